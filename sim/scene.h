@@ -1,0 +1,71 @@
+/* scene.h: the physical scene a prediction runs on (ribbon, folds, imperfection, mesh,
+ * protocol, solver), as plain typed parameters in SI units.
+ *
+ * Owned here because the simulator is the only consumer of its meaning; config/ fills it from
+ * INI files and `--set section.key=value` overrides, and names file, line and key on errors.
+ * Frame convention (DESIGN.md section 3): x is the compression axis (clamps at x = 0 and
+ * x = l - dl), y is the width / shear direction, z is up. The clamps hold the ribbon flat with
+ * its surface normal along +z. rod_scene_check() does the cross-field checks that need physics
+ * (a fold inside a clamp, an impossible crease) and names the offending key. */
+#ifndef RIBBON_SIM_SCENE_H
+#define RIBBON_SIM_SCENE_H
+
+#include <stddef.h>
+
+/* How the simulator reaches the upper state at Delta L (DESIGN.md section 3). */
+typedef enum rod_route {
+    ROD_ROUTE_COMPRESS_THEN_FOLD = 0, /* compress the flat ribbon with an upward bias, then ramp
+                                         the crease angle and stiffness at fixed Delta L */
+    ROD_ROUTE_TOGETHER = 1            /* ramp compression and crease together, same bias */
+} rod_route;
+
+typedef struct rod_scene {
+    /* [ribbon] */
+    double length;          /* m, free length l between the two clamp points */
+    double width;           /* m */
+    double thickness;       /* m */
+    double youngs_modulus;  /* Pa */
+    double shear_modulus;   /* Pa */
+    double density;         /* kg/m^3 */
+    double gravity[3];      /* m/s^2, (x, y, z); default 0 0 0 (off) */
+
+    /* [folds] a symmetric pair of creases at Gamma and 1 - Gamma */
+    double fold_angle_deg;        /* deg, 0 means no folds; |angle| < 180; positive turns the
+                                     tangent toward the surface normal (up when clamped flat) */
+    double fold_position;         /* Gamma, in (0, 0.5), fraction of the free length */
+    double fold_stiffness_factor; /* >= 1, multiplies the soft bending stiffness at a fold node */
+
+    /* [imperfection] */
+    double fold_angle_rel;  /* relative difference between the two crease angles: the crease at
+                               Gamma gets phi (1 + rel/2), the one at 1 - Gamma phi (1 - rel/2) */
+
+    /* [mesh] */
+    int nodes;              /* N, total nodes including the two clamped edges, >= 5 */
+
+    /* [protocol] */
+    double compression;     /* Delta L = dl / l, in [0, 1) */
+    double shear_rate;      /* m/s, rate of the shear clamp along y, > 0 */
+    double shear_max;       /* Delta W = dw / l at which the protocol stops without a snap */
+    rod_route route;        /* route to the upper state */
+
+    /* [solver] */
+    double dt;              /* s, time step of the dynamics */
+    double damping;         /* 1/s, mass-proportional damping mu (C = mu M) */
+    double tolerance;       /* Newton tolerance on the force residual, relative to the
+                               scene's force scale EI1 / l^2 */
+    int max_iterations;     /* Newton iteration cap per solve */
+
+    /* [snap] detection (README: "Snap") */
+    double snap_speed;      /* 1/s, |d(Delta Z)/dt| above which the ribbon is snapping */
+    double asym_threshold;  /* rad, peak |A| during the snap above which it is asymmetric */
+} rod_scene;
+
+/* The paper's simulation scene (l = 1 m, w = 0.2 m, b = 1 mm, E = 1 GPa, G = E/3,
+ * rho = 1000 kg/m^3, N = 201, dt = 1 ms, 0.01 m/s, Delta L = 0.5, phi = 90 deg, Gamma = 0.13). */
+rod_scene rod_scene_default(void);
+
+/* Cross-field checks. Returns 0 when the scene is usable; otherwise non-zero, writes a message
+ * to msg and the "section.key" most to blame to key (both may be NULL). */
+int rod_scene_check(const rod_scene *s, char *msg, size_t msglen, char *key, size_t keylen);
+
+#endif
