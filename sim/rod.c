@@ -1,0 +1,189 @@
+/* rod.c: building a rod from a scene (mesh, stiffnesses, masses, creases) and setting its
+ * boundary conditions.
+ *
+ * Mesh: the free length l is cut into N - 3 edges between the clamp points (node 1 at s = 0,
+ * node N-2 at s = 1). With creases, the three pieces [0, Gamma], [Gamma, 1 - Gamma] and
+ * [1 - Gamma, 1] are meshed separately with equal edges inside each piece, so that nodes sit
+ * exactly on both creases (DESIGN.md section 3: edges need not be equal). The mesh is symmetric
+ * under s -> 1 - s, which keeps the discrete model exactly C2-symmetric. The clamped edges 0
+ * and N-2 lie outside the free length, with the length of their neighbouring free edge.
+ * Masses are lumped: each node carries rho A times half of each adjacent rest edge; each twist
+ * angle carries the polar inertia rho (I1 + I2) times its edge's rest length. */
+#include "rod.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *rod_status_message(rod_status s)
+{
+    switch (s) {
+    case ROD_OK: return "ok";
+    case ROD_ERR_ALLOC: return "out of memory";
+    case ROD_ERR_SCENE: return "the scene cannot be simulated";
+    case ROD_ERR_NAN: return "a non-finite value appeared (NaN detected)";
+    case ROD_ERR_SINGULAR: return "singular linear system";
+    case ROD_ERR_MAXITER: return "Newton reached its iteration cap without converging";
+    case ROD_ERR_LINESEARCH: return "the line search could not reduce the residual (diverged)";
+    case ROD_ERR_BRANCH_LOST: return "the requested branch no longer exists";
+    case ROD_ERR_TIME_LIMIT: return "the protocol reached its step cap";
+    }
+    return "unknown error";
+}
+
+void rod_free(rod *r)
+{
+    if (!r) return;
+    free(r->q); free(r->len0); free(r->vor0); free(r->mass); free(r->s_node);
+    free(r->EI1); free(r->kap1_hat); free(r->d1); free(r->d2); free(r->tref); free(r->mref);
+    free(r);
+}
+
+rod_status rod_alloc(const rod_scene *s, rod **out, char *err, size_t errlen)
+{
+    char key[64], msg[256];
+    *out = NULL;
+    if (rod_scene_check(s, msg, sizeof msg, key, sizeof key)) {
+        if (err) snprintf(err, errlen, "%s: %s", key, msg);
+        return ROD_ERR_SCENE;
+    }
+    rod *r = calloc(1, sizeof *r);
+    if (!r) return ROD_ERR_ALLOC;
+    int n = s->nodes;
+    r->n = n;
+    r->ndof = 4 * n - 1;
+    r->free_end = 4 * (n - 2);
+    r->length = s->length;
+    r->q = calloc((size_t)r->ndof, sizeof *r->q);
+    r->len0 = calloc((size_t)n, sizeof *r->len0);
+    r->vor0 = calloc((size_t)n, sizeof *r->vor0);
+    r->mass = calloc((size_t)r->ndof, sizeof *r->mass);
+    r->s_node = calloc((size_t)n, sizeof *r->s_node);
+    r->EI1 = calloc((size_t)n, sizeof *r->EI1);
+    r->kap1_hat = calloc((size_t)n, sizeof *r->kap1_hat);
+    r->d1 = calloc((size_t)n, sizeof *r->d1);
+    r->d2 = calloc((size_t)n, sizeof *r->d2);
+    r->tref = calloc((size_t)n, sizeof *r->tref);
+    r->mref = calloc((size_t)n, sizeof *r->mref);
+    if (!r->q || !r->len0 || !r->vor0 || !r->mass || !r->s_node || !r->EI1 || !r->kap1_hat ||
+        !r->d1 || !r->d2 || !r->tref || !r->mref) {
+        rod_free(r);
+        return ROD_ERR_ALLOC;
+    }
+
+    /* Arc-length positions of nodes 1..N-2 (over l). */
+    int ne_free = n - 3;
+    int has_folds = s->fold_angle_deg != 0.0;
+    if (has_folds) {
+        int n_out = (int)lround(s->fold_position * ne_free);
+        if (n_out < 1) n_out = 1;
+        if (ne_free - 2 * n_out < 1) n_out = (ne_free - 1) / 2;
+        int n_mid = ne_free - 2 * n_out;
+        double g = s->fold_position;
+        for (int k = 0; k <= n_out; k++) r->s_node[1 + k] = g * k / n_out;
+        for (int k = 1; k <= n_mid; k++) r->s_node[1 + n_out + k] = g + (1.0 - 2.0 * g) * k / n_mid;
+        for (int k = 1; k <= n_out; k++) r->s_node[1 + n_out + n_mid + k] = 1.0 - g + g * k / n_out;
+        r->fold_node[0] = 1 + n_out;
+        r->fold_node[1] = 1 + n_out + n_mid;
+    } else {
+        for (int k = 0; k <= ne_free; k++) r->s_node[1 + k] = (double)k / ne_free;
+        r->fold_node[0] = r->fold_node[1] = -1;
+    }
+    r->s_node[n - 2] = 1.0;
+    /* Exact symmetry of the mesh: s_k + s_{N-1-k} = 1. */
+    for (int k = 1; k < n / 2; k++) {
+        double a = r->s_node[k], b = 1.0 - r->s_node[n - 1 - k];
+        double m = 0.5 * (a + b);
+        r->s_node[k] = m;
+        r->s_node[n - 1 - k] = 1.0 - m;
+    }
+    if (n % 2 == 1) {
+        r->s_node[n / 2] = 0.5;
+        r->mid_node = n / 2;
+        r->mid_edge = -1;
+    } else {
+        r->mid_node = -1;
+        r->mid_edge = n / 2 - 1;
+    }
+    double h0 = r->s_node[2] - r->s_node[1];
+    r->s_node[0] = -h0;
+    r->s_node[n - 1] = 1.0 + h0;
+    r->h_clamp = h0 * s->length;
+
+    /* Straight rest configuration along +x, normal +z; th = 0. */
+    for (int i = 0; i < n; i++) {
+        double *x = rod_x(r, i);
+        x[0] = s->length * r->s_node[i];
+        x[1] = 0.0;
+        x[2] = 0.0;
+    }
+    for (int i = 0; i < n - 1; i++) {
+        r->len0[i] = s->length * (r->s_node[i + 1] - r->s_node[i]);
+        double t[3] = {1, 0, 0}, d1[3] = {0, 0, 1}, d2[3] = {0, -1, 0};
+        memcpy(r->tref[i], t, sizeof t);
+        memcpy(r->d1[i], d1, sizeof d1);
+        memcpy(r->d2[i], d2, sizeof d2);
+    }
+    for (int i = 1; i < n - 1; i++) r->vor0[i] = 0.5 * (r->len0[i - 1] + r->len0[i]);
+
+    double w = s->width, b = s->thickness, E = s->youngs_modulus;
+    double A = w * b, I1 = w * b * b * b / 12.0, I2 = b * w * w * w / 12.0;
+    r->EA = E * A;
+    r->EI2 = E * I2;
+    r->GJ = s->shear_modulus * w * b * b * b / 3.0;
+    for (int i = 0; i < n; i++) r->EI1[i] = E * I1;
+    r->force_scale = E * I1 / (s->length * s->length);
+
+    double rho = s->density;
+    for (int i = 0; i < n - 1; i++) {
+        double m = rho * A * r->len0[i];
+        for (int k = 0; k < 3; k++) {
+            r->mass[4 * i + k] += 0.5 * m;
+            r->mass[4 * (i + 1) + k] += 0.5 * m;
+        }
+        r->mass[4 * i + 3] = rho * (I1 + I2) * r->len0[i];
+    }
+
+    for (int k = 0; k < 3; k++) r->gravity[k] = s->gravity[k];
+    r->terms.stretch = 1;
+    r->terms.bend = 1;
+    r->terms.twist = 1;
+    r->terms.fold = has_folds;
+    r->terms.gravity = (s->gravity[0] != 0.0 || s->gravity[1] != 0.0 || s->gravity[2] != 0.0);
+    if (has_folds) {
+        double phi = s->fold_angle_deg * M_PI / 180.0;
+        double rel = s->fold_angle_rel;
+        r->fold_kappa[0] = 2.0 * tan(0.5 * phi * (1.0 + 0.5 * rel));
+        r->fold_kappa[1] = 2.0 * tan(0.5 * phi * (1.0 - 0.5 * rel));
+        r->fold_factor = s->fold_stiffness_factor;
+        rod_set_folds(r, 1.0, 1.0);
+    }
+    *out = r;
+    return ROD_OK;
+}
+
+void rod_set_folds(rod *r, double frac_angle, double frac_stiff)
+{
+    if (!r->terms.fold) return;
+    for (int k = 0; k < 2; k++) {
+        int i = r->fold_node[k];
+        /* Ramp the crease angle, not its tangent, so a fraction of the route is a real crease. */
+        double phi = 2.0 * atan(0.5 * r->fold_kappa[k]);
+        r->kap1_hat[i] = 2.0 * tan(0.5 * phi * frac_angle);
+        r->EI1[i] = r->EI1[0] * (1.0 + frac_stiff * (r->fold_factor - 1.0));
+    }
+}
+
+void rod_set_clamps(rod *r, double dl, double dw)
+{
+    int n = r->n;
+    double l = r->length, h = r->h_clamp;
+    double *x0 = rod_x(r, 0), *x1 = rod_x(r, 1), *xa = rod_x(r, n - 2), *xb = rod_x(r, n - 1);
+    x0[0] = -h; x0[1] = 0; x0[2] = 0;
+    x1[0] = 0; x1[1] = 0; x1[2] = 0;
+    xa[0] = l * (1.0 - dl); xa[1] = dw * l; xa[2] = 0;
+    xb[0] = l * (1.0 - dl) + h; xb[1] = dw * l; xb[2] = 0;
+    r->q[3] = 0.0;
+    r->q[4 * (n - 2) + 3] = 0.0;
+}

@@ -1,0 +1,134 @@
+/* rod.h: the discrete elastic rod (DER) model of a folded ribbon, after the reference paper
+ * section 3 and Bergou et al. 2008/2010.
+ *
+ * Degrees of freedom, in this order so the Hessian is banded (half-bandwidth 10):
+ *
+ *     q = [ x0 (3), th0, x1 (3), th1, ..., x_{N-2} (3), th_{N-2}, x_{N-1} (3) ]   (4N - 1 values)
+ *
+ * Node i's position starts at q[4 i]; edge i's twist angle th_i is q[4 i + 3].
+ * Clamps (reference paper, "Boundary condition"): nodes 0, 1, N-2, N-1 and the angles th0 and
+ * th_{N-2} are prescribed. Node 1 and node N-2 are the clamp points; the free length l lies
+ * between them, and the clamped edges (0 and N-2) lie outside it. The free DOFs are therefore
+ * the contiguous range [ROD_FREE_BEGIN, 4 (N - 2)): th1, x2, th2, ..., x_{N-3}, th_{N-3}.
+ *
+ * Frames: each edge carries a reference frame (d1, d2, t) updated by parallel transport in time
+ * (rod_frames_update transports from the tangents of the last update) and the reference twist
+ * m_ref at each interior node, tracked continuously. Material frame: m1 = cos th d1 + sin th d2
+ * (surface normal), m2 = t x m1 (width direction).
+ *
+ * Curvatures are integrated (dimensionless) quantities at interior nodes:
+ *     kappa1 = (m1e . tf - m1f . te) / (1 + te . tf)    bending toward the normal (soft, E I1)
+ *     kappa2 = (m2e . tf - m2f . te) / (1 + te . tf)    bending in the ribbon plane (stiff, E I2)
+ *     kappa3 = th_f - th_e + m_ref                        twist (G J)
+ * and each term's energy is 1/2 K (kappa - kappa_hat)^2 / dl_hat, dl_hat the rest Voronoi length.
+ * (These are the paper's projections of the curvature binormal onto the averaged frame, rewritten
+ * without kb.) A crease of turning angle phi toward the normal is kappa1_hat = 2 tan(phi/2):
+ * DESIGN.md section 3 puts the fold on the soft, out-of-plane component, not the paper's kappa2.
+ */
+#ifndef RIBBON_SIM_ROD_H
+#define RIBBON_SIM_ROD_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "scene.h"
+
+#define ROD_BAND 10            /* half-bandwidth of the Hessian in the DOF ordering above */
+#define ROD_FREE_BEGIN 7       /* first free DOF: th1 */
+
+/* Errors of the simulator layer. */
+typedef enum rod_status {
+    ROD_OK = 0,
+    ROD_ERR_ALLOC,       /* out of memory */
+    ROD_ERR_SCENE,       /* the scene cannot be simulated (message says why) */
+    ROD_ERR_NAN,         /* a non-finite value appeared in the state or the residual */
+    ROD_ERR_SINGULAR,    /* the linear system could not be factorised */
+    ROD_ERR_MAXITER,     /* Newton reached its iteration cap without converging */
+    ROD_ERR_LINESEARCH,  /* the line search could not reduce the residual */
+    ROD_ERR_BRANCH_LOST, /* the requested branch ceased to exist (e.g. past its fold) */
+    ROD_ERR_TIME_LIMIT   /* the protocol reached its step cap */
+} rod_status;
+
+const char *rod_status_message(rod_status s);
+
+/* Which energy terms a rod evaluates (a scene pays only for what it uses). */
+typedef struct rod_terms {
+    int stretch, bend, twist, fold, gravity;
+} rod_terms;
+
+/* Counters of what was actually evaluated, for "the run reports which terms and stages ran". */
+typedef struct rod_counters {
+    uint64_t stretch_evals, bend_evals, twist_evals, fold_evals, gravity_evals;
+    uint64_t hessian_assemblies, factorisations, newton_iterations, damping_evals;
+} rod_counters;
+
+typedef struct rod {
+    int n;               /* nodes N */
+    int ndof;            /* 4 N - 1 */
+    int free_end;        /* one past the last free DOF: 4 (N - 2) */
+    double length;       /* m, free length l */
+    double h_clamp;      /* m, length of each clamped edge */
+    double *q;           /* DOFs (ndof) */
+    double *len0;        /* m, rest edge lengths (N - 1) */
+    double *vor0;        /* m, rest Voronoi length at interior nodes (N), 0 at the ends */
+    double *mass;        /* kg or kg m^2, lumped mass per DOF (ndof) */
+    double *s_node;      /* arc length of each node from the left clamp point over l (N) */
+    double EA;           /* N, axial stiffness */
+    double *EI1;         /* N m^2, soft bending stiffness per node (raised at fold nodes) */
+    double EI2;          /* N m^2, stiff (in-plane) bending stiffness */
+    double GJ;           /* N m^2, twist stiffness */
+    double *kap1_hat;    /* natural integrated curvature toward the normal, per node */
+    double gravity[3];   /* m/s^2 */
+    int fold_node[2];    /* node indices of the creases at Gamma and 1 - Gamma (-1 if none) */
+    double fold_kappa[2];/* their full natural curvatures 2 tan(phi_k / 2) */
+    double fold_factor;  /* stiffness factor at the creases */
+    int mid_node;        /* node at arc length 1/2, or -1 when the midpoint is mid-edge */
+    int mid_edge;        /* edge containing arc length 1/2 at its centre when mid_node < 0 */
+    /* frames */
+    double (*d1)[3];     /* reference director 1 per edge (N - 1) */
+    double (*d2)[3];     /* reference director 2 per edge */
+    double (*tref)[3];   /* tangent at which d1, d2 were last transported */
+    double *mref;        /* reference twist per node (N), continuous in time */
+    rod_terms terms;
+    rod_counters count;
+    double force_scale;  /* N, EI1 / l^2: scale for residual tolerances */
+} rod;
+
+/* Builds the rod for a scene: mesh with nodes at Gamma and 1 - Gamma, straight along x with the
+ * surface normal along +z, clamps at Delta L = 0, Delta W = 0, creases present at full angle
+ * in the natural curvature (the route ramps them with rod_set_folds). */
+rod_status rod_alloc(const rod_scene *s, rod **out, char *err, size_t errlen);
+void rod_free(rod *r);
+
+/* Sets the natural curvature of the two creases to frac_angle times their scene angle and their
+ * stiffness factor to 1 + frac_stiff (factor - 1). */
+void rod_set_folds(rod *r, double frac_angle, double frac_stiff);
+
+/* Places the clamps: left clamp point at the origin, right clamp point at (l (1 - dl), dw l, 0);
+ * clamped edges along +x, angles 0. */
+void rod_set_clamps(rod *r, double dl, double dw);
+
+/* Transports the reference frames from their stored tangents to the current ones and updates
+ * the reference twist. Call after every change of q and before evaluating energy terms. */
+void rod_frames_update(rod *r);
+
+/* Material directors of edge i. */
+void rod_material_frame(const rod *r, int i, double m1[3], double m2[3]);
+
+/* Total elastic + gravitational potential energy (J). */
+double rod_energy(rod *r);
+/* Gradient of the potential energy over all DOFs (ndof values, overwritten). */
+void rod_gradient(rod *r, double *g);
+/* Adds s * Hessian into the symmetric band matrix H over the free DOFs, stored lower-packed:
+ * H[(i) * (ROD_BAND + 1) + (j - i)] for free indices i <= j < i + ROD_BAND + 1 (that is GSL's
+ * symmetric band layout, row i holding A(i, i + k)). Only the free block is assembled. */
+void rod_hessian_add(rod *r, double s, double *H);
+
+/* Integrated curvature kappa1 at each interior node (N values, 0 at the ends). */
+void rod_kappa1(const rod *r, double *k1);
+
+static inline double *rod_x(const rod *r, int i) { return r->q + 4 * i; }
+static inline double rod_theta(const rod *r, int i) { return r->q[4 * i + 3]; }
+static inline int rod_nfree(const rod *r) { return r->free_end - ROD_FREE_BEGIN; }
+
+#endif

@@ -1,0 +1,26 @@
+/* rod_kernels.h (private to sim/): per-element energy kernels with analytic gradient and
+ * Hessian, in local coordinates.
+ *
+ * Stretch element j (edge j): local DOFs [x_j (3), x_{j+1} (3)].
+ * Bend and twist element i (interior node i): local DOFs
+ *     [x_{i-1} (3), th_{i-1}, x_i (3), th_i, x_{i+1} (3)]   = q[4 (i-1) .. 4 (i-1) + 10]
+ * so a node element's local block is a contiguous slice of q, which is what makes the global
+ * Hessian banded with half-bandwidth 10.
+ * Each kernel returns the element energy and, when g (and H) are non-NULL, overwrites them with
+ * the local gradient (and the symmetric local Hessian). Frames must be up to date. */
+#ifndef RIBBON_SIM_ROD_KERNELS_H
+#define RIBBON_SIM_ROD_KERNELS_H
+
+#include "rod.h"
+
+#define ROD_NODE_LOCAL 11
+
+double rod_stretch_element(const rod *r, int j, double g[6], double H[6][6]);
+double rod_bend_element(const rod *r, int i, double g[11], double H[11][11]);
+double rod_twist_element(const rod *r, int i, double g[11], double H[11][11]);
+
+/* Maps a gradient and Hessian in (e, f, th_e, th_f) space (8 values: e, f, th_e, th_f) to the
+ * node element's 11 local DOFs, using e = x_i - x_{i-1}, f = x_{i+1} - x_i. Adds s times. */
+void rod_local_from_ef(double s, const double g8[8], double H8[8][8], double g[11], double H[11][11]);
+
+#endif
