@@ -1,0 +1,699 @@
+/* scene_file.c: the scene INI loader. Owns the scene key table and the rules of the file format.
+ *
+ * Design, in the spirit of Redis's config.c: one static table lists every key with its type,
+ * bounds, offset into rod_scene, unit and doc; parsing, range checks, the "missing key" rule and
+ * the README table all follow from it, so adding a key is one row here plus one line of README.
+ *
+ * inih does the splitting (sections, "key = value", comments, whitespace). We feed it through our
+ * own line reader rather than ini_parse(), for three reasons: (1) Debian builds inih without
+ * line numbers in the handler, and the reader, called exactly once per physical line, gives them
+ * back; (2) the reader refuses what inih would silently accept or mangle: NUL bytes, over-long
+ * lines (inih would split them), "key: value", text after "[section]", and it strips leading
+ * whitespace so an indented line is never taken as a continuation of the previous value
+ * (inih's multi-line mode); (3) we never touch inih's run-time option globals, which other
+ * loaders in the same process share.
+ *
+ * The first error wins and is reported with file, line (or `--set` text, or "default") and
+ * "section.key". Nothing is written to the caller's scene unless the whole load succeeds. */
+#include "scene_file.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <ini.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+_Static_assert(sizeof(rod_route) == sizeof(int), "rod_route is stored as an int");
+
+#define OFF(field) offsetof(rod_scene, field)
+#define REQ CFG_KEY_REQUIRED
+#define MINO CFG_KEY_MIN_OPEN
+#define MAXO CFG_KEY_MAX_OPEN
+
+static const char *const route_names[] = {"compress-then-fold", "together", NULL};
+
+/* The key table. Bounds are the single-field physics limits (positive lengths, moduli, density;
+ * Gamma in (0, 0.5); |phi| < 180), plus generous upper limits that only catch typos of many
+ * orders of magnitude and keep every later product finite. Cross-field limits (a fold inside a
+ * clamp, creases that cannot be clamped at this Delta L) are rod_scene_check()'s. */
+static const cfg_scene_key scene_keys[] = {
+    {"ribbon", "length", CFG_TYPE_DOUBLE, OFF(length), 0.0, 100.0, REQ | MINO, NULL, "m",
+     "free length l between the two clamp points (Gamma, Delta L, Delta W are fractions of it)"},
+    {"ribbon", "width", CFG_TYPE_DOUBLE, OFF(width), 0.0, 10.0, REQ | MINO, NULL, "m",
+     "width w of the ribbon (the shear direction)"},
+    {"ribbon", "thickness", CFG_TYPE_DOUBLE, OFF(thickness), 0.0, 1.0, REQ | MINO, NULL, "m",
+     "thickness b of the ribbon"},
+    {"ribbon", "youngs_modulus", CFG_TYPE_DOUBLE, OFF(youngs_modulus), 0.0, 1e13, REQ | MINO, NULL,
+     "Pa", "Young's modulus E"},
+    {"ribbon", "shear_modulus", CFG_TYPE_DOUBLE, OFF(shear_modulus), 0.0, 1e13, REQ | MINO, NULL,
+     "Pa", "shear modulus G (isotropic: E / (2 (1 + nu)))"},
+    {"ribbon", "density", CFG_TYPE_DOUBLE, OFF(density), 0.0, 1e5, REQ | MINO, NULL, "kg/m^3",
+     "mass density rho"},
+    {"ribbon", "gravity", CFG_TYPE_VEC3, OFF(gravity), -1e3, 1e3, 0, NULL, "m/s^2",
+     "gravity vector (x along compression, y along shear, z up), e.g. \"0 0 -9.81\"; default 0 0 0 (off)"},
+
+    {"folds", "angle_deg", CFG_TYPE_DOUBLE, OFF(fold_angle_deg), -180.0, 180.0, REQ | MINO | MAXO,
+     NULL, "deg",
+     "crease angle phi of the symmetric pair; 0 means no folds; positive turns the tangent toward "
+     "the surface normal (up); 180 would fold the ribbon flat onto itself"},
+    {"folds", "position", CFG_TYPE_DOUBLE, OFF(fold_position), 0.0, 0.5, REQ | MINO | MAXO, NULL,
+     "1", "Gamma: the creases sit at Gamma and 1 - Gamma of the free length"},
+    {"folds", "stiffness_factor", CFG_TYPE_DOUBLE, OFF(fold_stiffness_factor), 1.0, 1e12, REQ,
+     NULL, "1", "multiplies the soft bending stiffness at a fold node (the paper gives none)"},
+
+    {"imperfection", "fold_angle_rel", CFG_TYPE_DOUBLE, OFF(fold_angle_rel), -1.0, 1.0, 0, NULL,
+     "1",
+     "relative difference between the two crease angles that seeds symmetry breaking: phi (1 + rel/2) "
+     "at Gamma, phi (1 - rel/2) at 1 - Gamma; default 1e-6"},
+
+    {"mesh", "nodes", CFG_TYPE_INT, OFF(nodes), 5.0, 100001.0, REQ, NULL, "1",
+     "N, total nodes including the two clamped edges"},
+
+    {"protocol", "compression", CFG_TYPE_DOUBLE, OFF(compression), 0.0, 1.0, REQ | MAXO, NULL, "1",
+     "Delta L = dl / l, held during the shear"},
+    {"protocol", "shear_rate", CFG_TYPE_DOUBLE, OFF(shear_rate), 0.0, 100.0, REQ | MINO, NULL,
+     "m/s", "speed of the shear clamp along y"},
+    {"protocol", "shear_max", CFG_TYPE_DOUBLE, OFF(shear_max), 0.0, 10.0, REQ | MINO, NULL, "1",
+     "Delta W = dw / l at which the protocol stops if no snap happened"},
+    {"protocol", "route", CFG_TYPE_ENUM, OFF(route), 0.0, 0.0, 0, route_names, "-",
+     "route to the upper state: compress-then-fold (compress flat with an upward bias, then ramp "
+     "the creases) or together (ramp both at once); default compress-then-fold"},
+
+    {"solver", "dt", CFG_TYPE_DOUBLE, OFF(dt), 0.0, 10.0, REQ | MINO, NULL, "s",
+     "time step of the implicit Euler dynamics"},
+    {"solver", "damping", CFG_TYPE_DOUBLE, OFF(damping), 0.0, 1e6, REQ, NULL, "1/s",
+     "mass-proportional damping mu (C = mu M; the paper gives none); 0 is undamped"},
+    {"solver", "tolerance", CFG_TYPE_DOUBLE, OFF(tolerance), 0.0, 1.0, REQ | MINO | MAXO, NULL,
+     "1", "Newton tolerance on the force residual, relative to the force scale E I1 / l^2"},
+    {"solver", "max_iterations", CFG_TYPE_INT, OFF(max_iterations), 1.0, 1000000.0, REQ, NULL,
+     "1", "Newton iteration cap per solve"},
+
+    {"snap", "speed", CFG_TYPE_DOUBLE, OFF(snap_speed), 0.0, 1e6, MINO, NULL, "1/s",
+     "|d(Delta Z)/dt| above which the ribbon counts as snapping; default 1"},
+    {"snap", "asym_threshold", CFG_TYPE_DOUBLE, OFF(asym_threshold), 0.0, 10.0, MINO, NULL, "rad",
+     "peak |A| during the snap above which the snap is asymmetric; default 0.05"},
+};
+
+#define N_KEYS (sizeof scene_keys / sizeof scene_keys[0])
+
+static const char *const section_names[] = {"ribbon", "folds",    "imperfection", "mesh",
+                                            "protocol", "solver", "snap"};
+#define N_SECTIONS (sizeof section_names / sizeof section_names[0])
+
+const cfg_scene_key *cfg_scene_keys(size_t *n)
+{
+    if (n) *n = N_KEYS;
+    return scene_keys;
+}
+
+/* ---- helpers ------------------------------------------------------------------------------ */
+
+/* Copy text into dst for an error message: at most dstlen - 1 bytes, non-printable bytes as '?',
+ * so a corrupt file cannot put control characters on the user's terminal. */
+static void copy_printable(char *dst, size_t dstlen, const char *src, size_t srclen)
+{
+    if (dstlen == 0) return;
+    size_t n = 0;
+    for (size_t i = 0; i < srclen && src[i] && n + 1 < dstlen; i++) {
+        unsigned char ch = (unsigned char)src[i];
+        dst[n++] = (ch >= 0x20 && ch < 0x7f) ? (char)ch : '?';
+    }
+    dst[n] = '\0';
+}
+
+static int find_section(const char *section)
+{
+    for (size_t i = 0; i < N_SECTIONS; i++)
+        if (strcmp(section, section_names[i]) == 0) return (int)i;
+    return -1;
+}
+
+static int find_key(const char *section, const char *name)
+{
+    for (size_t i = 0; i < N_KEYS; i++)
+        if (strcmp(section, scene_keys[i].section) == 0 && strcmp(name, scene_keys[i].name) == 0)
+            return (int)i;
+    return -1;
+}
+
+static int find_dotted_key(const char *dotted)
+{
+    for (size_t i = 0; i < N_KEYS; i++) {
+        size_t ls = strlen(scene_keys[i].section);
+        if (strncmp(dotted, scene_keys[i].section, ls) == 0 && dotted[ls] == '.' &&
+            strcmp(dotted + ls + 1, scene_keys[i].name) == 0)
+            return (int)i;
+    }
+    return -1;
+}
+
+static void key_dotted(const cfg_scene_key *k, char *buf, size_t len)
+{
+    snprintf(buf, len, "%s.%s", k->section, k->name);
+}
+
+/* Describe the allowed range of a numeric key, e.g. "(0, 100] m". */
+static void range_text(const cfg_scene_key *k, char *buf, size_t len)
+{
+    int dimensionless = strcmp(k->unit, "1") == 0 || strcmp(k->unit, "-") == 0;
+    snprintf(buf, len, "%c%.10g, %.10g%c%s%s", (k->flags & CFG_KEY_MIN_OPEN) ? '(' : '[', k->min,
+             k->max, (k->flags & CFG_KEY_MAX_OPEN) ? ')' : ']', dimensionless ? "" : " ",
+             dimensionless ? "" : k->unit);
+}
+
+static int in_range(const cfg_scene_key *k, double v)
+{
+    if ((k->flags & CFG_KEY_MIN_OPEN) ? !(v > k->min) : !(v >= k->min)) return 0;
+    if ((k->flags & CFG_KEY_MAX_OPEN) ? !(v < k->max) : !(v <= k->max)) return 0;
+    return 1;
+}
+
+/* Parse one finite number at *p (leading whitespace allowed), advancing *p past it.
+ * Returns CFG_OK or CFG_ERR_VALUE with msg filled. */
+static cfg_status parse_number(const char **p, double *out, char *msg, size_t msglen)
+{
+    char shown[64];
+    char *end;
+    errno = 0;
+    double v = strtod(*p, &end);
+    if (end == *p) {
+        copy_printable(shown, sizeof shown, *p, strlen(*p));
+        snprintf(msg, msglen, "'%s' is not a number", shown);
+        return CFG_ERR_VALUE;
+    }
+    if (!isfinite(v)) {
+        copy_printable(shown, sizeof shown, *p, (size_t)(end - *p));
+        snprintf(msg, msglen, "'%s' is not a finite number", shown);
+        return CFG_ERR_VALUE;
+    }
+    *out = v;
+    *p = end;
+    return CFG_OK;
+}
+
+static const char *skip_space(const char *p)
+{
+    while (*p && isspace((unsigned char)*p)) p++;
+    return p;
+}
+
+static cfg_status trailing_error(const char *rest, const char *value, char *msg, size_t msglen)
+{
+    char shown_rest[48], shown_value[64];
+    copy_printable(shown_rest, sizeof shown_rest, rest, strlen(rest));
+    copy_printable(shown_value, sizeof shown_value, value, strlen(value));
+    snprintf(msg, msglen, "unexpected text '%s' after the value in '%s'", shown_rest, shown_value);
+    return CFG_ERR_VALUE;
+}
+
+/* Parse `value` (already stripped of surrounding whitespace) for key k into the scene. */
+static cfg_status value_apply(const cfg_scene_key *k, const char *value, rod_scene *s, char *msg,
+                              size_t msglen)
+{
+    char range[96], shown[64];
+    unsigned char *field = (unsigned char *)s + k->offset;
+    if (value[0] == '\0') {
+        snprintf(msg, msglen, "empty value (expected %s)",
+                 k->type == CFG_TYPE_VEC3 ? "three numbers, e.g. \"0 0 -9.81\""
+                 : k->type == CFG_TYPE_ENUM ? "a name"
+                 : k->type == CFG_TYPE_INT  ? "an integer"
+                                            : "a number");
+        return CFG_ERR_VALUE;
+    }
+    switch (k->type) {
+    case CFG_TYPE_DOUBLE: {
+        const char *p = value;
+        double v;
+        cfg_status st = parse_number(&p, &v, msg, msglen);
+        if (st) return st;
+        p = skip_space(p);
+        if (*p) return trailing_error(p, value, msg, msglen);
+        if (!in_range(k, v)) {
+            range_text(k, range, sizeof range);
+            snprintf(msg, msglen, "%.10g is out of range: allowed %s (%s)", v, range, k->doc);
+            return CFG_ERR_RANGE;
+        }
+        memcpy(field, &v, sizeof v);
+        return CFG_OK;
+    }
+    case CFG_TYPE_INT: {
+        const char *p = value;
+        char *end;
+        errno = 0;
+        long long v = strtoll(p, &end, 10);
+        if (end == p) {
+            copy_printable(shown, sizeof shown, value, strlen(value));
+            snprintf(msg, msglen, "'%s' is not an integer", shown);
+            return CFG_ERR_VALUE;
+        }
+        p = skip_space(end);
+        if (*p == '.' || *p == 'e' || *p == 'E') {
+            copy_printable(shown, sizeof shown, value, strlen(value));
+            snprintf(msg, msglen, "'%s' is not an integer (write whole numbers without '.' or 'e')",
+                     shown);
+            return CFG_ERR_VALUE;
+        }
+        if (*p) return trailing_error(p, value, msg, msglen);
+        if (errno == ERANGE || !in_range(k, (double)v)) {
+            range_text(k, range, sizeof range);
+            copy_printable(shown, sizeof shown, value, strlen(value));
+            snprintf(msg, msglen, "%s is out of range: allowed %s (%s)", shown, range, k->doc);
+            return CFG_ERR_RANGE;
+        }
+        int iv = (int)v;
+        memcpy(field, &iv, sizeof iv);
+        return CFG_OK;
+    }
+    case CFG_TYPE_VEC3: {
+        /* Three numbers; separators are whitespace or one comma (with optional whitespace). */
+        double v[3];
+        const char *p = value;
+        for (int i = 0; i < 3; i++) {
+            if (i > 0) {
+                p = skip_space(p);
+                if (*p == ',') p = skip_space(p + 1);
+                if (*p == '\0') {
+                    snprintf(msg, msglen, "expected three numbers, found %d", i);
+                    return CFG_ERR_VALUE;
+                }
+            }
+            cfg_status st = parse_number(&p, &v[i], msg, msglen);
+            if (st) return st;
+        }
+        p = skip_space(p);
+        if (*p) return trailing_error(p, value, msg, msglen);
+        for (int i = 0; i < 3; i++) {
+            if (!in_range(k, v[i])) {
+                range_text(k, range, sizeof range);
+                snprintf(msg, msglen, "component %d (%.10g) is out of range: allowed %s each", i + 1,
+                         v[i], range);
+                return CFG_ERR_RANGE;
+            }
+        }
+        memcpy(field, v, sizeof v);
+        return CFG_OK;
+    }
+    case CFG_TYPE_ENUM: {
+        for (int i = 0; k->names && k->names[i]; i++) {
+            if (strcmp(value, k->names[i]) == 0) {
+                memcpy(field, &i, sizeof i);
+                return CFG_OK;
+            }
+        }
+        char allowed[128] = "";
+        size_t used = 0;
+        for (int i = 0; k->names && k->names[i] && used < sizeof allowed; i++) {
+            int n = snprintf(allowed + used, sizeof allowed - used, "%s%s", i ? " | " : "",
+                             k->names[i]);
+            if (n < 0) break;
+            used += (size_t)n;
+        }
+        copy_printable(shown, sizeof shown, value, strlen(value));
+        snprintf(msg, msglen, "'%s' is not one of: %s", shown, allowed);
+        return CFG_ERR_VALUE;
+    }
+    }
+    snprintf(msg, msglen, "internal error: key has an unknown type");
+    return CFG_ERR_VALUE;
+}
+
+/* ---- loading ------------------------------------------------------------------------------ */
+
+/* Where each key's current value came from. */
+typedef struct key_origin {
+    int line;     /* line of the file that set it, 0 if the file did not */
+    int override; /* 1 + index of the last override that set it, 0 if none did */
+} key_origin;
+
+typedef struct load_ctx {
+    const char *name; /* file name for errors */
+    const char *text;
+    size_t len;
+    size_t pos;        /* next byte the reader hands out */
+    int lineno;        /* physical lines handed to inih so far = the current line */
+    int section_line[N_SECTIONS]; /* first line of each [section], 0 if absent */
+    rod_scene scene;
+    key_origin origin[N_KEYS];
+    cfg_error *err;
+    int failed;
+} load_ctx;
+
+/* Record the first error at the current line. */
+static void fail_line(load_ctx *c, cfg_status st, const char *key, const char *fmt, ...)
+{
+    if (c->failed) return;
+    c->failed = 1;
+    cfg_error *e = c->err;
+    e->status = st;
+    e->origin = CFG_ORIGIN_LINE;
+    e->line = c->lineno;
+    snprintf(e->file, sizeof e->file, "%s", c->name);
+    e->where[0] = '\0';
+    copy_printable(e->key, sizeof e->key, key ? key : "", key ? strlen(key) : 0);
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(e->message, sizeof e->message, fmt, ap);
+    va_end(ap);
+}
+
+/* Check one line (leading whitespace already removed, no newline) the way inih will read it, and
+ * refuse what inih would accept silently. */
+static void line_classify(load_ctx *c, const char *line, size_t n)
+{
+    while (n > 0 && isspace((unsigned char)line[n - 1])) n--;
+    if (n == 0 || line[0] == ';' || line[0] == '#') return;
+    if (line[0] == '[') {
+        size_t i = 1;
+        while (i < n && line[i] != ']') i++;
+        if (i >= n) {
+            fail_line(c, CFG_ERR_SYNTAX, NULL, "section header without a closing ']'");
+            return;
+        }
+        char name[64];
+        if (i - 1 >= sizeof name) {
+            fail_line(c, CFG_ERR_UNKNOWN, NULL, "unknown section (name too long)");
+            return;
+        }
+        memcpy(name, line + 1, i - 1);
+        name[i - 1] = '\0';
+        for (size_t j = 0; j + 1 < i; j++) {
+            if (name[j] == ';' && j > 0 && isspace((unsigned char)name[j - 1])) {
+                fail_line(c, CFG_ERR_SYNTAX, NULL, "comment inside a section header");
+                return;
+            }
+        }
+        size_t r = i + 1;
+        while (r < n && isspace((unsigned char)line[r])) r++;
+        if (r < n && line[r] != ';' && line[r] != '#') {
+            fail_line(c, CFG_ERR_SYNTAX, NULL, "unexpected text after the section header");
+            return;
+        }
+        int s = find_section(name);
+        if (s < 0) {
+            char shown[64];
+            copy_printable(shown, sizeof shown, name, strlen(name));
+            fail_line(c, CFG_ERR_UNKNOWN, NULL,
+                      "unknown section [%s] (known: ribbon folds imperfection mesh protocol "
+                      "solver snap)",
+                      shown);
+            return;
+        }
+        if (!c->section_line[s]) c->section_line[s] = c->lineno;
+        return;
+    }
+    /* key = value: inih splits at the first '=' or ':' not inside an inline comment. */
+    for (size_t i = 0; i < n; i++) {
+        if (line[i] == '=') return;
+        if (line[i] == ':') {
+            fail_line(c, CFG_ERR_SYNTAX, NULL, "expected 'key = value' ('=' not ':')");
+            return;
+        }
+        if (line[i] == ';' && i > 0 && isspace((unsigned char)line[i - 1])) break;
+    }
+    fail_line(c, CFG_ERR_SYNTAX, NULL, "expected 'key = value', '[section]' or a comment");
+}
+
+/* inih reader: hand out exactly one physical line per call, so that the count of calls is the
+ * line number. Strips a UTF-8 BOM on line 1, leading whitespace and a trailing '\r'. */
+static char *line_read(char *str, int num, void *stream)
+{
+    load_ctx *c = stream;
+    if (c->pos >= c->len || num < 3) return NULL;
+    size_t start = c->pos, end = c->pos;
+    while (end < c->len && c->text[end] != '\n') end++;
+    c->pos = end < c->len ? end + 1 : end;
+    c->lineno++;
+
+    if (c->lineno == 1 && end - start >= 3 && (unsigned char)c->text[start] == 0xEF &&
+        (unsigned char)c->text[start + 1] == 0xBB && (unsigned char)c->text[start + 2] == 0xBF)
+        start += 3;
+    if (end > start && c->text[end - 1] == '\r') end--;
+    while (start < end && isspace((unsigned char)c->text[start])) start++;
+
+    size_t n = end - start;
+    const char *nul = memchr(c->text + start, '\0', n);
+    if (nul) {
+        fail_line(c, CFG_ERR_SYNTAX, NULL, "NUL byte in the line (not a text file?)");
+        n = (size_t)(nul - (c->text + start));
+    }
+    size_t cap = (size_t)num - 2; /* room for '\n' and '\0' */
+    if (cap > CFG_SCENE_MAX_LINE) cap = CFG_SCENE_MAX_LINE;
+    if (n > cap) {
+        fail_line(c, CFG_ERR_SYNTAX, NULL, "line longer than %d characters",
+                  CFG_SCENE_MAX_LINE);
+        n = cap;
+    }
+    memcpy(str, c->text + start, n);
+    str[n] = '\n';
+    str[n + 1] = '\0';
+    line_classify(c, str, n);
+    return str;
+}
+
+static int on_key(void *user, const char *section, const char *name, const char *value)
+{
+    load_ctx *c = user;
+    if (c->failed) return 1; /* only the first error is reported */
+    char dotted[128], shown[64];
+    snprintf(dotted, sizeof dotted, "%s.%s", section, name);
+    if (section[0] == '\0') {
+        copy_printable(shown, sizeof shown, name, strlen(name));
+        fail_line(c, CFG_ERR_SYNTAX, name, "key '%s' before any [section]", shown);
+        return 0;
+    }
+    if (find_section(section) < 0) {
+        fail_line(c, CFG_ERR_UNKNOWN, dotted, "unknown section [%s]", section);
+        return 0;
+    }
+    if (name[0] == '\0') {
+        fail_line(c, CFG_ERR_SYNTAX, dotted, "empty key name before '='");
+        return 0;
+    }
+    int k = find_key(section, name);
+    if (k < 0) {
+        char known[256] = "";
+        size_t used = 0;
+        for (size_t i = 0; i < N_KEYS; i++) {
+            if (strcmp(scene_keys[i].section, section) != 0) continue;
+            int w = snprintf(known + used, sizeof known - used, "%s%s", used ? " " : "",
+                             scene_keys[i].name);
+            if (w < 0 || (size_t)w >= sizeof known - used) break;
+            used += (size_t)w;
+        }
+        fail_line(c, CFG_ERR_UNKNOWN, dotted, "unknown key in [%s] (known: %s)", section, known);
+        return 0;
+    }
+    key_dotted(&scene_keys[k], dotted, sizeof dotted);
+    if (c->origin[k].line) {
+        fail_line(c, CFG_ERR_DUPLICATE, dotted, "set twice (first on line %d)", c->origin[k].line);
+        return 0;
+    }
+    char msg[sizeof c->err->message];
+    cfg_status st = value_apply(&scene_keys[k], value, &c->scene, msg, sizeof msg);
+    if (st) {
+        fail_line(c, st, dotted, "%s", msg);
+        return 0;
+    }
+    c->origin[k].line = c->lineno;
+    return 1;
+}
+
+static void fail_override(load_ctx *c, cfg_status st, const char *ovr, const char *key,
+                          const char *msg)
+{
+    cfg_error *e = c->err;
+    c->failed = 1;
+    e->status = st;
+    e->origin = CFG_ORIGIN_OVERRIDE;
+    e->line = 0;
+    snprintf(e->file, sizeof e->file, "--set");
+    copy_printable(e->where, sizeof e->where, ovr ? ovr : "(null)", ovr ? strlen(ovr) : 6);
+    copy_printable(e->key, sizeof e->key, key ? key : "", key ? strlen(key) : 0);
+    snprintf(e->message, sizeof e->message, "%s", msg);
+}
+
+/* Trim whitespace in place-free fashion: copy [b, e) of src, trimmed, into dst. */
+static int copy_trimmed(char *dst, size_t dstlen, const char *b, const char *e)
+{
+    while (b < e && isspace((unsigned char)*b)) b++;
+    while (e > b && isspace((unsigned char)e[-1])) e--;
+    if ((size_t)(e - b) >= dstlen) return -1;
+    memcpy(dst, b, (size_t)(e - b));
+    dst[e - b] = '\0';
+    return 0;
+}
+
+static void override_apply(load_ctx *c, const char *ovr, int index)
+{
+    char key[128], value[CFG_SCENE_MAX_LINE + 1], msg[sizeof c->err->message];
+    if (!ovr) {
+        fail_override(c, CFG_ERR_SYNTAX, NULL, NULL, "missing override text");
+        return;
+    }
+    const char *eq = strchr(ovr, '=');
+    if (!eq) {
+        fail_override(c, CFG_ERR_SYNTAX, ovr, NULL, "expected section.key=value");
+        return;
+    }
+    if (copy_trimmed(key, sizeof key, ovr, eq) < 0) {
+        fail_override(c, CFG_ERR_UNKNOWN, ovr, NULL, "unknown key (name too long)");
+        return;
+    }
+    if (copy_trimmed(value, sizeof value, eq + 1, eq + strlen(eq)) < 0) {
+        fail_override(c, CFG_ERR_VALUE, ovr, key, "value too long");
+        return;
+    }
+    int k = find_dotted_key(key);
+    if (k < 0) {
+        fail_override(c, CFG_ERR_UNKNOWN, ovr, key,
+                      strchr(key, '.') ? "unknown key (see README, \"Scene files\")"
+                                       : "expected section.key=value");
+        return;
+    }
+    cfg_status st = value_apply(&scene_keys[k], value, &c->scene, msg, sizeof msg);
+    if (st) {
+        fail_override(c, st, ovr, key, msg);
+        return;
+    }
+    c->origin[k].override = index + 1;
+}
+
+/* A required key the file did not set. Named at its section header if the section is there,
+ * else at the last line of the file. */
+static void check_required(load_ctx *c)
+{
+    for (size_t i = 0; i < N_KEYS && !c->failed; i++) {
+        const cfg_scene_key *k = &scene_keys[i];
+        if (!(k->flags & CFG_KEY_REQUIRED) || c->origin[i].line) continue;
+        char dotted[128];
+        key_dotted(k, dotted, sizeof dotted);
+        int s = find_section(k->section);
+        int line = (s >= 0 && c->section_line[s]) ? c->section_line[s] : c->lineno;
+        c->lineno = line;
+        if (line > 0) {
+            fail_line(c, CFG_ERR_MISSING, dotted, "required key missing%s (%s, %s)",
+                      c->section_line[s] ? " from this section" : " (no such section)", k->unit,
+                      k->doc);
+        } else {
+            fail_line(c, CFG_ERR_MISSING, dotted, "required key missing (the file is empty)");
+            c->err->origin = CFG_ORIGIN_FILE;
+        }
+    }
+}
+
+/* Cross-field checks, named where the blamed key was last set. */
+static void check_scene(load_ctx *c, const char *const *overrides)
+{
+    char msg[sizeof c->err->message], key[96];
+    msg[0] = key[0] = '\0';
+    if (rod_scene_check(&c->scene, msg, sizeof msg, key, sizeof key) == 0) return;
+    cfg_error *e = c->err;
+    c->failed = 1;
+    e->status = CFG_ERR_CHECK;
+    snprintf(e->key, sizeof e->key, "%s", key);
+    snprintf(e->message, sizeof e->message, "%s", msg[0] ? msg : "the scene is not usable");
+    int k = find_dotted_key(key);
+    snprintf(e->file, sizeof e->file, "%s", c->name);
+    e->line = 0;
+    e->where[0] = '\0';
+    if (k < 0) {
+        e->origin = CFG_ORIGIN_FILE;
+    } else if (c->origin[k].override) {
+        const char *ovr = overrides[c->origin[k].override - 1];
+        e->origin = CFG_ORIGIN_OVERRIDE;
+        snprintf(e->file, sizeof e->file, "--set");
+        copy_printable(e->where, sizeof e->where, ovr, strlen(ovr));
+    } else if (c->origin[k].line) {
+        e->origin = CFG_ORIGIN_LINE;
+        e->line = c->origin[k].line;
+    } else {
+        e->origin = CFG_ORIGIN_DEFAULT;
+        snprintf(e->where, sizeof e->where, "default");
+    }
+}
+
+cfg_status cfg_scene_parse(const char *name, const char *text, size_t len,
+                           const char *const *overrides, int n_overrides, rod_scene *out,
+                           cfg_error *err)
+{
+    cfg_error local;
+    if (!err) err = &local;
+    cfg_error_clear(err);
+    if (!name) name = "(scene)";
+    load_ctx *c = calloc(1, sizeof *c);
+    if (!c) {
+        err->status = CFG_ERR_IO;
+        snprintf(err->file, sizeof err->file, "%s", name);
+        snprintf(err->message, sizeof err->message, "out of memory");
+        return err->status;
+    }
+    c->name = name;
+    c->text = text ? text : "";
+    c->len = text ? len : 0;
+    c->scene = rod_scene_default();
+    c->err = err;
+
+    int rc = ini_parse_stream(line_read, c, on_key, c);
+    if (!c->failed && rc != 0) {
+        /* inih saw an error we did not (should not happen: line_classify mirrors it). */
+        if (rc > 0) c->lineno = rc;
+        fail_line(c, rc > 0 ? CFG_ERR_SYNTAX : CFG_ERR_IO, NULL,
+                  rc > 0 ? "malformed line" : "the INI parser failed (out of memory?)");
+        if (rc <= 0) err->origin = CFG_ORIGIN_FILE, err->line = 0;
+    }
+    if (!c->failed) check_required(c);
+    if (!c->failed && n_overrides > 0 && !overrides)
+        fail_override(c, CFG_ERR_SYNTAX, NULL, NULL, "missing override list");
+    for (int i = 0; i < n_overrides && !c->failed; i++) override_apply(c, overrides[i], i);
+    if (!c->failed) check_scene(c, overrides);
+
+    cfg_status st = c->failed ? err->status : CFG_OK;
+    if (st == CFG_OK && out) *out = c->scene;
+    free(c);
+    return st;
+}
+
+cfg_status cfg_scene_load(const char *path, const char *const *overrides, int n_overrides,
+                          rod_scene *out, cfg_error *err)
+{
+    cfg_error local;
+    if (!err) err = &local;
+    cfg_error_clear(err);
+    snprintf(err->file, sizeof err->file, "%s", path ? path : "(null)");
+    err->origin = CFG_ORIGIN_FILE;
+    if (!path) {
+        err->status = CFG_ERR_IO;
+        snprintf(err->message, sizeof err->message, "no scene file given");
+        return err->status;
+    }
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        err->status = CFG_ERR_IO;
+        snprintf(err->message, sizeof err->message, "cannot open: %s", strerror(errno));
+        return err->status;
+    }
+    char *buf = malloc(CFG_SCENE_MAX_FILE_BYTES + 1);
+    if (!buf) {
+        fclose(f);
+        err->status = CFG_ERR_IO;
+        snprintf(err->message, sizeof err->message, "out of memory");
+        return err->status;
+    }
+    size_t len = fread(buf, 1, CFG_SCENE_MAX_FILE_BYTES + 1, f);
+    int read_error = ferror(f);
+    fclose(f);
+    if (read_error || len > CFG_SCENE_MAX_FILE_BYTES) {
+        free(buf);
+        err->status = CFG_ERR_IO;
+        snprintf(err->message, sizeof err->message, "%s",
+                 read_error ? "read error (is it a directory?)"
+                            : "file larger than 1 MiB; not a scene file");
+        return err->status;
+    }
+    cfg_status st = cfg_scene_parse(path, buf, len, overrides, n_overrides, out, err);
+    free(buf);
+    return st;
+}
