@@ -298,7 +298,7 @@ static void test_refuses_malformed_lines(void **state)
     expect_line_error(scene_edit(8, "[folds] x"), CFG_ERR_SYNTAX, 8, "", "after the section");
     expect_line_error(scene_edit(4, "= 1e-3"), CFG_ERR_SYNTAX, 4, "ribbon.", "empty key");
     /* A key before any section. */
-    char text[8192];
+    char text[8192 + 16];
     snprintf(text, sizeof text, "length = 1\n%s", scene_edit(0, NULL));
     expect_line_error(text, CFG_ERR_SYNTAX, 1, "length", "before any [section]");
     /* A line longer than the limit. */
