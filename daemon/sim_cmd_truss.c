@@ -44,8 +44,9 @@ static const char truss_usage[] =
     "  --imperfection E  relative split of the support rest angles, |E| < 1 (default 0.001 with\n"
     "                    --dynamics; the static modes need the perfect model and refuse it)\n"
     "  --damping C       viscous damping in sqrt(k_s m) for --dynamics, >= 0 (default 0)\n"
-    "  --mu-start M      load where the upper branch is picked up (default max(1, twice the\n"
-    "                    small-angle saddle-node load))\n"
+    "  --mu-start M      load where the upper branch is picked up (default: max(1, twice the\n"
+    "                    small-angle saddle-node load), doubled while the upper state is not\n"
+    "                    stable there, up to a compression mu alpha^2 of 0.45)\n"
     "  --printed-signs   use the paper's printed joint angles (theta_L - dtheta, theta_R + dtheta)\n"
     "                    instead, for comparison only\n"
     "  --json            print one JSON object on stdout\n"
@@ -158,19 +159,50 @@ static int truss_cli_parse(int argc, char **argv, truss_cli *c)
     return 0;
 }
 
-/* Small-angle saddle-node load, largest over L2 >= l2 (mu_SN decreases with L2). */
-static double mu_sn_small_angle(double lambda, double l2)
+/* Automatic starting load: the paper's mu = 1, raised to twice the small-angle saddle-node load
+ * of the smallest L2 searched (the saddle-node load falls with L2) so the upper state exists. */
+static double mu_start_auto(const truss_params *p, double l2_lo)
 {
-    return truss_analytic_mu_at_psi(lambda, l2, truss_analytic_psi_sn(lambda));
+    double psi_sn = truss_analytic_psi_sn(p->lambda);
+    return fmax(1.0, 2.0 * truss_analytic_mu_at_psi(p->lambda, l2_lo, psi_sn));
 }
 
-static truss_cont_opts cont_opts_for(const truss_cli *c, double l2_min)
+static truss_cont_opts cont_opts_for(const truss_cli *c, double l2_lo)
 {
     truss_cont_opts o = truss_cont_opts_default();
-    o.mu_start = isnan(c->mu_start) ? fmax(1.0, 2.0 * mu_sn_small_angle(c->p.lambda, l2_min))
-                                    : c->mu_start;
+    o.mu_start = isnan(c->mu_start) ? mu_start_auto(&c->p, l2_lo) : c->mu_start;
     o.mu_max = fmax(o.mu_max, 20.0 * o.mu_start);
     return o;
+}
+
+/* truss_continue, and with an automatic start, retried from twice the load while the upper state
+ * is not stable there (the pitchfork can lie above the paper's mu = 1), up to the compression
+ * limit. */
+static truss_error continue_auto(const truss_cli *c, const truss_params *p, truss_cont_opts *o,
+                                 truss_branch *b)
+{
+    truss_error e = truss_continue(p, o, 0, b);
+    for (int k = 0; k < 8 && e == TRUSS_ERR_NO_UPPER && isnan(c->mu_start); k++) {
+        double next = 2.0 * o->mu_start;
+        if (!(next * p->alpha * p->alpha < 0.5 * TRUSS_COMPRESSION_MAX))
+            break;
+        o->mu_start = next;
+        o->mu_max = fmax(o->mu_max, 20.0 * next);
+        e = truss_continue(p, o, 0, b);
+    }
+    return e;
+}
+
+/* The starting load must leave room between the supports: dl / l = mu alpha^2. */
+static int check_compression(const truss_cli *c, double mu_start)
+{
+    double comp = mu_start * c->p.alpha * c->p.alpha;
+    if (comp < TRUSS_COMPRESSION_MAX)
+        return 0;
+    fprintf(stderr, "ribbon-sim truss: the upper state needs mu_start = %g, a compression "
+                    "dl/l = mu alpha^2 = %g, beyond the model's %g: Lambda or alpha too large "
+                    "(or --mu-start too large)\n", mu_start, comp, TRUSS_COMPRESSION_MAX);
+    return -1;
 }
 
 static json_t *jnum(double v)
@@ -208,8 +240,10 @@ static int fail(const char *what, truss_error e)
 static int run_events(const truss_cli *c)
 {
     truss_cont_opts o = cont_opts_for(c, c->p.l2);
+    if (check_compression(c, o.mu_start) != 0)
+        return 1;
     truss_branch b;
-    truss_error e = truss_continue(&c->p, &o, 0, &b);
+    truss_error e = continue_auto(c, &c->p, &o, &b);
     if (e == TRUSS_ERR_NO_UPPER) {
         if (c->p.printed_signs && c->p.l2 >= 0.5)
             fprintf(stderr, "ribbon-sim truss: no stable upper state: with the printed signs the "
@@ -283,8 +317,19 @@ static int run_switch(const truss_cli *c)
     double l2_star = truss_analytic_l2_star(c->p.lambda);
     double lo = 0.25 * l2_star, hi = 2.0 * l2_star + 0.5;
     truss_cont_opts o = cont_opts_for(c, lo);
+    if (check_compression(c, o.mu_start) != 0)
+        return 1;
     double l2_switch = 0.0;
     truss_error e = truss_switch_find(&c->p, &o, lo, hi, 1e-7, &l2_switch);
+    /* as in continue_auto: an automatic start is raised while the upper state is unstable */
+    for (int k = 0; k < 8 && e == TRUSS_ERR_NO_UPPER && isnan(c->mu_start); k++) {
+        double next = 2.0 * o.mu_start;
+        if (!(next * c->p.alpha * c->p.alpha < 0.5 * TRUSS_COMPRESSION_MAX))
+            break;
+        o.mu_start = next;
+        o.mu_max = fmax(o.mu_max, 20.0 * next);
+        e = truss_switch_find(&c->p, &o, lo, hi, 1e-7, &l2_switch);
+    }
     if (e != TRUSS_OK) {
         char what[128];
         snprintf(what, sizeof what, "ordering switch between L2 = %g and %g", lo, hi);
@@ -314,8 +359,9 @@ static int run_dynamics(const truss_cli *c)
     truss_dyn_opts o = truss_dyn_opts_default();
     o.mu_rate = c->rate;
     o.damping = c->damping;
-    o.mu_start = isnan(c->mu_start) ? fmax(1.0, 2.0 * mu_sn_small_angle(c->p.lambda, c->p.l2))
-                                    : c->mu_start;
+    o.mu_start = isnan(c->mu_start) ? mu_start_auto(&c->p, c->p.l2) : c->mu_start;
+    if (check_compression(c, o.mu_start) != 0)
+        return 1;
     truss_dyn_result r;
     truss_error e = truss_dynamics_run(&c->p, &o, 0, &r);
     if (e != TRUSS_OK)

@@ -32,16 +32,33 @@
  * at psi = (Lambda/2)^(1/3); the antisymmetric stiffness vanishes at psi = L2 (L2 + 2) / 4 with the
  * consistent signs (with the printed signs at L2 (L2 + 2) / (4 (1 - 2 L2)) instead). */
 #include "truss.h"
+#include "truss_private.h"
 
 #include <gsl/gsl_eigen.h>
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_linalg.h>
 #include <gsl/gsl_matrix.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #define NZ 5 /* extended coordinates x1, y1, x2, y2, D */
+
+int truss_newton_converged(const truss_newton_opts *o, double alpha, const double *dx,
+                           const double *x, const double *scale, int n, double res_max)
+{
+    const double floor = 100.0 * DBL_EPSILON;
+    if (!(res_max <= o->res_tol * alpha * alpha * alpha + floor))
+        return 0;
+    if (res_max <= floor)
+        return 1; /* the residual is round-off: further steps only amplify noise */
+    for (int i = 0; i < n; i++) {
+        if (!(fabs(dx[i]) <= o->step_tol * alpha * alpha * scale[i] + 8.0 * DBL_EPSILON * fabs(x[i])))
+            return 0;
+    }
+    return 1;
+}
 
 const char *truss_error_message(truss_error err)
 {
@@ -51,7 +68,7 @@ const char *truss_error_message(truss_error err)
     case TRUSS_ERR_NAN: return "NaN or Inf in a computed quantity";
     case TRUSS_ERR_MAX_ITER: return "iteration cap reached without convergence";
     case TRUSS_ERR_SINGULAR: return "singular linear system";
-    case TRUSS_ERR_DIVERGED: return "diverged (a spring collapsed to zero length)";
+    case TRUSS_ERR_DIVERGED: return "left the model's range (a spring collapsed, or no descent)";
     case TRUSS_ERR_NO_UPPER: return "no stable upper state at the starting load";
     case TRUSS_ERR_NOT_FOUND: return "not found in the searched range";
     case TRUSS_ERR_GSL: return "a GSL routine failed";
@@ -111,7 +128,11 @@ static const double link_map[3][2][NZ] = {
     {{-1, 0, 1, 0, 0}, {0, 1, 0, -1, 0}}, /* middle: (x2 - x1, y1 - y2) */
 };
 
-static int link_eval(int k, const double z[NZ], int want_hess, link_prims *lp)
+/* A spring compressed below this fraction of its natural length counts as collapsed: the
+ * joint angle there is ill-defined and the model has left its range. */
+#define LINK_COLLAPSE 1e-3
+
+static int link_eval(int k, const double z[NZ], double rest, int want_hess, link_prims *lp)
 {
     const double(*J)[NZ] = link_map[k];
     double a = 0.0, b = 0.0;
@@ -121,7 +142,7 @@ static int link_eval(int k, const double z[NZ], int want_hess, link_prims *lp)
     }
     double r2 = a * a + b * b;
     double r = sqrt(r2);
-    if (!(r > 1e-12))
+    if (!(r > LINK_COLLAPSE * rest))
         return -1;
     lp->len = r;
     lp->ang = atan2(b, a);
@@ -200,7 +221,7 @@ truss_error truss_energy_eval(const truss_params *p, double mu, const double q[4
     int want_hess = (hess != NULL || grad_mu != NULL);
     link_prims lp[3];
     for (int k = 0; k < 3; k++) {
-        if (link_eval(k, z, want_hess, &lp[k]) != 0)
+        if (link_eval(k, z, k == 2 ? p->l2 : 1.0, want_hess, &lp[k]) != 0)
             return TRUSS_ERR_DIVERGED;
     }
     const double kt = p->lambda * p->alpha * p->alpha / 3.0;
@@ -290,54 +311,132 @@ truss_newton_opts truss_newton_opts_default(void)
     return o;
 }
 
+/* Lowest and highest eigenvalue of a symmetric 4 x 4 (copied; w sized for 4). */
+static truss_error eig_range(const double h[16], gsl_eigen_symm_workspace *w, double *lo, double *hi)
+{
+    double a[16], ev[4];
+    memcpy(a, h, sizeof a);
+    gsl_matrix_view av = gsl_matrix_view_array(a, 4, 4);
+    gsl_vector_view evv = gsl_vector_view_array(ev, 4);
+    if (gsl_eigen_symm(&av.matrix, &evv.vector, w) != GSL_SUCCESS)
+        return TRUSS_ERR_GSL;
+    *lo = *hi = ev[0];
+    for (int i = 0; i < 4; i++) {
+        if (!isfinite(ev[i]))
+            return TRUSS_ERR_NAN;
+        *lo = fmin(*lo, ev[i]);
+        *hi = fmax(*hi, ev[i]);
+    }
+    return TRUSS_OK;
+}
+
+/* Solve A x = b for a 4 x 4 A (destroyed) by LU on the stack. */
+static truss_error solve4(double a[16], double b[4], double x[4])
+{
+    size_t perm_data[4];
+    gsl_permutation perm = {4, perm_data};
+    gsl_matrix_view av = gsl_matrix_view_array(a, 4, 4);
+    gsl_vector_view bv = gsl_vector_view_array(b, 4);
+    gsl_vector_view xv = gsl_vector_view_array(x, 4);
+    int sign = 0;
+    if (gsl_linalg_LU_decomp(&av.matrix, &perm, &sign) != GSL_SUCCESS)
+        return TRUSS_ERR_GSL;
+    for (int i = 0; i < 4; i++) {
+        if (!(fabs(a[5 * i]) > 0.0))
+            return TRUSS_ERR_SINGULAR;
+    }
+    if (gsl_linalg_LU_solve(&av.matrix, &perm, &bv.vector, &xv.vector) != GSL_SUCCESS)
+        return TRUSS_ERR_SINGULAR;
+    for (int i = 0; i < 4; i++) {
+        if (!isfinite(x[i]))
+            return TRUSS_ERR_NAN;
+    }
+    return TRUSS_OK;
+}
+
+static truss_error statics_iterate(const truss_params *p, double mu, double x[4],
+                                   const truss_newton_opts *opts, gsl_eigen_symm_workspace *w,
+                                   int *iterations)
+{
+    static const double unit[4] = {1.0, 1.0, 1.0, 1.0};
+    for (int it = 1; it <= opts->max_iter; it++) {
+        double u, g[4], h[16];
+        truss_error e = truss_energy_eval(p, mu, x, &u, g, h, NULL);
+        if (e != TRUSS_OK)
+            return e;
+        double lo, hi;
+        if ((e = eig_range(h, w, &lo, &hi)) != TRUSS_OK)
+            return e;
+        /* Where H is not positive definite, shift it so its lowest eigenvalue becomes |lo|:
+         * the step is then a descent direction and the iteration heads for a minimum. */
+        double sigma = lo > 1e-12 * fabs(hi) ? 0.0 : 2.0 * fabs(lo) + 1e-12 * fabs(hi);
+        for (int i = 0; i < 4; i++)
+            h[5 * i] += sigma;
+        double rhs[4] = {-g[0], -g[1], -g[2], -g[3]}, dx[4];
+        if ((e = solve4(h, rhs, dx)) != TRUSS_OK)
+            return e;
+        /* Limit the step to a tenth of l1 so a poor guess cannot fold a spring through zero. */
+        double dmax = 0.0, gmax = 0.0, slope = 0.0;
+        for (int i = 0; i < 4; i++) {
+            dmax = fmax(dmax, fabs(dx[i]));
+            gmax = fmax(gmax, fabs(g[i]));
+        }
+        double lim = dmax > 0.1 ? 0.1 / dmax : 1.0;
+        for (int i = 0; i < 4; i++) {
+            dx[i] *= lim;
+            slope += g[i] * dx[i];
+        }
+        double xt[4];
+        for (int i = 0; i < 4; i++)
+            xt[i] = x[i] + dx[i];
+        if (lim == 1.0 && truss_newton_converged(opts, p->alpha, dx, xt, unit, 4, gmax)) {
+            memcpy(x, xt, sizeof xt);
+            if (iterations != NULL)
+                *iterations = it;
+            return TRUSS_OK;
+        }
+        /* Backtracking on the energy (Armijo, with a round-off allowance). Near a minimum the
+         * energy change of a Newton step can fall below the round-off of U (small alpha): a
+         * full step with a positive definite Hessian is then also taken when it reduces the
+         * largest gradient component. */
+        double t = 1.0;
+        int ls;
+        for (ls = 0; ls < 40; ls++) {
+            for (int i = 0; i < 4; i++)
+                xt[i] = x[i] + t * dx[i];
+            double ut, gt[4];
+            if (truss_energy_eval(p, mu, xt, &ut, gt, NULL, NULL) == TRUSS_OK) {
+                if (ut <= u + 1e-4 * t * slope + 1e-13 * fabs(u))
+                    break;
+                double gtmax = 0.0;
+                for (int i = 0; i < 4; i++)
+                    gtmax = fmax(gtmax, fabs(gt[i]));
+                if (ls == 0 && sigma == 0.0 && lim == 1.0 && gtmax < gmax)
+                    break;
+            }
+            t *= 0.5;
+        }
+        if (ls == 40)
+            return TRUSS_ERR_DIVERGED;
+        memcpy(x, xt, sizeof xt);
+    }
+    return TRUSS_ERR_MAX_ITER;
+}
+
 truss_error truss_statics_solve(const truss_params *p, double mu, double q[4],
                                 const truss_newton_opts *opts, int *iterations)
 {
     if (!isfinite(mu) || opts->max_iter <= 0 || !(opts->step_tol > 0.0) || !(opts->res_tol > 0.0))
         return TRUSS_ERR_PARAM;
-    const double a2 = p->alpha * p->alpha;
-    const double a3 = a2 * p->alpha;
+    gsl_eigen_symm_workspace *w = gsl_eigen_symm_alloc(4);
+    if (w == NULL)
+        return TRUSS_ERR_NOMEM;
     double x[4] = {q[0], q[1], q[2], q[3]};
-    for (int it = 1; it <= opts->max_iter; it++) {
-        double g[4], h[16];
-        truss_error e = truss_energy_eval(p, mu, x, NULL, g, h, NULL);
-        if (e != TRUSS_OK)
-            return e;
-        /* Solve H dx = -g by LU on the stack (no allocation). */
-        size_t perm_data[4];
-        gsl_permutation perm = {4, perm_data};
-        gsl_matrix_view hv = gsl_matrix_view_array(h, 4, 4);
-        double rhs[4] = {-g[0], -g[1], -g[2], -g[3]};
-        double dx[4];
-        gsl_vector_view rv = gsl_vector_view_array(rhs, 4);
-        gsl_vector_view dv = gsl_vector_view_array(dx, 4);
-        int sign = 0;
-        if (gsl_linalg_LU_decomp(&hv.matrix, &perm, &sign) != GSL_SUCCESS)
-            return TRUSS_ERR_GSL;
-        if (fabs(gsl_linalg_LU_det(&hv.matrix, sign)) < 1e-300)
-            return TRUSS_ERR_SINGULAR;
-        if (gsl_linalg_LU_solve(&hv.matrix, &perm, &rv.vector, &dv.vector) != GSL_SUCCESS)
-            return TRUSS_ERR_SINGULAR;
-        /* Limit the step to a tenth of l1 so a poor guess cannot fold a spring through zero. */
-        double dmax = 0.0, gmax = 0.0;
-        for (int i = 0; i < 4; i++) {
-            if (!isfinite(dx[i]))
-                return TRUSS_ERR_NAN;
-            dmax = fmax(dmax, fabs(dx[i]));
-            gmax = fmax(gmax, fabs(g[i]));
-        }
-        double scale = dmax > 0.1 ? 0.1 / dmax : 1.0;
-        for (int i = 0; i < 4; i++)
-            x[i] += scale * dx[i];
-        if (dmax / a2 < opts->step_tol && gmax / a3 < opts->res_tol) {
-            for (int i = 0; i < 4; i++)
-                q[i] = x[i];
-            if (iterations != NULL)
-                *iterations = it;
-            return TRUSS_OK;
-        }
-    }
-    return TRUSS_ERR_MAX_ITER;
+    truss_error e = statics_iterate(p, mu, x, opts, w, iterations);
+    gsl_eigen_symm_free(w);
+    if (e == TRUSS_OK)
+        memcpy(q, x, sizeof x);
+    return e;
 }
 
 /* Lowest eigenvalue of the 2 x 2 block B^T H B for orthonormal columns b1, b2. */

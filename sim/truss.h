@@ -34,7 +34,8 @@ typedef enum truss_error {
     TRUSS_ERR_NAN,          /* a NaN or Inf appeared in a computed quantity */
     TRUSS_ERR_MAX_ITER,     /* an iteration hit its cap without converging */
     TRUSS_ERR_SINGULAR,     /* a linear system was singular */
-    TRUSS_ERR_DIVERGED,     /* Newton left the physical region (a spring collapsed to zero length) */
+    TRUSS_ERR_DIVERGED,     /* left the model's range: a spring collapsed (below 1e-3 of its
+                               natural length), or no descent was found */
     TRUSS_ERR_NO_UPPER,     /* no stable upper (inverted) state at the starting load */
     TRUSS_ERR_NOT_FOUND,    /* the requested event or switch was not found in the searched range */
     TRUSS_ERR_GSL,          /* a GSL routine returned an error code */
@@ -66,7 +67,8 @@ truss_error truss_params_check(const truss_params *p, char *msg, size_t msglen);
 
 /* Energy U, gradient g = dU/dq (4), Hessian H = d2U/dq2 (4 x 4, row-major) and load vector
  * g_mu = d(dU/dq)/dmu (4) at load mu and configuration q. Any output pointer may be NULL.
- * Fails with TRUSS_ERR_DIVERGED when a spring has zero length (angles undefined there). */
+ * Fails with TRUSS_ERR_DIVERGED when a spring is shorter than 1e-3 of its natural length (the
+ * joint angles are undefined at zero length). */
 truss_error truss_energy_eval(const truss_params *p, double mu, const double q[4], double *energy,
                               double grad[4], double hess[16], double grad_mu[4]);
 
@@ -83,14 +85,20 @@ void truss_config_guess(const truss_params *p, double mu, double psi_s, double q
 
 typedef struct truss_newton_opts {
     int max_iter;        /* Newton iteration cap per solve, > 0 */
-    double step_tol;     /* convergence: max |dq| / (alpha^2 l1) below this */
-    double res_tol;      /* and max |dU/dq| / (k_s l1 alpha^3) below this */
+    double step_tol;     /* convergence: every |dq_i| <= step_tol alpha^2 l1 + 8 eps |q_i| */
+    double res_tol;      /* and max |dU/dq| <= res_tol k_s l1 alpha^3 + 100 eps k_s l1 (eps: the
+                            double epsilon; the second terms are round-off floors, which matter
+                            for alpha below about 0.01); a residual at that floor alone passes */
 } truss_newton_opts;
 
 truss_newton_opts truss_newton_opts_default(void);
 
-/* Static equilibrium dU/dq = 0 at load mu by Newton from q (in: guess, out: solution; left
- * unchanged on failure). iterations may be NULL. */
+/* A stable static equilibrium (a local minimum of U) at load mu from the guess q (in: guess,
+ * out: solution; unchanged on failure): Newton's method, with the Hessian shifted where it is
+ * not positive definite and a backtracking line search on U, so it converges to a minimum
+ * (quadratically near one). It stops at a saddle only from a guess on the saddle's stable
+ * manifold (a symmetric guess at a symmetric saddle, say): check with truss_stability_eval.
+ * iterations may be NULL. */
 truss_error truss_statics_solve(const truss_params *p, double mu, double q[4],
                                 const truss_newton_opts *opts, int *iterations);
 
@@ -151,10 +159,14 @@ typedef struct truss_event {
     int step;              /* index of the branch point just before the event */
 } truss_event;
 
+/* Largest compression dl / l = mu alpha^2 the continuation and the dynamics accept. */
+#define TRUSS_COMPRESSION_MAX 0.9
+
 typedef struct truss_cont_opts {
     double mu_start;       /* load where the upper branch is picked up (paper: 1) */
-    double mu_max;         /* the branch ends when mu exceeds this (the middle branch runs to
-                              mu -> infinity as psi_S -> 0) */
+    double mu_max;         /* the branch ends when mu exceeds this or TRUSS_COMPRESSION_MAX /
+                              alpha^2 (the middle branch runs to mu -> infinity as psi_S -> 0);
+                              mu_start must lie below both */
     double psi_min;        /* the branch ends when psi_S falls below this (> 0) */
     double ds;             /* initial arclength step in scaled coordinates (x/alpha^2, y/alpha, mu) */
     double ds_min, ds_max; /* step bounds */
@@ -188,14 +200,16 @@ void truss_branch_free(truss_branch *b);
 
 /* The L2 where the ordering switches (psi_S at the pitchfork equals psi_S at the saddle-node),
  * from the full model, by bracketing in [l2_lo, l2_hi] and Illinois false position to l2_tol.
- * p->l2 is ignored. */
+ * Where the branch shows no pitchfork (it ended first) the saddle-node counts as first.
+ * p->l2 is ignored. TRUSS_ERR_NOT_FOUND when the order is the same at both ends. */
 truss_error truss_switch_find(const truss_params *p, const truss_cont_opts *opts, double l2_lo,
                               double l2_hi, double l2_tol, double *l2_switch);
 
 /* ---- dynamics (truss_dynamics.c) ---- */
 
 typedef struct truss_dyn_opts {
-    double mu_start;       /* load at T = 0, the run starts at rest in the upper state (paper: 1) */
+    double mu_start;       /* load at T = 0, the run starts at rest in the upper state (paper: 1);
+                              mu_start alpha^2 < TRUSS_COMPRESSION_MAX */
     double mu_rate;        /* d(1 - mu)/dT, > 0 (paper: 0.001) */
     double mu_end;         /* the run stops when mu reaches this */
     double damping;        /* viscous damping c in sqrt(k_s m) (force -c v on each mass), >= 0 */

@@ -14,7 +14,8 @@
  * Pseudo-arclength: tangent tau from [dF/dX; tau_prev^T] tau = (0, 0, 1), normalised (the start
  * tangent points to decreasing mu: releasing the compression); predictor X + ds tau; corrector
  * Newton on (F(X), tau . (X - X_pred)) = 0 with a 3 x 3 LU. ds grows by 1.5 after an easy
- * corrector (<= 4 iterations), halves after a failed one, within [ds_min, ds_max].
+ * corrector (<= 4 iterations) with a tangent that turned little, halves after a failed corrector
+ * or a tangent that turned by more than about 15 degrees, within [ds_min, ds_max].
  *
  * Events, from the full Hessian split into its symmetric and antisymmetric 2 x 2 blocks (exact on
  * this branch, since H commutes with the mirror map): the saddle-node is where the lowest
@@ -30,12 +31,18 @@
  * the event met first is the one with the larger psi_S; the switch function of L2 is
  * psi_S(pitchfork) - psi_S(saddle-node). */
 #include "truss.h"
+#include "truss_private.h"
 
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_linalg.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* A step is refused when the tangent turns by more than about 15 degrees over it, and the next
+ * one may grow only when it turned by less than about 6 degrees. */
+#define TANGENT_COS_MIN 0.966
+#define TANGENT_COS_GROW 0.995
 
 const char *truss_event_name(truss_event_type t)
 {
@@ -72,7 +79,8 @@ typedef struct cont_state {
 typedef struct cont_ctx {
     const truss_params *p;
     const truss_cont_opts *o;
-    double w[3]; /* X = u * w */
+    double w[3];  /* X = u * w */
+    double xs[3]; /* Newton step scales: the tolerance on X is step_tol itself */
 } cont_ctx;
 
 static void x_to_q(const cont_ctx *c, const double X[3], double q[4], double *mu)
@@ -173,7 +181,6 @@ static truss_error cont_tangent(const cont_ctx *c, const double X[3], const doub
 static truss_error cont_correct(const cont_ctx *c, const double X0[3], const double tau0[3],
                                 double h, double X[3], int *iters)
 {
-    const double a3 = c->p->alpha * c->p->alpha * c->p->alpha;
     double Xp[3], x[3];
     for (int i = 0; i < 3; i++)
         Xp[i] = x[i] = X0[i] + h * tau0[i];
@@ -198,7 +205,7 @@ static truss_error cont_correct(const cont_ctx *c, const double X0[3], const dou
             return TRUSS_ERR_DIVERGED;
         for (int i = 0; i < 3; i++)
             x[i] += dx[i];
-        if (dmax < c->o->newton.step_tol && fmaxv / a3 < c->o->newton.res_tol) {
+        if (truss_newton_converged(&c->o->newton, c->p->alpha, dx, x, c->xs, 3, fmaxv)) {
             for (int i = 0; i < 3; i++)
                 X[i] = x[i];
             if (iters != NULL)
@@ -328,7 +335,12 @@ truss_error truss_continue(const truss_params *p, const truss_cont_opts *opts, i
     truss_error e = cont_opts_check(opts);
     if (e != TRUSS_OK)
         return e;
-    cont_ctx c = {p, opts, {1.0 / (p->alpha * p->alpha), 1.0 / p->alpha, 1.0}};
+    /* the compression dl / l = mu alpha^2 must leave room between the supports */
+    const double mu_max = fmin(opts->mu_max, TRUSS_COMPRESSION_MAX / (p->alpha * p->alpha));
+    if (!(opts->mu_start < mu_max))
+        return TRUSS_ERR_PARAM;
+    const double ia2 = 1.0 / (p->alpha * p->alpha);
+    cont_ctx c = {p, opts, {ia2, 1.0 / p->alpha, 1.0}, {ia2, ia2, ia2}};
 
     /* Upper state at mu_start: guess from the largest root of the small-angle cubic. */
     double roots[3];
@@ -380,6 +392,19 @@ truss_error truss_continue(const truss_params *p, const truss_cont_opts *opts, i
             ds *= 0.5;
             continue;
         }
+        /* Step-size control on the turn of the tangent: a sharp fold (small Lambda) would
+         * otherwise be overshot and the corrector could land on another branch. */
+        double tau1[3];
+        e = cont_tangent(&c, X1, st.tau, tau1);
+        if (e != TRUSS_OK) {
+            out->end_reason = e;
+            break;
+        }
+        double turn = st.tau[0] * tau1[0] + st.tau[1] * tau1[1] + st.tau[2] * tau1[2];
+        if (turn < TANGENT_COS_MIN && ds * 0.5 >= opts->ds_min) {
+            ds *= 0.5;
+            continue;
+        }
         truss_point pt1;
         e = point_fill(&c, X1, pt.s + ds, &pt1);
         if (e != TRUSS_OK) {
@@ -403,12 +428,6 @@ truss_error truss_continue(const truss_params *p, const truss_cont_opts *opts, i
             }
             out->pitchfork.step = step;
         }
-        double tau1[3];
-        e = cont_tangent(&c, X1, st.tau, tau1);
-        if (e != TRUSS_OK) {
-            out->end_reason = e;
-            break;
-        }
         memcpy(st.X, X1, sizeof X1);
         memcpy(st.tau, tau1, sizeof tau1);
         pt = pt1;
@@ -418,11 +437,11 @@ truss_error truss_continue(const truss_params *p, const truss_cont_opts *opts, i
             out->end_reason = TRUSS_OK;
             break;
         }
-        if (pt.mu > opts->mu_max || pt.psi_s < opts->psi_min || pt.mu < -opts->mu_max) {
+        if (pt.mu > mu_max || pt.psi_s < opts->psi_min || pt.mu < -mu_max) {
             out->end_reason = TRUSS_ERR_NOT_FOUND;
             break;
         }
-        if (iters <= 4)
+        if (iters <= 4 && turn > TANGENT_COS_GROW)
             ds = fmin(ds * 1.5, opts->ds_max);
     }
 
@@ -457,11 +476,9 @@ static truss_error switch_value(const truss_params *p0, const truss_cont_opts *o
     truss_error e = truss_continue(&p, o, 0, &b);
     if (e != TRUSS_OK)
         return e;
-    if (!b.pitchfork.found) {
-        truss_branch_free(&b);
-        return TRUSS_ERR_NOT_FOUND;
-    }
-    *f = b.pitchfork.at.psi_s - b.saddle_node.at.psi_s;
+    /* No pitchfork on the followed branch: the saddle-node comes first; count the pitchfork at
+     * psi_S = 0 (where the small-angle one goes as L2 -> 0) to keep f of one sign there. */
+    *f = (b.pitchfork.found ? b.pitchfork.at.psi_s : 0.0) - b.saddle_node.at.psi_s;
     truss_branch_free(&b);
     return TRUSS_OK;
 }

@@ -98,6 +98,8 @@ truss_error truss_dynamics_run(const truss_params *p, const truss_dyn_opts *opts
     truss_error e = dyn_opts_check(opts);
     if (e != TRUSS_OK)
         return e;
+    if (!(opts->mu_start * p->alpha * p->alpha < TRUSS_COMPRESSION_MAX))
+        return TRUSS_ERR_PARAM;
 
     /* static upper state at mu_start */
     double roots[3];

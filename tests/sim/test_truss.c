@@ -291,6 +291,34 @@ static void test_truss_switch(void **state)
     assert_int_equal(truss_switch_find(&p, &o, 0.7, 1.0, 1e-7, &l2_switch), TRUSS_ERR_NOT_FOUND);
 }
 
+/* The switch converges to the small-angle L2* as alpha -> 0 (alpha = 0.001 exercises the
+ * round-off floors of the Newton tests), and a sharp fold (Lambda = 0.001) is not overshot. */
+static void test_truss_switch_limits(void **state)
+{
+    (void)state;
+    truss_cont_opts o = truss_cont_opts_default();
+    truss_params p = truss_params_default();
+    double l2_switch = 0.0;
+    p.alpha = 0.001;
+    assert_int_equal(truss_switch_find(&p, &o, 0.3, 1.0, 1e-8, &l2_switch), TRUSS_OK);
+    assert_close(l2_switch, truss_analytic_l2_star(p.lambda), 1e-5);
+    p.alpha = 0.1;
+    p.lambda = 0.001;
+    double l2_star = truss_analytic_l2_star(p.lambda);
+    assert_close(l2_star, 0.1478, 1e-4);
+    assert_int_equal(truss_switch_find(&p, &o, 0.25 * l2_star, 2.0 * l2_star, 1e-8, &l2_switch), TRUSS_OK);
+    assert_close(l2_switch, l2_star, 1e-3);
+    /* past that sharp fold the middle branch is followed down to its pitchfork */
+    truss_branch b;
+    p.l2 = 0.25 * l2_star;
+    assert_int_equal(truss_continue(&p, &o, 0, &b), TRUSS_OK);
+    assert_true(b.pitchfork.found);
+    double psi_pf = truss_analytic_psi_pf(p.l2);
+    assert_close(b.pitchfork.at.psi_s, psi_pf, 0.05 * psi_pf);
+    assert_true(b.pitchfork.at.psi_s < b.saddle_node.at.psi_s);
+    truss_branch_free(&b);
+}
+
 /* The paper's printed joint signs give a different model: its pitchfork sits at
  * psi = L2 (L2 + 2) / (4 (1 - 2 L2)) (1.2 at L2 = 0.4, not 0.24), and for L2 >= 1/2 its upper
  * state is never stable, so the paper's L2 = 0.8 case could not exist. */
@@ -324,6 +352,7 @@ int main(void)
         cmocka_unit_test(test_truss_psi_sn_small_angle),
         cmocka_unit_test(test_truss_classification),
         cmocka_unit_test(test_truss_switch),
+        cmocka_unit_test(test_truss_switch_limits),
         cmocka_unit_test(test_truss_printed_signs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
