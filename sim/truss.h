@@ -179,21 +179,25 @@ typedef struct truss_cont_opts {
 truss_cont_opts truss_cont_opts_default(void);
 
 typedef struct truss_branch {
-    truss_point *points;   /* the symmetric branch, from the upper state at mu_start */
+    truss_point *points;   /* the symmetric branch, from the upper state at mu_start (NULL
+                              with keep_points = 0) */
     size_t n;              /* number of points */
     truss_event saddle_node;
     truss_event pitchfork;
     truss_event_type first;/* first instability met while releasing from the upper state */
-    truss_error end_reason;/* TRUSS_OK when the branch ended at mu_max / psi_min with both
-                              events found, otherwise why it stopped early */
+    truss_error end_reason;/* why the branch ended: TRUSS_OK once both events were found,
+                              TRUSS_ERR_NOT_FOUND at mu_max / psi_min / the compression limit
+                              (no pitchfork met: the saddle-node came first), else a failure */
 } truss_branch;
 
 /* Follow the symmetric branch of the perfect model (imperfection must be 0) from the stable
  * upper state at mu_start by pseudo-arclength continuation in (x1, y1, mu) restricted to
  * symmetric configurations, past the saddle-node; locate the saddle-node (turning point, zero
  * symmetric eigenvalue) and the pitchfork (zero antisymmetric eigenvalue) by the Illinois
- * false-position method on the arclength. Points may be NULL-ed out with keep_points = 0.
- * On success the branch owns memory: release with truss_branch_free. */
+ * false-position method on the arclength; stop once both are found. Fails (returning why the
+ * branch ended, and freeing it) when the saddle-node was not reached; TRUSS_ERR_NO_UPPER when
+ * the symmetric upper state at mu_start is not stable. On success the branch may own memory
+ * (keep_points = 1): release with truss_branch_free. */
 truss_error truss_continue(const truss_params *p, const truss_cont_opts *opts, int keep_points,
                            truss_branch *out);
 void truss_branch_free(truss_branch *b);

@@ -452,9 +452,10 @@ truss_error truss_continue(const truss_params *p, const truss_cont_opts *opts, i
         out->first = TRUSS_EVENT_SADDLE_NODE;
     else if (out->pitchfork.found)
         out->first = TRUSS_EVENT_PITCHFORK;
-    /* Whatever ended the branch, the located events stay valid; the first event met on the
-     * stable part is known once any event is found at a point where the other test is still
-     * positive. Without the saddle-node the analysis is incomplete: report why. */
+    /* Located events stay valid whatever ended the branch. A pitchfork not found means the
+     * saddle-node came first (a pitchfork before it would lie on the part already followed).
+     * The saddle-node itself must be found: without it the analysis is incomplete, and the
+     * caller gets the reason the branch ended. */
     if (!out->saddle_node.found) {
         truss_error why = out->end_reason == TRUSS_OK ? TRUSS_ERR_NOT_FOUND : out->end_reason;
         truss_branch_free(out);
