@@ -19,7 +19,7 @@ rod_scene rod_scene_default(void)
     s.youngs_modulus = 1e9;
     s.shear_modulus = 1e9 / 3.0;
     s.density = 1000.0;
-    s.fold_angle_deg = 90.0;
+    s.fold_angle_deg = -90.0;
     s.fold_position = 0.13;
     s.fold_stiffness_factor = 1e4;
     s.fold_angle_rel = 1e-6;
@@ -30,7 +30,7 @@ rod_scene rod_scene_default(void)
     s.route = ROD_ROUTE_COMPRESS_THEN_FOLD;
     s.dt = 1e-3;
     s.damping = 0.5;
-    s.tolerance = 1e-8;
+    s.tolerance = 1e-6;
     s.max_iterations = 50;
     s.snap_speed = 1.0;
     s.asym_threshold = 0.05;

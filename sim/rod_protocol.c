@@ -1,0 +1,212 @@
+/* rod_protocol.c: the simulated trial (see rod_protocol.h for the definitions of the snap and
+ * of the fast mode).
+ *
+ * Each step places the moving clamp at Delta W(t + dt) = rate (t + dt) / l, predicts the free
+ * DOFs with the previous velocity, and solves the implicit Euler equations
+ *     M (q - q_n - dt v_n) / dt^2 + mu M (q - q_n) / dt + grad E(q) = 0
+ * with Newton (rod_solver.h, LDL^T while the system matrix stays positive definite, LU
+ * otherwise). Energy bookkeeping (work of the clamp by the trapezoidal rule on the reaction,
+ * damping losses mu v^T M v dt) is reported in every sample so the energy balance can be
+ * checked. */
+#include "rod_protocol.h"
+#include "rod_observe.h"
+#include "rod_route.h"
+#include "rod_solver.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static double wall_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+rod_predict_opts rod_predict_opts_default(void)
+{
+    rod_predict_opts o;
+    memset(&o, 0, sizeof o);
+    o.post_snap_time = 2.0;
+    return o;
+}
+
+/* Work increment of the prescribed DOFs: 1/2 (g_old + g_new) . (q - q_n) over clamped DOFs. */
+static double clamp_work(const rod *r, const double *g_old, const double *g_new, const double *q_n)
+{
+    double w = 0.0;
+    for (int k = 0; k < r->ndof; k++) {
+        if (k >= ROD_FREE_BEGIN && k < r->free_end) continue;
+        w += 0.5 * (g_old[k] + g_new[k]) * (r->q[k] - q_n[k]);
+    }
+    return w;
+}
+
+rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_prediction *out,
+                       char *err, size_t errlen)
+{
+    double t_start = wall_now();
+    rod_predict_opts def = rod_predict_opts_default();
+    if (!o) o = &def;
+    memset(out, 0, sizeof *out);
+    rod *r = NULL;
+    rod_status st = rod_alloc(sc, &r, err, errlen);
+    if (st != ROD_OK) return st;
+    rod_solver *s = rod_solver_alloc(r);
+    int nd = r->ndof;
+    double *q_n = malloc(sizeof(double) * (size_t)nd), *v = calloc((size_t)nd, sizeof(double));
+    double *g_old = malloc(sizeof(double) * (size_t)nd), *k1 = malloc(sizeof(double) * (size_t)r->n);
+    if (!s || !q_n || !v || !g_old || !k1) {
+        st = ROD_ERR_ALLOC;
+        if (err) snprintf(err, errlen, "out of memory allocating the simulator workspace");
+        goto done;
+    }
+
+    rod_route_report rr = {0};
+    st = rod_route_to_state(r, s, sc, +1, &rr);
+    out->stage_route = 1;
+    if (st != ROD_OK) {
+        if (err)
+            snprintf(err, errlen, "could not reach the upper state at Delta L = %g (%s, %.0f%% of the route done)",
+                     sc->compression, rod_status_message(st), 100.0 * rr.reached);
+        goto done;
+    }
+    rod_obs ob;
+    rod_observe(r, k1, &ob);
+    out->dz_upper = ob.dz;
+    if (!(ob.dz > 0.0)) {
+        st = ROD_ERR_BRANCH_LOST;
+        if (err) snprintf(err, errlen, "the route ended with Delta Z = %g, not in the upper state", ob.dz);
+        goto done;
+    }
+    memcpy(g_old, rod_solver_gradient(s), sizeof(double) * (size_t)nd);
+
+    double l = r->length, dl = sc->compression, rate = sc->shear_rate / l;
+    double dt_base = sc->dt, dt = dt_base, dt_max = 100.0 * dt_base, mu = sc->damping;
+    double t = 0.0, dw = 0.0, dz_prev = ob.dz, a_prev = ob.a;
+    double work = 0.0, damped = 0.0, onset_dw = 0.0, t_detect = 0.0, peak = 0.0;
+    double slow = 0.1 * sc->snap_speed;
+    int detected = 0;
+    long cap = (long)ceil(sc->shear_max / rate / dt_base + o->post_snap_time / dt_base) + 1000;
+    rod_newton_opts no = rod_newton_opts_static(sc);
+    no.q_n = q_n;
+    no.v_n = v;
+    no.positive_definite = 1;
+    out->stage_shear = 1;
+    out->stage_damping = mu > 0.0;
+
+    for (;;) {
+        if (!detected && dw >= sc->shear_max - 1e-12) break;
+        if (detected && t - t_detect >= o->post_snap_time) break;
+        if (out->steps + out->rejected >= cap) {
+            st = ROD_ERR_TIME_LIMIT;
+            if (err) snprintf(err, errlen, "step cap of %ld reached at Delta W = %g", cap, dw);
+            goto done;
+        }
+        memcpy(q_n, r->q, sizeof(double) * (size_t)nd);
+        rod_state_save(r, s, 1);
+        double dw_new = fmin(rate * (t + dt), detected ? 1e300 : sc->shear_max);
+        double h = dt;
+        if (!detected && dw_new >= sc->shear_max) h = (sc->shear_max - dw) / rate;
+        if (h <= 0.0) h = dt;
+        rod_set_clamps(r, dl, dw_new);
+        for (int k = ROD_FREE_BEGIN; k < r->free_end; k++) r->q[k] += h * v[k];
+        no.c1 = 1.0 / (h * h) + mu / h;
+        no.c2 = 1.0 / h;
+        rod_newton_report nr;
+        rod_status ss = rod_newton_solve(r, s, &no, &nr);
+        if (ss != ROD_OK) {
+            rod_state_restore(r, s, 1);
+            out->rejected++;
+            dt *= 0.5;
+            if (dt < dt_base / 1024.0) {
+                st = ss;
+                if (err)
+                    snprintf(err, errlen, "time step failed at Delta W = %.6f even at dt = %g s: %s (residual %.3g)",
+                             dw, dt, rod_status_message(ss), nr.residual_rel);
+                goto done;
+            }
+            continue;
+        }
+        if (o->adaptive && h > dt_base) {
+            /* Fast mode resolves every fast motion with the base step: a long step that moved
+             * the ribbon noticeably is redone shorter. */
+            rod_observe(r, k1, &ob);
+            if (fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev)) > 2e-3) {
+                rod_state_restore(r, s, 1);
+                out->rejected++;
+                dt = fmax(0.25 * dt, dt_base);
+                continue;
+            }
+        }
+        const double *g = rod_solver_gradient(s);
+        double kin = 0.0, dis = 0.0;
+        for (int k = 0; k < nd; k++) {
+            v[k] = (r->q[k] - q_n[k]) / h;
+            if (k >= ROD_FREE_BEGIN && k < r->free_end) {
+                kin += 0.5 * r->mass[k] * v[k] * v[k];
+                dis += mu * r->mass[k] * v[k] * v[k] * h;
+            }
+        }
+        work += clamp_work(r, g_old, g, q_n);
+        damped += dis;
+        memcpy(g_old, g, sizeof(double) * (size_t)nd);
+        t += h;
+        dw = dw_new;
+        out->steps++;
+        rod_observe(r, k1, &ob);
+        if (!isfinite(ob.dz) || !isfinite(ob.a) || !isfinite(ob.a_cam)) {
+            st = ROD_ERR_NAN;
+            if (err) snprintf(err, errlen, "non-finite observation at Delta W = %g", dw);
+            goto done;
+        }
+        double speed = fabs(ob.dz - dz_prev) / h;
+        if (!detected) {
+            if (speed < slow) {
+                onset_dw = dw;
+                peak = fabs(ob.a);
+            } else {
+                peak = fmax(peak, fabs(ob.a));
+            }
+            if (speed > sc->snap_speed) {
+                detected = 1;
+                t_detect = t;
+                out->snapped = 1;
+                out->snap_dw = onset_dw;
+            }
+        } else {
+            peak = fmax(peak, fabs(ob.a));
+        }
+        if (o->on_sample) {
+            rod_sample smp = {t, dw, ob.dz, ob.a, ob.a_cam, ob.dz_cam, 0, kin, work, damped};
+            smp.elastic = rod_energy(r);
+            if (o->on_sample(o->user, &smp, r)) break;
+        }
+        double change = fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev));
+        dz_prev = ob.dz;
+        a_prev = ob.a;
+        if (o->adaptive) {
+            if (!detected && change < 5e-4 && nr.iterations <= 4 && speed < 0.5 * slow)
+                dt = fmin(1.5 * dt, dt_max);
+            else if (change > 1e-3 || speed >= 0.5 * slow || detected)
+                dt = fmax(0.5 * dt, dt_base);
+        } else if (dt < dt_base) {
+            dt = fmin(2.0 * dt, dt_base);
+        }
+    }
+    out->peak_abs_a = peak;
+    out->asymmetric = out->snapped && peak > sc->asym_threshold;
+    out->dz_final = ob.dz;
+    out->sim_time = t;
+
+done:
+    if (r) out->count = r->count;
+    out->wall_s = wall_now() - t_start;
+    free(q_n); free(v); free(g_old); free(k1);
+    rod_solver_free(s);
+    rod_free(r);
+    return st;
+}

@@ -1,0 +1,61 @@
+/* rod_protocol.h: the trial protocol simulated end to end, which is what "predict" means:
+ * reach the upper state at Delta L (rod_route.h), then shear at the scene's constant rate with
+ * the axial gap held, integrating the dynamics by implicit Euler with mass-proportional damping,
+ * recording Delta Z, A and A_cam every step, detecting the snap and classifying its pathway.
+ *
+ * Snap (README "Snap"): the ribbon is snapping at the first step where |d(Delta Z)/dt| exceeds
+ * snap.speed (1/s). The snap Delta W is the shear at the last step before that where
+ * |d(Delta Z)/dt| was still below a tenth of snap.speed (the onset). The pathway is asymmetric
+ * when the peak |A| from the onset until the ribbon settles (or 2 s of simulated time after
+ * detection) exceeds snap.asym_threshold, symmetric otherwise. A run that reaches
+ * protocol.shear_max without a snap reports "no snap".
+ *
+ * Fast mode (adaptive time stepping): the step grows up to 100 dt while the ribbon moves
+ * quasi-statically (|change of Delta Z| per step below 5e-4 and Newton converging in few
+ * iterations) and returns to dt as soon as it speeds up; steps are rejected and halved when
+ * Newton fails. */
+#ifndef RIBBON_SIM_ROD_PROTOCOL_H
+#define RIBBON_SIM_ROD_PROTOCOL_H
+
+#include "rod.h"
+
+typedef struct rod_sample {
+    double t;        /* s since the shear started */
+    double dw, dz, a, a_cam, dz_cam;
+    double elastic;  /* J, elastic (+ gravity) energy */
+    double kinetic;  /* J, kinetic energy of the free DOFs */
+    double work;     /* J, work done on the ribbon by the moving clamp so far */
+    double damped;   /* J, energy removed by the damping so far */
+} rod_sample;
+
+/* Called after every accepted step; return non-zero to stop the run (reported as stopped). */
+typedef int (*rod_sample_fn)(void *user, const rod_sample *s, const rod *r);
+
+typedef struct rod_predict_opts {
+    int adaptive;          /* 1: adaptive time stepping (fast mode) */
+    double post_snap_time; /* s of simulated time followed after the snap is detected (2) */
+    rod_sample_fn on_sample;
+    void *user;
+} rod_predict_opts;
+
+rod_predict_opts rod_predict_opts_default(void);
+
+typedef struct rod_prediction {
+    int snapped;           /* 1 when a snap was detected */
+    double snap_dw;        /* Delta W at the snap onset (valid when snapped) */
+    int asymmetric;        /* pathway: 1 asymmetric, 0 symmetric */
+    double peak_abs_a;     /* rad, peak |A| during the snap */
+    double dz_upper;       /* Delta Z of the upper state before shearing */
+    double dz_final;       /* Delta Z at the end of the run */
+    long steps;            /* accepted time steps */
+    long rejected;         /* rejected (halved) steps */
+    double sim_time;       /* s of simulated shear time */
+    double wall_s;         /* s of wall time for the whole prediction */
+    rod_counters count;    /* what was evaluated */
+    int stage_route, stage_shear, stage_damping; /* stages that ran */
+} rod_prediction;
+
+rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_prediction *out,
+                       char *err, size_t errlen);
+
+#endif

@@ -1,0 +1,179 @@
+/* rod_route.c: quasi-static stepping (see rod_route.h). */
+#include "rod_route.h"
+#include "rod_observe.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* Arc length over [0, 1] of u -> (D u, H (1 - cos 2 pi u) / 2), by the midpoint rule. */
+static double arch_length(double D, double H, int m)
+{
+    double L = 0.0;
+    for (int k = 0; k < m; k++) {
+        double u = (k + 0.5) / m;
+        L += hypot(D, H * M_PI * sin(2.0 * M_PI * u)) / m;
+    }
+    return L;
+}
+
+void rod_place_arch(rod *r, double dl, int branch)
+{
+    double l = r->length, D = l * (1.0 - dl);
+    rod_set_clamps(r, dl, 0.0);
+    double lo = 0.0, hi = l;
+    for (int it = 0; it < 100; it++) {
+        double mid = 0.5 * (lo + hi);
+        if (arch_length(D, mid, 400) < l) lo = mid; else hi = mid;
+    }
+    double H = 0.5 * (lo + hi) * (branch >= 0 ? 1.0 : -1.0);
+    /* Walk the arch with a fine table of arc length and place nodes at their rest arc length. */
+    int m = 4000;
+    double u_prev = 0.0, s_prev = 0.0;
+    int node = 2;
+    double scale = l / arch_length(D, H, m);
+    for (int k = 1; k <= m && node < r->n - 2; k++) {
+        double u = (double)k / m, um = (k - 0.5) / m;
+        double s = s_prev + scale * hypot(D, H * M_PI * sin(2.0 * M_PI * um)) / m;
+        while (node < r->n - 2 && r->s_node[node] * l <= s) {
+            double uu = u_prev + (u - u_prev) * (r->s_node[node] * l - s_prev) / (s - s_prev);
+            double *x = rod_x(r, node);
+            x[0] = D * uu;
+            x[1] = 0.0;
+            x[2] = 0.5 * H * (1.0 - cos(2.0 * M_PI * uu));
+            node++;
+        }
+        u_prev = u;
+        s_prev = s;
+    }
+    for (int i = 1; i < r->n - 2; i++) r->q[4 * i + 3] = 0.0;
+    rod_frames_update(r);
+}
+
+/* Moves the right clamp to (dl, dw) and carries the free nodes along affinely, a predictor that
+ * keeps edge strains small. */
+static void move_clamps(rod *r, double dl_old, double dw_old, double dl, double dw)
+{
+    double l = r->length, sx = (1.0 - dl) / (1.0 - dl_old);
+    for (int i = 2; i < r->n - 2; i++) {
+        double *x = rod_x(r, i);
+        x[0] *= sx;
+        x[1] += (dw - dw_old) * l * r->s_node[i];
+    }
+    rod_set_clamps(r, dl, dw);
+}
+
+typedef struct stage {
+    double dl0, dl1;    /* compression from, to */
+    double f0, f1;      /* crease fraction from, to */
+} stage;
+
+static rod_status run_stage(rod *r, rod_solver *s, const rod_scene *sc, const stage *g, int nsteps,
+                            rod_route_report *rep)
+{
+    rod_newton_opts o = rod_newton_opts_static(sc);
+    o.positive_definite = 1; /* the route and the followed branch are stable states */
+    double p = 0.0, dp = 1.0 / nsteps;
+    int halvings = 0;
+    rod_state_save(r, s, 0);
+    while (p < 1.0) {
+        double pn = fmin(1.0, p + dp);
+        double dl_old = g->dl0 + p * (g->dl1 - g->dl0), dl = g->dl0 + pn * (g->dl1 - g->dl0);
+        move_clamps(r, dl_old, 0.0, dl, 0.0);
+        double f = g->f0 + pn * (g->f1 - g->f0);
+        rod_set_folds(r, f, f);
+        rod_newton_report nr;
+        rod_status st = rod_newton_solve(r, s, &o, &nr);
+        rep->solves++;
+        rep->newton_iterations += nr.iterations;
+        rep->residual_rel = nr.residual_rel;
+        if (st == ROD_OK) {
+            p = pn;
+            rod_state_save(r, s, 0);
+            if (halvings > 0 && nr.iterations < 6) { dp *= 2.0; halvings--; }
+            continue;
+        }
+        rod_state_restore(r, s, 0);
+        rod_set_folds(r, g->f0 + p * (g->f1 - g->f0), g->f0 + p * (g->f1 - g->f0));
+        if (++halvings > 10) {
+            rep->reached = p;
+            return st;
+        }
+        dp *= 0.5;
+    }
+    rep->reached = 1.0;
+    return ROD_OK;
+}
+
+rod_status rod_route_to_state(rod *r, rod_solver *s, const rod_scene *sc, int branch,
+                              rod_route_report *rep)
+{
+    rod_route_report local = {0};
+    if (!rep) rep = &local;
+    double dl = sc->compression, dl0 = fmin(dl, 0.05);
+    rod_set_folds(r, 0.0, 0.0);
+    rod_place_arch(r, dl0, branch);
+    stage first = {dl0, dl0, 0.0, 0.0};
+    rod_status st = run_stage(r, s, sc, &first, 1, rep);
+    if (st != ROD_OK) return st;
+    if (sc->route == ROD_ROUTE_TOGETHER) {
+        stage both = {dl0, dl, 0.0, 1.0};
+        return run_stage(r, s, sc, &both, 40, rep);
+    }
+    stage compress = {dl0, dl, 0.0, 0.0};
+    st = run_stage(r, s, sc, &compress, 20, rep);
+    if (st != ROD_OK) return st;
+    stage fold = {dl, dl, 0.0, 1.0};
+    return run_stage(r, s, sc, &fold, 20, rep);
+}
+
+rod_status rod_follow_shear(rod *r, rod_solver *s, const rod_scene *sc, double dl, double dw_from,
+                            double dw_to, double dw_step, double *dw_reached, rod_route_report *rep)
+{
+    rod_route_report local = {0};
+    if (!rep) rep = &local;
+    rod_newton_opts o = rod_newton_opts_static(sc);
+    o.positive_definite = 1; /* the route and the followed branch are stable states */
+    double *k1 = malloc(sizeof(double) * (size_t)r->n);
+    if (!k1) return ROD_ERR_ALLOC;
+    rod_obs ob;
+    rod_observe(r, k1, &ob);
+    double dw = dw_from, dz_prev = ob.dz;
+    double step = dw_step * (dw_to >= dw_from ? 1.0 : -1.0);
+    int halvings = 0;
+    rod_status st = ROD_OK;
+    rod_state_save(r, s, 0);
+    int cap = 100000;
+    while (fabs(dw_to - dw) > 1e-15 && cap-- > 0) {
+        double dn = dw + step;
+        if ((step > 0 && dn > dw_to) || (step < 0 && dn < dw_to)) dn = dw_to;
+        move_clamps(r, dl, dw, dl, dn);
+        rod_newton_report nr;
+        st = rod_newton_solve(r, s, &o, &nr);
+        rep->solves++;
+        rep->newton_iterations += nr.iterations;
+        rep->residual_rel = nr.residual_rel;
+        if (st == ROD_OK) {
+            rod_observe(r, k1, &ob);
+            /* A jump in Delta Z much larger than the step means Newton left the branch. */
+            if (fabs(ob.dz - dz_prev) > 0.02 + 20.0 * fabs(dn - dw)) st = ROD_ERR_BRANCH_LOST;
+        }
+        if (st == ROD_OK) {
+            dw = dn;
+            dz_prev = ob.dz;
+            rod_state_save(r, s, 0);
+            if (halvings > 0 && nr.iterations < 5) { step *= 2.0; halvings--; }
+            continue;
+        }
+        rod_state_restore(r, s, 0);
+        if (++halvings > 12) {
+            st = ROD_ERR_BRANCH_LOST;
+            break;
+        }
+        step *= 0.5;
+        st = ROD_OK;
+    }
+    if (cap <= 0 && st == ROD_OK) st = ROD_ERR_MAXITER;
+    if (dw_reached) *dw_reached = dw;
+    free(k1);
+    return st;
+}
