@@ -1,5 +1,6 @@
 /* truss.c: the double-mass von Mises truss model: energy with analytic gradient and Hessian,
- * Newton statics, Hessian eigen-analysis, and the paper's small-angle formulas beside them.
+ * statics (Newton with an eigenvalue shift and a line search, so it settles in a minimum),
+ * Hessian eigen-analysis, and the paper's small-angle formulas beside them.
  *
  * Derivation of the kernel. Extend the configuration with the right support abscissa,
  * z = [x1, y1, x2, y2, D]. Every term of the energy is a function of three "link" vectors, each
