@@ -153,7 +153,7 @@ static void check_paper_common(const rod_scene *s)
     assert_true(REL_CLOSE(s->shear_modulus, 1e9 / 3.0));
     assert_true(REL_CLOSE(s->density, 1000.0));
     for (int i = 0; i < 3; i++) assert_true(s->gravity[i] == 0.0);
-    assert_true(REL_CLOSE(s->fold_angle_deg, 90.0));
+    assert_true(REL_CLOSE(s->fold_angle_deg, -90.0));
     assert_int_equal(s->nodes, 201);
     assert_true(REL_CLOSE(s->dt, 1e-3));
     assert_true(REL_CLOSE(s->shear_rate, 0.01));
@@ -209,7 +209,7 @@ static void test_pet_scene_loads(void **state)
     assert_true(REL_CLOSE(s.density, 1380.0));
     assert_true(s.gravity[0] == 0.0 && s.gravity[1] == 0.0);
     assert_true(REL_CLOSE(s.gravity[2], -9.81));
-    assert_true(REL_CLOSE(s.fold_angle_deg, 90.0));
+    assert_true(REL_CLOSE(s.fold_angle_deg, -90.0));
     assert_true(REL_CLOSE(s.fold_position, 0.21));
     assert_true(REL_CLOSE(s.compression, 0.3));
     assert_true(REL_CLOSE(s.shear_rate, 1e-3));
