@@ -1,0 +1,161 @@
+/* grblsim_main.c: `ribbon-grblsim`, the GRBL 1.1 simulator on a pseudo-terminal (logic in
+ * drivers/grbl_sim.c). Prints "pty: PATH" as its first line on stdout, optionally makes a symlink
+ * to it, then serves until SIGINT/SIGTERM (the handler only sets a flag). */
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "grbl_sim.h"
+
+static volatile sig_atomic_t g_stop; /* set by the signal handler only */
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    g_stop = 1;
+}
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: ribbon-grblsim [options]\n"
+            "  --link PATH          also make PATH a symlink to the pty\n"
+            "  --axes N             number of axes, 1..3 (default 2: X compress, Y shear)\n"
+            "  --travel MM          machine travel of every axis (default 200)\n"
+            "  --start X[,Y[,Z]]    start positions, mm (default 0)\n"
+            "  --accel MM_S2        acceleration (default 200)\n"
+            "  --max-feed MM_MIN    feed clamp (default 3000)\n"
+            "  --require-home       start in alarm until $H or $X\n"
+            "  --drop P             leave a fraction P of requests unanswered\n"
+            "  --garble P           garble a fraction P of replies\n"
+            "  --stall AXIS:MM      stall axis X|Y|Z at MM\n"
+            "  --alarm-after S      raise an alarm S seconds after start\n"
+            "  --alarm-code N       GRBL alarm number for --alarm-after (default 1)\n"
+            "  --seed N             fault random seed\n"
+            "  --duration S         exit after S seconds (default: run until signalled)\n");
+}
+
+static int parse_double(const char *opt, const char *v, double lo, double hi, double *out)
+{
+    char *end = NULL;
+    double x = v ? strtod(v, &end) : NAN;
+    if (!v || end == v || *end || !(x >= lo && x <= hi)) {
+        fprintf(stderr, "ribbon-grblsim: %s needs a number in [%g, %g], got '%s'\n", opt, lo, hi,
+                v ? v : "");
+        return -1;
+    }
+    *out = x;
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    grbl_sim_params p = grbl_sim_params_default();
+    const char *link = NULL;
+    double duration = -1.0, x;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int bad = 0;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            usage(stdout);
+            return 0;
+        } else if (!strcmp(a, "--link")) {
+            link = v;
+            i++;
+            bad = !v;
+        } else if (!strcmp(a, "--axes")) {
+            bad = parse_double(a, v, 1, 3, &x);
+            p.n_axes = (int)x;
+            i++;
+        } else if (!strcmp(a, "--travel")) {
+            bad = parse_double(a, v, 1, 1e5, &x);
+            for (int k = 0; k < GRBL_SIM_AXES; k++)
+                p.travel_mm[k] = x;
+            i++;
+        } else if (!strcmp(a, "--start")) {
+            if (!v) {
+                bad = 1;
+            } else {
+                char buf[128];
+                snprintf(buf, sizeof buf, "%s", v);
+                char *save = NULL, *tok = strtok_r(buf, ",", &save);
+                for (int k = 0; tok && k < GRBL_SIM_AXES && !bad; k++, tok = strtok_r(NULL, ",", &save))
+                    bad = parse_double(a, tok, 0, 1e5, &p.start_mm[k]);
+            }
+            i++;
+        } else if (!strcmp(a, "--accel")) {
+            bad = parse_double(a, v, 1e-3, 1e5, &p.accel_mm_s2);
+            i++;
+        } else if (!strcmp(a, "--max-feed")) {
+            bad = parse_double(a, v, 1, 1e6, &p.max_feed_mm_min);
+            i++;
+        } else if (!strcmp(a, "--require-home")) {
+            p.start_in_alarm = true;
+        } else if (!strcmp(a, "--drop")) {
+            bad = parse_double(a, v, 0, 1, &p.drop_prob);
+            i++;
+        } else if (!strcmp(a, "--garble")) {
+            bad = parse_double(a, v, 0, 1, &p.garble_prob);
+            i++;
+        } else if (!strcmp(a, "--stall")) {
+            if (!v || (v[0] != 'X' && v[0] != 'Y' && v[0] != 'Z') || v[1] != ':') {
+                fprintf(stderr, "ribbon-grblsim: --stall needs AXIS:MM, e.g. X:12.5\n");
+                bad = 1;
+            } else {
+                bad = parse_double(a, v + 2, 0, 1e5, &p.stall_at_mm[v[0] - 'X']);
+            }
+            i++;
+        } else if (!strcmp(a, "--alarm-after")) {
+            bad = parse_double(a, v, 0, 1e6, &p.alarm_after_s);
+            i++;
+        } else if (!strcmp(a, "--alarm-code")) {
+            bad = parse_double(a, v, 1, 9, &x);
+            p.alarm_code = (int)x;
+            i++;
+        } else if (!strcmp(a, "--seed")) {
+            bad = parse_double(a, v, 0, 4294967295.0, &x);
+            p.seed = (unsigned)x;
+            i++;
+        } else if (!strcmp(a, "--duration")) {
+            bad = parse_double(a, v, 0, 1e7, &duration);
+            i++;
+        } else {
+            fprintf(stderr, "ribbon-grblsim: unknown option '%s'\n", a);
+            usage(stderr);
+            return 2;
+        }
+        if (bad)
+            return 2;
+    }
+    grbl_sim *s = NULL;
+    char why[256];
+    if (grbl_sim_open(&s, &p, why, sizeof why) != RAIL_OK) {
+        fprintf(stderr, "ribbon-grblsim: %s\n", why);
+        return 1;
+    }
+    printf("pty: %s\n", grbl_sim_path(s));
+    fflush(stdout);
+    if (link) {
+        unlink(link);
+        if (symlink(grbl_sim_path(s), link) != 0) {
+            fprintf(stderr, "ribbon-grblsim: cannot link %s: %s\n", link, strerror(errno));
+            grbl_sim_close(s);
+            return 1;
+        }
+    }
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+    grbl_sim_run(s, duration, &g_stop);
+    if (link)
+        unlink(link);
+    grbl_sim_close(s);
+    return 0;
+}

@@ -1,0 +1,39 @@
+/* rail_gcode.h: rails on a GRBL 1.1 controller over serial (G-code driver).
+ *
+ * One grbl_link is one controller (one serial port); one rail is one axis of it. The two rails
+ * of the rig can be two axes of one controller (open the link once, pass it to both rails; the
+ * controller runs their moves one after another) or two controllers (each rail opens its own).
+ * Every motion goes out as "$J=G53 G21 <axis><mm> F<mm/min>" jog segments of segment_s seconds,
+ * at most segments_ahead of them queued past the current position; the front end's polls top
+ * the queue up. A process that dies stops feeding, so the rail stops within
+ * segments_ahead * segment_s seconds of motion; a jog cancel (0x85) is the decelerating stop;
+ * estop is a feed hold ('!') and, once stopped, a soft reset (0x18) that empties the planner.
+ * Opening a link cancels any motion the controller is still running: nothing resumes by itself.
+ * Requires the controller to report machine positions ($10=1, GRBL's default). */
+#ifndef RIBBON_DRIVERS_RAIL_GCODE_H
+#define RIBBON_DRIVERS_RAIL_GCODE_H
+
+#include "rail.h"
+
+typedef struct rail_gcode_params {
+    char port[256];          /* device path or usb:VID:PID[:SERIAL] */
+    int baud;                /* baud, GRBL default 115200 */
+    char axis;               /* 'X', 'Y' or 'Z': the controller axis this rail is */
+    double segment_s;        /* s of motion per jog segment */
+    int segments_ahead;      /* segments queued beyond the current position (1..4) */
+    double reply_timeout_s;  /* s to wait for "ok" or a status report */
+    double stall_timeout_s;  /* s without progress while moving before a stall fault */
+} rail_gcode_params;
+
+typedef struct grbl_link grbl_link;
+
+rail_gcode_params rail_gcode_params_default(void);
+/* Open a controller link (the rail_clock times replies). */
+rail_err grbl_link_open(grbl_link **out, const rail_gcode_params *g, rail_clock clock, char *why,
+                        size_t why_len);
+void grbl_link_release(grbl_link *l);
+/* Open one axis as a rail; shared = NULL opens a link of its own, else the link is shared. */
+rail_err rail_gcode_open(rail **out, const rail_params *p, const rail_gcode_params *g, grbl_link *shared,
+                         rail_clock clock, char *why, size_t why_len);
+
+#endif
