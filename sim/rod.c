@@ -180,10 +180,15 @@ void rod_set_clamps(rod *r, double dl, double dw)
     int n = r->n;
     double l = r->length, h = r->h_clamp;
     double *x0 = rod_x(r, 0), *x1 = rod_x(r, 1), *xa = rod_x(r, n - 2), *xb = rod_x(r, n - 1);
-    x0[0] = -h; x0[1] = 0; x0[2] = 0;
-    x1[0] = 0; x1[1] = 0; x1[2] = 0;
-    xa[0] = l * (1.0 - dl); xa[1] = dw * l; xa[2] = 0;
-    xb[0] = l * (1.0 - dl) + h; xb[1] = dw * l; xb[2] = 0;
+    /* Symmetric loading: each clamp moves by dw l / 2 in opposite directions. It differs from
+     * moving one clamp by dw l only by a rigid translation, except that mass-proportional damping
+     * acts on absolute velocities; shearing symmetrically keeps the damped dynamics exactly
+     * C2-symmetric, so only the imperfection breaks the symmetry. */
+    double y = 0.5 * dw * l;
+    x0[0] = -h; x0[1] = -y; x0[2] = 0;
+    x1[0] = 0; x1[1] = -y; x1[2] = 0;
+    xa[0] = l * (1.0 - dl); xa[1] = y; xa[2] = 0;
+    xb[0] = l * (1.0 - dl) + h; xb[1] = y; xb[2] = 0;
     r->q[3] = 0.0;
     r->q[4 * (n - 2) + 3] = 0.0;
 }

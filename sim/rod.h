@@ -104,8 +104,8 @@ void rod_free(rod *r);
  * stiffness factor to 1 + frac_stiff (factor - 1). */
 void rod_set_folds(rod *r, double frac_angle, double frac_stiff);
 
-/* Places the clamps: left clamp point at the origin, right clamp point at (l (1 - dl), dw l, 0);
- * clamped edges along +x, angles 0. */
+/* Places the clamps: left clamp point at (0, -dw l / 2, 0), right clamp point at
+ * (l (1 - dl), +dw l / 2, 0) (symmetric shear, see rod.c); clamped edges along +x, angles 0. */
 void rod_set_clamps(rod *r, double dl, double dw);
 
 /* Transports the reference frames from their stored tangents to the current ones and updates

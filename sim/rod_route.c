@@ -57,7 +57,7 @@ static void move_clamps(rod *r, double dl_old, double dw_old, double dl, double 
     for (int i = 2; i < r->n - 2; i++) {
         double *x = rod_x(r, i);
         x[0] *= sx;
-        x[1] += (dw - dw_old) * l * r->s_node[i];
+        x[1] += (dw - dw_old) * l * (r->s_node[i] - 0.5);
     }
     rod_set_clamps(r, dl, dw);
 }
