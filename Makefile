@@ -40,7 +40,7 @@ build-asan: deps
 
 demo: build
 	@for s in config/scenes/paper-gamma013.ini config/scenes/paper-gamma021.ini; do \
-	  echo "== $$s"; ./$(BUILD)/bin/ribbon-sim predict --scene $$s || exit 1; \
+	  echo "== $$s"; ./$(BUILD)/bin/ribbon-sim predict --scene $$s --fast || exit 1; \
 	done
 
 test-normal: build
