@@ -19,6 +19,14 @@
 #include <string.h>
 #include <time.h>
 
+/* Delta W at time t: constant rate, optionally reached by a smooth velocity ramp of length T. */
+static double shear_at(double t, double rate, double T)
+{
+    if (T <= 0.0) return rate * t;
+    if (t < T) return rate * (0.5 * t - T / (2.0 * M_PI) * sin(M_PI * t / T));
+    return rate * (t - 0.5 * T);
+}
+
 static double wall_now(void)
 {
     struct timespec ts;
@@ -108,10 +116,13 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
         }
         memcpy(q_n, r->q, sizeof(double) * (size_t)nd);
         rod_state_save(r, s, 1);
-        double dw_new = fmin(rate * (t + dt), detected ? 1e300 : sc->shear_max);
         double h = dt;
-        if (!detected && dw_new >= sc->shear_max) h = (sc->shear_max - dw) / rate;
-        if (h <= 0.0) h = dt;
+        double dw_new = shear_at(t + h, rate, o->ramp_time);
+        if (!detected && dw_new > sc->shear_max) {
+            /* Land exactly on the shear limit (the rate is constant once past the ramp). */
+            h = fmax(1e-12, (sc->shear_max - dw) / rate);
+            dw_new = sc->shear_max;
+        }
         rod_set_clamps(r, dl, dw_new);
         for (int k = ROD_FREE_BEGIN; k < r->free_end; k++) r->q[k] += h * v[k];
         no.c1 = 1.0 / (h * h) + mu / h;

@@ -34,6 +34,8 @@ typedef int (*rod_sample_fn)(void *user, const rod_sample *s, const rod *r);
 typedef struct rod_predict_opts {
     int adaptive;          /* 1: adaptive time stepping (fast mode) */
     double post_snap_time; /* s of simulated time followed after the snap is detected (2) */
+    double ramp_time;      /* s over which the shear velocity rises smoothly from 0 to the rate,
+                              v = rate (1 - cos(pi t / T)) / 2 (0: starts at full rate) */
     rod_sample_fn on_sample;
     void *user;
 } rod_predict_opts;
