@@ -146,7 +146,10 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
             /* Fast mode resolves every fast motion with the base step: a long step that moved
              * the ribbon noticeably is redone shorter. */
             rod_observe(r, k1, &ob);
-            if (fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev)) > 2e-3) {
+            /* ...and so is one during which the asymmetry grew by more than 5%: the ribbon is
+             * near an instability, where the growth from the imperfection sets the snap. */
+            if (fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev)) > 2e-3 ||
+                fabs(ob.a - a_prev) > 0.05 * fabs(a_prev) + 1e-12) {
                 rod_state_restore(r, s, 1);
                 out->rejected++;
                 dt = fmax(0.25 * dt, dt_base);
@@ -197,10 +200,11 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
             if (o->on_sample(o->user, &smp, r)) break;
         }
         double change = fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev));
+        int a_steady = fabs(ob.a - a_prev) <= 0.02 * fabs(a_prev) + 1e-12;
         dz_prev = ob.dz;
         a_prev = ob.a;
         if (o->adaptive) {
-            if (!detected && change < 5e-4 && nr.iterations <= 4 && speed < 0.5 * slow)
+            if (!detected && change < 5e-4 && nr.iterations <= 4 && speed < 0.5 * slow && a_steady)
                 dt = fmin(1.5 * dt, dt_max);
             else if (change > 1e-3 || speed >= 0.5 * slow || detected)
                 dt = fmax(0.5 * dt, dt_base);

@@ -209,7 +209,7 @@ rod_status rod_newton_solve(rod *r, rod_solver *s, const rod_newton_opts *o, rod
     frames_save(r, &s->base);
     double l2 = 0.0, nl2 = 0.0;
     double res = residual(r, s, o, &l2);
-    double phi0 = o->positive_definite ? potential(r, o) : 0.0;
+    double phi0 = NAN; /* potential at the base, computed only when the line search needs it */
     rod_status st = ROD_OK;
     int it = 0;
     if (rep) memset(rep, 0, sizeof *rep);
@@ -231,16 +231,24 @@ rod_status rod_newton_solve(rod *r, rod_solver *s, const rod_newton_opts *o, rod
                 r->q[k] = s->base.q[k] + alpha * s->dq[a];
             }
             double nr = residual(r, s, o, &nl2);
-            int better;
-            if (o->positive_definite) {
-                /* Minimising: the potential must not rise beyond round-off; near the minimum,
-                 * where the potential is flat to round-off, the residual decides. */
+            int better = nl2 < l2;
+            if (o->positive_definite && !(better && alpha == 1.0)) {
+                /* Minimising: a full step that lowers |R| is taken as is (the common case near a
+                 * minimum, and it saves an energy pass); otherwise the potential must not rise
+                 * beyond round-off, and where it is flat to round-off the residual decides. */
+                if (isnan(phi0)) {
+                    for (int a = 0; a < nf; a++) r->q[a + ROD_FREE_BEGIN] = s->base.q[a + ROD_FREE_BEGIN];
+                    frames_load(r, &s->base, 0);
+                    phi0 = potential(r, o);
+                    for (int a = 0; a < nf; a++) r->q[a + ROD_FREE_BEGIN] = s->base.q[a + ROD_FREE_BEGIN] + alpha * s->dq[a];
+                    residual(r, s, o, &nl2);
+                }
                 double phi_new = potential(r, o);
                 double slack = 1e-13 * fabs(phi0) + 1e-300;
                 better = phi_new < phi0 - slack || (phi_new <= phi0 + slack && nl2 < l2);
                 if (better) phi0 = phi_new;
-            } else {
-                better = nl2 < l2;
+            } else if (better) {
+                phi0 = NAN; /* the potential at the new base is not known yet */
             }
             if (isfinite(nr) && (better || nr <= tol)) {
                 res = nr;

@@ -9,6 +9,7 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <string.h>
 
 #include "rod_protocol.h"
 
@@ -41,7 +42,8 @@ static double dissipation(double dt, double *work, double *damped)
     s.tolerance = 1e-9;
     s.max_iterations = 100;
     /* Elastic energy of the starting state: run a zero-length protocol first. */
-    tally t = {0, 1, {0}};
+    tally t;
+    memset(&t, 0, sizeof t);
     rod_predict_opts o = rod_predict_opts_default();
     o.on_sample = record;
     o.ramp_time = 0.4; /* a smooth start: a sudden one excites modes implicit Euler kills at O(1) */
