@@ -1,0 +1,125 @@
+/* mbsim_main.c: `ribbon-mbsim`, the simulated Modbus TCP drive (logic in drivers/mb_sim.c).
+ * `ribbon-mbsim --listen 127.0.0.1:PORT [--slave N]` prints "listening: HOST:PORT" as its first
+ * line (PORT 0 picks a free port and prints it), then serves until SIGINT/SIGTERM. */
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mb_sim.h"
+
+static volatile sig_atomic_t g_stop; /* set by the signal handler only */
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    g_stop = 1;
+}
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: ribbon-mbsim --listen HOST:PORT [options]\n"
+            "  --listen HOST:PORT   address to serve Modbus TCP on (default 127.0.0.1:1502)\n"
+            "  --slave N            unit id answered, 1..247 (default 1)\n"
+            "  --counts-per-mm C    drive counts per mm (default 1000)\n"
+            "  --travel MM          hard travel (default 200)\n"
+            "  --start MM           position at start (default 0)\n"
+            "  --drop P             leave a fraction P of requests unanswered\n"
+            "  --garble P           answer a fraction P with a corrupted frame\n"
+            "  --exception P        answer a fraction P with exception 6 (busy)\n"
+            "  --stall MM           stall (alarm 0x10) when the axis reaches MM\n"
+            "  --alarm-after S      raise an alarm S seconds after start\n"
+            "  --alarm-code N       alarm code for --alarm-after (default 0x30)\n"
+            "  --seed N             fault random seed\n"
+            "  --duration S         exit after S seconds (default: until signalled)\n"
+            "Registers: see drivers/rail_modbus_map.c (map \"ribbon-sim\").\n");
+}
+
+static int num(const char *opt, const char *v, double lo, double hi, double *out)
+{
+    char *end = NULL;
+    double x = v ? strtod(v, &end) : NAN;
+    if (!v || end == v || *end || !(x >= lo && x <= hi)) {
+        fprintf(stderr, "ribbon-mbsim: %s needs a number in [%g, %g], got '%s'\n", opt, lo, hi, v ? v : "");
+        return -1;
+    }
+    *out = x;
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    mb_sim_params p = mb_sim_params_default();
+    double duration = -1.0, x = 0.0;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int bad = 0;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            usage(stdout);
+            return 0;
+        } else if (!strcmp(a, "--listen")) {
+            const char *c = v ? strrchr(v, ':') : NULL;
+            if (!c || c == v || (size_t)(c - v) >= sizeof p.host) {
+                fprintf(stderr, "ribbon-mbsim: --listen needs HOST:PORT, got '%s'\n", v ? v : "");
+                return 2;
+            }
+            memcpy(p.host, v, (size_t)(c - v));
+            p.host[c - v] = 0;
+            bad = num(a, c + 1, 0, 65535, &x);
+            p.port = (int)x;
+        } else if (!strcmp(a, "--slave")) {
+            bad = num(a, v, 1, 247, &x);
+            p.slave = (int)x;
+        } else if (!strcmp(a, "--counts-per-mm")) {
+            bad = num(a, v, 1e-3, 1e7, &p.counts_per_mm);
+        } else if (!strcmp(a, "--travel")) {
+            bad = num(a, v, 1e-3, 1e6, &p.travel_mm);
+        } else if (!strcmp(a, "--start")) {
+            bad = num(a, v, 0, 1e6, &p.start_mm);
+        } else if (!strcmp(a, "--drop")) {
+            bad = num(a, v, 0, 1, &p.drop_prob);
+        } else if (!strcmp(a, "--garble")) {
+            bad = num(a, v, 0, 1, &p.garble_prob);
+        } else if (!strcmp(a, "--exception")) {
+            bad = num(a, v, 0, 1, &p.exception_prob);
+        } else if (!strcmp(a, "--stall")) {
+            bad = num(a, v, 0, 1e6, &p.stall_at_mm);
+        } else if (!strcmp(a, "--alarm-after")) {
+            bad = num(a, v, 0, 1e7, &p.alarm_after_s);
+        } else if (!strcmp(a, "--alarm-code")) {
+            bad = num(a, v, 1, 65535, &x);
+            p.alarm_code = (int)x;
+        } else if (!strcmp(a, "--seed")) {
+            bad = num(a, v, 0, 4294967295.0, &x);
+            p.seed = (unsigned)x;
+        } else if (!strcmp(a, "--duration")) {
+            bad = num(a, v, 0, 1e7, &duration);
+        } else {
+            fprintf(stderr, "ribbon-mbsim: unknown option '%s'\n", a);
+            usage(stderr);
+            return 2;
+        }
+        if (bad)
+            return 2;
+        i++; /* every option above takes one value */
+    }
+    mb_sim *s = NULL;
+    char why[256];
+    if (mb_sim_open(&s, &p, why, sizeof why) != RAIL_OK) {
+        fprintf(stderr, "ribbon-mbsim: %s\n", why);
+        return 1;
+    }
+    printf("listening: %s:%d\n", p.host, mb_sim_port(s));
+    fflush(stdout);
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+    mb_sim_run(s, duration, &g_stop);
+    mb_sim_close(s);
+    return 0;
+}

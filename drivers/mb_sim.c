@@ -1,0 +1,349 @@
+/* mb_sim.c: the simulated Modbus TCP drive (see mb_sim.h; register layout in rail_modbus_map.c).
+ *
+ * One select() loop over the listening socket and up to 8 clients. For each request: advance the
+ * axis, refresh the read-only registers, let the fault injector decide, reply with libmodbus,
+ * then act on a non-zero command register (and clear it: the command register is a trigger).
+ * Read-only registers (8..13, 16, 17) are rewritten from the axis before every reply, so a
+ * client writing them changes nothing. */
+#include "mb_sim.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <math.h>
+#include <modbus.h>
+#include <netinet/in.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/select.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "rail_axis.h"
+#include "rail_clock.h"
+#include "rail_modbus.h"
+
+#define MBS_CLIENTS 8
+#define MBS_REGS 64
+
+enum { ST_READY = 1, ST_MOVING = 2, ST_INPOS = 4, ST_HOMING = 8, ST_HOMED = 16, ST_ALARM = 32 };
+enum { ALM_DEVIATION = 0x10, ALM_OVERTRAVEL = 0x66, ALM_DATA = 0x70, ALM_COMM_TIMEOUT = 0x85 };
+
+struct mb_sim {
+    mb_sim_params p;
+    modbus_t *ctx;
+    modbus_mapping_t *map;
+    int listen_fd;
+    int clients[MBS_CLIENTS];
+    int port;
+    rail_clock clock;
+    double t_start, t_last, t_request;
+    rail_axis ax;
+    bool homing, stalled, alarm_fired;
+    int alarm;         /* current alarm code, 0 = none */
+    unsigned rng;
+};
+
+mb_sim_params mb_sim_params_default(void)
+{
+    mb_sim_params p;
+    memset(&p, 0, sizeof p);
+    snprintf(p.host, sizeof p.host, "127.0.0.1");
+    p.port = 1502;
+    p.slave = 1;
+    p.counts_per_mm = 1000.0;
+    p.travel_mm = 200.0;
+    p.home_speed_mm_s = 20.0;
+    p.stall_at_mm = NAN;
+    p.alarm_after_s = -1.0;
+    p.alarm_code = 0x30;
+    p.seed = 4242u;
+    return p;
+}
+
+static double rnd(mb_sim *s)
+{
+    unsigned x = s->rng ? s->rng : 1u;
+    x ^= x << 13;
+    x ^= x >> 17;
+    x ^= x << 5;
+    s->rng = x;
+    return (double)(x >> 8) / 16777216.0;
+}
+
+static void raise_alarm(mb_sim *s, int code)
+{
+    rail_axis_halt(&s->ax);
+    s->homing = false;
+    s->alarm = code;
+}
+
+static void advance(mb_sim *s)
+{
+    double now = rail_clock_now(s->clock);
+    double dt = now - s->t_last;
+    s->t_last = now;
+    if (!s->alarm_fired && s->p.alarm_after_s >= 0.0 && now - s->t_start >= s->p.alarm_after_s) {
+        s->alarm_fired = true;
+        raise_alarm(s, s->p.alarm_code);
+    }
+    uint16_t *R = s->map->tab_registers;
+    double wd = R[14] / 1000.0;
+    if (wd > 0.0 && rail_axis_busy(&s->ax) && now - s->t_request > wd)
+        raise_alarm(s, ALM_COMM_TIMEOUT);
+    if (dt > 0.0 && rail_axis_busy(&s->ax)) {
+        double before = s->ax.pos_mm;
+        rail_axis_step(&s->ax, dt);
+        double st = s->p.stall_at_mm;
+        if (!isnan(st) && !s->stalled &&
+            ((before < st && s->ax.pos_mm >= st) || (before > st && s->ax.pos_mm <= st))) {
+            s->stalled = true;
+            s->ax.pos_mm = st;
+            raise_alarm(s, ALM_DEVIATION);
+        }
+        if (s->ax.limit_hit) {
+            s->ax.limit_hit = false;
+            raise_alarm(s, ALM_OVERTRAVEL);
+        }
+        if (s->homing && !rail_axis_busy(&s->ax))
+            s->homing = false;
+    }
+}
+
+static void refresh(mb_sim *s)
+{
+    uint16_t *R = s->map->tab_registers;
+    double c = s->p.counts_per_mm;
+    rail_mb_put32(R + 8, (int32_t)lround(s->ax.pos_mm * c), RAIL_MB_HIGH_FIRST);
+    rail_mb_put32(R + 10, (int32_t)lround(s->ax.vel_mm_s * c), RAIL_MB_HIGH_FIRST);
+    uint16_t st = 0;
+    bool busy = rail_axis_busy(&s->ax);
+    if (s->alarm)
+        st |= ST_ALARM;
+    else if (!busy)
+        st |= ST_READY;
+    if (busy)
+        st |= ST_MOVING;
+    if (s->homing)
+        st |= ST_HOMING;
+    if (s->ax.homed)
+        st |= ST_HOMED;
+    if (!busy && fabs(s->ax.pos_mm - s->ax.target_mm) < 0.5 / c)
+        st |= ST_INPOS;
+    R[12] = st;
+    R[13] = (uint16_t)s->alarm;
+    R[16] = 0x5242;
+    R[17] = 1;
+}
+
+static void command(mb_sim *s)
+{
+    uint16_t *R = s->map->tab_registers;
+    uint16_t cmd = R[6];
+    if (!cmd)
+        return;
+    R[6] = 0;
+    double c = s->p.counts_per_mm;
+    switch (cmd) {
+    case 1: {
+        if (s->alarm)
+            return; /* a drive in alarm ignores start */
+        double target = rail_mb_get32(R + 0, RAIL_MB_HIGH_FIRST) / c;
+        double speed = rail_mb_get32(R + 2, RAIL_MB_HIGH_FIRST) / c;
+        double accel = rail_mb_get32(R + 4, RAIL_MB_HIGH_FIRST) / c;
+        if (!(speed > 0.0) || !(accel > 0.0) || target < 0.0 || target > s->p.travel_mm) {
+            raise_alarm(s, ALM_DATA);
+            return;
+        }
+        s->ax.accel_mm_s2 = accel;
+        rail_axis_move_to(&s->ax, target, speed);
+        break;
+    }
+    case 2:
+        rail_axis_stop(&s->ax);
+        break;
+    case 3:
+        rail_axis_halt(&s->ax);
+        s->homing = false;
+        break;
+    case 4:
+        if (s->alarm)
+            return;
+        rail_axis_home(&s->ax, s->p.home_speed_mm_s);
+        s->homing = true;
+        break;
+    case 5:
+        if (!rail_axis_busy(&s->ax)) {
+            s->alarm = 0;
+            s->stalled = false;
+            s->p.stall_at_mm = NAN;
+        }
+        break;
+    default:
+        break;
+    }
+}
+
+static void drop_client(mb_sim *s, int i)
+{
+    close(s->clients[i]);
+    s->clients[i] = -1;
+}
+
+static void serve(mb_sim *s, int i)
+{
+    uint8_t q[MODBUS_TCP_MAX_ADU_LENGTH];
+    modbus_set_socket(s->ctx, s->clients[i]);
+    int rc = modbus_receive(s->ctx, q);
+    if (rc <= 0) {
+        if (rc < 0)
+            drop_client(s, i);
+        return;
+    }
+    advance(s);
+    int hl = modbus_get_header_length(s->ctx); /* 7 for TCP: unit id is q[hl - 1] */
+    int unit = q[hl - 1];
+    if (unit != s->p.slave && unit != 0xff && unit != 0) {
+        modbus_reply_exception(s->ctx, q, MODBUS_EXCEPTION_GATEWAY_TARGET);
+        return;
+    }
+    s->t_request = rail_clock_now(s->clock);
+    if (s->p.drop_prob > 0.0 && rnd(s) < s->p.drop_prob)
+        return;
+    if (s->p.garble_prob > 0.0 && rnd(s) < s->p.garble_prob) {
+        /* Right transaction id, a well-formed frame of the wrong function with nonsense in it:
+           a corrupted reply the client must refuse. */
+        uint8_t fc = q[hl] == 0x06 ? 0x05 : 0x06;
+        uint8_t g[12] = {q[0], q[1], 0x00, 0x00, 0x00, 0x06, q[6], fc, 0xee, 0x13, 0x37, 0x99};
+        ssize_t w = send(s->clients[i], g, sizeof g, MSG_NOSIGNAL);
+        (void)w;
+        return;
+    }
+    if (s->p.exception_prob > 0.0 && rnd(s) < s->p.exception_prob) {
+        modbus_reply_exception(s->ctx, q, MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
+        return;
+    }
+    refresh(s);
+    modbus_reply(s->ctx, q, rc, s->map);
+    command(s);
+    refresh(s);
+}
+
+rail_err mb_sim_step(mb_sim *s, double max_wait_s)
+{
+    fd_set rd;
+    FD_ZERO(&rd);
+    FD_SET(s->listen_fd, &rd);
+    int maxfd = s->listen_fd;
+    for (int i = 0; i < MBS_CLIENTS; i++)
+        if (s->clients[i] >= 0) {
+            FD_SET(s->clients[i], &rd);
+            maxfd = s->clients[i] > maxfd ? s->clients[i] : maxfd;
+        }
+    struct timeval tv = {0, (long)(max_wait_s > 0.0 ? max_wait_s * 1e6 : 0)};
+    int r = select(maxfd + 1, &rd, NULL, NULL, &tv);
+    advance(s);
+    if (r <= 0)
+        return RAIL_OK;
+    if (FD_ISSET(s->listen_fd, &rd)) {
+        int fd = accept(s->listen_fd, NULL, NULL);
+        if (fd >= 0) {
+            int slot = -1;
+            for (int i = 0; i < MBS_CLIENTS && slot < 0; i++)
+                if (s->clients[i] < 0)
+                    slot = i;
+            if (slot < 0)
+                close(fd); /* full: like a drive with few connection slots */
+            else
+                s->clients[slot] = fd;
+        }
+    }
+    for (int i = 0; i < MBS_CLIENTS; i++)
+        if (s->clients[i] >= 0 && FD_ISSET(s->clients[i], &rd))
+            serve(s, i);
+    return RAIL_OK;
+}
+
+rail_err mb_sim_run(mb_sim *s, double duration_s, volatile sig_atomic_t *stop)
+{
+    double t0 = rail_clock_now(s->clock);
+    for (unsigned long it = 0; duration_s < 0.0 || it < (unsigned long)(duration_s * 2000.0) + 10; it++) {
+        if (stop && *stop)
+            break;
+        if (duration_s >= 0.0 && rail_clock_now(s->clock) - t0 >= duration_s)
+            break;
+        mb_sim_step(s, 0.002);
+    }
+    return RAIL_OK;
+}
+
+rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t n)
+{
+    *out = NULL;
+    if (!p || p->slave < 1 || p->slave > 247 || !(p->counts_per_mm > 0.0) || !(p->travel_mm > 0.0) ||
+        !(p->start_mm >= 0.0 && p->start_mm <= p->travel_mm) || p->port < 0 || p->port > 65535 ||
+        !(p->home_speed_mm_s > 0.0)) {
+        snprintf(why, n, "mbsim: slave must be 1..247, port 0..65535, counts_per_mm, travel and "
+                         "home speed positive, start inside the travel");
+        return RAIL_E_INVALID;
+    }
+    mb_sim *s = calloc(1, sizeof *s);
+    if (!s) {
+        snprintf(why, n, "mbsim: out of memory");
+        return RAIL_E_NOMEM;
+    }
+    s->p = *p;
+    s->listen_fd = -1;
+    for (int i = 0; i < MBS_CLIENTS; i++)
+        s->clients[i] = -1;
+    s->ctx = modbus_new_tcp(p->host, p->port);
+    s->map = modbus_mapping_new(0, 0, MBS_REGS, 0);
+    if (!s->ctx || !s->map) {
+        snprintf(why, n, "mbsim: cannot create the libmodbus server: %s", modbus_strerror(errno));
+        mb_sim_close(s);
+        return RAIL_E_NOMEM;
+    }
+    modbus_set_slave(s->ctx, p->slave);
+    modbus_set_indication_timeout(s->ctx, 0, 500000);
+    s->listen_fd = modbus_tcp_listen(s->ctx, 4);
+    if (s->listen_fd < 0) {
+        snprintf(why, n, "mbsim: cannot listen on %s:%d: %s", p->host, p->port, modbus_strerror(errno));
+        mb_sim_close(s);
+        return RAIL_E_IO;
+    }
+    struct sockaddr_in sa;
+    socklen_t sl = sizeof sa;
+    s->port = p->port;
+    if (getsockname(s->listen_fd, (struct sockaddr *)&sa, &sl) == 0)
+        s->port = ntohs(sa.sin_port);
+    s->clock = rail_clock_real();
+    s->t_start = s->t_last = s->t_request = rail_clock_now(s->clock);
+    s->ax = rail_axis_make(p->start_mm, 100.0, p->travel_mm);
+    s->rng = p->seed ? p->seed : 1u;
+    refresh(s);
+    *out = s;
+    return RAIL_OK;
+}
+
+int mb_sim_port(const mb_sim *s)
+{
+    return s->port;
+}
+
+void mb_sim_close(mb_sim *s)
+{
+    if (!s)
+        return;
+    for (int i = 0; i < MBS_CLIENTS; i++)
+        if (s->clients[i] >= 0)
+            close(s->clients[i]);
+    if (s->listen_fd >= 0)
+        close(s->listen_fd);
+    if (s->map)
+        modbus_mapping_free(s->map);
+    if (s->ctx) {
+        modbus_set_socket(s->ctx, -1);
+        modbus_free(s->ctx);
+    }
+    free(s);
+}

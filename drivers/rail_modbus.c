@@ -1,0 +1,471 @@
+/* rail_modbus.c: the Modbus rail driver (see rail_modbus.h).
+ *
+ * Every request goes through mb_call(), which maps libmodbus's errno to the layer's errors:
+ * Modbus exception responses -> RAIL_E_DEVICE (named by libmodbus), bad CRC / bad data / wrong
+ * slave / unknown exception -> RAIL_E_PROTOCOL, timeouts -> RAIL_E_TIMEOUT, a closed or reset
+ * link -> RAIL_E_DISCONNECTED. After a protocol error or a timeout the receive side is flushed
+ * so a late reply cannot pass for the next one. A lost link is retried (connect only) at the
+ * next poll; a reconnect probes read-only and re-arms the watchdog, never resumes a move.
+ * Writes use function 16 (write multiple registers) only, contiguous values in one request. */
+#include <errno.h>
+#include <math.h>
+#include <modbus.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rail_modbus.h"
+
+typedef struct mb {
+    modbus_t *ctx;
+    rail_modbus_params m;
+    double speed_scale, accel_scale;  /* drive units per mm/s, per mm/s^2 */
+    double accel_mm_s2;               /* mm/s^2 from the rail parameters */
+    bool lost;                        /* link down: reconnect (only) at the next poll */
+    bool homing;                      /* home sent and not finished (maps without a homing bit) */
+    double prev_pos, prev_t;          /* mm, s: for velocity when the map has no velocity register */
+    double pos_mm;                    /* last position read */
+} mb;
+
+rail_modbus_params rail_modbus_params_default(void)
+{
+    rail_modbus_params p;
+    memset(&p, 0, sizeof p);
+    snprintf(p.address, sizeof p.address, "127.0.0.1:1502");
+    p.rtu = false;
+    p.baud = 19200;
+    p.parity = 'E';
+    p.slave = 1;
+    p.timeout_s = 0.2;
+    p.watchdog_s = 1.0;
+    rail_modbus_preset("ribbon-sim", &p.map);
+    return p;
+}
+
+static rail_err mb_fail(rail *r, mb *k, const char *what)
+{
+    int err = errno;
+    rail_err e;
+    if (err > MODBUS_ENOBASE && err <= EMBXGTAR)
+        e = RAIL_E_DEVICE;
+    else if (err == EMBBADCRC || err == EMBBADDATA || err == EMBBADEXC || err == EMBMDATA ||
+             err == EMBBADSLAVE || err == EMBUNKEXC)
+        e = RAIL_E_PROTOCOL;
+    else if (err == ETIMEDOUT)
+        e = RAIL_E_TIMEOUT;
+    else
+        e = RAIL_E_DISCONNECTED;
+    if (e == RAIL_E_PROTOCOL || e == RAIL_E_TIMEOUT)
+        modbus_flush(k->ctx);
+    if (e == RAIL_E_DISCONNECTED)
+        k->lost = true;
+    if (e == RAIL_E_DEVICE)
+        return rail_set_error(r, e, "%s: drive answered with exception: %s", what, modbus_strerror(err));
+    return rail_set_error(r, e, "%s: %s", what, modbus_strerror(err));
+}
+
+static rail_err read_regs(rail *r, mb *k, int addr, int n, uint16_t *dst, const char *what)
+{
+    if (modbus_read_registers(k->ctx, addr, n, dst) != n)
+        return mb_fail(r, k, what);
+    return RAIL_OK;
+}
+
+/* Value of reg from a block read starting at base. */
+static long reg_get(const mb *k, rail_mb_reg g, const uint16_t *blk, int base, bool is_signed)
+{
+    const uint16_t *w = blk + (g.addr - base);
+    if (g.words == 2)
+        return (long)rail_mb_get32(w, k->m.map.word_order);
+    return is_signed ? (long)(int16_t)w[0] : (long)w[0];
+}
+
+typedef struct wr {
+    int addr;
+    uint16_t v;
+} wr;
+
+static void batch_put(wr *b, int *n, rail_mb_reg g, long v, rail_mb_word_order o)
+{
+    if (g.addr < 0)
+        return;
+    if (g.words == 2) {
+        uint16_t w[2];
+        rail_mb_put32(w, (int32_t)v, o);
+        b[(*n)++] = (wr){g.addr, w[0]};
+        b[(*n)++] = (wr){g.addr + 1, w[1]};
+    } else {
+        b[(*n)++] = (wr){g.addr, (uint16_t)v};
+    }
+}
+
+static int wr_cmp(const void *a, const void *b)
+{
+    return ((const wr *)a)->addr - ((const wr *)b)->addr;
+}
+
+/* Write a batch: sorted, each contiguous run in one function-16 request. */
+static rail_err batch_write(rail *r, mb *k, wr *b, int n, const char *what)
+{
+    qsort(b, (size_t)n, sizeof *b, wr_cmp);
+    for (int i = 0; i < n;) {
+        int j = i + 1;
+        while (j < n && b[j].addr == b[j - 1].addr + 1 && j - i < 120)
+            j++;
+        uint16_t vals[120];
+        for (int q = i; q < j; q++)
+            vals[q - i] = b[q].v;
+        if (modbus_write_registers(k->ctx, b[i].addr, j - i, vals) != j - i)
+            return mb_fail(r, k, what);
+        i = j;
+    }
+    return RAIL_OK;
+}
+
+static rail_err write_one(rail *r, mb *k, rail_mb_reg g, long v, const char *what)
+{
+    wr b[2];
+    int n = 0;
+    batch_put(b, &n, g, v, k->m.map.word_order);
+    return batch_write(r, k, b, n, what);
+}
+
+/* Read-only probe: identity (if mapped), status and position must answer. */
+static rail_err probe(rail *r, mb *k)
+{
+    const rail_modbus_map *m = &k->m.map;
+    uint16_t w[2];
+    if (m->ident.addr >= 0) {
+        rail_err e = read_regs(r, k, m->ident.addr, m->ident.words, w, "probe: identity register");
+        if (e != RAIL_OK)
+            return e;
+        long id = m->ident.words == 2 ? (long)rail_mb_get32(w, m->word_order) : (long)w[0];
+        if (m->ident_value >= 0 && id != m->ident_value)
+            return rail_set_error(r, RAIL_E_PROTOCOL,
+                                  "probe: identity register %d reads 0x%lx, map %s expects 0x%lx; "
+                                  "wrong drive or wrong map, nothing written",
+                                  m->ident.addr, id, m->name, m->ident_value);
+    }
+    rail_err e = read_regs(r, k, m->status.addr, m->status.words, w, "probe: status register");
+    if (e == RAIL_OK)
+        e = read_regs(r, k, m->actual_pos.addr, m->actual_pos.words, w, "probe: position register");
+    return e;
+}
+
+static rail_err arm_watchdog(rail *r, mb *k)
+{
+    const rail_modbus_map *m = &k->m.map;
+    if (m->watchdog.addr < 0)
+        return RAIL_OK;
+    long v = lround(k->m.watchdog_s * m->watchdog_units_per_s);
+    return write_one(r, k, m->watchdog, v, "arming the communication watchdog");
+}
+
+static rail_err mb_poll(rail *r, void *impl, rail_status *out)
+{
+    mb *k = impl;
+    const rail_modbus_map *m = &k->m.map;
+    out->code = 0;
+    out->message[0] = 0;
+    out->position_mm = k->pos_mm;
+    if (k->lost) {
+        /* Reconnect only: probe, re-arm the watchdog; any earlier move is forgotten. */
+        modbus_close(k->ctx);
+        rail_err e = RAIL_E_DISCONNECTED;
+        if (modbus_connect(k->ctx) == 0) {
+            k->lost = false;
+            k->homing = false;
+            e = probe(r, k);
+            if (e == RAIL_OK)
+                e = arm_watchdog(r, k);
+        } else {
+            e = rail_set_error(r, RAIL_E_DISCONNECTED, "drive at %s unreachable: %s", k->m.address,
+                               modbus_strerror(errno));
+        }
+        if (e != RAIL_OK) {
+            out->state = RAIL_STATE_DISCONNECTED;
+            rail_text_copy(out->message, sizeof out->message, rail_last_error(r));
+            return e;
+        }
+    }
+    rail_mb_reg regs[4] = {m->actual_pos, m->actual_vel, m->status, m->alarm};
+    int lo = 65536, hi = -1;
+    for (int i = 0; i < 4; i++)
+        if (regs[i].addr >= 0) {
+            lo = regs[i].addr < lo ? regs[i].addr : lo;
+            hi = regs[i].addr + regs[i].words - 1 > hi ? regs[i].addr + regs[i].words - 1 : hi;
+        }
+    uint16_t blk[64];
+    long pos_c = 0, vel_c = 0, status = 0, alarm = 0;
+    rail_err e = RAIL_E_TIMEOUT;
+    for (int attempt = 0; attempt < 2; attempt++) { /* one retry for a single bad reply */
+        if (hi - lo + 1 <= 64) {
+            e = read_regs(r, k, lo, hi - lo + 1, blk, "reading status");
+            if (e == RAIL_OK) {
+                pos_c = reg_get(k, m->actual_pos, blk, lo, true);
+                vel_c = m->actual_vel.addr >= 0 ? reg_get(k, m->actual_vel, blk, lo, true) : 0;
+                status = reg_get(k, m->status, blk, lo, false);
+                alarm = m->alarm.addr >= 0 ? reg_get(k, m->alarm, blk, lo, false) : 0;
+            }
+        } else {
+            e = RAIL_OK;
+            for (int i = 0; i < 4 && e == RAIL_OK; i++) {
+                if (regs[i].addr < 0)
+                    continue;
+                e = read_regs(r, k, regs[i].addr, regs[i].words, blk, "reading status");
+                long v = e == RAIL_OK ? reg_get(k, regs[i], blk, regs[i].addr, i < 2) : 0;
+                if (i == 0)
+                    pos_c = v;
+                else if (i == 1)
+                    vel_c = v;
+                else if (i == 2)
+                    status = v;
+                else
+                    alarm = v;
+            }
+        }
+        if (e == RAIL_OK || e == RAIL_E_DISCONNECTED || e == RAIL_E_DEVICE)
+            break;
+    }
+    if (e != RAIL_OK) {
+        out->state = e == RAIL_E_DEVICE || e == RAIL_E_PROTOCOL ? RAIL_STATE_FAULT : RAIL_STATE_DISCONNECTED;
+        rail_text_copy(out->message, sizeof out->message, rail_last_error(r));
+        return e;
+    }
+    double now = rail_clock_now(rail_get_clock(r));
+    double pos = (double)pos_c / m->counts_per_mm;
+    out->position_mm = pos;
+    k->pos_mm = pos;
+    if (m->actual_vel.addr >= 0)
+        out->velocity_mm_s = (double)vel_c / k->speed_scale;
+    else
+        out->velocity_mm_s = now > k->prev_t ? (pos - k->prev_pos) / (now - k->prev_t) : 0.0;
+    k->prev_pos = pos;
+    k->prev_t = now;
+    unsigned long st = (unsigned long)status;
+    if ((m->st_alarm && (st & m->st_alarm)) || (m->st_alarm == 0 && alarm != 0)) {
+        k->homing = false;
+        out->state = RAIL_STATE_ALARM;
+        out->code = (int)alarm;
+        snprintf(out->message, sizeof out->message, "drive alarm code 0x%lx", alarm);
+        out->velocity_mm_s = 0.0;
+    } else if ((m->st_homing && (st & m->st_homing)) || (k->homing && (st & m->st_moving))) {
+        out->state = RAIL_STATE_HOMING;
+    } else if (st & m->st_moving) {
+        out->state = RAIL_STATE_MOVING;
+    } else {
+        if (k->homing && m->st_home_end && !(st & m->st_home_end)) {
+            out->state = RAIL_STATE_FAULT;
+            snprintf(out->message, sizeof out->message, "homing ended without the home-end bit");
+        } else {
+            out->state = RAIL_STATE_IDLE;
+        }
+        k->homing = false;
+        out->velocity_mm_s = 0.0;
+    }
+    return RAIL_OK;
+}
+
+static rail_err mb_move_abs(rail *r, void *impl, double target, double speed)
+{
+    mb *k = impl;
+    const rail_modbus_map *m = &k->m.map;
+    double tc = target * m->counts_per_mm;
+    double sc = speed * k->speed_scale;
+    double ac = k->accel_mm_s2 * k->accel_scale;
+    if (fabs(tc) > 2147483647.0 || sc > 2147483647.0 || ac > 2147483647.0)
+        return rail_set_error(r, RAIL_E_INVALID, "target, speed or acceleration overflows 32-bit drive counts");
+    wr b[16];
+    int n = 0;
+    batch_put(b, &n, m->target_pos, lround(tc), m->word_order);
+    batch_put(b, &n, m->speed, lround(sc) > 0 ? lround(sc) : 1, m->word_order);
+    batch_put(b, &n, m->accel, lround(ac) > 0 ? lround(ac) : 1, m->word_order);
+    batch_put(b, &n, m->decel, lround(ac) > 0 ? lround(ac) : 1, m->word_order);
+    batch_put(b, &n, m->op_type, m->op_type_abs, m->word_order);
+    rail_err e = batch_write(r, k, b, n, "writing move data");
+    if (e == RAIL_OK)
+        e = write_one(r, k, m->trigger, m->trigger_value, "triggering the move");
+    return e;
+}
+
+static rail_err mb_control(rail *r, mb *k, long v, const char *what)
+{
+    if (v == 0)
+        return rail_set_error(r, RAIL_E_UNSUPPORTED, "map %s has no %s command", k->m.map.name, what);
+    return write_one(r, k, k->m.map.control, v, what);
+}
+
+static rail_err mb_stop(rail *r, void *impl)
+{
+    mb *k = impl;
+    return mb_control(r, k, k->m.map.ctl_stop, "stop");
+}
+
+static rail_err mb_estop(rail *r, void *impl)
+{
+    mb *k = impl;
+    long v = k->m.map.ctl_estop ? k->m.map.ctl_estop : k->m.map.ctl_stop;
+    return mb_control(r, k, v, "emergency stop");
+}
+
+static rail_err mb_home(rail *r, void *impl)
+{
+    mb *k = impl;
+    rail_err e = mb_control(r, k, k->m.map.ctl_home, "home");
+    if (e == RAIL_OK)
+        k->homing = true;
+    return e;
+}
+
+static rail_err mb_reset(rail *r, void *impl)
+{
+    mb *k = impl;
+    return mb_control(r, k, k->m.map.ctl_reset, "alarm reset");
+}
+
+static void mb_close(void *impl)
+{
+    mb *k = impl;
+    if (k->ctx) {
+        modbus_close(k->ctx);
+        modbus_free(k->ctx);
+    }
+    free(k);
+}
+
+static const rail_ops mb_ops = {
+    .name = "modbus",
+    .poll = mb_poll,
+    .move_abs = mb_move_abs,
+    .jog = NULL, /* bounded move to the limit in the jog's direction */
+    .stop = mb_stop,
+    .estop = mb_estop,
+    .home = mb_home,
+    .reset = mb_reset,
+    .close = mb_close,
+};
+
+static rail_err parse_host_port(const char *a, char *host, size_t hn, int *port)
+{
+    const char *c = strrchr(a, ':');
+    if (!c || c == a || (size_t)(c - a) >= hn)
+        return RAIL_E_INVALID;
+    memcpy(host, a, (size_t)(c - a));
+    host[c - a] = 0;
+    char *end = NULL;
+    long p = strtol(c + 1, &end, 10);
+    if (!*(c + 1) || *end || p < 1 || p > 65535)
+        return RAIL_E_INVALID;
+    *port = (int)p;
+    return RAIL_OK;
+}
+
+rail_err rail_modbus_open(rail **out, const rail_params *p, const rail_modbus_params *mp,
+                          rail_clock clock, char *why, size_t why_len)
+{
+    *out = NULL;
+    rail_err e = rail_params_check(p, why, why_len);
+    if (e != RAIL_OK)
+        return e;
+    const rail_modbus_map *m = &mp->map;
+    if (!m->verified && !mp->allow_unverified) {
+        snprintf(why, why_len,
+                 "modbus: map '%s' has not been verified on a real drive (source: %.120s); check "
+                 "it against the drive's manual and opt in explicitly (allow_unverified / "
+                 "--allow-unverified)",
+                 m->name, m->source);
+        return RAIL_E_UNVERIFIED;
+    }
+    e = rail_modbus_map_check(m, why, why_len);
+    if (e != RAIL_OK)
+        return e;
+    if (mp->slave < 1 || mp->slave > 247) {
+        snprintf(why, why_len, "modbus: slave id %d outside 1..247", mp->slave);
+        return RAIL_E_INVALID;
+    }
+    if (!(mp->timeout_s >= 0.01 && mp->timeout_s <= 5.0)) {
+        snprintf(why, why_len, "modbus: timeout_s %g outside [0.01, 5]", mp->timeout_s);
+        return RAIL_E_INVALID;
+    }
+    if (m->watchdog.addr >= 0) {
+        if (!(mp->watchdog_s >= 2.0 / p->poll_hz && mp->watchdog_s <= 10.0)) {
+            snprintf(why, why_len,
+                     "modbus: watchdog_s %g must be within [2 poll periods = %.3f s, 10 s] so "
+                     "polls keep it alive and a dead process stops the drive",
+                     mp->watchdog_s, 2.0 / p->poll_hz);
+            return RAIL_E_INVALID;
+        }
+    } else if (!mp->watchdog_external) {
+        snprintf(why, why_len,
+                 "modbus: map '%s' has no watchdog register; configure the drive's own "
+                 "communication timeout and confirm it (watchdog_external = true), or a dead "
+                 "process could leave the rail running",
+                 m->name);
+        return RAIL_E_INVALID;
+    }
+    mb *k = calloc(1, sizeof *k);
+    if (!k) {
+        snprintf(why, why_len, "modbus: out of memory");
+        return RAIL_E_NOMEM;
+    }
+    k->m = *mp;
+    k->speed_scale = m->speed_per_mm_s > 0.0 ? m->speed_per_mm_s : m->counts_per_mm;
+    k->accel_scale = m->accel_per_mm_s2 > 0.0 ? m->accel_per_mm_s2 : m->counts_per_mm;
+    k->accel_mm_s2 = p->accel_mm_s2;
+    k->prev_t = rail_clock_now(clock);
+    if (mp->rtu) {
+        char par = mp->parity;
+        if (par != 'N' && par != 'E' && par != 'O') {
+            free(k);
+            snprintf(why, why_len, "modbus: parity must be N, E or O");
+            return RAIL_E_INVALID;
+        }
+        k->ctx = modbus_new_rtu(mp->address, mp->baud, par, 8, par == 'N' ? 2 : 1);
+    } else {
+        char host[128];
+        int port = 0;
+        if (parse_host_port(mp->address, host, sizeof host, &port) != RAIL_OK) {
+            free(k);
+            snprintf(why, why_len, "modbus: address '%.100s' is not HOST:PORT", mp->address);
+            return RAIL_E_INVALID;
+        }
+        k->ctx = modbus_new_tcp(host, port);
+    }
+    if (!k->ctx) {
+        snprintf(why, why_len, "modbus: cannot create a context for %.100s: %s", mp->address,
+                 modbus_strerror(errno));
+        free(k);
+        return RAIL_E_INVALID;
+    }
+    modbus_set_slave(k->ctx, mp->slave);
+    uint32_t sec = (uint32_t)mp->timeout_s, usec = (uint32_t)((mp->timeout_s - sec) * 1e6);
+    modbus_set_response_timeout(k->ctx, sec, usec);
+    modbus_set_byte_timeout(k->ctx, sec, usec);
+    modbus_set_error_recovery(k->ctx, MODBUS_ERROR_RECOVERY_NONE);
+    if (modbus_connect(k->ctx) != 0) {
+        snprintf(why, why_len, "modbus: cannot connect to %.100s: %s", mp->address, modbus_strerror(errno));
+        mb_close(k);
+        return RAIL_E_IO;
+    }
+    /* Create the rail first so the probe's failures have a rail to carry their reason. */
+    rail *r = NULL;
+    e = rail_create(&r, p, clock, &mb_ops, k, why, why_len);
+    if (e != RAIL_OK)
+        return e;
+    e = probe(r, k);
+    rail_status st;
+    memset(&st, 0, sizeof st);
+    if (e == RAIL_OK)
+        e = mb_poll(r, k, &st);
+    if (e == RAIL_OK && st.state == RAIL_STATE_MOVING)
+        e = mb_stop(r, k); /* found moving (an earlier process): stop it, never adopt it */
+    if (e == RAIL_OK)
+        e = arm_watchdog(r, k);
+    if (e != RAIL_OK) {
+        snprintf(why, why_len, "modbus: %.200s", rail_last_error(r));
+        rail_close(r);
+        return e;
+    }
+    *out = r;
+    return RAIL_OK;
+}
