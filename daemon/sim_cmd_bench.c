@@ -1,0 +1,144 @@
+/* sim_cmd_bench.c: `ribbon-sim bench`: the simulator's speed and memory on the paper scene, as
+ * one machine-readable line (a benchmark, never a timed test).
+ *   newton_iter_banded_s / newton_iter_dense_s: one Newton iteration's linear algebra on the
+ *     N = 201 upper state: assembly of gradient and Hessian plus factorisation and solve, banded
+ *     (GSL LDL^T band) and dense (GSL LU with GSL's own CBLAS), in the same run;
+ *   paper_predict_wall_s, realtime_factor: the full Gamma = 0.13 prediction at the paper's
+ *     fixed dt = 1 ms, N = 201, and its simulated time over wall time;
+ *   fast_predict_wall_s, fast_predict_rel_diff: the same prediction in fast mode and its relative
+ *     difference in snap Delta W from the fixed-step run;
+ *   peak_rss_mb: the process's peak resident memory. */
+#include "rod_protocol.h"
+#include "rod_route.h"
+#include "rod_solver.h"
+#include "sim_cmd.h"
+#include "sim_opts.h"
+
+#include <gsl/gsl_linalg.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+
+static const char usage[] =
+    "usage: ribbon-sim bench --scene FILE [--set section.key=value ...] [--json]\n"
+    "  Measures the scene (the paper's Gamma = 0.13 scene is the reference:\n"
+    "  config/scenes/paper-gamma013.ini): banded vs dense Newton iteration, the fixed-step and\n"
+    "  fast predictions, peak memory. Prints one line (one JSON object with --json). Takes about\n"
+    "  a minute.\n";
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Times one banded and one dense Newton iteration's linear algebra at the upper state. */
+static int time_newton(const rod_scene *sc, double *banded, double *dense)
+{
+    rod *r = NULL;
+    char err[256];
+    if (rod_alloc(sc, &r, err, sizeof err) != ROD_OK) {
+        fprintf(stderr, "ribbon-sim bench: %s\n", err);
+        return 0;
+    }
+    rod_solver *s = rod_solver_alloc(r);
+    int nf = rod_nfree(r), w = ROD_BAND + 1, ok = 0;
+    double *g = malloc(sizeof(double) * (size_t)r->ndof);
+    double *H = malloc(sizeof(double) * (size_t)nf * (size_t)w);
+    double *x = malloc(sizeof(double) * (size_t)nf);
+    gsl_matrix *D = gsl_matrix_alloc((size_t)nf, (size_t)nf);
+    gsl_permutation *p = gsl_permutation_alloc((size_t)nf);
+    if (!s || !g || !H || !x || !D || !p || rod_route_to_state(r, s, sc, +1, NULL) != ROD_OK) goto out;
+    const int nb = 200, nd = 3;
+    double t0 = now();
+    for (int it = 0; it < nb; it++) {
+        rod_gradient(r, g);
+        memset(H, 0, sizeof(double) * (size_t)nf * (size_t)w);
+        rod_hessian_add(r, 1.0, H);
+        for (int a = 0; a < nf; a++) H[a * w] += 1e3 * r->mass[a + ROD_FREE_BEGIN];
+        gsl_matrix_view A = gsl_matrix_view_array(H, (size_t)nf, (size_t)w);
+        for (int a = 0; a < nf; a++) x[a] = -g[a + ROD_FREE_BEGIN];
+        gsl_vector_view xv = gsl_vector_view_array(x, (size_t)nf);
+        if (gsl_linalg_ldlt_band_decomp(&A.matrix) || gsl_linalg_ldlt_band_svx(&A.matrix, &xv.vector)) goto out;
+    }
+    *banded = (now() - t0) / nb;
+    t0 = now();
+    for (int it = 0; it < nd; it++) {
+        rod_gradient(r, g);
+        memset(H, 0, sizeof(double) * (size_t)nf * (size_t)w);
+        rod_hessian_add(r, 1.0, H);
+        gsl_matrix_set_zero(D);
+        for (int a = 0; a < nf; a++)
+            for (int k = 0; k < w && a + k < nf; k++) {
+                double v = H[a * w + k] + (k == 0 ? 1e3 * r->mass[a + ROD_FREE_BEGIN] : 0.0);
+                gsl_matrix_set(D, (size_t)a, (size_t)(a + k), v);
+                gsl_matrix_set(D, (size_t)(a + k), (size_t)a, v);
+            }
+        int sign;
+        for (int a = 0; a < nf; a++) x[a] = -g[a + ROD_FREE_BEGIN];
+        gsl_vector_view xv = gsl_vector_view_array(x, (size_t)nf);
+        if (gsl_linalg_LU_decomp(D, p, &sign) || gsl_linalg_LU_svx(D, p, &xv.vector)) goto out;
+    }
+    *dense = (now() - t0) / nd;
+    ok = 1;
+out:
+    if (!ok) fprintf(stderr, "ribbon-sim bench: the Newton timing failed\n");
+    free(g); free(H); free(x);
+    if (D) gsl_matrix_free(D);
+    if (p) gsl_permutation_free(p);
+    rod_solver_free(s);
+    rod_free(r);
+    return ok;
+}
+
+static int predict(const rod_scene *sc, int fast, rod_prediction *p)
+{
+    rod_predict_opts o = rod_predict_opts_default();
+    o.adaptive = fast;
+    char err[512] = "";
+    rod_status st = rod_predict(sc, &o, p, err, sizeof err);
+    if (st != ROD_OK || !p->snapped) {
+        fprintf(stderr, "ribbon-sim bench: %s prediction: %s\n", fast ? "fast" : "fixed-step",
+                st != ROD_OK ? err : "no snap");
+        return 0;
+    }
+    return 1;
+}
+
+int sim_cmd_bench(int argc, char **argv)
+{
+    sim_opts o;
+    int rc = sim_opts_parse(argc, argv, "json", usage, &o);
+    if (rc) return rc == 1 ? 0 : 2;
+    rod_scene sc;
+    if (!sim_opts_load_scene(&o, &sc)) return 2;
+    double banded = 0, dense = 0;
+    rod_prediction fixed, fast;
+    if (!time_newton(&sc, &banded, &dense)) return 1;
+    if (!predict(&sc, 0, &fixed) || !predict(&sc, 1, &fast)) return 1;
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    double rss_mb = (double)ru.ru_maxrss / 1024.0;
+    double rel = fabs(fast.snap_dw - fixed.snap_dw) / fabs(fixed.snap_dw);
+    json_t *j = json_pack("{s:i,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f}", "nodes", sc.nodes,
+                          "newton_iter_banded_s", banded, "newton_iter_dense_s", dense, "banded_vs_dense",
+                          dense / banded, "paper_predict_wall_s", fixed.wall_s, "realtime_factor",
+                          fixed.sim_time / fixed.wall_s, "fast_predict_wall_s", fast.wall_s,
+                          "fast_predict_rel_diff", rel, "peak_rss_mb", rss_mb, "snap_dw_fixed", fixed.snap_dw,
+                          "snap_dw_fast", fast.snap_dw);
+    char *txt = json_dumps(j, JSON_COMPACT | JSON_REAL_PRECISION(6));
+    if (o.json) puts(txt);
+    else
+        printf("bench nodes=%d banded=%.3gs dense=%.3gs ratio=%.0f paper_wall=%.2fs realtime=%.2f fast_wall=%.2fs "
+               "fast_rel_diff=%.2e rss=%.1fMB\n",
+               sc.nodes, banded, dense, dense / banded, fixed.wall_s, fixed.sim_time / fixed.wall_s, fast.wall_s, rel,
+               rss_mb);
+    free(txt);
+    json_decref(j);
+    return 0;
+}
