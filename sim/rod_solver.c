@@ -161,7 +161,7 @@ static void assemble(rod *r, rod_solver *s, const rod_newton_opts *o, double shi
 /* Solves J dq = -res with J = c1 M + H. In minimising mode an indefinite J is shifted by
  * sigma diag|J| (sigma = 1e-4, 1e-3, ... up to 10) until LDL^T has positive pivots, which
  * makes dq a descent direction of the incremental potential (a stable equilibrium is a minimum);
- * otherwise LU with partial pivoting solves the unshifted system. */
+ * otherwise, or when no shift helps, LU with partial pivoting solves the unshifted system. */
 static rod_status linear_solve(rod *r, rod_solver *s, const rod_newton_opts *o)
 {
     int nf = s->nfree, w = ROD_BAND + 1;
@@ -180,7 +180,8 @@ static rod_status linear_solve(rod *r, rod_solver *s, const rod_newton_opts *o)
             }
             shift = shift == 0.0 ? 1e-4 : shift * 10.0;
         }
-        return ROD_ERR_SINGULAR;
+        /* Far from any minimum a diagonal shift may not reach definiteness (diagonal entries
+         * that nearly cancel): fall back to the unshifted LU step, checked by the line search. */
     }
     assemble(r, s, o, 0.0);
     r->count.factorisations++;
