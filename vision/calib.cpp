@@ -1,0 +1,193 @@
+// calib.cpp: the calibration record: defaults, checks, the clamp-points method, and its file.
+//
+// File format: plain text, one `key = values` per line, `#` comments, numbers separated by commas
+// or spaces, written with 17 significant digits so a save/load round-trip is exact. A bad line is
+// reported with its number and key. Unknown keys are refused (a typo must not silently fall back
+// to a default). Keys: px_per_mm, clamp_left, clamp_right, principal, camera_distance_mm,
+// camera_matrix (9 values, row-major), dist (5 values); the last two appear together or not at all.
+#include "vis_internal.hpp"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+extern "C" vis_calib vis_calib_default(void)
+{
+    vis_calib c;
+    std::memset(&c, 0, sizeof c);
+    c.px_per_mm = 0.0;  // unset: vis_calib_check refuses it
+    c.principal_px[0] = c.principal_px[1] = -1.0;
+    return c;
+}
+
+extern "C" vis_status vis_calib_check(const vis_calib *c, vis_error *err)
+{
+    if (!c)
+        return vis::fail(err, VIS_ERR_ARG, "calibration: NULL");
+    if (!vis::finite(c->px_per_mm) || c->px_per_mm <= 0 || c->px_per_mm > 1e4)
+        return vis::fail(err, VIS_ERR_ARG, "calibration: px_per_mm = %g, need 0 < px_per_mm <= 1e4",
+                         c->px_per_mm);
+    const double v[6] = {c->clamp_left_px[0],  c->clamp_left_px[1], c->clamp_right_px[0],
+                         c->clamp_right_px[1], c->principal_px[0],  c->principal_px[1]};
+    for (double x : v)
+        if (!vis::finite(x) || std::fabs(x) > 1e5)
+            return vis::fail(err, VIS_ERR_ARG, "calibration: a clamp or principal point is not finite");
+    if (std::hypot(c->clamp_right_px[0] - c->clamp_left_px[0],
+                   c->clamp_right_px[1] - c->clamp_left_px[1]) < 4)
+        return vis::fail(err, VIS_ERR_ARG, "calibration: clamp points closer than 4 px (unset?)");
+    if (!vis::finite(c->camera_distance_mm) || c->camera_distance_mm < 0)
+        return vis::fail(err, VIS_ERR_ARG, "calibration: camera_distance_mm must be >= 0");
+    if (c->has_intrinsics) {
+        for (int i = 0; i < 9; i++)
+            if (!vis::finite(c->camera_matrix[i]))
+                return vis::fail(err, VIS_ERR_ARG, "calibration: camera_matrix not finite");
+        for (int i = 0; i < 5; i++)
+            if (!vis::finite(c->dist[i]))
+                return vis::fail(err, VIS_ERR_ARG, "calibration: dist not finite");
+        if (!(c->camera_matrix[0] > 0 && c->camera_matrix[4] > 0))
+            return vis::fail(err, VIS_ERR_ARG, "calibration: camera_matrix focal lengths must be > 0");
+    }
+    vis::ok(err);
+    return VIS_OK;
+}
+
+extern "C" vis_status vis_calib_from_clamps(vis_calib *c, const double left_px[2],
+                                            const double right_px[2], double spacing_mm,
+                                            vis_error *err)
+{
+    if (!c || !left_px || !right_px)
+        return vis::fail(err, VIS_ERR_ARG, "vis_calib_from_clamps: NULL argument");
+    if (!vis::finite(spacing_mm) || spacing_mm <= 0)
+        return vis::fail(err, VIS_ERR_ARG, "clamp spacing %g mm must be > 0", spacing_mm);
+    const double d = std::hypot(right_px[0] - left_px[0], right_px[1] - left_px[1]);
+    if (!vis::finite(d) || d < 4)
+        return vis::fail(err, VIS_ERR_ARG, "clamp points %.1f px apart: need at least 4 px", d);
+    c->clamp_left_px[0] = left_px[0];
+    c->clamp_left_px[1] = left_px[1];
+    c->clamp_right_px[0] = right_px[0];
+    c->clamp_right_px[1] = right_px[1];
+    c->px_per_mm = d / spacing_mm;
+    return vis_calib_check(c, err);
+}
+
+extern "C" vis_status vis_calib_save(const vis_calib *c, const char *path, vis_error *err)
+{
+    if (!path)
+        return vis::fail(err, VIS_ERR_ARG, "vis_calib_save: NULL path");
+    vis_status s = vis_calib_check(c, err);
+    if (s != VIS_OK)
+        return s;
+    FILE *f = std::fopen(path, "w");
+    if (!f)
+        return vis::fail(err, VIS_ERR_IO, "cannot write calibration %s: %s", path, std::strerror(errno));
+    std::fprintf(f, "# ribbon rig camera calibration (vision/calib.cpp)\n");
+    std::fprintf(f, "px_per_mm = %.17g\n", c->px_per_mm);
+    std::fprintf(f, "clamp_left = %.17g, %.17g\n", c->clamp_left_px[0], c->clamp_left_px[1]);
+    std::fprintf(f, "clamp_right = %.17g, %.17g\n", c->clamp_right_px[0], c->clamp_right_px[1]);
+    std::fprintf(f, "principal = %.17g, %.17g\n", c->principal_px[0], c->principal_px[1]);
+    std::fprintf(f, "camera_distance_mm = %.17g\n", c->camera_distance_mm);
+    if (c->has_intrinsics) {
+        std::fprintf(f, "camera_matrix =");
+        for (int i = 0; i < 9; i++)
+            std::fprintf(f, "%s %.17g", i ? "," : "", c->camera_matrix[i]);
+        std::fprintf(f, "\ndist =");
+        for (int i = 0; i < 5; i++)
+            std::fprintf(f, "%s %.17g", i ? "," : "", c->dist[i]);
+        std::fprintf(f, "\n");
+    }
+    if (std::fclose(f) != 0)
+        return vis::fail(err, VIS_ERR_IO, "cannot write calibration %s", path);
+    vis::ok(err);
+    return VIS_OK;
+}
+
+// Parse exactly `n` numbers from `s`; false on any other content.
+static bool parse_numbers(const char *s, double *out, int n)
+{
+    for (int i = 0; i < n; i++) {
+        while (*s == ' ' || *s == '\t' || (i > 0 && *s == ','))
+            s++;
+        char *end;
+        errno = 0;
+        out[i] = std::strtod(s, &end);
+        if (end == s || errno || !std::isfinite(out[i]))
+            return false;
+        s = end;
+    }
+    while (*s == ' ' || *s == '\t' || *s == '\r' || *s == '\n')
+        s++;
+    return *s == '\0';
+}
+
+extern "C" vis_status vis_calib_load(vis_calib *c, const char *path, vis_error *err)
+{
+    if (!c || !path)
+        return vis::fail(err, VIS_ERR_ARG, "vis_calib_load: NULL argument");
+    FILE *f = std::fopen(path, "r");
+    if (!f)
+        return vis::fail(err, VIS_ERR_IO, "cannot read calibration %s: %s", path, std::strerror(errno));
+    vis_calib r = vis_calib_default();
+    char line[1024];
+    int lineno = 0, have_k = 0, have_d = 0;
+    vis_status st = VIS_OK;
+    while (st == VIS_OK && lineno < 10000 && std::fgets(line, sizeof line, f)) {
+        lineno++;
+        if (!std::strchr(line, '\n') && !std::feof(f)) {
+            st = vis::fail(err, VIS_ERR_FORMAT, "%s:%d: line too long", path, lineno);
+            break;
+        }
+        char *p = line;
+        while (*p == ' ' || *p == '\t')
+            p++;
+        if (*p == '#' || *p == '\n' || *p == '\r' || *p == '\0')
+            continue;
+        char *eq = std::strchr(p, '=');
+        if (!eq) {
+            st = vis::fail(err, VIS_ERR_FORMAT, "%s:%d: expected key = value", path, lineno);
+            break;
+        }
+        char *ke = eq;
+        while (ke > p && (ke[-1] == ' ' || ke[-1] == '\t'))
+            ke--;
+        *ke = '\0';
+        const char *val = eq + 1;
+        struct Key {
+            const char *name;
+            double *dst;
+            int n;
+            int *flag;
+        } keys[] = {{"px_per_mm", &r.px_per_mm, 1, nullptr},
+                    {"clamp_left", r.clamp_left_px, 2, nullptr},
+                    {"clamp_right", r.clamp_right_px, 2, nullptr},
+                    {"principal", r.principal_px, 2, nullptr},
+                    {"camera_distance_mm", &r.camera_distance_mm, 1, nullptr},
+                    {"camera_matrix", r.camera_matrix, 9, &have_k},
+                    {"dist", r.dist, 5, &have_d}};
+        bool known = false;
+        for (const Key &k : keys) {
+            if (std::strcmp(p, k.name) != 0)
+                continue;
+            known = true;
+            if (!parse_numbers(val, k.dst, k.n))
+                st = vis::fail(err, VIS_ERR_FORMAT, "%s:%d: %s needs %d finite number%s", path, lineno,
+                               k.name, k.n, k.n > 1 ? "s" : "");
+            else if (k.flag)
+                *k.flag = 1;
+        }
+        if (!known)
+            st = vis::fail(err, VIS_ERR_FORMAT, "%s:%d: unknown key \"%s\"", path, lineno, p);
+    }
+    std::fclose(f);
+    if (st != VIS_OK)
+        return st;
+    if (have_k != have_d)
+        return vis::fail(err, VIS_ERR_FORMAT, "%s: camera_matrix and dist must appear together", path);
+    r.has_intrinsics = have_k;
+    vis_error e2;
+    if (vis_calib_check(&r, &e2) != VIS_OK)
+        return vis::fail(err, VIS_ERR_FORMAT, "%s: %s", path, e2.message);
+    *c = r;
+    vis::ok(err);
+    return VIS_OK;
+}

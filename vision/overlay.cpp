@@ -1,0 +1,49 @@
+// overlay.cpp: draws the tracker's result over a frame, for the overlay video and for eyes.
+//
+// Green centreline, red midpoint, and a text line (frame, Delta Z, A, quality, or the reason). The
+// input may be grey or BGR; the output is always BGR.
+#include "vis_internal.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+#include <cstdio>
+#include <vector>
+
+extern "C" vis_status vis_overlay_draw(const vis_frame *in, const vis_tracker *t, const vis_measure *m,
+                                       int frame, vis_frame *out, vis_error *err)
+{
+    if (!in || !out || !m || in->mat.empty())
+        return vis::fail(err, VIS_ERR_ARG, "vis_overlay_draw: NULL or empty argument");
+    VIS_GUARD(err, VIS_ERR_INTERNAL, {
+        cv::Mat bgr;
+        if (in->mat.channels() == 1)
+            cv::cvtColor(in->mat, bgr, cv::COLOR_GRAY2BGR);
+        else
+            bgr = in->mat.clone();
+        const int shift = 4;  // sub-pixel drawing
+        const double sc = 1 << shift;
+        if (t && m->reason == VIS_REASON_NONE) {
+            const size_t n = vis_tracker_curve(t, nullptr, 0);
+            std::vector<double> uv(2 * n);
+            vis_tracker_curve(t, uv.data(), n);
+            std::vector<cv::Point> pts(n);
+            for (size_t i = 0; i < n; i++)
+                pts[i] = cv::Point((int)std::lround(uv[2 * i] * sc), (int)std::lround(uv[2 * i + 1] * sc));
+            if (n >= 2)
+                cv::polylines(bgr, pts, false, cv::Scalar(0, 200, 0), 1, cv::LINE_AA, shift);
+            cv::circle(bgr, cv::Point((int)std::lround(m->mid_px[0] * sc), (int)std::lround(m->mid_px[1] * sc)),
+                       3 << shift, cv::Scalar(0, 0, 255), 1, cv::LINE_AA, shift);
+        }
+        char text[160];
+        if (m->reason == VIS_REASON_NONE)
+            std::snprintf(text, sizeof text, "#%d dZ=%+.4f A=%+.4f q=%.2f", frame, m->dz, m->a, m->quality);
+        else
+            std::snprintf(text, sizeof text, "#%d %s", frame, vis_reason_str(m->reason));
+        const double fs = std::max(0.35, bgr.cols / 900.0);
+        cv::putText(bgr, text, cv::Point(4, (int)(14 * fs / 0.35 * 0.9)), cv::FONT_HERSHEY_SIMPLEX, fs,
+                    cv::Scalar(0, 0, 255), 1, cv::LINE_AA);
+        out->mat = bgr;
+        vis::ok(err);
+        return VIS_OK;
+    })
+}

@@ -1,0 +1,74 @@
+// signal.cpp: from a grey frame to a ridge signal the tracer can follow.
+//
+// Uneven lighting and either polarity are handled in one step: the ribbon is thinner than
+// `ribbon_max_px`, so a morphological closing (dark ribbon) or opening (light ribbon) with a larger
+// square removes it and leaves the local background; the difference (black-hat / top-hat) is the
+// ribbon's contrast above its own surroundings, zero on flat background however bright. Clamp jaws
+// and clutter larger than the square vanish as well. Only the region of interest around the expected
+// curve is filtered, which keeps the per-frame cost proportional to the ribbon, not the image.
+// Exposure and polarity come from the 256-bin histogram (no sort, no allocation per frame).
+#include "tracker_impl.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+namespace vis {
+
+namespace {
+void histogram(const cv::Mat &g, double h[256], double &total)
+{
+    for (int i = 0; i < 256; i++)
+        h[i] = 0;
+    for (int y = 0; y < g.rows; y++) {
+        const uint8_t *r = g.ptr<uint8_t>(y);
+        for (int x = 0; x < g.cols; x++)
+            h[r[x]] += 1;
+    }
+    total = (double)g.rows * g.cols;
+}
+int percentile(const double h[256], double total, double q)
+{
+    double acc = 0;
+    for (int i = 0; i < 256; i++) {
+        acc += h[i];
+        if (acc >= q * total)
+            return i;
+    }
+    return 255;
+}
+}  // namespace
+
+Exposure exposure_check(const cv::Mat &grey, double min_contrast)
+{
+    double h[256], total;
+    histogram(grey, h, total);
+    const int lo = percentile(h, total, 0.001), hi = percentile(h, total, 0.999);
+    const int med = percentile(h, total, 0.5);
+    if (hi - lo < min_contrast || (h[0] + h[1] + h[2]) > 0.95 * total ||
+        (h[255] + h[254] + h[253]) > 0.95 * total)
+        return med < 128 ? Exposure::dark : Exposure::saturated;
+    return Exposure::ok;
+}
+
+bool polarity_is_dark(const cv::Mat &grey)
+{
+    double h[256], total;
+    histogram(grey, h, total);
+    const int lo = percentile(h, total, 0.002), hi = percentile(h, total, 0.998);
+    const int med = percentile(h, total, 0.5);
+    return med - lo >= hi - med;
+}
+
+void ridge_signal(const cv::Mat &grey, bool dark, int r, cv::Rect roi, cv::Mat &work, cv::Mat &sig)
+{
+    // Pad the ROI by the kernel radius so the filter sees the background around the ribbon.
+    const cv::Rect img(0, 0, grey.cols, grey.rows);
+    const cv::Rect big = cv::Rect(roi.x - r, roi.y - r, roi.width + 2 * r, roi.height + 2 * r) & img;
+    const cv::Mat k = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * r + 1, 2 * r + 1));
+    cv::morphologyEx(grey(big), work, dark ? cv::MORPH_BLACKHAT : cv::MORPH_TOPHAT, k,
+                     cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
+    sig.create(grey.rows, grey.cols, CV_32F);
+    sig.setTo(0);
+    work.convertTo(sig(big), CV_32F);
+}
+
+}  // namespace vis

@@ -1,0 +1,23 @@
+// source.hpp: the private frame-source interface behind vis_source (one implementation per file).
+#ifndef RIBBON_VIS_SOURCE_HPP
+#define RIBBON_VIS_SOURCE_HPP
+
+#include "vis_internal.hpp"
+
+namespace vis {
+// A source of grey frames. read() returns VIS_OK, VIS_ERR_END at a clean end, or an error.
+class Source {
+public:
+    virtual ~Source() = default;
+    virtual vis_status read(cv::Mat &grey, double &t_s, vis_error *err) = 0;
+    virtual int frame_count() const { return -1; }
+    virtual double fps() const { return 0.0; }
+};
+Source *source_video_open(const char *path, vis_error *err);
+Source *source_camera_open(const vis_camera_settings &s, vis_error *err);
+Source *source_images_open(const char *pattern, int first, vis_error *err);
+Source *source_synth_open(const vis_render_params &p, double fps, vis_shape_fn fn, void *user,
+                          vis_error *err);
+}  // namespace vis
+
+#endif

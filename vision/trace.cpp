@@ -1,0 +1,143 @@
+// trace.cpp: the sub-pixel centreline tracer (cross-section centroids along the arc).
+//
+// The guide curve (the previous frame's centreline, or a fresh geodesic path) is resampled every
+// `step` px along its arc length; at each sample the ridge signal is read along the normal, +-band px,
+// every 0.25 px by bilinear interpolation (OpenCV's convention: pixel centres at integers, so no
+// half-pixel shift). The ribbon's cross-section is the peak of that profile: its centre is the
+// centroid of the part above median + 30% of the peak height, which is unbiased for the symmetric
+// blurred profile of a ribbon. Working along normals (not image columns) is what lets the tracer
+// follow overhangs and tangents beyond vertical. A sample is valid only when the peak stands out
+// from the profile's own noise (peak - lower quartile >= min_contrast and >= 5 times the RMS of the profile away from the peak) and is narrower than the
+// largest expected thickness: on a corrupted or noise-only frame the profiles fail that test and the
+// frame is reported instead of measured.
+#include "tracker_impl.hpp"
+
+#include <algorithm>
+
+namespace vis {
+
+std::vector<Pt> resample(const std::vector<Pt> &g, double step, double *len)
+{
+    std::vector<double> cum(g.size(), 0.0);
+    for (size_t i = 1; i < g.size(); i++)
+        cum[i] = cum[i - 1] + cv::norm(g[i] - g[i - 1]);
+    const double L = cum.back();
+    if (len)
+        *len = L;
+    const size_t m = std::max<size_t>(2, (size_t)std::ceil(L / step) + 1);
+    std::vector<Pt> out(m);
+    size_t j = 0;
+    for (size_t i = 0; i < m; i++) {
+        const double s = L * (double)i / (double)(m - 1);
+        while (j + 2 < g.size() && cum[j + 1] < s)
+            j++;
+        const double d = cum[j + 1] - cum[j];
+        const double w = d > 0 ? std::min(1.0, std::max(0.0, (s - cum[j]) / d)) : 0.0;
+        out[i] = g[j] + w * (g[j + 1] - g[j]);
+    }
+    return out;
+}
+
+std::vector<Pt> smooth(const std::vector<Pt> &c, int h)
+{
+    const int n = (int)c.size();
+    std::vector<Pt> out(c);
+    for (int i = 1; i + 1 < n; i++) {
+        const int k = std::min(h, std::min(i, n - 1 - i));  // shrink the window near the ends
+        Pt acc(0, 0);
+        for (int j = i - k; j <= i + k; j++)
+            acc += c[(size_t)j];
+        out[(size_t)i] = acc * (1.0 / (2 * k + 1));
+    }
+    return out;
+}
+
+static inline float bilinear(const cv::Mat &m, double x, double y)
+{
+    if (!(x >= 0 && y >= 0 && x <= m.cols - 1 && y <= m.rows - 1))
+        return 0.f;
+    const int x0 = std::min((int)x, m.cols - 2 < 0 ? 0 : m.cols - 2);
+    const int y0 = std::min((int)y, m.rows - 2 < 0 ? 0 : m.rows - 2);
+    const float fx = (float)(x - x0), fy = (float)(y - y0);
+    const float *r0 = m.ptr<float>(y0), *r1 = m.ptr<float>(std::min(y0 + 1, m.rows - 1));
+    const int x1 = std::min(x0 + 1, m.cols - 1);
+    return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x1]) + fy * ((1 - fx) * r1[x0] + fx * r1[x1]);
+}
+
+void trace_pass(const cv::Mat &sig, cv::Point origin, const std::vector<Pt> &guide, double band,
+                double margin, double min_contrast, double max_width, std::vector<TraceSample> &out)
+{
+    out.clear();
+    const size_t n = guide.size();
+    if (n < 3)
+        return;
+    const double d = 0.25;
+    const int K = (int)std::floor(band / d);
+    std::vector<float> prof((size_t)(2 * K + 1)), tmp((size_t)(2 * K + 1));
+    double s = 0;
+    for (size_t i = 1; i < n; i++)
+        s += cv::norm(guide[i] - guide[i - 1]);
+    const double L = s;
+    s = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (i > 0)
+            s += cv::norm(guide[i] - guide[i - 1]);
+        if (s < margin || s > L - margin)
+            continue;
+        const Pt t = guide[std::min(i + 1, n - 1)] - guide[i > 0 ? i - 1 : 0];
+        const double tl = cv::norm(t);
+        if (!(tl > 0))
+            continue;
+        const Pt nrm(-t.y / tl, t.x / tl);
+        const Pt c = guide[i] - Pt(origin.x, origin.y);
+        for (int k = -K; k <= K; k++) {
+            const Pt q = c + (k * d) * nrm;
+            prof[(size_t)(k + K)] = bilinear(sig, q.x, q.y);
+        }
+        // Background level: the lower quartile (the band is at least twice the ribbon, so at least
+        // half of the profile is background).
+        tmp = prof;
+        const size_t q = tmp.size() / 4;
+        std::nth_element(tmp.begin(), tmp.begin() + (long)q, tmp.end());
+        const double base = tmp[q];
+        int kp = 0;
+        for (int k = 1; k < 2 * K + 1; k++)
+            if (prof[(size_t)k] > prof[(size_t)kp])
+                kp = k;
+        const double peak = prof[(size_t)kp] - base;
+        TraceSample ts{guide[i], s, peak, false};
+        const double thr = base + 0.3 * peak;
+        int lo = kp, hi = kp;
+        while (lo > 0 && prof[(size_t)(lo - 1)] > thr)
+            lo--;
+        while (hi < 2 * K && prof[(size_t)(hi + 1)] > thr)
+            hi++;
+        // Noise: spread of the profile outside the peak (1 px clear of it on each side).
+        double ss = 0;
+        int cnt = 0;
+        for (int k = 0; k < 2 * K + 1; k++)
+            if (k < lo - 4 || k > hi + 4) {
+                const double dv = prof[(size_t)k] - base;
+                ss += dv * dv;
+                cnt++;
+            }
+        const double noise = cnt >= 8 ? std::sqrt(ss / cnt) : 0.0;
+        const double width = (hi - lo) * d;
+        if (peak >= min_contrast && peak >= 5.0 * noise && width <= max_width + 2.0 && lo > 0 &&
+            hi < 2 * K) {
+            double sw = 0, so = 0;
+            for (int k = lo; k <= hi; k++) {
+                const double w = prof[(size_t)k] - thr;
+                sw += w;
+                so += w * (k - K) * d;
+            }
+            if (sw > 0) {
+                ts.p = guide[i] + (so / sw) * nrm;
+                ts.valid = true;
+            }
+        }
+        out.push_back(ts);
+    }
+}
+
+}  // namespace vis

@@ -1,0 +1,375 @@
+// tracker.cpp: the tracker object and its per-frame pipeline (vis_tracker_process).
+//
+// Stages, in order (each in its own file, see tracker_impl.hpp):
+//   1. frame checks: unreadable, too dark, saturated -> a reason, not an error;
+//   2. clamp points: from the calibration; the right one moves toward the principal point as the
+//      shear carries it away from the camera (magnification D / (D + shear));
+//   3. ridge signal (black-hat or top-hat, polarity fixed, or decided once and then kept);
+//   4. guide: the previous frame's smooth curve, or a geodesic path between the clamps when there is
+//      none or following it fails (first frame, snap-through, recovery after a lost frame);
+//   5. three tracer passes (wide band, then narrow) refining the centreline to sub-pixel;
+//   6. metric curve: undistortion (if the calibration has intrinsics), then depth correction: the
+//      point at arc fraction xi is assumed at depth y = shear (3 xi^2 - 2 xi^3) (clamped ends keep
+//      their tangent along x, so the shear profile is flat at both clamps), and its pixel offset from
+//      the principal point is scaled by (1 + y / D) / px_per_mm;
+//   7. local smooth fit, Delta Z, A, quality, reason.
+// All buffers live in the tracker and are reused from frame to frame.
+#include "tracker_impl.hpp"
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+
+struct vis_tracker {
+    vis_track_params p;
+    vis_calib c;
+    int polarity = 0;                // 0 undecided, 1 dark, 2 light
+    std::vector<vis::Pt> prev;       // previous smooth centreline, pixels (empty: none)
+    std::vector<vis::Pt> curve;      // last smooth centreline, pixels (for overlays)
+    cv::Mat work, sig;
+    cv::Size size;
+};
+
+extern "C" vis_track_params vis_track_params_default(void)
+{
+    vis_track_params p;
+    p.length_mm = 0.0;
+    p.polarity = VIS_POLARITY_AUTO;
+    p.band_px = 12.0;
+    p.ribbon_max_px = 8.0;
+    p.step_px = 1.0;
+    p.end_margin_px = 3.0;
+    p.fit_window = 0.08;
+    p.end_window = 0.06;
+    p.min_contrast = 12.0;
+    p.min_quality = 0.3;
+    return p;
+}
+
+static bool track_params_valid(const vis_track_params &p, vis_error *err)
+{
+    if (!vis::finite(p.length_mm) || p.length_mm < 0 || !vis::finite(p.band_px) || p.band_px < 1 ||
+        p.band_px > 100 || !vis::finite(p.ribbon_max_px) || p.ribbon_max_px < 1 ||
+        p.ribbon_max_px > 100 || !vis::finite(p.step_px) || p.step_px < 0.25 || p.step_px > 20 ||
+        !vis::finite(p.end_margin_px) || p.end_margin_px < 0 || p.end_margin_px > 200 ||
+        !vis::finite(p.fit_window) || p.fit_window <= 0 || p.fit_window > 0.25 ||
+        !vis::finite(p.end_window) || p.end_window <= 0 || p.end_window > 0.5 ||
+        !vis::finite(p.min_contrast) || p.min_contrast < 0 || p.min_contrast > 255 ||
+        !vis::finite(p.min_quality) || p.min_quality < 0 || p.min_quality > 1 ||
+        (p.polarity != VIS_POLARITY_AUTO && p.polarity != VIS_POLARITY_DARK &&
+         p.polarity != VIS_POLARITY_LIGHT)) {
+        vis::fail(err, VIS_ERR_ARG,
+                  "track params: need length_mm >= 0, 1 <= band_px <= 100, 1 <= ribbon_max_px <= 100, "
+                  "0.25 <= step_px <= 20, 0 <= end_margin_px <= 200, 0 < fit_window <= 0.25, 0 < end_window <= 0.5, "
+                  "0 <= min_contrast <= 255, 0 <= min_quality <= 1, a known polarity");
+        return false;
+    }
+    return true;
+}
+
+extern "C" vis_tracker *vis_tracker_create(const vis_track_params *p, const vis_calib *c,
+                                           vis_error *err)
+{
+    if (!p || !c) {
+        vis::fail(err, VIS_ERR_ARG, "vis_tracker_create: NULL params or calibration");
+        return nullptr;
+    }
+    if (!track_params_valid(*p, err) || vis_calib_check(c, err) != VIS_OK)
+        return nullptr;
+    VIS_GUARD(err, nullptr, {
+        vis_tracker *t = new vis_tracker;
+        t->p = *p;
+        t->c = *c;
+        if (p->polarity == VIS_POLARITY_DARK)
+            t->polarity = 1;
+        else if (p->polarity == VIS_POLARITY_LIGHT)
+            t->polarity = 2;
+        vis::ok(err);
+        return t;
+    })
+}
+
+extern "C" void vis_tracker_free(vis_tracker *t) { delete t; }
+
+extern "C" void vis_tracker_reset(vis_tracker *t)
+{
+    if (!t)
+        return;
+    t->prev.clear();
+    if (t->p.polarity == VIS_POLARITY_AUTO)
+        t->polarity = 0;
+}
+
+static void measure_clear(vis_measure *m, vis_reason r)
+{
+    m->reason = r;
+    m->dz = 0;
+    m->a = 0;
+    m->quality = 0;
+    m->length_mm = 0;
+    m->mid_px[0] = m->mid_px[1] = 0;
+    m->residual_px = 0;
+}
+
+extern "C" void vis_tracker_skip(vis_tracker *t, vis_measure *out)
+{
+    if (out)
+        measure_clear(out, VIS_REASON_UNREADABLE);
+    (void)t;  // the previous curve stays the best guide for the next frame
+}
+
+extern "C" size_t vis_tracker_curve(const vis_tracker *t, double *uv, size_t max)
+{
+    if (!t)
+        return 0;
+    for (size_t i = 0; uv && i < max && i < t->curve.size(); i++) {
+        uv[2 * i] = t->curve[i].x;
+        uv[2 * i + 1] = t->curve[i].y;
+    }
+    return t->curve.size();
+}
+
+namespace {
+
+using vis::Pt;
+
+struct Geometry {
+    Pt principal;     // pixels
+    Pt left, right;   // clamp points in the image at this frame's shear, pixels
+    double shear;     // mm
+    double D;         // mm, 0 = no depth correction
+    double ppmm;      // pixels per mm at y = 0
+};
+
+// Depth magnification factor (1 + y / D) at arc fraction xi.
+double depth_factor(const Geometry &g, double xi)
+{
+    if (!(g.D > 0))
+        return 1.0;
+    xi = std::min(1.0, std::max(0.0, xi));
+    const double y = g.shear * (3 * xi * xi - 2 * xi * xi * xi);
+    return 1.0 + y / g.D;
+}
+
+struct Attempt {
+    vis_reason reason = VIS_REASON_LOST;
+    double quality = 0;
+    vis_measure m{};
+    std::vector<Pt> curve_px;
+};
+
+// Steps 5 to 7 from a guide curve.
+Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide)
+{
+    Attempt at;
+    const vis_track_params &p = t->p;
+    std::vector<vis::TraceSample> samples;
+    const double band_narrow = std::min(p.band_px, p.ribbon_max_px + 2.0);
+    double len_px = 0;
+    for (int pass = 0; pass < 3; pass++) {
+        guide.front() = g.left;
+        guide.back() = g.right;
+        std::vector<Pt> rs = vis::resample(guide, p.step_px, &len_px);
+        if (len_px < 4 * p.end_margin_px + 8 || rs.size() < 8) {
+            at.reason = VIS_REASON_LOST;
+            return at;
+        }
+        vis::trace_pass(t->sig, cv::Point(0, 0), rs, pass == 0 ? p.band_px : band_narrow,
+                        p.end_margin_px, p.min_contrast, p.ribbon_max_px, samples);
+        size_t nv = 0;
+        for (const auto &s : samples)
+            nv += s.valid;
+        if (samples.size() < 8 || nv < samples.size() / 2) {
+            at.reason = VIS_REASON_LOST;
+            at.quality = samples.empty() ? 0 : (double)nv / samples.size();
+            return at;
+        }
+        // Next guide: the clamp points and the valid samples, lightly smoothed.
+        guide.clear();
+        guide.push_back(g.left);
+        for (const auto &s : samples)
+            if (s.valid)
+                guide.push_back(s.p);
+        guide.push_back(g.right);
+        if (pass < 2)
+            guide = vis::smooth(guide, 2);
+    }
+    // Occlusion: the longest run of invalid samples.
+    size_t run = 0, worst = 0, nv = 0;
+    for (const auto &s : samples) {
+        run = s.valid ? 0 : run + 1;
+        worst = std::max(worst, run);
+        nv += s.valid;
+    }
+    const double valid_frac = (double)nv / samples.size();
+
+    // Metric points: clamp, valid samples, clamp.
+    std::vector<Pt> px;
+    std::vector<double> xi;
+    px.push_back(g.left);
+    xi.push_back(0);
+    for (const auto &s : samples)
+        if (s.valid) {
+            px.push_back(s.p);
+            xi.push_back(s.s / len_px);
+        }
+    px.push_back(g.right);
+    xi.push_back(1);
+    std::vector<Pt> und = px;
+    if (t->c.has_intrinsics) {
+        cv::Mat K(3, 3, CV_64F, t->c.camera_matrix), dist(1, 5, CV_64F, t->c.dist);
+        std::vector<cv::Point2d> in(px.begin() + 1, px.end() - 1), outp;
+        cv::undistortPoints(in, outp, K, dist, cv::noArray(), K);
+        std::copy(outp.begin(), outp.end(), und.begin() + 1);
+    }
+    vis::FitInput fin;
+    fin.xz.resize(und.size());
+    fin.s.resize(und.size());
+    for (size_t i = 0; i < und.size(); i++) {
+        const double f = depth_factor(g, xi[i]) / g.ppmm;
+        fin.xz[i] = Pt((und[i].x - g.principal.x) * f, -(und[i].y - g.principal.y) * f);
+        fin.s[i] = i == 0 ? 0 : fin.s[i - 1] + cv::norm(fin.xz[i] - fin.xz[i - 1]);
+    }
+    for (size_t i = 1; i < fin.s.size(); i++)  // strictly increasing parameter
+        if (!(fin.s[i] > fin.s[i - 1]))
+            fin.s[i] = fin.s[i - 1] + 1e-9;
+    vis::FitResult fr;
+    const int n_out = std::max(64, std::min(2000, (int)(len_px / 2)));
+    if (!vis::curve_fit(fin, p.fit_window * fin.s.back(), p.end_window * fin.s.back(), n_out, fr)) {
+        at.reason = VIS_REASON_LOST;
+        return at;
+    }
+    const double length = p.length_mm > 0 ? p.length_mm : fr.length;
+    const double resid_px = fr.residual * g.ppmm;
+    at.quality = valid_frac / (1.0 + (resid_px / 0.5) * (resid_px / 0.5));
+    at.m.dz = fr.height / length;
+    at.m.a = fr.a;
+    at.m.quality = at.quality;
+    at.m.length_mm = fr.length;
+    at.m.residual_px = resid_px;
+    // Back to pixels for the midpoint and the curve.
+    auto to_px = [&](Pt q, double x) {
+        const double f = g.ppmm / depth_factor(g, x);
+        return Pt(g.principal.x + q.x * f, g.principal.y - q.y * f);
+    };
+    const Pt mid = to_px(fr.mid, 0.5);
+    at.m.mid_px[0] = mid.x;
+    at.m.mid_px[1] = mid.y;
+    at.curve_px.resize(fr.curve.size());
+    for (size_t j = 0; j < fr.curve.size(); j++)
+        at.curve_px[j] = to_px(fr.curve[j], (double)j / (fr.curve.size() - 1));
+    if (t->c.has_intrinsics) {
+        // The stored curve guides the next frame in raw image coordinates: redistort.
+        cv::Mat K(3, 3, CV_64F, t->c.camera_matrix), dist(1, 5, CV_64F, t->c.dist);
+        std::vector<cv::Point3d> obj(at.curve_px.size());
+        const double fx = t->c.camera_matrix[0], fy = t->c.camera_matrix[4];
+        for (size_t j = 0; j < obj.size(); j++)
+            obj[j] = cv::Point3d((at.curve_px[j].x - t->c.camera_matrix[2]) / fx,
+                                 (at.curve_px[j].y - t->c.camera_matrix[5]) / fy, 1.0);
+        std::vector<cv::Point2d> img;
+        cv::projectPoints(obj, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, dist, img);
+        at.curve_px.assign(img.begin(), img.end());
+    }
+    at.reason = VIS_REASON_NONE;
+    // A curve much longer or shorter than the ribbon is not the ribbon (a path through clutter).
+    const bool bad_length = p.length_mm > 0 && (fr.length > 1.3 * p.length_mm || fr.length < 0.3 * p.length_mm);
+    if (bad_length || !std::isfinite(at.m.dz) || !std::isfinite(at.m.a))
+        at.reason = VIS_REASON_LOST;
+    else if (worst > samples.size() / 5)
+        at.reason = VIS_REASON_OCCLUDED;
+    else if (at.quality < p.min_quality)
+        at.reason = VIS_REASON_LOST;
+    return at;
+}
+
+}  // namespace
+
+extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, double shear_mm,
+                                          vis_measure *out, vis_error *err)
+{
+    if (!t || !out)
+        return vis::fail(err, VIS_ERR_ARG, "vis_tracker_process: NULL tracker or output");
+    if (!vis::finite(shear_mm))
+        return vis::fail(err, VIS_ERR_ARG, "vis_tracker_process: shear_mm is not finite");
+    measure_clear(out, VIS_REASON_UNREADABLE);
+    if (!f || f->mat.empty() || f->mat.depth() != CV_8U) {
+        vis::ok(err);
+        return VIS_OK;
+    }
+    VIS_GUARD(err, VIS_ERR_INTERNAL, {
+        const cv::Mat grey = vis::grey_of(f->mat);
+        if (grey.size() != t->size) {
+            t->size = grey.size();
+            t->prev.clear();
+        }
+        const vis::Exposure ex = vis::exposure_check(grey, t->p.min_contrast);
+        if (ex != vis::Exposure::ok) {
+            measure_clear(out, ex == vis::Exposure::dark ? VIS_REASON_DARK : VIS_REASON_SATURATED);
+            vis::ok(err);
+            return VIS_OK;
+        }
+        const vis_calib &c = t->c;
+        Geometry g;
+        if (c.has_intrinsics)
+            g.principal = Pt(c.camera_matrix[2], c.camera_matrix[5]);
+        else if (c.principal_px[0] >= 0 && c.principal_px[1] >= 0)
+            g.principal = Pt(c.principal_px[0], c.principal_px[1]);
+        else
+            g.principal = Pt(0.5 * (grey.cols - 1), 0.5 * (grey.rows - 1));
+        g.shear = shear_mm;
+        g.D = c.camera_distance_mm;
+        g.ppmm = c.px_per_mm;
+        if (g.D > 0 && !(g.D + shear_mm > 0.05 * g.D))
+            return vis::fail(err, VIS_ERR_ARG, "shear %g mm puts the clamp behind the camera", shear_mm);
+        const double mag = g.D > 0 ? g.D / (g.D + shear_mm) : 1.0;
+        g.left = Pt(c.clamp_left_px[0], c.clamp_left_px[1]);
+        g.right = g.principal + (Pt(c.clamp_right_px[0], c.clamp_right_px[1]) - g.principal) * mag;
+        auto inside = [&](Pt q) {
+            return q.x >= 0 && q.y >= 0 && q.x <= grey.cols - 1 && q.y <= grey.rows - 1;
+        };
+        if (!inside(g.left) || !inside(g.right)) {
+            measure_clear(out, VIS_REASON_CLAMP_NOT_FOUND);
+            vis::ok(err);
+            return VIS_OK;
+        }
+        const bool dark = t->polarity ? t->polarity == 1 : vis::polarity_is_dark(grey);
+        const int r = (int)std::ceil(t->p.ribbon_max_px);
+        const cv::Rect full(0, 0, grey.cols, grey.rows);
+        Attempt best;
+        bool have = false;
+        if (!t->prev.empty()) {
+            cv::Rect box = cv::boundingRect(std::vector<cv::Point2f>(t->prev.begin(), t->prev.end()));
+            box |= cv::Rect((int)g.right.x, (int)g.right.y, 1, 1);
+            const int pad = (int)std::ceil(t->p.band_px) + 3;
+            box = cv::Rect(box.x - pad, box.y - pad, box.width + 2 * pad, box.height + 2 * pad) & full;
+            vis::ridge_signal(grey, dark, r, box, t->work, t->sig);
+            best = track_from(t, g, t->prev);
+            have = true;
+        }
+        if (!have || best.reason != VIS_REASON_NONE) {
+            vis::ridge_signal(grey, dark, r, full, t->work, t->sig);
+            std::vector<Pt> path;
+            if (vis::path_init(t->sig, g.left, g.right, path)) {
+                Attempt fresh = track_from(t, g, vis::smooth(path, 3));
+                if (!have || fresh.reason == VIS_REASON_NONE ||
+                    (best.reason != VIS_REASON_NONE && fresh.quality > best.quality))
+                    best = fresh;
+            }
+        }
+        if (best.reason == VIS_REASON_NONE) {
+            *out = best.m;
+            out->reason = VIS_REASON_NONE;
+            t->prev = best.curve_px;
+            t->curve = best.curve_px;
+            if (t->polarity == 0)
+                t->polarity = dark ? 1 : 2;  // keep the polarity once the ribbon is found
+        } else {
+            measure_clear(out, best.reason);
+            out->quality = best.quality;
+            t->curve.clear();
+        }
+        vis::ok(err);
+        return VIS_OK;
+    })
+}

@@ -1,0 +1,66 @@
+// tracker_impl.hpp: private stages of the tracker (one file each), in pipeline order:
+//   signal.cpp     frame -> ridge signal image (background removed, polarity folded in)
+//   path_init.cpp  ridge signal -> a first pixel path between the clamps (no previous curve)
+//   trace.cpp      ridge signal + guide curve -> sub-pixel centreline samples along the arc
+//   curve_fit.cpp  samples -> smooth metric curve -> Delta Z, A, midpoint
+#ifndef RIBBON_VIS_TRACKER_IMPL_HPP
+#define RIBBON_VIS_TRACKER_IMPL_HPP
+
+#include "vis_internal.hpp"
+
+#include <vector>
+
+namespace vis {
+
+using Pt = cv::Point2d;
+
+// --- signal.cpp
+enum class Exposure { ok, dark, saturated };
+// Global exposure check on an 8-bit grey frame.
+Exposure exposure_check(const cv::Mat &grey, double min_contrast);
+// Decide the polarity from the histogram: true when the ribbon is darker than the background.
+bool polarity_is_dark(const cv::Mat &grey);
+// Ridge signal in `roi` of `grey` (black-hat or top-hat with a square of side 2 r + 1), CV_32F.
+void ridge_signal(const cv::Mat &grey, bool dark, int r, cv::Rect roi, cv::Mat &work, cv::Mat &sig);
+
+// --- path_init.cpp
+// Cheapest 8-connected path from a to b where a step costs length / (eps + S / s_ref). Pixels of the
+// full image (sig covers it). Returns false when either end is outside or no path exists.
+bool path_init(const cv::Mat &sig, Pt a, Pt b, std::vector<Pt> &path);
+
+// --- trace.cpp
+struct TraceSample {
+    Pt p;          // sub-pixel centre, pixels (image coordinates)
+    double s;      // arc position along the guide, pixels from the left clamp
+    double peak;   // ridge height above the profile's median, grey levels
+    bool valid;    // a clear ridge was found
+};
+// Resample `guide` (from left clamp to right clamp) every `step` px; polyline length in *len.
+std::vector<Pt> resample(const std::vector<Pt> &guide, double step, double *len);
+// Moving-average smoothing with half-width h samples, ends kept fixed.
+std::vector<Pt> smooth(const std::vector<Pt> &c, int h);
+// One pass of the tracer: profiles along the normals of `guide` (already resampled), centroid of the
+// ridge within +-band px, skipping samples within `margin` px of either end.
+void trace_pass(const cv::Mat &sig, cv::Point origin, const std::vector<Pt> &guide, double band,
+                double margin, double min_contrast, double max_width, std::vector<TraceSample> &out);
+
+// --- curve_fit.cpp
+struct FitInput {
+    std::vector<Pt> xz;      // metric points (mm), z up, from left clamp to right clamp
+    std::vector<double> s;   // their chord-length parameter, mm
+};
+struct FitResult {
+    double length;           // arc length of the smooth curve, mm
+    double height;           // midpoint height above the clamp chord, mm (positive = left of chord)
+    double a;                // 2 theta(1/2) - theta(0) - theta(1), radians
+    Pt mid;                  // midpoint, mm
+    double residual;         // RMS distance of the points from the fit, mm
+    std::vector<Pt> curve;   // smooth curve samples, mm
+};
+// Local polynomial regression: half-window `hw` (mm) around interior points; the end tangents from
+// one-sided windows of length `he` (mm).
+bool curve_fit(const FitInput &in, double hw, double he, int n_out, FitResult &out);
+
+}  // namespace vis
+
+#endif

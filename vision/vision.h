@@ -1,0 +1,304 @@
+/* vision.h: the C face of the vision module (C++17 and OpenCV 4.6 inside).
+ *
+ * It owns everything between a camera and two numbers per frame: frame sources (camera, video file,
+ * image sequence, synthetic renderer) behind one interface, a synthetic renderer that draws a
+ * simulated ribbon as a side view through a pinhole camera (with ground truth), an FFV1 video writer,
+ * the tracker that measures the midpoint height Delta Z and the asymmetry A, and calibration.
+ *
+ * Design choices: every object is an opaque handle created by _create / _open functions and released by
+ * _free / _close; every parameter set is a plain struct filled by a *_default() function, with units in
+ * each field comment; every call that can fail returns a vis_status and fills an optional vis_error
+ * with a human message (no C++ exception ever crosses this header; no global state; nothing exits).
+ * The module does not know the simulator: a simulated state reaches it as a vis_shape (points and
+ * normals in the simulator's frame), which the daemon fills.
+ *
+ * Conventions (DESIGN.md section 3, issue 5):
+ * - World frame = simulator frame: x along the compression axis (left clamp point at x = 0), y along
+ *   the ribbon width / shear direction, z up. Metres.
+ * - The camera sits on the -y side at distance `distance_m` from the plane y = 0 and looks along +y,
+ *   so it sees the x-z plane with x to the right and z up. Shear (+y) moves the right clamp away.
+ * - Image: pixel (i, j) has its centre at (u, v) = (i, j) (OpenCV's convention); v points down.
+ * - Arc length s runs from the left clamp in the image; angles are counterclockwise with z up.
+ * - Delta Z = height of the arc-length midpoint above the line through the clamp points, over the free
+ *   length l. A = 2 theta(1/2) - theta(0) - theta(1), theta the tangent angle. The *_cam variants use
+ *   the curve projected orthographically on the x-z plane (what a distant side camera sees).
+ */
+#ifndef RIBBON_VISION_H
+#define RIBBON_VISION_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---------------------------------------------------------------- errors */
+
+/* What went wrong, one code per kind of cause; the message in vis_error says which field or byte. */
+typedef enum vis_status {
+    VIS_OK = 0,
+    VIS_ERR_ARG,         /* invalid argument: NULL, NaN/Inf, out of range, mismatched sizes */
+    VIS_ERR_NOMEM,       /* allocation failed */
+    VIS_ERR_IO,          /* file or device could not be opened, read or written */
+    VIS_ERR_FORMAT,      /* content is damaged or not what was expected (video, image, calib file) */
+    VIS_ERR_END,         /* end of a frame stream: not a failure, the normal way a loop stops */
+    VIS_ERR_NOT_FOUND,   /* a pattern (checkerboard, clamp) was not found in the image */
+    VIS_ERR_INTERNAL     /* an unexpected exception inside OpenCV or the C++ runtime */
+} vis_status;
+
+typedef struct vis_error {
+    vis_status code;     /* same as the returned status */
+    char message[256];   /* human-readable cause, NUL-terminated */
+} vis_error;
+
+const char *vis_status_str(vis_status s);
+
+/* ---------------------------------------------------------------- frames */
+
+/* An 8-bit image, 1 (grey) or 3 (BGR) channels, owned by the library. */
+typedef struct vis_frame vis_frame;
+
+vis_frame *vis_frame_alloc(int width_px, int height_px, int channels, vis_error *err);
+void vis_frame_free(vis_frame *f);
+int vis_frame_width(const vis_frame *f);
+int vis_frame_height(const vis_frame *f);
+int vis_frame_channels(const vis_frame *f);
+size_t vis_frame_stride(const vis_frame *f);   /* bytes between rows */
+uint8_t *vis_frame_data(vis_frame *f);         /* row-major pixels, `stride` bytes per row */
+/* Write/read an image file (format from the extension; PNG is lossless). Read resizes `f`. */
+vis_status vis_frame_save(const vis_frame *f, const char *path, vis_error *err);
+vis_status vis_frame_load(vis_frame *f, const char *path, vis_error *err);
+
+/* ---------------------------------------------------------------- ribbon shape and ground truth */
+
+/* A ribbon state in the simulator's frame: the free length only, point 0 at the left clamp point,
+ * point n-1 at the right clamp point. Arrays are borrowed for the duration of the call. */
+typedef struct vis_shape {
+    size_t n;              /* number of centreline points, >= 3 */
+    const double *pos;     /* 3n values: x, y, z of each point, metres */
+    const double *normal;  /* 3n values: unit surface normal at each point (z-ish when flat) */
+    double width_m;        /* ribbon width, metres (the band spans +-width/2 along normal x tangent) */
+    double thickness_m;    /* ribbon thickness, metres (along the normal) */
+} vis_shape;
+
+typedef struct vis_truth {
+    double length_m;       /* free length l: 3D arc length of the centreline, metres */
+    double dz;             /* Delta Z from the 3D curve (midpoint height over the clamp line), / l */
+    double a;              /* A from the 3D curve's tangent angle in its x-z projection... see below */
+    double dz_cam;         /* Delta Z of the x-z projection (arc-length midpoint of the projection), / l */
+    double a_cam;          /* A of the x-z projection, radians */
+    double shear_m;        /* y of the right clamp point minus y of the left one, metres */
+} vis_truth;
+/* `a` is the paper's A: the tangent's elevation angle atan2(t_z, |t_xy|) integrated as
+ * 2 theta(s=1/2) - theta(0) - theta(1) on the 3D curve (equal to a_cam when the curve is planar). */
+
+vis_status vis_shape_truth(const vis_shape *shape, vis_truth *out, vis_error *err);
+
+/* ---------------------------------------------------------------- pinhole camera */
+
+typedef struct vis_camera {
+    int width_px;          /* image width, pixels */
+    int height_px;         /* image height, pixels */
+    double focal_px;       /* focal length, pixels */
+    double distance_m;     /* camera centre to the plane y = 0, metres (camera at y = -distance) */
+    double tilt_rad;       /* pitch: positive looks down onto the scene, radians */
+    double target_x_m;     /* the optical axis passes through (target_x, 0, target_z), metres */
+    double target_z_m;
+} vis_camera;
+
+vis_camera vis_camera_default(void);
+/* Project a world point (metres) to pixel coordinates. Fails if the point is behind the camera. */
+vis_status vis_camera_project(const vis_camera *cam, const double p[3], double uv[2], vis_error *err);
+/* Set focal_px and the target so that the box [x0,x1] x [z0,z1] (plane y = 0, metres) fills `fill`
+ * (0..1) of the image width or height, whichever is tighter. */
+vis_status vis_camera_fit(vis_camera *cam, double x0, double x1, double z0, double z1, double fill,
+                          vis_error *err);
+
+/* ---------------------------------------------------------------- synthetic renderer */
+
+typedef struct vis_render_params {
+    vis_camera camera;
+    double background;        /* backdrop grey level, 0..255 */
+    double ribbon;            /* ribbon grey level, 0..255 (darker or lighter than the backdrop) */
+    double clamp;             /* clamp jaw grey level, 0..255 */
+    double clamp_length_m;    /* jaw length along the ribbon, outside the free length, metres (0 = none) */
+    double clamp_height_m;    /* jaw height across the ribbon, metres */
+    double noise_sigma;       /* additive Gaussian noise, grey levels (0 = none) */
+    double blur_sigma_px;     /* Gaussian optical blur, pixels (0 = none) */
+    double light_gradient;    /* illumination changes by this fraction across the width (0 = even) */
+    double vignette;          /* illumination falls by this fraction at the corners (0 = none) */
+    int clutter;              /* number of random background shapes (0 = none) */
+    int supersample;          /* anti-aliasing: samples per pixel side, 1..8 */
+    uint64_t seed;            /* seed of the noise and clutter generator (no hidden global RNG) */
+} vis_render_params;
+
+vis_render_params vis_render_params_default(void);
+
+/* Where the renderer put things, in pixels (the image-side ground truth of one frame). */
+typedef struct vis_render_truth {
+    vis_truth truth;          /* the shape's ground truth */
+    double clamp_left_px[2];  /* projected left clamp point (u, v) */
+    double clamp_right_px[2]; /* projected right clamp point (u, v) */
+    double mid_px[2];         /* projected 3D arc-length midpoint (u, v) */
+    double px_per_m;          /* focal_px / distance_m: the scale in the plane y = 0, pixels/metre */
+} vis_render_truth;
+
+typedef struct vis_renderer vis_renderer;
+vis_renderer *vis_renderer_create(const vis_render_params *p, vis_error *err);
+void vis_renderer_free(vis_renderer *r);
+/* Draw one frame into `out` (reallocated to the camera size, 1 channel). `truth` may be NULL. */
+vis_status vis_renderer_draw(vis_renderer *r, const vis_shape *shape, vis_frame *out,
+                             vis_render_truth *truth, vis_error *err);
+
+/* ---------------------------------------------------------------- video writing */
+
+/* Lossless FFV1 in Matroska (.mkv): grey frames read back bit-exact. */
+typedef struct vis_video_writer vis_video_writer;
+vis_video_writer *vis_video_writer_open(const char *path, int width_px, int height_px, int channels,
+                                        double fps, vis_error *err);
+vis_status vis_video_writer_write(vis_video_writer *w, const vis_frame *f, vis_error *err);
+void vis_video_writer_close(vis_video_writer *w);
+
+/* Render a sequence of shapes into OUT.mkv plus a ground-truth CSV beside it, one row per frame:
+ * frame,t_s,shear_m,length_m,dz,a,dz_cam,a_cam,clamp_left_u,clamp_left_v,clamp_right_u,
+ * clamp_right_v,mid_u,mid_v,px_per_m */
+typedef struct vis_synth_writer vis_synth_writer;
+vis_synth_writer *vis_synth_writer_open(const char *video_path, const char *truth_csv_path,
+                                        const vis_render_params *p, double fps, vis_error *err);
+vis_status vis_synth_writer_add(vis_synth_writer *w, const vis_shape *shape, vis_render_truth *truth,
+                                vis_error *err);
+/* Flushes and closes; returns the first error met while closing. */
+vis_status vis_synth_writer_close(vis_synth_writer *w, vis_error *err);
+
+/* ---------------------------------------------------------------- frame sources */
+
+typedef struct vis_camera_settings {
+    int index;                /* V4L2 device index (used when path is NULL or empty) */
+    const char *path;         /* device path such as /dev/video0, or NULL */
+    int width_px;             /* requested width, pixels (0 = driver default) */
+    int height_px;            /* requested height, pixels (0 = driver default) */
+    double fps;               /* requested frame rate, 1/s (0 = driver default) */
+    char fourcc[5];           /* requested pixel format such as "MJPG" ("" = driver default) */
+} vis_camera_settings;
+vis_camera_settings vis_camera_settings_default(void);
+
+/* Synthetic source: the callback fills `shape` for frame `index` (arrays must stay valid until the
+ * next call) and returns 0, or returns 1 at the end of the sequence, or -1 on error. */
+typedef int (*vis_shape_fn)(void *user, int index, vis_shape *shape);
+
+typedef struct vis_source vis_source;
+vis_source *vis_source_open_camera(const vis_camera_settings *s, vis_error *err);
+vis_source *vis_source_open_video(const char *path, vis_error *err);
+/* printf-style pattern with one integer conversion, e.g. "dir/frame_%04d.png", starting at `first`. */
+vis_source *vis_source_open_images(const char *pattern, int first, vis_error *err);
+vis_source *vis_source_open_synthetic(const vis_render_params *p, double fps, vis_shape_fn fn,
+                                      void *user, vis_error *err);
+/* Next frame as grey into `out` (reallocated as needed); `t_s` (may be NULL) gets its time in seconds.
+ * Returns VIS_ERR_END at a clean end; VIS_ERR_FORMAT when the stream is damaged (a video that stops
+ * before its announced length, an unreadable image): the message says after which frame. */
+vis_status vis_source_read(vis_source *src, vis_frame *out, double *t_s, vis_error *err);
+int vis_source_frame_count(const vis_source *src);  /* announced count, or -1 if unknown */
+double vis_source_fps(const vis_source *src);       /* frames per second, or 0 if unknown */
+void vis_source_close(vis_source *src);
+
+/* ---------------------------------------------------------------- calibration */
+
+/* Maps pixels to millimetres in the plane y = 0 of the rig and names the clamp points. */
+typedef struct vis_calib {
+    double px_per_mm;          /* scale in the plane y = 0, pixels per millimetre */
+    double clamp_left_px[2];   /* left clamp point (u, v) at zero shear, pixels */
+    double clamp_right_px[2];  /* right clamp point (u, v) at zero shear, pixels */
+    double principal_px[2];    /* principal point (u, v), pixels; negative = image centre */
+    double camera_distance_mm; /* camera centre to the plane y = 0, mm; 0 = no depth correction */
+    int has_intrinsics;        /* 1 when camera_matrix and dist are valid (checkerboard) */
+    double camera_matrix[9];   /* 3x3 row-major intrinsic matrix, pixels */
+    double dist[5];            /* OpenCV distortion k1 k2 p1 p2 k3, dimensionless */
+} vis_calib;
+
+vis_calib vis_calib_default(void);
+/* Scale from the two clamp points and their known spacing (mm) at zero shear. */
+vis_status vis_calib_from_clamps(vis_calib *c, const double left_px[2], const double right_px[2],
+                                 double spacing_mm, vis_error *err);
+/* Intrinsics, distortion and scale from views of a checkerboard with `cols` x `rows` inner corners
+ * and `square_mm` squares; the last view must show the board in the plane y = 0 (sets px_per_mm). */
+vis_status vis_calib_from_checkerboard(vis_calib *c, const vis_frame *const *views, size_t n_views,
+                                       int cols, int rows, double square_mm, vis_error *err);
+vis_status vis_calib_check(const vis_calib *c, vis_error *err);
+vis_status vis_calib_save(const vis_calib *c, const char *path, vis_error *err);
+vis_status vis_calib_load(vis_calib *c, const char *path, vis_error *err);
+
+/* ---------------------------------------------------------------- tracker */
+
+typedef enum vis_polarity {
+    VIS_POLARITY_AUTO = 0,     /* decided from the frame (and kept once the ribbon is found) */
+    VIS_POLARITY_DARK,         /* dark ribbon on a light (backlit) background */
+    VIS_POLARITY_LIGHT         /* light ribbon on a dark background */
+} vis_polarity;
+
+/* Why a frame has no measurement. */
+typedef enum vis_reason {
+    VIS_REASON_NONE = 0,       /* measured */
+    VIS_REASON_UNREADABLE,     /* the frame could not be read or decoded */
+    VIS_REASON_DARK,           /* the frame is (nearly) black: no contrast */
+    VIS_REASON_SATURATED,      /* the frame is (nearly) saturated: no contrast */
+    VIS_REASON_CLAMP_NOT_FOUND,/* the clamp points are unknown or outside the image */
+    VIS_REASON_LOST,           /* no ribbon-like ridge joins the clamps */
+    VIS_REASON_OCCLUDED        /* the ridge is broken over part of its length */
+} vis_reason;
+const char *vis_reason_str(vis_reason r);
+
+typedef struct vis_track_params {
+    double length_mm;          /* free length l used to normalise Delta Z, mm (0 = measured) */
+    vis_polarity polarity;     /* which way the ribbon contrasts with the background */
+    double band_px;            /* half-width of the search band around the previous curve, pixels */
+    double ribbon_max_px;      /* largest apparent ribbon thickness, pixels (background filter size) */
+    double step_px;            /* spacing of centreline samples along the arc, pixels */
+    double end_margin_px;      /* samples closer than this to a clamp point are not traced, pixels */
+    double fit_window;         /* half-window of the interior local fits, fraction of the length */
+    double end_window;         /* one-sided window of the end-tangent fits, fraction of the length */
+    double min_contrast;       /* weakest ridge accepted, grey levels */
+    double min_quality;        /* below this quality (0..1) a frame is reported LOST */
+} vis_track_params;
+vis_track_params vis_track_params_default(void);
+
+typedef struct vis_measure {
+    vis_reason reason;         /* VIS_REASON_NONE when dz and a are valid */
+    double dz;                 /* Delta Z, normalised by l (positive up) */
+    double a;                  /* A, radians */
+    double quality;            /* 0..1: share of the arc with a clear ridge times fit consistency */
+    double length_mm;          /* measured (projected, depth-corrected) arc length, mm */
+    double mid_px[2];          /* arc-length midpoint in the image, pixels */
+    double residual_px;        /* RMS distance of the traced samples from the smooth fit, pixels */
+} vis_measure;
+
+typedef struct vis_tracker vis_tracker;
+vis_tracker *vis_tracker_create(const vis_track_params *p, const vis_calib *c, vis_error *err);
+void vis_tracker_free(vis_tracker *t);
+/* Measure one frame. `shear_mm` is the right clamp's rail position along y at this frame (away from
+ * the camera positive), used for the depth correction. A frame that cannot be measured is not an
+ * error: the call returns VIS_OK with out->reason set. Errors are for bad arguments only. */
+vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, double shear_mm, vis_measure *out,
+                               vis_error *err);
+/* Report an unreadable frame (keeps the tracker's state consistent). */
+void vis_tracker_skip(vis_tracker *t, vis_measure *out);
+/* The last smooth centreline in pixels, from the left clamp: copies up to `max` (u, v) pairs into
+ * `uv` and returns how many exist. */
+size_t vis_tracker_curve(const vis_tracker *t, double *uv, size_t max);
+/* Forget the previous curve (the next frame is searched from scratch). */
+void vis_tracker_reset(vis_tracker *t);
+
+/* Draw the tracked centreline, midpoint and values over `in` into `out` (3-channel). */
+vis_status vis_overlay_draw(const vis_frame *in, const vis_tracker *t, const vis_measure *m, int frame,
+                            vis_frame *out, vis_error *err);
+
+/* Index of the first frame after a jump in Delta Z, or -1. A jump is a change between consecutive
+ * measured frames larger than `min_jump` (normalised) and than `fraction` of the overall range. */
+int vis_snap_find(const double *dz, const unsigned char *valid, size_t n, double min_jump,
+                  double fraction);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
