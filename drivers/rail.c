@@ -308,6 +308,7 @@ rail_err rail_move_abs(rail *r, double target, double speed)
         e = ready_for_motion(r, &st);
     if (e == RAIL_OK)
         e = r->ops->move_abs(r, r->impl, target, speed);
+    r->have_last = false;
     return e;
 }
 
@@ -325,6 +326,7 @@ rail_err rail_move_rel(rail *r, double delta, double speed)
     e = check_target(r, target);
     if (e == RAIL_OK)
         e = r->ops->move_abs(r, r->impl, target, speed);
+    r->have_last = false;
     return e;
 }
 
@@ -346,6 +348,7 @@ rail_err rail_jog(rail *r, double v)
                               "jog at %.4f mm/s from %.4f mm would leave the allowed travel "
                               "[%.4f, %.4f] mm at once; nothing sent",
                               v, st.position_mm, lo, hi);
+    r->have_last = false;
     if (!r->ops->jog)
         return r->ops->move_abs(r, r->impl, end, fabs(v));
     return r->ops->jog(r, r->impl, v, end);
@@ -353,11 +356,13 @@ rail_err rail_jog(rail *r, double v)
 
 rail_err rail_stop(rail *r)
 {
+    r->have_last = false; /* the next status is a fresh reading, never an extrapolation */
     return r->ops->stop(r, r->impl);
 }
 
 rail_err rail_estop(rail *r)
 {
+    r->have_last = false;
     return r->ops->estop(r, r->impl);
 }
 
@@ -369,6 +374,7 @@ rail_err rail_home(rail *r, bool confirmed)
                               "remove the specimen and confirm explicitly (--confirm)");
     if (!r->ops->home)
         return rail_set_error(r, RAIL_E_UNSUPPORTED, "driver %s cannot home", r->ops->name);
+    r->have_last = false;
     return r->ops->home(r, r->impl);
 }
 
@@ -376,6 +382,7 @@ rail_err rail_reset(rail *r)
 {
     if (!r->ops->reset)
         return rail_set_error(r, RAIL_E_UNSUPPORTED, "driver %s has no alarm reset", r->ops->name);
+    r->have_last = false;
     return r->ops->reset(r, r->impl);
 }
 

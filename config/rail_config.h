@@ -1,0 +1,40 @@
+/* rail_config.h: the rail sections of a rig INI file, validated into the drivers' parameter
+ * structs. One section per rail, "[rail.compress]" and "[rail.shear]"; other sections belong to
+ * other loaders and are ignored here. Keys (units in the names):
+ *   driver = mock | gcode | modbus
+ *   soft_min_mm, soft_max_mm, max_speed_mm_s, accel_mm_s2, poll_hz,
+ *   min_gap_mm, gap_at_zero_mm, gap_per_mm                      (all drivers; rail_params)
+ *   port, baud, axis, segment_s, segments_ahead, reply_timeout_s, stall_timeout_s   (gcode)
+ *   address, rtu, parity, slave, timeout_s, watchdog_s, map, allow_unverified,
+ *   watchdog_external, counts_per_mm, speed_per_mm_s, accel_per_mm_s2, word_order,
+ *   reg_<name> = ADDR[/WORDS] for target_pos speed accel decel op_type trigger control
+ *   actual_pos actual_vel status alarm watchdog ident (-1 = none), op_type_abs, trigger_value,
+ *   ctl_stop ctl_estop ctl_home ctl_reset, st_ready st_moving st_in_pos st_alarm st_homing
+ *   st_home_end, ident_value                                     (modbus; map = preset first)
+ *   start_mm, travel_mm, home_speed_mm_s                          (mock)
+ * A bad value, an unknown key in a rail section or a missing section is an error naming the
+ * file, the line and the key. */
+#ifndef RIBBON_CONFIG_RAIL_CONFIG_H
+#define RIBBON_CONFIG_RAIL_CONFIG_H
+
+#include <stddef.h>
+
+#include "rail_gcode.h"
+#include "rail_mock.h"
+#include "rail_modbus.h"
+
+typedef struct rail_config {
+    char driver[16];          /* "mock", "gcode" or "modbus" */
+    rail_params params;
+    rail_gcode_params gcode;
+    rail_modbus_params modbus;
+    rail_mock_params mock;
+} rail_config;
+
+/* Load section [rail.<rail_name>] of path. Returns 0, or -1 with the reason in why. */
+int rail_config_load(const char *path, const char *rail_name, rail_config *out, char *why, size_t why_len);
+/* Same from a string (tests); name is used in messages. */
+int rail_config_load_string(const char *text, const char *name, const char *rail_name, rail_config *out,
+                            char *why, size_t why_len);
+
+#endif

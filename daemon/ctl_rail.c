@@ -1,0 +1,434 @@
+/* ctl_rail.c: `ribbonctl rail`: drive one rail from the command line, for bench-top use,
+ * scripts and tests.
+ *
+ *   ribbonctl rail (--config F --rail compress|shear | --driver mock|gcode|modbus [--port PATH]
+ *                  [--address HOST:PORT] [--axis X|Y] ...) ACTION [--json]
+ *   ACTION: status | home --confirm | move-abs MM | move-rel MM | jog MM_S [--duration S] | stop
+ *           | bench
+ *
+ * Moves and homing wait until the rail is at rest (polling at the rail's rate keeps GRBL jog
+ * segments flowing and the Modbus watchdog fed), then print the final status. A jog runs for
+ * --duration seconds (default 1) and then stops: a one-shot command never leaves a rail running.
+ * Ctrl-C stops the rail (the handler only sets a flag). Exit status: 0 done, 1 the rail refused
+ * or failed (reason printed; with --json also in the JSON object), 2 usage. */
+#include <jansson.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ctl.h"
+#include "rail_config.h"
+#include "rail_gcode.h"
+#include "rail_mock.h"
+#include "rail_modbus.h"
+
+static volatile sig_atomic_t g_interrupted; /* set by SIGINT/SIGTERM only */
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    g_interrupted = 1;
+}
+
+typedef struct rail_cli {
+    const char *driver;       /* mock | gcode | modbus */
+    const char *config;       /* rig INI file, or NULL */
+    const char *rail_name;    /* compress | shear (with --config) */
+    rail_params p;
+    rail_gcode_params g;
+    rail_modbus_params m;
+    rail_mock_params k;
+    double speed_mm_s;        /* mm/s for moves; 0 = half the speed limit */
+    double timeout_s;         /* s to wait for a move or homing; 0 = estimate */
+    double duration_s;        /* s a jog runs before it is stopped */
+    int bench_polls;
+    int json, confirm;
+    const char *action;
+    double value;
+    int have_value;
+} rail_cli;
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: ribbonctl rail SOURCE [options] ACTION [VALUE]\n"
+            "SOURCE: --config RIG.ini --rail compress|shear\n"
+            "     or --driver mock|gcode|modbus with:\n"
+            "        --port PATH|usb:VID:PID[:SERIAL] --baud N --axis X|Y|Z      (gcode)\n"
+            "        --address HOST:PORT | --rtu DEVICE --slave N --map NAME\n"
+            "        --counts-per-mm C --allow-unverified --watchdog-external    (modbus)\n"
+            "        --start MM                                                   (mock)\n"
+            "limits: --soft-min MM --soft-max MM --max-speed MM_S --accel MM_S2 --poll-hz HZ\n"
+            "        --min-gap MM --gap-at-zero MM --gap-per-mm 1|-1\n"
+            "ACTION: status | home --confirm | move-abs MM | move-rel MM | jog MM_S | stop | bench\n"
+            "options: --speed MM_S  --timeout S  --duration S (jog)  --polls N (bench)  --json\n");
+}
+
+static int num(const char *opt, const char *v, double *out)
+{
+    char *end = NULL;
+    double x = v ? strtod(v, &end) : NAN;
+    if (!v || end == v || *end || !isfinite(x)) {
+        fprintf(stderr, "ribbonctl rail: %s needs a number, got '%s'\n", opt, v ? v : "");
+        return -1;
+    }
+    *out = x;
+    return 0;
+}
+
+static int parse(rail_cli *c, int argc, char **argv)
+{
+    double x;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int bad = 0, takes = 1;
+#define OPT(name) (!strcmp(a, name))
+        if (OPT("--help") || OPT("-h")) {
+            usage(stdout);
+            exit(0);
+        } else if (OPT("--json")) {
+            c->json = 1;
+            takes = 0;
+        } else if (OPT("--confirm")) {
+            c->confirm = 1;
+            takes = 0;
+        } else if (OPT("--allow-unverified")) {
+            c->m.allow_unverified = true;
+            takes = 0;
+        } else if (OPT("--watchdog-external")) {
+            c->m.watchdog_external = true;
+            takes = 0;
+        } else if (OPT("--driver")) {
+            c->driver = v;
+        } else if (OPT("--config")) {
+            c->config = v;
+        } else if (OPT("--rail")) {
+            c->rail_name = v;
+        } else if (OPT("--port")) {
+            if (v)
+                snprintf(c->g.port, sizeof c->g.port, "%s", v);
+        } else if (OPT("--baud")) {
+            bad = num(a, v, &x);
+            c->g.baud = c->m.baud = (int)x;
+        } else if (OPT("--axis")) {
+            bad = !v || strlen(v) != 1;
+            if (!bad)
+                c->g.axis = v[0];
+        } else if (OPT("--address")) {
+            if (v)
+                snprintf(c->m.address, sizeof c->m.address, "%s", v);
+        } else if (OPT("--rtu")) {
+            c->m.rtu = true;
+            if (v)
+                snprintf(c->m.address, sizeof c->m.address, "%s", v);
+        } else if (OPT("--slave")) {
+            bad = num(a, v, &x);
+            c->m.slave = (int)x;
+        } else if (OPT("--map")) {
+            bad = !v || rail_modbus_preset(v, &c->m.map) != RAIL_OK;
+            if (bad)
+                fprintf(stderr, "ribbonctl rail: unknown --map '%s' (ribbon-sim, oriental-az)\n", v ? v : "");
+        } else if (OPT("--counts-per-mm")) {
+            bad = num(a, v, &c->m.map.counts_per_mm);
+        } else if (OPT("--start")) {
+            bad = num(a, v, &c->k.start_mm);
+        } else if (OPT("--soft-min")) {
+            bad = num(a, v, &c->p.soft_min_mm);
+        } else if (OPT("--soft-max")) {
+            bad = num(a, v, &c->p.soft_max_mm);
+        } else if (OPT("--max-speed")) {
+            bad = num(a, v, &c->p.max_speed_mm_s);
+        } else if (OPT("--accel")) {
+            bad = num(a, v, &c->p.accel_mm_s2);
+        } else if (OPT("--poll-hz")) {
+            bad = num(a, v, &c->p.poll_hz);
+        } else if (OPT("--min-gap")) {
+            bad = num(a, v, &c->p.min_gap_mm);
+        } else if (OPT("--gap-at-zero")) {
+            bad = num(a, v, &c->p.gap_at_zero_mm);
+        } else if (OPT("--gap-per-mm")) {
+            bad = num(a, v, &c->p.gap_per_mm);
+        } else if (OPT("--speed")) {
+            bad = num(a, v, &c->speed_mm_s);
+        } else if (OPT("--timeout")) {
+            bad = num(a, v, &c->timeout_s);
+        } else if (OPT("--duration")) {
+            bad = num(a, v, &c->duration_s);
+        } else if (OPT("--polls")) {
+            bad = num(a, v, &x);
+            c->bench_polls = (int)x;
+        } else if (a[0] == '-' && !(a[1] >= '0' && a[1] <= '9') && a[1] != '.') {
+            fprintf(stderr, "ribbonctl rail: unknown option '%s'\n", a);
+            return 2;
+        } else {
+            takes = 0;
+            if (!c->action) {
+                c->action = a;
+            } else if (!c->have_value) {
+                if (num(c->action, a, &c->value))
+                    return 2;
+                c->have_value = 1;
+            } else {
+                fprintf(stderr, "ribbonctl rail: unexpected argument '%s'\n", a);
+                return 2;
+            }
+        }
+#undef OPT
+        if (takes && !v) {
+            fprintf(stderr, "ribbonctl rail: %s needs a value\n", a);
+            return 2;
+        }
+        if (bad)
+            return 2;
+        i += takes;
+    }
+    return 0;
+}
+
+static void print_status(const rail_cli *c, const rail *r, const rail_status *st, rail_err e, const char *why)
+{
+    const char *name = r ? rail_get_params(r)->name : (c->rail_name ? c->rail_name : "rail");
+    const char *msg = e != RAIL_OK ? why : st->message;
+    if (c->json) {
+        json_t *o = json_object();
+        json_object_set_new(o, "rail", json_string(name));
+        json_object_set_new(o, "state", json_string(rail_state_name(st->state)));
+        json_object_set_new(o, "position_mm", json_real(st->position_mm));
+        json_object_set_new(o, "velocity_mm_s", json_real(st->velocity_mm_s));
+        json_object_set_new(o, "code", json_integer(st->code));
+        json_object_set_new(o, "message", json_string(msg ? msg : ""));
+        json_object_set_new(o, "ok", json_boolean(e == RAIL_OK));
+        if (e != RAIL_OK)
+            json_object_set_new(o, "error", json_string(rail_err_message(e)));
+        char *s = json_dumps(o, JSON_COMPACT | JSON_REAL_PRECISION(10));
+        printf("%s\n", s ? s : "{}");
+        free(s);
+        json_decref(o);
+        return;
+    }
+    printf("%s: %s at %.4f mm, %.4f mm/s", name, rail_state_name(st->state), st->position_mm,
+           st->velocity_mm_s);
+    if (st->code)
+        printf(", code %d", st->code);
+    if (st->message[0])
+        printf(" (%s)", st->message);
+    printf("\n");
+    if (e != RAIL_OK)
+        fprintf(stderr, "ribbonctl rail: %s\n", why);
+}
+
+/* Poll until at rest; Ctrl-C stops the rail. */
+static rail_err wait_rest(rail *r, double timeout_s, rail_status *st)
+{
+    double period = 1.0 / rail_get_params(r)->poll_hz;
+    rail_clock ck = rail_get_clock(r);
+    double t0 = rail_clock_now(ck);
+    long cap = (long)(timeout_s / period) + 3;
+    for (long i = 0; i < cap; i++) {
+        if (g_interrupted) {
+            rail_stop(r);
+            g_interrupted = 0;
+            rail_wait_idle(r, 5.0, st);
+            return rail_set_error(r, RAIL_E_STATE, "interrupted: rail stopped at %.4f mm", st->position_mm);
+        }
+        rail_err e = rail_status_poll(r, st);
+        if (e != RAIL_OK)
+            return e;
+        if (st->state == RAIL_STATE_IDLE)
+            return RAIL_OK;
+        if (st->state != RAIL_STATE_MOVING && st->state != RAIL_STATE_HOMING)
+            return rail_set_error(r, st->state == RAIL_STATE_ALARM ? RAIL_E_DEVICE : RAIL_E_STATE,
+                                  "rail in state %s: %s", rail_state_name(st->state), st->message);
+        if (rail_clock_now(ck) - t0 > timeout_s)
+            break;
+        rail_clock_sleep(ck, period);
+    }
+    rail_stop(r);
+    return rail_set_error(r, RAIL_E_TIMEOUT, "not at rest after %.1f s; stop sent", timeout_s);
+}
+
+static rail_err open_rail(rail_cli *c, rail **r, char *why, size_t n)
+{
+    rail_clock ck = rail_clock_real();
+    if (!c->driver) {
+        snprintf(why, n, "no driver: give --driver mock|gcode|modbus or --config F --rail NAME");
+        return RAIL_E_INVALID;
+    }
+    if (!strcmp(c->driver, "mock"))
+        return rail_mock_open(r, &c->p, &c->k, ck, why, n);
+    if (!strcmp(c->driver, "gcode")) {
+        if (!c->g.port[0]) {
+            snprintf(why, n, "driver gcode needs --port PATH or usb:VID:PID[:SERIAL]");
+            return RAIL_E_INVALID;
+        }
+        return rail_gcode_open(r, &c->p, &c->g, NULL, ck, why, n);
+    }
+    if (!strcmp(c->driver, "modbus"))
+        return rail_modbus_open(r, &c->p, &c->m, ck, why, n);
+    snprintf(why, n, "unknown driver '%s' (mock, gcode, modbus)", c->driver);
+    return RAIL_E_INVALID;
+}
+
+static int bench(rail_cli *c, rail *r)
+{
+    int n = c->bench_polls > 0 ? c->bench_polls : 500;
+    rail_status st;
+    rail_clock ck = rail_get_clock(r);
+    double t0 = rail_clock_now(ck);
+    int fails = 0;
+    for (int i = 0; i < n; i++)
+        if (rail_status_poll(r, &st) != RAIL_OK)
+            fails++;
+    double dt = rail_clock_now(ck) - t0;
+    /* Stop latency: jog at half the speed limit for 0.5 s, then time stop() until a reading
+       shows the rail decelerating (or at rest). */
+    double lat = NAN, v = 0.5 * rail_get_params(r)->max_speed_mm_s;
+    if (rail_jog(r, st.position_mm < 0.5 * (rail_get_params(r)->soft_min_mm + rail_get_params(r)->soft_max_mm) ? v : -v) == RAIL_OK) {
+        double tj = rail_clock_now(ck);
+        while (rail_clock_now(ck) - tj < 0.5 && rail_status_get(r, &st) == RAIL_OK)
+            rail_clock_sleep(ck, 0.005);
+        rail_status_poll(r, &st);
+        double v0 = fabs(st.velocity_mm_s);
+        double ts = rail_clock_now(ck);
+        if (rail_stop(r) == RAIL_OK) {
+            for (int i = 0; i < 2000; i++) {
+                if (rail_status_poll(r, &st) != RAIL_OK)
+                    break;
+                if (st.state == RAIL_STATE_IDLE || fabs(st.velocity_mm_s) < v0 - 1e-6) {
+                    lat = rail_clock_now(ck) - ts;
+                    break;
+                }
+            }
+        }
+        rail_wait_idle(r, 10.0, &st);
+    }
+    printf("{\"bench\":\"rail_status\",\"driver\":\"%s\",\"polls\":%d,\"failed\":%d,\"polls_per_s\":%.1f,"
+           "\"stop_latency_ms\":%.2f}\n",
+           rail_driver_name(r), n, fails, n / dt, isnan(lat) ? -1.0 : lat * 1e3);
+    return fails ? 1 : 0;
+}
+
+int ctl_rail_main(int argc, char **argv)
+{
+    rail_cli c;
+    memset(&c, 0, sizeof c);
+    c.p = rail_params_default();
+    snprintf(c.p.name, sizeof c.p.name, "rail");
+    c.p.poll_hz = 20.0;
+    c.g = rail_gcode_params_default();
+    c.m = rail_modbus_params_default();
+    c.k = rail_mock_params_default();
+    c.duration_s = 1.0;
+    int u = parse(&c, argc, argv);
+    if (u)
+        return u;
+    char why[512] = "";
+    if (c.config) {
+        if (!c.rail_name) {
+            fprintf(stderr, "ribbonctl rail: --config needs --rail compress|shear\n");
+            return 2;
+        }
+        rail_config rc;
+        if (rail_config_load(c.config, c.rail_name, &rc, why, sizeof why) != 0) {
+            fprintf(stderr, "ribbonctl rail: %s\n", why);
+            return 1;
+        }
+        c.driver = rc.driver;
+        c.p = rc.params;
+        c.g = rc.gcode;
+        c.m = rc.modbus;
+        c.k = rc.mock;
+    } else {
+        /* Name the rail after its source so every reason says which rail it is about. */
+        if (c.rail_name)
+            snprintf(c.p.name, sizeof c.p.name, "%s", c.rail_name);
+        else if (c.driver && !strcmp(c.driver, "gcode"))
+            snprintf(c.p.name, sizeof c.p.name, "gcode-%c", c.g.axis);
+        else if (c.driver)
+            snprintf(c.p.name, sizeof c.p.name, "%.20s", c.driver);
+    }
+    if (!c.action) {
+        usage(stderr);
+        return 2;
+    }
+    const char *A = c.action;
+    int needs_value = !strcmp(A, "move-abs") || !strcmp(A, "move-rel") || !strcmp(A, "jog");
+    if (strcmp(A, "status") && strcmp(A, "home") && strcmp(A, "stop") && strcmp(A, "bench") && !needs_value) {
+        fprintf(stderr, "ribbonctl rail: unknown action '%s'\n", A);
+        usage(stderr);
+        return 2;
+    }
+    if (needs_value != c.have_value) {
+        fprintf(stderr, "ribbonctl rail: %s %s\n", A, needs_value ? "needs a value" : "takes no value");
+        return 2;
+    }
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+
+    rail *r = NULL;
+    rail_status st;
+    memset(&st, 0, sizeof st);
+    st.state = RAIL_STATE_DISCONNECTED;
+    rail_err e = open_rail(&c, &r, why, sizeof why);
+    if (e != RAIL_OK) {
+        print_status(&c, NULL, &st, e, why);
+        return 1;
+    }
+    double speed = c.speed_mm_s > 0.0 ? c.speed_mm_s : 0.5 * c.p.max_speed_mm_s;
+    double span = c.p.soft_max_mm - c.p.soft_min_mm;
+    double timeout = c.timeout_s > 0.0 ? c.timeout_s : 10.0 + 2.0 * span / speed;
+    int rc = 0;
+    if (!strcmp(A, "bench")) {
+        rc = bench(&c, r);
+        rail_close(r);
+        return rc;
+    }
+    if (!strcmp(A, "status")) {
+        e = rail_status_poll(r, &st);
+    } else if (!strcmp(A, "stop")) {
+        e = rail_stop(r);
+        if (e == RAIL_OK)
+            e = wait_rest(r, timeout, &st);
+    } else if (!strcmp(A, "home")) {
+        e = rail_home(r, c.confirm != 0);
+        if (e == RAIL_OK)
+            e = wait_rest(r, timeout, &st);
+    } else if (!strcmp(A, "move-abs") || !strcmp(A, "move-rel")) {
+        e = A[5] == 'a' ? rail_move_abs(r, c.value, speed) : rail_move_rel(r, c.value, speed);
+        if (e == RAIL_OK)
+            e = wait_rest(r, timeout, &st);
+    } else { /* jog */
+        e = rail_jog(r, c.value);
+        double t0 = rail_clock_now(rail_clock_real());
+        long cap = (long)(c.duration_s * c.p.poll_hz) + 3;
+        for (long i = 0; e == RAIL_OK && i < cap && !g_interrupted; i++) {
+            if (rail_clock_now(rail_clock_real()) - t0 >= c.duration_s)
+                break;
+            e = rail_status_get(r, &st);
+            if (e == RAIL_OK && st.state != RAIL_STATE_MOVING)
+                break; /* reached a limit, or a fault */
+            rail_clock_sleep(rail_clock_real(), 1.0 / c.p.poll_hz);
+        }
+        rail_err es = rail_stop(r);
+        if (e == RAIL_OK)
+            e = es;
+        if (e == RAIL_OK)
+            e = wait_rest(r, timeout, &st);
+    }
+    if (e != RAIL_OK) {
+        rail_text_copy(why, sizeof why, rail_last_error(r));
+        rail_status_poll(r, &st);
+        rc = 1;
+    } else if (strcmp(A, "status")) {
+        rail_status_poll(r, &st);
+    }
+    print_status(&c, r, &st, e, why);
+    rail_close(r);
+    return rc;
+}

@@ -1,0 +1,43 @@
+/* ribbonctl.c: `ribbonctl`, the bench-top and scripting command line of the rig. This file is
+ * only the dispatcher: a table of subcommands {name, function, one-line help}; each subcommand's
+ * code is in its own ctl_<name>.c (see ctl.h for how to add one). */
+#include <stdio.h>
+#include <string.h>
+
+#include "ctl.h"
+
+typedef struct ctl_cmd {
+    const char *name;
+    int (*run)(int argc, char **argv);
+    const char *help;
+} ctl_cmd;
+
+static const ctl_cmd commands[] = {
+    {"rail", ctl_rail_main, "drive one rail: status | home | move-abs MM | move-rel MM | jog MM_S | stop | bench"},
+    {"ports", ctl_ports_main, "list serial ports (path, USB VID:PID, serial number)"},
+};
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: ribbonctl COMMAND [options]   (ribbonctl COMMAND --help for details)\n\n");
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        fprintf(f, "  %-8s %s\n", commands[i].name, commands[i].help);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
+        usage(argc < 2 ? stderr : stdout);
+        return argc < 2 ? 2 : 0;
+    }
+    if (!strcmp(argv[1], "--version")) {
+        printf("ribbonctl %s\n", RIBBON_VERSION);
+        return 0;
+    }
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        if (!strcmp(argv[1], commands[i].name))
+            return commands[i].run(argc - 1, argv + 1);
+    fprintf(stderr, "ribbonctl: unknown command '%s'\n", argv[1]);
+    usage(stderr);
+    return 2;
+}

@@ -1,0 +1,85 @@
+/* test_rail_config.c: rail sections of rig INI files load into driver parameters; presets
+ * apply before register overrides whatever the key order; bad values, unknown keys and missing
+ * sections are refused naming file, line and key. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+#include <cmocka.h>
+
+#include "rail_config.h"
+
+static void expect_fail(const char *text, const char *rail, const char *needle)
+{
+    rail_config rc;
+    char why[400] = "";
+    assert_int_equal(rail_config_load_string(text, "rig.ini", rail, &rc, why, sizeof why), -1);
+    if (!strstr(why, needle)) {
+        print_error("reason '%s' lacks '%s'\n", why, needle);
+        fail();
+    }
+}
+
+static void test_load_gcode_and_modbus(void **s)
+{
+    (void)s;
+    const char *text = "[rig]\nname = bench\n"
+                       "[rail.compress]\ndriver = gcode\nport = /dev/ttyACM0\naxis = X\n"
+                       "soft_min_mm = 0\nsoft_max_mm = 80\nmax_speed_mm_s = 5\nmin_gap_mm = 20\n"
+                       "gap_at_zero_mm = 100\ngap_per_mm = -1\nsegment_s = 0.25\n"
+                       "[rail.shear]\ndriver = modbus\naddress = 10.0.0.5:502\nslave = 3\n"
+                       "reg_status = 0x20/1\nmap = ribbon-sim\ncounts_per_mm = 200\n"
+                       "word_order = low_first\n";
+    rail_config rc;
+    char why[400] = "";
+    assert_int_equal(rail_config_load_string(text, "rig.ini", "compress", &rc, why, sizeof why), 0);
+    assert_string_equal(rc.driver, "gcode");
+    assert_string_equal(rc.gcode.port, "/dev/ttyACM0");
+    assert_string_equal(rc.params.name, "compress");
+    assert_true(rc.params.soft_max_mm == 80.0 && rc.params.min_gap_mm == 20.0);
+    assert_true(rc.params.gap_per_mm == -1.0 && rc.gcode.segment_s == 0.25);
+    assert_int_equal(rail_config_load_string(text, "rig.ini", "shear", &rc, why, sizeof why), 0);
+    assert_string_equal(rc.driver, "modbus");
+    assert_int_equal(rc.modbus.slave, 3);
+    assert_int_equal(rc.modbus.map.status.addr, 0x20); /* override kept although map came later */
+    assert_int_equal(rc.modbus.map.status.words, 1);
+    assert_int_equal(rc.modbus.map.actual_pos.addr, 8);
+    assert_true(rc.modbus.map.counts_per_mm == 200.0);
+    assert_int_equal(rc.modbus.map.word_order, RAIL_MB_LOW_FIRST);
+}
+
+static void test_errors_named(void **s)
+{
+    (void)s;
+    expect_fail("[rail.shear]\ndriver = mock\nmax_speed_mm_s = fast\n", "shear",
+                "rig.ini:3: [rail.shear] max_speed_mm_s: 'fast' is not a number");
+    expect_fail("[rail.shear]\nspeeed = 3\n", "shear", "rig.ini:2: [rail.shear] speeed: unknown key");
+    expect_fail("[rail.shear]\nmax_speed_mm_s = 5000\n", "shear", "outside");
+    expect_fail("[rail.compress]\ndriver = mock\n", "shear", "no section [rail.shear]");
+    expect_fail("[rail.shear]\ndriver = stepper\n", "shear", "driver: 'stepper'");
+    expect_fail("[rail.shear]\nmap = acme\n", "shear", "rig.ini:2: [rail.shear] map: unknown preset");
+    expect_fail("[rail.shear]\nsoft_min_mm = 5\nsoft_max_mm = 1\n", "shear", "soft_min_mm");
+    expect_fail("[rail.shear]\ndriver = modbus\nreg_status = -1\n", "shear", "status is required");
+    expect_fail("[rail.shear]\nreg_speed = 12/3\n", "shear", "ADDR/2");
+    expect_fail("[rail.shear]\n", "sideways", "not compress or shear");
+}
+
+static void test_missing_file(void **s)
+{
+    (void)s;
+    rail_config rc;
+    char why[400];
+    assert_int_equal(rail_config_load("/nonexistent/rig.ini", "shear", &rc, why, sizeof why), -1);
+    assert_non_null(strstr(why, "/nonexistent/rig.ini: cannot read"));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_load_gcode_and_modbus),
+        cmocka_unit_test(test_errors_named),
+        cmocka_unit_test(test_missing_file),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
