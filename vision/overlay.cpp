@@ -36,9 +36,9 @@ extern "C" vis_status vis_overlay_draw(const vis_frame *in, const vis_tracker *t
         }
         char text[160];
         if (m->reason == VIS_REASON_NONE)
-            std::snprintf(text, sizeof text, "#%d dZ=%+.4f A=%+.4f q=%.2f", frame, m->dz, m->a, m->quality);
+            std::snprintf(text, sizeof text, "frame %d dZ=%+.4f A=%+.4f q=%.2f", frame, m->dz, m->a, m->quality);
         else
-            std::snprintf(text, sizeof text, "#%d %s", frame, vis_reason_str(m->reason));
+            std::snprintf(text, sizeof text, "frame %d %s", frame, vis_reason_str(m->reason));
         const double fs = std::max(0.35, bgr.cols / 900.0);
         cv::putText(bgr, text, cv::Point(4, (int)(14 * fs / 0.35 * 0.9)), cv::FONT_HERSHEY_SIMPLEX, fs,
                     cv::Scalar(0, 0, 255), 1, cv::LINE_AA);

@@ -159,6 +159,25 @@ struct Attempt {
     std::vector<Pt> curve_px;
 };
 
+// Occlusion: the ribbon is seen leaving both clamps (most samples valid in the first and last tenth)
+// but a stretch longer than a fifth of the arc shows no ridge.
+bool occluded(const std::vector<vis::TraceSample> &smp)
+{
+    const size_t n = smp.size();
+    if (n < 20)
+        return false;
+    size_t run = 0, worst = 0, head = 0, tail = 0;
+    for (size_t i = 0; i < n; i++) {
+        run = smp[i].valid ? 0 : run + 1;
+        worst = std::max(worst, run);
+        if (i < n / 10)
+            head += smp[i].valid;
+        if (i >= n - n / 10)
+            tail += smp[i].valid;
+    }
+    return worst > n / 5 && head * 3 >= (n / 10) * 2 && tail * 3 >= (n / 10) * 2;
+}
+
 // Steps 5 to 7 from a guide curve.
 Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide)
 {
@@ -181,7 +200,7 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide)
         for (const auto &s : samples)
             nv += s.valid;
         if (samples.size() < 8 || nv < samples.size() / 2) {
-            at.reason = VIS_REASON_LOST;
+            at.reason = occluded(samples) ? VIS_REASON_OCCLUDED : VIS_REASON_LOST;
             at.quality = samples.empty() ? 0 : (double)nv / samples.size();
             return at;
         }
@@ -195,13 +214,9 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide)
         if (pass < 2)
             guide = vis::smooth(guide, 2);
     }
-    // Occlusion: the longest run of invalid samples.
-    size_t run = 0, worst = 0, nv = 0;
-    for (const auto &s : samples) {
-        run = s.valid ? 0 : run + 1;
-        worst = std::max(worst, run);
+    size_t nv = 0;
+    for (const auto &s : samples)
         nv += s.valid;
-    }
     const double valid_frac = (double)nv / samples.size();
 
     // Metric points: clamp, valid samples, clamp.
@@ -237,7 +252,8 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide)
     vis::FitResult fr;
     const int n_out = std::max(64, std::min(2000, (int)(len_px / 2)));
     if (!vis::curve_fit(fin, p.fit_window * fin.s.back(), p.end_window * fin.s.back(), n_out, fr)) {
-        at.reason = VIS_REASON_LOST;
+        // No smooth curve: a gap wider than the fit window (occlusion) or too few samples.
+        at.reason = occluded(samples) ? VIS_REASON_OCCLUDED : VIS_REASON_LOST;
         return at;
     }
     const double length = p.length_mm > 0 ? p.length_mm : fr.length;
@@ -276,7 +292,7 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide)
     const bool bad_length = p.length_mm > 0 && (fr.length > 1.3 * p.length_mm || fr.length < 0.3 * p.length_mm);
     if (bad_length || !std::isfinite(at.m.dz) || !std::isfinite(at.m.a))
         at.reason = VIS_REASON_LOST;
-    else if (worst > samples.size() / 5)
+    else if (occluded(samples))
         at.reason = VIS_REASON_OCCLUDED;
     else if (at.quality < p.min_quality)
         at.reason = VIS_REASON_LOST;
