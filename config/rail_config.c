@@ -49,6 +49,7 @@ static const key_def keys[] = {
     I("segments_ahead", gcode.segments_ahead, 1, 4),
     D("reply_timeout_s", gcode.reply_timeout_s, 0.01, 10),
     D("stall_timeout_s", gcode.stall_timeout_s, 0.05, 60),
+    D("min_segment_mm", gcode.min_segment_mm, 1e-4, 10),
     S("address", modbus.address),
     B("rtu", modbus.rtu),
     {"parity", K_CHAR, F(modbus.parity), 0, 0, 0},

@@ -4,7 +4,8 @@
  *   driver = mock | gcode | modbus
  *   soft_min_mm, soft_max_mm, max_speed_mm_s, accel_mm_s2, poll_hz,
  *   min_gap_mm, gap_at_zero_mm, gap_per_mm                      (all drivers; rail_params)
- *   port, baud, axis, segment_s, segments_ahead, reply_timeout_s, stall_timeout_s   (gcode)
+ *   port, baud, axis, segment_s, segments_ahead, reply_timeout_s, stall_timeout_s,
+ *   min_segment_mm                                                  (gcode)
  *   address, rtu, parity, slave, timeout_s, watchdog_s, map, allow_unverified,
  *   watchdog_external, counts_per_mm, speed_per_mm_s, accel_per_mm_s2, word_order,
  *   reg_<name> = ADDR[/WORDS] for target_pos speed accel decel op_type trigger control

@@ -12,19 +12,6 @@
 
 #include "grbl_link.h"
 
-rail_gcode_params rail_gcode_params_default(void)
-{
-    rail_gcode_params g;
-    memset(&g, 0, sizeof g);
-    g.baud = 115200;
-    g.axis = 'X';
-    g.segment_s = 0.3;
-    g.segments_ahead = 2;
-    g.reply_timeout_s = 0.2;
-    g.stall_timeout_s = 1.0;
-    return g;
-}
-
 static rail_err lfail(grbl_link *l, rail_err e, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static rail_err lfail(grbl_link *l, rail_err e, const char *fmt, ...)
 {

@@ -33,14 +33,36 @@ typedef struct gcode {
     double last_feed;     /* mm/min */
 } gcode;
 
+rail_gcode_params rail_gcode_params_default(void)
+{
+    rail_gcode_params g;
+    memset(&g, 0, sizeof g);
+    g.baud = 115200;
+    g.axis = 'X';
+    g.segment_s = 0.3;
+    g.segments_ahead = 2;
+    g.reply_timeout_s = 0.2;
+    g.stall_timeout_s = 1.0;
+    g.min_segment_mm = 0.05;
+    return g;
+}
+
 static rail_err link_error(rail *r, gcode *k, rail_err e)
 {
     return rail_set_error(r, e, "%s", k->l->why);
 }
 
-static rail_err send_segment(rail *r, gcode *k)
+/* Segment length: segment_s of motion, but never below min_segment_mm (slow shear rates would
+   otherwise send segments below the controller's step resolution). */
+static double segment_mm(const gcode *k)
 {
     double seg = k->speed_mm_s * k->g.segment_s;
+    return seg > k->g.min_segment_mm ? seg : k->g.min_segment_mm;
+}
+
+static rail_err send_segment(rail *r, gcode *k)
+{
+    double seg = segment_mm(k);
     double remaining = (k->goal_mm - k->sent_to_mm) * k->dir;
     double next = remaining <= seg ? k->goal_mm : k->sent_to_mm + k->dir * seg;
     char cmd[96];
@@ -58,7 +80,7 @@ static rail_err send_segment(rail *r, gcode *k)
 /* Keep segments_ahead segments queued ahead of pos. */
 static rail_err top_up(rail *r, gcode *k, double pos)
 {
-    double seg = k->speed_mm_s * k->g.segment_s;
+    double seg = segment_mm(k);
     for (int i = 0; i < 4; i++) {
         double remaining = (k->goal_mm - k->sent_to_mm) * k->dir;
         double ahead = (k->sent_to_mm - pos) * k->dir;
@@ -337,8 +359,8 @@ rail_err rail_gcode_open(rail **out, const rail_params *p, const rail_gcode_para
                  g->segment_s * g->segments_ahead, 1.0 / p->poll_hz);
         return RAIL_E_INVALID;
     }
-    if (!(g->stall_timeout_s > 0.0)) {
-        snprintf(why, why_len, "gcode: stall_timeout_s must be positive");
+    if (!(g->stall_timeout_s > 0.0) || !(g->min_segment_mm > 0.0 && g->min_segment_mm <= 10.0)) {
+        snprintf(why, why_len, "gcode: stall_timeout_s must be positive and min_segment_mm in (0, 10]");
         return RAIL_E_INVALID;
     }
     gcode *k = calloc(1, sizeof *k);

@@ -4,9 +4,9 @@
  * of the rig can be two axes of one controller (open the link once, pass it to both rails; the
  * controller runs their moves one after another) or two controllers (each rail opens its own).
  * Every motion goes out as "$J=G53 G21 <axis><mm> F<mm/min>" jog segments of segment_s seconds,
- * at most segments_ahead of them queued past the current position; the front end's polls top
- * the queue up. A process that dies stops feeding, so the rail stops within
- * segments_ahead * segment_s seconds of motion; a jog cancel (0x85) is the decelerating stop;
+ * (at least min_segment_mm long), at most segments_ahead of them queued past the current
+ * position; the front end's polls top the queue up. A process that dies stops feeding, so the
+ * rail stops within segments_ahead segments; a jog cancel (0x85) is the decelerating stop;
  * estop is a feed hold ('!') and, once stopped, a soft reset (0x18) that empties the planner.
  * Opening a link cancels any motion the controller is still running: nothing resumes by itself.
  * Requires the controller to report machine positions ($10=1, GRBL's default). */
@@ -23,6 +23,8 @@ typedef struct rail_gcode_params {
     int segments_ahead;      /* segments queued beyond the current position (1..4) */
     double reply_timeout_s;  /* s to wait for "ok" or a status report */
     double stall_timeout_s;  /* s without progress while moving before a stall fault */
+    double min_segment_mm;   /* mm, shortest segment (slow jogs): the dead-process bound is
+                                segments_ahead * max(segment_s * speed, min_segment_mm) */
 } rail_gcode_params;
 
 typedef struct grbl_link grbl_link;

@@ -161,6 +161,26 @@ static rail_err arm_watchdog(rail *r, mb *k)
     return write_one(r, k, m->watchdog, v, "arming the communication watchdog");
 }
 
+rail_state rail_mb_state_of(const rail_modbus_map *m, unsigned long st, long alarm, bool homing, char *msg,
+                            size_t n)
+{
+    if (n)
+        msg[0] = 0;
+    if ((m->st_alarm && (st & m->st_alarm)) || (m->st_alarm == 0 && alarm != 0)) {
+        snprintf(msg, n, "drive alarm code 0x%lx", (unsigned long)alarm);
+        return RAIL_STATE_ALARM;
+    }
+    if ((m->st_homing && (st & m->st_homing)) || (homing && (st & m->st_moving)))
+        return RAIL_STATE_HOMING;
+    if (st & m->st_moving)
+        return RAIL_STATE_MOVING;
+    if (homing && m->st_home_end && !(st & m->st_home_end)) {
+        snprintf(msg, n, "homing ended without the home-end bit");
+        return RAIL_STATE_FAULT;
+    }
+    return RAIL_STATE_IDLE;
+}
+
 static rail_err mb_poll(rail *r, void *impl, rail_status *out)
 {
     mb *k = impl;
@@ -242,24 +262,13 @@ static rail_err mb_poll(rail *r, void *impl, rail_status *out)
         out->velocity_mm_s = now > k->prev_t ? (pos - k->prev_pos) / (now - k->prev_t) : 0.0;
     k->prev_pos = pos;
     k->prev_t = now;
-    unsigned long st = (unsigned long)status;
-    if ((m->st_alarm && (st & m->st_alarm)) || (m->st_alarm == 0 && alarm != 0)) {
-        k->homing = false;
-        out->state = RAIL_STATE_ALARM;
+    char msg[sizeof out->message];
+    rail_state state = rail_mb_state_of(m, (unsigned long)status, alarm, k->homing, msg, sizeof msg);
+    out->state = state;
+    rail_text_copy(out->message, sizeof out->message, msg);
+    if (state == RAIL_STATE_ALARM)
         out->code = (int)alarm;
-        snprintf(out->message, sizeof out->message, "drive alarm code 0x%lx", alarm);
-        out->velocity_mm_s = 0.0;
-    } else if ((m->st_homing && (st & m->st_homing)) || (k->homing && (st & m->st_moving))) {
-        out->state = RAIL_STATE_HOMING;
-    } else if (st & m->st_moving) {
-        out->state = RAIL_STATE_MOVING;
-    } else {
-        if (k->homing && m->st_home_end && !(st & m->st_home_end)) {
-            out->state = RAIL_STATE_FAULT;
-            snprintf(out->message, sizeof out->message, "homing ended without the home-end bit");
-        } else {
-            out->state = RAIL_STATE_IDLE;
-        }
+    if (state != RAIL_STATE_MOVING && state != RAIL_STATE_HOMING) {
         k->homing = false;
         out->velocity_mm_s = 0.0;
     }

@@ -72,6 +72,11 @@ rail_modbus_params rail_modbus_params_default(void);
 rail_err rail_modbus_open(rail **out, const rail_params *p, const rail_modbus_params *m,
                           rail_clock clock, char *why, size_t why_len);
 
+/* State from the status word, the alarm code and whether a homing run was commanded (pure;
+ * used by the driver and the fuzz target). msg gets the alarm or fault text, "" otherwise. */
+rail_state rail_mb_state_of(const rail_modbus_map *m, unsigned long status, long alarm, bool homing,
+                            char *msg, size_t n);
+
 /* Word order helpers (also used by the simulator and the fuzz target). */
 void rail_mb_put32(uint16_t *w, int32_t v, rail_mb_word_order o);
 int32_t rail_mb_get32(const uint16_t *w, rail_mb_word_order o);

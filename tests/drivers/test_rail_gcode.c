@@ -353,6 +353,33 @@ static void test_killed_controller_is_disconnected(void **s)
     rail_close(r);
 }
 
+static void test_slow_shear_rate(void **s)
+{
+    (void)s;
+    char path[128];
+    grbl_sim_params sp = grbl_sim_params_default();
+    pid_t pid = grblsim_spawn(&sp, path, sizeof path);
+    rail *r = open_axis(path, 'Y', "shear", NULL);
+    rail_status st;
+    /* 0.5 mm/s: segments of max(0.2 s * 0.5 mm/s, 0.05 mm) = 0.1 mm, joined without stops. */
+    assert_int_equal(rail_jog(r, 0.5), RAIL_OK);
+    double t0 = rail_clock_now(rail_clock_real());
+    int stopped = 0;
+    while (rail_clock_now(rail_clock_real()) - t0 < 1.2) {
+        assert_int_equal(rail_status_get(r, &st), RAIL_OK);
+        if (rail_clock_now(rail_clock_real()) - t0 > 0.3 && !st.extrapolated && fabs(st.velocity_mm_s - 0.5) > 0.02)
+            stopped++;
+        rail_clock_sleep(rail_clock_real(), 0.01);
+    }
+    assert_int_equal(stopped, 0);
+    assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
+    NEAR(st.position_mm, 0.5 * (rail_clock_now(rail_clock_real()) - t0), 0.03);
+    assert_int_equal(rail_stop(r), RAIL_OK);
+    assert_int_equal(wait_idle(r, 2.0, &st), RAIL_OK);
+    rail_close(r);
+    grblsim_kill(pid);
+}
+
 static void test_open_missing_port(void **s)
 {
     (void)s;
@@ -382,6 +409,7 @@ int main(void)
         cmocka_unit_test(test_estop_mid_move),
         cmocka_unit_test(test_garbled_and_dropped_replies),
         cmocka_unit_test(test_killed_controller_is_disconnected),
+        cmocka_unit_test(test_slow_shear_rate),
         cmocka_unit_test(test_open_missing_port),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
