@@ -1,20 +1,42 @@
 /* vis_test_run.c: see vis_test_run.h. */
+#define _XOPEN_SOURCE 700 /* nftw */
 #include "vis_test_run.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <ftw.h>
+#include <unistd.h>
+
+static char tmp_dir[512];
+
+static int rm_entry(const char *path, const struct stat *sb, int flag, struct FTW *ftw)
+{
+    (void)sb;
+    (void)flag;
+    (void)ftw;
+    return remove(path);
+}
+
+/* Remove the temporary directory at exit, unless VT_KEEP is set (to look at the videos). */
+static void tmp_cleanup(void)
+{
+    if (tmp_dir[0] && strcmp(tmp_dir, "/tmp") != 0 && !getenv("VT_KEEP"))
+        nftw(tmp_dir, rm_entry, 16, FTW_DEPTH | FTW_PHYS);
+}
 
 const char *vt_tmpdir(void)
 {
-    static char dir[512];
+    char *dir = tmp_dir;
     if (!dir[0]) {
         const char *base = getenv("TMPDIR");
-        snprintf(dir, sizeof dir, "%s/vistestXXXXXX", base && base[0] ? base : "/tmp");
+        snprintf(dir, sizeof tmp_dir, "%s/vistestXXXXXX", base && base[0] ? base : "/tmp");
         if (!mkdtemp(dir)) {
             perror("mkdtemp");
-            snprintf(dir, sizeof dir, "/tmp");
+            snprintf(dir, sizeof tmp_dir, "/tmp");
+        } else {
+            atexit(tmp_cleanup);
         }
     }
     return dir;

@@ -22,7 +22,8 @@ typedef struct vt_result {
     double quality[VT_MAXF];
 } vt_result;
 
-/* Temporary directory for this test process (created once, under TMPDIR or /tmp). */
+/* Temporary directory for this test process (created once, under TMPDIR or /tmp, removed at exit
+ * unless VT_KEEP is set). */
 const char *vt_tmpdir(void);
 /* Render `frames` frames with `p`, write NAME.mkv + NAME.csv in the temp dir, track with `tp` and
  * `c`, fill `r`. Returns 0 on success; on failure prints why and returns -1. */

@@ -1,0 +1,472 @@
+/* ctl_track.c: `ribbonctl track`: measure Delta Z and A in every frame of a recorded video.
+ *
+ *   ribbonctl track VIDEO [--calib FILE | --px-per-mm S --clamp-left X,Y --clamp-right X,Y
+ *                   | --clamp-spacing-mm MM --clamp-left X,Y --clamp-right X,Y]
+ *                   [--camera-distance-mm D] [--shear-csv FILE] [--length-mm L]
+ *                   [--polarity auto|dark|light] [--csv OUT] [--overlay OUT.mkv]
+ *                   [--save-calib FILE] [--json] [--quiet]
+ *
+ * Reads the video through vision's frame source, tracks every frame, writes one CSV row per frame
+ * (frame, t, dz, a, quality, reason: dz and a empty when the frame has no measurement, never NaN),
+ * optionally an FFV1 overlay video, and prints a summary (--json: frames, tracked, mean_quality,
+ * snap_frame, damaged, error). A progress bar goes to stderr. A video that stops before its
+ * announced length is read up to the damage; the outputs keep every frame read, the damage is
+ * reported and the exit status is 1. Exit status: 0 done, 1 input or output failed, 2 usage.
+ * --shear-csv gives the shear rail position per frame (lines "frame,shear_mm", header allowed) for
+ * the depth correction; frames not listed take the last value given (0 before the first). */
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ctl.h"
+#include "vision.h"
+
+#define TRACK_MAX_FRAMES 50000000 /* loop cap: about 19 days at 30 fps */
+
+typedef struct track_cli {
+    const char *video, *calib_file, *csv, *overlay, *save_calib, *shear_csv;
+    double px_per_mm, spacing_mm, distance_mm;
+    double left[2], right[2];
+    int have_left, have_right, json, quiet;
+    vis_track_params tp;
+} track_cli;
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: ribbonctl track VIDEO [calibration] [options]\n"
+            "calibration (one of):\n"
+            "  --calib FILE                         saved calibration (vision/calib.cpp format)\n"
+            "  --px-per-mm S --clamp-left X,Y --clamp-right X,Y\n"
+            "  --clamp-spacing-mm MM --clamp-left X,Y --clamp-right X,Y   (scale from the clamps)\n"
+            "  clamp points are pixel coordinates of the ribbon's centre at each clamp, zero shear\n"
+            "options:\n"
+            "  --camera-distance-mm D   camera to ribbon plane, enables the depth correction\n"
+            "  --shear-csv FILE         shear rail position per frame: lines frame,shear_mm\n"
+            "  --length-mm L            free length l for Delta Z = dz / l (default: measured)\n"
+            "  --polarity auto|dark|light\n"
+            "  --csv OUT                per-frame CSV: frame,t,dz,a,quality,reason\n"
+            "  --overlay OUT.mkv        overlay video (FFV1)\n"
+            "  --save-calib FILE        write the calibration used\n"
+            "  --json                   summary as JSON on stdout\n"
+            "  --quiet                  no progress bar\n");
+}
+
+static int parse_num(const char *opt, const char *v, double *out)
+{
+    char *end = NULL;
+    const double x = v ? strtod(v, &end) : NAN;
+    if (!v || end == v || *end || !isfinite(x)) {
+        fprintf(stderr, "ribbonctl track: %s needs a number, got '%s'\n", opt, v ? v : "");
+        return -1;
+    }
+    *out = x;
+    return 0;
+}
+
+static int parse_point(const char *opt, const char *v, double out[2])
+{
+    char *end = NULL;
+    if (!v) {
+        fprintf(stderr, "ribbonctl track: %s needs X,Y\n", opt);
+        return -1;
+    }
+    out[0] = strtod(v, &end);
+    if (end == v || *end != ',') {
+        fprintf(stderr, "ribbonctl track: %s needs X,Y (pixels), got '%s'\n", opt, v);
+        return -1;
+    }
+    const char *w = end + 1;
+    out[1] = strtod(w, &end);
+    if (end == w || *end || !isfinite(out[0]) || !isfinite(out[1])) {
+        fprintf(stderr, "ribbonctl track: %s needs X,Y (pixels), got '%s'\n", opt, v);
+        return -1;
+    }
+    return 0;
+}
+
+static int parse_args(int argc, char **argv, track_cli *c)
+{
+    memset(c, 0, sizeof *c);
+    c->tp = vis_track_params_default();
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int used = 1; /* this option takes a value */
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            usage(stdout);
+            return 1;
+        } else if (!strcmp(a, "--json")) {
+            c->json = 1;
+            used = 0;
+        } else if (!strcmp(a, "--quiet")) {
+            c->quiet = 1;
+            used = 0;
+        } else if (!strcmp(a, "--calib")) {
+            c->calib_file = v;
+        } else if (!strcmp(a, "--csv")) {
+            c->csv = v;
+        } else if (!strcmp(a, "--overlay")) {
+            c->overlay = v;
+        } else if (!strcmp(a, "--save-calib")) {
+            c->save_calib = v;
+        } else if (!strcmp(a, "--shear-csv")) {
+            c->shear_csv = v;
+        } else if (!strcmp(a, "--px-per-mm")) {
+            if (parse_num(a, v, &c->px_per_mm) || c->px_per_mm <= 0)
+                return -1;
+        } else if (!strcmp(a, "--clamp-spacing-mm")) {
+            if (parse_num(a, v, &c->spacing_mm) || c->spacing_mm <= 0)
+                return -1;
+        } else if (!strcmp(a, "--camera-distance-mm")) {
+            if (parse_num(a, v, &c->distance_mm) || c->distance_mm <= 0)
+                return -1;
+        } else if (!strcmp(a, "--length-mm")) {
+            if (parse_num(a, v, &c->tp.length_mm) || c->tp.length_mm <= 0)
+                return -1;
+        } else if (!strcmp(a, "--clamp-left")) {
+            if (parse_point(a, v, c->left))
+                return -1;
+            c->have_left = 1;
+        } else if (!strcmp(a, "--clamp-right")) {
+            if (parse_point(a, v, c->right))
+                return -1;
+            c->have_right = 1;
+        } else if (!strcmp(a, "--polarity")) {
+            if (v && !strcmp(v, "auto"))
+                c->tp.polarity = VIS_POLARITY_AUTO;
+            else if (v && !strcmp(v, "dark"))
+                c->tp.polarity = VIS_POLARITY_DARK;
+            else if (v && !strcmp(v, "light"))
+                c->tp.polarity = VIS_POLARITY_LIGHT;
+            else {
+                fprintf(stderr, "ribbonctl track: --polarity needs auto, dark or light\n");
+                return -1;
+            }
+        } else if (a[0] == '-' && a[1] == '-') {
+            fprintf(stderr, "ribbonctl track: unknown option '%s'\n", a);
+            return -1;
+        } else if (!c->video) {
+            c->video = a;
+            used = 0;
+        } else {
+            fprintf(stderr, "ribbonctl track: unexpected argument '%s'\n", a);
+            return -1;
+        }
+        if (used) {
+            if (!v) {
+                fprintf(stderr, "ribbonctl track: %s needs a value\n", a);
+                return -1;
+            }
+            i++;
+        }
+    }
+    if (!c->video) {
+        fprintf(stderr, "ribbonctl track: no VIDEO given\n");
+        return -1;
+    }
+    const int explicit_scale = c->px_per_mm > 0 || c->spacing_mm > 0;
+    if (c->calib_file && (explicit_scale || c->have_left || c->have_right)) {
+        fprintf(stderr, "ribbonctl track: --calib excludes --px-per-mm/--clamp-*\n");
+        return -1;
+    }
+    if (!c->calib_file && (!explicit_scale || !c->have_left || !c->have_right)) {
+        fprintf(stderr, "ribbonctl track: need --calib FILE, or --px-per-mm (or --clamp-spacing-mm) "
+                        "with --clamp-left and --clamp-right\n");
+        return -1;
+    }
+    if (c->px_per_mm > 0 && c->spacing_mm > 0) {
+        fprintf(stderr, "ribbonctl track: give --px-per-mm or --clamp-spacing-mm, not both\n");
+        return -1;
+    }
+    return 0;
+}
+
+/* Shear positions per frame, from "frame,shear_mm" lines; dense array indexed by frame. */
+typedef struct shear_table {
+    double *mm;
+    size_t n;
+} shear_table;
+
+static int shear_load(const char *path, shear_table *t)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        fprintf(stderr, "ribbonctl track: cannot read %s\n", path);
+        return -1;
+    }
+    char line[256];
+    int lineno = 0;
+    while (fgets(line, sizeof line, f) && lineno < TRACK_MAX_FRAMES) {
+        lineno++;
+        char *end;
+        const long fr = strtol(line, &end, 10);
+        if (end == line) {
+            if (lineno == 1)
+                continue; /* header */
+            fprintf(stderr, "ribbonctl track: %s:%d: expected frame,shear_mm\n", path, lineno);
+            fclose(f);
+            return -1;
+        }
+        char *w = end + (*end == ',');
+        const double mm = strtod(w, &end);
+        if (end == w || fr < 0 || fr >= TRACK_MAX_FRAMES || !isfinite(mm)) {
+            fprintf(stderr, "ribbonctl track: %s:%d: expected frame,shear_mm\n", path, lineno);
+            fclose(f);
+            return -1;
+        }
+        if ((size_t)fr >= t->n) {
+            const size_t n = (size_t)fr + 1;
+            double *m = realloc(t->mm, n * sizeof *m);
+            if (!m) {
+                fclose(f);
+                return -1;
+            }
+            for (size_t k = t->n; k < n; k++)
+                m[k] = NAN;
+            t->mm = m;
+            t->n = n;
+        }
+        t->mm[fr] = mm;
+    }
+    fclose(f);
+    double last = 0.0; /* fill gaps with the last value given */
+    for (size_t k = 0; k < t->n; k++) {
+        if (isnan(t->mm[k]))
+            t->mm[k] = last;
+        last = t->mm[k];
+    }
+    return 0;
+}
+
+static double shear_at(const shear_table *t, size_t frame)
+{
+    if (!t->n)
+        return 0.0;
+    return frame < t->n ? t->mm[frame] : t->mm[t->n - 1];
+}
+
+static const char *reason_id(vis_reason r)
+{
+    switch (r) {
+    case VIS_REASON_NONE: return "ok";
+    case VIS_REASON_UNREADABLE: return "unreadable";
+    case VIS_REASON_DARK: return "dark";
+    case VIS_REASON_SATURATED: return "saturated";
+    case VIS_REASON_CLAMP_NOT_FOUND: return "clamp_not_found";
+    case VIS_REASON_LOST: return "lost";
+    case VIS_REASON_OCCLUDED: return "occluded";
+    }
+    return "unknown";
+}
+
+static void progress(size_t i, int total, int final)
+{
+    if (total > 0) {
+        const int w = 40, done = (int)((double)(i > (size_t)total ? (size_t)total : i) * w / total);
+        fprintf(stderr, "\rtrack [%.*s%*s] %zu/%d", done, "########################################",
+                w - done, "", i, total);
+    } else {
+        fprintf(stderr, "\rtrack %zu frames", i);
+    }
+    if (final)
+        fputc('\n', stderr);
+    fflush(stderr);
+}
+
+int ctl_track_main(int argc, char **argv)
+{
+    track_cli c;
+    const int pa = parse_args(argc, argv, &c);
+    if (pa > 0)
+        return 0;
+    if (pa < 0) {
+        usage(stderr);
+        return 2;
+    }
+    vis_error err;
+    vis_calib cal = vis_calib_default();
+    if (c.calib_file) {
+        if (vis_calib_load(&cal, c.calib_file, &err) != VIS_OK) {
+            fprintf(stderr, "ribbonctl track: %s\n", err.message);
+            return 1;
+        }
+    } else if (c.spacing_mm > 0) {
+        if (vis_calib_from_clamps(&cal, c.left, c.right, c.spacing_mm, &err) != VIS_OK) {
+            fprintf(stderr, "ribbonctl track: %s\n", err.message);
+            return 2;
+        }
+    } else {
+        cal.px_per_mm = c.px_per_mm;
+        memcpy(cal.clamp_left_px, c.left, sizeof c.left);
+        memcpy(cal.clamp_right_px, c.right, sizeof c.right);
+    }
+    if (c.distance_mm > 0)
+        cal.camera_distance_mm = c.distance_mm;
+    if (vis_calib_check(&cal, &err) != VIS_OK) {
+        fprintf(stderr, "ribbonctl track: %s\n", err.message);
+        return 2;
+    }
+    if (c.save_calib && vis_calib_save(&cal, c.save_calib, &err) != VIS_OK) {
+        fprintf(stderr, "ribbonctl track: %s\n", err.message);
+        return 1;
+    }
+    shear_table shear = {NULL, 0};
+    if (c.shear_csv && shear_load(c.shear_csv, &shear)) {
+        free(shear.mm);
+        return 1;
+    }
+
+    int rc = 0;
+    FILE *csv = NULL;
+    vis_source *src = NULL;
+    vis_tracker *trk = NULL;
+    vis_frame *frame = NULL, *over = NULL;
+    vis_video_writer *ov = NULL;
+    double *dz = NULL;
+    unsigned char *valid = NULL;
+    size_t n = 0, cap = 0, tracked = 0;
+    double qsum = 0.0;
+    int damaged = 0;
+    char failure[300] = "";
+
+    src = vis_source_open_video(c.video, &err);
+    if (!src) {
+        snprintf(failure, sizeof failure, "%s", err.message);
+        rc = 1;
+        goto done;
+    }
+    trk = vis_tracker_create(&c.tp, &cal, &err);
+    frame = vis_frame_alloc(8, 8, 1, &err);
+    over = vis_frame_alloc(8, 8, 3, &err);
+    if (!trk || !frame || !over) {
+        snprintf(failure, sizeof failure, "%s", err.message);
+        rc = 1;
+        goto done;
+    }
+    if (c.csv) {
+        csv = fopen(c.csv, "w");
+        if (!csv) {
+            snprintf(failure, sizeof failure, "cannot write %s", c.csv);
+            rc = 1;
+            goto done;
+        }
+        fprintf(csv, "frame,t,dz,a,quality,reason\n");
+    }
+    const int total = vis_source_frame_count(src);
+    const int show = !c.quiet;
+    const double fps = vis_source_fps(src);
+    for (size_t i = 0; i < TRACK_MAX_FRAMES; i++) {
+        double t = 0.0;
+        const vis_status st = vis_source_read(src, frame, &t, &err);
+        if (st == VIS_ERR_END)
+            break;
+        if (st != VIS_OK) {
+            snprintf(failure, sizeof failure, "%s", err.message);
+            damaged = 1;
+            rc = 1;
+            break;
+        }
+        vis_measure m;
+        if (vis_tracker_process(trk, frame, shear_at(&shear, i), &m, &err) != VIS_OK) {
+            snprintf(failure, sizeof failure, "frame %zu: %s", i, err.message);
+            rc = 1;
+            break;
+        }
+        if (n == cap) {
+            const size_t nc = cap ? 2 * cap : 1024;
+            double *d2 = realloc(dz, nc * sizeof *d2);
+            if (d2)
+                dz = d2;
+            unsigned char *v2 = realloc(valid, nc);
+            if (v2)
+                valid = v2;
+            if (!d2 || !v2) {
+                snprintf(failure, sizeof failure, "out of memory at frame %zu", i);
+                rc = 1;
+                break;
+            }
+            cap = nc;
+        }
+        const int ok = m.reason == VIS_REASON_NONE;
+        dz[n] = ok ? m.dz : 0.0;
+        valid[n] = (unsigned char)ok;
+        n++;
+        if (ok) {
+            tracked++;
+            qsum += m.quality;
+        }
+        if (csv) {
+            if (ok)
+                fprintf(csv, "%zu,%.6f,%.8f,%.8f,%.4f,%s\n", i, t, m.dz, m.a, m.quality, reason_id(m.reason));
+            else
+                fprintf(csv, "%zu,%.6f,,,%.4f,%s\n", i, t, m.quality, reason_id(m.reason));
+        }
+        if (c.overlay) {
+            if (vis_overlay_draw(frame, trk, &m, (int)i, over, &err) != VIS_OK) {
+                snprintf(failure, sizeof failure, "overlay: %s", err.message);
+                rc = 1;
+                break;
+            }
+            if (!ov) {
+                ov = vis_video_writer_open(c.overlay, vis_frame_width(over), vis_frame_height(over), 3,
+                                           fps > 0 ? fps : 25.0, &err);
+                if (!ov) {
+                    snprintf(failure, sizeof failure, "%s", err.message);
+                    rc = 1;
+                    break;
+                }
+            }
+            if (vis_video_writer_write(ov, over, &err) != VIS_OK) {
+                snprintf(failure, sizeof failure, "overlay: %s", err.message);
+                rc = 1;
+                break;
+            }
+        }
+        if (show && n % 10 == 0)
+            progress(n, total, 0);
+    }
+    if (show)
+        progress(n, total, 1);
+
+done:;
+    const int snap = n ? vis_snap_find(dz, valid, n, 0.02, 0.3) : -1;
+    if (csv && fclose(csv) != 0 && !rc) {
+        snprintf(failure, sizeof failure, "cannot write %s", c.csv);
+        rc = 1;
+    }
+    vis_video_writer_close(ov);
+    if (failure[0])
+        fprintf(stderr, "ribbonctl track: %s\n", failure);
+    const double mean_q = tracked ? qsum / (double)tracked : 0.0;
+    if (c.json) {
+        json_t *o = json_object();
+        json_object_set_new(o, "video", json_string(c.video));
+        json_object_set_new(o, "frames", json_integer((json_int_t)n));
+        json_object_set_new(o, "tracked", json_integer((json_int_t)tracked));
+        json_object_set_new(o, "mean_quality", json_real(mean_q));
+        json_object_set_new(o, "snap_frame", snap >= 0 ? json_integer(snap) : json_null());
+        json_object_set_new(o, "damaged", json_boolean(damaged));
+        json_object_set_new(o, "error", failure[0] ? json_string(failure) : json_null());
+        char *s = json_dumps(o, JSON_COMPACT);
+        printf("%s\n", s ? s : "{}");
+        free(s);
+        json_decref(o);
+    } else if (src) {
+        printf("frames %zu, tracked %zu, mean quality %.3f, snap frame ", n, tracked, mean_q);
+        if (snap >= 0)
+            printf("%d\n", snap);
+        else
+            printf("none\n");
+    }
+    free(dz);
+    free(valid);
+    free(shear.mm);
+    vis_frame_free(frame);
+    vis_frame_free(over);
+    vis_tracker_free(trk);
+    vis_source_close(src);
+    return rc;
+}
