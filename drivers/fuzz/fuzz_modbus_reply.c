@@ -28,13 +28,14 @@ int fuzz_modbus_reply_one(const uint8_t *data, size_t size)
         return 0;
     }
     modbus_set_socket(ctx, sv[0]);
-    modbus_set_response_timeout(ctx, 0, 2000);
-    modbus_set_byte_timeout(ctx, 0, 2000);
     modbus_set_error_recovery(ctx, MODBUS_ERROR_RECOVERY_NONE);
     modbus_set_slave(ctx, 1);
     uint16_t regs[8];
-    /* First request: nobody answers; it tells us libmodbus's transaction id. */
+    /* First request: nobody answers (short timeout); it tells us libmodbus's transaction id. */
+    modbus_set_response_timeout(ctx, 0, 200);
     modbus_read_registers(ctx, 0, 8, regs);
+    modbus_set_response_timeout(ctx, 0, 2000);
+    modbus_set_byte_timeout(ctx, 0, 2000);
     uint8_t req[32];
     ssize_t n = recv(sv[1], req, sizeof req, MSG_DONTWAIT);
     uint8_t buf[300];
