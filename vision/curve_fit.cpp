@@ -139,16 +139,21 @@ bool curve_fit(const FitInput &in, double hw, double he, int n_out, FitResult &o
     out.mid = pm;
     const Pt r = pm - in.xz.front();
     out.height = (c.x * r.y - c.y * r.x) / cl;
-    double ss = 0;
-    size_t cnt = 0;
+    // Residual: the median distance of the samples from the fit (robust: a sharp crease, which the
+    // smooth fit rounds off, touches only a few samples and must not lower the quality).
+    std::vector<double> res;
+    res.reserve(n / 3 + 1);
     for (size_t i = 0; i < n; i += 3) {
         Pt p, d;
-        if (local_eval(in, in.s[i], hw, DEG_MID, p, d)) {
-            ss += (p.x - in.xz[i].x) * (p.x - in.xz[i].x) + (p.y - in.xz[i].y) * (p.y - in.xz[i].y);
-            cnt++;
-        }
+        if (local_eval(in, in.s[i], hw, DEG_MID, p, d))
+            res.push_back(cv::norm(p - in.xz[i]));
     }
-    out.residual = cnt ? std::sqrt(ss / cnt) : 0.0;
+    if (!res.empty()) {
+        std::nth_element(res.begin(), res.begin() + (long)(res.size() / 2), res.end());
+        out.residual = res[res.size() / 2];
+    } else {
+        out.residual = 0.0;
+    }
     return true;
 }
 

@@ -54,7 +54,7 @@ struct FitResult {
     double height;           // midpoint height above the clamp chord, mm (positive = left of chord)
     double a;                // 2 theta(1/2) - theta(0) - theta(1), radians
     Pt mid;                  // midpoint, mm
-    double residual;         // RMS distance of the points from the fit, mm
+    double residual;         // median distance of the points from the fit, mm
     std::vector<Pt> curve;   // smooth curve samples, mm
 };
 // Local polynomial regression: half-window `hw` (mm) around interior points; the end tangents from

@@ -266,10 +266,10 @@ typedef struct vis_measure {
     vis_reason reason;         /* VIS_REASON_NONE when dz and a are valid */
     double dz;                 /* Delta Z, normalised by l (positive up) */
     double a;                  /* A, radians */
-    double quality;            /* 0..1: share of the arc with a clear ridge times fit consistency */
+    double quality;            /* 0..1: share of the arc with a clear ridge / (1 + (residual / 0.5 px)^2) */
     double length_mm;          /* measured (projected, depth-corrected) arc length, mm */
     double mid_px[2];          /* arc-length midpoint in the image, pixels */
-    double residual_px;        /* RMS distance of the traced samples from the smooth fit, pixels */
+    double residual_px;        /* median distance of the traced samples from the smooth fit, pixels */
 } vis_measure;
 
 typedef struct vis_tracker vis_tracker;

@@ -6,7 +6,7 @@
 
 #define DENSE 8192
 
-static void finish(vt_shape *s, size_t n, const double *xd, const double *zd, size_t m, double dw)
+void vt_from_dense(vt_shape *s, size_t n, const double *xd, const double *zd, size_t m, double dw)
 {
     /* Resample the dense planar curve (xd, zd) at n points equally spaced in arc length. */
     double cum[DENSE];
@@ -85,7 +85,7 @@ void vt_arch(vt_shape *s, size_t n, double l, double X, double phi, double dw)
             lo = R;
     }
     arch_fill(xd, zd, X, 0.5 * (lo + hi), phi);
-    finish(s, n, xd, zd, DENSE, dw);
+    vt_from_dense(s, n, xd, zd, DENSE, dw);
 }
 
 void vt_overhang(vt_shape *s, size_t n, double l, double T, double dw)
@@ -99,7 +99,7 @@ void vt_overhang(vt_shape *s, size_t n, double l, double T, double dw)
         xd[i] = xd[i - 1] + ds * cos(th);
         zd[i] = zd[i - 1] + ds * sin(th);
     }
-    finish(s, n, xd, zd, DENSE, dw);
+    vt_from_dense(s, n, xd, zd, DENSE, dw);
 }
 
 vis_render_params vt_render_params(const vt_shape *s, int w, int h)

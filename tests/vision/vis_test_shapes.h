@@ -23,6 +23,9 @@ typedef struct vt_shape {
     vis_shape view;            /* points into pos/normal */
 } vt_shape;
 
+/* Shape from a dense planar curve (xd, zd), m <= 8192 points, resampled at n points equally spaced
+ * in arc length, sheared by dw. */
+void vt_from_dense(vt_shape *s, size_t n, const double *xd, const double *zd, size_t m, double dw);
 void vt_arch(vt_shape *s, size_t n, double l, double X, double phi, double dw);
 void vt_overhang(vt_shape *s, size_t n, double l, double T, double dw);
 /* Camera fitted around the shape with margin; 320 x 240 unless changed after. */
