@@ -1,0 +1,124 @@
+/* test_ctl_rail.c: `ribbonctl rail` and `ribbonctl ports` as a user runs them: the real program
+ * against the mock, the GRBL simulator on a pty and the Modbus simulator on 127.0.0.1; --json
+ * output parsed (state, position_mm, velocity_mm_s, code, message); refusals exit 1 with the
+ * reason, usage errors exit 2. */
+#include <jansson.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <cmocka.h>
+
+#include "grblsim_spawn.h"
+#include "mbsim_spawn.h"
+
+/* Run ribbonctl with args (stderr folded into the output); returns the exit status. */
+static int run(const char *args, char *out, size_t n)
+{
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "%s %s 2>&1", RIBBONCTL_PATH, args);
+    fflush(NULL);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    size_t k = fread(out, 1, n - 1, p);
+    out[k] = 0;
+    int st = pclose(p);
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+static json_t *parse_json_line(const char *out)
+{
+    json_error_t err;
+    const char *brace = strchr(out, '{');
+    assert_non_null(brace);
+    json_t *o = json_loads(brace, JSON_DISABLE_EOF_CHECK, &err);
+    if (!o)
+        print_error("not JSON: %s (%s)\n", out, err.text);
+    assert_non_null(o);
+    const char *keys[] = {"state", "position_mm", "velocity_mm_s", "code", "message"};
+    for (int i = 0; i < 5; i++)
+        assert_non_null(json_object_get(o, keys[i]));
+    return o;
+}
+
+static void test_mock_status_json(void **s)
+{
+    (void)s;
+    char out[4096];
+    assert_int_equal(run("rail --driver mock --start 3.5 --json status", out, sizeof out), 0);
+    json_t *o = parse_json_line(out);
+    assert_string_equal(json_string_value(json_object_get(o, "state")), "idle");
+    assert_true(json_real_value(json_object_get(o, "position_mm")) == 3.5);
+    json_decref(o);
+    assert_int_equal(run("rail --driver mock move-abs 4 --speed 8", out, sizeof out), 0);
+    assert_non_null(strstr(out, "idle at 4.0000 mm"));
+}
+
+static void test_refusals_and_usage(void **s)
+{
+    (void)s;
+    char out[4096];
+    assert_int_equal(run("rail --driver mock home", out, sizeof out), 1);
+    assert_non_null(strstr(out, "--confirm"));
+    assert_int_equal(run("rail --driver mock --soft-max 50 move-abs 60", out, sizeof out), 1);
+    assert_non_null(strstr(out, "soft limits"));
+    assert_int_equal(run("rail --driver mock --max-speed 5 --json move-abs 1 --speed 9", out, sizeof out), 1);
+    json_t *o = parse_json_line(out);
+    assert_false(json_is_true(json_object_get(o, "ok")));
+    assert_non_null(strstr(json_string_value(json_object_get(o, "message")), "above the limit"));
+    json_decref(o);
+    assert_int_equal(run("rail --driver mock wiggle", out, sizeof out), 2);
+    assert_int_equal(run("rail --driver mock move-abs", out, sizeof out), 2);
+    assert_int_equal(run("rail --driver warp status", out, sizeof out), 1);
+    assert_non_null(strstr(out, "unknown driver"));
+    assert_int_equal(run("nosuchcommand", out, sizeof out), 2);
+    assert_int_equal(run("ports --json", out, sizeof out), 0);
+    json_error_t err;
+    json_t *a = json_loads(out, JSON_DISABLE_EOF_CHECK, &err);
+    assert_true(json_is_array(a));
+    json_decref(a);
+}
+
+static void test_gcode_and_modbus(void **s)
+{
+    (void)s;
+    char path[128], out[4096], args[512];
+    grbl_sim_params gp = grbl_sim_params_default();
+    pid_t g = grblsim_spawn(&gp, path, sizeof path);
+    snprintf(args, sizeof args, "rail --driver gcode --port %s --axis Y --json move-abs 6.25 --speed 10", path);
+    assert_int_equal(run(args, out, sizeof out), 0);
+    json_t *o = parse_json_line(out);
+    assert_true(fabs(json_real_value(json_object_get(o, "position_mm")) - 6.25) <= 1e-3);
+    json_decref(o);
+    snprintf(args, sizeof args, "rail --driver gcode --port %s --axis Y jog -5 --duration 0.3", path);
+    assert_int_equal(run(args, out, sizeof out), 0);
+    assert_non_null(strstr(out, "idle at"));
+    grblsim_kill(g);
+
+    int port;
+    pid_t m = mbsim_spawn(mb_sim_params_default(), &port);
+    snprintf(args, sizeof args, "rail --driver modbus --address 127.0.0.1:%d --json move-rel 2.5 --speed 10", port);
+    assert_int_equal(run(args, out, sizeof out), 0);
+    o = parse_json_line(out);
+    assert_true(fabs(json_real_value(json_object_get(o, "position_mm")) - 2.5) <= 1e-3);
+    json_decref(o);
+    snprintf(args, sizeof args, "rail --driver modbus --address 127.0.0.1:%d --map oriental-az status", port);
+    assert_int_equal(run(args, out, sizeof out), 1);
+    assert_non_null(strstr(out, "allow-unverified"));
+    mbsim_kill(m);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_mock_status_json),
+        cmocka_unit_test(test_refusals_and_usage),
+        cmocka_unit_test(test_gcode_and_modbus),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
