@@ -6,7 +6,8 @@
 // A global polynomial or spline would smear the sharp creases of a folded ribbon into the tangent at
 // the midpoint and ends; a local fit only sees the arc near where it is evaluated. The clamp points
 // themselves are the first and last samples.
-// Measures: the smooth curve is evaluated at n_out points; its polyline length is the arc length; the
+// Measures: the smooth curve and its speed are evaluated at n_out points; the arc length is the
+// integral of the speed; the
 // arc-length midpoint is found on it and re-evaluated by the local fit for position and tangent.
 // Tangent angles are taken relative to the clamp chord (A is invariant under rotation, and this keeps
 // angles away from the +-pi cut even for overhangs or a rolled camera).
@@ -111,13 +112,18 @@ bool curve_fit(const FitInput &in, double hw, double he, int n_out, FitResult &o
         return false;
     const double L = in.s.back();
     out.curve.resize((size_t)n_out);
-    std::vector<double> cum((size_t)n_out, 0.0);
+    std::vector<double> cum((size_t)n_out, 0.0), speed((size_t)n_out);
+    const double h = L / (n_out - 1);
     Pt der;
     for (int j = 0; j < n_out; j++) {
-        if (!local_eval(in, L * j / (n_out - 1), hw, DEG_MID, out.curve[(size_t)j], der))
+        if (!local_eval(in, h * j, hw, DEG_MID, out.curve[(size_t)j], der))
             return false;
+        speed[(size_t)j] = cv::norm(der);
+        // Arc length by the trapezoid rule on the fitted speed |r'(s)|: the parameter is nearly arc
+        // length, so the speed is nearly constant and the rule nearly exact, unlike chords, which
+        // cut every bend short by (kappa h)^2 / 24.
         if (j > 0)
-            cum[(size_t)j] = cum[(size_t)j - 1] + cv::norm(out.curve[(size_t)j] - out.curve[(size_t)j - 1]);
+            cum[(size_t)j] = cum[(size_t)j - 1] + 0.5 * h * (speed[(size_t)j - 1] + speed[(size_t)j]);
     }
     out.length = cum.back();
     const double half = 0.5 * out.length;
@@ -125,7 +131,7 @@ bool curve_fit(const FitInput &in, double hw, double he, int n_out, FitResult &o
     while (k + 2 < (size_t)n_out && cum[k + 1] < half)
         k++;
     const double w = (half - cum[k]) / std::max(1e-300, cum[k + 1] - cum[k]);
-    const double s_mid = L * (k + w) / (n_out - 1);
+    const double s_mid = h * (k + w);
     Pt pm, dm, p0, d0, p1, d1;
     if (!local_eval(in, s_mid, hw, DEG_MID, pm, dm) || !local_eval(in, 0.0, 0.5 * he, DEG_END, p0, d0) ||
         !local_eval(in, L, 0.5 * he, DEG_END, p1, d1))
@@ -142,8 +148,9 @@ bool curve_fit(const FitInput &in, double hw, double he, int n_out, FitResult &o
     // Residual: the median distance of the samples from the fit (robust: a sharp crease, which the
     // smooth fit rounds off, touches only a few samples and must not lower the quality).
     std::vector<double> res;
-    res.reserve(n / 3 + 1);
-    for (size_t i = 0; i < n; i += 3) {
+    const size_t stride = std::max<size_t>(1, n / 64);  // 64 samples are plenty for a median
+    res.reserve(n / stride + 1);
+    for (size_t i = 0; i < n; i += stride) {
         Pt p, d;
         if (local_eval(in, in.s[i], hw, DEG_MID, p, d))
             res.push_back(cv::norm(p - in.xz[i]));

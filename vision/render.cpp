@@ -207,14 +207,16 @@ extern "C" vis_status vis_renderer_draw(vis_renderer *r, const vis_shape *shape,
             return true;
         };
 
-        // Backdrop and clutter.
+        // Backdrop and clutter. The clutter has its own generator, re-seeded every frame, so it
+        // stays put from frame to frame like a real background (the noise does not).
         r->fine.setTo(cv::Scalar(p.background));
+        cv::RNG crng(p.seed * 2654435761u + 12345u);
         for (int c = 0; c < p.clutter; c++) {
             const float W = (float)r->fine.cols, H = (float)r->fine.rows;
-            const cv::Point2f ctr(r->rng.uniform(0.f, W), r->rng.uniform(0.f, H));
-            const cv::Size2f sz(r->rng.uniform(0.08f, 0.3f) * W, r->rng.uniform(0.08f, 0.3f) * H);
-            const float ang = r->rng.uniform(0.f, 180.f);
-            const double level = p.background + r->rng.uniform(-0.35, 0.35) *
+            const cv::Point2f ctr(crng.uniform(0.f, W), crng.uniform(0.f, H));
+            const cv::Size2f sz(crng.uniform(0.08f, 0.3f) * W, crng.uniform(0.08f, 0.3f) * H);
+            const float ang = crng.uniform(0.f, 180.f);
+            const double level = p.background + crng.uniform(-0.35, 0.35) *
                                                     std::fabs(p.background - p.ribbon);
             if (c % 2 == 0)
                 cv::ellipse(r->fine, cv::RotatedRect(ctr, sz, ang), cv::Scalar(level), cv::FILLED);

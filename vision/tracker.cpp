@@ -4,9 +4,12 @@
 //   1. frame checks: unreadable, too dark, saturated -> a reason, not an error;
 //   2. clamp points: from the calibration; the right one moves toward the principal point as the
 //      shear carries it away from the camera (magnification D / (D + shear));
-//   3. ridge signal (black-hat or top-hat, polarity fixed, or decided once and then kept);
-//   4. guide: the previous frame's smooth curve, or a geodesic path between the clamps when there is
-//      none or following it fails (first frame, snap-through, recovery after a lost frame);
+//   3. polarity fixed, or decided once and then kept;
+//   4. guide: the previous frame's smooth curve, traced on the raw (polarity-folded) grey levels in
+//      its bounding box, since each profile brings its own background level; or, when there is no
+//      previous curve or following it fails (first frame, snap-through, recovery after a lost
+//      frame), a geodesic path between the clamps on the black-hat/top-hat ridge signal of the whole
+//      frame, which removes lighting, clamps and large clutter before the path search;
 //   5. three tracer passes (wide band, then narrow) refining the centreline to sub-pixel;
 //   6. metric curve: undistortion (if the calibration has intrinsics), then depth correction: the
 //      point at arc fraction xi is assumed at depth y = shear (3 xi^2 - 2 xi^3) (clamped ends keep
@@ -250,7 +253,7 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide)
         if (!(fin.s[i] > fin.s[i - 1]))
             fin.s[i] = fin.s[i - 1] + 1e-9;
     vis::FitResult fr;
-    const int n_out = std::max(64, std::min(2000, (int)(len_px / 2)));
+    const int n_out = std::max(64, std::min(256, (int)(len_px / 6)));
     if (!vis::curve_fit(fin, p.fit_window * fin.s.back(), p.end_window * fin.s.back(), n_out, fr)) {
         // No smooth curve: a gap wider than the fit window (occlusion) or too few samples.
         at.reason = occluded(samples) ? VIS_REASON_OCCLUDED : VIS_REASON_LOST;
@@ -359,7 +362,7 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
             box |= cv::Rect((int)g.right.x, (int)g.right.y, 1, 1);
             const int pad = (int)std::ceil(t->p.band_px) + 3;
             box = cv::Rect(box.x - pad, box.y - pad, box.width + 2 * pad, box.height + 2 * pad) & full;
-            vis::ridge_signal(grey, dark, r, box, t->work, t->sig);
+            vis::raw_signal(grey, dark, box, t->sig);
             best = track_from(t, g, t->prev);
             have = true;
         }

@@ -22,6 +22,10 @@ Exposure exposure_check(const cv::Mat &grey, double min_contrast);
 bool polarity_is_dark(const cv::Mat &grey);
 // Ridge signal in `roi` of `grey` (black-hat or top-hat with a square of side 2 r + 1), CV_32F.
 void ridge_signal(const cv::Mat &grey, bool dark, int r, cv::Rect roi, cv::Mat &work, cv::Mat &sig);
+// Raw signal in `roi`: the grey level itself, inverted for a dark ribbon (CV_32F, full size). When
+// following the previous curve the tracer's own per-profile background (its lower quartile) does
+// the background removal, so the morphological filter is skipped.
+void raw_signal(const cv::Mat &grey, bool dark, cv::Rect roi, cv::Mat &sig);
 
 // --- path_init.cpp
 // Cheapest 8-connected path from a to b where a step costs length / (eps + S / s_ref). Pixels of the

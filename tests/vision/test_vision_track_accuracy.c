@@ -107,10 +107,14 @@ static vis_render_params params_for(vt_gen_fn gen, int frames, int width)
     return p;
 }
 
-static void run_case(const char *name, vt_gen_fn gen, int frames, int width, vt_result *r)
+static void run_case_p(const char *name, vt_gen_fn gen, int frames, int width, int clutter, double gradient,
+                       vt_result *r)
 {
     static vt_shape s;
     vis_render_params p = params_for(gen, frames, width);
+    p.clutter = clutter;
+    p.light_gradient = gradient;
+    p.vignette = gradient;
     gen(&s, 0, NULL);
     vis_calib c = vt_calib(&p, &s);
     vis_track_params tp = vis_track_params_default();
@@ -119,6 +123,11 @@ static void run_case(const char *name, vt_gen_fn gen, int frames, int width, vt_
     tp.length_mm = g.length_m * 1000.0;
     tp.ribbon_max_px = 12.0; /* the 2 mm ribbon looks up to 8 px thick at this scale */
     assert_int_equal(vt_run(name, gen, NULL, frames, &p, &c, &tp, r), 0);
+}
+
+static void run_case(const char *name, vt_gen_fn gen, int frames, int width, vt_result *r)
+{
+    run_case_p(name, gen, frames, width, 0, 0.0, r);
 }
 
 static void check(const vt_result *r)
@@ -161,6 +170,16 @@ static void test_creased_ribbon(void **state)
     check(&r);
 }
 
+static void test_clutter_and_uneven_light(void **state)
+{
+    (void)state;
+    /* The asymmetric sequence in front of 8 fixed background shapes under a lighting gradient and
+     * vignetting (both 40%): frames after the first follow the previous curve. */
+    vt_result r;
+    run_case_p("clutter", gen_asym, 10, 640, 8, 0.4, &r);
+    check(&r);
+}
+
 static void test_snap_sequence(void **state)
 {
     (void)state;
@@ -179,6 +198,7 @@ int main(void)
         cmocka_unit_test(test_asymmetric_sheared_arch),
         cmocka_unit_test(test_overhanging_arch),
         cmocka_unit_test(test_creased_ribbon),
+        cmocka_unit_test(test_clutter_and_uneven_light),
         cmocka_unit_test(test_snap_sequence),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -115,8 +115,9 @@ static void test_bad_frames_are_reported(void **state)
     /* A frame of another size (clamps outside it) and then recovery on a good frame. */
     vis_frame *small = vis_frame_alloc(40, 30, 1, NULL);
     fill(small, 120);
-    for (int i = 0; i < 40; i++)
-        vis_frame_data(small)[15 * vis_frame_stride(small) + (size_t)i] = 10;
+    for (int y = 14; y < 17; y++)
+        for (int i = 0; i < 40; i++)
+            vis_frame_data(small)[(size_t)y * vis_frame_stride(small) + (size_t)i] = 10;
     assert_int_equal(vis_tracker_process(t, small, 0.0, &m, &err), VIS_OK);
     assert_int_equal(m.reason, VIS_REASON_CLAMP_NOT_FOUND);
     assert_int_equal(vis_tracker_process(t, s.f, 0.0, &m, &err), VIS_OK);
