@@ -17,6 +17,7 @@ static const ctl_cmd commands[] = {
     {"ports", ctl_ports_main, "list serial ports (path, USB VID:PID, serial number)"},
 #ifdef RIBBON_HAVE_VISION
     {"track", ctl_track_main, "measure Delta Z and A in every frame of a video: CSV, overlay, --json summary"},
+    {"vision-bench", ctl_vision_bench_main, "speed of the tracker and of decode + track, one JSON line"},
 #endif
 };
 

@@ -2,7 +2,7 @@
 //
 // The guide curve (the previous frame's centreline, or a fresh geodesic path) is resampled every
 // `step` px along its arc length; at each sample the ridge signal is read along the normal, +-band px,
-// every 0.25 px by bilinear interpolation (OpenCV's convention: pixel centres at integers, so no
+// every 0.5 px by bilinear interpolation (OpenCV's convention: pixel centres at integers, so no
 // half-pixel shift). The ribbon's cross-section is the peak of that profile: its centre is the
 // centroid of the part above median + 30% of the peak height, which is unbiased for the symmetric
 // blurred profile of a ribbon. Working along normals (not image columns) is what lets the tracer
@@ -71,7 +71,7 @@ void trace_pass(const cv::Mat &sig, cv::Point origin, const std::vector<Pt> &gui
     const size_t n = guide.size();
     if (n < 3)
         return;
-    const double d = 0.25;
+    const double d = 0.5;  // profile step, px: finer steps measured no more accurate
     const int K = (int)std::floor(band / d);
     std::vector<float> prof((size_t)(2 * K + 1)), tmp((size_t)(2 * K + 1));
     double s = 0;

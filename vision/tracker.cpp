@@ -10,7 +10,8 @@
 //      previous curve or following it fails (first frame, snap-through, recovery after a lost
 //      frame), a geodesic path between the clamps on the black-hat/top-hat ridge signal of the whole
 //      frame, which removes lighting, clamps and large clutter before the path search;
-//   5. three tracer passes (wide band, then narrow) refining the centreline to sub-pixel;
+//   5. tracer passes (wide band, then narrow; three from a fresh path, two from the previous curve)
+//      refining the centreline to sub-pixel;
 //   6. metric curve: undistortion (if the calibration has intrinsics), then depth correction: the
 //      point at arc fraction xi is assumed at depth y = shear (3 xi^2 - 2 xi^3) (clamped ends keep
 //      their tangent along x, so the shear profile is flat at both clamps), and its pixel offset from
@@ -182,14 +183,14 @@ bool occluded(const std::vector<vis::TraceSample> &smp)
 }
 
 // Steps 5 to 7 from a guide curve.
-Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide)
+Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide, int passes)
 {
     Attempt at;
     const vis_track_params &p = t->p;
     std::vector<vis::TraceSample> samples;
     const double band_narrow = std::min(p.band_px, p.ribbon_max_px + 2.0);
     double len_px = 0;
-    for (int pass = 0; pass < 3; pass++) {
+    for (int pass = 0; pass < passes; pass++) {
         guide.front() = g.left;
         guide.back() = g.right;
         std::vector<Pt> rs = vis::resample(guide, p.step_px, &len_px);
@@ -214,7 +215,7 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide)
             if (s.valid)
                 guide.push_back(s.p);
         guide.push_back(g.right);
-        if (pass < 2)
+        if (pass + 1 < passes)
             guide = vis::smooth(guide, 2);
     }
     size_t nv = 0;
@@ -363,14 +364,14 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
             const int pad = (int)std::ceil(t->p.band_px) + 3;
             box = cv::Rect(box.x - pad, box.y - pad, box.width + 2 * pad, box.height + 2 * pad) & full;
             vis::raw_signal(grey, dark, box, t->sig);
-            best = track_from(t, g, t->prev);
+            best = track_from(t, g, t->prev, 2);  // the previous curve is already close: two passes
             have = true;
         }
         if (!have || best.reason != VIS_REASON_NONE) {
             vis::ridge_signal(grey, dark, r, full, t->work, t->sig);
             std::vector<Pt> path;
             if (vis::path_init(t->sig, g.left, g.right, path)) {
-                Attempt fresh = track_from(t, g, vis::smooth(path, 3));
+                Attempt fresh = track_from(t, g, vis::smooth(path, 3), 3);
                 if (!have || fresh.reason == VIS_REASON_NONE ||
                     (best.reason != VIS_REASON_NONE && fresh.quality > best.quality))
                     best = fresh;

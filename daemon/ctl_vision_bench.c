@@ -1,0 +1,166 @@
+/* ctl_vision_bench.c: `ribbonctl vision-bench`: speed of the vision module, one JSON line.
+ *
+ *   ribbonctl vision-bench [--width W --height H] [--frames N] [--dir DIR]
+ *
+ * Renders N frames (default 200) of a ribbon arch (a cosine arch of 200 mm between clamps 160 mm
+ * apart, with a slowly growing asymmetric mode) at W x H (default 1280 x 720), writes them to an
+ * FFV1 file in DIR (default TMPDIR or /tmp, removed afterwards), then times on one thread:
+ *   track_fps         the tracker alone on frames held in memory,
+ *   decode_track_fps  decoding the FFV1 file and tracking every frame.
+ * Issue 5's targets: track_fps >= 500, decode_track_fps >= 150. Rendering is not timed. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "ctl.h"
+#include "vision.h"
+
+#define BENCH_MAX_FRAMES 5000
+#define BENCH_PTS 301
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Cosine arch with an antisymmetric mode of relative amplitude `asym`, n points (not arc-length
+ * spaced: the renderer and tracker do not need it), unit normals in the x-z plane. */
+static void bench_shape(double *pos, double *nrm, double asym)
+{
+    const double X = 0.16, R = 0.055;
+    for (int i = 0; i < BENCH_PTS; i++) {
+        const double xi = (double)i / (BENCH_PTS - 1), c = cos(2 * M_PI * xi), sn = sin(2 * M_PI * xi);
+        pos[3 * i] = X * xi;
+        pos[3 * i + 1] = 0.0;
+        pos[3 * i + 2] = R * ((1 - c) / 2 + asym * sn * (1 - c) / 2);
+        const double dz = R * (M_PI * sn + asym * M_PI * (c * (1 - c) + sn * sn)) / X;
+        const double l = sqrt(1 + dz * dz);
+        nrm[3 * i] = -dz / l;
+        nrm[3 * i + 1] = 0.0;
+        nrm[3 * i + 2] = 1.0 / l;
+    }
+}
+
+int ctl_vision_bench_main(int argc, char **argv)
+{
+    int w = 1280, h = 720, frames = 200;
+    const char *dir = getenv("TMPDIR");
+    for (int i = 1; i < argc; i++) {
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            printf("usage: ribbonctl vision-bench [--width W --height H] [--frames N] [--dir DIR]\n");
+            return 0;
+        } else if (!strcmp(argv[i], "--width") && v) {
+            w = atoi(v);
+            i++;
+        } else if (!strcmp(argv[i], "--height") && v) {
+            h = atoi(v);
+            i++;
+        } else if (!strcmp(argv[i], "--frames") && v) {
+            frames = atoi(v);
+            i++;
+        } else if (!strcmp(argv[i], "--dir") && v) {
+            dir = v;
+            i++;
+        } else {
+            fprintf(stderr, "ribbonctl vision-bench: unknown option '%s'\n", argv[i]);
+            return 2;
+        }
+    }
+    if (w < 64 || h < 48 || w > 8192 || h > 8192 || frames < 1 || frames > BENCH_MAX_FRAMES) {
+        fprintf(stderr, "ribbonctl vision-bench: need 64 <= width, 48 <= height <= 8192, 1 <= frames <= %d\n",
+                BENCH_MAX_FRAMES);
+        return 2;
+    }
+    char path[1024];
+    snprintf(path, sizeof path, "%s/ribbon-vision-bench-%ld.mkv", dir && dir[0] ? dir : "/tmp", (long)getpid());
+
+    static double pos[3 * BENCH_PTS], nrm[3 * BENCH_PTS];
+    vis_shape sh = {BENCH_PTS, pos, nrm, 0.005, 0.002};
+    vis_render_params rp = vis_render_params_default();
+    rp.camera.width_px = w;
+    rp.camera.height_px = h;
+    vis_error err;
+    int rc = 1;
+    vis_frame **mem = calloc((size_t)frames, sizeof *mem);
+    vis_frame *f = vis_frame_alloc(8, 8, 1, &err);
+    vis_renderer *r = NULL;
+    vis_video_writer *vw = NULL;
+    vis_tracker *t = NULL;
+    vis_source *src = NULL;
+    if (!mem || !f)
+        goto out;
+    if (vis_camera_fit(&rp.camera, -0.02, 0.18, -0.03, 0.09, 0.9, &err) != VIS_OK)
+        goto out;
+    r = vis_renderer_create(&rp, &err);
+    vw = r ? vis_video_writer_open(path, w, h, 1, 30.0, &err) : NULL;
+    if (!vw)
+        goto out;
+    for (int i = 0; i < frames; i++) {
+        bench_shape(pos, nrm, 0.3 * i / frames);
+        mem[i] = vis_frame_alloc(w, h, 1, &err);
+        if (!mem[i] || vis_renderer_draw(r, &sh, mem[i], NULL, &err) != VIS_OK ||
+            vis_video_writer_write(vw, mem[i], &err) != VIS_OK)
+            goto out;
+    }
+    vis_video_writer_close(vw);
+    vw = NULL;
+
+    vis_calib cal = vis_calib_default();
+    const double l0[3] = {0, 0, 0}, r0[3] = {0.16, 0, 0};
+    vis_camera_project(&rp.camera, l0, cal.clamp_left_px, NULL);
+    vis_camera_project(&rp.camera, r0, cal.clamp_right_px, NULL);
+    cal.px_per_mm = rp.camera.focal_px / rp.camera.distance_m / 1000.0;
+    vis_track_params tp = vis_track_params_default();
+    tp.ribbon_max_px = 14.0;
+    t = vis_tracker_create(&tp, &cal, &err);
+    if (!t)
+        goto out;
+    vis_measure m;
+    int tracked = 0;
+    double t0 = now_s();
+    for (int i = 0; i < frames; i++) {
+        if (vis_tracker_process(t, mem[i], 0.0, &m, &err) != VIS_OK)
+            goto out;
+        tracked += m.reason == VIS_REASON_NONE;
+    }
+    const double track_s = now_s() - t0;
+
+    vis_tracker_reset(t);
+    src = vis_source_open_video(path, &err);
+    if (!src)
+        goto out;
+    int decoded = 0;
+    t0 = now_s();
+    for (int i = 0; i < frames; i++) {
+        if (vis_source_read(src, f, NULL, &err) != VIS_OK)
+            goto out;
+        if (vis_tracker_process(t, f, 0.0, &m, &err) != VIS_OK)
+            goto out;
+        decoded++;
+    }
+    const double dec_s = now_s() - t0;
+    printf("{\"bench\":\"vision\",\"width\":%d,\"height\":%d,\"frames\":%d,\"tracked\":%d,"
+           "\"track_fps\":%.1f,\"decode_track_fps\":%.1f,\"target_track_fps\":500,"
+           "\"target_decode_track_fps\":150}\n",
+           w, h, frames, tracked, frames / track_s, decoded / dec_s);
+    rc = 0;
+out:
+    if (rc)
+        fprintf(stderr, "ribbonctl vision-bench: %s\n", err.message);
+    vis_source_close(src);
+    vis_tracker_free(t);
+    vis_video_writer_close(vw);
+    vis_renderer_free(r);
+    for (int i = 0; mem && i < frames; i++)
+        vis_frame_free(mem[i]);
+    free(mem);
+    vis_frame_free(f);
+    remove(path);
+    return rc;
+}
