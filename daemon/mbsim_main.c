@@ -1,6 +1,7 @@
-/* mbsim_main.c: `ribbon-mbsim`, the simulated Modbus TCP drive (logic in drivers/mb_sim.c).
+/* mbsim_main.c: `ribbon-mbsim`, the simulated Modbus drive (logic in drivers/mb_sim.c).
  * `ribbon-mbsim --listen 127.0.0.1:PORT [--slave N]` prints "listening: HOST:PORT" as its first
- * line (PORT 0 picks a free port and prints it), then serves until SIGINT/SIGTERM. */
+ * line (PORT 0 picks a free port and prints it); `--rtu` serves Modbus RTU on a pseudo-terminal
+ * instead and prints "pty: PATH". Serves until SIGINT/SIGTERM (the handler only sets a flag). */
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -22,13 +23,15 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: ribbon-mbsim --listen HOST:PORT [options]\n"
             "  --listen HOST:PORT   address to serve Modbus TCP on (default 127.0.0.1:1502)\n"
+            "  --rtu                serve Modbus RTU on a pseudo-terminal instead (prints pty: PATH)\n"
             "  --slave N            unit id answered, 1..247 (default 1)\n"
             "  --counts-per-mm C    drive counts per mm (default 1000)\n"
             "  --travel MM          hard travel (default 200)\n"
             "  --start MM           position at start (default 0)\n"
             "  --drop P             leave a fraction P of requests unanswered\n"
-            "  --garble P           answer a fraction P with a corrupted frame\n"
+            "  --garble P           answer a fraction P with a corrupted frame (RTU: bad CRC)\n"
             "  --exception P        answer a fraction P with exception 6 (busy)\n"
+            "  --wrong-id P         RTU: answer a fraction P as another slave id\n"
             "  --stall MM           stall (alarm 0x10) when the axis reaches MM\n"
             "  --alarm-after S      raise an alarm S seconds after start\n"
             "  --alarm-code N       alarm code for --alarm-after (default 0x30)\n"
@@ -70,6 +73,11 @@ int main(int argc, char **argv)
             p.host[c - v] = 0;
             bad = num(a, c + 1, 0, 65535, &x);
             p.port = (int)x;
+        } else if (!strcmp(a, "--rtu")) {
+            p.rtu = true;
+            i--; /* takes no value */
+        } else if (!strcmp(a, "--wrong-id")) {
+            bad = num(a, v, 0, 1, &p.wrong_id_prob);
         } else if (!strcmp(a, "--slave")) {
             bad = num(a, v, 1, 247, &x);
             p.slave = (int)x;
@@ -112,7 +120,10 @@ int main(int argc, char **argv)
         fprintf(stderr, "ribbon-mbsim: %s\n", why);
         return 1;
     }
-    printf("listening: %s:%d\n", p.host, mb_sim_port(s));
+    if (p.rtu)
+        printf("pty: %s\n", mb_sim_path(s));
+    else
+        printf("listening: %s:%d\n", p.host, mb_sim_port(s));
     fflush(stdout);
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);

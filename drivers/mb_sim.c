@@ -1,22 +1,29 @@
-/* mb_sim.c: the simulated Modbus TCP drive (see mb_sim.h; register layout in rail_modbus_map.c).
+/* mb_sim.c: the simulated Modbus drive (see mb_sim.h; register layout in rail_modbus_map.c).
  *
- * One select() loop over the listening socket and up to 8 clients. For each request: advance the
- * axis, refresh the read-only registers, let the fault injector decide, reply with libmodbus,
- * then act on a non-zero command register (and clear it: the command register is a trigger).
+ * TCP: one select() loop over the listening socket and up to 8 clients. RTU: libmodbus's RTU
+ * server talks to one end of a socketpair and a relay copies bytes between the other end and a
+ * pseudo-terminal master, which is where RTU faults (bad CRC, wrong slave id) are applied.
+ * For each request: advance the axis, refresh the read-only registers, let the fault injector
+ * decide, reply with libmodbus, then act on a non-zero command register (and clear it: the
+ * command register is a trigger).
  * Read-only registers (8..13, 16, 17) are rewritten from the axis before every reply, so a
  * client writing them changes nothing. */
+#define _XOPEN_SOURCE 700
 #include "mb_sim.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <modbus.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/select.h>
 #include <sys/socket.h>
+#include <termios.h>
 #include <unistd.h>
 
 #include "rail_axis.h"
@@ -27,6 +34,7 @@
 #define MBS_REGS 64
 
 enum { ST_READY = 1, ST_MOVING = 2, ST_INPOS = 4, ST_HOMING = 8, ST_HOMED = 16, ST_ALARM = 32 };
+enum { CORRUPT_CRC = 1, CORRUPT_ID = 2 };
 enum { ALM_DEVIATION = 0x10, ALM_OVERTRAVEL = 0x66, ALM_DATA = 0x70, ALM_COMM_TIMEOUT = 0x85 };
 
 struct mb_sim {
@@ -36,6 +44,10 @@ struct mb_sim {
     int listen_fd;
     int clients[MBS_CLIENTS];
     int port;
+    int master, slave;  /* RTU: pty ends (the slave is held open in raw mode) */
+    int sv[2];          /* RTU: [0] libmodbus server side, [1] relay side */
+    char path[128];     /* RTU: pty slave path */
+    int corrupt;        /* RTU: fault to apply to the next reply (0, CORRUPT_CRC, CORRUPT_ID) */
     rail_clock clock;
     double t_start, t_last, t_request;
     rail_axis ax;
@@ -190,47 +202,105 @@ static void drop_client(mb_sim *s, int i)
     s->clients[i] = -1;
 }
 
-static void serve(mb_sim *s, int i)
+/* Handle one request waiting on the context's current socket; returns false if the link broke. */
+static bool serve_request(mb_sim *s, int client_fd)
 {
     uint8_t q[MODBUS_TCP_MAX_ADU_LENGTH];
-    modbus_set_socket(s->ctx, s->clients[i]);
     int rc = modbus_receive(s->ctx, q);
-    if (rc <= 0) {
-        if (rc < 0)
-            drop_client(s, i);
-        return;
-    }
+    if (rc <= 0)
+        return rc == 0; /* 0: a request for another slave (RTU), ignored */
     advance(s);
-    int hl = modbus_get_header_length(s->ctx); /* 7 for TCP: unit id is q[hl - 1] */
+    int hl = modbus_get_header_length(s->ctx); /* TCP 7 (unit id is q[6]), RTU 1 (q[0]) */
     int unit = q[hl - 1];
-    if (unit != s->p.slave && unit != 0xff && unit != 0) {
+    if (!s->p.rtu && unit != s->p.slave && unit != 0xff && unit != 0) {
         modbus_reply_exception(s->ctx, q, MODBUS_EXCEPTION_GATEWAY_TARGET);
-        return;
+        return true;
     }
     s->t_request = rail_clock_now(s->clock);
     if (s->p.drop_prob > 0.0 && rnd(s) < s->p.drop_prob)
-        return;
+        return true;
     if (s->p.garble_prob > 0.0 && rnd(s) < s->p.garble_prob) {
-        /* Right transaction id, a well-formed frame of the wrong function with nonsense in it:
-           a corrupted reply the client must refuse. */
-        uint8_t fc = q[hl] == 0x06 ? 0x05 : 0x06;
-        uint8_t g[12] = {q[0], q[1], 0x00, 0x00, 0x00, 0x06, q[6], fc, 0xee, 0x13, 0x37, 0x99};
-        ssize_t w = send(s->clients[i], g, sizeof g, MSG_NOSIGNAL);
-        (void)w;
-        return;
+        if (s->p.rtu) {
+            s->corrupt = CORRUPT_CRC; /* the relay spoils the reply's CRC */
+        } else {
+            /* Right transaction id, a well-formed frame of the wrong function with nonsense in
+               it: a corrupted reply the client must refuse. */
+            uint8_t fc = q[hl] == 0x06 ? 0x05 : 0x06;
+            uint8_t g[12] = {q[0], q[1], 0x00, 0x00, 0x00, 0x06, q[6], fc, 0xee, 0x13, 0x37, 0x99};
+            ssize_t w = send(client_fd, g, sizeof g, MSG_NOSIGNAL);
+            (void)w;
+            return true;
+        }
+    } else if (s->p.rtu && s->p.wrong_id_prob > 0.0 && rnd(s) < s->p.wrong_id_prob) {
+        s->corrupt = CORRUPT_ID;
     }
     if (s->p.exception_prob > 0.0 && rnd(s) < s->p.exception_prob) {
         modbus_reply_exception(s->ctx, q, MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
-        return;
+        return true;
     }
     refresh(s);
     modbus_reply(s->ctx, q, rc, s->map);
     command(s);
     refresh(s);
+    return true;
+}
+
+static void serve(mb_sim *s, int i)
+{
+    modbus_set_socket(s->ctx, s->clients[i]);
+    if (!serve_request(s, s->clients[i]))
+        drop_client(s, i);
+}
+
+static uint16_t crc16(const uint8_t *b, size_t n)
+{
+    /* Modbus RTU CRC: reflected polynomial 0xA001, initial 0xFFFF, sent low byte first. */
+    uint16_t c = 0xffff;
+    for (size_t i = 0; i < n; i++) {
+        c ^= b[i];
+        for (int k = 0; k < 8; k++)
+            c = (c & 1) ? (uint16_t)((c >> 1) ^ 0xa001) : (uint16_t)(c >> 1);
+    }
+    return c;
+}
+
+/* RTU: relay pty -> server, serve, relay replies server -> pty (with the RTU faults). */
+static void rtu_step(mb_sim *s, double max_wait_s)
+{
+    struct pollfd pf = {s->master, POLLIN, 0};
+    int r = poll(&pf, 1, max_wait_s > 0.0 ? (int)(max_wait_s * 1000.0) : 0);
+    advance(s);
+    if (r <= 0 || !(pf.revents & POLLIN))
+        return;
+    uint8_t buf[512];
+    ssize_t n = read(s->master, buf, sizeof buf);
+    if (n <= 0)
+        return;
+    if (write(s->sv[1], buf, (size_t)n) != n)
+        return;
+    serve_request(s, -1);
+    ssize_t m = recv(s->sv[1], buf, sizeof buf, MSG_DONTWAIT);
+    if (m >= 4) {
+        if (s->corrupt == CORRUPT_CRC) {
+            buf[m - 1] ^= 0x5a;
+        } else if (s->corrupt == CORRUPT_ID) {
+            buf[0] = (uint8_t)(buf[0] % 247 + 1);
+            uint16_t c = crc16(buf, (size_t)m - 2);
+            buf[m - 2] = (uint8_t)(c & 0xff);
+            buf[m - 1] = (uint8_t)(c >> 8);
+        }
+        ssize_t w = write(s->master, buf, (size_t)m);
+        (void)w;
+    }
+    s->corrupt = 0;
 }
 
 rail_err mb_sim_step(mb_sim *s, double max_wait_s)
 {
+    if (s->p.rtu) {
+        rtu_step(s, max_wait_s);
+        return RAIL_OK;
+    }
     fd_set rd;
     FD_ZERO(&rd);
     FD_SET(s->listen_fd, &rd);
@@ -296,7 +366,8 @@ rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t n)
     s->listen_fd = -1;
     for (int i = 0; i < MBS_CLIENTS; i++)
         s->clients[i] = -1;
-    s->ctx = modbus_new_tcp(p->host, p->port);
+    s->master = s->slave = s->sv[0] = s->sv[1] = -1;
+    s->ctx = p->rtu ? modbus_new_rtu("/dev/null", 19200, 'E', 8, 1) : modbus_new_tcp(p->host, p->port);
     s->map = modbus_mapping_new(0, 0, MBS_REGS, 0);
     if (!s->ctx || !s->map) {
         snprintf(why, n, "mbsim: cannot create the libmodbus server: %s", modbus_strerror(errno));
@@ -305,17 +376,38 @@ rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t n)
     }
     modbus_set_slave(s->ctx, p->slave);
     modbus_set_indication_timeout(s->ctx, 0, 500000);
-    s->listen_fd = modbus_tcp_listen(s->ctx, 4);
-    if (s->listen_fd < 0) {
-        snprintf(why, n, "mbsim: cannot listen on %s:%d: %s", p->host, p->port, modbus_strerror(errno));
-        mb_sim_close(s);
-        return RAIL_E_IO;
+    if (p->rtu) {
+        /* The server never opens a device: it reads and writes a socketpair, relayed to a pty. */
+        s->master = posix_openpt(O_RDWR | O_NOCTTY);
+        const char *name = NULL;
+        if (s->master >= 0 && grantpt(s->master) == 0 && unlockpt(s->master) == 0)
+            name = ptsname(s->master);
+        rail_text_copy(s->path, sizeof s->path, name ? name : "");
+        struct termios tio;
+        if (!name || (s->slave = open(s->path, O_RDWR | O_NOCTTY)) < 0 || tcgetattr(s->slave, &tio) != 0 ||
+            socketpair(AF_UNIX, SOCK_STREAM, 0, s->sv) != 0) {
+            snprintf(why, n, "mbsim: cannot set up the RTU pseudo-terminal: %s", strerror(errno));
+            mb_sim_close(s);
+            return RAIL_E_IO;
+        }
+        cfmakeraw(&tio);
+        tcsetattr(s->slave, TCSANOW, &tio);
+        fcntl(s->master, F_SETFD, FD_CLOEXEC);
+        fcntl(s->slave, F_SETFD, FD_CLOEXEC);
+        modbus_set_socket(s->ctx, s->sv[0]);
+    } else {
+        s->listen_fd = modbus_tcp_listen(s->ctx, 4);
+        if (s->listen_fd < 0) {
+            snprintf(why, n, "mbsim: cannot listen on %s:%d: %s", p->host, p->port, modbus_strerror(errno));
+            mb_sim_close(s);
+            return RAIL_E_IO;
+        }
+        struct sockaddr_in sa;
+        socklen_t sl = sizeof sa;
+        s->port = p->port;
+        if (getsockname(s->listen_fd, (struct sockaddr *)&sa, &sl) == 0)
+            s->port = ntohs(sa.sin_port);
     }
-    struct sockaddr_in sa;
-    socklen_t sl = sizeof sa;
-    s->port = p->port;
-    if (getsockname(s->listen_fd, (struct sockaddr *)&sa, &sl) == 0)
-        s->port = ntohs(sa.sin_port);
     s->clock = rail_clock_real();
     s->t_start = s->t_last = s->t_request = rail_clock_now(s->clock);
     s->ax = rail_axis_make(p->start_mm, 100.0, p->travel_mm);
@@ -330,6 +422,11 @@ int mb_sim_port(const mb_sim *s)
     return s->port;
 }
 
+const char *mb_sim_path(const mb_sim *s)
+{
+    return s->path;
+}
+
 void mb_sim_close(mb_sim *s)
 {
     if (!s)
@@ -339,6 +436,12 @@ void mb_sim_close(mb_sim *s)
             close(s->clients[i]);
     if (s->listen_fd >= 0)
         close(s->listen_fd);
+    if (s->p.rtu) {
+        int fds[4] = {s->master, s->slave, s->sv[0], s->sv[1]};
+        for (int i = 0; i < 4; i++)
+            if (fds[i] >= 0)
+                close(fds[i]);
+    }
     if (s->map)
         modbus_mapping_free(s->map);
     if (s->ctx) {

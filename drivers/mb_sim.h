@@ -1,5 +1,6 @@
-/* mb_sim.h: a simulated Modbus TCP drive served with libmodbus (the "ribbon-sim" map of
- * rail_modbus_map.c), one rail_axis moving in real time.
+/* mb_sim.h: a simulated Modbus drive served with libmodbus (the "ribbon-sim" map of
+ * rail_modbus_map.c), one rail_axis moving in real time, over TCP or over RTU on a
+ * pseudo-terminal (rtu = true; mb_sim_path() names the pty a client opens as its serial line).
  *
  * Holding registers 0..63 are all readable (unused ones read 0) with function 3, writable with
  * functions 6 and 16; any standard Modbus TCP client can talk to it. Requests for another unit
@@ -7,7 +8,9 @@
  * communication watchdog (register 14, ms) halts a moving axis and raises alarm 0x85 when no
  * request arrives in time. Faults: drop a fraction of requests unanswered, garble a fraction of
  * replies (bytes that are no Modbus frame), answer a fraction with exception 6 (busy), stall
- * the axis at a position (alarm 0x10, position deviation), raise an alarm after a time. */
+ * the axis at a position (alarm 0x10, position deviation), raise an alarm after a time; on RTU
+ * a garbled reply is a frame with a bad CRC, and wrong_id_prob answers as another slave.
+ * On RTU, requests for another slave id are ignored (silence), as on a real bus. */
 #ifndef RIBBON_DRIVERS_MB_SIM_H
 #define RIBBON_DRIVERS_MB_SIM_H
 
@@ -17,6 +20,7 @@
 #include "rail.h"
 
 typedef struct mb_sim_params {
+    bool rtu;                  /* RTU on a pseudo-terminal instead of TCP */
     char host[64];             /* address to listen on: 127.0.0.1 */
     int port;                  /* TCP port; 0 = any free port (see mb_sim_port) */
     int slave;                 /* unit id answered, 1..247 */
@@ -27,6 +31,7 @@ typedef struct mb_sim_params {
     double drop_prob;          /* 0..1, requests left unanswered */
     double garble_prob;        /* 0..1, replies replaced by garbage bytes */
     double exception_prob;     /* 0..1, requests answered with exception 6 (busy) */
+    double wrong_id_prob;      /* 0..1, RTU replies sent with another slave id (valid CRC) */
     double stall_at_mm;        /* mm, NaN = off */
     double alarm_after_s;      /* s after start, negative = off */
     int alarm_code;            /* drive alarm code for alarm_after_s */
@@ -37,7 +42,8 @@ typedef struct mb_sim mb_sim;
 
 mb_sim_params mb_sim_params_default(void);
 rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t why_len);
-int mb_sim_port(const mb_sim *s);
+int mb_sim_port(const mb_sim *s);           /* TCP port */
+const char *mb_sim_path(const mb_sim *s);   /* RTU: the pty path, "" for TCP */
 rail_err mb_sim_step(mb_sim *s, double max_wait_s);
 rail_err mb_sim_run(mb_sim *s, double duration_s, volatile sig_atomic_t *stop);
 void mb_sim_close(mb_sim *s);

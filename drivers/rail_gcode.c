@@ -26,7 +26,8 @@ typedef struct gcode {
     bool homing;
     bool stopping;        /* stop sent; the controller has not reported rest yet */
     double prev_pos, prev_t; /* mm, s: previous reading, for the velocity while stopping */
-    bool stall_fault;
+    char fault[120];      /* sticky driver-detected fault (stall, reset under a move), "" = none */
+    int resets_at_start;  /* link->resets_seen when the move began */
     double progress_pos;  /* mm, position at the last progress */
     double progress_t;    /* s */
     double pos_mm;        /* mm, last reported position of our axis */
@@ -161,24 +162,25 @@ static rail_err gcode_poll(rail *r, void *impl, rail_status *out)
             return RAIL_OK;
         }
     }
-    if (k->stall_fault) {
-        out->state = RAIL_STATE_FAULT;
-        snprintf(out->message, sizeof out->message,
-                 "stall: no progress for %.2f s at %.3f mm while moving; reset to clear",
+    if (k->active && k->l->resets_seen != k->resets_at_start) {
+        /* The controller restarted under a move: never carry the move on by ourselves. */
+        k->active = false;
+        snprintf(k->fault, sizeof k->fault,
+                 "controller reset during the move at %.3f mm; move abandoned, reset to clear", pos);
+    }
+    if (k->active && now - k->progress_t > k->g.stall_timeout_s) {
+        grbl_link_realtime(k->l, 0x85);
+        k->active = false;
+        snprintf(k->fault, sizeof k->fault,
+                 "stall: no progress for %.2f s at %.3f mm while moving; jog cancelled, reset to clear",
                  k->g.stall_timeout_s, pos);
+    }
+    if (k->fault[0]) {
+        out->state = RAIL_STATE_FAULT;
+        rail_text_copy(out->message, sizeof out->message, k->fault);
         return RAIL_OK;
     }
     if (k->active) {
-        if (now - k->progress_t > k->g.stall_timeout_s) {
-            grbl_link_realtime(k->l, 0x85);
-            k->active = false;
-            k->stall_fault = true;
-            out->state = RAIL_STATE_FAULT;
-            snprintf(out->message, sizeof out->message,
-                     "stall: no progress for %.2f s at %.3f mm while moving; jog cancelled",
-                     k->g.stall_timeout_s, pos);
-            return RAIL_OK;
-        }
         bool there = fabs(pos - k->goal_mm) < 1e-3 && fabs(k->sent_to_mm - k->goal_mm) < 1e-9;
         if (there && rep.state == GRBL_IDLE) {
             k->active = false;
@@ -231,8 +233,8 @@ static rail_err gcode_stop(rail *r, void *impl)
 static rail_err gcode_move_abs(rail *r, void *impl, double target, double speed)
 {
     gcode *k = impl;
-    if (k->stall_fault)
-        return rail_set_error(r, RAIL_E_STATE, "stall fault pending; reset first");
+    if (k->fault[0])
+        return rail_set_error(r, RAIL_E_STATE, "%s", k->fault);
     if (k->active || k->stopping) {
         /* Change of plan mid-move: cancel the queued segments and let the axis come to rest. */
         rail_err e = k->active ? gcode_stop(r, impl) : RAIL_OK;
@@ -256,6 +258,7 @@ static rail_err gcode_move_abs(rail *r, void *impl, double target, double speed)
     k->sent_to_mm = st.position_mm;
     k->progress_pos = st.position_mm;
     k->progress_t = rail_clock_now(rail_get_clock(r));
+    k->resets_at_start = k->l->resets_seen;
     k->active = true;
     return top_up(r, k, st.position_mm);
 }
@@ -309,7 +312,7 @@ static rail_err gcode_home(rail *r, void *impl)
 static rail_err gcode_reset(rail *r, void *impl)
 {
     gcode *k = impl;
-    k->stall_fault = false;
+    k->fault[0] = 0;
     k->active = false;
     int code = 0;
     rail_err e = grbl_link_send(k->l, "$X", &code);

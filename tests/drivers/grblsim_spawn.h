@@ -13,7 +13,7 @@
 
 #include "grbl_sim.h"
 
-static pid_t grblsim_spawn(const grbl_sim_params *p, char *path, size_t n)
+__attribute__((unused)) static pid_t grblsim_spawn(const grbl_sim_params *p, char *path, size_t n)
 {
     grbl_sim *s = NULL;
     char why[256];
@@ -33,7 +33,7 @@ static pid_t grblsim_spawn(const grbl_sim_params *p, char *path, size_t n)
     return pid;
 }
 
-static void grblsim_kill(pid_t pid)
+__attribute__((unused)) static void grblsim_kill(pid_t pid)
 {
     if (pid > 0) {
         kill(pid, SIGKILL);

@@ -12,7 +12,7 @@
 
 #include "mb_sim.h"
 
-static pid_t mbsim_spawn(mb_sim_params p, int *port)
+__attribute__((unused)) static pid_t mbsim_spawn(mb_sim_params p, int *port)
 {
     mb_sim *s = NULL;
     char why[256];
@@ -34,7 +34,29 @@ static pid_t mbsim_spawn(mb_sim_params p, int *port)
     return pid;
 }
 
-static void mbsim_kill(pid_t pid)
+/* The same on RTU: path gets the pseudo-terminal a client opens as its serial line. */
+__attribute__((unused)) static pid_t mbsim_spawn_rtu(mb_sim_params p, char *path, size_t n)
+{
+    mb_sim *s = NULL;
+    char why[256];
+    p.rtu = true;
+    if (mb_sim_open(&s, &p, why, sizeof why) != RAIL_OK) {
+        fprintf(stderr, "mbsim: %s\n", why);
+        return -1;
+    }
+    snprintf(path, n, "%s", mb_sim_path(s));
+    fflush(NULL);
+    pid_t pid = fork();
+    if (pid == 0) {
+        mb_sim_run(s, 60.0, NULL);
+        mb_sim_close(s);
+        _exit(0);
+    }
+    mb_sim_close(s);
+    return pid;
+}
+
+__attribute__((unused)) static void mbsim_kill(pid_t pid)
 {
     if (pid > 0) {
         kill(pid, SIGKILL);
