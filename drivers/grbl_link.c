@@ -15,6 +15,8 @@
 static rail_err lfail(grbl_link *l, rail_err e, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static rail_err lfail(grbl_link *l, rail_err e, const char *fmt, ...)
 {
+    if (e == RAIL_E_DISCONNECTED)
+        l->lost = true;
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(l->why, sizeof l->why, fmt, ap);
@@ -166,8 +168,31 @@ rail_err grbl_link_send(grbl_link *l, const char *cmd, int *err_code)
     return lfail(l, RAIL_E_PROTOCOL, "too many unrelated lines while waiting for 'ok' to '%s'", cmd);
 }
 
+/* Reopen a lost port. The controller may have been reset or replaced: cancel whatever it runs
+   and count it as a reset, so a move in progress is abandoned, never carried on. */
+static rail_err reopen(grbl_link *l, grbl_report *rep)
+{
+    rail_serial *ser = NULL;
+    char why[256];
+    rail_err e = rail_serial_open(&ser, l->spec, l->baud, why, sizeof why);
+    if (e != RAIL_OK)
+        return lfail(l, RAIL_E_DISCONNECTED, "controller lost; reopening failed: %s", why);
+    rail_serial_close(l->ser);
+    l->ser = ser;
+    l->rx_len = 0;
+    l->lost = false;
+    l->home_pending = false;
+    l->resets_seen++;
+    e = grbl_link_status(l, rep);
+    if (e == RAIL_OK)
+        e = grbl_link_quiesce(l, rep);
+    return e;
+}
+
 rail_err grbl_link_status(grbl_link *l, grbl_report *rep)
 {
+    if (l->lost)
+        return reopen(l, rep);
     rail_err e = grbl_link_drain(l);
     if (e != RAIL_OK)
         return e;
@@ -224,6 +249,8 @@ rail_err grbl_link_open(grbl_link **out, const rail_gcode_params *g, rail_clock 
     l->clock = clock;
     l->reply_timeout_s = g->reply_timeout_s;
     l->refs = 1;
+    rail_text_copy(l->spec, sizeof l->spec, g->port);
+    l->baud = g->baud;
     rail_err e = rail_serial_open(&l->ser, g->port, g->baud, why, why_len);
     if (e != RAIL_OK) {
         free(l);

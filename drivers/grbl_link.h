@@ -20,7 +20,10 @@ struct grbl_link {
     int alarm_code;          /* last ALARM:N seen, 0 = none since the last unlock */
     bool home_pending;       /* "$H" sent, its "ok" not yet seen */
     int home_error;          /* error:N (>0) or -ALARM (<0) ending the homing cycle */
-    int resets_seen;         /* reset banners seen */
+    int resets_seen;         /* reset banners seen (and reconnects: both end any move) */
+    bool lost;               /* the port failed: the next status query tries to reopen it */
+    char spec[256];          /* port spec, for reopening */
+    int baud;
     char why[256];           /* reason of the last failure */
 };
 

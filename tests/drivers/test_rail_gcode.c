@@ -380,6 +380,42 @@ static void test_slow_shear_rate(void **s)
     grblsim_kill(pid);
 }
 
+static void test_reconnect_never_resumes(void **s)
+{
+    (void)s;
+    char p1[128], p2[128], link[128];
+    snprintf(link, sizeof link, "/tmp/ribbon-test-grbl-%d", (int)getpid());
+    grbl_sim_params sp = grbl_sim_params_default();
+    pid_t a = grblsim_spawn(&sp, p1, sizeof p1);
+    unlink(link);
+    assert_int_equal(symlink(p1, link), 0);
+    rail *r = open_axis(link, 'X', "shear", NULL);
+    rail_status st;
+    assert_int_equal(rail_jog(r, 10.0), RAIL_OK);
+    rail_clock_sleep(rail_clock_real(), 0.2);
+    assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
+    grblsim_kill(a); /* cable pulled mid-jog */
+    assert_int_equal(rail_status_poll(r, &st), RAIL_E_DISCONNECTED);
+    assert_int_equal(rail_status_poll(r, &st), RAIL_E_DISCONNECTED); /* reopening fails */
+    /* A controller comes back on the same path (here: another simulator, at 7 mm). */
+    sp.start_mm[0] = 7.0;
+    pid_t b = grblsim_spawn(&sp, p2, sizeof p2);
+    unlink(link);
+    assert_int_equal(symlink(p2, link), 0);
+    assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
+    assert_int_equal(st.state, RAIL_STATE_IDLE);
+    assert_true(st.position_mm == 7.0);
+    rail_clock_sleep(rail_clock_real(), 0.4);
+    assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
+    assert_true(st.position_mm == 7.0); /* the jog was not resumed */
+    assert_int_equal(rail_move_abs(r, 8.0, 10.0), RAIL_OK); /* and new commands work */
+    assert_int_equal(wait_idle(r, 3.0, &st), RAIL_OK);
+    NEAR(st.position_mm, 8.0, SIM_RES);
+    rail_close(r);
+    unlink(link);
+    grblsim_kill(b);
+}
+
 static void test_open_missing_port(void **s)
 {
     (void)s;
@@ -410,6 +446,7 @@ int main(void)
         cmocka_unit_test(test_garbled_and_dropped_replies),
         cmocka_unit_test(test_killed_controller_is_disconnected),
         cmocka_unit_test(test_slow_shear_rate),
+        cmocka_unit_test(test_reconnect_never_resumes),
         cmocka_unit_test(test_open_missing_port),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
