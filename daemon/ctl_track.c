@@ -1,11 +1,12 @@
 /* ctl_track.c: `ribbonctl track`: measure Delta Z and A in every frame of a recorded video.
  *
- *   ribbonctl track VIDEO [--calib FILE | --px-per-mm S --clamp-left X,Y --clamp-right X,Y
+ *   ribbonctl track VIDEO|PATTERN [--calib FILE | --px-per-mm S --clamp-left X,Y --clamp-right X,Y
  *                   | --clamp-spacing-mm MM --clamp-left X,Y --clamp-right X,Y]
  *                   [--camera-distance-mm D] [--shear-csv FILE] [--length-mm L]
  *                   [--polarity auto|dark|light] [--csv OUT] [--overlay OUT.mkv]
  *                   [--save-calib FILE] [--json] [--quiet]
  *
+ * PATTERN: an image sequence such as dir/frame_%04d.png (numbered from 0).
  * Reads the video through vision's frame source, tracks every frame, writes one CSV row per frame
  * (frame, t, dz, a, quality, reason: dz and a empty when the frame has no measurement, never NaN),
  * optionally an FFV1 overlay video, and prints a summary (--json: frames, tracked, mean_quality,
@@ -36,7 +37,8 @@ typedef struct track_cli {
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: ribbonctl track VIDEO [calibration] [options]\n"
+            "usage: ribbonctl track VIDEO|IMAGE_PATTERN [calibration] [options]\n"
+            "  IMAGE_PATTERN: an image sequence such as dir/frame_%%04d.png, numbered from 0\n"
             "calibration (one of):\n"
             "  --calib FILE                         saved calibration (vision/calib.cpp format)\n"
             "  --px-per-mm S --clamp-left X,Y --clamp-right X,Y\n"
@@ -332,7 +334,8 @@ int ctl_track_main(int argc, char **argv)
     int damaged = 0;
     char failure[300] = "";
 
-    src = vis_source_open_video(c.video, &err);
+    /* A name with a printf conversion is an image sequence ("dir/frame_%04d.png", from 0). */
+    src = strchr(c.video, '%') ? vis_source_open_images(c.video, 0, &err) : vis_source_open_video(c.video, &err);
     if (!src) {
         snprintf(failure, sizeof failure, "%s", err.message);
         rc = 1;

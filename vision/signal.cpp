@@ -75,12 +75,4 @@ void ridge_signal(const cv::Mat &grey, bool dark, int r, cv::Rect roi, cv::Mat &
     work.convertTo(sig(big), CV_32F);
 }
 
-void raw_signal(const cv::Mat &grey, bool dark, cv::Rect roi, cv::Mat &sig)
-{
-    if (sig.size() != grey.size() || sig.type() != CV_32F)
-        sig.create(grey.rows, grey.cols, CV_32F);
-    roi &= cv::Rect(0, 0, grey.cols, grey.rows);
-    grey(roi).convertTo(sig(roi), CV_32F, dark ? -1.0 : 1.0, dark ? 255.0 : 0.0);
-}
-
 }  // namespace vis

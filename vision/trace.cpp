@@ -52,6 +52,8 @@ std::vector<Pt> smooth(const std::vector<Pt> &c, int h)
     return out;
 }
 
+// Bilinear sample of a CV_8U or CV_32F image at (x, y), 0 outside.
+template <typename T>
 static inline float bilinear(const cv::Mat &m, double x, double y)
 {
     if (!(x >= 0 && y >= 0 && x <= m.cols - 1 && y <= m.rows - 1))
@@ -59,18 +61,20 @@ static inline float bilinear(const cv::Mat &m, double x, double y)
     const int x0 = std::min((int)x, m.cols - 2 < 0 ? 0 : m.cols - 2);
     const int y0 = std::min((int)y, m.rows - 2 < 0 ? 0 : m.rows - 2);
     const float fx = (float)(x - x0), fy = (float)(y - y0);
-    const float *r0 = m.ptr<float>(y0), *r1 = m.ptr<float>(std::min(y0 + 1, m.rows - 1));
+    const T *r0 = m.ptr<T>(y0), *r1 = m.ptr<T>(std::min(y0 + 1, m.rows - 1));
     const int x1 = std::min(x0 + 1, m.cols - 1);
-    return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x1]) + fy * ((1 - fx) * r1[x0] + fx * r1[x1]);
+    return (1 - fy) * ((1 - fx) * (float)r0[x0] + fx * (float)r0[x1]) +
+           fy * ((1 - fx) * (float)r1[x0] + fx * (float)r1[x1]);
 }
 
-void trace_pass(const cv::Mat &sig, cv::Point origin, const std::vector<Pt> &guide, double band,
+void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, double band,
                 double margin, double min_contrast, double max_width, std::vector<TraceSample> &out)
 {
     out.clear();
     const size_t n = guide.size();
     if (n < 3)
         return;
+    const bool u8 = img.depth() == CV_8U;
     const double d = 0.5;  // profile step, px: finer steps measured no more accurate
     const int K = (int)std::floor(band / d);
     std::vector<float> prof((size_t)(2 * K + 1)), tmp((size_t)(2 * K + 1));
@@ -89,10 +93,11 @@ void trace_pass(const cv::Mat &sig, cv::Point origin, const std::vector<Pt> &gui
         if (!(tl > 0))
             continue;
         const Pt nrm(-t.y / tl, t.x / tl);
-        const Pt c = guide[i] - Pt(origin.x, origin.y);
+        const Pt c = guide[i];
         for (int k = -K; k <= K; k++) {
             const Pt q = c + (k * d) * nrm;
-            prof[(size_t)(k + K)] = bilinear(sig, q.x, q.y);
+            const float v = u8 ? bilinear<uint8_t>(img, q.x, q.y) : bilinear<float>(img, q.x, q.y);
+            prof[(size_t)(k + K)] = invert ? 255.f - v : v;
         }
         // Background level: the lower quartile (the band is at least twice the ribbon, so at least
         // half of the profile is background).

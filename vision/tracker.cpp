@@ -32,6 +32,8 @@ struct vis_tracker {
     std::vector<vis::Pt> prev;       // previous smooth centreline, pixels (empty: none)
     std::vector<vis::Pt> curve;      // last smooth centreline, pixels (for overlays)
     cv::Mat work, sig;
+    cv::Mat trace_img;               // what the tracer samples: sig, or the grey frame itself
+    bool trace_invert = false;       // sample 255 - value (grey frame, dark ribbon)
     cv::Size size;
 };
 
@@ -198,7 +200,7 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide, int
             at.reason = VIS_REASON_LOST;
             return at;
         }
-        vis::trace_pass(t->sig, cv::Point(0, 0), rs, pass == 0 ? p.band_px : band_narrow,
+        vis::trace_pass(t->trace_img, t->trace_invert, rs, pass == 0 ? p.band_px : band_narrow,
                         p.end_margin_px, p.min_contrast, p.ribbon_max_px, samples);
         size_t nv = 0;
         for (const auto &s : samples)
@@ -254,7 +256,7 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide, int
         if (!(fin.s[i] > fin.s[i - 1]))
             fin.s[i] = fin.s[i - 1] + 1e-9;
     vis::FitResult fr;
-    const int n_out = std::max(64, std::min(256, (int)(len_px / 6)));
+    const int n_out = std::max(48, std::min(128, (int)(len_px / 12)));
     if (!vis::curve_fit(fin, p.fit_window * fin.s.back(), p.end_window * fin.s.back(), n_out, fr)) {
         // No smooth curve: a gap wider than the fit window (occlusion) or too few samples.
         at.reason = occluded(samples) ? VIS_REASON_OCCLUDED : VIS_REASON_LOST;
@@ -359,16 +361,16 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
         Attempt best;
         bool have = false;
         if (!t->prev.empty()) {
-            cv::Rect box = cv::boundingRect(std::vector<cv::Point2f>(t->prev.begin(), t->prev.end()));
-            box |= cv::Rect((int)g.right.x, (int)g.right.y, 1, 1);
-            const int pad = (int)std::ceil(t->p.band_px) + 3;
-            box = cv::Rect(box.x - pad, box.y - pad, box.width + 2 * pad, box.height + 2 * pad) & full;
-            vis::raw_signal(grey, dark, box, t->sig);
+            // Following: trace the grey levels themselves (each profile has its own background).
+            t->trace_img = grey;
+            t->trace_invert = dark;
             best = track_from(t, g, t->prev, 2);  // the previous curve is already close: two passes
             have = true;
         }
         if (!have || best.reason != VIS_REASON_NONE) {
             vis::ridge_signal(grey, dark, r, full, t->work, t->sig);
+            t->trace_img = t->sig;
+            t->trace_invert = false;
             std::vector<Pt> path;
             if (vis::path_init(t->sig, g.left, g.right, path)) {
                 Attempt fresh = track_from(t, g, vis::smooth(path, 3), 3);

@@ -22,10 +22,7 @@ Exposure exposure_check(const cv::Mat &grey, double min_contrast);
 bool polarity_is_dark(const cv::Mat &grey);
 // Ridge signal in `roi` of `grey` (black-hat or top-hat with a square of side 2 r + 1), CV_32F.
 void ridge_signal(const cv::Mat &grey, bool dark, int r, cv::Rect roi, cv::Mat &work, cv::Mat &sig);
-// Raw signal in `roi`: the grey level itself, inverted for a dark ribbon (CV_32F, full size). When
-// following the previous curve the tracer's own per-profile background (its lower quartile) does
-// the background removal, so the morphological filter is skipped.
-void raw_signal(const cv::Mat &grey, bool dark, cv::Rect roi, cv::Mat &sig);
+
 
 // --- path_init.cpp
 // Cheapest 8-connected path from a to b where a step costs length / (eps + S / s_ref). Pixels of the
@@ -43,9 +40,10 @@ struct TraceSample {
 std::vector<Pt> resample(const std::vector<Pt> &guide, double step, double *len);
 // Moving-average smoothing with half-width h samples, ends kept fixed.
 std::vector<Pt> smooth(const std::vector<Pt> &c, int h);
-// One pass of the tracer: profiles along the normals of `guide` (already resampled), centroid of the
-// ridge within +-band px, skipping samples within `margin` px of either end.
-void trace_pass(const cv::Mat &sig, cv::Point origin, const std::vector<Pt> &guide, double band,
+// One pass of the tracer on `img` (the CV_32F ridge signal, or the CV_8U grey frame, inverted when
+// `invert`): profiles along the normals of `guide` (already resampled), centroid of the ridge within
+// +-band px, skipping samples within `margin` px of either end.
+void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, double band,
                 double margin, double min_contrast, double max_width, std::vector<TraceSample> &out);
 
 // --- curve_fit.cpp

@@ -4,7 +4,7 @@
  * calibration, and checks the --json summary (frames, tracked, mean_quality, snap_frame), the CSV
  * (one row per frame, no NaN) and the overlay video (readable, one frame per input frame). A
  * truncated copy of the video is tracked up to the damage (exit status 1, "damaged": true, the
- * frames before the damage in the CSV); usage errors exit with 2.
+ * frames before the damage in the CSV); usage errors exit with 2; an image sequence is tracked too.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -156,11 +156,39 @@ static void test_truncated_video_and_usage(void **state)
     assert_non_null(strstr(out, "frames 12"));
 }
 
+static void test_track_image_sequence(void **state)
+{
+    (void)state;
+    char pat[700], name[720], cmd[3000], out[4096];
+    snprintf(pat, sizeof pat, "%s/cli_%%03d.png", vt_tmpdir());
+    vis_source *src = vis_source_open_video(video, NULL);
+    assert_non_null(src);
+    vis_frame *f = vis_frame_alloc(8, 8, 1, NULL);
+    for (int i = 0; i < 4; i++) {
+        assert_int_equal(vis_source_read(src, f, NULL, NULL), VIS_OK);
+        snprintf(name, sizeof name, pat, i);
+        assert_int_equal(vis_frame_save(f, name, NULL), VIS_OK);
+    }
+    vis_frame_free(f);
+    vis_source_close(src);
+    snprintf(cmd, sizeof cmd, "'%s' track '%s' --calib '%s' --json --quiet", RIBBONCTL_PATH, pat, calib);
+    assert_int_equal(run(cmd, out, sizeof out), 0);
+    printf("%s", out);
+    json_error_t je;
+    json_t *o = json_loads(out, 0, &je);
+    assert_non_null(o);
+    assert_int_equal(json_integer_value(json_object_get(o, "frames")), 4);
+    assert_int_equal(json_integer_value(json_object_get(o, "tracked")), 4);
+    assert_true(json_is_null(json_object_get(o, "snap_frame")));
+    json_decref(o);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_track_video_with_json_csv_overlay),
         cmocka_unit_test(test_truncated_video_and_usage),
+        cmocka_unit_test(test_track_image_sequence),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }
