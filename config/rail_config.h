@@ -12,7 +12,8 @@
  *   actual_pos actual_vel status alarm watchdog ident (-1 = none), op_type_abs, trigger_value,
  *   ctl_stop ctl_estop ctl_home ctl_reset, st_ready st_moving st_in_pos st_alarm st_homing
  *   st_home_end, ident_value                                     (modbus; map = preset first)
- *   start_mm, travel_mm, home_speed_mm_s                          (mock)
+ *   start_mm, travel_mm, home_speed_mm_s, stall_at_mm, comm_loss_after_s, alarm_after_s,
+ *   alarm_code                                                    (mock, faults for demos)
  * A bad value, an unknown key in a rail section or a missing section is an error naming the
  * file, the line and the key. */
 #ifndef RIBBON_CONFIG_RAIL_CONFIG_H
@@ -37,5 +38,14 @@ int rail_config_load(const char *path, const char *rail_name, rail_config *out, 
 /* Same from a string (tests); name is used in messages. */
 int rail_config_load_string(const char *text, const char *name, const char *rail_name, rail_config *out,
                             char *why, size_t why_len);
+
+/* Open the rail a config describes. shared: a GRBL link to use for a gcode rail (NULL: open one). */
+rail_err rail_config_open(const rail_config *c, rail_clock clock, grbl_link *shared, rail **out, char *why,
+                          size_t why_len);
+
+/* Load and open both rails of a rig file. Two gcode rails naming the same port share one
+ * controller link (two axes of one board). On failure nothing stays open. */
+rail_err rail_config_open_rig(const char *path, rail_clock clock, rail **compress, rail **shear, char *why,
+                              size_t why_len);
 
 #endif

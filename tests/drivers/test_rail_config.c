@@ -1,6 +1,7 @@
 /* test_rail_config.c: rail sections of rig INI files load into driver parameters; presets
  * apply before register overrides whatever the key order; bad values, unknown keys and missing
  * sections are refused naming file, line and key. */
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -8,6 +9,10 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include <stdio.h>
+#include <unistd.h>
+
+#include "grblsim_spawn.h"
 #include "rail_config.h"
 
 static void expect_fail(const char *text, const char *rail, const char *needle)
@@ -74,12 +79,65 @@ static void test_missing_file(void **s)
     assert_non_null(strstr(why, "/nonexistent/rig.ini: cannot read"));
 }
 
+static void write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+}
+
+static void test_open_rig_shared_controller(void **s)
+{
+    (void)s;
+    char pty[128], rig[128], text[1024], why[400];
+    grbl_sim_params sp = grbl_sim_params_default();
+    pid_t pid = grblsim_spawn(&sp, pty, sizeof pty);
+    snprintf(rig, sizeof rig, "/tmp/ribbon-test-rig-%d.ini", (int)getpid());
+    snprintf(text, sizeof text,
+             "[rail.compress]\ndriver = gcode\nport = %s\naxis = X\nmax_speed_mm_s = 20\npoll_hz = 20\n"
+             "[rail.shear]\ndriver = gcode\nport = %s\naxis = Y\nmax_speed_mm_s = 20\npoll_hz = 20\n",
+             pty, pty);
+    write_file(rig, text);
+    rail *c = NULL, *sh = NULL;
+    rail_err e = rail_config_open_rig(rig, rail_clock_real(), &c, &sh, why, sizeof why);
+    if (e != RAIL_OK)
+        print_error("%s\n", why);
+    assert_int_equal(e, RAIL_OK);
+    rail_status st;
+    assert_int_equal(rail_move_abs(c, 2.0, 20.0), RAIL_OK);
+    assert_int_equal(rail_wait_idle(c, 3.0, &st), RAIL_OK);
+    assert_int_equal(rail_move_abs(sh, 1.0, 20.0), RAIL_OK);
+    assert_int_equal(rail_wait_idle(sh, 3.0, &st), RAIL_OK);
+    assert_true(fabs(st.position_mm - 1.0) < 1e-3);
+    assert_int_equal(rail_status_poll(c, &st), RAIL_OK);
+    assert_true(fabs(st.position_mm - 2.0) < 1e-3);
+    rail_close(c);
+    rail_close(sh);
+    /* Both rails on the same axis of one controller is refused. */
+    snprintf(text, sizeof text,
+             "[rail.compress]\ndriver = gcode\nport = %s\naxis = X\n[rail.shear]\ndriver = gcode\n"
+             "port = %s\naxis = X\n", pty, pty);
+    write_file(rig, text);
+    assert_int_equal(rail_config_open_rig(rig, rail_clock_real(), &c, &sh, why, sizeof why), RAIL_E_INVALID);
+    assert_non_null(strstr(why, "both rails are axis X"));
+    assert_null(c);
+    /* Mock faults from the file. */
+    write_file(rig, "[rail.compress]\ndriver = mock\nstall_at_mm = 3\n[rail.shear]\ndriver = mock\n");
+    assert_int_equal(rail_config_open_rig(rig, rail_clock_real(), &c, &sh, why, sizeof why), RAIL_OK);
+    rail_close(c);
+    rail_close(sh);
+    unlink(rig);
+    grblsim_kill(pid);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_load_gcode_and_modbus),
         cmocka_unit_test(test_errors_named),
         cmocka_unit_test(test_missing_file),
+        cmocka_unit_test(test_open_rig_shared_controller),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
