@@ -71,6 +71,28 @@ extern "C" vis_status vis_calib_from_clamps(vis_calib *c, const double left_px[2
     return vis_calib_check(c, err);
 }
 
+extern "C" vis_status vis_calib_from_camera(vis_calib *c, const vis_camera *cam, const double left_m[3],
+                                            const double right_m[3], vis_error *err)
+{
+    if (!c || !cam || !left_m || !right_m)
+        return vis::fail(err, VIS_ERR_ARG, "vis_calib_from_camera: NULL argument");
+    const double l[3] = {left_m[0], 0.0, left_m[2]}, r[3] = {right_m[0], 0.0, right_m[2]};
+    vis_calib out = vis_calib_default();
+    vis_status st = vis_camera_project(cam, l, out.clamp_left_px, err);
+    if (st == VIS_OK)
+        st = vis_camera_project(cam, r, out.clamp_right_px, err);
+    if (st != VIS_OK)
+        return st;
+    out.px_per_mm = cam->focal_px / cam->distance_m / 1000.0;
+    out.camera_distance_mm = cam->distance_m * 1000.0;
+    out.principal_px[0] = 0.5 * (cam->width_px - 1);
+    out.principal_px[1] = 0.5 * (cam->height_px - 1);
+    st = vis_calib_check(&out, err);
+    if (st == VIS_OK)
+        *c = out;
+    return st;
+}
+
 extern "C" vis_status vis_calib_save(const vis_calib *c, const char *path, vis_error *err)
 {
     if (!path)

@@ -224,6 +224,11 @@ vis_status vis_calib_from_clamps(vis_calib *c, const double left_px[2], const do
  * and `square_mm` squares; the last view must show the board in the plane y = 0 (sets px_per_mm). */
 vis_status vis_calib_from_checkerboard(vis_calib *c, const vis_frame *const *views, size_t n_views,
                                        int cols, int rows, double square_mm, vis_error *err);
+/* The calibration that matches a synthetic camera (mock mode): clamp points projected at zero shear
+ * from the world points `left_m`, `right_m` (metres; their y is ignored), scale and distance from
+ * the camera. Exact for tilt 0 (the tracker's depth model has no tilt). */
+vis_status vis_calib_from_camera(vis_calib *c, const vis_camera *cam, const double left_m[3],
+                                 const double right_m[3], vis_error *err);
 vis_status vis_calib_check(const vis_calib *c, vis_error *err);
 vis_status vis_calib_save(const vis_calib *c, const char *path, vis_error *err);
 vis_status vis_calib_load(vis_calib *c, const char *path, vis_error *err);

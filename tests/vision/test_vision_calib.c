@@ -1,6 +1,6 @@
 /* test_vision_calib.c: calibration from clamp points, from checkerboards, and its file.
  *
- * Clamp points and their spacing give px_per_mm exactly; a rendered checkerboard gives the scale
+ * Clamp points and their spacing give px_per_mm exactly; a synthetic camera gives its own calibration; a rendered checkerboard gives the scale
  * it was drawn at (within 0.5%), the focal length and camera distance (within 2%, from tilted views)
  * and near-zero distortion; the file round-trips every field exactly;
  * a damaged file is refused naming the line; a tracker fed the loaded calibration measures the same
@@ -177,11 +177,30 @@ static void test_loaded_calibration_tracks_the_same(void **state)
     vis_renderer_free(r);
 }
 
+static void test_from_synthetic_camera(void **state)
+{
+    (void)state;
+    vis_camera cam = vis_camera_default();
+    const double l[3] = {0.0, 0.0, 0.0}, r[3] = {0.16, 0.01, 0.0}; /* y (shear) is ignored */
+    vis_calib c;
+    vis_error err;
+    assert_int_equal(vis_calib_from_camera(&c, &cam, l, r, &err), VIS_OK);
+    const double r0[3] = {0.16, 0.0, 0.0};
+    double uv[2];
+    assert_int_equal(vis_camera_project(&cam, r0, uv, NULL), VIS_OK);
+    assert_true(c.clamp_right_px[0] == uv[0] && c.clamp_right_px[1] == uv[1]);
+    assert_true(fabs(c.px_per_mm - cam.focal_px / cam.distance_m / 1000.0) < 1e-12);
+    assert_true(fabs(c.camera_distance_mm - 1000.0 * cam.distance_m) < 1e-9);
+    const double far[3] = {0.0, 0.0, 0.0};
+    assert_int_equal(vis_calib_from_camera(&c, &cam, l, far, &err), VIS_ERR_ARG); /* same point */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_from_clamps),
         cmocka_unit_test(test_checkerboard),
+        cmocka_unit_test(test_from_synthetic_camera),
         cmocka_unit_test(test_file_round_trip_and_errors),
         cmocka_unit_test(test_loaded_calibration_tracks_the_same),
     };

@@ -121,11 +121,6 @@ vis_render_params vt_render_params(const vt_shape *s, int w, int h)
 vis_calib vt_calib(const vis_render_params *p, const vt_shape *s)
 {
     vis_calib c = vis_calib_default();
-    const double *l = s->pos, *r = s->pos + 3 * (s->n - 1);
-    const double r0[3] = {r[0], 0.0, r[2]}; /* right clamp at zero shear */
-    vis_camera_project(&p->camera, l, c.clamp_left_px, NULL);
-    vis_camera_project(&p->camera, r0, c.clamp_right_px, NULL);
-    c.px_per_mm = p->camera.focal_px / p->camera.distance_m / 1000.0;
-    c.camera_distance_mm = p->camera.distance_m * 1000.0;
+    vis_calib_from_camera(&c, &p->camera, s->pos, s->pos + 3 * (s->n - 1), NULL);
     return c;
 }
