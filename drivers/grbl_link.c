@@ -246,7 +246,10 @@ rail_err grbl_link_open(grbl_link **out, const rail_gcode_params *g, rail_clock 
         snprintf(why, why_len, "gcode: out of memory");
         return RAIL_E_NOMEM;
     }
-    l->clock = clock;
+    /* Reply timeouts are real time whatever clock the rail runs on: a virtual clock does not
+       advance while we wait for bytes. */
+    (void)clock;
+    l->clock = rail_clock_real();
     l->reply_timeout_s = g->reply_timeout_s;
     l->refs = 1;
     rail_text_copy(l->spec, sizeof l->spec, g->port);
