@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "rail_modbus.h"
+#include "rail_serial.h"
 
 typedef struct mb {
     modbus_t *ctx;
@@ -429,7 +430,14 @@ rail_err rail_modbus_open(rail **out, const rail_params *p, const rail_modbus_pa
             snprintf(why, why_len, "modbus: parity must be N, E or O");
             return RAIL_E_INVALID;
         }
-        k->ctx = modbus_new_rtu(mp->address, mp->baud, par, 8, par == 'N' ? 2 : 1);
+        /* The line may be named like a G-code port: a path or usb:VID:PID[:SERIAL]. */
+        char dev[256];
+        rail_err re = rail_serial_resolve(mp->address, dev, sizeof dev, why, why_len);
+        if (re != RAIL_OK) {
+            free(k);
+            return re;
+        }
+        k->ctx = modbus_new_rtu(dev, mp->baud, par, 8, par == 'N' ? 2 : 1);
     } else {
         char host[128];
         int port = 0;

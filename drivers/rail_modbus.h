@@ -55,7 +55,7 @@ rail_err rail_modbus_preset(const char *name, rail_modbus_map *out);
 rail_err rail_modbus_map_check(const rail_modbus_map *m, char *why, size_t why_len);
 
 typedef struct rail_modbus_params {
-    char address[160];        /* TCP "HOST:PORT", or the serial device of an RTU line */
+    char address[160];        /* TCP "HOST:PORT"; RTU: device path or usb:VID:PID[:SERIAL] */
     bool rtu;                 /* RTU on a serial line instead of TCP */
     int baud;                 /* baud (RTU) */
     char parity;              /* 'N', 'E' or 'O' (RTU) */

@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
+#include <unistd.h>
 #include <cmocka.h>
 
 #include "grblsim_spawn.h"
@@ -57,6 +58,32 @@ static void test_mock_status_json(void **s)
     json_decref(o);
     assert_int_equal(run("rail --driver mock move-abs 4 --speed 8", out, sizeof out), 0);
     assert_non_null(strstr(out, "idle at 4.0000 mm"));
+}
+
+static void test_config_rail(void **s)
+{
+    (void)s;
+    char rig[128], out[4096], args[512];
+    snprintf(rig, sizeof rig, "/tmp/ribbon-test-ctl-%d.ini", (int)getpid());
+    FILE *f = fopen(rig, "w");
+    assert_non_null(f);
+    fputs("[rail.compress]\ndriver = mock\nstart_mm = 12\nsoft_min_mm = 10\nsoft_max_mm = 40\n"
+          "min_gap_mm = 20\ngap_at_zero_mm = 50\ngap_per_mm = -1\n",
+          f);
+    fclose(f);
+    snprintf(args, sizeof args, "rail --config %s --rail compress --json status", rig);
+    assert_int_equal(run(args, out, sizeof out), 0);
+    json_t *o = parse_json_line(out);
+    assert_string_equal(json_string_value(json_object_get(o, "rail")), "compress");
+    assert_true(json_real_value(json_object_get(o, "position_mm")) == 12.0);
+    json_decref(o);
+    snprintf(args, sizeof args, "rail --config %s --rail compress move-abs 35", rig);
+    assert_int_equal(run(args, out, sizeof out), 1); /* gap 15 mm < 20 mm */
+    assert_non_null(strstr(out, "minimum"));
+    snprintf(args, sizeof args, "rail --config %s --rail shear status", rig);
+    assert_int_equal(run(args, out, sizeof out), 1);
+    assert_non_null(strstr(out, "no section [rail.shear]"));
+    unlink(rig);
 }
 
 static void test_refusals_and_usage(void **s)
@@ -117,6 +144,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_mock_status_json),
+        cmocka_unit_test(test_config_rail),
         cmocka_unit_test(test_refusals_and_usage),
         cmocka_unit_test(test_gcode_and_modbus),
     };
