@@ -105,14 +105,16 @@ bool local_eval(const FitInput &in, double s0, double hw, int max_deg, Pt &pos, 
 
 }  // namespace
 
-bool curve_fit(const FitInput &in, double hw, double he, int n_out, FitResult &out)
+bool curve_fit(const FitInput &in, double hw, double he, int n_out, FitResult &out, FitScratch &ws)
 {
     const size_t n = in.xz.size();
     if (n < 4 || in.s.size() != n || n_out < 8 || !(hw > 0))
         return false;
     const double L = in.s.back();
     out.curve.resize((size_t)n_out);
-    std::vector<double> cum((size_t)n_out, 0.0), speed((size_t)n_out);
+    std::vector<double> &cum = ws.cum, &speed = ws.speed;
+    cum.assign((size_t)n_out, 0.0);
+    speed.resize((size_t)n_out);
     const double h = L / (n_out - 1);
     Pt der;
     for (int j = 0; j < n_out; j++) {
@@ -147,7 +149,8 @@ bool curve_fit(const FitInput &in, double hw, double he, int n_out, FitResult &o
     out.height = (c.x * r.y - c.y * r.x) / cl;
     // Residual: the median distance of the samples from the fit (robust: a sharp crease, which the
     // smooth fit rounds off, touches only a few samples and must not lower the quality).
-    std::vector<double> res;
+    std::vector<double> &res = ws.res;
+    res.clear();
     const size_t stride = std::max<size_t>(1, n / 64);  // 64 samples are plenty for a median
     res.reserve(n / stride + 1);
     for (size_t i = 0; i < n; i += stride) {

@@ -16,16 +16,17 @@
 
 namespace vis {
 
-std::vector<Pt> resample(const std::vector<Pt> &g, double step, double *len)
+void resample(const std::vector<Pt> &g, double step, double *len, std::vector<double> &cum,
+              std::vector<Pt> &out)
 {
-    std::vector<double> cum(g.size(), 0.0);
+    cum.assign(g.size(), 0.0);
     for (size_t i = 1; i < g.size(); i++)
         cum[i] = cum[i - 1] + cv::norm(g[i] - g[i - 1]);
     const double L = cum.back();
     if (len)
         *len = L;
     const size_t m = std::max<size_t>(2, (size_t)std::ceil(L / step) + 1);
-    std::vector<Pt> out(m);
+    out.resize(m);
     size_t j = 0;
     for (size_t i = 0; i < m; i++) {
         const double s = L * (double)i / (double)(m - 1);
@@ -35,13 +36,12 @@ std::vector<Pt> resample(const std::vector<Pt> &g, double step, double *len)
         const double w = d > 0 ? std::min(1.0, std::max(0.0, (s - cum[j]) / d)) : 0.0;
         out[i] = g[j] + w * (g[j + 1] - g[j]);
     }
-    return out;
 }
 
-std::vector<Pt> smooth(const std::vector<Pt> &c, int h)
+void smooth(const std::vector<Pt> &c, int h, std::vector<Pt> &out)
 {
     const int n = (int)c.size();
-    std::vector<Pt> out(c);
+    out.assign(c.begin(), c.end());
     for (int i = 1; i + 1 < n; i++) {
         const int k = std::min(h, std::min(i, n - 1 - i));  // shrink the window near the ends
         Pt acc(0, 0);
@@ -49,7 +49,6 @@ std::vector<Pt> smooth(const std::vector<Pt> &c, int h)
             acc += c[(size_t)j];
         out[(size_t)i] = acc * (1.0 / (2 * k + 1));
     }
-    return out;
 }
 
 // Bilinear sample of a CV_8U or CV_32F image at (x, y), 0 outside.
@@ -68,7 +67,8 @@ static inline float bilinear(const cv::Mat &m, double x, double y)
 }
 
 void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, double band,
-                double margin, double min_contrast, double max_width, std::vector<TraceSample> &out)
+                double margin, double min_contrast, double max_width, std::vector<TraceSample> &out,
+                std::vector<float> &prof, std::vector<float> &tmp)
 {
     out.clear();
     const size_t n = guide.size();
@@ -77,7 +77,8 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
     const bool u8 = img.depth() == CV_8U;
     const double d = 0.5;  // profile step, px: finer steps measured no more accurate
     const int K = (int)std::floor(band / d);
-    std::vector<float> prof((size_t)(2 * K + 1)), tmp((size_t)(2 * K + 1));
+    prof.resize((size_t)(2 * K + 1));
+    tmp.resize(prof.size());
     double s = 0;
     for (size_t i = 1; i < n; i++)
         s += cv::norm(guide[i] - guide[i - 1]);
@@ -101,7 +102,7 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
         }
         // Background level: the lower quartile (the band is at least twice the ribbon, so at least
         // half of the profile is background).
-        tmp = prof;
+        std::copy(prof.begin(), prof.end(), tmp.begin());
         const size_t q = tmp.size() / 4;
         std::nth_element(tmp.begin(), tmp.begin() + (long)q, tmp.end());
         const double base = tmp[q];

@@ -25,6 +25,16 @@
 
 #include <algorithm>
 
+namespace {
+// One way of measuring a frame (following the previous curve, or a fresh acquisition).
+struct Attempt {
+    vis_reason reason = VIS_REASON_LOST;
+    double quality = 0;
+    vis_measure m{};
+    std::vector<vis::Pt> curve_px;  // smooth centreline, pixels
+};
+}  // namespace
+
 struct vis_tracker {
     vis_track_params p;
     vis_calib c;
@@ -32,6 +42,11 @@ struct vis_tracker {
     std::vector<vis::Pt> prev;       // previous smooth centreline, pixels (empty: none)
     std::vector<vis::Pt> curve;      // last smooth centreline, pixels (for overlays)
     cv::Mat work, sig;
+    vis::Workspace ws;               // per-frame buffers, reused
+    Attempt att[2];                  // following, fresh acquisition
+    std::vector<vis::Pt> path;       // geodesic path scratch
+    std::vector<cv::Point3d> obj3;   // redistortion scratch
+    std::vector<cv::Point2d> img2;
     cv::Mat trace_img;               // what the tracer samples: sig, or the grey frame itself
     bool trace_invert = false;       // sample 255 - value (grey frame, dark ribbon)
     cv::Size size;
@@ -158,13 +173,6 @@ double depth_factor(const Geometry &g, double xi)
     return 1.0 + y / g.D;
 }
 
-struct Attempt {
-    vis_reason reason = VIS_REASON_LOST;
-    double quality = 0;
-    vis_measure m{};
-    std::vector<Pt> curve_px;
-};
-
 // Occlusion: the ribbon is seen leaving both clamps (most samples valid in the first and last tenth)
 // but a stretch longer than a fifth of the arc shows no ridge.
 bool occluded(const std::vector<vis::TraceSample> &smp)
@@ -184,31 +192,37 @@ bool occluded(const std::vector<vis::TraceSample> &smp)
     return worst > n / 5 && head * 3 >= (n / 10) * 2 && tail * 3 >= (n / 10) * 2;
 }
 
-// Steps 5 to 7 from a guide curve.
-Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide, int passes)
+// Steps 5 to 7 from a guide curve, into `at`.
+void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_in, int passes,
+                Attempt &at)
 {
-    Attempt at;
+    at.reason = VIS_REASON_LOST;
+    at.quality = 0;
+    at.m = vis_measure{};
     const vis_track_params &p = t->p;
-    std::vector<vis::TraceSample> samples;
+    vis::Workspace &ws = t->ws;
+    std::vector<vis::TraceSample> &samples = ws.samples;
+    std::vector<Pt> &guide = ws.guide;
+    guide.assign(guide_in.begin(), guide_in.end());
     const double band_narrow = std::min(p.band_px, p.ribbon_max_px + 2.0);
     double len_px = 0;
     for (int pass = 0; pass < passes; pass++) {
         guide.front() = g.left;
         guide.back() = g.right;
-        std::vector<Pt> rs = vis::resample(guide, p.step_px, &len_px);
-        if (len_px < 4 * p.end_margin_px + 8 || rs.size() < 8) {
+        vis::resample(guide, p.step_px, &len_px, ws.cum, ws.rs);
+        if (len_px < 4 * p.end_margin_px + 8 || ws.rs.size() < 8) {
             at.reason = VIS_REASON_LOST;
-            return at;
+            return;
         }
-        vis::trace_pass(t->trace_img, t->trace_invert, rs, pass == 0 ? p.band_px : band_narrow,
-                        p.end_margin_px, p.min_contrast, p.ribbon_max_px, samples);
+        vis::trace_pass(t->trace_img, t->trace_invert, ws.rs, pass == 0 ? p.band_px : band_narrow,
+                        p.end_margin_px, p.min_contrast, p.ribbon_max_px, samples, ws.prof, ws.prof_tmp);
         size_t nv = 0;
         for (const auto &s : samples)
             nv += s.valid;
         if (samples.size() < 8 || nv < samples.size() / 2) {
             at.reason = occluded(samples) ? VIS_REASON_OCCLUDED : VIS_REASON_LOST;
             at.quality = samples.empty() ? 0 : (double)nv / samples.size();
-            return at;
+            return;
         }
         // Next guide: the clamp points and the valid samples, lightly smoothed.
         guide.clear();
@@ -217,8 +231,10 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide, int
             if (s.valid)
                 guide.push_back(s.p);
         guide.push_back(g.right);
-        if (pass + 1 < passes)
-            guide = vis::smooth(guide, 2);
+        if (pass + 1 < passes) {
+            vis::smooth(guide, 2, ws.smooth_tmp);
+            guide.swap(ws.smooth_tmp);
+        }
     }
     size_t nv = 0;
     for (const auto &s : samples)
@@ -226,8 +242,10 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide, int
     const double valid_frac = (double)nv / samples.size();
 
     // Metric points: clamp, valid samples, clamp.
-    std::vector<Pt> px;
-    std::vector<double> xi;
+    std::vector<Pt> &px = ws.px, &und = ws.und;
+    std::vector<double> &xi = ws.xi;
+    px.clear();
+    xi.clear();
     px.push_back(g.left);
     xi.push_back(0);
     for (const auto &s : samples)
@@ -237,14 +255,14 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide, int
         }
     px.push_back(g.right);
     xi.push_back(1);
-    std::vector<Pt> und = px;
+    und.assign(px.begin(), px.end());
     if (t->c.has_intrinsics) {
         cv::Mat K(3, 3, CV_64F, t->c.camera_matrix), dist(1, 5, CV_64F, t->c.dist);
-        std::vector<cv::Point2d> in(px.begin() + 1, px.end() - 1), outp;
-        cv::undistortPoints(in, outp, K, dist, cv::noArray(), K);
-        std::copy(outp.begin(), outp.end(), und.begin() + 1);
+        ws.ud_in.assign(px.begin() + 1, px.end() - 1);
+        cv::undistortPoints(ws.ud_in, ws.ud_out, K, dist, cv::noArray(), K);
+        std::copy(ws.ud_out.begin(), ws.ud_out.end(), und.begin() + 1);
     }
-    vis::FitInput fin;
+    vis::FitInput &fin = ws.fin;
     fin.xz.resize(und.size());
     fin.s.resize(und.size());
     for (size_t i = 0; i < und.size(); i++) {
@@ -255,12 +273,12 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide, int
     for (size_t i = 1; i < fin.s.size(); i++)  // strictly increasing parameter
         if (!(fin.s[i] > fin.s[i - 1]))
             fin.s[i] = fin.s[i - 1] + 1e-9;
-    vis::FitResult fr;
+    vis::FitResult &fr = ws.fr;
     const int n_out = std::max(48, std::min(128, (int)(len_px / 12)));
-    if (!vis::curve_fit(fin, p.fit_window * fin.s.back(), p.end_window * fin.s.back(), n_out, fr)) {
+    if (!vis::curve_fit(fin, p.fit_window * fin.s.back(), p.end_window * fin.s.back(), n_out, fr, ws.fit)) {
         // No smooth curve: a gap wider than the fit window (occlusion) or too few samples.
         at.reason = occluded(samples) ? VIS_REASON_OCCLUDED : VIS_REASON_LOST;
-        return at;
+        return;
     }
     const double length = p.length_mm > 0 ? p.length_mm : fr.length;
     const double resid_px = fr.residual * g.ppmm;
@@ -284,14 +302,14 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide, int
     if (t->c.has_intrinsics) {
         // The stored curve guides the next frame in raw image coordinates: redistort.
         cv::Mat K(3, 3, CV_64F, t->c.camera_matrix), dist(1, 5, CV_64F, t->c.dist);
-        std::vector<cv::Point3d> obj(at.curve_px.size());
+        std::vector<cv::Point3d> &obj = t->obj3;
+        obj.resize(at.curve_px.size());
         const double fx = t->c.camera_matrix[0], fy = t->c.camera_matrix[4];
         for (size_t j = 0; j < obj.size(); j++)
             obj[j] = cv::Point3d((at.curve_px[j].x - t->c.camera_matrix[2]) / fx,
                                  (at.curve_px[j].y - t->c.camera_matrix[5]) / fy, 1.0);
-        std::vector<cv::Point2d> img;
-        cv::projectPoints(obj, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, dist, img);
-        at.curve_px.assign(img.begin(), img.end());
+        cv::projectPoints(obj, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, dist, t->img2);
+        at.curve_px.assign(t->img2.begin(), t->img2.end());
     }
     at.reason = VIS_REASON_NONE;
     // A curve much longer or shorter than the ribbon is not the ribbon (a path through clutter).
@@ -302,7 +320,6 @@ Attempt track_from(vis_tracker *t, const Geometry &g, std::vector<Pt> guide, int
         at.reason = VIS_REASON_OCCLUDED;
     else if (at.quality < p.min_quality)
         at.reason = VIS_REASON_LOST;
-    return at;
 }
 
 }  // namespace
@@ -358,37 +375,43 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
         const bool dark = t->polarity ? t->polarity == 1 : vis::polarity_is_dark(grey);
         const int r = (int)std::ceil(t->p.ribbon_max_px);
         const cv::Rect full(0, 0, grey.cols, grey.rows);
-        Attempt best;
-        bool have = false;
+        Attempt *best = nullptr;
         if (!t->prev.empty()) {
             // Following: trace the grey levels themselves (each profile has its own background).
             t->trace_img = grey;
             t->trace_invert = dark;
-            best = track_from(t, g, t->prev, 2);  // the previous curve is already close: two passes
-            have = true;
+            track_from(t, g, t->prev, 2, t->att[0]);  // the previous curve is close: two passes
+            best = &t->att[0];
         }
-        if (!have || best.reason != VIS_REASON_NONE) {
+        if (!best || best->reason != VIS_REASON_NONE) {
             vis::ridge_signal(grey, dark, r, full, t->work, t->sig);
             t->trace_img = t->sig;
             t->trace_invert = false;
-            std::vector<Pt> path;
-            if (vis::path_init(t->sig, g.left, g.right, path)) {
-                Attempt fresh = track_from(t, g, vis::smooth(path, 3), 3);
-                if (!have || fresh.reason == VIS_REASON_NONE ||
-                    (best.reason != VIS_REASON_NONE && fresh.quality > best.quality))
-                    best = fresh;
+            if (vis::path_init(t->sig, g.left, g.right, t->path)) {
+                vis::smooth(t->path, 3, t->ws.smooth_tmp);
+                Attempt &fresh = t->att[1];
+                track_from(t, g, t->ws.smooth_tmp, 3, fresh);
+                if (!best || fresh.reason == VIS_REASON_NONE ||
+                    (best->reason != VIS_REASON_NONE && fresh.quality > best->quality))
+                    best = &fresh;
             }
         }
-        if (best.reason == VIS_REASON_NONE) {
-            *out = best.m;
+        if (!best) {
+            measure_clear(out, VIS_REASON_LOST);
+            t->curve.clear();
+            vis::ok(err);
+            return VIS_OK;
+        }
+        if (best->reason == VIS_REASON_NONE) {
+            *out = best->m;
             out->reason = VIS_REASON_NONE;
-            t->prev = best.curve_px;
-            t->curve = best.curve_px;
+            t->prev = best->curve_px;
+            t->curve = best->curve_px;
             if (t->polarity == 0)
                 t->polarity = dark ? 1 : 2;  // keep the polarity once the ribbon is found
         } else {
-            measure_clear(out, best.reason);
-            out->quality = best.quality;
+            measure_clear(out, best->reason);
+            out->quality = best->quality;
             t->curve.clear();
         }
         vis::ok(err);

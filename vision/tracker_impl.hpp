@@ -36,15 +36,18 @@ struct TraceSample {
     double peak;   // ridge height above the profile's median, grey levels
     bool valid;    // a clear ridge was found
 };
-// Resample `guide` (from left clamp to right clamp) every `step` px; polyline length in *len.
-std::vector<Pt> resample(const std::vector<Pt> &guide, double step, double *len);
-// Moving-average smoothing with half-width h samples, ends kept fixed.
-std::vector<Pt> smooth(const std::vector<Pt> &c, int h);
+// Resample `guide` (from left clamp to right clamp) every `step` px into `out`; polyline length in
+// *len; `cum` is scratch.
+void resample(const std::vector<Pt> &guide, double step, double *len, std::vector<double> &cum,
+              std::vector<Pt> &out);
+// Moving-average smoothing with half-width h samples into `out` (not `c`), ends kept fixed.
+void smooth(const std::vector<Pt> &c, int h, std::vector<Pt> &out);
 // One pass of the tracer on `img` (the CV_32F ridge signal, or the CV_8U grey frame, inverted when
 // `invert`): profiles along the normals of `guide` (already resampled), centroid of the ridge within
 // +-band px, skipping samples within `margin` px of either end.
 void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, double band,
-                double margin, double min_contrast, double max_width, std::vector<TraceSample> &out);
+                double margin, double min_contrast, double max_width, std::vector<TraceSample> &out,
+                std::vector<float> &prof, std::vector<float> &tmp);
 
 // --- curve_fit.cpp
 struct FitInput {
@@ -59,9 +62,25 @@ struct FitResult {
     double residual;         // median distance of the points from the fit, mm
     std::vector<Pt> curve;   // smooth curve samples, mm
 };
+struct FitScratch {
+    std::vector<double> cum, speed, res;
+};
 // Local polynomial regression: half-window `hw` (mm) around interior points; the end tangents from
 // one-sided windows of length `he` (mm).
-bool curve_fit(const FitInput &in, double hw, double he, int n_out, FitResult &out);
+bool curve_fit(const FitInput &in, double hw, double he, int n_out, FitResult &out, FitScratch &ws);
+
+// Every buffer a frame needs, kept by the tracker so that, once sizes settle, tracking a frame
+// allocates nothing (the geodesic search of a fresh acquisition excepted).
+struct Workspace {
+    std::vector<Pt> guide, rs, smooth_tmp, px, und;
+    std::vector<double> cum, xi;
+    std::vector<TraceSample> samples;
+    std::vector<float> prof, prof_tmp;
+    std::vector<cv::Point2d> ud_in, ud_out;
+    FitInput fin;
+    FitResult fr;
+    FitScratch fit;
+};
 
 }  // namespace vis
 
