@@ -326,21 +326,21 @@ int ctl_rail_main(int argc, char **argv)
     if (u)
         return u;
     char why[512] = "";
+    rail_config cfg; /* outlives the block below: c.driver points into it */
     if (c.config) {
         if (!c.rail_name) {
             fprintf(stderr, "ribbonctl rail: --config needs --rail compress|shear\n");
             return 2;
         }
-        rail_config rc;
-        if (rail_config_load(c.config, c.rail_name, &rc, why, sizeof why) != 0) {
+        if (rail_config_load(c.config, c.rail_name, &cfg, why, sizeof why) != 0) {
             fprintf(stderr, "ribbonctl rail: %s\n", why);
             return 1;
         }
-        c.driver = rc.driver;
-        c.p = rc.params;
-        c.g = rc.gcode;
-        c.m = rc.modbus;
-        c.k = rc.mock;
+        c.driver = cfg.driver;
+        c.p = cfg.params;
+        c.g = cfg.gcode;
+        c.m = cfg.modbus;
+        c.k = cfg.mock;
     } else {
         /* Name the rail after its source so every reason says which rail it is about. */
         if (c.rail_name)
