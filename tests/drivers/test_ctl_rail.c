@@ -127,7 +127,7 @@ static void test_gcode_and_modbus(void **s)
     assert_non_null(strstr(out, "idle at"));
     grblsim_kill(g);
 
-    int port;
+    int port = 0;
     pid_t m = mbsim_spawn(mb_sim_params_default(), &port);
     snprintf(args, sizeof args, "rail --driver modbus --address 127.0.0.1:%d --json move-rel 2.5 --speed 10", port);
     assert_int_equal(run(args, out, sizeof out), 0);
