@@ -2,7 +2,7 @@
  *
  *   ribbonctl track VIDEO|PATTERN [--calib FILE | --px-per-mm S --clamp-left X,Y --clamp-right X,Y
  *                   | --clamp-spacing-mm MM --clamp-left X,Y --clamp-right X,Y]
- *                   [--camera-distance-mm D] [--shear-csv FILE] [--length-mm L]
+ *                   [--camera-distance-mm D] [--camera-tilt-rad T] [--shear-csv FILE] [--length-mm L]
  *                   [--polarity auto|dark|light] [--csv OUT] [--overlay OUT.mkv]
  *                   [--save-calib FILE] [--json] [--quiet]
  *
@@ -28,7 +28,8 @@
 
 typedef struct track_cli {
     const char *video, *calib_file, *csv, *overlay, *save_calib, *shear_csv;
-    double px_per_mm, spacing_mm, distance_mm;
+    double px_per_mm, spacing_mm, distance_mm, tilt_rad;
+    int have_tilt;
     double left[2], right[2];
     int have_left, have_right, json, quiet;
     vis_track_params tp;
@@ -46,6 +47,7 @@ static void usage(FILE *f)
             "  clamp points are pixel coordinates of the ribbon's centre at each clamp, zero shear\n"
             "options:\n"
             "  --camera-distance-mm D   camera to ribbon plane, enables the depth correction\n"
+            "  --camera-tilt-rad T      camera pitch, positive looking down (with a distance)\n"
             "  --shear-csv FILE         shear rail position per frame: lines frame,shear_mm\n"
             "  --length-mm L            free length l for Delta Z = dz / l (default: measured)\n"
             "  --polarity auto|dark|light\n"
@@ -125,6 +127,10 @@ static int parse_args(int argc, char **argv, track_cli *c)
         } else if (!strcmp(a, "--camera-distance-mm")) {
             if (parse_num(a, v, &c->distance_mm) || c->distance_mm <= 0)
                 return -1;
+        } else if (!strcmp(a, "--camera-tilt-rad")) {
+            if (parse_num(a, v, &c->tilt_rad) || fabs(c->tilt_rad) > 1.2)
+                return -1;
+            c->have_tilt = 1;
         } else if (!strcmp(a, "--length-mm")) {
             if (parse_num(a, v, &c->tp.length_mm) || c->tp.length_mm <= 0)
                 return -1;
@@ -307,6 +313,8 @@ int ctl_track_main(int argc, char **argv)
     }
     if (c.distance_mm > 0)
         cal.camera_distance_mm = c.distance_mm;
+    if (c.have_tilt)
+        cal.camera_tilt_rad = c.tilt_rad;
     if (vis_calib_check(&cal, &err) != VIS_OK) {
         fprintf(stderr, "ribbonctl track: %s\n", err.message);
         return 2;

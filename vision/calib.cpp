@@ -4,6 +4,7 @@
 // or spaces, written with 17 significant digits so a save/load round-trip is exact. A bad line is
 // reported with its number and key. Unknown keys are refused (a typo must not silently fall back
 // to a default). Keys: px_per_mm, clamp_left, clamp_right, principal, camera_distance_mm,
+// camera_tilt_rad,
 // camera_matrix (9 values, row-major), dist (5 values); the last two appear together or not at all.
 #include "vis_internal.hpp"
 
@@ -38,6 +39,8 @@ extern "C" vis_status vis_calib_check(const vis_calib *c, vis_error *err)
         return vis::fail(err, VIS_ERR_ARG, "calibration: clamp points closer than 4 px (unset?)");
     if (!vis::finite(c->camera_distance_mm) || c->camera_distance_mm < 0)
         return vis::fail(err, VIS_ERR_ARG, "calibration: camera_distance_mm must be >= 0");
+    if (!vis::finite(c->camera_tilt_rad) || std::fabs(c->camera_tilt_rad) > 1.2)
+        return vis::fail(err, VIS_ERR_ARG, "calibration: camera_tilt_rad must be within +-1.2");
     if (c->has_intrinsics) {
         for (int i = 0; i < 9; i++)
             if (!vis::finite(c->camera_matrix[i]))
@@ -85,6 +88,7 @@ extern "C" vis_status vis_calib_from_camera(vis_calib *c, const vis_camera *cam,
         return st;
     out.px_per_mm = cam->focal_px / cam->distance_m / 1000.0;
     out.camera_distance_mm = cam->distance_m * 1000.0;
+    out.camera_tilt_rad = cam->tilt_rad;
     out.principal_px[0] = 0.5 * (cam->width_px - 1);
     out.principal_px[1] = 0.5 * (cam->height_px - 1);
     st = vis_calib_check(&out, err);
@@ -109,6 +113,7 @@ extern "C" vis_status vis_calib_save(const vis_calib *c, const char *path, vis_e
     std::fprintf(f, "clamp_right = %.17g, %.17g\n", c->clamp_right_px[0], c->clamp_right_px[1]);
     std::fprintf(f, "principal = %.17g, %.17g\n", c->principal_px[0], c->principal_px[1]);
     std::fprintf(f, "camera_distance_mm = %.17g\n", c->camera_distance_mm);
+    std::fprintf(f, "camera_tilt_rad = %.17g\n", c->camera_tilt_rad);
     if (c->has_intrinsics) {
         std::fprintf(f, "camera_matrix =");
         for (int i = 0; i < 9; i++)
@@ -184,6 +189,7 @@ extern "C" vis_status vis_calib_load(vis_calib *c, const char *path, vis_error *
                     {"clamp_right", r.clamp_right_px, 2, nullptr},
                     {"principal", r.principal_px, 2, nullptr},
                     {"camera_distance_mm", &r.camera_distance_mm, 1, nullptr},
+                    {"camera_tilt_rad", &r.camera_tilt_rad, 1, nullptr},
                     {"camera_matrix", r.camera_matrix, 9, &have_k},
                     {"dist", r.dist, 5, &have_d}};
         bool known = false;

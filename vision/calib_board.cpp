@@ -2,10 +2,13 @@
 //
 // OpenCV finds the inner corners (then refines them to sub-pixel) in every view and fits the
 // pinhole model with distortion (calibrateCamera). With fewer than three views the full model is
-// not determined, so the principal point is held at the image centre, the aspect ratio at 1 and the
-// distortion at zero except k1 (one or two views still give focal length and pose). The last view
-// must show the board held in the ribbon's plane (y = 0): its undistorted corner spacing gives
-// px_per_mm and its pose gives the camera distance used by the depth correction.
+// not determined, so the aspect ratio is held at 1 and the distortion at zero except k1 (one or two
+// views still give focal length and pose); below six views the principal point stays at the image
+// centre. The last view
+// must show the board held in the ribbon's plane (y = 0): its pose gives the camera distance D (to
+// where the optical axis meets that plane) and the camera's pitch, and px_per_mm = focal / D. Views
+// at different tilts are needed for the focal length (and so D): fronto-parallel views alone fix
+// only their ratio, px_per_mm.
 #include "vis_internal.hpp"
 
 #include <opencv2/calib3d.hpp>
@@ -50,10 +53,13 @@ extern "C" vis_status vis_calib_from_checkerboard(vis_calib *c, const vis_frame 
             img.push_back(corners);
             obj.push_back(board);
         }
+        // Few views do not pin the principal point: a shift of it mimics a pitch of the camera, so
+        // it stays at the image centre (with tangential distortion off) below six views.
         int flags = 0;
+        if (n_views < 6)
+            flags |= cv::CALIB_FIX_PRINCIPAL_POINT | cv::CALIB_ZERO_TANGENT_DIST;
         if (n_views < 3)
-            flags = cv::CALIB_FIX_PRINCIPAL_POINT | cv::CALIB_FIX_ASPECT_RATIO |
-                    cv::CALIB_ZERO_TANGENT_DIST | cv::CALIB_FIX_K2 | cv::CALIB_FIX_K3;
+            flags |= cv::CALIB_FIX_ASPECT_RATIO | cv::CALIB_FIX_K2 | cv::CALIB_FIX_K3;
         cv::Mat K = cv::Mat::eye(3, 3, CV_64F), dist = cv::Mat::zeros(1, 5, CV_64F);
         K.at<double>(0, 2) = 0.5 * (size.width - 1);
         K.at<double>(1, 2) = 0.5 * (size.height - 1);
@@ -64,24 +70,21 @@ extern "C" vis_status vis_calib_from_checkerboard(vis_calib *c, const vis_frame 
         if (!std::isfinite(rms) || rms > 2.0)
             return vis::fail(err, VIS_ERR_FORMAT,
                              "checkerboard: calibration does not fit (reprojection error %.2f px)", rms);
-        // Scale in the last view, from undistorted corners.
-        std::vector<cv::Point2f> und;
-        cv::undistortPoints(img.back(), und, K, dist, cv::noArray(), K);
-        double sum = 0;
-        int cnt = 0;
-        for (int r = 0; r < rows; r++)
-            for (int q = 0; q < cols; q++) {
-                const cv::Point2f p = und[(size_t)(r * cols + q)];
-                if (q + 1 < cols) {
-                    sum += cv::norm(und[(size_t)(r * cols + q + 1)] - p);
-                    cnt++;
-                }
-                if (r + 1 < rows) {
-                    sum += cv::norm(und[(size_t)((r + 1) * cols + q)] - p);
-                    cnt++;
-                }
-            }
-        c->px_per_mm = sum / cnt / square_mm;
+        // Pose of the last view (the board in the ribbon's plane y = 0): the board normal, turned to
+        // point away from the camera, is the world's +y axis in camera coordinates, (0, -sin t, cos t)
+        // for a camera pitched down by t; the optical axis meets the plane at distance D = n.t / n_z.
+        cv::Mat R;
+        cv::Rodrigues(rvecs.back(), R);
+        cv::Vec3d n(R.at<double>(0, 2), R.at<double>(1, 2), R.at<double>(2, 2));
+        if (n[2] < 0)
+            n = -n;
+        const cv::Mat &tv = tvecs.back();
+        const double D = (n[0] * tv.at<double>(0) + n[1] * tv.at<double>(1) + n[2] * tv.at<double>(2)) / n[2];
+        if (!(D > 0) || !std::isfinite(D))
+            return vis::fail(err, VIS_ERR_FORMAT, "checkerboard: the last view's pose is not in front of the camera");
+        c->px_per_mm = K.at<double>(0, 0) / D;  // F = px_per_mm * D, the tracker's model
+        c->camera_distance_mm = D;
+        c->camera_tilt_rad = std::atan2(-n[1], n[2]);
         for (int i = 0; i < 9; i++)
             c->camera_matrix[i] = K.at<double>(i / 3, i % 3);
         for (int i = 0; i < 5; i++)
@@ -89,7 +92,6 @@ extern "C" vis_status vis_calib_from_checkerboard(vis_calib *c, const vis_frame 
         c->has_intrinsics = 1;
         c->principal_px[0] = c->camera_matrix[2];
         c->principal_px[1] = c->camera_matrix[5];
-        c->camera_distance_mm = std::fabs(tvecs.back().at<double>(2));
         vis::ok(err);
         return VIS_OK;
     })

@@ -14,8 +14,8 @@
 //      refining the centreline to sub-pixel;
 //   6. metric curve: undistortion (if the calibration has intrinsics), then depth correction: the
 //      point at arc fraction xi is assumed at depth y = shear (3 xi^2 - 2 xi^3) (clamped ends keep
-//      their tangent along x, so the shear profile is flat at both clamps), and its pixel offset from
-//      the principal point is scaled by (1 + y / D) / px_per_mm;
+//      their tangent along x, so the shear profile is flat at both clamps), and its pixel's ray is
+//      intersected with the plane at that depth, camera tilt included (view_model.cpp);
 //   7. local smooth fit, Delta Z, A, quality, reason.
 // All buffers live in the tracker and are reused from frame to frame.
 #include "tracker_impl.hpp"
@@ -156,21 +156,17 @@ namespace {
 using vis::Pt;
 
 struct Geometry {
-    Pt principal;     // pixels
-    Pt left, right;   // clamp points in the image at this frame's shear, pixels
-    double shear;     // mm
-    double D;         // mm, 0 = no depth correction
-    double ppmm;      // pixels per mm at y = 0
+    vis::ViewModel vm;  // image <-> plane model (principal point, scale, distance, tilt)
+    Pt left, right;     // clamp points in the image at this frame's shear, pixels
+    double shear;       // mm
 };
 
-// Depth magnification factor (1 + y / D) at arc fraction xi.
-double depth_factor(const Geometry &g, double xi)
+// Depth (mm, away from the camera) of the centreline at arc fraction xi: the shear profile of a
+// ribbon clamped flat at both ends, shear * (3 xi^2 - 2 xi^3).
+double depth_at(const Geometry &g, double xi)
 {
-    if (!(g.D > 0))
-        return 1.0;
     xi = std::min(1.0, std::max(0.0, xi));
-    const double y = g.shear * (3 * xi * xi - 2 * xi * xi * xi);
-    return 1.0 + y / g.D;
+    return g.shear * (3 * xi * xi - 2 * xi * xi * xi);
 }
 
 // Occlusion: the ribbon is seen leaving both clamps (most samples valid in the first and last tenth)
@@ -266,8 +262,9 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
     fin.xz.resize(und.size());
     fin.s.resize(und.size());
     for (size_t i = 0; i < und.size(); i++) {
-        const double f = depth_factor(g, xi[i]) / g.ppmm;
-        fin.xz[i] = Pt((und[i].x - g.principal.x) * f, -(und[i].y - g.principal.y) * f);
+        fin.xz[i] = vis::view_to_metric(g.vm, und[i], depth_at(g, xi[i]));
+        if (!std::isfinite(fin.xz[i].x) || !std::isfinite(fin.xz[i].y))
+            return;  // LOST: a ray that misses the ribbon's plane
         fin.s[i] = i == 0 ? 0 : fin.s[i - 1] + cv::norm(fin.xz[i] - fin.xz[i - 1]);
     }
     for (size_t i = 1; i < fin.s.size(); i++)  // strictly increasing parameter
@@ -281,7 +278,7 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
         return;
     }
     const double length = p.length_mm > 0 ? p.length_mm : fr.length;
-    const double resid_px = fr.residual * g.ppmm;
+    const double resid_px = fr.residual * g.vm.ppmm;
     at.quality = valid_frac / (1.0 + (resid_px / 0.5) * (resid_px / 0.5));
     at.m.dz = fr.height / length;
     at.m.a = fr.a;
@@ -289,10 +286,7 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
     at.m.length_mm = fr.length;
     at.m.residual_px = resid_px;
     // Back to pixels for the midpoint and the curve.
-    auto to_px = [&](Pt q, double x) {
-        const double f = g.ppmm / depth_factor(g, x);
-        return Pt(g.principal.x + q.x * f, g.principal.y - q.y * f);
-    };
+    auto to_px = [&](Pt q, double x) { return vis::view_to_image(g.vm, q, depth_at(g, x)); };
     const Pt mid = to_px(fr.mid, 0.5);
     at.m.mid_px[0] = mid.x;
     at.m.mid_px[1] = mid.y;
@@ -351,21 +345,23 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
         const vis_calib &c = t->c;
         Geometry g;
         if (c.has_intrinsics)
-            g.principal = Pt(c.camera_matrix[2], c.camera_matrix[5]);
+            g.vm.principal = Pt(c.camera_matrix[2], c.camera_matrix[5]);
         else if (c.principal_px[0] >= 0 && c.principal_px[1] >= 0)
-            g.principal = Pt(c.principal_px[0], c.principal_px[1]);
+            g.vm.principal = Pt(c.principal_px[0], c.principal_px[1]);
         else
-            g.principal = Pt(0.5 * (grey.cols - 1), 0.5 * (grey.rows - 1));
+            g.vm.principal = Pt(0.5 * (grey.cols - 1), 0.5 * (grey.rows - 1));
+        g.vm.ppmm = c.px_per_mm;
+        g.vm.D = c.camera_distance_mm;
+        g.vm.tilt = c.camera_tilt_rad;
         g.shear = shear_mm;
-        g.D = c.camera_distance_mm;
-        g.ppmm = c.px_per_mm;
-        if (g.D > 0 && !(g.D + shear_mm > 0.05 * g.D))
+        if (g.vm.D > 0 && !(g.vm.D + shear_mm > 0.05 * g.vm.D))
             return vis::fail(err, VIS_ERR_ARG, "shear %g mm puts the clamp behind the camera", shear_mm);
-        const double mag = g.D > 0 ? g.D / (g.D + shear_mm) : 1.0;
+        // The clamp points are calibrated at zero shear; the right one moves with the shear rail.
         g.left = Pt(c.clamp_left_px[0], c.clamp_left_px[1]);
-        g.right = g.principal + (Pt(c.clamp_right_px[0], c.clamp_right_px[1]) - g.principal) * mag;
+        g.right = vis::view_to_image(
+            g.vm, vis::view_to_metric(g.vm, Pt(c.clamp_right_px[0], c.clamp_right_px[1]), 0.0), shear_mm);
         auto inside = [&](Pt q) {
-            return q.x >= 0 && q.y >= 0 && q.x <= grey.cols - 1 && q.y <= grey.rows - 1;
+            return std::isfinite(q.x) && std::isfinite(q.y) && q.x >= 0 && q.y >= 0 && q.x <= grey.cols - 1 && q.y <= grey.rows - 1;
         };
         if (!inside(g.left) || !inside(g.right)) {
             measure_clear(out, VIS_REASON_CLAMP_NOT_FOUND);

@@ -49,6 +49,19 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
                 double margin, double min_contrast, double max_width, std::vector<TraceSample> &out,
                 std::vector<float> &prof, std::vector<float> &tmp);
 
+// --- view_model.cpp
+struct ViewModel {
+    Pt principal;  // principal point, pixels
+    double ppmm;   // pixels per mm at the distance D along the optical axis
+    double D;      // mm from the camera centre to where the optical axis meets y = 0; 0 = unknown
+    double tilt;   // pitch, radians, positive looks down (as vis_camera.tilt_rad)
+};
+// Pixel (undistorted) on the surface y = depth (mm, away from the camera) -> (x, z) mm relative to
+// the optical axis' point on y = 0; NaN when the ray misses.
+Pt view_to_metric(const ViewModel &m, Pt uv, double depth);
+// The inverse: (x, z) mm at depth -> pixel; NaN when behind the camera.
+Pt view_to_image(const ViewModel &m, Pt xz, double depth);
+
 // --- curve_fit.cpp
 struct FitInput {
     std::vector<Pt> xz;      // metric points (mm), z up, from left clamp to right clamp

@@ -210,7 +210,9 @@ typedef struct vis_calib {
     double clamp_left_px[2];   /* left clamp point (u, v) at zero shear, pixels */
     double clamp_right_px[2];  /* right clamp point (u, v) at zero shear, pixels */
     double principal_px[2];    /* principal point (u, v), pixels; negative = image centre */
-    double camera_distance_mm; /* camera centre to the plane y = 0, mm; 0 = no depth correction */
+    double camera_distance_mm; /* camera centre to where its optical axis meets the plane y = 0, mm;
+                                  0 = unknown: no depth correction, no tilt */
+    double camera_tilt_rad;    /* camera pitch, radians, positive looks down (as vis_camera) */
     int has_intrinsics;        /* 1 when camera_matrix and dist are valid (checkerboard) */
     double camera_matrix[9];   /* 3x3 row-major intrinsic matrix, pixels */
     double dist[5];            /* OpenCV distortion k1 k2 p1 p2 k3, dimensionless */
@@ -226,7 +228,7 @@ vis_status vis_calib_from_checkerboard(vis_calib *c, const vis_frame *const *vie
                                        int cols, int rows, double square_mm, vis_error *err);
 /* The calibration that matches a synthetic camera (mock mode): clamp points projected at zero shear
  * from the world points `left_m`, `right_m` (metres; their y is ignored), scale and distance from
- * the camera. Exact for tilt 0 (the tracker's depth model has no tilt). */
+ * the camera, tilt included. */
 vis_status vis_calib_from_camera(vis_calib *c, const vis_camera *cam, const double left_m[3],
                                  const double right_m[3], vis_error *err);
 vis_status vis_calib_check(const vis_calib *c, vis_error *err);
