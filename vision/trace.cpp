@@ -1,15 +1,17 @@
 // trace.cpp: the sub-pixel centreline tracer (cross-section centroids along the arc).
 //
 // The guide curve (the previous frame's centreline, or a fresh geodesic path) is resampled every
-// `step` px along its arc length; at each sample the ridge signal is read along the normal, +-band px,
-// every 0.5 px by bilinear interpolation (OpenCV's convention: pixel centres at integers, so no
-// half-pixel shift). The ribbon's cross-section is the peak of that profile: its centre is the
-// centroid of the part above median + 30% of the peak height, which is unbiased for the symmetric
-// blurred profile of a ribbon. Working along normals (not image columns) is what lets the tracer
-// follow overhangs and tangents beyond vertical. A sample is valid only when the peak stands out
-// from the profile's own noise (peak - lower quartile >= min_contrast and >= 5 times the RMS of the profile away from the peak) and is narrower than the
-// largest expected thickness: on a corrupted or noise-only frame the profiles fail that test and the
-// frame is reported instead of measured.
+// `step` px along its arc length; at each sample the image (the grey frame with the polarity folded
+// in, or the ridge signal) is read along the normal, +-band px, every 0.5 px by bilinear
+// interpolation (OpenCV's convention: pixel centres at integers, so no half-pixel shift). The
+// ribbon's cross-section is the peak of that profile: its centre is the centroid of the part above
+// the lower quartile (the local background) + 30% of the peak height, which is unbiased for the
+// symmetric blurred profile of a ribbon. Working along normals (not image columns) is what lets the
+// tracer follow overhangs and tangents beyond vertical. A sample is valid only when the peak stands
+// out from the profile's own noise (peak - lower quartile >= min_contrast and >= 5 times the RMS of
+// the profile away from the peak), is narrower than the largest expected thickness and lies inside
+// the band: on a corrupted or noise-only frame the profiles fail that test and the frame is reported
+// instead of measured.
 #include "tracker_impl.hpp"
 
 #include <algorithm>

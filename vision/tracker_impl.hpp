@@ -1,7 +1,8 @@
 // tracker_impl.hpp: private stages of the tracker (one file each), in pipeline order:
 //   signal.cpp     frame -> ridge signal image (background removed, polarity folded in)
 //   path_init.cpp  ridge signal -> a first pixel path between the clamps (no previous curve)
-//   trace.cpp      ridge signal + guide curve -> sub-pixel centreline samples along the arc
+//   trace.cpp      image + guide curve -> sub-pixel centreline samples along the arc
+//   view_model.cpp pixels <-> millimetres in the ribbon's plane (depth from the shear, camera pitch)
 //   curve_fit.cpp  samples -> smooth metric curve -> Delta Z, A, midpoint
 #ifndef RIBBON_VIS_TRACKER_IMPL_HPP
 #define RIBBON_VIS_TRACKER_IMPL_HPP
@@ -33,7 +34,7 @@ bool path_init(const cv::Mat &sig, Pt a, Pt b, std::vector<Pt> &path);
 struct TraceSample {
     Pt p;          // sub-pixel centre, pixels (image coordinates)
     double s;      // arc position along the guide, pixels from the left clamp
-    double peak;   // ridge height above the profile's median, grey levels
+    double peak;   // ridge height above the profile's lower quartile, grey levels
     bool valid;    // a clear ridge was found
 };
 // Resample `guide` (from left clamp to right clamp) every `step` px into `out`; polyline length in
