@@ -17,6 +17,8 @@ __attribute__((unused)) static pid_t grblsim_spawn(const grbl_sim_params *p, cha
 {
     grbl_sim *s = NULL;
     char why[256];
+    if (n)
+        path[0] = 0;
     if (grbl_sim_open(&s, p, why, sizeof why) != RAIL_OK) {
         fprintf(stderr, "grblsim: %s\n", why);
         return -1;

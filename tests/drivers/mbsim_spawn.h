@@ -16,6 +16,7 @@ __attribute__((unused)) static pid_t mbsim_spawn(mb_sim_params p, int *port)
 {
     mb_sim *s = NULL;
     char why[256];
+    *port = 0;
     snprintf(p.host, sizeof p.host, "127.0.0.1");
     p.port = 0;
     if (mb_sim_open(&s, &p, why, sizeof why) != RAIL_OK) {
@@ -39,6 +40,8 @@ __attribute__((unused)) static pid_t mbsim_spawn_rtu(mb_sim_params p, char *path
 {
     mb_sim *s = NULL;
     char why[256];
+    if (n)
+        path[0] = 0;
     p.rtu = true;
     if (mb_sim_open(&s, &p, why, sizeof why) != RAIL_OK) {
         fprintf(stderr, "mbsim: %s\n", why);
