@@ -2,8 +2,8 @@
  *
  *   ribbonctl vision-bench [--width W --height H] [--frames N] [--dir DIR]
  *
- * Renders N frames (default 200) of a ribbon arch (a cosine arch of 200 mm between clamps 160 mm
- * apart, with a slowly growing asymmetric mode) at W x H (default 1280 x 720), writes them to an
+ * Renders N frames (default 200) of a ribbon arch (a cosine arch between clamps 160 mm apart, 5 mm
+ * wide and 1 mm thick, about 5 px in the image, with a slowly growing asymmetric mode) at W x H (default 1280 x 720), writes them to an
  * FFV1 file in DIR (default TMPDIR or /tmp, removed afterwards), then times on one thread:
  *   track_fps         the tracker alone on frames held in memory,
  *   decode_track_fps  decoding the FFV1 file and tracking every frame.
@@ -81,7 +81,7 @@ int ctl_vision_bench_main(int argc, char **argv)
     snprintf(path, sizeof path, "%s/ribbon-vision-bench-%ld.mkv", dir && dir[0] ? dir : "/tmp", (long)getpid());
 
     static double pos[3 * BENCH_PTS], nrm[3 * BENCH_PTS];
-    vis_shape sh = {BENCH_PTS, pos, nrm, 0.005, 0.002};
+    vis_shape sh = {BENCH_PTS, pos, nrm, 0.005, 0.001}; /* 5 mm wide, 1 mm thick: about 5 px here */
     vis_render_params rp = vis_render_params_default();
     rp.camera.width_px = w;
     rp.camera.height_px = h;
@@ -117,7 +117,7 @@ int ctl_vision_bench_main(int argc, char **argv)
     vis_camera_project(&rp.camera, r0, cal.clamp_right_px, NULL);
     cal.px_per_mm = rp.camera.focal_px / rp.camera.distance_m / 1000.0;
     vis_track_params tp = vis_track_params_default();
-    tp.ribbon_max_px = 14.0;
+    tp.ribbon_max_px = 8.0;
     t = vis_tracker_create(&tp, &cal, &err);
     if (!t)
         goto out;
