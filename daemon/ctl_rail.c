@@ -4,7 +4,8 @@
  *   ribbonctl rail (--config F --rail compress|shear | --driver mock|gcode|modbus [--port PATH]
  *                  [--address HOST:PORT] [--axis X|Y] ...) ACTION [--json]
  *   ACTION: status | home --confirm | move-abs MM | move-rel MM | jog MM_S [--duration S] | stop
- *           | bench
+ *           | estop | reset | bench
+ * (reset clears a device alarm, e.g. GRBL's "$X" unlock; it never moves the rail.)
  *
  * Moves and homing wait until the rail is at rest (polling at the rail's rate keeps GRBL jog
  * segments flowing and the Modbus watchdog fed), then print the final status. A jog runs for
@@ -62,7 +63,8 @@ static void usage(FILE *f)
             "        --start MM                                                   (mock)\n"
             "limits: --soft-min MM --soft-max MM --max-speed MM_S --accel MM_S2 --poll-hz HZ\n"
             "        --min-gap MM --gap-at-zero MM --gap-per-mm 1|-1\n"
-            "ACTION: status | home --confirm | move-abs MM | move-rel MM | jog MM_S | stop | bench\n"
+            "ACTION: status | home --confirm | move-abs MM | move-rel MM | jog MM_S | stop | estop\n"
+            "        | reset (clear a device alarm; never moves) | bench\n"
             "options: --speed MM_S  --timeout S  --duration S (jog)  --polls N (bench)  --json\n");
 }
 
@@ -356,7 +358,8 @@ int ctl_rail_main(int argc, char **argv)
     }
     const char *A = c.action;
     int needs_value = !strcmp(A, "move-abs") || !strcmp(A, "move-rel") || !strcmp(A, "jog");
-    if (strcmp(A, "status") && strcmp(A, "home") && strcmp(A, "stop") && strcmp(A, "bench") && !needs_value) {
+    if (strcmp(A, "status") && strcmp(A, "home") && strcmp(A, "stop") && strcmp(A, "estop") &&
+        strcmp(A, "reset") && strcmp(A, "bench") && !needs_value) {
         fprintf(stderr, "ribbonctl rail: unknown action '%s'\n", A);
         usage(stderr);
         return 2;
@@ -391,6 +394,14 @@ int ctl_rail_main(int argc, char **argv)
     }
     if (!strcmp(A, "status")) {
         e = rail_status_poll(r, &st);
+    } else if (!strcmp(A, "estop")) {
+        e = rail_estop(r);
+        if (e == RAIL_OK)
+            e = rail_status_poll(r, &st);
+    } else if (!strcmp(A, "reset")) {
+        e = rail_reset(r);
+        if (e == RAIL_OK)
+            e = rail_status_poll(r, &st);
     } else if (!strcmp(A, "stop")) {
         e = rail_stop(r);
         if (e == RAIL_OK)

@@ -13,7 +13,7 @@ typedef struct ctl_cmd {
 } ctl_cmd;
 
 static const ctl_cmd commands[] = {
-    {"rail", ctl_rail_main, "drive one rail: status | home | move-abs MM | move-rel MM | jog MM_S | stop | bench"},
+    {"rail", ctl_rail_main, "drive one rail: status | home | move-abs MM | move-rel MM | jog MM_S | stop | estop | reset | bench"},
     {"ports", ctl_ports_main, "list serial ports (path, USB VID:PID, serial number)"},
 #ifdef RIBBON_HAVE_VISION
     {"track", ctl_track_main, "measure Delta Z and A in every frame of a video: CSV, overlay, --json summary"},

@@ -126,6 +126,20 @@ static void test_gcode_and_modbus(void **s)
     assert_int_equal(run(args, out, sizeof out), 0);
     assert_non_null(strstr(out, "idle at"));
     grblsim_kill(g);
+    /* A controller that starts locked (homing enabled): status says alarm, reset unlocks. */
+    gp.start_in_alarm = true;
+    g = grblsim_spawn(&gp, path, sizeof path);
+    snprintf(args, sizeof args, "rail --driver gcode --port %s --json status", path);
+    assert_int_equal(run(args, out, sizeof out), 0);
+    o = parse_json_line(out);
+    assert_string_equal(json_string_value(json_object_get(o, "state")), "alarm");
+    json_decref(o);
+    snprintf(args, sizeof args, "rail --driver gcode --port %s --json reset", path);
+    assert_int_equal(run(args, out, sizeof out), 0);
+    o = parse_json_line(out);
+    assert_string_equal(json_string_value(json_object_get(o, "state")), "idle");
+    json_decref(o);
+    grblsim_kill(g);
 
     int port = 0;
     pid_t m = mbsim_spawn(mb_sim_params_default(), &port);
