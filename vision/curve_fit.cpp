@@ -24,6 +24,9 @@ namespace {
 // asymmetric mode at the midpoint. Third degree at the ends, where the window is one-sided and short
 // (a clamped end is close to quadratic), to keep the extrapolated tangent's noise down.
 const int DEG_MID = 5;
+// Third degree for the curve samples (display, arc length) and the residual: the speed integral and
+// a median residual do not need the 5th degree, and they are most of the evaluations.
+const int DEG_CURVE = 3;
 const int DEG_END = 3;
 
 // Value and first derivative of x(s), z(s) at s0 from a local weighted cubic.
@@ -118,7 +121,7 @@ bool curve_fit(const FitInput &in, double hw, double he, int n_out, FitResult &o
     const double h = L / (n_out - 1);
     Pt der;
     for (int j = 0; j < n_out; j++) {
-        if (!local_eval(in, h * j, hw, DEG_MID, out.curve[(size_t)j], der))
+        if (!local_eval(in, h * j, hw, DEG_CURVE, out.curve[(size_t)j], der))
             return false;
         speed[(size_t)j] = cv::norm(der);
         // Arc length by the trapezoid rule on the fitted speed |r'(s)|: the parameter is nearly arc
@@ -155,7 +158,7 @@ bool curve_fit(const FitInput &in, double hw, double he, int n_out, FitResult &o
     res.reserve(n / stride + 1);
     for (size_t i = 0; i < n; i += stride) {
         Pt p, d;
-        if (local_eval(in, in.s[i], hw, DEG_MID, p, d))
+        if (local_eval(in, in.s[i], hw, DEG_CURVE, p, d))
             res.push_back(cv::norm(p - in.xz[i]));
     }
     if (!res.empty()) {
