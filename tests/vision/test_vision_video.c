@@ -3,7 +3,8 @@
  * FFV1 in .mkv must read back bit-exact (sub-pixel tracking depends on it); a truncated or
  * corrupted video is read up to the damage and the damage is reported (VIS_ERR_FORMAT), never as a
  * clean end; a file that is not a video is refused at open; image sequences end at the first
- * missing number and report an undecodable image; the synthetic source renders its callback's shapes.
+ * missing number and report an undecodable image; the synthetic source renders its callback's shapes;
+ * a camera that does not exist is an I/O error naming it.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -275,6 +276,23 @@ static void test_synthetic_source(void **state)
     vis_frame_free(f);
 }
 
+static void test_missing_camera_is_reported(void **state)
+{
+    (void)state;
+    vis_camera_settings cs = vis_camera_settings_default();
+    cs.path = "/dev/ribbon-no-such-camera";
+    cs.width_px = 640;
+    cs.height_px = 480;
+    cs.fps = 30;
+    memcpy(cs.fourcc, "MJPG", 5);
+    vis_error err;
+    assert_null(vis_source_open_camera(&cs, &err));
+    assert_int_equal(err.code, VIS_ERR_IO);
+    assert_non_null(strstr(err.message, "ribbon-no-such-camera"));
+    assert_null(vis_source_open_camera(NULL, &err));
+    assert_int_equal(err.code, VIS_ERR_ARG);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -284,6 +302,7 @@ int main(void)
         cmocka_unit_test(test_not_a_video_is_refused),
         cmocka_unit_test(test_image_sequence),
         cmocka_unit_test(test_synthetic_source),
+        cmocka_unit_test(test_missing_camera_is_reported),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
