@@ -22,16 +22,18 @@ extern "C" vis_status vis_overlay_draw(const vis_frame *in, const vis_tracker *t
             bgr = in->mat.clone();
         const int shift = 4;  // sub-pixel drawing
         const double sc = 1 << shift;
+        // Pixel -> fixed point, clamped so that no coordinate can overflow an int.
+        auto fx = [&](double v) { return (int)std::lround(std::isfinite(v) ? std::min(1e5, std::max(-1e5, v)) * sc : 0.0); };
         if (t && m->reason == VIS_REASON_NONE) {
             const size_t n = vis_tracker_curve(t, nullptr, 0);
             std::vector<double> uv(2 * n);
             vis_tracker_curve(t, uv.data(), n);
             std::vector<cv::Point> pts(n);
             for (size_t i = 0; i < n; i++)
-                pts[i] = cv::Point((int)std::lround(uv[2 * i] * sc), (int)std::lround(uv[2 * i + 1] * sc));
+                pts[i] = cv::Point(fx(uv[2 * i]), fx(uv[2 * i + 1]));
             if (n >= 2)
                 cv::polylines(bgr, pts, false, cv::Scalar(0, 200, 0), 1, cv::LINE_AA, shift);
-            cv::circle(bgr, cv::Point((int)std::lround(m->mid_px[0] * sc), (int)std::lround(m->mid_px[1] * sc)),
+            cv::circle(bgr, cv::Point(fx(m->mid_px[0]), fx(m->mid_px[1])),
                        3 << shift, cv::Scalar(0, 0, 255), 1, cv::LINE_AA, shift);
         }
         char text[160];

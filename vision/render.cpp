@@ -46,6 +46,12 @@ void fill_hull(cv::Mat &img, const std::vector<cv::Point2f> &pts, float value)
         x0 = std::min(x0, q.x); x1 = std::max(x1, q.x);
         y0 = std::min(y0, q.y); y1 = std::max(y1, q.y);
     }
+    if (!(x1 >= 0 && y1 >= 0 && x0 <= img.cols - 1 && y0 <= img.rows - 1))
+        return;  // off the image (also keeps huge coordinates away from the int conversions)
+    x0 = std::max(x0, -1.f);
+    y0 = std::max(y0, -1.f);
+    x1 = std::min(x1, (float)img.cols);
+    y1 = std::min(y1, (float)img.rows);
     const int X0 = std::max(0, (int)std::ceil(x0)), X1 = std::min(img.cols - 1, (int)std::floor(x1));
     const int Y0 = std::max(0, (int)std::ceil(y0)), Y1 = std::min(img.rows - 1, (int)std::floor(y1));
     // Orientation of the hull, so the inside test works for either winding.

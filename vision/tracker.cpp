@@ -306,6 +306,11 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
         at.curve_px.assign(t->img2.begin(), t->img2.end());
     }
     at.reason = VIS_REASON_NONE;
+    for (const Pt &q : at.curve_px)
+        if (!std::isfinite(q.x) || !std::isfinite(q.y)) {
+            at.reason = VIS_REASON_LOST;  // a point the camera model cannot place
+            return;
+        }
     // A curve much longer or shorter than the ribbon is not the ribbon (a path through clutter).
     const bool bad_length = p.length_mm > 0 && (fr.length > 1.3 * p.length_mm || fr.length < 0.3 * p.length_mm);
     if (bad_length || !std::isfinite(at.m.dz) || !std::isfinite(at.m.a))
