@@ -261,11 +261,21 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
     vis::FitInput &fin = ws.fin;
     fin.xz.resize(und.size());
     fin.s.resize(und.size());
-    for (size_t i = 0; i < und.size(); i++) {
-        fin.xz[i] = vis::view_to_metric(g.vm, und[i], depth_at(g, xi[i]));
-        if (!std::isfinite(fin.xz[i].x) || !std::isfinite(fin.xz[i].y))
-            return;  // LOST: a ray that misses the ribbon's plane
-        fin.s[i] = i == 0 ? 0 : fin.s[i - 1] + cv::norm(fin.xz[i] - fin.xz[i - 1]);
+    // Depth depends on the arc fraction, which the image distorts (the far end looks shorter): a
+    // first conversion uses the image's arc fraction, a second the metric curve's own.
+    const int rounds = g.vm.D > 0 && g.shear != 0.0 ? 2 : 1;
+    for (int round = 0; round < rounds; round++) {
+        if (round > 0)
+            for (size_t i = 0; i < und.size(); i++)
+                xi[i] = fin.s[i] / fin.s.back();
+        for (size_t i = 0; i < und.size(); i++) {
+            fin.xz[i] = vis::view_to_metric(g.vm, und[i], depth_at(g, xi[i]));
+            if (!std::isfinite(fin.xz[i].x) || !std::isfinite(fin.xz[i].y))
+                return;  // LOST: a ray that misses the ribbon's plane
+            fin.s[i] = i == 0 ? 0 : fin.s[i - 1] + cv::norm(fin.xz[i] - fin.xz[i - 1]);
+        }
+        if (!(fin.s.back() > 0))
+            return;
     }
     for (size_t i = 1; i < fin.s.size(); i++)  // strictly increasing parameter
         if (!(fin.s[i] > fin.s[i - 1]))

@@ -4,7 +4,8 @@
  * calibration, and checks the --json summary (frames, tracked, mean_quality, snap_frame), the CSV
  * (one row per frame, no NaN) and the overlay video (readable, one frame per input frame). A
  * truncated copy of the video is tracked up to the damage (exit status 1, "damaged": true, the
- * frames before the damage in the CSV); usage errors exit with 2; an image sequence is tracked too.
+ * frames before the damage in the CSV); usage errors exit with 2; an image sequence is tracked too;
+ * --shear-csv drives the depth correction (Delta Z within 0.2 px with the clamp 30 mm deeper).
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -183,12 +184,69 @@ static void test_track_image_sequence(void **state)
     json_decref(o);
 }
 
+static void test_shear_csv_depth_correction(void **state)
+{
+    (void)state;
+    /* A symmetric arch whose right clamp shears 30 mm away from a camera 400 mm off: without the
+     * depth correction the midpoint height would be off by several pixels. */
+    static vt_shape s;
+    char vid[600], truth[600], shear[600], out_csv[600], cal[600], cmd[3000], out[4096];
+    snprintf(vid, sizeof vid, "%s/shear.mkv", vt_tmpdir());
+    snprintf(truth, sizeof truth, "%s/shear_truth.csv", vt_tmpdir());
+    snprintf(shear, sizeof shear, "%s/shear_mm.csv", vt_tmpdir());
+    snprintf(out_csv, sizeof out_csv, "%s/shear_out.csv", vt_tmpdir());
+    snprintf(cal, sizeof cal, "%s/shear_calib.txt", vt_tmpdir());
+    vt_arch(&s, 301, 0.2, 0.16, 0.0, 0.0);
+    vis_render_params p = vis_render_params_default();
+    p.camera.distance_m = 0.4;
+    vis_camera_fit(&p.camera, -0.02, 0.18, -0.07, 0.07, 0.9, NULL);
+    vis_calib c;
+    assert_int_equal(vis_calib_from_camera(&c, &p.camera, s.pos, s.pos + 3 * (s.n - 1), NULL), VIS_OK);
+    assert_int_equal(vis_calib_save(&c, cal, NULL), VIS_OK);
+    vis_synth_writer *w = vis_synth_writer_open(vid, truth, &p, 25.0, NULL);
+    assert_non_null(w);
+    FILE *sf = fopen(shear, "w");
+    assert_non_null(sf);
+    fprintf(sf, "frame,shear_mm\n");
+    double dz_true[4], px_per_m = 0, len = 0;
+    for (int i = 0; i < 4; i++) {
+        vt_arch(&s, 301, 0.2, 0.16, 0.0, 0.01 * i);
+        vis_render_truth tr;
+        assert_int_equal(vis_synth_writer_add(w, &s.view, &tr, NULL), VIS_OK);
+        dz_true[i] = tr.truth.dz_cam * tr.truth.length_m;
+        px_per_m = tr.px_per_m;
+        len = tr.truth.length_m;
+        fprintf(sf, "%d,%.6f\n", i, tr.truth.shear_m * 1000.0);
+    }
+    fclose(sf);
+    assert_int_equal(vis_synth_writer_close(w, NULL), VIS_OK);
+    (void)len;
+    snprintf(cmd, sizeof cmd, "'%s' track '%s' --calib '%s' --shear-csv '%s' --length-mm 200 --csv '%s' --quiet",
+             RIBBONCTL_PATH, vid, cal, shear, out_csv);
+    assert_int_equal(run(cmd, out, sizeof out), 0);
+    FILE *f = fopen(out_csv, "r");
+    assert_non_null(f);
+    char line[512];
+    assert_non_null(fgets(line, sizeof line, f));
+    for (int i = 0; i < 4; i++) {
+        int fr;
+        double t, dz, a;
+        assert_non_null(fgets(line, sizeof line, f));
+        assert_int_equal(sscanf(line, "%d,%lf,%lf,%lf", &fr, &t, &dz, &a), 4);
+        const double e = (dz * 0.2 - dz_true[i]) * px_per_m;
+        printf("shear %d mm: Delta Z error %.3f px\n", 10 * i, e);
+        assert_true(fabs(e) < 0.2);
+    }
+    fclose(f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_track_video_with_json_csv_overlay),
         cmocka_unit_test(test_truncated_video_and_usage),
         cmocka_unit_test(test_track_image_sequence),
+        cmocka_unit_test(test_shear_csv_depth_correction),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }
