@@ -31,6 +31,7 @@ typedef struct gcode {
     double progress_pos;  /* mm, position at the last progress */
     double progress_t;    /* s */
     double pos_mm;        /* mm, last reported position of our axis */
+    double axes_mm[GRBL_MAX_AXES]; /* mm, every axis at the last report (shared controllers) */
     double last_feed;     /* mm/min */
 } gcode;
 
@@ -125,6 +126,16 @@ static rail_err gcode_poll(rail *r, void *impl, rail_status *out)
         k->progress_pos = pos;
         k->progress_t = now;
     }
+    /* On a shared controller our queued segments wait while another axis runs: that is not a
+       stall, so any other axis moving counts as progress. */
+    bool others_moved = false, ours_still = fabs(pos - k->axes_mm[k->ax]) < 1e-4;
+    for (int i = 0; i < GRBL_MAX_AXES; i++) {
+        if (i != k->ax && fabs(rep.pos[i] - k->axes_mm[i]) > 5e-4)
+            others_moved = true;
+        k->axes_mm[i] = rep.pos[i];
+    }
+    if (others_moved)
+        k->progress_t = now;
     switch (rep.state) {
     case GRBL_ALARM:
         k->active = false;
@@ -182,7 +193,9 @@ static rail_err gcode_poll(rail *r, void *impl, rail_status *out)
     }
     if (k->active) {
         bool there = fabs(pos - k->goal_mm) < 1e-3 && fabs(k->sent_to_mm - k->goal_mm) < 1e-9;
-        if (there && rep.state == GRBL_IDLE) {
+        /* Done when on the goal and at rest: the controller idle, or (another axis's moves
+           queued behind ours keep it busy) our axis unchanged since the last report. */
+        if (there && (rep.state == GRBL_IDLE || ours_still)) {
             k->active = false;
             out->state = RAIL_STATE_IDLE;
             return RAIL_OK;

@@ -123,6 +123,41 @@ static void test_sequence_one_controller(void **s)
     grblsim_kill(pid);
 }
 
+static void test_one_controller_both_axes_at_once(void **s)
+{
+    (void)s;
+    char path[128], why[300];
+    grbl_sim_params sp = grbl_sim_params_default();
+    pid_t pid = grblsim_spawn(&sp, path, sizeof path);
+    rail_gcode_params g = gparams(path, 'X');
+    grbl_link *l = NULL;
+    assert_int_equal(grbl_link_open(&l, &g, rail_clock_real(), why, sizeof why), RAIL_OK);
+    rail *x = open_axis(path, 'X', "compress", l);
+    rail *y = open_axis(path, 'Y', "shear", l);
+    grbl_link_release(l);
+    /* The controller runs the two axes' segments one after the other: neither is a stall. */
+    assert_int_equal(rail_move_abs(x, 9.0, 15.0), RAIL_OK);
+    assert_int_equal(rail_move_abs(y, 6.0, 15.0), RAIL_OK);
+    rail_status sx, sy;
+    double t0 = rail_clock_now(rail_clock_real());
+    int done = 0;
+    while (!done && rail_clock_now(rail_clock_real()) - t0 < 8.0) {
+        assert_int_equal(rail_status_get(x, &sx), RAIL_OK);
+        assert_int_equal(rail_status_get(y, &sy), RAIL_OK);
+        assert_true(sx.state == RAIL_STATE_MOVING || sx.state == RAIL_STATE_IDLE);
+        assert_true(sy.state == RAIL_STATE_MOVING || sy.state == RAIL_STATE_IDLE);
+        done = sx.state == RAIL_STATE_IDLE && sy.state == RAIL_STATE_IDLE && !sx.extrapolated &&
+               !sy.extrapolated;
+        rail_clock_sleep(rail_clock_real(), 0.01);
+    }
+    assert_true(done);
+    NEAR(sx.position_mm, 9.0, SIM_RES);
+    NEAR(sy.position_mm, 6.0, SIM_RES);
+    rail_close(x);
+    rail_close(y);
+    grblsim_kill(pid);
+}
+
 static void test_sequence_two_controllers(void **s)
 {
     (void)s;
@@ -448,6 +483,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sequence_one_controller),
+        cmocka_unit_test(test_one_controller_both_axes_at_once),
         cmocka_unit_test(test_sequence_two_controllers),
         cmocka_unit_test(test_dead_client_stops_and_no_resume),
         cmocka_unit_test(test_home_alarm_reset),
