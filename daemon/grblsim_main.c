@@ -30,6 +30,7 @@ static void usage(FILE *f)
             "  --accel MM_S2        acceleration (default 200)\n"
             "  --max-feed MM_MIN    feed clamp (default 3000)\n"
             "  --require-home       start in alarm until $H or $X\n"
+            "  --wco X[,Y[,Z]]      report work positions with this offset ($10=0 style)\n"
             "  --drop P             leave a fraction P of requests unanswered\n"
             "  --garble P           garble a fraction P of replies\n"
             "  --stall AXIS:MM      stall axis X|Y|Z at MM\n"
@@ -86,6 +87,18 @@ int main(int argc, char **argv)
                 char *save = NULL, *tok = strtok_r(buf, ",", &save);
                 for (int k = 0; tok && k < GRBL_SIM_AXES && !bad; k++, tok = strtok_r(NULL, ",", &save))
                     bad = parse_double(a, tok, 0, 1e5, &p.start_mm[k]);
+            }
+            i++;
+        } else if (!strcmp(a, "--wco")) {
+            if (!v) {
+                bad = 1;
+            } else {
+                char buf[128];
+                snprintf(buf, sizeof buf, "%s", v);
+                char *save = NULL, *tok = strtok_r(buf, ",", &save);
+                for (int k = 0; tok && k < GRBL_SIM_AXES && !bad; k++, tok = strtok_r(NULL, ",", &save))
+                    bad = parse_double(a, tok, -1e5, 1e5, &p.wco_mm[k]);
+                p.report_wpos = true;
             }
             i++;
         } else if (!strcmp(a, "--accel")) {

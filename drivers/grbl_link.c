@@ -220,6 +220,19 @@ rail_err grbl_link_status(grbl_link *l, grbl_report *rep)
             char why[200], pb[64];
             if (!grbl_status_parse(line, len, rep, why, sizeof why))
                 return lfail(l, RAIL_E_PROTOCOL, "%s: '%s'", why, printable(line, pb, sizeof pb));
+            if (rep->have_wco) {
+                memcpy(l->wco, rep->wco, sizeof l->wco);
+                l->have_wco = true;
+            }
+            if (rep->work_pos && !rep->have_wco) {
+                /* Work position without an offset in this report: use the last one seen. */
+                if (!l->have_wco)
+                    return lfail(l, RAIL_E_PROTOCOL,
+                                 "controller reports work positions (WPos) and no offset (WCO) "
+                                 "has been seen yet; set $10=1 so it reports machine positions");
+                for (int q = 0; q < GRBL_MAX_AXES; q++)
+                    rep->pos[q] += l->wco[q];
+            }
             return RAIL_OK;
         }
         if (k == GRBL_LINE_OTHER) {

@@ -21,6 +21,8 @@ struct grbl_link {
     bool home_pending;       /* "$H" sent, its "ok" not yet seen */
     int home_error;          /* error:N (>0) or -ALARM (<0) ending the homing cycle */
     int resets_seen;         /* reset banners seen (and reconnects: both end any move) */
+    double wco[GRBL_MAX_AXES]; /* mm, last work coordinate offset reported */
+    bool have_wco;
     bool lost;               /* the port failed: the next status query tries to reopen it */
     char spec[256];          /* port spec, for reopening */
     int baud;

@@ -255,12 +255,16 @@ bool grbl_status_parse(const char *line, size_t len, grbl_report *out, char *why
         /* Other fields (Ln, Pn, Ov, A) are not needed here and skipped. */
         i = b;
     }
+    out->have_wco = have_wco;
+    if (have_wco)
+        memcpy(out->wco, wco, sizeof wco);
     if (have_m) {
         out->have_pos = true;
     } else if (have_w) {
         for (int q = 0; q < GRBL_MAX_AXES; q++)
             out->pos[q] = wpos[q] + (have_wco ? wco[q] : 0.0);
         out->have_pos = true;
+        out->work_pos = true;
     } else {
         return say(why, n, "status report without MPos or WPos (length %zu)%s", len, "");
     }

@@ -6,7 +6,8 @@
  *   <Idle|MPos:10.000,0.000,0.000|FS:0,0|WCO:0.000,0.000,0.000>
  * The state comes first (Idle, Run, Hold:0|1, Jog, Alarm, Door:0-3, Check, Home, Sleep); fields
  * follow in any order; unknown fields are skipped; a report with neither MPos nor WPos is
- * refused. Every refusal names the byte offset and what was expected there. */
+ * refused. A WPos-only report is flagged (work_pos) so the caller can add a WCO remembered from
+ * an earlier report, or refuse it: GRBL sends WCO only now and then. Every refusal names the byte offset and what was expected there. */
 #ifndef RIBBON_DRIVERS_GRBL_PROTO_H
 #define RIBBON_DRIVERS_GRBL_PROTO_H
 
@@ -31,9 +32,12 @@ typedef enum grbl_state {
 typedef struct grbl_report {
     grbl_state state;
     int substate;                 /* Hold:0/1, Door:0..3; -1 if none */
-    double pos[GRBL_MAX_AXES];    /* mm, machine position (MPos, or WPos + WCO) */
+    double pos[GRBL_MAX_AXES];    /* mm, machine position: MPos, or WPos + WCO of this report */
     int n_axes;                   /* axes present in the report */
     bool have_pos;
+    bool work_pos;                /* the report had WPos only: pos is WPos (+ wco if have_wco) */
+    bool have_wco;                /* the report carried WCO (GRBL sends it every 10-30 reports) */
+    double wco[GRBL_MAX_AXES];    /* mm, work coordinate offset when have_wco */
     double feed_mm_min;           /* mm/min, current feed (FS or F field), 0 if absent */
     int buffer_blocks;            /* Bf: planner blocks available, -1 if absent */
 } grbl_report;

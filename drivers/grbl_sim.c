@@ -55,6 +55,7 @@ struct grbl_sim {
     size_t line_len;
     bool line_overflow;
     unsigned rng;
+    unsigned long reports;  /* status reports sent */
 };
 
 grbl_sim_params grbl_sim_params_default(void)
@@ -180,9 +181,19 @@ static void status_report(grbl_sim *s)
     double pos[GRBL_SIM_AXES] = {0, 0, 0};
     for (int i = 0; i < s->p.n_axes; i++)
         pos[i] = s->ax[i].pos_mm;
-    char b[200];
-    snprintf(b, sizeof b, "<%s%s|MPos:%.3f,%.3f,%.3f|Bf:%d,127|FS:%.0f,0>", st, sub, pos[0], pos[1],
-             pos[2], SIM_QUEUE - s->q_len, sqrt(v2) * 60.0);
+    char b[240];
+    if (s->p.report_wpos) {
+        const double *w = s->p.wco_mm;
+        char wco[80] = "";
+        if (s->reports % 10 == 0)
+            snprintf(wco, sizeof wco, "|WCO:%.3f,%.3f,%.3f", w[0], w[1], w[2]);
+        snprintf(b, sizeof b, "<%s%s|WPos:%.3f,%.3f,%.3f|Bf:%d,127|FS:%.0f,0%s>", st, sub, pos[0] - w[0],
+                 pos[1] - w[1], pos[2] - w[2], SIM_QUEUE - s->q_len, sqrt(v2) * 60.0, wco);
+    } else {
+        snprintf(b, sizeof b, "<%s%s|MPos:%.3f,%.3f,%.3f|Bf:%d,127|FS:%.0f,0>", st, sub, pos[0], pos[1],
+                 pos[2], SIM_QUEUE - s->q_len, sqrt(v2) * 60.0);
+    }
+    s->reports++;
     reply(s, b);
 }
 

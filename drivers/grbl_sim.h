@@ -35,6 +35,9 @@ typedef struct grbl_sim_params {
     double alarm_after_s;               /* s after start, negative = off: ALARM:alarm_code */
     int alarm_code;                     /* GRBL alarm number for the injected alarm */
     unsigned seed;                      /* fault random stream */
+    bool report_wpos;                   /* report WPos (= MPos - wco_mm) with WCO in every 10th
+                                           report, as GRBL does with $10=0 */
+    double wco_mm[GRBL_SIM_AXES];       /* mm, work coordinate offset for report_wpos */
 } grbl_sim_params;
 
 typedef struct grbl_sim grbl_sim;

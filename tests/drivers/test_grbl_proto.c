@@ -39,6 +39,10 @@ static void test_status_variants(void **s)
     assert_true(grbl_status_parse(b, strlen(b), &r, why, sizeof why));
     assert_int_equal(r.state, GRBL_JOG);
     assert_true(r.pos[0] == 11.0 && r.pos[1] == 2.0);
+    assert_true(r.work_pos && r.have_wco && r.wco[0] == 10.0);
+    const char *w = "<Idle|WPos:1.000,2.000,3.000|FS:0,0>"; /* no WCO in this one */
+    assert_true(grbl_status_parse(w, strlen(w), &r, why, sizeof why));
+    assert_true(r.work_pos && !r.have_wco && r.pos[0] == 1.0);
     const char *c = "<Door:2|MPos:0,0|FS:0,0>";
     assert_true(grbl_status_parse(c, strlen(c), &r, why, sizeof why));
     assert_int_equal(r.state, GRBL_DOOR);

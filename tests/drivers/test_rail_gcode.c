@@ -463,6 +463,28 @@ static void test_reconnect_never_resumes(void **s)
     grblsim_kill(b);
 }
 
+static void test_work_positions_with_offset(void **s)
+{
+    (void)s;
+    char path[128];
+    grbl_sim_params sp = grbl_sim_params_default();
+    sp.report_wpos = true; /* $10=0: WPos, with WCO only in every 10th report */
+    sp.wco_mm[0] = 5.0;
+    sp.start_mm[0] = 7.0;
+    pid_t pid = grblsim_spawn(&sp, path, sizeof path);
+    rail *r = open_axis(path, 'X', "compress", NULL);
+    rail_status st;
+    for (int i = 0; i < 25; i++) { /* machine position whether or not this report has a WCO */
+        assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
+        NEAR(st.position_mm, 7.0, SIM_RES);
+    }
+    assert_int_equal(rail_move_abs(r, 9.0, 10.0), RAIL_OK);
+    assert_int_equal(wait_idle(r, 3.0, &st), RAIL_OK);
+    NEAR(st.position_mm, 9.0, SIM_RES);
+    rail_close(r);
+    grblsim_kill(pid);
+}
+
 static void test_open_missing_port(void **s)
 {
     (void)s;
@@ -495,6 +517,7 @@ int main(void)
         cmocka_unit_test(test_killed_controller_is_disconnected),
         cmocka_unit_test(test_slow_shear_rate),
         cmocka_unit_test(test_reconnect_never_resumes),
+        cmocka_unit_test(test_work_positions_with_offset),
         cmocka_unit_test(test_open_missing_port),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
