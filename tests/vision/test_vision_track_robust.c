@@ -3,7 +3,8 @@
  * Black, saturated, noise-only and missing frames are reported with a reason (never measured, never
  * a crash) and the tracker recovers on the next good frame; a light ribbon on a dark background,
  * uneven lighting and background clutter are still measured within the accuracy bar; an occluded
- * ribbon is reported as occluded; clamp points outside the image are reported; invalid arguments are
+ * ribbon is reported as occluded; clamp points outside the image are reported; the overlay draws the
+ * tracked centreline; invalid arguments are
  * refused with VIS_ERR_ARG and a message at every entry point.
  */
 #include <setjmp.h>
@@ -219,6 +220,41 @@ static void test_clamps_outside_image(void **state)
     vis_frame_free(s.f);
 }
 
+static void test_overlay_draws_the_curve(void **state)
+{
+    (void)state;
+    scene s;
+    scene_make(&s, 0.3);
+    scene_draw(&s);
+    vis_error err;
+    vis_tracker *t = vis_tracker_create(&s.tp, &s.c, &err);
+    assert_non_null(t);
+    vis_measure m;
+    assert_int_equal(vis_tracker_process(t, s.f, 0.0, &m, &err), VIS_OK);
+    assert_int_equal(m.reason, VIS_REASON_NONE);
+    vis_frame *o = vis_frame_alloc(8, 8, 1, NULL);
+    assert_int_equal(vis_overlay_draw(s.f, t, &m, 3, o, &err), VIS_OK);
+    assert_int_equal(vis_frame_channels(o), 3);
+    /* Green pixels along the tracked curve, none in a plain grey frame. */
+    double uv[2 * 400];
+    const size_t n = vis_tracker_curve(t, uv, 400);
+    assert_true(n >= 16);
+    int green = 0;
+    for (size_t i = 0; i < n && i < 400; i += 4) {
+        const int x = (int)lround(uv[2 * i]), y = (int)lround(uv[2 * i + 1]);
+        const uint8_t *px = vis_frame_data(o) + (size_t)y * vis_frame_stride(o) + 3 * (size_t)x;
+        green += px[1] > px[0] + 40 && px[1] > px[2] + 40; /* BGR */
+    }
+    printf("overlay: %d of %zu curve samples green\n", green, (n + 3) / 4);
+    assert_true(green * 2 > (int)((n + 3) / 4));
+    char path[600];
+    snprintf(path, sizeof path, "%s/overlay.png", vt_tmpdir());
+    assert_int_equal(vis_frame_save(o, path, &err), VIS_OK);
+    vis_frame_free(o);
+    vis_tracker_free(t);
+    vis_frame_free(s.f);
+}
+
 static void test_invalid_arguments(void **state)
 {
     (void)state;
@@ -284,6 +320,7 @@ int main(void)
         cmocka_unit_test(test_background_clutter),
         cmocka_unit_test(test_occluded_ribbon),
         cmocka_unit_test(test_clamps_outside_image),
+        cmocka_unit_test(test_overlay_draws_the_curve),
         cmocka_unit_test(test_invalid_arguments),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
