@@ -258,14 +258,15 @@ const char *vis_reason_str(vis_reason r);
 typedef struct vis_track_params {
     double length_mm;          /* free length l used to normalise Delta Z, mm (0 = measured) */
     vis_polarity polarity;     /* which way the ribbon contrasts with the background */
-    double band_px;            /* half-width of the search band around the previous curve, pixels */
-    double ribbon_max_px;      /* largest apparent ribbon thickness, pixels (background filter size) */
-    double step_px;            /* spacing of centreline samples along the arc, pixels */
-    double end_margin_px;      /* samples closer than this to a clamp point are not traced, pixels */
-    double fit_window;         /* half-window of the interior local fits, fraction of the length */
-    double end_window;         /* one-sided window of the end-tangent fits, fraction of the length */
-    double min_contrast;       /* weakest ridge accepted, grey levels */
-    double min_quality;        /* below this quality (0..1) a frame is reported LOST */
+    double band_px;            /* half-width of the search band around the guide curve, pixels (12) */
+    double ribbon_max_px;      /* largest apparent ribbon thickness, pixels (8): thicker ridges are
+                                  refused; also sets the background filter */
+    double step_px;            /* spacing of centreline samples along the arc, pixels (1) */
+    double end_margin_px;      /* samples closer than this to a clamp point are not traced, px (3) */
+    double fit_window;         /* half-window of the interior local fits, fraction of the length (0.08) */
+    double end_window;         /* one-sided window of the end-tangent fits, fraction of length (0.06) */
+    double min_contrast;       /* weakest ridge accepted, grey levels (12) */
+    double min_quality;        /* below this quality (0..1) a frame is reported LOST (0.3) */
 } vis_track_params;
 vis_track_params vis_track_params_default(void);
 
