@@ -45,6 +45,7 @@ typedef struct rail_cli {
     double timeout_s;         /* s to wait for a move or homing; 0 = estimate */
     double duration_s;        /* s a jog runs before it is stopped */
     int bench_polls;
+    double counts_per_mm;     /* --counts-per-mm, 0 = the map's own */
     int json, confirm;
     const char *action;
     double value;
@@ -134,7 +135,7 @@ static int parse(rail_cli *c, int argc, char **argv)
             if (bad)
                 fprintf(stderr, "ribbonctl rail: unknown --map '%s' (ribbon-sim, oriental-az)\n", v ? v : "");
         } else if (OPT("--counts-per-mm")) {
-            bad = num(a, v, &c->m.map.counts_per_mm);
+            bad = num(a, v, &c->counts_per_mm); /* applied after --map, whatever the order */
         } else if (OPT("--start")) {
             bad = num(a, v, &c->k.start_mm);
         } else if (OPT("--soft-min")) {
@@ -327,6 +328,8 @@ int ctl_rail_main(int argc, char **argv)
     int u = parse(&c, argc, argv);
     if (u)
         return u;
+    if (c.counts_per_mm != 0.0)
+        c.m.map.counts_per_mm = c.counts_per_mm;
     char why[512] = "";
     rail_config cfg; /* outlives the block below: c.driver points into it */
     if (c.config) {

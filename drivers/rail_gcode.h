@@ -9,7 +9,8 @@
  * rail stops within segments_ahead segments; a jog cancel (0x85) is the decelerating stop;
  * estop is a feed hold ('!') and, once stopped, a soft reset (0x18) that empties the planner.
  * Opening a link cancels any motion the controller is still running: nothing resumes by itself.
- * Requires the controller to report machine positions ($10=1, GRBL's default). */
+ * Positions are machine positions: MPos ($10=1, GRBL's default), or WPos plus the last WCO the
+ * controller reported (a WPos report before any WCO is refused). */
 #ifndef RIBBON_DRIVERS_RAIL_GCODE_H
 #define RIBBON_DRIVERS_RAIL_GCODE_H
 

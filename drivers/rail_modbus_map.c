@@ -21,7 +21,9 @@
  * manual revision of the drive at hand (some sources list the feedback position at 0x0120),
  * and the R-OUT assignment against the drive's parameters. The AZ communication timeout is a
  * drive parameter, not mapped here: set it with the vendor's software and confirm with
- * watchdog_external. counts_per_mm depends on the mechanics and must be configured. */
+ * watchdog_external. counts_per_mm depends on the mechanics and must be configured. The
+ * operating current (0x0064) and operation data number (0x0058) are not written: the drive's
+ * values stand. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
