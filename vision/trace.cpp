@@ -121,9 +121,12 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
         }
         // Background level: the lower quartile (the band is at least twice the ribbon, so at least
         // half of the profile is background).
-        std::copy(prof.begin(), prof.end(), tmp.begin());
-        const size_t q = tmp.size() / 4;
-        std::nth_element(tmp.begin(), tmp.begin() + (long)q, tmp.end());
+        // Every second sample (1 px apart) is plenty for a quartile and halves the selection.
+        size_t nt = 0;
+        for (size_t k = 0; k < prof.size(); k += 2)
+            tmp[nt++] = prof[k];
+        const size_t q = nt / 4;
+        std::nth_element(tmp.begin(), tmp.begin() + (long)q, tmp.begin() + (long)nt);
         const double base = tmp[q];
         int kp = 0;
         for (int k = 1; k < 2 * K + 1; k++)

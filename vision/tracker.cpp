@@ -281,7 +281,7 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
         if (!(fin.s[i] > fin.s[i - 1]))
             fin.s[i] = fin.s[i - 1] + 1e-9;
     vis::FitResult &fr = ws.fr;
-    const int n_out = std::max(48, std::min(128, (int)(len_px / 12)));
+    const int n_out = std::max(48, std::min(128, (int)(len_px / 20)));
     if (!vis::curve_fit(fin, p.fit_window * fin.s.back(), p.end_window * fin.s.back(), n_out, fr, ws.fit)) {
         // No smooth curve: a gap wider than the fit window (occlusion) or too few samples.
         at.reason = occluded(samples) ? VIS_REASON_OCCLUDED : VIS_REASON_LOST;
