@@ -13,8 +13,8 @@
  * Drivers keep a dead process from leaving a rail moving: GRBL moves go out as short jog segments
  * that the front end tops up on every poll (stop polling and the rail stops within a segment);
  * Modbus drives run under the drive's communication watchdog. Opening or reconnecting a rail never
- * resumes a motion that was in progress. Stopping the other rail on a fault is the caller's job
- * (the trial runner owns both rails); rail_estop() is the tool for it.
+ * resumes a motion that was in progress. Stopping the other rail on a fault is done by
+ * rail_pair_poll() (rail_pair.h), through which the trial runner polls both rails.
  * Time comes from a rail_clock (rail_clock.h) so the mock runs on a virtual clock in tests.
  * A rail is not thread-safe: one thread (the trial runner's loop) owns both rails; GRBL rails
  * need rail_status_get() at least every 1 / poll_hz seconds while they move, or they stop. */
