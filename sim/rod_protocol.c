@@ -85,6 +85,7 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
     rod_obs ob;
     rod_observe(r, k1, &ob);
     out->dz_upper = ob.dz;
+    out->elastic_upper = rod_energy(r);
     if (!(ob.dz > 0.0)) {
         st = ROD_ERR_BRANCH_LOST;
         if (err) snprintf(err, errlen, "the route ended with Delta Z = %g, not in the upper state", ob.dz);
@@ -142,11 +143,10 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
             }
             continue;
         }
+        rod_observe(r, k1, &ob);
         if (o->adaptive && h > dt_base) {
             /* Fast mode resolves every fast motion with the base step: a long step that moved
-             * the ribbon noticeably is redone shorter. */
-            rod_observe(r, k1, &ob);
-            /* ...and so is one during which the asymmetry grew by more than 5%: the ribbon is
+             * the ribbon noticeably is redone shorter, and so is one during which the asymmetry grew by more than 5%: the ribbon is
              * near an instability, where the growth from the imperfection sets the snap. */
             if (fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev)) > 2e-3 ||
                 fabs(ob.a - a_prev) > 0.05 * fabs(a_prev) + 1e-12) {
@@ -171,7 +171,6 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
         t += h;
         dw = dw_new;
         out->steps++;
-        rod_observe(r, k1, &ob);
         if (!isfinite(ob.dz) || !isfinite(ob.a) || !isfinite(ob.a_cam)) {
             st = ROD_ERR_NAN;
             if (err) snprintf(err, errlen, "non-finite observation at Delta W = %g", dw);

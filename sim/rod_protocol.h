@@ -48,6 +48,7 @@ typedef struct rod_prediction {
     int asymmetric;        /* pathway: 1 asymmetric, 0 symmetric */
     double peak_abs_a;     /* rad, peak |A| during the snap */
     double dz_upper;       /* Delta Z of the upper state before shearing */
+    double elastic_upper;  /* J, elastic (+ gravity) energy of that state */
     double dz_final;       /* Delta Z at the end of the run */
     long steps;            /* accepted time steps */
     long rejected;         /* rejected (halved) steps */
