@@ -1,17 +1,13 @@
 /* rod_protocol.c: the simulated trial (see rod_protocol.h for the definitions of the snap and
  * of the fast mode).
  *
- * Each step places the moving clamp at Delta W(t + dt) = rate (t + dt) / l, predicts the free
- * DOFs with the previous velocity, and solves the implicit Euler equations
- *     M (q - q_n - dt v_n) / dt^2 + mu M (q - q_n) / dt + grad E(q) = 0
- * with Newton (rod_solver.h, LDL^T while the system matrix stays positive definite, LU
- * otherwise). Energy bookkeeping (work of the clamp by the trapezoidal rule on the reaction,
- * damping losses mu v^T M v dt) is reported in every sample so the energy balance can be
- * checked. */
+ * Each step places the moving clamp at Delta W(t + dt) = rate (t + dt) / l and takes one
+ * implicit Euler step (rod_dynamics.h), which also keeps the energy books (work of the clamp,
+ * damping losses) reported in every sample so the energy balance can be checked. */
 #include "rod_protocol.h"
+#include "rod_dynamics.h"
 #include "rod_observe.h"
 #include "rod_route.h"
-#include "rod_solver.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -42,17 +38,6 @@ rod_predict_opts rod_predict_opts_default(void)
     return o;
 }
 
-/* Work increment of the prescribed DOFs: 1/2 (g_old + g_new) . (q - q_n) over clamped DOFs. */
-static double clamp_work(const rod *r, const double *g_old, const double *g_new, const double *q_n)
-{
-    double w = 0.0;
-    for (int k = 0; k < r->ndof; k++) {
-        if (k >= ROD_FREE_BEGIN && k < r->free_end) continue;
-        w += 0.5 * (g_old[k] + g_new[k]) * (r->q[k] - q_n[k]);
-    }
-    return w;
-}
-
 rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_prediction *out,
                        char *err, size_t errlen)
 {
@@ -60,21 +45,19 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
     rod_predict_opts def = rod_predict_opts_default();
     if (!o) o = &def;
     memset(out, 0, sizeof *out);
-    rod *r = NULL;
-    rod_status st = rod_alloc(sc, &r, err, errlen);
+    rod_dyn dyn;
+    rod_status st = rod_dyn_open(&dyn, sc, err, errlen);
     if (st != ROD_OK) return st;
-    rod_solver *s = rod_solver_alloc(r);
-    int nd = r->ndof;
-    double *q_n = malloc(sizeof(double) * (size_t)nd), *v = calloc((size_t)nd, sizeof(double));
-    double *g_old = malloc(sizeof(double) * (size_t)nd), *k1 = malloc(sizeof(double) * (size_t)r->n);
-    if (!s || !q_n || !v || !g_old || !k1) {
+    rod *r = dyn.r;
+    double *k1 = malloc(sizeof(double) * (size_t)r->n);
+    if (!k1) {
         st = ROD_ERR_ALLOC;
         if (err) snprintf(err, errlen, "out of memory allocating the simulator workspace");
         goto done;
     }
 
     rod_route_report rr = {0};
-    st = rod_route_to_state(r, s, sc, +1, &rr);
+    st = rod_route_to_state(r, dyn.s, sc, +1, &rr);
     out->stage_route = 1;
     if (st != ROD_OK) {
         if (err)
@@ -91,21 +74,17 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
         if (err) snprintf(err, errlen, "the route ended with Delta Z = %g, not in the upper state", ob.dz);
         goto done;
     }
-    memcpy(g_old, rod_solver_gradient(s), sizeof(double) * (size_t)nd);
-
     double l = r->length, dl = sc->compression, rate = sc->shear_rate / l;
-    double dt_base = sc->dt, dt = dt_base, dt_max = 100.0 * dt_base, mu = sc->damping;
+    rod_dyn_start(&dyn, dl, 0.0);
+
+    double dt_base = sc->dt, dt = dt_base, dt_max = 100.0 * dt_base;
     double t = 0.0, dw = 0.0, dz_prev = ob.dz, a_prev = ob.a;
-    double work = 0.0, damped = 0.0, onset_dw = 0.0, t_detect = 0.0, peak = 0.0;
+    double onset_dw = 0.0, t_detect = 0.0, peak = 0.0;
     double slow = 0.1 * sc->snap_speed;
     int detected = 0;
     long cap = (long)ceil(sc->shear_max / rate / dt_base + o->post_snap_time / dt_base) + 1000;
-    rod_newton_opts no = rod_newton_opts_static(sc);
-    no.q_n = q_n;
-    no.v_n = v;
-    no.positive_definite = 1;
     out->stage_shear = 1;
-    out->stage_damping = mu > 0.0;
+    out->stage_damping = sc->damping > 0.0;
 
     for (;;) {
         if (!detected && dw >= sc->shear_max - 1e-12) break;
@@ -115,8 +94,6 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
             if (err) snprintf(err, errlen, "step cap of %ld reached at Delta W = %g", cap, dw);
             goto done;
         }
-        memcpy(q_n, r->q, sizeof(double) * (size_t)nd);
-        rod_state_save(r, s, 1);
         double h = dt;
         double dw_new = shear_at(t + h, rate, o->ramp_time);
         if (!detected && dw_new > sc->shear_max) {
@@ -124,14 +101,9 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
             h = fmax(1e-12, (sc->shear_max - dw) / rate);
             dw_new = sc->shear_max;
         }
-        rod_set_clamps(r, dl, dw_new);
-        for (int k = ROD_FREE_BEGIN; k < r->free_end; k++) r->q[k] += h * v[k];
-        no.c1 = 1.0 / (h * h) + mu / h;
-        no.c2 = 1.0 / h;
         rod_newton_report nr;
-        rod_status ss = rod_newton_solve(r, s, &no, &nr);
+        rod_status ss = rod_dyn_try(&dyn, h, dl, dw_new, &nr);
         if (ss != ROD_OK) {
-            rod_state_restore(r, s, 1);
             out->rejected++;
             dt *= 0.5;
             if (dt < dt_base / 1024.0) {
@@ -146,28 +118,18 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
         rod_observe(r, k1, &ob);
         if (o->adaptive && h > dt_base) {
             /* Fast mode resolves every fast motion with the base step: a long step that moved
-             * the ribbon noticeably is redone shorter, and so is one during which the asymmetry grew by more than 5%: the ribbon is
-             * near an instability, where the growth from the imperfection sets the snap. */
+             * the ribbon noticeably is redone shorter, and so is one during which the asymmetry
+             * grew by more than 5%: the ribbon is near an instability, where the growth from the
+             * imperfection sets the snap. */
             if (fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev)) > 2e-3 ||
                 fabs(ob.a - a_prev) > 0.05 * fabs(a_prev) + 1e-12) {
-                rod_state_restore(r, s, 1);
+                rod_dyn_reject(&dyn);
                 out->rejected++;
                 dt = fmax(0.25 * dt, dt_base);
                 continue;
             }
         }
-        const double *g = rod_solver_gradient(s);
-        double kin = 0.0, dis = 0.0;
-        for (int k = 0; k < nd; k++) {
-            v[k] = (r->q[k] - q_n[k]) / h;
-            if (k >= ROD_FREE_BEGIN && k < r->free_end) {
-                kin += 0.5 * r->mass[k] * v[k] * v[k];
-                dis += mu * r->mass[k] * v[k] * v[k] * h;
-            }
-        }
-        work += clamp_work(r, g_old, g, q_n);
-        damped += dis;
-        memcpy(g_old, g, sizeof(double) * (size_t)nd);
+        rod_dyn_accept(&dyn);
         t += h;
         dw = dw_new;
         out->steps++;
@@ -194,7 +156,7 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
             peak = fmax(peak, fabs(ob.a));
         }
         if (o->on_sample) {
-            rod_sample smp = {t, dw, ob.dz, ob.a, ob.a_cam, ob.dz_cam, 0, kin, work, damped};
+            rod_sample smp = {t, dw, ob.dz, ob.a, ob.a_cam, ob.dz_cam, 0, dyn.kinetic, dyn.work, dyn.damped};
             smp.elastic = rod_energy(r);
             if (o->on_sample(o->user, &smp, r)) break;
         }
@@ -217,10 +179,9 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
     out->sim_time = t;
 
 done:
-    if (r) out->count = r->count;
+    out->count = r->count;
     out->wall_s = wall_now() - t_start;
-    free(q_n); free(v); free(g_old); free(k1);
-    rod_solver_free(s);
-    rod_free(r);
+    free(k1);
+    rod_dyn_close(&dyn);
     return st;
 }

@@ -1,0 +1,35 @@
+/* rod_twin.h: the simulated ribbon of mock mode, driven by the rails instead of by a protocol.
+ *
+ * A digital twin is a rod that starts in its upper state at the mounting compression and is then
+ * moved by whatever the clamps do: each rod_twin_advance() integrates the dynamics (implicit Euler,
+ * the scene's dt as the largest step) from the twin's time to t_to while the clamp placement goes
+ * linearly from where it was to the (Delta L, Delta W) given, which the caller computes from the
+ * rails' positions. So the twin snaps when, and because, the rails shear it, and whatever the
+ * runner does (hold, stop, abort, return) is what the ribbon feels. */
+#ifndef RIBBON_SIM_ROD_TWIN_H
+#define RIBBON_SIM_ROD_TWIN_H
+
+#include "rod.h"
+#include "rod_observe.h"
+
+typedef struct rod_twin rod_twin;
+
+/* Builds the rod of sc and brings it to the upper state at Delta L = dl_start (the documented
+ * route, rod_route.h), Delta W = 0, at rest, at time 0. */
+rod_status rod_twin_open(const rod_scene *sc, double dl_start, rod_twin **out, char *err, size_t errlen);
+void rod_twin_close(rod_twin *tw);
+
+/* Integrates to time t_to (> current time; equal is a no-op) with the clamps moving linearly to
+ * (dl, dw). Failed steps are halved down to dt / 1024; then the status and err say where. */
+rod_status rod_twin_advance(rod_twin *tw, double t_to, double dl, double dw, char *err, size_t errlen);
+
+double rod_twin_time(const rod_twin *tw);
+/* Delta Z, A, ... of the current state (rod_observe.h). */
+void rod_twin_observe(rod_twin *tw, rod_obs *o);
+/* The current state, for rendering. */
+const rod *rod_twin_rod(const rod_twin *tw);
+/* Kinetic energy (J) of the last step and the total count of Newton failures recovered by halving. */
+double rod_twin_kinetic(const rod_twin *tw);
+long rod_twin_halvings(const rod_twin *tw);
+
+#endif
