@@ -1,0 +1,80 @@
+/* snap_detect.c: online snap detection on measured frames (see snap_detect.h). */
+#include "snap_detect.h"
+
+#include <math.h>
+#include <string.h>
+
+snap_params snap_params_default(void)
+{
+    snap_params p;
+    p.snap_speed = 1.0;
+    p.dz_jump = 0.005;
+    p.asym_threshold = 0.05;
+    p.post_snap_s = 2.0;
+    p.settle_frames = 5;
+    return p;
+}
+
+void snap_detect_init(snap_detect *d, const snap_params *p)
+{
+    memset(d, 0, sizeof *d);
+    d->p = *p;
+    d->onset_frame = -1;
+    d->detect_frame = -1;
+}
+
+snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, double dz, double a, int valid)
+{
+    if (!valid || !isfinite(t_s) || !isfinite(dw) || !isfinite(dz) || !isfinite(a)) return d->phase;
+    if (d->phase == SNAP_DONE) return d->phase;
+    if (!d->have_prev || !(t_s > d->t_prev)) {
+        /* First measured frame (or a repeated time stamp): a reference, not a speed. */
+        if (!d->have_prev) {
+            d->onset_dw = dw;
+            d->onset_frame = frame;
+            d->peak_abs_a = fabs(a);
+        }
+        d->have_prev = 1;
+        d->t_prev = t_s;
+        d->dz_prev = dz;
+        return d->phase;
+    }
+    double jump = fabs(dz - d->dz_prev), speed = jump / (t_s - d->t_prev);
+    double slow = 0.1 * d->p.snap_speed;
+    d->t_prev = t_s;
+    d->dz_prev = dz;
+    if (d->phase == SNAP_WAITING) {
+        if (speed < slow) {
+            d->onset_dw = dw;
+            d->onset_frame = frame;
+            d->peak_abs_a = fabs(a);
+        } else {
+            d->peak_abs_a = fmax(d->peak_abs_a, fabs(a));
+        }
+        if (speed > d->p.snap_speed && jump > d->p.dz_jump) {
+            d->phase = SNAP_SNAPPING;
+            d->t_detect = t_s;
+            d->detect_frame = frame;
+            d->slow_run = 0;
+        }
+        return d->phase;
+    }
+    /* Snapping: follow the pathway until it settles. */
+    d->peak_abs_a = fmax(d->peak_abs_a, fabs(a));
+    d->slow_run = speed < slow ? d->slow_run + 1 : 0;
+    if (d->slow_run >= d->p.settle_frames || t_s - d->t_detect >= d->p.post_snap_s) d->phase = SNAP_DONE;
+    return d->phase;
+}
+
+int snap_detect_snapped(const snap_detect *d) { return d->phase != SNAP_WAITING; }
+double snap_detect_dw(const snap_detect *d) { return d->onset_dw; }
+int snap_detect_asymmetric(const snap_detect *d)
+{
+    return snap_detect_snapped(d) && d->peak_abs_a > d->p.asym_threshold;
+}
+
+const char *snap_detect_regime(const snap_detect *d)
+{
+    if (!snap_detect_snapped(d)) return "no snap";
+    return snap_detect_asymmetric(d) ? "asymmetric" : "symmetric";
+}

@@ -1,0 +1,54 @@
+/* snap_detect.h: finds the snap in a stream of measured frames as they arrive, with the same
+ * definition the simulator uses (sim/rod_protocol.h, README "Snap"), so measured and predicted
+ * snaps are the same quantity:
+ *   - the ribbon is snapping at the first frame where |d(Delta Z)/dt| between consecutive measured
+ *     frames exceeds snap_speed (1/s) and the jump exceeds dz_jump (a floor above the tracker's
+ *     noise);
+ *   - the snap Delta W is the Delta W of the last frame before that where |d(Delta Z)/dt| was
+ *     still below a tenth of snap_speed (the onset);
+ *   - the pathway is asymmetric when the peak |A| from the onset until the ribbon settles (speed
+ *     below a tenth of snap_speed for settle_frames frames) or post_snap_s after detection exceeds
+ *     asym_threshold.
+ * Frames the tracker could not measure are skipped (they neither start nor end anything). */
+#ifndef RIBBON_DAEMON_SNAP_DETECT_H
+#define RIBBON_DAEMON_SNAP_DETECT_H
+
+typedef struct snap_params {
+    double snap_speed;     /* 1/s, normalised Delta Z speed that means snapping (scene snap.speed) */
+    double dz_jump;        /* normalised jump between consecutive measured frames also required */
+    double asym_threshold; /* rad, peak |A| above which the snap is asymmetric */
+    double post_snap_s;    /* s after detection at most spent on the pathway */
+    int settle_frames;     /* consecutive slow frames that end the snap */
+} snap_params;
+
+typedef enum snap_phase {
+    SNAP_WAITING = 0, /* no snap yet */
+    SNAP_SNAPPING,    /* detected; following the pathway */
+    SNAP_DONE         /* detected and settled (or post_snap_s passed): result final */
+} snap_phase;
+
+typedef struct snap_detect {
+    snap_params p;
+    snap_phase phase;
+    int have_prev;
+    double t_prev, dz_prev;
+    double onset_dw;       /* Delta W of the last slow frame */
+    long onset_frame;
+    double peak_abs_a;
+    double t_detect;
+    long detect_frame;     /* first frame seen snapping */
+    int slow_run;
+} snap_detect;
+
+snap_params snap_params_default(void);
+void snap_detect_init(snap_detect *d, const snap_params *p);
+/* One frame. valid = 0 for a frame without a measurement. Returns the phase after the frame. */
+snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, double dz, double a, int valid);
+/* Result (meaningful once phase >= SNAP_SNAPPING; the regime is final at SNAP_DONE). */
+int snap_detect_snapped(const snap_detect *d);
+double snap_detect_dw(const snap_detect *d);
+int snap_detect_asymmetric(const snap_detect *d);
+/* "asymmetric", "symmetric" or "no snap". */
+const char *snap_detect_regime(const snap_detect *d);
+
+#endif
