@@ -1,0 +1,396 @@
+/* trial_runner.c: the trial state machine and its acquisition loop (see trial_runner.h). */
+#include "trial_runner.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "rail_pair.h"
+
+static const char *const state_names[TRIAL_STATE_COUNT] = {
+    "idle", "compressing", "holding", "checking", "shearing", "snapped", "returning", "done", "aborted",
+    "failed",
+};
+
+const char *trial_state_name(trial_state s)
+{
+    return (s >= 0 && s < TRIAL_STATE_COUNT) ? state_names[s] : "unknown";
+}
+
+int trial_state_final(trial_state s) { return s == TRIAL_DONE || s == TRIAL_ABORTED || s == TRIAL_FAILED; }
+
+double trial_dl_from_mm(const trial_calibration *c, double l, double mm)
+{
+    return (double)c->compress_sign * (mm - c->compress_zero_mm) / (1000.0 * l);
+}
+double trial_dw_from_mm(const trial_calibration *c, double l, double mm)
+{
+    return (double)c->shear_sign * (mm - c->shear_zero_mm) / (1000.0 * l);
+}
+double trial_compress_mm(const trial_calibration *c, double l, double dl)
+{
+    return c->compress_zero_mm + (double)c->compress_sign * dl * 1000.0 * l;
+}
+double trial_shear_mm(const trial_calibration *c, double l, double dw)
+{
+    return c->shear_zero_mm + (double)c->shear_sign * dw * 1000.0 * l;
+}
+
+/* Abort protocol: 0 none, 1 reason being written, 2 requested (reason readable). */
+void trial_runner_abort(trial_runner *tr, const char *reason)
+{
+    int expected = 0;
+    if (!atomic_compare_exchange_strong(&tr->abort_requested, &expected, 1)) return;
+    snprintf(tr->abort_reason, sizeof tr->abort_reason, "%s", reason && *reason ? reason : "abort requested");
+    atomic_store(&tr->abort_requested, 2);
+}
+
+int trial_runner_init(trial_runner *tr, const trial_plan *plan, rail *compress, rail *shear, trial_camera cam,
+                      vis_tracker *tracker, trial_sink sink, char *why, size_t why_len)
+{
+    memset(tr, 0, sizeof *tr);
+    if (!plan || !compress || !shear || !cam.grab || !tracker) {
+        snprintf(why, why_len, "trial runner: missing rail, camera or tracker");
+        return -1;
+    }
+    if (!(plan->fps > 0.0) || !(plan->compress_speed_mm_s > 0.0) || !(plan->return_speed_mm_s > 0.0) ||
+        !(plan->scene.length > 0.0) || !(plan->scene.shear_rate > 0.0)) {
+        snprintf(why, why_len, "trial runner: fps, speeds, length and shear rate must be positive");
+        return -1;
+    }
+    tr->plan = *plan;
+    tr->compress = compress;
+    tr->shear = shear;
+    tr->cam = cam;
+    tr->tracker = tracker;
+    tr->sink = sink;
+    atomic_init(&tr->abort_requested, 0);
+    atomic_init(&tr->state, TRIAL_IDLE);
+    vis_error ve;
+    tr->frame = vis_frame_alloc(16, 16, 1, &ve);
+    if (!tr->frame) {
+        snprintf(why, why_len, "trial runner: %s", ve.message);
+        return -1;
+    }
+    return 0;
+}
+
+void trial_runner_free(trial_runner *tr)
+{
+    vis_frame_free(tr->frame);
+    tr->frame = NULL;
+}
+
+/* The loop's working state. */
+typedef struct run_ctx {
+    trial_runner *tr;
+    trial_result *res;
+    rail_clock clock;
+    double t0;            /* rail clock at the start */
+    double t;             /* trial time of this iteration */
+    double t_state;       /* trial time the current state began */
+    double state_limit;   /* s the current state may last */
+    trial_state st;
+    double start_compress_mm;
+    double target_compress_mm, target_shear_mm;
+    double last_reading_c, last_reading_s;
+    double check_sum;
+    int check_n;
+    double t_snap;
+    rail_status sc, ss;
+} run_ctx;
+
+static int emit_event(run_ctx *c, const char *kind, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static int emit_event(run_ctx *c, const char *kind, const char *fmt, ...)
+{
+    char msg[320];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    if (c->tr->sink.event) return c->tr->sink.event(c->tr->sink.user, c->t, kind, msg);
+    return 0;
+}
+
+static void enter(run_ctx *c, trial_state s, double limit_s, const char *why)
+{
+    c->st = s;
+    c->t_state = c->t;
+    c->state_limit = limit_s;
+    atomic_store(&c->tr->state, s);
+    if (c->tr->sink.state) c->tr->sink.state(c->tr->sink.user, s, c->t, why ? why : "");
+}
+
+/* Ends the trial: stops both rails (estop on failure), records the reason. */
+static void finish(run_ctx *c, trial_state s, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void finish(run_ctx *c, trial_state s, const char *fmt, ...)
+{
+    if (s == TRIAL_FAILED)
+        rail_pair_estop(c->tr->compress, c->tr->shear);
+    else if (s == TRIAL_ABORTED) {
+        rail_stop(c->tr->compress);
+        rail_stop(c->tr->shear);
+    }
+    c->res->reason[0] = '\0';
+    if (fmt) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(c->res->reason, sizeof c->res->reason, fmt, ap);
+        va_end(ap);
+    }
+    c->res->final = s;
+    if (s != TRIAL_DONE) emit_event(c, s == TRIAL_FAILED ? "fault" : "info", "%s", c->res->reason);
+    enter(c, s, 0.0, c->res->reason);
+}
+
+static int rail_idle_at(const rail_status *st, double target)
+{
+    return st->state == RAIL_STATE_IDLE && fabs(st->position_mm - target) < 0.05;
+}
+
+/* Position of a rail at time t (rail clock), from its latest status. */
+static double position_at(const rail_status *st, double t)
+{
+    if (st->state == RAIL_STATE_MOVING || st->state == RAIL_STATE_HOMING)
+        return st->position_mm + st->velocity_mm_s * (t - st->t_s);
+    return st->position_mm;
+}
+
+static int command(run_ctx *c, rail *r, rail_err e, const char *what)
+{
+    if (e == RAIL_OK) return 0;
+    finish(c, TRIAL_FAILED, "%s refused: %s", what, rail_last_error(r));
+    return -1;
+}
+
+/* One step of the state machine after this iteration's frame. Returns 1 when the trial ended. */
+static int step(run_ctx *c, const trial_sample *smp)
+{
+    trial_runner *tr = c->tr;
+    const trial_plan *p = &tr->plan;
+    double l = p->scene.length;
+    if (c->state_limit > 0.0 && c->t - c->t_state > c->state_limit) {
+        finish(c, TRIAL_FAILED, "%s did not end within its time limit of %.0f s", trial_state_name(c->st),
+               c->state_limit);
+        return 1;
+    }
+    switch (c->st) {
+    case TRIAL_COMPRESSING:
+        if (rail_idle_at(&c->sc, c->target_compress_mm)) {
+            emit_event(c, "info", "compression reached: Delta L = %.4f (rail at %.3f mm)",
+                       trial_dl_from_mm(&p->calib, l, c->sc.position_mm), c->sc.position_mm);
+            enter(c, TRIAL_HOLDING, p->hold_s + 30.0, NULL);
+        }
+        return 0;
+    case TRIAL_HOLDING:
+        if (c->t - c->t_state >= p->hold_s) {
+            c->check_sum = 0.0;
+            c->check_n = 0;
+            vis_tracker_reset(tr->tracker); /* frames during the moves are not trusted */
+            enter(c, TRIAL_CHECKING, 10.0 + 10.0 / p->fps, NULL);
+        }
+        return 0;
+    case TRIAL_CHECKING:
+        if (smp->measured) {
+            c->check_sum += smp->dz;
+            c->check_n++;
+        }
+        if (c->check_n >= 5) {
+            double dz = c->check_sum / c->check_n;
+            c->res->upper_dz = dz;
+            if (!(dz > p->upper_dz_min)) {
+                finish(c, TRIAL_FAILED,
+                       "not in the upper state: the camera sees Delta Z = %.4f (needs more than %.4f); check the "
+                       "specimen and the calibration",
+                       dz, p->upper_dz_min);
+                return 1;
+            }
+            emit_event(c, "info", "upper state seen: Delta Z = %.4f", dz);
+            c->target_shear_mm = trial_shear_mm(&p->calib, l, p->scene.shear_max);
+            double v = p->scene.shear_rate * 1000.0;
+            snap_detect_init(&tr->det, &p->snap);
+            if (command(c, tr->shear, rail_move_abs(tr->shear, c->target_shear_mm, v), "shear move")) return 1;
+            enter(c, TRIAL_SHEARING, p->scene.shear_max / (p->scene.shear_rate / l) * 1.5 + 30.0, NULL);
+        }
+        return 0;
+    case TRIAL_SHEARING:
+        if (tr->det.phase != SNAP_WAITING) {
+            if (command(c, tr->shear, rail_stop(tr->shear), "shear stop")) return 1;
+            c->t_snap = c->t;
+            emit_event(c, "info", "snap detected at frame %ld; onset Delta W = %.5f", tr->det.detect_frame,
+                       snap_detect_dw(&tr->det));
+            enter(c, TRIAL_SNAPPED, p->post_snap_s + 30.0, NULL);
+            return 0;
+        }
+        if (rail_idle_at(&c->ss, c->target_shear_mm)) {
+            emit_event(c, "info", "shear limit reached, no snap (Delta W = %.4f)", p->scene.shear_max);
+            goto start_return;
+        }
+        return 0;
+    case TRIAL_SNAPPED:
+        if (tr->det.phase == SNAP_DONE || c->t - c->t_snap >= p->post_snap_s) goto start_return;
+        return 0;
+    case TRIAL_RETURNING:
+        if (rail_idle_at(&c->sc, c->start_compress_mm) && rail_idle_at(&c->ss, p->calib.shear_zero_mm)) {
+            finish(c, TRIAL_DONE, NULL);
+            return 1;
+        }
+        return 0;
+    default:
+        return 0;
+    }
+start_return : {
+    double dist = fmax(fabs(c->ss.position_mm - p->calib.shear_zero_mm),
+                       fabs(c->sc.position_mm - c->start_compress_mm));
+    /* Shear back first in the same command batch; both move at the return speed. */
+    if (command(c, tr->shear, rail_move_abs(tr->shear, p->calib.shear_zero_mm, p->return_speed_mm_s),
+                "return of the shear rail"))
+        return 1;
+    if (command(c, tr->compress, rail_move_abs(tr->compress, c->start_compress_mm, p->return_speed_mm_s),
+                "return of the compression rail"))
+        return 1;
+    enter(c, TRIAL_RETURNING, dist / p->return_speed_mm_s * 2.0 + 30.0, NULL);
+    return 0;
+}
+}
+
+void trial_runner_run(trial_runner *tr, trial_result *out)
+{
+    memset(out, 0, sizeof *out);
+    snprintf(out->regime, sizeof out->regime, "no snap");
+    const trial_plan *p = &tr->plan;
+    double l = p->scene.length;
+    run_ctx c;
+    memset(&c, 0, sizeof c);
+    c.tr = tr;
+    c.res = out;
+    c.clock = rail_get_clock(tr->compress);
+    c.t0 = rail_clock_now(c.clock);
+    c.last_reading_c = c.last_reading_s = -1.0;
+    snap_detect_init(&tr->det, &p->snap);
+    char why[256] = "";
+
+    /* Where the rails are, and the preconditions. */
+    if (rail_pair_poll(tr->compress, tr->shear, &c.sc, &c.ss, why, sizeof why) != RAIL_OK) {
+        finish(&c, TRIAL_FAILED, "rails not ready: %s", why);
+        goto end;
+    }
+    if (c.sc.state != RAIL_STATE_IDLE || c.ss.state != RAIL_STATE_IDLE) {
+        finish(&c, TRIAL_FAILED, "rails not idle (compression %s, shear %s)", rail_state_name(c.sc.state),
+               rail_state_name(c.ss.state));
+        goto end;
+    }
+    if (fabs(c.ss.position_mm - p->calib.shear_zero_mm) > 0.5) {
+        finish(&c, TRIAL_FAILED, "the shear rail is at %.3f mm, not at its zero %.3f mm: return it first",
+               c.ss.position_mm, p->calib.shear_zero_mm);
+        goto end;
+    }
+    c.start_compress_mm = c.sc.position_mm;
+    c.target_compress_mm = trial_compress_mm(&p->calib, l, p->scene.compression);
+    emit_event(&c, "info", "start: compression rail at %.3f mm (Delta L = %.4f), target %.3f mm (Delta L = %.4f)",
+               c.sc.position_mm, trial_dl_from_mm(&p->calib, l, c.sc.position_mm), c.target_compress_mm,
+               p->scene.compression);
+    if (rail_move_abs(tr->compress, c.target_compress_mm, p->compress_speed_mm_s) != RAIL_OK) {
+        finish(&c, TRIAL_FAILED, "compression move refused: %s", rail_last_error(tr->compress));
+        goto end;
+    }
+    enter(&c, TRIAL_COMPRESSING,
+          fabs(c.target_compress_mm - c.start_compress_mm) / p->compress_speed_mm_s * 2.0 + 30.0, NULL);
+
+    double frame_dt = 1.0 / p->fps, t_next = c.t0;
+    for (long frame = 0;; frame++) {
+        if (!p->paced_by_camera) {
+            t_next += frame_dt;
+            double now = rail_clock_now(c.clock);
+            if (t_next > now) rail_clock_sleep(c.clock, t_next - now);
+        }
+        if (atomic_load(&tr->abort_requested) == 2) {
+            finish(&c, TRIAL_ABORTED, "aborted in %s: %s", trial_state_name(c.st), tr->abort_reason);
+            break;
+        }
+        if (rail_pair_poll(tr->compress, tr->shear, &c.sc, &c.ss, why, sizeof why) != RAIL_OK) {
+            finish(&c, TRIAL_FAILED, "rail fault in %s: %s", trial_state_name(c.st), why);
+            break;
+        }
+        double now = rail_clock_now(c.clock);
+        c.t = now - c.t0;
+        trial_sample smp;
+        /* Fresh rail readings (not extrapolations) are stored as they come. */
+        for (int k = 0; k < 2; k++) {
+            const rail_status *st = k ? &c.ss : &c.sc;
+            double *last = k ? &c.last_reading_s : &c.last_reading_c;
+            if (st->extrapolated || st->t_s == *last) continue;
+            *last = st->t_s;
+            memset(&smp, 0, sizeof smp);
+            smp.kind = 0;
+            smp.frame = -1;
+            smp.t_s = st->t_s - c.t0;
+            smp.compress_mm = position_at(&c.sc, st->t_s);
+            smp.shear_mm = position_at(&c.ss, st->t_s);
+            smp.dl = trial_dl_from_mm(&p->calib, l, smp.compress_mm);
+            smp.dw = trial_dw_from_mm(&p->calib, l, smp.shear_mm);
+            smp.reason = VIS_REASON_NONE;
+            out->rail_readings++;
+            if (tr->sink.sample && tr->sink.sample(tr->sink.user, &smp, why, sizeof why)) {
+                finish(&c, TRIAL_FAILED, "sample not stored: %s", why);
+                goto end;
+            }
+        }
+        /* The frame of this instant, with the rails where they are at its time. */
+        double pos_c = position_at(&c.sc, now), pos_s = position_at(&c.ss, now);
+        double dl = trial_dl_from_mm(&p->calib, l, pos_c), dw = trial_dw_from_mm(&p->calib, l, pos_s);
+        double t_frame = now;
+        vis_error ve = {0};
+        vis_status vs = tr->cam.grab(tr->cam.ctx, now, dl, dw, tr->frame, &t_frame, &ve);
+        if (vs != VIS_OK) {
+            finish(&c, TRIAL_FAILED, "camera: %s", ve.message[0] ? ve.message : vis_status_str(vs));
+            break;
+        }
+        double t_rail = t_frame - p->calib.camera_time_offset_s;
+        pos_c = position_at(&c.sc, t_rail);
+        pos_s = position_at(&c.ss, t_rail);
+        memset(&smp, 0, sizeof smp);
+        smp.kind = 1;
+        smp.frame = frame;
+        smp.t_s = t_rail - c.t0;
+        smp.compress_mm = pos_c;
+        smp.shear_mm = pos_s;
+        smp.dl = trial_dl_from_mm(&p->calib, l, pos_c);
+        smp.dw = trial_dw_from_mm(&p->calib, l, pos_s);
+        vis_measure m;
+        if (vis_tracker_process(tr->tracker, tr->frame, smp.dw * l * 1000.0, &m, &ve) != VIS_OK) {
+            finish(&c, TRIAL_FAILED, "tracker: %s", ve.message);
+            break;
+        }
+        smp.reason = m.reason;
+        smp.measured = m.reason == VIS_REASON_NONE && m.quality >= p->min_quality && isfinite(m.dz) &&
+                       isfinite(m.a);
+        if (smp.measured) {
+            smp.dz = m.dz;
+            smp.a = p->calib.camera_back ? -m.a : m.a;
+            out->measured_frames++;
+        }
+        smp.quality = isfinite(m.quality) ? m.quality : 0.0;
+        out->frames++;
+        if (tr->sink.sample && tr->sink.sample(tr->sink.user, &smp, why, sizeof why)) {
+            finish(&c, TRIAL_FAILED, "sample not stored: %s", why);
+            break;
+        }
+        if (tr->sink.frame && tr->sink.frame(tr->sink.user, tr->frame, frame, why, sizeof why)) {
+            finish(&c, TRIAL_FAILED, "video: %s", why);
+            break;
+        }
+        if (c.st == TRIAL_SHEARING || c.st == TRIAL_SNAPPED)
+            snap_detect_add(&tr->det, frame, smp.t_s, smp.dw, smp.dz, smp.a, smp.measured);
+        if (step(&c, &smp)) break;
+    }
+end:
+    out->duration_s = rail_clock_now(c.clock) - c.t0;
+    out->snapped = snap_detect_snapped(&tr->det);
+    out->snap_dw = out->snapped ? snap_detect_dw(&tr->det) : 0.0;
+    out->asymmetric = snap_detect_asymmetric(&tr->det);
+    out->peak_abs_a = tr->det.peak_abs_a;
+    snprintf(out->regime, sizeof out->regime, "%s", snap_detect_regime(&tr->det));
+    if (!trial_state_final(out->final)) out->final = TRIAL_FAILED;
+}

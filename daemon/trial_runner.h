@@ -1,0 +1,149 @@
+/* trial_runner.h: one trial on the rails, as a state machine driven one camera frame at a time.
+ *
+ *   idle -> compressing -> holding -> checking -> shearing -> snapped -> returning -> done
+ *                                        |           `-> (shear limit, no snap) -> returning
+ *                                        `-> failed (vision does not see the upper state)
+ *   any state -> aborted (abort asked: both rails stop where they are)
+ *   any state -> failed  (rail fault: both rails stop, emergency stop of the healthy one)
+ *
+ * Every loop iteration: poll both rails through rail_pair_poll (a fault of either stops both),
+ * convert their positions to (Delta L, Delta W) with the rig calibration, grab the camera frame of
+ * this instant (trial_camera: a real camera, or mock mode's digital twin that renders the simulated
+ * ribbon where the rails put it), measure it with the tracker, hand the sample, the video frame
+ * and every state change and event to the sink (the daemon stores them), feed the snap detector,
+ * then take the state machine's next step. Rails move only by commands from here; each state has
+ * a time limit; a time limit or a refused command ends the trial as failed with the reason.
+ * One thread owns a trial (the rails are not thread-safe); trial_runner_abort may be called from
+ * any thread. The runner allocates nothing per frame. */
+#ifndef RIBBON_DAEMON_TRIAL_RUNNER_H
+#define RIBBON_DAEMON_TRIAL_RUNNER_H
+
+#include <stdatomic.h>
+#include <stddef.h>
+
+#include "rail.h"
+#include "scene.h"
+#include "snap_detect.h"
+#include "vision.h"
+
+typedef enum trial_state {
+    TRIAL_IDLE = 0,
+    TRIAL_COMPRESSING,
+    TRIAL_HOLDING,
+    TRIAL_CHECKING,
+    TRIAL_SHEARING,
+    TRIAL_SNAPPED,
+    TRIAL_RETURNING,
+    TRIAL_DONE,
+    TRIAL_ABORTED,
+    TRIAL_FAILED,
+    TRIAL_STATE_COUNT
+} trial_state;
+
+const char *trial_state_name(trial_state s);
+/* 1 for done, aborted and failed. */
+int trial_state_final(trial_state s);
+
+/* The rig calibration: where the simulator's coordinates are on the rails. */
+typedef struct trial_calibration {
+    double compress_zero_mm;   /* compression rail position where the clamp gap is the free length */
+    double shear_zero_mm;      /* shear rail position with the clamps aligned */
+    int compress_sign;         /* +1: a larger rail position brings the clamps closer */
+    int shear_sign;            /* +1: a larger rail position is +y (Delta W > 0) */
+    int camera_back;           /* 1: the camera looks from +y, which flips the sign of A */
+    double camera_time_offset_s; /* camera time minus rail time, s */
+} trial_calibration;
+
+/* Rail positions <-> normalised clamp placement, for a free length l (m). */
+double trial_dl_from_mm(const trial_calibration *c, double l, double compress_mm);
+double trial_dw_from_mm(const trial_calibration *c, double l, double shear_mm);
+double trial_compress_mm(const trial_calibration *c, double l, double dl);
+double trial_shear_mm(const trial_calibration *c, double l, double dw);
+
+/* Everything a trial needs to know, filled from the rig file by the daemon. */
+typedef struct trial_plan {
+    rod_scene scene;             /* specimen and protocol: length, compression, shear_rate, shear_max */
+    trial_calibration calib;
+    double compress_speed_mm_s;  /* speed of the compression move */
+    double return_speed_mm_s;    /* speed of both rails on the way back */
+    double hold_s;               /* time held at the target compression before the check */
+    double upper_dz_min;         /* Delta Z the camera must see to start shearing */
+    double post_snap_s;          /* longest recording after the snap */
+    double min_quality;          /* tracker quality below which a frame counts as unmeasured */
+    snap_params snap;            /* online detection (snap_speed, asym_threshold from the scene) */
+    double fps;                  /* frames per second of the loop */
+    int paced_by_camera;         /* 1: the camera blocks until its next frame; 0: the runner sleeps
+                                    on the rails' clock (mock mode, real or virtual) */
+} trial_plan;
+
+/* A camera as the runner sees it: the frame of time t_s (rail clock) with the clamps at (dl, dw).
+ * A real camera ignores dl and dw and blocks until its next frame, returning its time in *t_frame;
+ * mock mode's twin advances the simulated ribbon to t_s under those clamp positions and renders it. */
+typedef struct trial_camera {
+    vis_status (*grab)(void *ctx, double t_s, double dl, double dw, vis_frame *out, double *t_frame,
+                       vis_error *err);
+    void *ctx;
+} trial_camera;
+
+/* One stored sample. kind 0: a fresh rail reading (no frame); kind 1: a camera frame with the rail
+ * positions at its time. Measurements are valid only when reason is VIS_REASON_NONE. */
+typedef struct trial_sample {
+    int kind;
+    long frame;
+    double t_s;
+    double compress_mm, shear_mm, dl, dw;
+    int measured;
+    double dz, a, quality;
+    vis_reason reason;
+} trial_sample;
+
+/* Where the runner's output goes. Every callback is optional; a callback that returns non-zero
+ * (e.g. the store refused a write) fails the trial with the reason it wrote. */
+typedef struct trial_sink {
+    int (*state)(void *user, trial_state s, double t_s, const char *why);
+    int (*event)(void *user, double t_s, const char *kind, const char *message);
+    int (*sample)(void *user, const trial_sample *s, char *why, size_t why_len);
+    int (*frame)(void *user, const vis_frame *f, long index, char *why, size_t why_len);
+    void *user;
+} trial_sink;
+
+typedef struct trial_result {
+    trial_state final;           /* done, aborted or failed */
+    char reason[256];            /* why it ended (failures and aborts), "" when done */
+    int snapped;
+    double snap_dw;              /* valid when snapped */
+    int asymmetric;
+    char regime[16];             /* "asymmetric", "symmetric", "no snap" */
+    double peak_abs_a;
+    double upper_dz;             /* Delta Z seen by the check */
+    long frames, measured_frames, rail_readings;
+    double duration_s;           /* rail-clock time of the trial */
+} trial_result;
+
+typedef struct trial_runner {
+    trial_plan plan;
+    rail *compress, *shear;      /* borrowed */
+    trial_camera cam;
+    vis_tracker *tracker;        /* borrowed */
+    trial_sink sink;
+    atomic_int abort_requested;
+    char abort_reason[128];
+    /* live state, for status requests (read under the daemon's lock) */
+    _Atomic trial_state state;
+    double t0;
+    vis_frame *frame;
+    snap_detect det;
+} trial_runner;
+
+/* Prepares a runner (allocates its frame). The rails, camera and tracker stay the caller's. */
+int trial_runner_init(trial_runner *tr, const trial_plan *plan, rail *compress, rail *shear,
+                      trial_camera cam, vis_tracker *tracker, trial_sink sink, char *why, size_t why_len);
+void trial_runner_free(trial_runner *tr);
+
+/* Runs the trial to its end (done, aborted or failed). Rails are always left stopped. */
+void trial_runner_run(trial_runner *tr, trial_result *out);
+
+/* From any thread: ask the running trial to stop (rails stop, trial ends aborted). */
+void trial_runner_abort(trial_runner *tr, const char *reason);
+
+#endif
