@@ -184,7 +184,7 @@ int api_client_request(const api_client_config *c, const char *method, const cha
         snprintf(why, n, "the API token contains control characters");
         return -1;
     }
-    for (const char *m = method; *m; m++)
+    for (const char *m = method; *m || m == method; m++)
         if (!isupper((unsigned char)*m)) {
             snprintf(why, n, "HTTP method '%.20s' must be upper-case letters", method);
             return -1;

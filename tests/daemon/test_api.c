@@ -562,6 +562,19 @@ static void test_oversized_body_is_413(void **state)
     char reply[4096];
     raw_exchange(api_server_port(f->srv), parts, lens, NCHUNK + 2, 0, reply, sizeof reply);
     assert_int_equal(raw_status(reply), 413);
+
+    /* Content-Length over the limit with the body sent at once (no Expect): the reply still
+     * arrives whole. */
+    static char whole[80 * 1024];
+    int wl = snprintf(whole, sizeof whole,
+                      "POST /trials HTTP/1.1\r\nHost: t\r\nContent-Length: %d\r\nConnection: close\r\n\r\n",
+                      70 * 1024);
+    memset(whole + wl, ' ', 70 * 1024);
+    const char *one[] = {whole};
+    size_t one_len[] = {(size_t)wl + 70 * 1024};
+    raw_exchange(api_server_port(f->srv), one, one_len, 1, 0, reply, sizeof reply);
+    assert_int_equal(raw_status(reply), 413);
+    assert_non_null(strstr(raw_body(reply), "\"status\":413"));
     assert_int_equal(f->m.count, 0);
 }
 
@@ -579,6 +592,9 @@ static void test_token_required(void **state)
     f->cc.token = "s3cret-tokeN";
     assert_int_equal(req(f, "POST", "/trials", NULL, NULL, why, sizeof why), 401);
     assert_string_equal(why, "wrong token");
+    json_t *body = json_pack("{s:s}", "note", "refused before the op sees it");
+    assert_int_equal(req(f, "POST", "/trials", body, NULL, why, sizeof why), 401);
+    json_decref(body);
     f->cc.token = "s3cret-token-and-more";
     assert_int_equal(req(f, "GET", "/status", NULL, NULL, why, sizeof why), 401);
     assert_int_equal(f->m.ops_called, 0);
