@@ -1,0 +1,116 @@
+/* api_route.c: matching a request path against the control API's routes.
+ *
+ * The table is small and fixed, so matching is a handful of string compares rather than a
+ * pattern engine. A trial id is a path segment of decimal digits with value 1 .. INT64_MAX
+ * (the store's INTEGER PRIMARY KEY); signs, spaces, hex and overflow are refused with a reason so
+ * that "/trials/abc" says what is wrong instead of "not found". "/trials/current" is not a route:
+ * "current" exists only as the target of the abort action. */
+#include "api_route.h"
+
+#include <stdio.h>
+#include <string.h>
+
+/* Parse seg[0..len) as a positive decimal int64. */
+static int parse_id(const char *seg, size_t len, int64_t *id, char *why, size_t n)
+{
+    if (len == 0) {
+        snprintf(why, n, "trial id is empty: expected a positive integer");
+        return -1;
+    }
+    int64_t v = 0;
+    for (size_t i = 0; i < len; i++) {
+        char c = seg[i];
+        if (c < '0' || c > '9') {
+            snprintf(why, n, "trial id '%.*s' is not a positive integer", (int)(len > 40 ? 40 : len), seg);
+            return -1;
+        }
+        int d = c - '0';
+        if (v > (INT64_MAX - d) / 10) {
+            snprintf(why, n, "trial id '%.*s' is too large", (int)(len > 40 ? 40 : len), seg);
+            return -1;
+        }
+        v = v * 10 + d;
+    }
+    if (v == 0) {
+        snprintf(why, n, "trial id must be at least 1, got '%.*s'", (int)(len > 40 ? 40 : len), seg);
+        return -1;
+    }
+    *id = v;
+    return 0;
+}
+
+api_route api_route_parse(const char *path, int64_t *id, char *why, size_t n)
+{
+    static const char prefix[] = "/trials/";
+    static const char report[] = "/report.png";
+    if (path == NULL)
+        return API_ROUTE_NONE;
+    if (strcmp(path, "/status") == 0)
+        return API_ROUTE_STATUS;
+    if (strcmp(path, "/trials") == 0)
+        return API_ROUTE_TRIALS;
+    if (strcmp(path, "/trials/current/abort") == 0)
+        return API_ROUTE_ABORT;
+    if (strncmp(path, prefix, sizeof prefix - 1) != 0)
+        return API_ROUTE_NONE;
+
+    const char *seg = path + sizeof prefix - 1;
+    const char *slash = strchr(seg, '/');
+    api_route r;
+    size_t len;
+    if (slash == NULL) {
+        r = API_ROUTE_TRIAL;
+        len = strlen(seg);
+    } else if (strcmp(slash, report) == 0) {
+        r = API_ROUTE_REPORT;
+        len = (size_t)(slash - seg);
+    } else {
+        return API_ROUTE_NONE;
+    }
+    int64_t v = 0;
+    if (parse_id(seg, len, &v, why, n) != 0)
+        return API_ROUTE_BAD_ID;
+    if (id)
+        *id = v;
+    return r;
+}
+
+const char *api_route_allow(api_route r)
+{
+    switch (r) {
+    case API_ROUTE_STATUS:
+    case API_ROUTE_TRIAL:
+    case API_ROUTE_REPORT:
+        return "GET";
+    case API_ROUTE_TRIALS:
+        return "GET, POST";
+    case API_ROUTE_ABORT:
+        return "POST";
+    case API_ROUTE_NONE:
+    case API_ROUTE_BAD_ID:
+        break;
+    }
+    return NULL;
+}
+
+int api_route_method_ok(api_route r, const char *method)
+{
+    if (method == NULL)
+        return 0;
+    int get = strcmp(method, "GET") == 0;
+    int post = strcmp(method, "POST") == 0;
+    switch (r) {
+    case API_ROUTE_STATUS:
+    case API_ROUTE_TRIAL:
+    case API_ROUTE_REPORT:
+        return get;
+    case API_ROUTE_TRIALS:
+        return get || post;
+    case API_ROUTE_ABORT:
+        return post;
+    case API_ROUTE_NONE:
+    case API_ROUTE_BAD_ID:
+        break;
+    }
+    return 0;
+}

@@ -1,0 +1,31 @@
+/* api_route.h: the control API's route table (paths and methods), kept apart from the HTTP
+ * server so it can be tested, fuzzed and printed on its own. See api_server.h for what each route
+ * does. Paths are matched exactly (no trailing slash, no query string: libmicrohttpd strips it). */
+#ifndef RIBBON_DAEMON_API_ROUTE_H
+#define RIBBON_DAEMON_API_ROUTE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+typedef enum api_route {
+    API_ROUTE_NONE = 0, /* no such path: 404 */
+    API_ROUTE_BAD_ID,   /* /trials/{id} or /trials/{id}/report.png with a bad id: 400 */
+    API_ROUTE_STATUS,   /* /status                   GET */
+    API_ROUTE_TRIALS,   /* /trials                   GET (list), POST (start) */
+    API_ROUTE_ABORT,    /* /trials/current/abort     POST */
+    API_ROUTE_TRIAL,    /* /trials/{id}              GET */
+    API_ROUTE_REPORT,   /* /trials/{id}/report.png   GET */
+} api_route;
+
+/* Parse a request path. For {id} routes *id gets the id (1 .. INT64_MAX, decimal digits only);
+ * a path of an {id} route whose id is not that gives API_ROUTE_BAD_ID and a reason in why. */
+api_route api_route_parse(const char *path, int64_t *id, char *why, size_t n);
+
+/* Methods allowed on a route, as an Allow header value ("GET", "GET, POST", "POST"); NULL for
+ * API_ROUTE_NONE and API_ROUTE_BAD_ID. */
+const char *api_route_allow(api_route r);
+
+/* 1 when method (exact, case-sensitive as HTTP says) is allowed on r, else 0. */
+int api_route_method_ok(api_route r, const char *method);
+
+#endif
