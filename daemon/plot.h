@@ -16,6 +16,8 @@
  *   - NaN in a data array is a gap: the point is skipped and a line is broken there, never drawn
  *     through. +-Inf is refused as bad input (it is never a legitimate measurement).
  *   - width_px / height_px of 0 mean the default (PLOT_WIDTH_DEFAULT x PLOT_HEIGHT_DEFAULT).
+ *   - Titles, labels and regime texts are PLplot text: UTF-8, with PLplot's escapes ("#gD" is
+ *     Delta, "#gG" Gamma, "#gf" phi, "#u"/"#d" super/subscript); a literal '#' is written "##".
  *   - The file is written to a temporary name in the same directory, checked (PNG signature, size,
  *     final IEND chunk) and renamed over png_path, so a failed plot never leaves a half file.
  *   - Every failure returns a status and a human reason in why (NUL-terminated, truncated to

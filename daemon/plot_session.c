@@ -7,7 +7,9 @@
  *   - Global state. PLplot keeps a table of streams and a "current stream" pointer in globals, and
  *     its exit/abort handlers are process-wide. So every figure takes plot_lock (one mutex), makes
  *     its own stream with plmkstrm, ends it with plend1 (which frees the stream slot) and puts back
- *     whatever stream was current before. Nothing of a figure outlives the call.
+ *     whatever stream was current before. Nothing of a figure outlives the call. The exit handler
+ *     is set for the figure and put back to PLplot's default afterwards (PLplot has no getter, so
+ *     a handler some other code had installed would be lost: nothing else here uses PLplot).
  *   - Fatal errors. plexit() calls the handler set with plsexit(), then plend() and exit() no matter
  *     what the handler returns: a handler cannot veto the exit. The only way back is not to return:
  *     our handler longjmps to the setjmp in plot_session_run (the jump target lives in plot_fatal,
@@ -29,8 +31,13 @@
  *   - Drivers. Debian's PLplot loads drivers (cairo.so) from its compiled-in directory
  *     /usr/lib/<arch>/plplot5.15.0/drivers; no PLPLOT_* environment variable is needed (the tests
  *     run without one).
- *   - Leaks. PLplot frees its streams; cairo/pango leave fontconfig's caches allocated until exit
- *     (once per process, not per figure). tests/daemon/test_plot_lsan.supp suppresses exactly those.
+ *   - Locale. PLplot switches LC_NUMERIC to "C" around its drawing calls with setlocale(), which is
+ *     process-wide: harmless here (the daemon never changes the locale), noted for the future.
+ *   - Memory. PLplot frees its streams and the cairo surfaces. Text goes through pango, whose font
+ *     map keeps the fontconfig patterns of every text size it has seen until exit: constant for
+ *     repeated figures of one size, a few tens of kB more for each new page size. LeakSanitizer
+ *     reports those patterns as lost because fontconfig links them by offsets, not pointers;
+ *     tests/daemon/test_plot_lsan.supp suppresses libfontconfig frames, and nothing else.
  */
 #include "plot_session.h"
 

@@ -203,10 +203,16 @@ static plot_status trial_draw(void *vctx, char *why, size_t why_len)
     snprintf(lsp, sizeof lsp, "predicted snap %.4f", d->snap_dw_predicted);
     plot_legend_entry e[6];
     int n = 0;
-    e[n++] = (plot_legend_entry){lm, PLOT_LEGEND_KIND_LINE_SYMBOL, PLOT_COL_MEASURED, PLOT_LSTY_SOLID,
-                                 PLOT_WIDTH_DATA, PLOT_GLYPH_DOT, 0.8};
-    e[n++] = (plot_legend_entry){lp, PLOT_LEGEND_KIND_LINE, PLOT_COL_PREDICTED, PLOT_LSTY_DASHED, PLOT_WIDTH_DATA,
-                                 NULL, 0};
+    if (plot_series_finite(d->measured.dw, d->measured.dz, d->measured.n) > 0)
+        e[n++] = (plot_legend_entry){lm, PLOT_LEGEND_KIND_LINE_SYMBOL, PLOT_COL_MEASURED, PLOT_LSTY_SOLID,
+                                     PLOT_WIDTH_DATA, PLOT_GLYPH_DOT, 0.8};
+    else
+        e[n++] = (plot_legend_entry){"no measured curve", PLOT_LEGEND_KIND_NONE, PLOT_COL_MEASURED, 0, 0, NULL, 0};
+    if (plot_series_finite(d->predicted.dw, d->predicted.dz, d->predicted.n) > 0)
+        e[n++] = (plot_legend_entry){lp, PLOT_LEGEND_KIND_LINE, PLOT_COL_PREDICTED, PLOT_LSTY_DASHED,
+                                     PLOT_WIDTH_DATA, NULL, 0};
+    else
+        e[n++] = (plot_legend_entry){"no predicted curve", PLOT_LEGEND_KIND_NONE, PLOT_COL_PREDICTED, 0, 0, NULL, 0};
     if (isfinite(d->snap_dw_measured))
         e[n++] = (plot_legend_entry){lsm, PLOT_LEGEND_KIND_LINE_SYMBOL, PLOT_COL_MEASURED, PLOT_LSTY_DOTTED, 1.5,
                                      PLOT_GLYPH_TRIANGLE_DOWN, 0.8};

@@ -261,6 +261,28 @@ static void test_trial_report_nan_is_a_gap(void **state)
     assert_true(count_color(gap, PLOT_COL_MEASURED, WHOLE) > 1000);
 }
 
+/* A long recording (20000 frames): drawn in full as a line, its sample dots thinned out. */
+static void test_trial_report_long_series(void **state)
+{
+    (void)state;
+    enum { N = 20000 };
+    static double dw[N], dz[N], a[N];
+    for (int i = 0; i < N; i++) {
+        dw[i] = 0.5 * i / (N - 1);
+        dz[i] = fake_dz(dw[i]);
+        a[i] = i % 997 == 0 ? NAN : fake_a(dw[i]);
+    }
+    plot_trial_data d;
+    plot_trial_data_default(&d);
+    d.measured = (plot_curve){dw, dz, a, N};
+    d.snap_dw_measured = 0.43;
+    d.regime_measured = "symmetric";
+    char why[256];
+    const char *p = out_path("trial-long.png");
+    assert_int_equal(plot_trial_report(p, &d, why, sizeof why), PLOT_OK);
+    assert_true(count_color(p, PLOT_COL_MEASURED, (region){0.11, 0.67, 0.12, 0.90}) > 1000);
+}
+
 static void test_trial_report_all_nan_and_empty(void **state)
 {
     (void)state;
@@ -759,6 +781,7 @@ int main(void)
         cmocka_unit_test(test_trial_report_draws_both_curves),
         cmocka_unit_test(test_trial_report_custom_size_and_defaults),
         cmocka_unit_test(test_trial_report_nan_is_a_gap),
+        cmocka_unit_test(test_trial_report_long_series),
         cmocka_unit_test(test_trial_report_all_nan_and_empty),
         cmocka_unit_test(test_trial_report_bad_input),
         cmocka_unit_test(test_trial_report_bad_path),
