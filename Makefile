@@ -6,7 +6,7 @@
 DEB_PACKAGES := cmake make gcc g++ pkg-config \
 	libgsl-dev libinih-dev libsqlite3-dev libserialport-dev libmodbus-dev \
 	libopencv-dev libmicrohttpd-dev libjansson-dev libcmocka-dev libcairo2-dev \
-	libcurl4-openssl-dev
+	libcurl4-openssl-dev libplplot-dev plplot-driver-cairo libsystemd-dev
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 BUILD ?= build
 ASAN_BUILD ?= build-asan
