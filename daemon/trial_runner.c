@@ -347,7 +347,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             finish(&c, TRIAL_FAILED, "camera: %s", ve.message[0] ? ve.message : vis_status_str(vs));
             break;
         }
-        double t_rail = t_frame - p->calib.camera_time_offset_s;
+        double t_rail = t_frame + p->calib.camera_time_offset_s;
         pos_c = position_at(&c.sc, t_rail);
         pos_s = position_at(&c.ss, t_rail);
         memset(&smp, 0, sizeof smp);

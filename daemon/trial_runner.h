@@ -51,7 +51,7 @@ typedef struct trial_calibration {
     int compress_sign;         /* +1: a larger rail position brings the clamps closer */
     int shear_sign;            /* +1: a larger rail position is +y (Delta W > 0) */
     int camera_back;           /* 1: the camera looks from +y, which flips the sign of A */
-    double camera_time_offset_s; /* camera time minus rail time, s */
+    double camera_time_offset_s; /* s, add to a frame's time stamp to get the rails' clock time */
 } trial_calibration;
 
 /* Rail positions <-> normalised clamp placement, for a free length l (m). */

@@ -1,0 +1,303 @@
+/* rig_daemon.c: ribbond's state and its control API operations (see rig_daemon.h). */
+#include "rig_daemon.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "trial_report.h"
+
+static void say(rig_daemon *d, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void say(rig_daemon *d, const char *fmt, ...)
+{
+    if (!d->log) return;
+    char line[600];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    d->log(line);
+}
+
+int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *overrides, int n_overrides,
+                    void (*log)(const char *line), char *why, size_t why_len)
+{
+    memset(d, 0, sizeof *d);
+    d->log = log;
+    pthread_mutex_init(&d->lock, NULL);
+    snprintf(d->config_path, sizeof d->config_path, "%s", config_path);
+    if (n_overrides > RIG_DAEMON_MAX_OVERRIDES) {
+        snprintf(why, why_len, "at most %d --set overrides", RIG_DAEMON_MAX_OVERRIDES);
+        return -1;
+    }
+    for (int k = 0; k < n_overrides; k++) d->overrides[k] = overrides[k];
+    d->n_overrides = n_overrides;
+    cfg_error ce;
+    if (rig_config_load(config_path, overrides, n_overrides, &d->cfg, &ce) != CFG_OK) {
+        cfg_error_format(&ce, why, why_len);
+        return -1;
+    }
+    if (store_open(d->cfg.store_path, &d->st, why, why_len) != STORE_OK) return -1;
+    int interrupted = 0;
+    char w[256];
+    if (store_trial_mark_interrupted(d->st, store_wall_now(), &interrupted, w, sizeof w) != STORE_OK)
+        say(d, "could not mark interrupted trials: %s", w);
+    else if (interrupted > 0)
+        say(d, "%d trial(s) found running at start-up marked interrupted (motion is never resumed)", interrupted);
+    if (d->cfg.mode == RIG_MODE_REPLAY) return 0;
+    rail_clock clk = d->cfg.clock == RIG_CLOCK_VIRTUAL ? rail_clock_virtual(&d->vclock) : rail_clock_real();
+    rail_err re = RAIL_OK;
+    /* Both rails from the same (checked) config the loader produced. */
+    re = rail_config_open(&d->cfg.compress, clk, NULL, &d->compress, why, why_len);
+    if (re == RAIL_OK) re = rail_config_open(&d->cfg.shear, clk, NULL, &d->shear, why, why_len);
+    if (re != RAIL_OK) {
+        rail_close(d->compress);
+        d->compress = NULL;
+        store_close(d->st);
+        d->st = NULL;
+        return -1;
+    }
+    return 0;
+}
+
+int rig_daemon_serve(rig_daemon *d, unsigned *port, char *why, size_t why_len)
+{
+    api_server_config ac = api_server_config_default();
+    ac.listen = d->cfg.api.listen;
+    ac.port = (unsigned)d->cfg.api.port;
+    ac.token = d->cfg.api.token[0] ? d->cfg.api.token : NULL;
+    api_ops ops = rig_daemon_ops();
+    if (api_server_start(&ac, &ops, d, &d->api, why, why_len)) return -1;
+    *port = api_server_port(d->api);
+    return 0;
+}
+
+void rig_daemon_close(rig_daemon *d, const char *reason)
+{
+    /* The API first: no new trial can start while the running one is stopped. */
+    api_server_stop(d->api);
+    d->api = NULL;
+    pthread_mutex_lock(&d->lock);
+    trial_session *s = d->session;
+    d->session = NULL;
+    pthread_mutex_unlock(&d->lock);
+    if (s) {
+        trial_session_abort(s, reason);
+        trial_result r;
+        trial_session_join(s, &r);
+        say(d, "trial ended %s%s%s", trial_state_name(r.final), r.reason[0] ? ": " : "", r.reason);
+    }
+    if (d->compress) rail_stop(d->compress);
+    if (d->shear) rail_stop(d->shear);
+    rail_close(d->compress);
+    rail_close(d->shear);
+    d->compress = d->shear = NULL;
+    store_close(d->st);
+    d->st = NULL;
+    pthread_mutex_destroy(&d->lock);
+}
+
+/* The session if it still runs; reaps a finished one. Caller holds the lock. */
+static trial_session *running_session(rig_daemon *d)
+{
+    if (!d->session) return NULL;
+    session_status ss;
+    trial_session_status(d->session, &ss);
+    if (!ss.finished) return d->session;
+    trial_session_join(d->session, NULL);
+    d->session = NULL;
+    return NULL;
+}
+
+static json_t *num_or_null(double v) { return isfinite(v) ? json_real(v) : json_null(); }
+
+static int op_status(void *user, json_t **out, char *why, size_t n)
+{
+    (void)why;
+    (void)n;
+    rig_daemon *d = user;
+    json_t *o = json_object();
+    json_object_set_new(o, "mode", json_string(rig_mode_name(d->cfg.mode)));
+    json_object_set_new(o, "config", json_string(d->config_path));
+    json_object_set_new(o, "store", json_string(d->cfg.store_path));
+    json_object_set_new(o, "version", json_string(RIBBON_VERSION));
+    pthread_mutex_lock(&d->lock);
+    trial_session *s = running_session(d);
+    if (s) {
+        session_status ss;
+        trial_session_status(s, &ss);
+        json_t *t = json_pack("{s:I, s:s, s:i, s:i, s:o, s:o, s:o, s:o, s:o, s:b, s:o, s:s, s:i, s:o, s:s}", "id",
+                              (json_int_t)ss.trial_id, "state", trial_state_name(ss.state), "frames", (int)ss.frames,
+                              "measured_frames", (int)ss.measured, "t_s", num_or_null(ss.t_s), "dl",
+                              num_or_null(ss.dl), "dw", num_or_null(ss.dw), "dz", num_or_null(ss.dz), "a",
+                              num_or_null(ss.a), "prediction_done", ss.prediction_done, "snap_dw_predicted",
+                              num_or_null(ss.prediction_done ? ss.snap_dw_predicted : NAN), "regime_predicted",
+                              ss.regime_predicted, "nodes", ss.nodes, "dt", num_or_null(ss.dt), "message",
+                              ss.message);
+        json_object_set_new(o, "state", json_string("running"));
+        json_object_set_new(o, "trial", t ? t : json_null());
+    } else {
+        json_object_set_new(o, "state", json_string("idle"));
+        json_object_set_new(o, "trial", json_null());
+        /* Idle: the API thread may read the rails (no trial owns them). */
+        if (d->compress && d->shear) {
+            rail_status sc, sh;
+            rail_status_get(d->compress, &sc);
+            rail_status_get(d->shear, &sh);
+            json_object_set_new(o, "rails",
+                                json_pack("{s:{s:s, s:f}, s:{s:s, s:f}}", "compress", "state",
+                                          rail_state_name(sc.state), "position_mm", sc.position_mm, "shear",
+                                          "state", rail_state_name(sh.state), "position_mm", sh.position_mm));
+        }
+    }
+    pthread_mutex_unlock(&d->lock);
+    *out = o;
+    return 0;
+}
+
+static int op_start(void *user, const json_t *body, json_t **out, int *http_status, char *why, size_t n)
+{
+    rig_daemon *d = user;
+    if (d->cfg.mode == RIG_MODE_REPLAY) {
+        *http_status = 409;
+        snprintf(why, n, "this daemon runs in replay mode; use `ribbonctl replay` (trials need rig or mock mode)");
+        return -1;
+    }
+    /* Body: {"set": ["section.key=value", ...], "note": "..."}; unknown fields are refused. */
+    const char *key;
+    json_t *val;
+    json_object_foreach((json_t *)body, key, val)
+    {
+        if (strcmp(key, "set") != 0 && strcmp(key, "note") != 0) {
+            *http_status = 400;
+            snprintf(why, n, "unknown field \"%s\" (allowed: set, note)", key);
+            return -1;
+        }
+    }
+    json_t *set = json_object_get(body, "set"), *note = json_object_get(body, "note");
+    if (set && !json_is_array(set)) {
+        *http_status = 400;
+        snprintf(why, n, "\"set\" must be an array of \"section.key=value\" strings");
+        return -1;
+    }
+    if (note && !json_is_string(note)) {
+        *http_status = 400;
+        snprintf(why, n, "\"note\" must be a string");
+        return -1;
+    }
+    const char *ov[2 * RIG_DAEMON_MAX_OVERRIDES];
+    int nov = 0;
+    for (int k = 0; k < d->n_overrides; k++) ov[nov++] = d->overrides[k];
+    for (size_t k = 0; set && k < json_array_size(set); k++) {
+        const char *t = json_string_value(json_array_get(set, k));
+        if (!t || nov >= 2 * RIG_DAEMON_MAX_OVERRIDES) {
+            *http_status = 400;
+            snprintf(why, n, "\"set\"[%zu] must be a string (at most %d overrides)", k, RIG_DAEMON_MAX_OVERRIDES);
+            return -1;
+        }
+        ov[nov++] = t;
+    }
+    rig_config cfg;
+    if (set && json_array_size(set) > 0) {
+        cfg_error ce;
+        if (rig_config_load(d->config_path, ov, nov, &cfg, &ce) != CFG_OK) {
+            *http_status = 400;
+            cfg_error_format(&ce, why, n);
+            return -1;
+        }
+        if (cfg.mode != d->cfg.mode || strcmp(cfg.store_path, d->cfg.store_path) != 0) {
+            *http_status = 400;
+            snprintf(why, n, "a trial may not change rig.mode or store.path");
+            return -1;
+        }
+    } else {
+        cfg = d->cfg;
+    }
+    pthread_mutex_lock(&d->lock);
+    trial_session *s = running_session(d);
+    if (s) {
+        session_status ss;
+        trial_session_status(s, &ss);
+        pthread_mutex_unlock(&d->lock);
+        *http_status = 409;
+        snprintf(why, n, "trial %lld is running (%s); abort it first", (long long)ss.trial_id,
+                 trial_state_name(ss.state));
+        return -1;
+    }
+    int64_t id = 0;
+    int rc = trial_session_start(&cfg, d->compress, d->shear, note ? json_string_value(note) : NULL, d->log,
+                                 &d->session, &id, why, n);
+    pthread_mutex_unlock(&d->lock);
+    if (rc) {
+        *http_status = 500;
+        return -1;
+    }
+    say(d, "trial %lld started (%s mode)", (long long)id, rig_mode_name(cfg.mode));
+    store_err se = store_trial_json(d->st, id, out, why, n);
+    if (se != STORE_OK) {
+        *out = json_pack("{s:I, s:s}", "id", (json_int_t)id, "status", "created");
+    }
+    return 0;
+}
+
+static int op_abort(void *user, json_t **out, int *http_status, char *why, size_t n)
+{
+    rig_daemon *d = user;
+    pthread_mutex_lock(&d->lock);
+    trial_session *s = running_session(d);
+    if (!s) {
+        pthread_mutex_unlock(&d->lock);
+        *http_status = 409;
+        snprintf(why, n, "no trial is running");
+        return -1;
+    }
+    session_status ss;
+    trial_session_status(s, &ss);
+    trial_session_abort(s, "abort requested through the API");
+    pthread_mutex_unlock(&d->lock);
+    *out = json_pack("{s:I, s:s, s:s}", "id", (json_int_t)ss.trial_id, "state", trial_state_name(ss.state),
+                     "abort", "requested");
+    return 0;
+}
+
+static int op_list(void *user, json_t **out, char *why, size_t n)
+{
+    rig_daemon *d = user;
+    return store_trials_json(d->st, out, why, n) == STORE_OK ? 0 : -1;
+}
+
+static int op_show(void *user, int64_t id, json_t **out, int *http_status, char *why, size_t n)
+{
+    rig_daemon *d = user;
+    store_err e = store_trial_json(d->st, id, out, why, n);
+    if (e == STORE_OK) return 0;
+    *http_status = e == STORE_E_NOTFOUND ? 404 : 500;
+    return -1;
+}
+
+static int op_report(void *user, int64_t id, unsigned char **png, size_t *len, int *http_status, char *why,
+                     size_t n)
+{
+    rig_daemon *d = user;
+    int notfound = 0;
+    if (trial_report_png_bytes(d->st, id, png, len, &notfound, why, n)) {
+        *http_status = notfound ? 404 : 500;
+        return -1;
+    }
+    return 0;
+}
+
+api_ops rig_daemon_ops(void)
+{
+    api_ops o;
+    memset(&o, 0, sizeof o);
+    o.status = op_status;
+    o.start = op_start;
+    o.abort_current = op_abort;
+    o.list = op_list;
+    o.show = op_show;
+    o.report_png = op_report;
+    return o;
+}

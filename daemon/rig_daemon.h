@@ -1,0 +1,50 @@
+/* rig_daemon.h: what ribbond is while it runs: the rig file, the rails (opened once), the store,
+ * the current trial session, and the control API's operations on them.
+ *
+ * Threads: the API's operations run on the API server's thread (api_server.h); a trial runs on
+ * its session's thread, which owns the rails while it runs; main() waits for signals. The daemon's
+ * mutex guards `session`; the store handle `st` is used by the API thread only (each thread has its
+ * own connection). At start-up every trial the store still marks running is marked interrupted:
+ * a restart never resumes motion. */
+#ifndef RIBBON_DAEMON_RIG_DAEMON_H
+#define RIBBON_DAEMON_RIG_DAEMON_H
+
+#include <pthread.h>
+#include <stddef.h>
+
+#include "api_server.h"
+#include "rail.h"
+#include "rig_config.h"
+#include "store.h"
+#include "trial_session.h"
+
+#define RIG_DAEMON_MAX_OVERRIDES 64
+
+typedef struct rig_daemon {
+    rig_config cfg;
+    char config_path[RIG_PATH_MAX];
+    const char *overrides[RIG_DAEMON_MAX_OVERRIDES]; /* from the command line (borrowed) */
+    int n_overrides;
+    store *st;                 /* API thread's connection */
+    rail *compress, *shear;    /* NULL in replay mode */
+    rail_vclock vclock;        /* mock mode's virtual clock */
+    pthread_mutex_t lock;
+    trial_session *session;    /* current or last trial, under lock */
+    api_server *api;
+    void (*log)(const char *line);
+} rig_daemon;
+
+/* Loads the rig file, opens the store (marking interrupted trials) and, in rig and mock modes,
+ * both rails. Returns 0, or -1 with why. */
+int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *overrides, int n_overrides,
+                    void (*log)(const char *line), char *why, size_t why_len);
+/* Starts the control API; *port gets the bound port. */
+int rig_daemon_serve(rig_daemon *d, unsigned *port, char *why, size_t why_len);
+/* Stops a running trial (aborted with reason), waits for it, stops the API, closes the rails
+ * (stopped) and the store. */
+void rig_daemon_close(rig_daemon *d, const char *reason);
+
+/* The API operations (api_ops), exposed for tests. */
+api_ops rig_daemon_ops(void);
+
+#endif
