@@ -120,53 +120,58 @@ static bool parse_num(const char *v, double *x)
     return *end == 0 && isfinite(*x);
 }
 
-static int handler(void *user, const char *section, const char *name, const char *value)
+/* Apply one key; 0, -1 (bad value) or -2 (unknown key), with the reason in why. */
+static int set_key(rail_config *out, const char *name, const char *value, char *why, size_t why_len)
 {
-    ctx *c = user;
-    if (c->failed || strcmp(section, c->section) != 0)
-        return 1;
-    c->seen = true;
     if (!strcmp(name, "map")) {
-        if (c->pass_map && rail_modbus_preset(value, &c->out->modbus.map) != RAIL_OK)
-            return fail(c, name, "unknown preset '%s' (ribbon-sim, oriental-az)", value);
-        return 1;
+        if (rail_modbus_preset(value, &out->modbus.map) != RAIL_OK) {
+            snprintf(why, why_len, "unknown preset '%s' (ribbon-sim, oriental-az)", value);
+            return -1;
+        }
+        return 0;
     }
-    if (c->pass_map)
-        return 1;
     if (!strcmp(name, "word_order")) {
         if (!strcmp(value, "high_first"))
-            c->out->modbus.map.word_order = RAIL_MB_HIGH_FIRST;
+            out->modbus.map.word_order = RAIL_MB_HIGH_FIRST;
         else if (!strcmp(value, "low_first"))
-            c->out->modbus.map.word_order = RAIL_MB_LOW_FIRST;
-        else
-            return fail(c, name, "'%s' is not high_first or low_first", value);
-        return 1;
+            out->modbus.map.word_order = RAIL_MB_LOW_FIRST;
+        else {
+            snprintf(why, why_len, "'%s' is not high_first or low_first", value);
+            return -1;
+        }
+        return 0;
     }
     for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
         const key_def *k = &keys[i];
         if (strcmp(name, k->key) != 0)
             continue;
-        char *field = (char *)c->out + k->off;
+        char *field = (char *)out + k->off;
         double x = 0.0;
         switch (k->k) {
         case K_STRING:
-            if (strlen(value) >= k->size)
-                return fail(c, name, "value '%.60s' too long", value);
+            if (strlen(value) >= k->size) {
+                snprintf(why, why_len, "value '%.60s' too long", value);
+                return -1;
+            }
             snprintf(field, k->size, "%s", value);
-            return 1;
+            return 0;
         case K_CHAR:
-            if (strlen(value) != 1)
-                return fail(c, name, "'%s' must be one letter", value);
+            if (strlen(value) != 1) {
+                snprintf(why, why_len, "'%.60s' must be one letter", value);
+                return -1;
+            }
             *(char *)field = value[0];
-            return 1;
+            return 0;
         case K_BOOL:
             if (!strcmp(value, "true") || !strcmp(value, "1") || !strcmp(value, "yes"))
                 *(bool *)field = true;
             else if (!strcmp(value, "false") || !strcmp(value, "0") || !strcmp(value, "no"))
                 *(bool *)field = false;
-            else
-                return fail(c, name, "'%s' is not true or false", value);
-            return 1;
+            else {
+                snprintf(why, why_len, "'%.60s' is not true or false", value);
+                return -1;
+            }
+            return 0;
         case K_REG: {
             rail_mb_reg *r = (rail_mb_reg *)field;
             char buf[32];
@@ -175,50 +180,89 @@ static int handler(void *user, const char *section, const char *name, const char
             double words = 1.0;
             if (slash) {
                 *slash = 0;
-                if (!parse_num(slash + 1, &words) || (words != 1.0 && words != 2.0))
-                    return fail(c, name, "'%s' must be ADDR or ADDR/1 or ADDR/2", value);
+                if (!parse_num(slash + 1, &words) || (words != 1.0 && words != 2.0)) {
+                    snprintf(why, why_len, "'%.60s' must be ADDR or ADDR/1 or ADDR/2", value);
+                    return -1;
+                }
             }
-            if (!parse_num(buf, &x) && !(buf[0] == '0' && buf[1] == 'x'))
-                return fail(c, name, "'%s' is not a register address", value);
+            if (!parse_num(buf, &x) && !(buf[0] == '0' && buf[1] == 'x')) {
+                snprintf(why, why_len, "'%.60s' is not a register address", value);
+                return -1;
+            }
             if (buf[0] == '0' && buf[1] == 'x')
                 x = (double)strtol(buf, NULL, 16);
-            if (x < -1 || x > 65535 || x != floor(x))
-                return fail(c, name, "register address '%s' outside -1..65535", value);
+            if (x < -1 || x > 65535 || x != floor(x)) {
+                snprintf(why, why_len, "register address '%.60s' outside -1..65535", value);
+                return -1;
+            }
             r->addr = (int)x;
             r->words = (int)words;
-            return 1;
+            return 0;
         }
         default:
-            if (!parse_num(value, &x) && !(value[0] == '0' && value[1] == 'x'))
-                return fail(c, name, "'%s' is not a number", value);
+            if (!parse_num(value, &x) && !(value[0] == '0' && value[1] == 'x')) {
+                snprintf(why, why_len, "'%.60s' is not a number", value);
+                return -1;
+            }
             if (value[0] == '0' && value[1] == 'x')
                 x = (double)strtoul(value, NULL, 16);
             if (!(x >= k->min && x <= k->max)) {
-                char b[96];
-                snprintf(b, sizeof b, "%%s is outside [%g, %g]", k->min, k->max);
-                return fail(c, name, b, value);
+                snprintf(why, why_len, "%.60s is outside [%g, %g]", value, k->min, k->max);
+                return -1;
             }
             if (k->k == K_DOUBLE)
                 *(double *)field = x;
             else if (k->k == K_INT) {
-                if (x != floor(x))
-                    return fail(c, name, "'%s' must be an integer", value);
+                if (x != floor(x)) {
+                    snprintf(why, why_len, "'%.60s' must be an integer", value);
+                    return -1;
+                }
                 *(int *)field = (int)x;
             } else {
                 *(long *)field = (long)x;
             }
-            return 1;
+            return 0;
         }
     }
-    return fail(c, name, "unknown key%s", "");
+    snprintf(why, why_len, "unknown key");
+    return -2;
 }
 
-static void defaults(rail_config *out, const char *rail_name)
+int rail_config_set(rail_config *c, const char *key, const char *value, char *why, size_t why_len)
+{
+    char local[8];
+    if (!why || why_len == 0) {
+        why = local;
+        why_len = sizeof local;
+    }
+    if (!c || !key || !value) {
+        snprintf(why, why_len, "missing argument");
+        return -1;
+    }
+    return set_key(c, key, value, why, why_len);
+}
+
+static int handler(void *user, const char *section, const char *name, const char *value)
+{
+    ctx *c = user;
+    if (c->failed || strcmp(section, c->section) != 0)
+        return 1;
+    c->seen = true;
+    /* The preset goes first (pass 1), every other key on top of it (pass 2). */
+    if (c->pass_map != (strcmp(name, "map") == 0))
+        return 1;
+    char why[200];
+    if (set_key(c->out, name, value, why, sizeof why) != 0)
+        return fail(c, name, "%s", why);
+    return 1;
+}
+
+void rail_config_init(rail_config *out, const char *rail_name)
 {
     memset(out, 0, sizeof *out);
     snprintf(out->driver, sizeof out->driver, "mock");
     out->params = rail_params_default();
-    snprintf(out->params.name, sizeof out->params.name, "%s", rail_name);
+    snprintf(out->params.name, sizeof out->params.name, "%s", rail_name ? rail_name : "rail");
     out->gcode = rail_gcode_params_default();
     out->modbus = rail_modbus_params_default();
     out->mock = rail_mock_params_default();
@@ -242,22 +286,83 @@ static int finish(ctx *c, int rc)
         snprintf(c->why, c->why_len, "%s: no section [%s]", c->file, c->section);
         return -1;
     }
-    const char *d = c->out->driver;
-    if (strcmp(d, "mock") && strcmp(d, "gcode") && strcmp(d, "modbus")) {
-        snprintf(c->why, c->why_len, "%s: [%s] driver: '%s' is not mock, gcode or modbus", c->file,
-                 c->section, d);
-        return -1;
-    }
     char w[300];
-    if (rail_params_check(&c->out->params, w, sizeof w) != RAIL_OK) {
-        snprintf(c->why, c->why_len, "%s: [%s] %s", c->file, c->section, w);
-        return -1;
-    }
-    if (!strcmp(d, "modbus") && rail_modbus_map_check(&c->out->modbus.map, w, sizeof w) != RAIL_OK) {
+    if (rail_config_check(c->out, w, sizeof w, NULL, 0) != 0) {
         snprintf(c->why, c->why_len, "%s: [%s] %s", c->file, c->section, w);
         return -1;
     }
     return 0;
+}
+
+/* The key a driver check blames: rail_params_check() starts its reasons "rail NAME: FIELD (...)",
+ * rail_modbus_map_check() "modbus map NAME: FIELD ..." or "...: register NAME is required". */
+static void blamed_key(const char *why, char *key, size_t key_len)
+{
+    static const char *const fields[] = {"soft_min_mm",    "soft_max_mm",    "max_speed_mm_s",
+                                         "accel_mm_s2",    "poll_hz",        "min_gap_mm",
+                                         "gap_at_zero_mm", "gap_per_mm",     "counts_per_mm",
+                                         "speed_per_mm_s", "word_order"};
+    const char *p = strstr(why, ": ");
+    p = p ? p + 2 : why;
+    for (size_t i = 0; i < sizeof fields / sizeof fields[0]; i++) {
+        if (strncmp(p, fields[i], strlen(fields[i])) == 0) {
+            snprintf(key, key_len, "%s", fields[i]);
+            return;
+        }
+    }
+    if (strncmp(p, "register ", 9) == 0) {
+        size_t n = strcspn(p + 9, " :");
+        snprintf(key, key_len, "reg_%.*s", (int)(n < 24 ? n : 24), p + 9);
+        return;
+    }
+    if (strstr(p, "(ctl_stop)")) {
+        snprintf(key, key_len, "ctl_stop");
+        return;
+    }
+    snprintf(key, key_len, "%s", strncmp(why, "modbus map", 10) == 0 ? "map" : "");
+}
+
+int rail_config_check(const rail_config *rc, char *why, size_t why_len, char *key, size_t key_len)
+{
+    char local[8], key_local[32];
+    if (!why || why_len == 0) {
+        why = local;
+        why_len = sizeof local;
+    }
+    if (!key || key_len == 0) {
+        key = key_local;
+        key_len = sizeof key_local;
+    }
+    key[0] = '\0';
+    const char *d = rc->driver;
+    if (strcmp(d, "mock") && strcmp(d, "gcode") && strcmp(d, "modbus")) {
+        snprintf(why, why_len, "driver: '%s' is not mock, gcode or modbus", d);
+        snprintf(key, key_len, "driver");
+        return -1;
+    }
+    char w[300];
+    if (rail_params_check(&rc->params, w, sizeof w) != RAIL_OK) {
+        snprintf(why, why_len, "%s", w);
+        blamed_key(w, key, key_len);
+        return -1;
+    }
+    if (!strcmp(d, "modbus") && rail_modbus_map_check(&rc->modbus.map, w, sizeof w) != RAIL_OK) {
+        snprintf(why, why_len, "%s", w);
+        blamed_key(w, key, key_len);
+        return -1;
+    }
+    return 0;
+}
+
+const char *rail_config_key_name(size_t i)
+{
+    static const char *const extra[] = {"map", "word_order"};
+    size_t n = sizeof keys / sizeof keys[0];
+    if (i < n)
+        return keys[i].key;
+    if (i - n < sizeof extra / sizeof extra[0])
+        return extra[i - n];
+    return NULL;
 }
 
 static int load(const char *path, const char *text, const char *name, const char *rail_name,
@@ -267,7 +372,7 @@ static int load(const char *path, const char *text, const char *name, const char
         snprintf(why, why_len, "rail name '%s' is not compress or shear", rail_name ? rail_name : "");
         return -1;
     }
-    defaults(out, rail_name);
+    rail_config_init(out, rail_name);
     ctx c;
     memset(&c, 0, sizeof c);
     c.file = name;

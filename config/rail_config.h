@@ -39,6 +39,21 @@ int rail_config_load(const char *path, const char *rail_name, rail_config *out, 
 int rail_config_load_string(const char *text, const char *name, const char *rail_name, rail_config *out,
                             char *why, size_t why_len);
 
+/* Building blocks for loaders that read the rail sections themselves (config/rig_config.c, which
+ * needs its own line numbers, duplicate detection and --set overrides):
+ *   rail_config_init   the defaults (driver mock, each driver's *_default(), params.name = rail_name);
+ *   rail_config_set    one key = value; "map" loads a preset (replacing every register set before,
+ *                      so apply it first); returns 0, -1 for a bad value or -2 for an unknown key,
+ *                      with the reason (without the key) in why;
+ *   rail_config_check  the checks rail_config_load runs at the end (driver name, rail_params_check,
+ *                      the Modbus map); returns 0 or -1 with the reason in why and the blamed key
+ *                      ("soft_min_mm", "reg_status", "map", ... or "") in key;
+ *   rail_config_key_name  the i-th accepted key name (NULL past the end), for documentation tests. */
+void rail_config_init(rail_config *out, const char *rail_name);
+int rail_config_set(rail_config *c, const char *key, const char *value, char *why, size_t why_len);
+int rail_config_check(const rail_config *c, char *why, size_t why_len, char *key, size_t key_len);
+const char *rail_config_key_name(size_t i);
+
 /* Open the rail a config describes. shared: a GRBL link to use for a gcode rail (NULL: open one). */
 rail_err rail_config_open(const rail_config *c, rail_clock clock, grbl_link *shared, rail **out, char *why,
                           size_t why_len);

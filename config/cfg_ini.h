@@ -1,0 +1,50 @@
+/* cfg_ini.h: line-exact INI reading on top of inih, for config loaders that must name the line
+ * of every error (the rig file loader; the scene loader has its own copy of the same rules).
+ *
+ * inih does the splitting (sections, "key = value", inline " ;" comments, whitespace). This module
+ * feeds it one physical line per reader call, so the count of calls is the line number (Debian
+ * builds inih without line numbers in the handler), and it refuses what inih would accept silently
+ * or mangle: NUL bytes, over-long lines (inih would split them), "key: value", text after a
+ * "[section]", keys before any section. Leading whitespace is stripped, so an indented line is
+ * never a continuation of the previous value. CRLF line ends and a UTF-8 BOM are accepted.
+ * No global state: inih's options are compile-time, and every call has its own context. */
+#ifndef RIBBON_CONFIG_CFG_INI_H
+#define RIBBON_CONFIG_CFG_INI_H
+
+#include <stddef.h>
+
+#include "cfg_error.h"
+
+/* Longest line the reader accepts (bytes, without the newline). inih's line buffer is 200 bytes
+ * (INI_MAX_LINE in Debian's build), less the newline and the terminator. */
+#define CFG_INI_MAX_LINE 196
+
+/* Callbacks. Each returns 0 to go on; non-zero stops the read, and the callback must have filled
+ * the cfg_error (cfg_error_set) before returning. `line` is 1-based. */
+typedef struct cfg_ini_handler {
+    int (*section)(void *user, int line, const char *section);
+    int (*key)(void *user, int line, const char *section, const char *name, const char *value);
+} cfg_ini_handler;
+
+/* Read `len` bytes of `text` (need not be NUL-terminated); `name` is the file name for errors.
+ * Syntax errors are reported in *err with the line and status CFG_ERR_SYNTAX. Returns CFG_OK, the
+ * status a callback left in *err, or CFG_ERR_IO when inih fails (out of memory). */
+cfg_status cfg_ini_parse(const char *name, const char *text, size_t len, const cfg_ini_handler *h,
+                         void *user, cfg_error *err);
+
+/* Read a whole file of at most max_bytes into a malloc'd, NUL-terminated buffer (*text, *len).
+ * On failure nothing is allocated and *err names the file (CFG_ERR_IO). */
+cfg_status cfg_ini_read_file(const char *path, size_t max_bytes, char **text, size_t *len,
+                             cfg_error *err);
+
+/* Fill *err (clearing it first). origin CFG_ORIGIN_LINE needs line >= 1; `where` is the override
+ * text or "default" (may be NULL); `key` the "section.key" (may be NULL). Returns st. */
+cfg_status cfg_error_set(cfg_error *err, cfg_status st, cfg_origin origin, const char *file,
+                         int line, const char *where, const char *key, const char *fmt, ...)
+    __attribute__((format(printf, 8, 9)));
+
+/* Copy at most srclen bytes of src into dst for an error message, non-printable bytes as '?', so a
+ * corrupt file cannot put control characters on the user's terminal. Always terminates. */
+void cfg_text_printable(char *dst, size_t dstlen, const char *src, size_t srclen);
+
+#endif
