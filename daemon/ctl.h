@@ -10,5 +10,6 @@ int ctl_rail_main(int argc, char **argv);
 int ctl_ports_main(int argc, char **argv);
 int ctl_track_main(int argc, char **argv); /* ctl_track.c, built when vision/ is (RIBBON_HAVE_VISION) */
 int ctl_vision_bench_main(int argc, char **argv); /* ctl_vision_bench.c, likewise */
+int ctl_render_main(int argc, char **argv); /* ctl_render.c, likewise (needs sim/ and vision/) */
 
 #endif
