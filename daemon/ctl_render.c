@@ -21,7 +21,9 @@
  * the jump in the ground truth's projected Delta Z, by the same rule as `ribbonctl track`'s
  * snap_frame, or null), snap_detect_frame (first frame at or after the simulator's snap
  * detection, or null), sim_time_s, render_ms_per_frame, wall_s.
- * Exit status: 0 done, 1 the scene, the simulation or an output failed (reason on stderr), 2 usage. */
+ * Exit status: 0 done, 1 the scene, the simulation or an output failed (reason on stderr), 2 usage.
+ * Outputs are opened before the simulation runs (an unwritable path fails at once); after a later
+ * failure the frames written so far stay in the video and the CSV, row k still describing frame k. */
 #include <gsl/gsl_errno.h>
 #include <jansson.h>
 #include <math.h>
@@ -59,7 +61,7 @@ static void usage(FILE *f)
             "  --set section.key=value  scene override (repeatable), as in ribbon-sim\n"
             "  --fps F                  frames per second of simulated time (30)\n"
             "  --width W --height H     image size, pixels (640 x 480)\n"
-            "  --fast                   adaptive time stepping (README \"Speed\")\n"
+            "  --fast                   adaptive time stepping (README \"Fast mode\")\n"
             "  --noise SIGMA            Gaussian noise, grey levels (2)\n"
             "  --blur SIGMA_PX          optical blur, pixels (0.8)\n"
             "  --camera-distance-m D    camera to ribbon plane (default max(5 l, 50 w))\n"
