@@ -18,7 +18,7 @@
  *   trials           id | mode status state reason | config_text calibration_json |
  *                    specimen_id -> specimens | source_trial_id -> trials | video_path |
  *                    created_at started_at ended_at | snapped snap_dw_measured regime_measured |
- *                    software_version
+ *                    software_version | samples_count (v3, kept by the sample writer)
  *   samples          (trial_id -> trials, seq) | t_s kind frame | compress_mm shear_mm |
  *                    dl dw dz a quality reason                              (WITHOUT ROWID)
  *   events           id | trial_id -> trials | t_s wall_time state kind message
@@ -109,6 +109,14 @@ static const char schema_v2[] =
     "CREATE INDEX trials_status ON trials(status);"
     "PRAGMA user_version = 2;";
 
+/* v3: each trial's sample count kept in the trial row, updated in the writer's own commit, so
+ * listing trials does not count every sample of every trial (GET /trials on a year of trials).
+ * Existing files get it back-filled from their samples. */
+static const char schema_v3[] =
+    "ALTER TABLE trials ADD COLUMN samples_count INTEGER NOT NULL DEFAULT 0;"
+    "UPDATE trials SET samples_count = (SELECT count(*) FROM samples WHERE samples.trial_id = trials.id);"
+    "PRAGMA user_version = 3;";
+
 typedef struct store_migration {
     int version;      /* user_version after the step */
     const char *what; /* for reasons */
@@ -118,6 +126,7 @@ typedef struct store_migration {
 static const store_migration migrations[] = {
     {1, "base schema", schema_v1},
     {2, "ladder cache and indexes", schema_v2},
+    {3, "sample count per trial", schema_v3},
 };
 #define N_MIGRATIONS (sizeof migrations / sizeof migrations[0])
 _Static_assert(sizeof migrations / sizeof migrations[0] == STORE_SCHEMA_VERSION,

@@ -33,7 +33,7 @@
 #include <jansson.h>
 
 /* The schema version this program creates and understands (see the migration list in store.c). */
-#define STORE_SCHEMA_VERSION 2
+#define STORE_SCHEMA_VERSION 3
 
 /* Errors of the store layer; store_err_message() gives the generic text, why the specific one. */
 typedef enum store_err {
@@ -124,7 +124,7 @@ bool store_status_parse(const char *s, store_status *out);
 bool store_regime_parse(const char *s, store_regime *out);
 bool store_event_kind_parse(const char *s, store_event_kind *out);
 
-/* ---- specimens (store_trials.c) --------------------------------------------------------- */
+/* ---- specimens (store_specimens.c) --------------------------------------------------------- */
 
 typedef struct store_specimen {
     int64_t id;                    /* set by the store */
@@ -185,12 +185,13 @@ typedef struct store_trial {
     double snap_dw_measured;    /* Delta W = dw / l at the snap; NaN = none */
     store_regime regime_measured;
     char software_version[32];
+    int64_t samples;            /* samples stored for the trial */
 } store_trial;
 
 store_err store_trial_create(store *st, const store_trial_def *def, int64_t *id, char *why, size_t why_len);
 /* Status transitions: created -> running -> done | failed | aborted | interrupted, and
  * created -> failed | aborted. The end states are final (STORE_E_STATE). running stamps
- * started_at, an end state ended_at, both with wall_s. reason NULL keeps the current reason. */
+ * started_at, an end state ended_at, both with wall_s. reason NULL or "" keeps the current one. */
 store_err store_trial_set_status(store *st, int64_t id, store_status status, const char *reason, double wall_s,
                                  char *why, size_t why_len);
 /* The runner's current state name ("compressing", "shearing", ...; < 32 bytes). */
@@ -212,7 +213,7 @@ store_err store_trial_list(store *st, store_trial **out, size_t *n, char *why, s
 store_err store_trial_texts(store *st, int64_t id, char **config_text, char **calibration_json, char *why,
                             size_t why_len);
 
-/* ---- events (store_trials.c) ------------------------------------------------------------ */
+/* ---- events (store_events.c) ------------------------------------------------------------ */
 
 typedef struct store_event {
     int64_t id;            /* set by the store */
@@ -257,12 +258,14 @@ store_writer_params store_writer_params_default(void);
 
 typedef struct store_samples store_samples;
 
-/* p NULL = defaults. Numbering continues after the trial's last stored sample. */
+/* p NULL = defaults. Numbering continues after the trial's last stored sample. A writer uses
+ * its store's connection: end it before store_close, and keep both on one thread. */
 store_err store_samples_begin(store *st, int64_t trial_id, const store_writer_params *p, store_samples **out,
                               char *why, size_t why_len);
-/* Copy one sample into the batch (committing if due). A refused sample (NaN t_s, infinity,
- * bad kind or frame, quality outside [0,1]) is not added. If a commit fails the rows stay
- * pending; once the batch is full, add refuses until a flush succeeds. */
+/* Copy one sample into the batch (committing if due). STORE_E_INVALID: the sample was refused
+ * (NaN t_s, infinity, bad kind or frame, quality outside [0,1]) and not added. Any other error
+ * is a failed commit: the sample was added and every row stays pending for the next commit;
+ * once the batch is full, add refuses (not added) until a flush succeeds. */
 store_err store_samples_add(store_samples *w, const store_sample *s, char *why, size_t why_len);
 store_err store_samples_flush(store_samples *w, char *why, size_t why_len);
 /* Flush and free (freed even when the flush fails; the error says how many rows were lost). */
@@ -275,7 +278,7 @@ store_err store_samples_count(store *st, int64_t trial_id, int64_t *count, char 
 store_err store_samples_get(store *st, int64_t trial_id, store_sample **out, size_t *n, char *why,
                             size_t why_len);
 
-/* ---- curves for reports (store_samples.c, store_predictions.c) ------------------------------ */
+/* ---- curves for reports (store_curve.c, store_samples.c, store_predictions.c) ------------------------------ */
 
 /* A curve as parallel arrays. Curves the store returns live in one block: free with
  * store_curve_free(). Curves a caller passes in are only read. */
@@ -291,7 +294,7 @@ void store_curve_free(store_curve *c);
 /* The measured curve: camera frames with dw, dz and a all present, in time order. */
 store_err store_trial_curve(store *st, int64_t trial_id, store_curve *out, char *why, size_t why_len);
 
-/* ---- predictions and the ladder (store_predictions.c) ----------------------------------------- */
+/* ---- predictions (store_predictions.c) and the ladder (store_ladder.c) ----------------------------------------- */
 
 typedef struct store_prediction {
     int64_t id;                 /* set by the store */

@@ -72,10 +72,10 @@ int main(int argc, char **argv)
         fprintf(stderr, "ribbon-store-bench: %s\n", why);
         return 1;
     }
-    json_t *j = json_pack("{s:s, s:I, s:f, s:i, s:f, s:s, s:s}", "bench", "store", "samples", (json_int_t)n, "samples_per_s",
-                          rate, "batch_rows", (int)store_writer_params_default().batch_rows, "max_age_s",
-                          store_writer_params_default().max_age_s, "sqlite", sqlite3_libversion(), "version",
-                          RIBBON_VERSION);
+    store_writer_params wp = store_writer_params_default();
+    json_t *j = json_pack("{s:s, s:I, s:f, s:i, s:f, s:s, s:s}", "bench", "store", "samples", (json_int_t)n,
+                          "samples_per_s", rate, "batch_rows", (int)wp.batch_rows, "max_age_s", wp.max_age_s,
+                          "sqlite", sqlite3_libversion(), "version", RIBBON_VERSION);
     char *line = j ? json_dumps(j, JSON_COMPACT | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(6)) : NULL;
     if (!line) {
         fprintf(stderr, "ribbon-store-bench: out of memory\n");

@@ -12,7 +12,7 @@
 #define TRIAL_JSON_SELECT                                                                                   \
     "SELECT t.id, t.mode, t.status, t.state, t.reason, t.snapped, t.snap_dw_measured, t.regime_measured,"   \
     " t.video_path, t.source_trial_id, s.name, t.created_at, t.started_at, t.ended_at,"                     \
-    " t.software_version, (SELECT count(*) FROM samples WHERE trial_id = t.id),"                           \
+    " t.software_version, t.samples_count,"                                                                 \
     " p.id, p.snap_dw, p.regime, p.nodes, p.dt, p.adaptive, p.est_error, p.wall_s, p.imperfection,"          \
     " p.scene_hash, t.calibration_json"                                                                     \
     " FROM trials t LEFT JOIN specimens s ON s.id = t.specimen_id"                                          \

@@ -32,7 +32,8 @@ static store_err check(const store_prediction *p, char *why, size_t why_len)
         if ((e = store_need_finite(p->snap_dw, "predicted snap_dw", why, why_len)))
             return e;
         if (p->regime != STORE_REGIME_SYMMETRIC && p->regime != STORE_REGIME_ASYMMETRIC)
-            return store_fail(why, why_len, STORE_E_INVALID, "a predicted snap's regime must be symmetric or asymmetric");
+            return store_fail(why, why_len, STORE_E_INVALID,
+                              "a predicted snap's regime must be symmetric or asymmetric");
     } else {
         if (!isnan(p->snap_dw))
             return store_fail(why, why_len, STORE_E_INVALID,
@@ -67,7 +68,9 @@ static store_err insert_curve(store *st, int64_t pid, const store_curve *c, char
     if (c->n == 0)
         return STORE_OK;
     sqlite3_stmt *s;
-    store_err e = store_prepare(st, "INSERT INTO prediction_curve (prediction_id, seq, t_s, dw, dz, a) VALUES (?1,?2,?3,?4,?5,?6)",
+    store_err e = store_prepare(st,
+                                "INSERT INTO prediction_curve (prediction_id, seq, t_s, dw, dz, a)"
+                                " VALUES (?1,?2,?3,?4,?5,?6)",
                                 &s, why, why_len);
     if (e != STORE_OK)
         return e;

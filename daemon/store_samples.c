@@ -7,7 +7,9 @@
  * a commit is also due once the caller's clock (the samples' own t_s, no hidden clock) is
  * max_age_s past the last commit. Committed rows survive kill -9 (WAL). A failed commit keeps
  * its rows pending so a later flush can retry; the batch never grows beyond batch_rows.
- * Sequence numbers are the writer's: 0, 1, 2... per trial, continuing after rows already stored. */
+ * Sequence numbers are the writer's: 0, 1, 2... per trial, continuing after rows already stored.
+ * Each commit also adds its rows to trials.samples_count, so the count a trial list shows is
+ * exact after any crash without counting the samples. */
 #include "store_int.h"
 
 #include <math.h>
@@ -19,6 +21,7 @@ struct store_samples {
     int64_t trial_id;
     store_writer_params p;
     sqlite3_stmt *insert; /* prepared once, reset per row */
+    sqlite3_stmt *count;  /* trials.samples_count += rows, in the same commit */
     store_sample *batch;  /* p.batch_rows slots */
     size_t pending;       /* rows in batch waiting for a commit */
     int64_t next_seq;
@@ -98,7 +101,11 @@ store_err store_samples_begin(store *st, int64_t trial_id, const store_writer_pa
                       "INSERT INTO samples (trial_id, seq, t_s, kind, frame, compress_mm, shear_mm,"
                       " dl, dw, dz, a, quality, reason) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13)",
                       &w->insert, why, why_len);
+    if (e == STORE_OK)
+        e = store_prepare(st, "UPDATE trials SET samples_count = samples_count + ?1 WHERE id = ?2", &w->count, why,
+                          why_len);
     if (e != STORE_OK) {
+        sqlite3_finalize(w->insert);
         free(batch);
         free(w);
         return e;
@@ -169,6 +176,15 @@ store_err store_samples_flush(store_samples *w, char *why, size_t why_len)
             e = store_sql_fail(w->st->db, rc, sub, sizeof sub, "inserting a sample");
     }
     sqlite3_reset(w->insert);
+    if (e == STORE_OK) {
+        sqlite3_reset(w->count);
+        sqlite3_bind_int64(w->count, 1, (int64_t)w->pending);
+        sqlite3_bind_int64(w->count, 2, w->trial_id);
+        int rc = sqlite3_step(w->count);
+        if (rc != SQLITE_DONE)
+            e = store_sql_fail(w->st->db, rc, sub, sizeof sub, "counting the trial's samples");
+        sqlite3_reset(w->count);
+    }
     if (e == STORE_OK)
         e = store_commit(w->st, sub, sizeof sub);
     if (e != STORE_OK) {
@@ -214,6 +230,7 @@ store_err store_samples_end(store_samples *w, char *why, size_t why_len)
     if (e != STORE_OK)
         store_fail(why, why_len, e, "%s; %zu samples lost", sub, pending);
     sqlite3_finalize(w->insert);
+    sqlite3_finalize(w->count);
     free(w->batch);
     free(w);
     return e;
@@ -233,20 +250,38 @@ store_err store_samples_count(store *st, int64_t trial_id, int64_t *count, char 
 {
     *count = 0;
     sqlite3_stmt *s;
-    store_err e = store_prepare(st,
-                                "SELECT (SELECT 1 FROM trials WHERE id = ?1),"
-                                " (SELECT count(*) FROM samples WHERE trial_id = ?1)",
-                                &s, why, why_len);
+    store_err e = store_prepare(st, "SELECT samples_count FROM trials WHERE id = ?1", &s, why, why_len);
     if (e != STORE_OK)
         return e;
     sqlite3_bind_int64(s, 1, trial_id);
     int rc = sqlite3_step(s);
-    if (rc != SQLITE_ROW)
-        e = store_sql_fail(st->db, rc, why, why_len, "counting samples");
-    else if (sqlite3_column_type(s, 0) == SQLITE_NULL)
+    if (rc == SQLITE_ROW)
+        *count = sqlite3_column_int64(s, 0);
+    else if (rc == SQLITE_DONE)
         e = store_fail(why, why_len, STORE_E_NOTFOUND, "trial %lld does not exist", (long long)trial_id);
     else
-        *count = sqlite3_column_int64(s, 1);
+        e = store_sql_fail(st->db, rc, why, why_len, "counting samples");
+    sqlite3_finalize(s);
+    return e;
+}
+
+/* The rows themselves counted (store_samples_get sizes its array by what is really there). */
+static store_err count_rows(store *st, int64_t trial_id, int64_t *count, char *why, size_t why_len)
+{
+    int64_t cached;
+    store_err e = store_samples_count(st, trial_id, &cached, why, why_len); /* NOTFOUND for a bad id */
+    if (e != STORE_OK)
+        return e;
+    sqlite3_stmt *s;
+    e = store_prepare(st, "SELECT count(*) FROM samples WHERE trial_id = ?1", &s, why, why_len);
+    if (e != STORE_OK)
+        return e;
+    sqlite3_bind_int64(s, 1, trial_id);
+    int rc = sqlite3_step(s);
+    if (rc == SQLITE_ROW)
+        *count = sqlite3_column_int64(s, 0);
+    else
+        e = store_sql_fail(st->db, rc, why, why_len, "counting samples");
     sqlite3_finalize(s);
     return e;
 }
@@ -256,7 +291,7 @@ store_err store_samples_get(store *st, int64_t trial_id, store_sample **out, siz
     *out = NULL;
     *n = 0;
     int64_t count = 0;
-    store_err e = store_samples_count(st, trial_id, &count, why, why_len);
+    store_err e = count_rows(st, trial_id, &count, why, why_len);
     if (e != STORE_OK || count == 0)
         return e;
     store_sample *v = malloc((size_t)count * sizeof *v);
@@ -310,8 +345,9 @@ store_err store_trial_curve(store *st, int64_t trial_id, store_curve *out, char 
         memset(out, 0, sizeof *out);
         return e;
     }
-#define VALID_FRAMES " FROM samples WHERE trial_id = ?1 AND kind = 1 AND dw IS NOT NULL AND dz IS NOT NULL AND a IS NOT NULL"
-    return store_curve_query(st, "SELECT count(*)" VALID_FRAMES, "SELECT t_s, dw, dz, a" VALID_FRAMES " ORDER BY t_s, seq",
-                             trial_id, out, why, why_len);
+#define VALID_FRAMES                                                                                        \
+    " FROM samples WHERE trial_id = ?1 AND kind = 1 AND dw IS NOT NULL AND dz IS NOT NULL AND a IS NOT NULL"
+    return store_curve_query(st, "SELECT count(*)" VALID_FRAMES, "SELECT t_s, dw, dz, a" VALID_FRAMES
+                             " ORDER BY t_s, seq", trial_id, out, why, why_len);
 #undef VALID_FRAMES
 }

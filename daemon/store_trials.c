@@ -293,7 +293,7 @@ store_err store_trial_mark_interrupted(store *st, double wall_s, int *count, cha
 #define TRIAL_COLUMNS                                                                                       \
     "SELECT t.id, t.mode, t.status, t.state, t.reason, t.specimen_id, s.name, t.source_trial_id,"           \
     " t.video_path, t.created_at, t.started_at, t.ended_at, t.snapped, t.snap_dw_measured,"                 \
-    " t.regime_measured, t.software_version"                                                                \
+    " t.regime_measured, t.software_version, t.samples_count"                                               \
     " FROM trials t LEFT JOIN specimens s ON s.id = t.specimen_id "
 
 store_err store_trial_read_row(sqlite3_stmt *s, store_trial *out)
@@ -319,6 +319,7 @@ store_err store_trial_read_row(sqlite3_stmt *s, store_trial *out)
         !store_regime_parse((const char *)sqlite3_column_text(s, 14), &out->regime_measured))
         return STORE_E_CORRUPT;
     store_col_text(s, 15, out->software_version, sizeof out->software_version);
+    out->samples = sqlite3_column_int64(s, 16);
     return STORE_OK;
 }
 

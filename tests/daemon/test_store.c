@@ -241,6 +241,7 @@ static void test_migrate_v1_to_current(void **state)
     NEAR(t.snap_dw_measured, 0.123, 0);
     assert_int_equal(t.regime_measured, STORE_REGIME_ASYMMETRIC);
     assert_string_equal(t.software_version, "0.0.9");
+    assert_int_equal(t.samples, 3); /* v3 back-filled the count */
     int64_t n;
     OK(store_samples_count(st, 1, &n, why, sizeof why));
     assert_int_equal(n, 3);
@@ -871,6 +872,9 @@ static void test_writer_commit_triggers(void **state)
     OK(store_samples_end(w, why, sizeof why));
     OK(store_samples_count(reader, id, &seen, why, sizeof why));
     assert_int_equal(seen, 8);
+    store_trial tr;
+    OK(store_trial_get(reader, id, &tr, why, sizeof why));
+    assert_int_equal(tr.samples, 8);
 
     /* A second writer continues the numbering. */
     OK(store_samples_begin(st, id, NULL, &w, why, sizeof why));

@@ -3,8 +3,8 @@
  * how many it has committed after every commit. The parent kills it with SIGKILL mid-stream (it
  * is always inside a batch, often inside a commit), reopens the file and checks: PRAGMA
  * integrity_check is ok, every sample reported committed is there with its values, the rows
- * have no gaps, and store_trial_mark_interrupted turns the child's 'running' trial into
- * 'interrupted'. Three rounds on one file, killed at different points. */
+ * have no gaps, the trial's sample count matches its rows, and store_trial_mark_interrupted
+ * turns the child's 'running' trial into 'interrupted'. Three rounds on one file, killed at different points. */
 #include <errno.h>
 #include <math.h>
 #include <setjmp.h>
@@ -190,6 +190,14 @@ static void test_kill9_mid_stream(void **state)
         store_trial t;
         OK(store_trial_get(st, trial, &t, why, sizeof why));
         assert_int_equal(t.status, STORE_STATUS_RUNNING);
+        /* The trial's cached count went in the same commits as the rows. */
+        assert_int_equal(sqlite3_prepare_v2(store_handle(st), "SELECT count(*) FROM samples WHERE trial_id = ?1", -1,
+                                            &s, NULL),
+                         SQLITE_OK);
+        sqlite3_bind_int64(s, 1, trial);
+        assert_int_equal(sqlite3_step(s), SQLITE_ROW);
+        assert_int_equal(sqlite3_column_int64(s, 0), t.samples);
+        sqlite3_finalize(s);
         int n = 0;
         OK(store_trial_mark_interrupted(st, store_wall_now(), &n, why, sizeof why));
         assert_int_equal(n, 1);
