@@ -12,4 +12,6 @@ int ctl_track_main(int argc, char **argv); /* ctl_track.c, built when vision/ is
 int ctl_vision_bench_main(int argc, char **argv); /* ctl_vision_bench.c, likewise */
 int ctl_render_main(int argc, char **argv); /* ctl_render.c, likewise (needs sim/ and vision/) */
 
+int ctl_trials_main(int argc, char **argv); /* ctl_trials.c: start abort status list show export report
+                                            phase-report replay (RIBBON_HAVE_TRIALS) */
 #endif

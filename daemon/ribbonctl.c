@@ -20,13 +20,24 @@ static const ctl_cmd commands[] = {
     {"vision-bench", ctl_vision_bench_main, "speed of the tracker and of decode + track, one JSON line"},
     {"render", ctl_render_main, "simulate a scene's trial and film it: FFV1 video + ground truth CSV, JSON summary"},
 #endif
+#ifdef RIBBON_HAVE_TRIALS
+    {"start", ctl_trials_main, "ask ribbond to run a trial (--set overrides, --note, --wait to follow it)"},
+    {"abort", ctl_trials_main, "abort the running trial (rails stop where they are)"},
+    {"status", ctl_trials_main, "the daemon's state and the running trial (JSON)"},
+    {"list", ctl_trials_main, "every trial: measured and predicted snap and regime (--json, --db FILE)"},
+    {"show", ctl_trials_main, "one trial with its events (--json, --db FILE)"},
+    {"export", ctl_trials_main, "samples as CSV: export ID --csv [--out F] | export --all --out DIR (--db FILE)"},
+    {"report", ctl_trials_main, "report ID --out FILE.png: Delta Z and A against Delta W, measured and predicted"},
+    {"phase-report", ctl_trials_main, "every trial's measured regime on the predicted (Gamma, phi) phase diagram"},
+    {"replay", ctl_trials_main, "replay ID: a recorded trial through tracking and snap detection again"},
+#endif
 };
 
 static void usage(FILE *f)
 {
     fprintf(f, "usage: ribbonctl COMMAND [options]   (ribbonctl COMMAND --help for details)\n\n");
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        fprintf(f, "  %-8s %s\n", commands[i].name, commands[i].help);
+        fprintf(f, "  %-12s %s\n", commands[i].name, commands[i].help);
 }
 
 int main(int argc, char **argv)

@@ -158,7 +158,7 @@ int main(int argc, char **argv)
         return 1;
     }
     char line[600];
-    snprintf(line, sizeof line, "%s mode, store %s, listening on http://%s:%u", rig_mode_name(d.cfg.mode),
+    snprintf(line, sizeof line, "%s mode, store %.400s, listening on http://%s:%u", rig_mode_name(d.cfg.mode),
              d.cfg.store_path, strchr(d.cfg.api.listen, ':') ? "[::1]" : d.cfg.api.listen, port);
     log_line(line);
     sd_notifyf(0, "READY=1\nSTATUS=%s", line);

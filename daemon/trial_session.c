@@ -79,7 +79,7 @@ static void logf_(trial_session *s, const char *fmt, ...)
     vsnprintf(line, sizeof line, fmt, ap);
     va_end(ap);
     pthread_mutex_lock(&s->lock);
-    snprintf(s->status.message, sizeof s->status.message, "%s", line);
+    snprintf(s->status.message, sizeof s->status.message, "%.255s", line);
     pthread_mutex_unlock(&s->lock);
     if (s->log) {
         char full[600];
@@ -88,7 +88,7 @@ static void logf_(trial_session *s, const char *fmt, ...)
     }
 }
 
-static void store_event(trial_session *s, double t_s, store_event_kind kind, const char *msg)
+static void session_event(trial_session *s, double t_s, store_event_kind kind, const char *msg)
 {
     store_event ev;
     memset(&ev, 0, sizeof ev);
@@ -251,12 +251,12 @@ static int choose_resolution(trial_session *s, rod_scene *sc, double *est_error,
             nr++;
         }
         free(cached);
-        store_event(s, NAN, STORE_EVENT_INFO, "resolution ladder taken from the store's cache");
+        session_event(s, NAN, STORE_EVENT_INFO, "resolution ladder taken from the store's cache");
     } else {
         free(cached);
         char msg[128];
         snprintf(msg, sizeof msg, "computing the resolution ladder (%d rungs), once for this scene", sim->n_ladder);
-        store_event(s, NAN, STORE_EVENT_INFO, msg);
+        session_event(s, NAN, STORE_EVENT_INFO, msg);
         if (ladder_compute(sc, sim->ladder_nodes, sim->n_ladder, sim->fast, r, NULL, NULL, why, why_len)) return -1;
         nr = sim->n_ladder;
         store_ladder_rung sr[LADDER_MAX_RUNGS];
@@ -270,7 +270,7 @@ static int choose_resolution(trial_session *s, rod_scene *sc, double *est_error,
         }
         char w2[256];
         if (store_ladder_put(s->st, hash, sr, (size_t)nr, w2, sizeof w2) != STORE_OK)
-            store_event(s, NAN, STORE_EVENT_WARNING, w2);
+            session_event(s, NAN, STORE_EVENT_WARNING, w2);
     }
     int k = ladder_choose(r, nr, sim->target_error);
     sc->nodes = r[k].nodes;
@@ -278,7 +278,7 @@ static int choose_resolution(trial_session *s, rod_scene *sc, double *est_error,
     char msg[200];
     snprintf(msg, sizeof msg, "prediction resolution N = %d, dt = %g s: estimated error %.2g (target %.2g)", sc->nodes,
              sc->dt, *est_error, sim->target_error);
-    store_event(s, NAN, STORE_EVENT_INFO, msg);
+    session_event(s, NAN, STORE_EVENT_INFO, msg);
     return 0;
 }
 
@@ -294,7 +294,7 @@ static int sink_state(void *user, trial_state st, double t_s, const char *why)
     store_trial_set_state(s->st, s->trial_id, trial_state_name(st), w, sizeof w);
     char msg[400];
     snprintf(msg, sizeof msg, "state %s%s%s", trial_state_name(st), why && *why ? ": " : "", why ? why : "");
-    store_event(s, t_s, STORE_EVENT_STATE, msg);
+    session_event(s, t_s, STORE_EVENT_STATE, msg);
     return 0;
 }
 
@@ -303,7 +303,7 @@ static int sink_event(void *user, double t_s, const char *kind, const char *mess
     trial_session *s = user;
     store_event_kind k = STORE_EVENT_INFO;
     store_event_kind_parse(kind, &k);
-    store_event(s, t_s, k, message);
+    session_event(s, t_s, k, message);
     return 0;
 }
 
@@ -375,7 +375,7 @@ static void fail_early(trial_session *s, const char *why)
 {
     char w[256];
     int aborted = strncmp(why, "aborted", 7) == 0;
-    store_event(s, NAN, aborted ? STORE_EVENT_INFO : STORE_EVENT_FAULT, why);
+    session_event(s, NAN, aborted ? STORE_EVENT_INFO : STORE_EVENT_FAULT, why);
     store_trial_set_status(s->st, s->trial_id, aborted ? STORE_STATUS_ABORTED : STORE_STATUS_FAILED, why,
                            store_wall_now(), w, sizeof w);
     s->result.final = aborted ? TRIAL_ABORTED : TRIAL_FAILED;
@@ -401,13 +401,13 @@ static void *session_main(void *arg)
     /* 1. Disk space for the video. */
     struct statvfs fs;
     if (statvfs(cfg->camera.video_dir, &fs) != 0) {
-        snprintf(why, sizeof why, "video directory %s cannot be read: %m", cfg->camera.video_dir);
+        snprintf(why, sizeof why, "video directory %.300s cannot be read: %m", cfg->camera.video_dir);
         fail_early(s, why);
         goto end;
     }
     double free_mb = (double)fs.f_bavail * (double)fs.f_frsize / 1e6;
     if (free_mb < cfg->trial.min_free_disk_mb) {
-        snprintf(why, sizeof why, "only %.0f MB free in %s; a trial needs %.0f MB (trial.min_free_disk_mb)", free_mb,
+        snprintf(why, sizeof why, "only %.0f MB free in %.300s; a trial needs %.0f MB (trial.min_free_disk_mb)", free_mb,
                  cfg->camera.video_dir, cfg->trial.min_free_disk_mb);
         fail_early(s, why);
         goto end;
@@ -440,7 +440,7 @@ static void *session_main(void *arg)
     if (pthread_create(&s->pred_thread, NULL, pred_main, &s->pred) == 0)
         s->pred_started = 1;
     else
-        store_event(s, NAN, STORE_EVENT_WARNING, "prediction thread could not start: no prediction for this trial");
+        session_event(s, NAN, STORE_EVENT_WARNING, "prediction thread could not start: no prediction for this trial");
 
     /* 3. Camera, tracker, video. */
     rail_status rs;
@@ -559,7 +559,7 @@ static void *session_main(void *arg)
     /* 5. Result. Samples first, so a stored result always has its samples. */
     {
         char w[256];
-        if (store_samples_end(s->writer, w, sizeof w) != STORE_OK) store_event(s, NAN, STORE_EVENT_FAULT, w);
+        if (store_samples_end(s->writer, w, sizeof w) != STORE_OK) session_event(s, NAN, STORE_EVENT_FAULT, w);
         s->writer = NULL;
         long frames = trial_video_close(s->video, w, sizeof w);
         s->video = NULL;
@@ -631,7 +631,7 @@ int trial_session_start(const rig_config *cfg, rail *compress, rail *shear, cons
     sp.thickness_m = cfg->scene.thickness;
     sp.youngs_modulus_pa = cfg->scene.youngs_modulus;
     sp.density_kg_m3 = cfg->scene.density;
-    snprintf(sp.material, sizeof sp.material, "%s", cfg->specimen.material);
+    snprintf(sp.material, sizeof sp.material, "%.31s", cfg->specimen.material);
     sp.crease_angle_left_deg = cfg->specimen.crease_angle_left_deg;
     sp.crease_angle_right_deg = cfg->specimen.crease_angle_right_deg;
     sp.fold_position = cfg->scene.fold_position;
