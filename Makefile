@@ -1,5 +1,5 @@
 # Thin wrapper giving the README's two commands:
-#   make demo   the main job (today: predictions for the two paper scenes)
+#   make demo   the main job: one mock trial through ribbond, measured beside predicted, report written
 #   make test   the whole test suite: normal build, then ASan+UBSan build without the heavy tests
 # Both first install missing Debian packages (as root) or print the exact command to run.
 
@@ -39,10 +39,21 @@ build-asan: deps
 	cmake -S . -B $(ASAN_BUILD) -DCMAKE_BUILD_TYPE=Debug -DRIBBON_SANITIZE=ON
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 
+# The main job: ribbond on config/mock.ini (mock rails, the simulator as the ribbon, synthetic frames
+# measured by the real tracker), one complete trial through the API, measured and predicted snap side
+# by side, the report PNG, the store's path; then ribbond is stopped with SIGTERM. The store and the
+# videos go to the working directory (ribbon-mock.db, ribbon-mock-videos/).
+DEMO_REPORT ?= ribbon-mock-report.png
 demo: build
-	@for s in config/scenes/paper-gamma013.ini config/scenes/paper-gamma021.ini; do \
-	  echo "== $$s"; ./$(BUILD)/bin/ribbon-sim predict --scene $$s --fast || exit 1; \
-	done
+	@log=$$(mktemp); \
+	./$(BUILD)/bin/ribbond --config config/mock.ini --set api.port=0 2>$$log & pid=$$!; \
+	url=""; for i in $$(seq 300); do \
+	  url=$$(sed -n 's/.*listening on \(http[^ ]*\).*/\1/p' $$log); [ -n "$$url" ] && break; \
+	  kill -0 $$pid 2>/dev/null || break; sleep 0.1; done; \
+	if [ -z "$$url" ]; then cat $$log; echo "ribbond did not start"; kill $$pid 2>/dev/null; exit 1; fi; \
+	echo "ribbond on $$url (log: $$log)"; \
+	./$(BUILD)/bin/ribbonctl start --url $$url --note "make demo" --wait --out $(DEMO_REPORT); rc=$$?; \
+	kill -TERM $$pid; wait $$pid; exit $$rc
 
 test-normal: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

@@ -42,7 +42,7 @@ static int usage_error(const char *cmd, const char *msg)
 static void help(const char *cmd)
 {
     printf("usage:\n"
-           "  ribbonctl start [--set section.key=value ...] [--note TEXT] [--wait] [--json]\n"
+           "  ribbonctl start [--set section.key=value ...] [--note TEXT] [--wait [--out REPORT.png]] [--json]\n"
            "  ribbonctl abort\n"
            "  ribbonctl status [--json]\n"
            "  ribbonctl list [--json] [--db FILE]\n"
@@ -55,7 +55,8 @@ static void help(const char *cmd)
            "common: --url URL (default $RIBBON_URL or http://127.0.0.1:8377), --token T (default $RIBBON_TOKEN)\n"
            "\n"
            "start asks ribbond to run one trial of its rig file (with --set overrides of scene or rig keys);\n"
-           "--wait follows it on stderr and prints the measured and predicted snap when it ends.\n"
+           "--wait follows it on stderr and prints the measured and predicted snap when it ends (with --out,\n"
+           "also its report) and the store's path on a line `database: PATH`.\n"
            "report draws Delta Z and A against Delta W, measured and predicted, snaps marked.\n"
            "phase-report draws every trial's measured regime over the predicted (Gamma, phi) phase diagram,\n"
            "computed for the scene (--scene, default the paper scene at N = 41, dt = 10 ms, fast mode)\n"
@@ -251,30 +252,37 @@ static int wait_for(const ctl_opts *o, int64_t id)
         nanosleep(&ts, NULL);
     }
     if (isatty(2)) fprintf(stderr, "\n");
-    /* The prediction may still be running beside a finished trial: wait for it a little. */
+    /* The session joins its prediction before it ends, so the stored trial is complete now. */
     json_t *t = NULL;
-    for (int k = 0; k < 600; k++) {
-        char path[64];
-        snprintf(path, sizeof path, "/trials/%lld", (long long)id);
-        if (request(o, "GET", path, NULL, &t, NULL, NULL) < 0) return 1;
-        if (json_is_number(json_object_get(t, "snap_dw_predicted")) || json_is_object(json_object_get(t, "prediction")))
-            break;
-        json_decref(t);
-        t = NULL;
-        struct timespec ts = {0, 500000000};
-        nanosleep(&ts, NULL);
-    }
-    if (!t) {
-        char path[64];
-        snprintf(path, sizeof path, "/trials/%lld", (long long)id);
-        if (request(o, "GET", path, NULL, &t, NULL, NULL) < 0) return 1;
-    }
+    char path[64];
+    snprintf(path, sizeof path, "/trials/%lld", (long long)id);
+    if (request(o, "GET", path, NULL, &t, NULL, NULL) < 0) return 1;
     if (o->json)
         print_json(t);
     else
         print_comparison(t);
     int ok = !strcmp(jstr(t, "status"), "done");
     json_decref(t);
+    if (o->out) {
+        /* The report of the trial just run (start --wait --out FILE.png). */
+        char path[64];
+        snprintf(path, sizeof path, "/trials/%lld/report.png", (long long)id);
+        unsigned char *png = NULL;
+        size_t len = 0;
+        if (request(o, "GET", path, NULL, NULL, &png, &len) < 0) return 1;
+        FILE *f = fopen(o->out, "wb");
+        int wrote = f && fwrite(png, 1, len, f) == len;
+        if (f && fclose(f) != 0) wrote = 0;
+        free(png);
+        if (!wrote) {
+            fprintf(stderr, "ribbonctl: %s: %s\n", o->out, strerror(errno));
+            return 1;
+        }
+        printf("report: %s\n", o->out);
+    }
+    json_t *s = NULL;
+    if (!o->json && request(o, "GET", "/status", NULL, &s, NULL, NULL) > 0) printf("database: %s\n", jstr(s, "store"));
+    json_decref(s);
     return ok ? 0 : 1;
 }
 

@@ -6,6 +6,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <errno.h>
+#include <sys/stat.h>
 #include <sys/statvfs.h>
 
 #include <jansson.h>
@@ -400,6 +402,11 @@ static void *session_main(void *arg)
 
     /* 1. Disk space for the video. */
     struct statvfs fs;
+    if (mkdir(cfg->camera.video_dir, 0775) != 0 && errno != EEXIST) {
+        snprintf(why, sizeof why, "video directory %.300s cannot be created: %m", cfg->camera.video_dir);
+        fail_early(s, why);
+        goto end;
+    }
     if (statvfs(cfg->camera.video_dir, &fs) != 0) {
         snprintf(why, sizeof why, "video directory %.300s cannot be read: %m", cfg->camera.video_dir);
         fail_early(s, why);
