@@ -33,8 +33,9 @@
  *     This is the law rail_axis (the mock and the simulators) follows, so the two agree up to the
  *     axis's 1 ms integration sub-step;
  *   - stop / estop: braking at a from v0 to rest, so it moves at most v0^2 / (2a) from p0 (the
- *     reading after the stop call is fresh, so p0 is at most a poll old and v0 at most the
- *     speed at the stop call);
+ *     first status after the stop call is a fresh reading taken after it, so p0 and v0 are
+ *     already the device's while braking, and p0 + v0^2/(2a) is where braking from the stop
+ *     call ends);
  *   - home, or nothing known (after open or reset, or after the driver failed to send a
  *     command): straight on at the measured velocity, p0 + v0 (now - t0).
  * A fresh reading always replaces the reconstruction: nothing of it is carried over. */
