@@ -1,17 +1,24 @@
 # Thin wrapper giving the README's two commands:
 #   make demo   the main job: one mock trial through ribbond, measured beside predicted, report written
-#   make test   the whole test suite: normal build, then ASan+UBSan build without the heavy tests
+#   make test   the whole test suite: normal build, then ASan+UBSan build without the heavy tests,
+#               then short libFuzzer runs of the drivers' fuzz targets (clang, build-fuzz)
 # Both first install missing Debian packages (as root) or print the exact command to run.
 
 DEB_PACKAGES := cmake make gcc g++ pkg-config \
 	libgsl-dev libinih-dev libsqlite3-dev libserialport-dev libmodbus-dev \
 	libopencv-dev libmicrohttpd-dev libjansson-dev libcmocka-dev libcairo2-dev \
-	libcurl4-openssl-dev libplplot-dev plplot-driver-cairo libsystemd-dev
+	libcurl4-openssl-dev libplplot-dev plplot-driver-cairo libsystemd-dev \
+	clang libclang-rt-14-dev
+# clang with libclang-rt-14-dev: libFuzzer (libclang_rt.fuzzer-x86_64.a) and clang's sanitizer
+# runtimes for the fuzz build (clang-14 only recommends them, and deps skips recommends).
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 BUILD ?= build
 ASAN_BUILD ?= build-asan
+FUZZ_BUILD ?= build-fuzz
+# Seconds of each libFuzzer run in `make test` (the two run side by side).
+FUZZ_SECONDS ?= 20
 
-.PHONY: all deps build build-asan demo test test-normal test-asan clean
+.PHONY: all deps build build-asan build-fuzz demo test test-normal test-asan test-fuzz clean
 
 all: build
 
@@ -44,6 +51,11 @@ build-asan: deps
 # by side, the report PNG, the store's path; then ribbond is stopped with SIGTERM. The store and the
 # videos go to the working directory (ribbon-mock.db, ribbon-mock-videos/).
 DEMO_REPORT ?= ribbon-mock-report.png
+# Only the drivers library and its fuzz targets, with clang (drivers/fuzz/CMakeLists.txt).
+build-fuzz: deps
+	cmake -S drivers/fuzz -B $(FUZZ_BUILD) -DCMAKE_C_COMPILER=clang -DRIBBON_FUZZ_SECONDS=$(FUZZ_SECONDS)
+	cmake --build $(FUZZ_BUILD) -j $(JOBS)
+
 demo: build
 	@log=$$(mktemp); \
 	./$(BUILD)/bin/ribbond --config config/mock.ini --set api.port=0 2>$$log & pid=$$!; \
@@ -62,7 +74,10 @@ test-asan: build-asan
 	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --output-on-failure -j $(JOBS) -LE heavy
 
-test: test-normal test-asan
+test-fuzz: build-fuzz
+	cd $(FUZZ_BUILD) && ctest --output-on-failure -j $(JOBS) -L fuzz
+
+test: test-normal test-asan test-fuzz
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD)

@@ -6,7 +6,8 @@
  * path); a speed is finite, positive and at most max_speed. A jog becomes a bounded move toward
  * the nearest limit in its direction, so even a jog can never cross a limit.
  * Polling: rail_status_get() reads the device at most poll_hz times a second and otherwise
- * extrapolates from the last reading with its measured velocity (flagged `extrapolated`).
+ * reconstructs the position from the last reading and what the front end last commanded
+ * (flagged `extrapolated`; the profile is in rail.h and in reconstruct() below).
  * Drivers that feed motion in segments (GRBL) get their poll call at that same rate. */
 #include "rail.h"
 
@@ -16,6 +17,21 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The last motion command, as the reconstruction needs it. A jog is recorded as what it is
+ * underneath: a move to the end of the allowed travel at |velocity|. */
+typedef enum rail_cmd_kind {
+    RAIL_CMD_NONE = 0, /* nothing known (open, reset, a command that failed): measured velocity */
+    RAIL_CMD_MOVE,     /* move_abs / move_rel / jog: target_mm at speed_mm_s */
+    RAIL_CMD_STOP,     /* stop / estop: decelerating to rest at accel_mm_s2 */
+    RAIL_CMD_HOME      /* homing: the device's own search, measured velocity */
+} rail_cmd_kind;
+
+typedef struct rail_cmd {
+    rail_cmd_kind kind;
+    double target_mm;   /* mm, RAIL_CMD_MOVE only */
+    double speed_mm_s;  /* mm/s, > 0, RAIL_CMD_MOVE only */
+} rail_cmd;
+
 struct rail {
     const rail_ops *ops;
     void *impl;
@@ -23,6 +39,7 @@ struct rail {
     rail_clock clock;
     rail_status last;   /* last device reading */
     bool have_last;
+    rail_cmd cmd;       /* last motion command the driver accepted, for the reconstruction */
     char why[256];
 };
 
@@ -226,13 +243,102 @@ rail_err rail_status_poll(rail *r, rail_status *out)
     return e;
 }
 
+/* A move in its own frame: u is the distance travelled toward the target since the reading, w the
+ * velocity toward it, w0 the measured one, s the commanded speed, L >= 0 the distance left at the
+ * reading. The law is the devices' (and rail_axis's): head for the target at s, change velocity
+ * at no more than a, and brake at a so as to come to rest on the target. In closed form:
+ *   - if w0 > 0 and w0^2 / (2a) >= L the rail cannot stop in time: brake at a from the start
+ *     and end on the target (drives that overshoot come back; the reconstruction does not);
+ *   - otherwise three phases: ramp at +-a from w0 to the peak wp, cruise at wp, brake at a from
+ *     wp to rest on the target. wp = s when w0 > s (slowing down; the stopping margin
+ *     L - w^2/(2a) is constant while braking, so it stays positive); else wp = min(s,
+ *     sqrt(a L + w0^2 / 2)), the second being the triangle's peak, where the distance ramping
+ *     up, (wp^2 - w0^2)/(2a), plus the braking one, wp^2/(2a), is exactly L.
+ * u is capped at L, so a reconstruction never passes the target. */
+static void move_profile(double w0, double s, double L, double a, double t, double *u, double *w)
+{
+    if (w0 > 0.0 && w0 * w0 >= 2.0 * a * L) {
+        double tt = fmin(t, w0 / a);
+        *u = w0 * tt - 0.5 * a * tt * tt;
+        *w = w0 - a * tt;
+        if (*u >= L) {
+            *u = L;
+            *w = 0.0;
+        }
+        return;
+    }
+    double wp, acc;
+    if (w0 > s) {
+        wp = s;
+        acc = -a;
+    } else {
+        wp = fmin(s, sqrt(a * L + 0.5 * w0 * w0));
+        acc = a;
+    }
+    double t1 = fabs(wp - w0) / a;
+    double d1 = (wp * wp - w0 * w0) / (2.0 * acc);
+    double db = wp * wp / (2.0 * a);
+    double dc = fmax(0.0, L - d1 - db);
+    double t2 = wp > 0.0 ? dc / wp : 0.0;
+    double t3 = wp / a;
+    if (t <= t1) {
+        *u = w0 * t + 0.5 * acc * t * t;
+        *w = w0 + acc * t;
+    } else if (t <= t1 + t2) {
+        *u = d1 + wp * (t - t1);
+        *w = wp;
+    } else if (t <= t1 + t2 + t3) {
+        double tau = t - t1 - t2;
+        *u = d1 + dc + wp * tau - 0.5 * a * tau * tau;
+        *w = wp - a * tau;
+    } else {
+        *u = L;
+        *w = 0.0;
+    }
+    if (*u > L) {
+        *u = L;
+        *w = 0.0;
+    }
+}
+
+/* Position and velocity dt seconds after the reading st, from the last command (rail.h). */
+static void reconstruct(const rail *r, rail_status *st, double dt)
+{
+    double a = r->p.accel_mm_s2, p0 = st->position_mm, v0 = st->velocity_mm_s;
+    switch (r->cmd.kind) {
+    case RAIL_CMD_MOVE: {
+        double T = r->cmd.target_mm;
+        double dir = T >= p0 ? 1.0 : -1.0;
+        double u, w;
+        move_profile(dir * v0, r->cmd.speed_mm_s, fabs(T - p0), a, dt, &u, &w);
+        st->position_mm = p0 + dir * u;
+        /* Rounding must not carry the position past the target either. */
+        if ((st->position_mm - T) * dir > 0.0)
+            st->position_mm = T;
+        st->velocity_mm_s = dir * w;
+        break;
+    }
+    case RAIL_CMD_STOP: {
+        double tt = fmin(dt, fabs(v0) / a);
+        double sg = v0 > 0.0 ? 1.0 : v0 < 0.0 ? -1.0 : 0.0;
+        st->position_mm = p0 + v0 * tt - sg * 0.5 * a * tt * tt;
+        st->velocity_mm_s = v0 - sg * a * tt;
+        break;
+    }
+    case RAIL_CMD_HOME:
+    case RAIL_CMD_NONE:
+        st->position_mm = p0 + v0 * dt;
+        break;
+    }
+}
+
 rail_err rail_status_get(rail *r, rail_status *out)
 {
     double now = rail_clock_now(r->clock);
     if (r->have_last && now - r->last.t_s < 1.0 / r->p.poll_hz && now >= r->last.t_s) {
         rail_status st = r->last;
         if (st.state == RAIL_STATE_MOVING || st.state == RAIL_STATE_HOMING) {
-            st.position_mm += st.velocity_mm_s * (now - st.t_s);
+            reconstruct(r, &st, now - st.t_s);
             st.extrapolated = true;
         }
         *out = st;
@@ -298,6 +404,27 @@ static rail_err ready_for_motion(rail *r, rail_status *st)
     return RAIL_OK;
 }
 
+/* Remember what the driver was told. A command refused by the front end sends nothing and leaves
+ * the previous one standing; one the driver failed to send leaves the device's motion unknown, so
+ * the reconstruction falls back to the measured velocity. */
+static void record_sent(rail *r, rail_err e, double target, double speed)
+{
+    if (e != RAIL_OK) {
+        r->cmd.kind = RAIL_CMD_NONE;
+        return;
+    }
+    r->cmd.kind = RAIL_CMD_MOVE;
+    r->cmd.target_mm = target;
+    r->cmd.speed_mm_s = speed;
+}
+
+static rail_err send_move(rail *r, double target, double speed)
+{
+    rail_err e = r->ops->move_abs(r, r->impl, target, speed);
+    record_sent(r, e, target, speed);
+    return e;
+}
+
 rail_err rail_move_abs(rail *r, double target, double speed)
 {
     rail_err e = check_target(r, target);
@@ -307,7 +434,7 @@ rail_err rail_move_abs(rail *r, double target, double speed)
     if (e == RAIL_OK)
         e = ready_for_motion(r, &st);
     if (e == RAIL_OK)
-        e = r->ops->move_abs(r, r->impl, target, speed);
+        e = send_move(r, target, speed);
     r->have_last = false;
     return e;
 }
@@ -325,7 +452,7 @@ rail_err rail_move_rel(rail *r, double delta, double speed)
     double target = st.position_mm + delta;
     e = check_target(r, target);
     if (e == RAIL_OK)
-        e = r->ops->move_abs(r, r->impl, target, speed);
+        e = send_move(r, target, speed);
     r->have_last = false;
     return e;
 }
@@ -350,20 +477,26 @@ rail_err rail_jog(rail *r, double v)
                               v, st.position_mm, lo, hi);
     r->have_last = false;
     if (!r->ops->jog)
-        return r->ops->move_abs(r, r->impl, end, fabs(v));
-    return r->ops->jog(r, r->impl, v, end);
+        return send_move(r, end, fabs(v));
+    e = r->ops->jog(r, r->impl, v, end);
+    record_sent(r, e, end, fabs(v));
+    return e;
 }
 
 rail_err rail_stop(rail *r)
 {
     r->have_last = false; /* the next status is a fresh reading, never an extrapolation */
-    return r->ops->stop(r, r->impl);
+    rail_err e = r->ops->stop(r, r->impl);
+    r->cmd.kind = e == RAIL_OK ? RAIL_CMD_STOP : RAIL_CMD_NONE;
+    return e;
 }
 
 rail_err rail_estop(rail *r)
 {
     r->have_last = false;
-    return r->ops->estop(r, r->impl);
+    rail_err e = r->ops->estop(r, r->impl);
+    r->cmd.kind = e == RAIL_OK ? RAIL_CMD_STOP : RAIL_CMD_NONE;
+    return e;
 }
 
 rail_err rail_home(rail *r, bool confirmed)
@@ -375,7 +508,9 @@ rail_err rail_home(rail *r, bool confirmed)
     if (!r->ops->home)
         return rail_set_error(r, RAIL_E_UNSUPPORTED, "driver %s cannot home", r->ops->name);
     r->have_last = false;
-    return r->ops->home(r, r->impl);
+    rail_err e = r->ops->home(r, r->impl);
+    r->cmd.kind = e == RAIL_OK ? RAIL_CMD_HOME : RAIL_CMD_NONE;
+    return e;
 }
 
 rail_err rail_reset(rail *r)
@@ -383,6 +518,7 @@ rail_err rail_reset(rail *r)
     if (!r->ops->reset)
         return rail_set_error(r, RAIL_E_UNSUPPORTED, "driver %s has no alarm reset", r->ops->name);
     r->have_last = false;
+    r->cmd.kind = RAIL_CMD_NONE;
     return r->ops->reset(r, r->impl);
 }
 

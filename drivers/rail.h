@@ -7,9 +7,8 @@
  *     compression rail, the specimen's minimum clamp gap BEFORE the driver sees it; a refused
  *     command sends nothing and leaves a reason in rail_last_error();
  *   - homing needs an explicit confirmation flag (a clamped specimen would be crushed);
- *   - status polls are rate limited to the rail's configured poll rate; between device readings
- *     the position is reconstructed from the last reading and the last measured velocity, and
- *     every status carries the monotonic time of the reading it came from.
+ *   - status polls are rate limited to the rail's configured poll rate, and every status carries
+ *     the monotonic time of the device reading it came from (see "Reconstruction" below).
  * Drivers keep a dead process from leaving a rail moving: GRBL moves go out as short jog segments
  * that the front end tops up on every poll (stop polling and the rail stops within a segment);
  * Modbus drives run under the drive's communication watchdog. Opening or reconnecting a rail never
@@ -17,7 +16,29 @@
  * rail_pair_poll() (rail_pair.h), through which the trial runner polls both rails.
  * Time comes from a rail_clock (rail_clock.h) so the mock runs on a virtual clock in tests.
  * A rail is not thread-safe: one thread (the trial runner's loop) owns both rails; GRBL rails
- * need rail_status_get() at least every 1 / poll_hz seconds while they move, or they stop. */
+ * need rail_status_get() at least every 1 / poll_hz seconds while they move, or they stop.
+ *
+ * Reconstruction. rail_status_get() reads the device when the last reading is 1 / poll_hz old
+ * (or after any command: the first status after a command is always a fresh reading); in between
+ * it returns the last reading (p0, v0 at t0, its state, code and message) with position and
+ * velocity reconstructed for the time now - t0 and `extrapolated` set. Only a reading whose state
+ * is moving or homing is reconstructed; any other reading is returned as it is. The model is the
+ * last command the front end sent (a command refused before sending changes nothing), with the
+ * acceleration accel_mm_s2 = a:
+ *   - move_abs / move_rel to T at speed s, and jog at v (recorded as a move to the end of the
+ *     allowed travel in v's direction at |v|): a trapezoidal profile from the reading's measured
+ *     velocity v0: ramp at +-a toward sign(T - p0) * s, cruise, brake at a to rest exactly on T
+ *     (a triangle when the move is too short to reach s; when v0 is already too fast to stop
+ *     before T, braking at a from t0). The position is capped at T: it never passes the target.
+ *     This is the law rail_axis (the mock and the simulators) follows, so the two agree up to the
+ *     axis's 1 ms integration sub-step;
+ *   - stop / estop: braking at a from v0 to rest, so it moves at most v0^2 / (2a) from p0 (the
+ *     first status after the stop call is a fresh reading taken after it, so p0 and v0 are
+ *     already the device's while braking, and p0 + v0^2/(2a) is where braking from the stop
+ *     call ends);
+ *   - home, or nothing known (after open or reset, or after the driver failed to send a
+ *     command): straight on at the measured velocity, p0 + v0 (now - t0).
+ * A fresh reading always replaces the reconstruction: nothing of it is carried over. */
 #ifndef RIBBON_DRIVERS_RAIL_H
 #define RIBBON_DRIVERS_RAIL_H
 
@@ -69,7 +90,8 @@ typedef struct rail_status {
     double velocity_mm_s;  /* mm/s, signed */
     int code;              /* device's own code (GRBL alarm/error number, drive alarm), 0 = none */
     double t_s;            /* s, monotonic time of the device reading this comes from */
-    bool extrapolated;     /* true if position was reconstructed since the reading at t_s */
+    bool extrapolated;     /* true if position and velocity were reconstructed since the
+                              reading at t_s (see "Reconstruction" above) */
     char message[160];     /* human text for state/code ("" when idle and fine) */
 } rail_status;
 
@@ -114,7 +136,7 @@ rail_err rail_create(rail **out, const rail_params *p, rail_clock clock, const r
                      void *impl, char *why, size_t why_len);
 void rail_close(rail *r);
 
-rail_err rail_status_get(rail *r, rail_status *out);    /* rate limited, may extrapolate */
+rail_err rail_status_get(rail *r, rail_status *out);    /* rate limited, may reconstruct */
 rail_err rail_status_poll(rail *r, rail_status *out);   /* always reads the device */
 rail_err rail_move_abs(rail *r, double target_mm, double speed_mm_s);
 rail_err rail_move_rel(rail *r, double delta_mm, double speed_mm_s);
