@@ -13,6 +13,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <gsl/gsl_errno.h>
 #include <systemd/sd-daemon.h>
 
 #include "rig_daemon.h"
@@ -111,6 +112,8 @@ static int bench(int argc, char **argv)
 
 int main(int argc, char **argv)
 {
+    /* GSL's default handler aborts the process; every GSL failure is a returned status here. */
+    gsl_set_error_handler_off();
     if (argc > 1 && !strcmp(argv[1], "bench")) return bench(argc - 2, argv + 2);
     const char *config = NULL;
     const char *ov[RIG_DAEMON_MAX_OVERRIDES];

@@ -240,3 +240,19 @@ char *trial_config_text(const rig_config *cfg, const char *note)
     }
     return buf;
 }
+
+void trial_state_times(store *st, int64_t id, double *t_check, double *t_shear, double *t_return)
+{
+    *t_check = *t_shear = *t_return = NAN;
+    store_event *ev = NULL;
+    size_t n = 0;
+    char why[256];
+    if (store_events_get(st, id, &ev, &n, why, sizeof why) != STORE_OK) return;
+    for (size_t k = 0; k < n; k++) {
+        if (ev[k].kind != STORE_EVENT_STATE) continue;
+        if (!strncmp(ev[k].message, "state checking", 14) && isnan(*t_check)) *t_check = ev[k].t_s;
+        if (!strncmp(ev[k].message, "state shearing", 14) && isnan(*t_shear)) *t_shear = ev[k].t_s;
+        if (!strncmp(ev[k].message, "state returning", 15) && isnan(*t_return)) *t_return = ev[k].t_s;
+    }
+    free(ev);
+}

@@ -11,6 +11,7 @@
 
 #include "rig_config.h"
 #include "snap_detect.h"
+#include "store.h"
 #include "trial_runner.h"
 #include "trial_video.h"
 #include "vision.h"
@@ -35,6 +36,10 @@ typedef struct trial_record {
     double min_quality;
 } trial_record;
 int trial_record_parse(const char *json, trial_record *out, char *why, size_t why_len);
+
+/* Trial times (s) at which a stored trial entered the checking, shearing and returning states,
+ * from its state events; NaN for a state it never entered. */
+void trial_state_times(store *st, int64_t id, double *t_check, double *t_shear, double *t_return);
 
 /* "# rig file PATH" + its text + "# scene file PATH" + its text (+ "# note: ..."), malloc'ed;
  * NULL when out of memory (a file that cannot be read is noted in the text instead). */

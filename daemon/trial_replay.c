@@ -10,23 +10,6 @@
 #include "trial_calib.h"
 #include "vision.h"
 
-/* Trial times of the source's state changes into checking, shearing and returning (NaN if none). */
-static void source_times(store *st, int64_t id, double *t_check, double *t_shear, double *t_return)
-{
-    *t_check = *t_shear = *t_return = NAN;
-    store_event *ev = NULL;
-    size_t n = 0;
-    char why[256];
-    if (store_events_get(st, id, &ev, &n, why, sizeof why) != STORE_OK) return;
-    for (size_t k = 0; k < n; k++) {
-        if (ev[k].kind != STORE_EVENT_STATE) continue;
-        if (!strncmp(ev[k].message, "state checking", 14) && isnan(*t_check)) *t_check = ev[k].t_s;
-        if (!strncmp(ev[k].message, "state shearing", 14) && isnan(*t_shear)) *t_shear = ev[k].t_s;
-        if (!strncmp(ev[k].message, "state returning", 15) && isnan(*t_return)) *t_return = ev[k].t_s;
-    }
-    free(ev);
-}
-
 static void add_event(store *st, int64_t id, double t, store_event_kind kind, const char *msg)
 {
     store_event ev;
@@ -116,7 +99,7 @@ int trial_replay_run(store *st, int64_t source_id, const char *video, int64_t *n
     store_trial_set_status(st, *new_id, STORE_STATUS_RUNNING, NULL, store_wall_now(), w2, sizeof w2);
     if (store_samples_begin(st, *new_id, NULL, &w, why, why_len) != STORE_OK) goto fail;
     double t_check, t_shear, t_return;
-    source_times(st, source_id, &t_check, &t_shear, &t_return);
+    trial_state_times(st, source_id, &t_check, &t_shear, &t_return);
     snap_detect det;
     snap_detect_init(&det, &rec.snap);
     long total = vis_source_frame_count(vs);

@@ -11,6 +11,7 @@
 
 #include "plot.h"
 #include "rod_protocol.h"
+#include "trial_calib.h"
 
 int trial_report_png(store *st, int64_t id, const char *png_path, int *notfound, char *why, size_t why_len)
 {
@@ -23,6 +24,22 @@ int trial_report_png(store *st, int64_t id, const char *png_path, int *notfound,
     }
     store_curve meas = {0}, pred = {0};
     if (store_trial_curve(st, id, &meas, why, why_len) != STORE_OK) return -1;
+    /* Only the shear: frames from the start of shearing to the return (the compression's frames
+     * are at Delta W = 0 and the return's retrace the lower branch). */
+    double t_check, t_shear, t_return;
+    trial_state_times(st, id, &t_check, &t_shear, &t_return);
+    if (isfinite(t_shear)) {
+        size_t m = 0;
+        for (size_t k = 0; k < meas.n; k++) {
+            if (meas.t_s[k] < t_shear || (isfinite(t_return) && meas.t_s[k] >= t_return)) continue;
+            meas.t_s[m] = meas.t_s[k];
+            meas.dw[m] = meas.dw[k];
+            meas.dz[m] = meas.dz[k];
+            meas.a[m] = meas.a[k];
+            m++;
+        }
+        meas.n = m;
+    }
     store_prediction p = store_prediction_default();
     int have_pred = store_prediction_get_by_trial(st, id, &p, why, why_len) == STORE_OK;
     if (have_pred) pred = p.curve;

@@ -1,0 +1,301 @@
+/* test_ribbond_e2e: the daemon end to end in mock mode (config/mock.ini: mock rails on a virtual
+ * clock, the simulator as the ribbon, synthetic frames measured by the real tracker).
+ *   1. A trial started through the HTTP API runs to done; a second start while it runs gets 409;
+ *      the measured snap Delta W is within 2% of the prediction made at the same resolution and
+ *      the regimes agree; samples, events, the video and the prediction are stored.
+ *   2. Replaying that trial (its video and recorded rail positions) reproduces its measured snap
+ *      within one frame's Delta W.
+ *   3. API error cases: unknown trial 404, bad fields 400 (naming the key), abort when idle 409.
+ *   4. kill -9 in the middle of a trial, then a restart: integrity_check ok, the trial is marked
+ *      interrupted, and the committed samples are all there (contiguous sequence numbers). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <signal.h>
+#include <sqlite3.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <gsl/gsl_errno.h>
+
+#include "api_client.h"
+#include "rig_daemon.h"
+#include "store.h"
+#include "trial_replay.h"
+
+static char dir[64];
+static char set_store[256], set_video[256];
+
+static void overrides(const char **ov, int *n)
+{
+    ov[0] = set_store;
+    ov[1] = set_video;
+    ov[2] = "api.port=0";
+    ov[3] = "sim.nodes=61"; /* explicit resolution: the prediction and the twin share it */
+    *n = 4;
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    snprintf(dir, sizeof dir, "/tmp/ribbond-e2e-XXXXXX");
+    assert_non_null(mkdtemp(dir));
+    snprintf(set_store, sizeof set_store, "store.path=%s/trials.db", dir);
+    snprintf(set_video, sizeof set_video, "camera.video_dir=%s/videos", dir);
+    gsl_set_error_handler_off();
+    char why[256];
+    assert_int_equal(api_client_global_init(why, sizeof why), 0);
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    api_client_global_cleanup();
+    char cmd[160];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    return system(cmd) == 0 ? 0 : -1;
+}
+
+static int http(unsigned port, const char *method, const char *path, const char *body_text, json_t **out,
+                char *why, size_t n)
+{
+    char url[64];
+    snprintf(url, sizeof url, "http://127.0.0.1:%u", port);
+    api_client_config c = api_client_config_default();
+    c.base_url = url;
+    json_t *body = NULL;
+    if (body_text) {
+        json_error_t je;
+        body = json_loads(body_text, 0, &je);
+        assert_non_null(body);
+    }
+    int status = 0;
+    unsigned char *bytes = NULL;
+    size_t len = 0;
+    int rc = api_client_request(&c, method, path, body, &status, out, &bytes, &len, why, n);
+    json_decref(body);
+    free(bytes);
+    assert_int_equal(rc, 0);
+    return status;
+}
+
+static void sleep_s(double s)
+{
+    struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
+    nanosleep(&ts, NULL);
+}
+
+static void mock_trial_then_replay(void **state)
+{
+    (void)state;
+    const char *ov[8];
+    int nov;
+    overrides(ov, &nov);
+    rig_daemon d;
+    char why[512] = "";
+    int rc = rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, nov, NULL, why, sizeof why);
+    if (rc) fprintf(stderr, "open: %s\n", why);
+    assert_int_equal(rc, 0);
+    unsigned port = 0;
+    assert_int_equal(rig_daemon_serve(&d, &port, why, sizeof why), 0);
+
+    json_t *t = NULL;
+    assert_int_equal(http(port, "POST", "/trials", "{\"note\": \"e2e\"}", &t, why, sizeof why), 201);
+    json_int_t id = json_integer_value(json_object_get(t, "id"));
+    assert_true(id >= 1);
+    json_decref(t);
+    /* A second start while it runs. */
+    t = NULL;
+    assert_int_equal(http(port, "POST", "/trials", NULL, &t, why, sizeof why), 409);
+    json_decref(t);
+    /* Follow it. */
+    int running = 1;
+    for (int k = 0; k < 2400 && running; k++) {
+        json_t *s = NULL;
+        assert_int_equal(http(port, "GET", "/status", NULL, &s, why, sizeof why), 200);
+        running = !strcmp(json_string_value(json_object_get(s, "state")), "running");
+        json_decref(s);
+        if (running) sleep_s(0.25);
+    }
+    assert_false(running);
+    char path[64];
+    snprintf(path, sizeof path, "/trials/%lld", (long long)id);
+    t = NULL;
+    assert_int_equal(http(port, "GET", path, NULL, &t, why, sizeof why), 200);
+    const char *status = json_string_value(json_object_get(t, "status"));
+    double meas = json_number_value(json_object_get(t, "snap_dw_measured"));
+    double pred = json_number_value(json_object_get(t, "snap_dw_predicted"));
+    const char *rm = json_string_value(json_object_get(t, "regime_measured"));
+    const char *rp = json_string_value(json_object_get(t, "regime_predicted"));
+    json_int_t samples = json_integer_value(json_object_get(t, "samples"));
+    json_t *pr = json_object_get(t, "prediction");
+    printf("trial %lld %s: measured %.5f %s, predicted %.5f %s (N = %lld), difference %.2f%%, %lld samples\n",
+           (long long)id, status, meas, rm ? rm : "-", pred, rp ? rp : "-",
+           (long long)json_integer_value(json_object_get(pr, "nodes")), 100.0 * (meas - pred) / pred,
+           (long long)samples);
+    assert_string_equal(status, "done");
+    assert_true(pred > 0.0 && fabs(meas - pred) / pred < 0.02);
+    assert_non_null(rm);
+    assert_non_null(rp);
+    assert_string_equal(rm, rp);
+    assert_int_equal(json_integer_value(json_object_get(pr, "nodes")), 61);
+    assert_true(samples > 100);
+    assert_true(json_array_size(json_object_get(t, "events")) >= 7);
+    const char *video = json_string_value(json_object_get(t, "video_path"));
+    assert_non_null(video);
+    struct stat sb;
+    assert_int_equal(stat(video, &sb), 0);
+    assert_true(sb.st_size > 10000);
+    json_decref(t);
+
+    /* Report through the API: PNG bytes. */
+    {
+        char url[64];
+        snprintf(url, sizeof url, "http://127.0.0.1:%u", port);
+        api_client_config c = api_client_config_default();
+        c.base_url = url;
+        int st = 0;
+        unsigned char *png = NULL;
+        size_t len = 0;
+        snprintf(path, sizeof path, "/trials/%lld/report.png", (long long)id);
+        assert_int_equal(api_client_request(&c, "GET", path, NULL, &st, NULL, &png, &len, why, sizeof why), 0);
+        assert_int_equal(st, 200);
+        assert_true(len > 1000 && !memcmp(png, "\x89PNG", 4));
+        free(png);
+    }
+
+    /* API errors. */
+    t = NULL;
+    assert_int_equal(http(port, "GET", "/trials/999", NULL, &t, why, sizeof why), 404);
+    json_decref(t);
+    t = NULL;
+    assert_int_equal(http(port, "POST", "/trials", "{\"bogus\": 1}", &t, why, sizeof why), 400);
+    assert_non_null(strstr(why, "bogus"));
+    json_decref(t);
+    t = NULL;
+    assert_int_equal(http(port, "POST", "/trials", "{\"set\": [\"protocol.compression=abc\"]}", &t, why, sizeof why),
+                     400);
+    assert_non_null(strstr(why, "protocol.compression"));
+    json_decref(t);
+    t = NULL;
+    assert_int_equal(http(port, "POST", "/trials/current/abort", NULL, &t, why, sizeof why), 409);
+    json_decref(t);
+
+    /* Replay: the same video and rail positions through the pipeline again. */
+    rig_daemon_close(&d, "test done");
+    store *st = NULL;
+    char db[128];
+    snprintf(db, sizeof db, "%s/trials.db", dir);
+    assert_int_equal(store_open(db, &st, why, sizeof why), STORE_OK);
+    int64_t rid = 0;
+    trial_result r;
+    rc = trial_replay_run(st, id, NULL, &rid, &r, NULL, NULL, why, sizeof why);
+    if (rc) fprintf(stderr, "replay: %s\n", why);
+    assert_int_equal(rc, 0);
+    double frame_dw = 0.01 / 30.0 / 0.2; /* shear rate / fps / l */
+    printf("replay trial %lld: %s at %.5f (source %.5f, one frame is %.5f)\n", (long long)rid, r.regime, r.snap_dw,
+           meas, frame_dw);
+    assert_true(r.snapped);
+    assert_true(fabs(r.snap_dw - meas) <= frame_dw + 1e-9);
+    store_trial rt;
+    assert_int_equal(store_trial_get(st, rid, &rt, why, sizeof why), STORE_OK);
+    assert_int_equal(rt.source_trial_id, id);
+    assert_int_equal(rt.mode, STORE_MODE_REPLAY);
+    store_close(st);
+}
+
+static void kill9_then_restart(void **state)
+{
+    (void)state;
+    /* A store of its own, so the trial watched is the one killed. */
+    char db[128];
+    snprintf(db, sizeof db, "%s/killed.db", dir);
+    snprintf(set_store, sizeof set_store, "store.path=%s", db);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        const char *ov[8];
+        int nov;
+        overrides(ov, &nov);
+        rig_daemon d;
+        char why[512];
+        if (rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, nov, NULL, why, sizeof why)) _exit(3);
+        trial_session *s;
+        int64_t id;
+        if (trial_session_start(&d.cfg, d.compress, d.shear, "to be killed", NULL, &s, &id, why, sizeof why)) _exit(4);
+        for (;;) pause();
+    }
+    /* Wait until the trial is well under way, then kill it without warning. */
+    int64_t trial = 0, seen = 0;
+    for (int k = 0; k < 1200 && seen < 300; k++) {
+        sleep_s(0.1);
+        sqlite3 *h = NULL;
+        if (sqlite3_open_v2(db, &h, SQLITE_OPEN_READONLY, NULL) != SQLITE_OK) {
+            sqlite3_close(h);
+            continue;
+        }
+        sqlite3_busy_timeout(h, 1000);
+        sqlite3_stmt *q = NULL;
+        if (sqlite3_prepare_v2(h, "SELECT trial_id, count(*) FROM samples GROUP BY trial_id ORDER BY trial_id DESC LIMIT 1",
+                               -1, &q, NULL) == SQLITE_OK &&
+            sqlite3_step(q) == SQLITE_ROW) {
+            trial = sqlite3_column_int64(q, 0);
+            seen = sqlite3_column_int64(q, 1);
+        }
+        sqlite3_finalize(q);
+        sqlite3_close(h);
+    }
+    kill(pid, SIGKILL);
+    int ws;
+    waitpid(pid, &ws, 0);
+    assert_true(WIFSIGNALED(ws));
+    assert_true(seen >= 300);
+
+    /* Restart: the daemon marks it interrupted and never moves. */
+    const char *ov[8];
+    int nov;
+    overrides(ov, &nov);
+    rig_daemon d;
+    char why[512];
+    assert_int_equal(rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, nov, NULL, why, sizeof why), 0);
+    store_trial tr;
+    assert_int_equal(store_trial_get(d.st, trial, &tr, why, sizeof why), STORE_OK);
+    assert_int_equal(tr.status, STORE_STATUS_INTERRUPTED);
+    sqlite3 *h = store_handle(d.st);
+    sqlite3_stmt *q = NULL;
+    assert_int_equal(sqlite3_prepare_v2(h, "PRAGMA integrity_check", -1, &q, NULL), SQLITE_OK);
+    assert_int_equal(sqlite3_step(q), SQLITE_ROW);
+    assert_string_equal((const char *)sqlite3_column_text(q, 0), "ok");
+    sqlite3_finalize(q);
+    assert_int_equal(sqlite3_prepare_v2(h, "SELECT count(*), min(seq), max(seq) FROM samples WHERE trial_id = ?", -1, &q,
+                                        NULL),
+                     SQLITE_OK);
+    sqlite3_bind_int64(q, 1, trial);
+    assert_int_equal(sqlite3_step(q), SQLITE_ROW);
+    int64_t n = sqlite3_column_int64(q, 0), lo = sqlite3_column_int64(q, 1), hi = sqlite3_column_int64(q, 2);
+    sqlite3_finalize(q);
+    printf("killed trial %lld: %lld samples seen before the kill, %lld stored (seq %lld..%lld), status %s\n",
+           (long long)trial, (long long)seen, (long long)n, (long long)lo, (long long)hi, store_status_name(tr.status));
+    assert_true(n >= seen);
+    assert_int_equal(lo, 0);
+    assert_int_equal(hi, n - 1);
+    rig_daemon_close(&d, "test done");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(mock_trial_then_replay),
+        cmocka_unit_test(kill9_then_restart),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
