@@ -413,6 +413,33 @@ rail_err rail_config_open(const rail_config *c, rail_clock clock, grbl_link *sha
     return RAIL_E_INVALID;
 }
 
+rail_err rail_config_open_pair(const rail_config *cc, const rail_config *cs, rail_clock clock, rail **compress,
+                               rail **shear, char *why, size_t why_len)
+{
+    *compress = *shear = NULL;
+    grbl_link *link = NULL;
+    bool share = !strcmp(cc->driver, "gcode") && !strcmp(cs->driver, "gcode") &&
+                 !strcmp(cc->gcode.port, cs->gcode.port);
+    if (share) {
+        if (cc->gcode.axis == cs->gcode.axis) {
+            snprintf(why, why_len, "both rails are axis %c of controller %s", cc->gcode.axis, cc->gcode.port);
+            return RAIL_E_INVALID;
+        }
+        rail_err e = grbl_link_open(&link, &cc->gcode, clock, why, why_len);
+        if (e != RAIL_OK)
+            return e;
+    }
+    rail_err e = rail_config_open(cc, clock, link, compress, why, why_len);
+    if (e == RAIL_OK)
+        e = rail_config_open(cs, clock, link, shear, why, why_len);
+    grbl_link_release(link); /* the rails hold their own references */
+    if (e != RAIL_OK) {
+        rail_close(*compress);
+        *compress = NULL;
+    }
+    return e;
+}
+
 rail_err rail_config_open_rig(const char *path, rail_clock clock, rail **compress, rail **shear, char *why,
                               size_t why_len)
 {
@@ -421,26 +448,5 @@ rail_err rail_config_open_rig(const char *path, rail_clock clock, rail **compres
     if (rail_config_load(path, "compress", &cc, why, why_len) != 0 ||
         rail_config_load(path, "shear", &cs, why, why_len) != 0)
         return RAIL_E_INVALID;
-    grbl_link *link = NULL;
-    bool share = !strcmp(cc.driver, "gcode") && !strcmp(cs.driver, "gcode") &&
-                 !strcmp(cc.gcode.port, cs.gcode.port);
-    if (share) {
-        if (cc.gcode.axis == cs.gcode.axis) {
-            snprintf(why, why_len, "%s: both rails are axis %c of controller %s", path, cc.gcode.axis,
-                     cc.gcode.port);
-            return RAIL_E_INVALID;
-        }
-        rail_err e = grbl_link_open(&link, &cc.gcode, clock, why, why_len);
-        if (e != RAIL_OK)
-            return e;
-    }
-    rail_err e = rail_config_open(&cc, clock, link, compress, why, why_len);
-    if (e == RAIL_OK)
-        e = rail_config_open(&cs, clock, link, shear, why, why_len);
-    grbl_link_release(link); /* the rails hold their own references */
-    if (e != RAIL_OK) {
-        rail_close(*compress);
-        *compress = NULL;
-    }
-    return e;
+    return rail_config_open_pair(&cc, &cs, clock, compress, shear, why, why_len);
 }

@@ -60,6 +60,10 @@ rail_err rail_config_open(const rail_config *c, rail_clock clock, grbl_link *sha
 
 /* Load and open both rails of a rig file. Two gcode rails naming the same port share one
  * controller link (two axes of one board). On failure nothing stays open. */
+/* Open both rails from configs already loaded (e.g. by rig_config): two gcode rails naming the
+ * same port share one controller link. On failure nothing stays open. */
+rail_err rail_config_open_pair(const rail_config *compress_cfg, const rail_config *shear_cfg, rail_clock clock,
+                               rail **compress, rail **shear, char *why, size_t why_len);
 rail_err rail_config_open_rig(const char *path, rail_clock clock, rail **compress, rail **shear, char *why,
                               size_t why_len);
 

@@ -50,11 +50,8 @@ int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *o
     rail_clock clk = d->cfg.clock == RIG_CLOCK_VIRTUAL ? rail_clock_virtual(&d->vclock) : rail_clock_real();
     rail_err re = RAIL_OK;
     /* Both rails from the same (checked) config the loader produced. */
-    re = rail_config_open(&d->cfg.compress, clk, NULL, &d->compress, why, why_len);
-    if (re == RAIL_OK) re = rail_config_open(&d->cfg.shear, clk, NULL, &d->shear, why, why_len);
+    re = rail_config_open_pair(&d->cfg.compress, &d->cfg.shear, clk, &d->compress, &d->shear, why, why_len);
     if (re != RAIL_OK) {
-        rail_close(d->compress);
-        d->compress = NULL;
         store_close(d->st);
         d->st = NULL;
         return -1;

@@ -178,21 +178,21 @@ static void test_mock_ini(void **state)
     assert_int_equal(cfg.clock, RIG_CLOCK_VIRTUAL);
     assert_true(cfg.has_rails);
     assert_string_equal(cfg.compress.driver, "mock");
-    assert_true(NEAR(cfg.scene.length, 1.0));
+    assert_true(NEAR(cfg.scene.length, 0.2));
     assert_true(NEAR(cfg.scene.compression, 0.5));
-    /* Gap model from the calibration: gap = 1050 - x; specimen minimum pushed into the rail. */
-    assert_true(NEAR(cfg.compress.params.gap_at_zero_mm, 1050.0));
+    /* Gap model from the calibration: gap = 250 - x; specimen minimum pushed into the rail. */
+    assert_true(NEAR(cfg.compress.params.gap_at_zero_mm, 250.0));
     assert_true(cfg.compress.params.gap_per_mm == -1.0);
-    assert_true(NEAR(cfg.compress.params.min_gap_mm, 400.0));
-    assert_true(NEAR(cfg.trial.compress_target_mm, 550.0));
-    assert_true(NEAR(cfg.trial.shear_end_mm, 550.0));
+    assert_true(NEAR(cfg.compress.params.min_gap_mm, 90.0));
+    assert_true(NEAR(cfg.trial.compress_target_mm, 150.0));
+    assert_true(NEAR(cfg.trial.shear_end_mm, 170.0));
     assert_true(NEAR(cfg.trial.shear_speed_mm_s, 10.0));
     assert_int_equal(cfg.camera.source, RIG_SOURCE_SYNTHETIC);
     assert_int_equal(cfg.camera.calibration[0], '\0');
     assert_int_equal(cfg.specimen.crease_orientation, RIG_CREASE_DOWN);
     assert_true(isnan(cfg.specimen.crease_angle_left_deg));
-    assert_int_equal(cfg.sim.n_ladder, 4);
-    assert_int_equal(cfg.sim.ladder_nodes[3], 291);
+    assert_int_equal(cfg.sim.n_ladder, 3);
+    assert_int_equal(cfg.sim.ladder_nodes[2], 121);
     assert_false(cfg.sim.explicit_resolution);
     assert_true(cfg.api.loopback);
     assert_int_equal(cfg.api.port, 8377);
@@ -203,7 +203,7 @@ static void test_mock_ini(void **state)
     assert_string_equal(cfg.store_path, want);
     snprintf(want, sizeof want, "%s/ribbon-mock-videos", cwd);
     assert_string_equal(cfg.camera.video_dir, want);
-    assert_string_equal(cfg.scene_path, CONFIG_DIR "/scenes/paper-gamma013.ini");
+    assert_string_equal(cfg.scene_path, CONFIG_DIR "/scenes/mock-gamma013.ini");
     assert_string_equal(cfg.path, CONFIG_DIR "/mock.ini");
     assert_string_equal(cfg.dir, CONFIG_DIR);
 }
