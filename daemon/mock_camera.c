@@ -79,7 +79,7 @@ vis_status mock_camera_grab(void *ctx, double t_s, double dl, double dw, vis_fra
         twin_shape_from_rod(&mc->shape, rod_twin_rod(mc->twin), msg, sizeof msg) != TWIN_OK) {
         if (err) {
             err->code = VIS_ERR_INTERNAL;
-            snprintf(err->message, sizeof err->message, "mock ribbon: %s", msg);
+            snprintf(err->message, sizeof err->message, "mock ribbon: %.200s", msg);
         }
         return VIS_ERR_INTERNAL;
     }
