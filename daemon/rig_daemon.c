@@ -7,6 +7,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "trial_replay.h"
 #include "trial_report.h"
 
 static void say(rig_daemon *d, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
@@ -154,14 +155,50 @@ static int op_status(void *user, json_t **out, char *why, size_t n)
     return 0;
 }
 
+/* Replay mode: POST /trials {"source_trial": ID} (default [replay] source_trial) replays a stored
+ * trial into a new one. It runs on the API thread (a few seconds: decoding and tracking the video);
+ * other API requests wait meanwhile. */
+static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *http_status, char *why, size_t n)
+{
+    json_t *src = json_object_get(body, "source_trial");
+    const char *key;
+    json_t *val;
+    json_object_foreach((json_t *)body, key, val)
+    {
+        if (strcmp(key, "source_trial") != 0 && strcmp(key, "note") != 0) {
+            *http_status = 400;
+            snprintf(why, n, "unknown field \"%s\" in replay mode (allowed: source_trial, note)", key);
+            return -1;
+        }
+    }
+    int64_t id = src ? (int64_t)json_integer_value(src) : d->cfg.replay.source_trial;
+    if ((src && !json_is_integer(src)) || id < 1) {
+        *http_status = 400;
+        snprintf(why, n, "which trial? give \"source_trial\": ID (or [replay] source_trial in the rig file)");
+        return -1;
+    }
+    if (!src && d->cfg.replay.video[0] && !d->cfg.replay.source_trial) {
+        *http_status = 400;
+        snprintf(why, n, "replay of an outside recording (replay.video + replay.rails) is not supported yet; "
+                         "replay a stored trial");
+        return -1;
+    }
+    int64_t nid = 0;
+    trial_result r;
+    if (trial_replay_run(d->st, id, src ? NULL : (d->cfg.replay.video[0] ? d->cfg.replay.video : NULL), &nid, &r,
+                         NULL, NULL, why, n)) {
+        *http_status = nid ? 500 : 400;
+        return -1;
+    }
+    say(d, "trial %lld replayed as trial %lld: %s at Delta W = %.5f", (long long)id, (long long)nid, r.regime,
+        r.snap_dw);
+    return store_trial_json(d->st, nid, out, why, n) == STORE_OK ? 0 : -1;
+}
+
 static int op_start(void *user, const json_t *body, json_t **out, int *http_status, char *why, size_t n)
 {
     rig_daemon *d = user;
-    if (d->cfg.mode == RIG_MODE_REPLAY) {
-        *http_status = 409;
-        snprintf(why, n, "this daemon runs in replay mode; use `ribbonctl replay` (trials need rig or mock mode)");
-        return -1;
-    }
+    if (d->cfg.mode == RIG_MODE_REPLAY) return replay_start(d, body, out, http_status, why, n);
     /* Body: {"set": ["section.key=value", ...], "note": "..."}; unknown fields are refused. */
     const char *key;
     json_t *val;
