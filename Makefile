@@ -5,7 +5,8 @@
 
 DEB_PACKAGES := cmake make gcc g++ pkg-config \
 	libgsl-dev libinih-dev libsqlite3-dev libserialport-dev libmodbus-dev \
-	libopencv-dev libmicrohttpd-dev libjansson-dev libcmocka-dev libcairo2-dev
+	libopencv-dev libmicrohttpd-dev libjansson-dev libcmocka-dev libcairo2-dev \
+	libplplot-dev plplot-driver-cairo
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 BUILD ?= build
 ASAN_BUILD ?= build-asan
