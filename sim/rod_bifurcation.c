@@ -29,6 +29,14 @@ rod_analysis_opts rod_analysis_opts_default(void)
     return o;
 }
 
+rod_analysis_opts rod_analysis_opts_classify(void)
+{
+    rod_analysis_opts o = rod_analysis_opts_default();
+    o.cont.max_negative = 0;
+    o.switch_branches = 0;
+    return o;
+}
+
 void rod_analysis_free(rod_analysis *a)
 {
     for (int b = 0; b < a->nbranches; b++) rod_branch_free(&a->branches[b]);

@@ -32,6 +32,10 @@ typedef struct rod_analysis_opts {
 
 rod_analysis_opts rod_analysis_opts_default(void);
 
+/* Classification only (what a sweep point needs): the primary branch ends just past its first
+ * instability (max_negative 0), no branch switching. */
+rod_analysis_opts rod_analysis_opts_classify(void);
+
 typedef struct rod_analysis {
     rod_branch branches[ROD_ANALYSIS_MAX_BRANCHES]; /* 0: primary; then switched branches */
     int nbranches;
