@@ -5,7 +5,8 @@
  *            angle and position replaced is classified by continuation
  *            (rod_analysis_opts_classify: the primary branch up to its first instability) and
  *            one `point` row is appended to the CSV;
- *   phase 2  for each phi, every pair of neighbouring Gammas with different regimes is a task:
+ *   phase 2  for each phi, every pair of neighbouring Gammas with different regimes (asymmetric,
+ *            symmetric, or none: no instability on the traced branch) is a task:
  *            bisection in Gamma (each probe a classification, appended as a `probe` row) until
  *            the bracket is narrower than --gamma-tol, then one `boundary` row (the mesh puts
  *            nodes on each Gamma, rod.c, so the boundary is not tied to the grid spacing).
@@ -199,7 +200,12 @@ static void *points_worker(void *arg)
     return NULL;
 }
 
-static int is_regime(const sweep_row *r) { return !strcmp(r->regime, "asymmetric") || !strcmp(r->regime, "symmetric"); }
+/* Regimes a boundary may separate: the two snaps and "none" (the upper branch reaches the end of
+ * the load range without an instability: no snap). Failed points separate nothing. */
+static int is_regime(const sweep_row *r)
+{
+    return !strcmp(r->regime, "asymmetric") || !strcmp(r->regime, "symmetric") || !strcmp(r->regime, "none");
+}
 
 static void *boundary_worker(void *arg)
 {
