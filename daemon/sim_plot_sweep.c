@@ -114,14 +114,26 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
         }
         pllsty(1);
     } else if (nb > 0) {
+        /* One line per kind of boundary (the regimes either side, in the note), through its
+         * points in order of phi: asymmetric/symmetric solid, the others dashed. */
         PLFLT *x = malloc(sizeof(PLFLT) * (size_t)nb), *y = malloc(sizeof(PLFLT) * (size_t)nb);
-        if (x && y) {
-            for (int k = 0; k < nb; k++) {
-                x[k] = b[k].phi;
-                y[k] = b[k].gamma;
-            }
-            plline(nb, x, y);
+        char *done = calloc((size_t)nb, 1);
+        for (int k = 0; x && y && done && k < nb; k++) {
+            if (done[k]) continue;
+            int m = 0;
+            for (int q = k; q < nb; q++)
+                if (!done[q] && !strcmp(b[q].note, b[k].note)) {
+                    done[q] = 1;
+                    x[m] = b[q].phi;
+                    y[m] = b[q].gamma;
+                    m++;
+                }
+            pllsty(strstr(b[k].note, "asymmetric below; symmetric above") ? 1 : 2);
+            if (m > 1) plline(m, x, y);
+            for (int q = 0; q < m; q++) polygon(x[q], y[q], 0.4 * rx, 0.4 * ry, 4, 0.0);
         }
+        pllsty(1);
+        free(done);
         free(x);
         free(y);
     }

@@ -1,7 +1,8 @@
 /* sim_plot_sweep.h: the figure of `ribbon-sim sweep --plot FILE.png` (PLplot, pngcairo).
  * With several phi: the (phi, Gamma) phase diagram, circles where the pitchfork comes first
  * (asymmetric snap), squares where the saddle-node does (symmetric), crosses where the analysis
- * failed or found no instability, and the located boundary Gamma*(phi) as a line. With one phi:
+ * failed or found no instability (no snap), and the located boundaries as lines, one per pair of
+ * regimes (asymmetric/symmetric solid, the others dashed). With one phi:
  * the first instability's Delta W against Gamma with the same markers and Gamma* as a dashed
  * vertical line. */
 #ifndef RIBBON_DAEMON_SIM_PLOT_SWEEP_H
