@@ -207,44 +207,73 @@ static int is_regime(const sweep_row *r)
     return !strcmp(r->regime, "asymmetric") || !strcmp(r->regime, "symmetric") || !strcmp(r->regime, "none");
 }
 
+/* Bisects one grid cell of one phi. A midpoint of a third regime (a narrow band inside the
+ * cell, such as "none" between the two snaps) splits the cell: the upper part is pushed and
+ * bisected after the lower one, so each boundary gets its own row (at most 8 parts per cell). */
+static void bisect_cell(sweep *sw, double phi, double lo0, double hi0)
+{
+    struct part {
+        double lo, hi;
+        char rlo[16], rhi[16];
+    } stack[8];
+    int top = 0;
+    sweep_row rlo, rhi;
+    lookup_or_classify(sw, phi, lo0, &rlo);
+    lookup_or_classify(sw, phi, hi0, &rhi);
+    if (!is_regime(&rlo) || !is_regime(&rhi) || !strcmp(rlo.regime, rhi.regime)) return;
+    stack[top].lo = lo0;
+    stack[top].hi = hi0;
+    snprintf(stack[top].rlo, sizeof stack[top].rlo, "%s", rlo.regime);
+    snprintf(stack[top].rhi, sizeof stack[top].rhi, "%s", rhi.regime);
+    top++;
+    while (top > 0 && !interrupted) {
+        struct part p = stack[--top];
+        char note[160] = "";
+        for (int it = 0; p.hi - p.lo > sw->gamma_tol && it < 60 && !interrupted; it++) {
+            double mid = 0.5 * (p.lo + p.hi);
+            sweep_row rm;
+            lookup_or_classify(sw, phi, mid, &rm);
+            if (!strcmp(rm.regime, p.rlo)) {
+                p.lo = mid;
+            } else if (!strcmp(rm.regime, p.rhi)) {
+                p.hi = mid;
+            } else if (is_regime(&rm) && top < 8) {
+                stack[top].lo = mid;
+                stack[top].hi = p.hi;
+                snprintf(stack[top].rlo, sizeof stack[top].rlo, "%s", rm.regime);
+                snprintf(stack[top].rhi, sizeof stack[top].rhi, "%s", p.rhi);
+                top++;
+                p.hi = mid;
+                snprintf(p.rhi, sizeof p.rhi, "%s", rm.regime);
+            } else {
+                snprintf(note, sizeof note, "bisection stopped: Gamma %.6g is %s", mid, rm.regime);
+                break;
+            }
+        }
+        if (interrupted) break;
+        sweep_row b;
+        memset(&b, 0, sizeof b);
+        b.kind = 'b';
+        b.phi = phi;
+        b.gamma = 0.5 * (p.lo + p.hi);
+        b.gamma_lo = p.lo;
+        b.gamma_hi = p.hi;
+        snprintf(b.regime, sizeof b.regime, "boundary");
+        snprintf(b.first_type, sizeof b.first_type, "none");
+        if (!note[0]) snprintf(note, sizeof note, "%s below; %s above", p.rlo, p.rhi);
+        snprintf(b.note, sizeof b.note, "%s", note);
+        pthread_mutex_lock(&sw->mu);
+        record(sw, &b);
+        pthread_mutex_unlock(&sw->mu);
+    }
+}
+
 static void *boundary_worker(void *arg)
 {
     sweep *sw = arg;
     int i;
     while ((i = take_task(sw)) >= 0) {
-        double phi = sw->phi[sw->btask_phi[i]], lo = sw->btask_lo[i], hi = sw->btask_hi[i];
-        sweep_row rlo, rhi;
-        lookup_or_classify(sw, phi, lo, &rlo);
-        lookup_or_classify(sw, phi, hi, &rhi);
-        char note[160] = "";
-        int ok = is_regime(&rlo) && is_regime(&rhi) && strcmp(rlo.regime, rhi.regime) != 0;
-        for (int it = 0; ok && hi - lo > sw->gamma_tol && it < 60 && !interrupted; it++) {
-            double mid = 0.5 * (lo + hi);
-            sweep_row rm;
-            lookup_or_classify(sw, phi, mid, &rm);
-            if (!strcmp(rm.regime, rlo.regime)) lo = mid;
-            else if (!strcmp(rm.regime, rhi.regime)) hi = mid;
-            else {
-                snprintf(note, sizeof note, "bisection stopped: Gamma %.6g is %s", mid, rm.regime);
-                break;
-            }
-        }
-        if (!interrupted && ok) {
-            sweep_row b;
-            memset(&b, 0, sizeof b);
-            b.kind = 'b';
-            b.phi = phi;
-            b.gamma = 0.5 * (lo + hi);
-            b.gamma_lo = lo;
-            b.gamma_hi = hi;
-            snprintf(b.regime, sizeof b.regime, "boundary");
-            snprintf(b.first_type, sizeof b.first_type, "none");
-            if (!note[0]) snprintf(note, sizeof note, "%s below; %s above", rlo.regime, rhi.regime);
-            snprintf(b.note, sizeof b.note, "%s", note);
-            pthread_mutex_lock(&sw->mu);
-            record(sw, &b);
-            pthread_mutex_unlock(&sw->mu);
-        }
+        bisect_cell(sw, sw->phi[sw->btask_phi[i]], sw->btask_lo[i], sw->btask_hi[i]);
         pthread_mutex_lock(&sw->mu);
         sw->done++;
         progress(sw, "boundaries");
