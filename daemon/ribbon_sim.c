@@ -18,6 +18,8 @@ static const sim_command commands[] = {
     {"equilibrium", sim_cmd_equilibrium, "static equilibrium at (Delta L, Delta W) on a branch"},
     {"trajectory", sim_cmd_trajectory, "the simulated protocol step by step, as CSV"},
     {"convergence", sim_cmd_convergence, "snap Delta W and its error against run time over a ladder of N and dt"},
+    {"continue", sim_cmd_continue, "bifurcation analysis: branches in Delta W, pitchfork / saddle-node, regime"},
+    {"sweep", sim_cmd_sweep, "phase diagram over (phi, Gamma): regime per point, boundary Gamma*(phi)"},
     {"bench", sim_cmd_bench, "speed and memory on a scene, one machine-readable line"},
 #ifdef RIBBON_HAVE_TRUSS
     {"truss", sim_cmd_truss, "the reduced double-mass von Mises truss model (paper section 4)"},

@@ -11,5 +11,7 @@ int sim_cmd_trajectory(int argc, char **argv);
 int sim_cmd_convergence(int argc, char **argv);
 int sim_cmd_bench(int argc, char **argv);
 int sim_cmd_truss(int argc, char **argv);
+int sim_cmd_continue(int argc, char **argv);
+int sim_cmd_sweep(int argc, char **argv);
 
 #endif

@@ -7,7 +7,11 @@
  *     fixed dt = 1 ms, N = 201, and its simulated time over wall time;
  *   fast_predict_wall_s, fast_predict_rel_diff: the same prediction in fast mode and its relative
  *     difference in snap Delta W from the fixed-step run;
+ *   continue_wall_s: the full bifurcation analysis of the scene (`ribbon-sim continue`: route to
+ *     the upper state, primary branch, the branch switched at the first pitchfork, all events
+ *     located), with continue_route_wall_s, the route's share, and continue_first_dw;
  *   peak_rss_mb: the process's peak resident memory. */
+#include "rod_bifurcation.h"
 #include "rod_protocol.h"
 #include "rod_route.h"
 #include "rod_solver.h"
@@ -27,7 +31,7 @@ static const char usage[] =
     "usage: ribbon-sim bench --scene FILE [--set section.key=value ...] [--json]\n"
     "  Measures the scene (the paper's Gamma = 0.13 scene is the reference:\n"
     "  config/scenes/paper-gamma013.ini): banded vs dense Newton iteration, the fixed-step and\n"
-    "  fast predictions, peak memory. Prints one line (one JSON object with --json). Takes about\n"
+    "  fast predictions, the continuation (continue_wall_s), peak memory. Prints one line (one JSON object with --json). Takes about\n"
     "  a minute.\n";
 
 static double now(void)
@@ -121,23 +125,34 @@ int sim_cmd_bench(int argc, char **argv)
     rod_prediction fixed, fast;
     if (!time_newton(&sc, &banded, &dense)) return 1;
     if (!predict(&sc, 0, &fixed) || !predict(&sc, 1, &fast)) return 1;
+    rod_analysis an;
+    char cerr[512] = "";
+    rod_status cst = rod_bifurcation_analyse(&sc, NULL, &an, cerr, sizeof cerr);
+    if (cst != ROD_OK) {
+        fprintf(stderr, "ribbon-sim bench: continuation: %s\n", cerr[0] ? cerr : rod_status_message(cst));
+        return 1;
+    }
+    double cont_wall = an.wall_s, cont_route = an.route_wall_s;
+    double cont_first = an.first >= 0 ? an.events[an.first].at.dw : 0.0;
+    rod_analysis_free(&an);
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     double rss_mb = (double)ru.ru_maxrss / 1024.0;
     double rel = fabs(fast.snap_dw - fixed.snap_dw) / fabs(fixed.snap_dw);
-    json_t *j = json_pack("{s:i,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f}", "nodes", sc.nodes,
+    json_t *j = json_pack("{s:i,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f}", "nodes", sc.nodes,
                           "newton_iter_banded_s", banded, "newton_iter_dense_s", dense, "banded_vs_dense",
                           dense / banded, "paper_predict_wall_s", fixed.wall_s, "realtime_factor",
                           fixed.sim_time / fixed.wall_s, "fast_predict_wall_s", fast.wall_s,
                           "fast_predict_rel_diff", rel, "peak_rss_mb", rss_mb, "snap_dw_fixed", fixed.snap_dw,
-                          "snap_dw_fast", fast.snap_dw);
+                          "snap_dw_fast", fast.snap_dw, "continue_wall_s", cont_wall, "continue_route_wall_s",
+                          cont_route, "continue_first_dw", cont_first);
     char *txt = json_dumps(j, JSON_COMPACT | JSON_REAL_PRECISION(6));
     if (o.json) puts(txt);
     else
         printf("bench nodes=%d banded=%.3gs dense=%.3gs ratio=%.0f paper_wall=%.2fs realtime=%.2f fast_wall=%.2fs "
-               "fast_rel_diff=%.2e rss=%.1fMB\n",
+               "fast_rel_diff=%.2e continue_wall=%.2fs rss=%.1fMB\n",
                sc.nodes, banded, dense, dense / banded, fixed.wall_s, fixed.sim_time / fixed.wall_s, fast.wall_s, rel,
-               rss_mb);
+               cont_wall, rss_mb);
     free(txt);
     json_decref(j);
     return 0;

@@ -1,0 +1,162 @@
+/* sim_sweep_row.c: reading and writing sweep rows (see sim_sweep_row.h). */
+#include "sim_sweep_row.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char header[] = "kind,phi_deg,gamma,gamma_lo,gamma_hi,regime,first_type,first_dw,first_dz,wall_s,note";
+
+static const char *kind_name(char k) { return k == 'p' ? "point" : k == 'q' ? "probe" : "boundary"; }
+
+void sweep_row_write_header(FILE *f) { fprintf(f, "%s\n", header); }
+
+void sweep_row_write(FILE *f, const sweep_row *r)
+{
+    char note[sizeof r->note];
+    snprintf(note, sizeof note, "%s", r->note);
+    for (char *p = note; *p; p++)
+        if (*p == ',' || *p == '\n' || *p == '\r') *p = ';';
+    fprintf(f, "%s,%.17g,%.17g,%.17g,%.17g,%s,%s,%.10g,%.10g,%.4g,%s\n", kind_name(r->kind), r->phi, r->gamma,
+            r->gamma_lo, r->gamma_hi, r->regime, r->first_type, r->first_dw, r->first_dz, r->wall_s, note);
+}
+
+int sweep_table_add(sweep_table *t, const sweep_row *r)
+{
+    if (t->n == t->cap) {
+        size_t cap = t->cap ? 2 * t->cap : 64;
+        sweep_row *nr = realloc(t->rows, cap * sizeof *nr);
+        if (!nr) return 0;
+        t->rows = nr;
+        t->cap = cap;
+    }
+    t->rows[t->n++] = *r;
+    return 1;
+}
+
+void sweep_table_free(sweep_table *t)
+{
+    free(t->rows);
+    t->rows = NULL;
+    t->n = t->cap = 0;
+}
+
+static int parse_double(const char *s, double *out)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (errno || end == s || *end || !isfinite(v)) return 0;
+    *out = v;
+    return 1;
+}
+
+/* Splits line in place into at most 11 fields (the last takes the rest). */
+static int parse_row(char *line, sweep_row *r)
+{
+    char *f[11];
+    int n = 0;
+    char *p = line;
+    while (n < 11) {
+        f[n++] = p;
+        if (n == 11) break;
+        char *c = strchr(p, ',');
+        if (!c) break;
+        *c = '\0';
+        p = c + 1;
+    }
+    if (n != 11) return 0;
+    memset(r, 0, sizeof *r);
+    if (!strcmp(f[0], "point")) r->kind = 'p';
+    else if (!strcmp(f[0], "probe")) r->kind = 'q';
+    else if (!strcmp(f[0], "boundary")) r->kind = 'b';
+    else return 0;
+    if (!parse_double(f[1], &r->phi) || !parse_double(f[2], &r->gamma) || !parse_double(f[3], &r->gamma_lo) ||
+        !parse_double(f[4], &r->gamma_hi) || !parse_double(f[7], &r->first_dw) ||
+        !parse_double(f[8], &r->first_dz) || !parse_double(f[9], &r->wall_s))
+        return 0;
+    if (strlen(f[5]) >= sizeof r->regime || strlen(f[6]) >= sizeof r->first_type) return 0;
+    strcpy(r->regime, f[5]);
+    strcpy(r->first_type, f[6]);
+    snprintf(r->note, sizeof r->note, "%s", f[10]);
+    return 1;
+}
+
+int sweep_table_load(const char *path, sweep_table *t, char *err, size_t errlen)
+{
+    memset(t, 0, sizeof *t);
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        if (errno == ENOENT) return 0;
+        snprintf(err, errlen, "cannot read %s: %s", path, strerror(errno));
+        return -1;
+    }
+    char line[1024];
+    int lineno = 0, rc = 0;
+    while (fgets(line, sizeof line, f)) {
+        lineno++;
+        size_t len = strlen(line);
+        int complete = len > 0 && line[len - 1] == '\n';
+        while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r')) line[--len] = '\0';
+        if (lineno == 1) {
+            if (strcmp(line, header) != 0) {
+                snprintf(err, errlen, "%s is not a sweep file (line 1 is not the sweep header); refusing to append", path);
+                rc = -1;
+                break;
+            }
+            continue;
+        }
+        sweep_row r;
+        if (!complete || !parse_row(line, &r)) continue;
+        if (!sweep_table_add(t, &r)) {
+            snprintf(err, errlen, "out of memory reading %s", path);
+            rc = -1;
+            break;
+        }
+    }
+    if (rc == 0 && lineno == 0) {
+        /* An empty file: treated as new (the header is written by the caller only for a new file,
+         * so say so rather than append headerless rows). */
+        snprintf(err, errlen, "%s is empty; remove it or name another file", path);
+        rc = -1;
+    }
+    fclose(f);
+    if (rc != 0) sweep_table_free(t);
+    return rc;
+}
+
+static int same(double a, double b) { return fabs(a - b) <= 1e-9 * fmax(1.0, fabs(a)); }
+
+const sweep_row *sweep_table_find(const sweep_table *t, double phi, double gamma)
+{
+    for (size_t k = 0; k < t->n; k++) {
+        const sweep_row *r = &t->rows[k];
+        if ((r->kind == 'p' || r->kind == 'q') && strcmp(r->regime, "failed") != 0 && same(r->phi, phi) &&
+            same(r->gamma, gamma))
+            return r;
+    }
+    return NULL;
+}
+
+const sweep_row *sweep_table_find_boundary(const sweep_table *t, double phi, double lo, double hi)
+{
+    for (size_t k = 0; k < t->n; k++) {
+        const sweep_row *r = &t->rows[k];
+        if (r->kind == 'b' && same(r->phi, phi) && r->gamma >= fmin(lo, hi) && r->gamma <= fmax(lo, hi)) return r;
+    }
+    return NULL;
+}
+
+void sweep_table_fix_tail(const char *path, FILE *f)
+{
+    FILE *r = fopen(path, "rb");
+    if (!r) return;
+    int last = EOF;
+    if (fseek(r, -1, SEEK_END) == 0) last = fgetc(r);
+    fclose(r);
+    if (last != EOF && last != '\n') {
+        fputc('\n', f);
+        fflush(f);
+    }
+}

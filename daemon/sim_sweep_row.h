@@ -1,0 +1,51 @@
+/* sim_sweep_row.h: the rows of a sweep CSV and the in-memory table a sweep resumes from.
+ *
+ * One row per line, the header first:
+ *     kind,phi_deg,gamma,gamma_lo,gamma_hi,regime,first_type,first_dw,first_dz,wall_s,note
+ * kind is `point` (a grid point), `probe` (a bisection point) or `boundary` (Gamma* for one phi,
+ * bracketed by gamma_lo .. gamma_hi); regime is asymmetric, symmetric, none, failed or boundary;
+ * note is free text without commas (the reason of a failure, the regimes either side of a
+ * boundary). Numbers are printed with 17 significant digits so a resumed sweep finds its grid
+ * points again exactly. */
+#ifndef RIBBON_DAEMON_SIM_SWEEP_ROW_H
+#define RIBBON_DAEMON_SIM_SWEEP_ROW_H
+
+#include <stddef.h>
+#include <stdio.h>
+
+typedef struct sweep_row {
+    char kind;             /* 'p' point, 'q' probe, 'b' boundary */
+    double phi;            /* deg, crease angle magnitude */
+    double gamma, gamma_lo, gamma_hi;
+    char regime[16];
+    char first_type[16];   /* rod_event_name of the first instability, or none */
+    double first_dw, first_dz;
+    double wall_s;
+    char note[160];
+} sweep_row;
+
+typedef struct sweep_table {
+    sweep_row *rows;
+    size_t n, cap;
+} sweep_table;
+
+/* Reads the rows of an existing sweep file into t (an absent file is an empty table). Lines that
+ * do not parse (a row cut by a kill) are skipped. Fails (returns -1 with err) when the file is
+ * not a sweep file (wrong header) or memory runs out. */
+int sweep_table_load(const char *path, sweep_table *t, char *err, size_t errlen);
+int sweep_table_add(sweep_table *t, const sweep_row *r);
+void sweep_table_free(sweep_table *t);
+
+/* A classified row (point or probe, not failed) at (phi, gamma), or NULL. */
+const sweep_row *sweep_table_find(const sweep_table *t, double phi, double gamma);
+/* A boundary row of phi inside [lo, hi], or NULL. */
+const sweep_row *sweep_table_find_boundary(const sweep_table *t, double phi, double lo, double hi);
+
+void sweep_row_write_header(FILE *f);
+void sweep_row_write(FILE *f, const sweep_row *r);
+
+/* When the file at path does not end with a newline (a row cut by a kill), writes one to f (the
+ * same file opened for appending) so the next row starts on its own line. */
+void sweep_table_fix_tail(const char *path, FILE *f);
+
+#endif
