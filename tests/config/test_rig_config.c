@@ -273,7 +273,7 @@ static char *slurp(const char *path)
 {
     FILE *f = fopen(path, "rb");
     if (!f) return NULL;
-    static char buf[1 << 16];
+    static char buf[1 << 20]; /* the README is larger than 64 KiB */
     size_t n = fread(buf, 1, sizeof buf - 1, f);
     fclose(f);
     buf[n] = '\0';
