@@ -172,7 +172,7 @@ int trial_record_parse(const char *text, trial_record *out, char *why, size_t wh
     out->camera.has_intrinsics = json_is_true(json_object_get(cam, "has_intrinsics"));
     out->calib.compress_sign = cs < 0 ? -1 : 1;
     out->calib.shear_sign = ss < 0 ? -1 : 1;
-    out->calib.camera_back = side && strcmp(side, "back") == 0;
+    out->calib.camera_side = side && strcmp(side, "back") == 0 ? RIG_CAMERA_BACK : RIG_CAMERA_FRONT;
     out->roi.x = (int)roi[0];
     out->roi.y = (int)roi[1];
     out->roi.w = (int)roi[2];

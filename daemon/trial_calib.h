@@ -26,7 +26,7 @@ char *trial_calib_json(const rig_config *cfg, const vis_calib *cal, trial_roi ro
 
 /* What replay needs back from a record. */
 typedef struct trial_record {
-    trial_calibration calib;
+    rig_calibration calib;
     vis_calib camera;      /* in the full frame's pixels */
     trial_roi roi;         /* the video's region inside the full frame */
     double fps;

@@ -130,7 +130,7 @@ int trial_replay_run(store *st, int64_t source_id, const char *video, int64_t *n
         }
         int measured = m.reason == VIS_REASON_NONE && m.quality >= rec.min_quality && isfinite(m.dz) &&
                        isfinite(m.a);
-        double a = rec.calib.camera_back ? -m.a : m.a;
+        double a = rig_calib_a_sign(&rec.calib) * m.a;
         store_sample x = store_sample_default();
         x.t_s = r->t_s;
         x.kind = STORE_SAMPLE_FRAME;

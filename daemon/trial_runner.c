@@ -20,23 +20,6 @@ const char *trial_state_name(trial_state s)
 
 int trial_state_final(trial_state s) { return s == TRIAL_DONE || s == TRIAL_ABORTED || s == TRIAL_FAILED; }
 
-double trial_dl_from_mm(const trial_calibration *c, double l, double mm)
-{
-    return (double)c->compress_sign * (mm - c->compress_zero_mm) / (1000.0 * l);
-}
-double trial_dw_from_mm(const trial_calibration *c, double l, double mm)
-{
-    return (double)c->shear_sign * (mm - c->shear_zero_mm) / (1000.0 * l);
-}
-double trial_compress_mm(const trial_calibration *c, double l, double dl)
-{
-    return c->compress_zero_mm + (double)c->compress_sign * dl * 1000.0 * l;
-}
-double trial_shear_mm(const trial_calibration *c, double l, double dw)
-{
-    return c->shear_zero_mm + (double)c->shear_sign * dw * 1000.0 * l;
-}
-
 /* Abort protocol: 0 none, 1 reason being written, 2 requested (reason readable). */
 void trial_runner_abort(trial_runner *tr, const char *reason)
 {
@@ -149,12 +132,13 @@ static int rail_idle_at(const rail_status *st, double target)
     return st->state == RAIL_STATE_IDLE && fabs(st->position_mm - target) < 0.05;
 }
 
-/* Position of a rail at time t (rail clock), from its latest status. */
-static double position_at(const rail_status *st, double t)
+/* Position of a rail at time t (rail clock) from its latest status. A fresh reading is the
+ * position at its t_s; an extrapolated status (rail_status_get) is already the position at the
+ * poll time t_poll, so only the rest of the way is added. */
+static double position_at(const rail_status *st, double t_poll, double t)
 {
-    if (st->state == RAIL_STATE_MOVING || st->state == RAIL_STATE_HOMING)
-        return st->position_mm + st->velocity_mm_s * (t - st->t_s);
-    return st->position_mm;
+    if (st->state != RAIL_STATE_MOVING && st->state != RAIL_STATE_HOMING) return st->position_mm;
+    return st->position_mm + st->velocity_mm_s * (t - (st->extrapolated ? t_poll : st->t_s));
 }
 
 static int command(run_ctx *c, rail *r, rail_err e, const char *what)
@@ -179,7 +163,7 @@ static int step(run_ctx *c, const trial_sample *smp)
     case TRIAL_COMPRESSING:
         if (rail_idle_at(&c->sc, c->target_compress_mm)) {
             emit_event(c, "info", "compression reached: Delta L = %.4f (rail at %.3f mm)",
-                       trial_dl_from_mm(&p->calib, l, c->sc.position_mm), c->sc.position_mm);
+                       rig_calib_dl(&p->calib, l, c->sc.position_mm), c->sc.position_mm);
             enter(c, TRIAL_HOLDING, p->hold_s + 30.0, NULL);
         }
         return 0;
@@ -207,7 +191,7 @@ static int step(run_ctx *c, const trial_sample *smp)
                 return 1;
             }
             emit_event(c, "info", "upper state seen: Delta Z = %.4f", dz);
-            c->target_shear_mm = trial_shear_mm(&p->calib, l, p->scene.shear_max);
+            c->target_shear_mm = rig_calib_shear_mm(&p->calib, l, p->scene.shear_max);
             double v = p->scene.shear_rate * 1000.0;
             snap_detect_init(&tr->det, &p->snap);
             if (command(c, tr->shear, rail_move_abs(tr->shear, c->target_shear_mm, v), "shear move")) return 1;
@@ -287,9 +271,9 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
         goto end;
     }
     c.start_compress_mm = c.sc.position_mm;
-    c.target_compress_mm = trial_compress_mm(&p->calib, l, p->scene.compression);
+    c.target_compress_mm = rig_calib_compress_mm(&p->calib, l, p->scene.compression);
     emit_event(&c, "info", "start: compression rail at %.3f mm (Delta L = %.4f), target %.3f mm (Delta L = %.4f)",
-               c.sc.position_mm, trial_dl_from_mm(&p->calib, l, c.sc.position_mm), c.target_compress_mm,
+               c.sc.position_mm, rig_calib_dl(&p->calib, l, c.sc.position_mm), c.target_compress_mm,
                p->scene.compression);
     if (rail_move_abs(tr->compress, c.target_compress_mm, p->compress_speed_mm_s) != RAIL_OK) {
         finish(&c, TRIAL_FAILED, "compression move refused: %s", rail_last_error(tr->compress));
@@ -326,10 +310,10 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             smp.kind = 0;
             smp.frame = -1;
             smp.t_s = st->t_s - c.t0;
-            smp.compress_mm = position_at(&c.sc, st->t_s);
-            smp.shear_mm = position_at(&c.ss, st->t_s);
-            smp.dl = trial_dl_from_mm(&p->calib, l, smp.compress_mm);
-            smp.dw = trial_dw_from_mm(&p->calib, l, smp.shear_mm);
+            smp.compress_mm = position_at(&c.sc, now, st->t_s);
+            smp.shear_mm = position_at(&c.ss, now, st->t_s);
+            smp.dl = rig_calib_dl(&p->calib, l, smp.compress_mm);
+            smp.dw = rig_calib_dw(&p->calib, l, smp.shear_mm);
             smp.reason = VIS_REASON_NONE;
             out->rail_readings++;
             if (tr->sink.sample && tr->sink.sample(tr->sink.user, &smp, why, sizeof why)) {
@@ -338,8 +322,8 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             }
         }
         /* The frame of this instant, with the rails where they are at its time. */
-        double pos_c = position_at(&c.sc, now), pos_s = position_at(&c.ss, now);
-        double dl = trial_dl_from_mm(&p->calib, l, pos_c), dw = trial_dw_from_mm(&p->calib, l, pos_s);
+        double pos_c = position_at(&c.sc, now, now), pos_s = position_at(&c.ss, now, now);
+        double dl = rig_calib_dl(&p->calib, l, pos_c), dw = rig_calib_dw(&p->calib, l, pos_s);
         double t_frame = now;
         vis_error ve = {0};
         vis_status vs = tr->cam.grab(tr->cam.ctx, now, dl, dw, tr->frame, &t_frame, &ve);
@@ -348,16 +332,16 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             break;
         }
         double t_rail = t_frame + p->calib.camera_time_offset_s;
-        pos_c = position_at(&c.sc, t_rail);
-        pos_s = position_at(&c.ss, t_rail);
+        pos_c = position_at(&c.sc, now, t_rail);
+        pos_s = position_at(&c.ss, now, t_rail);
         memset(&smp, 0, sizeof smp);
         smp.kind = 1;
         smp.frame = frame;
         smp.t_s = t_rail - c.t0;
         smp.compress_mm = pos_c;
         smp.shear_mm = pos_s;
-        smp.dl = trial_dl_from_mm(&p->calib, l, pos_c);
-        smp.dw = trial_dw_from_mm(&p->calib, l, pos_s);
+        smp.dl = rig_calib_dl(&p->calib, l, pos_c);
+        smp.dw = rig_calib_dw(&p->calib, l, pos_s);
         vis_measure m;
         if (vis_tracker_process(tr->tracker, tr->frame, smp.dw * l * 1000.0, &m, &ve) != VIS_OK) {
             finish(&c, TRIAL_FAILED, "tracker: %s", ve.message);
@@ -368,7 +352,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
                        isfinite(m.a);
         if (smp.measured) {
             smp.dz = m.dz;
-            smp.a = p->calib.camera_back ? -m.a : m.a;
+            smp.a = rig_calib_a_sign(&p->calib) * m.a;
             out->measured_frames++;
         }
         smp.quality = isfinite(m.quality) ? m.quality : 0.0;

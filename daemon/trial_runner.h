@@ -22,6 +22,7 @@
 #include <stddef.h>
 
 #include "rail.h"
+#include "rig_calib.h"
 #include "scene.h"
 #include "snap_detect.h"
 #include "vision.h"
@@ -44,26 +45,10 @@ const char *trial_state_name(trial_state s);
 /* 1 for done, aborted and failed. */
 int trial_state_final(trial_state s);
 
-/* The rig calibration: where the simulator's coordinates are on the rails. */
-typedef struct trial_calibration {
-    double compress_zero_mm;   /* compression rail position where the clamp gap is the free length */
-    double shear_zero_mm;      /* shear rail position with the clamps aligned */
-    int compress_sign;         /* +1: a larger rail position brings the clamps closer */
-    int shear_sign;            /* +1: a larger rail position is +y (Delta W > 0) */
-    int camera_back;           /* 1: the camera looks from +y, which flips the sign of A */
-    double camera_time_offset_s; /* s, add to a frame's time stamp to get the rails' clock time */
-} trial_calibration;
-
-/* Rail positions <-> normalised clamp placement, for a free length l (m). */
-double trial_dl_from_mm(const trial_calibration *c, double l, double compress_mm);
-double trial_dw_from_mm(const trial_calibration *c, double l, double shear_mm);
-double trial_compress_mm(const trial_calibration *c, double l, double dl);
-double trial_shear_mm(const trial_calibration *c, double l, double dw);
-
 /* Everything a trial needs to know, filled from the rig file by the daemon. */
 typedef struct trial_plan {
     rod_scene scene;             /* specimen and protocol: length, compression, shear_rate, shear_max */
-    trial_calibration calib;
+    rig_calibration calib;       /* rails <-> Delta L, Delta W; camera side; time offset (rig_calib.h) */
     double compress_speed_mm_s;  /* speed of the compression move */
     double return_speed_mm_s;    /* speed of both rails on the way back */
     double hold_s;               /* time held at the target compression before the check */

@@ -512,12 +512,7 @@ static void *session_main(void *arg)
     trial_plan plan;
     memset(&plan, 0, sizeof plan);
     plan.scene = cfg->scene;
-    plan.calib.compress_zero_mm = cfg->calib.compress_zero_mm;
-    plan.calib.shear_zero_mm = cfg->calib.shear_zero_mm;
-    plan.calib.compress_sign = cfg->calib.compress_sign;
-    plan.calib.shear_sign = cfg->calib.shear_sign;
-    plan.calib.camera_back = cfg->calib.camera_side == RIG_CAMERA_BACK;
-    plan.calib.camera_time_offset_s = cfg->calib.camera_time_offset_s;
+    plan.calib = cfg->calib;
     plan.compress_speed_mm_s = cfg->trial.compress_speed_mm_s;
     plan.return_speed_mm_s = cfg->trial.return_speed_mm_s;
     plan.hold_s = cfg->trial.hold_s;
