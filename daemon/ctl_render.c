@@ -24,7 +24,6 @@
  * Exit status: 0 done, 1 the scene, the simulation or an output failed (reason on stderr), 2 usage.
  * Outputs are opened before the simulation runs (an unwritable path fails at once); after a later
  * failure the frames written so far stay in the video and the CSV, row k still describing frame k. */
-#include <gsl/gsl_errno.h>
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
@@ -282,9 +281,6 @@ int ctl_render_main(int argc, char **argv)
         return 2;
     }
     const double wall0 = wall_now();
-    /* GSL's default handler aborts; the simulator handles its failures by return codes (a
-     * singular factorisation rejects and halves the step). Process-wide, as in ribbon-sim's main. */
-    gsl_set_error_handler_off();
     rod_scene sc;
     cfg_error ce;
     if (cfg_scene_load(c.scene, c.sets, c.nsets, &sc, &ce) != CFG_OK) {

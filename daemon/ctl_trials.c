@@ -224,6 +224,26 @@ static int open_db(const ctl_opts *o, store **st, int read_only)
     return 0;
 }
 
+/* GET /trials/{id}/report.png into path. Returns 0, or 1 with the reason printed. */
+static int fetch_report(const ctl_opts *o, int64_t id, const char *out)
+{
+    char path[64];
+    snprintf(path, sizeof path, "/trials/%lld/report.png", (long long)id);
+    unsigned char *png = NULL;
+    size_t len = 0;
+    if (request(o, "GET", path, NULL, NULL, &png, &len) < 0) return 1;
+    FILE *f = fopen(out, "wb");
+    int ok = f && fwrite(png, 1, len, f) == len;
+    if (f && fclose(f) != 0) ok = 0;
+    free(png);
+    if (!ok) {
+        fprintf(stderr, "ribbonctl: %s: %s\n", out, strerror(errno));
+        return 1;
+    }
+    printf("report: %s\n", out);
+    return 0;
+}
+
 /* ---- commands ------------------------------------------------------------------------------------ */
 
 static int wait_for(const ctl_opts *o, int64_t id)
@@ -263,23 +283,7 @@ static int wait_for(const ctl_opts *o, int64_t id)
         print_comparison(t);
     int ok = !strcmp(jstr(t, "status"), "done");
     json_decref(t);
-    if (o->out) {
-        /* The report of the trial just run (start --wait --out FILE.png). */
-        char path[64];
-        snprintf(path, sizeof path, "/trials/%lld/report.png", (long long)id);
-        unsigned char *png = NULL;
-        size_t len = 0;
-        if (request(o, "GET", path, NULL, NULL, &png, &len) < 0) return 1;
-        FILE *f = fopen(o->out, "wb");
-        int wrote = f && fwrite(png, 1, len, f) == len;
-        if (f && fclose(f) != 0) wrote = 0;
-        free(png);
-        if (!wrote) {
-            fprintf(stderr, "ribbonctl: %s: %s\n", o->out, strerror(errno));
-            return 1;
-        }
-        printf("report: %s\n", o->out);
-    }
+    if (o->out && fetch_report(o, id, o->out)) return 1; /* start --wait --out FILE.png */
     json_t *s = NULL;
     if (!o->json && request(o, "GET", "/status", NULL, &s, NULL, NULL) > 0) printf("database: %s\n", jstr(s, "store"));
     json_decref(s);
@@ -432,23 +436,10 @@ static int cmd_report(const ctl_opts *o)
             fprintf(stderr, "ribbonctl: report: %s\n", why);
             return 1;
         }
-    } else {
-        char path[64];
-        snprintf(path, sizeof path, "/trials/%lld/report.png", (long long)o->id);
-        unsigned char *png = NULL;
-        size_t len = 0;
-        if (request(o, "GET", path, NULL, NULL, &png, &len) < 0) return 1;
-        FILE *f = fopen(o->out, "wb");
-        int ok = f && fwrite(png, 1, len, f) == len;
-        if (f && fclose(f) != 0) ok = 0;
-        free(png);
-        if (!ok) {
-            fprintf(stderr, "ribbonctl: %s: %s\n", o->out, strerror(errno));
-            return 1;
-        }
+        printf("report: %s\n", o->out);
+        return 0;
     }
-    printf("report: %s\n", o->out);
-    return 0;
+    return fetch_report(o, o->id, o->out);
 }
 
 static int parse_range(const char *s, double *a, double *b, size_t *n)

@@ -87,8 +87,8 @@ static void slow_creep_is_no_snap(void **state)
     snap_detect_init(&d, &p);
     for (long k = 0; k < 2000; k++) {
         double t = k / FPS;
-        /* 0.002/s creep plus 1e-3 frame-to-frame noise: fast in speed (0.02/s... up to 0.04/s) but
-         * never a jump above dz_jump. */
+        /* 0.002/s creep plus +-1e-3 alternating noise: 0.04/s between frames, well below the
+         * snap speed; nothing here may count as a snap. */
         double noise = (k % 2 ? 1e-3 : -1e-3);
         snap_detect_add(&d, k, t, RATE * t, 0.3 - 0.002 * t + noise, 0.0, 1);
     }
