@@ -18,7 +18,7 @@ struct mock_camera {
 };
 
 int mock_camera_open(const rod_scene *sc, double dl_start, const twin_camera_params *cp, double noise_sigma,
-                     double blur_sigma_px, uint64_t seed, mock_camera **out, vis_calib *calib, char *why,
+                     double blur_sigma_px, uint64_t seed, mock_camera **out, char *why,
                      size_t why_len)
 {
     *out = NULL;
@@ -31,7 +31,6 @@ int mock_camera_open(const rod_scene *sc, double dl_start, const twin_camera_par
     vis_render_params rp;
     vis_error ve = {0};
     if (twin_render_params_for_scene(sc, cp, &rp, err, sizeof err) != TWIN_OK ||
-        twin_calib_for_scene(sc, &rp.camera, calib, err, sizeof err) != TWIN_OK ||
         twin_shape_init(&mc->shape, sc, TWIN_Y_RIG, err, sizeof err) != TWIN_OK) {
         snprintf(why, why_len, "mock camera: %s", err);
         goto fail;

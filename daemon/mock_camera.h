@@ -19,10 +19,10 @@
 typedef struct mock_camera mock_camera;
 
 /* sc: the scene at the twin's resolution (nodes, dt). dl_start: the mounting compression.
- * noise_sigma, blur_sigma_px: image degradations (0 = clean). On success *calib is the calibration
- * that matches the synthetic camera (for the tracker). */
+ * noise_sigma, blur_sigma_px: image degradations (0 = clean). The camera is the one
+ * twin_render_params_for_scene frames; its calibration is twin_calib_for_scene's (trial_calib.c). */
 int mock_camera_open(const rod_scene *sc, double dl_start, const twin_camera_params *cp, double noise_sigma,
-                     double blur_sigma_px, uint64_t seed, mock_camera **out, vis_calib *calib, char *why,
+                     double blur_sigma_px, uint64_t seed, mock_camera **out, char *why,
                      size_t why_len);
 void mock_camera_close(mock_camera *mc);
 

@@ -396,7 +396,6 @@ static void *session_main(void *arg)
     live_camera live = {0};
     vis_tracker *trk = NULL;
     rod_scene sc = cfg->scene;
-    vis_calib cal = vis_calib_default();
     vis_error ve = {0};
     trial_camera cam = {0};
 
@@ -463,14 +462,13 @@ static void *session_main(void *arg)
         cp.height_px = height;
         double dl0 = rig_calib_dl(&cfg->calib, sc.length, rs.position_mm);
         if (mock_camera_open(&sc, dl0, &cp, cfg->camera.noise_sigma, cfg->camera.blur_sigma_px,
-                             (uint64_t)s->trial_id, &mock, &cal, why, sizeof why)) {
+                             (uint64_t)s->trial_id, &mock, why, sizeof why)) {
             fail_early(s, why);
             goto end;
         }
         cam.grab = mock_camera_grab;
         cam.ctx = mock;
     } else {
-        cal = s->cal;
         vis_camera_settings cs = vis_camera_settings_default();
         cs.index = cfg->camera.index;
         cs.path = cfg->camera.source == RIG_SOURCE_DEVICE ? cfg->camera.device : NULL;
@@ -489,7 +487,7 @@ static void *session_main(void *arg)
     }
     vis_track_params tp = vis_track_params_default();
     tp.length_mm = sc.length * 1000.0;
-    trk = vis_tracker_create(&tp, &cal, &ve);
+    trk = vis_tracker_create(&tp, &s->cal, &ve); /* the calibration stored with the trial */
     if (!trk) {
         snprintf(why, sizeof why, "tracker: %s", ve.message);
         fail_early(s, why);
