@@ -19,13 +19,14 @@
 #include "ctl.h"
 #include "scene_file.h"
 #include "store.h"
+#include "rig_config.h"
 #include "trial_replay.h"
 #include "trial_report.h"
 
 #define MAX_SET 64
 
 typedef struct ctl_opts {
-    const char *url, *token, *db, *out, *note, *video, *scene;
+    const char *url, *token, *db, *out, *note, *video, *scene, *config;
     const char *set[MAX_SET];
     int n_set;
     int json, wait, csv, all;
@@ -52,6 +53,7 @@ static void help(const char *cmd)
            "  ribbonctl report ID --out FILE.png [--db FILE]\n"
            "  ribbonctl phase-report --out FILE.png [--db FILE] [--scene F] [--phi A:B:n] [--gamma C:D:m]\n"
            "  ribbonctl replay ID [--video FILE] [--db FILE] [--json]\n"
+           "  ribbonctl replay --config REPLAY.ini [--set section.key=value ...] [--db FILE] [--json]\n"
            "common: --url URL (default $RIBBON_URL or http://127.0.0.1:8377), --token T (default $RIBBON_TOKEN)\n"
            "\n"
            "start asks ribbond to run one trial of its rig file (with --set overrides of scene or rig keys);\n"
@@ -62,7 +64,10 @@ static void help(const char *cmd)
            "computed for the scene (--scene, default the paper scene at N = 41, dt = 10 ms, fast mode)\n"
            "on the grid --phi (default 30:150:5, degrees) x --gamma (default 0.08:0.28:6).\n"
            "replay runs a recorded trial's video and rail positions through the tracker and snap detection\n"
-           "again and stores the result as a new trial linked to its source (cmd: %s).\n",
+           "again and stores the result as a new trial linked to its source. With --config, a replay-mode\n"
+           "rig file names what to replay: [replay] source_trial (or ID), or an outside recording\n"
+           "(replay.video, replay.rails as t_s,compress_mm,shear_mm, camera.calibration); the store is the\n"
+           "rig file's store.path unless --db is given (cmd: %s).\n",
            cmd);
 }
 
@@ -92,6 +97,7 @@ static int parse(const char *cmd, int argc, char **argv, ctl_opts *o, int want_i
         else if (!strcmp(a, "--note")) TAKE(note);
         else if (!strcmp(a, "--video")) TAKE(video);
         else if (!strcmp(a, "--scene")) TAKE(scene);
+        else if (!strcmp(a, "--config")) TAKE(config);
         else if (!strcmp(a, "--phi")) TAKE(phi);
         else if (!strcmp(a, "--gamma")) TAKE(gamma);
         else if (!strcmp(a, "--set")) {
@@ -509,16 +515,52 @@ static void replay_progress(void *u, long f, long total)
 
 static int cmd_replay(const ctl_opts *o)
 {
-    if (!o->id) return usage_error("replay", "ribbonctl replay ID (the recorded trial)");
+    rig_config cfg;
+    int have_cfg = 0;
+    if (o->config) {
+        cfg_error ce;
+        if (rig_config_load(o->config, o->set, o->n_set, &cfg, &ce) != CFG_OK) {
+            char msg[600];
+            cfg_error_format(&ce, msg, sizeof msg);
+            fprintf(stderr, "ribbonctl replay: %s\n", msg);
+            return 1;
+        }
+        if (cfg.mode != RIG_MODE_REPLAY) {
+            fprintf(stderr, "ribbonctl replay: %s is a %s-mode rig file; replay needs rig.mode = replay\n", o->config,
+                    rig_mode_name(cfg.mode));
+            return 2;
+        }
+        have_cfg = 1;
+    } else if (o->n_set) {
+        return usage_error("replay", "--set needs --config");
+    }
+    int64_t source = o->id ? o->id : have_cfg ? cfg.replay.source_trial : 0;
+    int files = !source && have_cfg && cfg.replay.video[0];
+    if (!source && !files)
+        return usage_error("replay", "ribbonctl replay ID (the recorded trial), or --config with a replay rig file");
+    ctl_opts oo = *o;
+    if (!oo.db && have_cfg) oo.db = cfg.store_path;
     store *st;
-    if (open_db(o, &st, 0)) return 1;
-    int64_t nid = 0;
-    trial_result r;
+    if (open_db(&oo, &st, 0)) return 1;
     char why[512];
-    int rc = trial_replay_run(st, o->id, o->video, &nid, &r, replay_progress, NULL, why, sizeof why);
+    trial_replay *r = NULL;
+    int rc = files ? trial_replay_from_files(&cfg, &r, why, sizeof why)
+                   : trial_replay_from_trial(st, source, o->video ? o->video
+                                                     : have_cfg && cfg.replay.video[0] ? cfg.replay.video
+                                                                                       : NULL,
+                                             &r, why, sizeof why);
+    int64_t nid = 0;
+    trial_result res;
+    memset(&res, 0, sizeof res);
+    if (rc == 0) rc = trial_replay_create(r, st, o->note, &nid, why, sizeof why);
+    if (rc == 0) rc = trial_replay_execute(r, st, NULL, replay_progress, NULL, &res, why, sizeof why);
+    trial_replay_free(r);
     fprintf(stderr, "\n");
     if (rc) {
-        fprintf(stderr, "ribbonctl: replay of trial %lld: %s\n", (long long)o->id, why);
+        if (files)
+            fprintf(stderr, "ribbonctl: replay of %s: %s\n", cfg.replay.video, why);
+        else
+            fprintf(stderr, "ribbonctl: replay of trial %lld: %s\n", (long long)source, why);
         store_close(st);
         return 1;
     }
@@ -526,9 +568,12 @@ static int cmd_replay(const ctl_opts *o)
     if (store_trial_json(st, nid, &t, why, sizeof why) == STORE_OK) {
         if (o->json)
             print_json(t);
+        else if (files)
+            printf("replay of %s is trial %lld: %s at Delta W = %.5f (%ld frames)\n", cfg.replay.video,
+                   (long long)nid, res.regime, res.snap_dw, res.frames);
         else
-            printf("replay of trial %lld is trial %lld: %s at Delta W = %.5f (%ld frames)\n", (long long)o->id,
-                   (long long)nid, r.regime, r.snap_dw, r.frames);
+            printf("replay of trial %lld is trial %lld: %s at Delta W = %.5f (%ld frames)\n", (long long)source,
+                   (long long)nid, res.regime, res.snap_dw, res.frames);
         json_decref(t);
     }
     store_close(st);

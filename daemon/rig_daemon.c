@@ -81,6 +81,12 @@ void rig_daemon_close(rig_daemon *d, const char *reason)
     trial_session *s = d->session;
     d->session = NULL;
     pthread_mutex_unlock(&d->lock);
+    replay_job *rj = d->replay;
+    d->replay = NULL;
+    if (rj) {
+        replay_job_abort(rj);
+        replay_job_join(rj, NULL);
+    }
     if (s) {
         trial_session_abort(s, reason);
         trial_result r;
@@ -109,6 +115,21 @@ static trial_session *running_session(rig_daemon *d)
     return NULL;
 }
 
+/* The replay if it still runs; reaps a finished one. Caller holds the lock. */
+static replay_job *running_replay(rig_daemon *d)
+{
+    if (!d->replay) return NULL;
+    replay_job_status rs;
+    replay_job_status_get(d->replay, &rs);
+    if (!rs.finished) return d->replay;
+    trial_result r;
+    replay_job_join(d->replay, &r);
+    d->replay = NULL;
+    say(d, "replay trial %lld ended %s: %s%s%s", (long long)rs.trial_id, trial_state_name(r.final), r.regime,
+        r.reason[0] ? ": " : "", r.reason);
+    return NULL;
+}
+
 static json_t *num_or_null(double v) { return isfinite(v) ? json_real(v) : json_null(); }
 
 static int op_status(void *user, json_t **out, char *why, size_t n)
@@ -123,7 +144,15 @@ static int op_status(void *user, json_t **out, char *why, size_t n)
     json_object_set_new(o, "version", json_string(RIBBON_VERSION));
     pthread_mutex_lock(&d->lock);
     trial_session *s = running_session(d);
-    if (s) {
+    replay_job *rj = running_replay(d);
+    if (rj) {
+        replay_job_status rs;
+        replay_job_status_get(rj, &rs);
+        json_object_set_new(o, "state", json_string("running"));
+        json_object_set_new(o, "trial", json_pack("{s:I, s:s, s:I, s:i, s:i}", "id", (json_int_t)rs.trial_id, "state",
+                                                  "replaying", "source_trial", (json_int_t)rs.source_id, "frames",
+                                                  (int)rs.frame, "total_frames", (int)rs.total));
+    } else if (s) {
         session_status ss;
         trial_session_status(s, &ss);
         json_t *t = json_pack("{s:I, s:s, s:i, s:i, s:o, s:o, s:o, s:o, s:o, s:b, s:o, s:s, s:i, s:o, s:s}", "id",
@@ -155,12 +184,12 @@ static int op_status(void *user, json_t **out, char *why, size_t n)
     return 0;
 }
 
-/* Replay mode: POST /trials {"source_trial": ID} (default [replay] source_trial) replays a stored
- * trial into a new one. It runs on the API thread (a few seconds: decoding and tracking the video);
- * other API requests wait meanwhile. */
+/* Replay mode: POST /trials {"source_trial": ID} replays a stored trial; {} replays [replay]
+ * source_trial, or the outside files the rig file names (replay.video, replay.rails). The replay
+ * runs on a thread of its own; the answer (201) is the new trial, status running. */
 static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *http_status, char *why, size_t n)
 {
-    json_t *src = json_object_get(body, "source_trial");
+    json_t *src = json_object_get(body, "source_trial"), *note = json_object_get(body, "note");
     const char *key;
     json_t *val;
     json_object_foreach((json_t *)body, key, val)
@@ -171,27 +200,46 @@ static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *ht
             return -1;
         }
     }
+    if (note && !json_is_string(note)) {
+        *http_status = 400;
+        snprintf(why, n, "\"note\" must be a string");
+        return -1;
+    }
     int64_t id = src ? (int64_t)json_integer_value(src) : d->cfg.replay.source_trial;
-    if ((src && !json_is_integer(src)) || id < 1) {
+    int files = !src && !d->cfg.replay.source_trial && d->cfg.replay.video[0];
+    if (!files && ((src && !json_is_integer(src)) || id < 1)) {
         *http_status = 400;
-        snprintf(why, n, "which trial? give \"source_trial\": ID (or [replay] source_trial in the rig file)");
+        snprintf(why, n, "which trial? give \"source_trial\": ID (or [replay] source_trial, or replay.video and "
+                         "replay.rails, in the rig file)");
         return -1;
     }
-    if (!src && d->cfg.replay.video[0] && !d->cfg.replay.source_trial) {
-        *http_status = 400;
-        snprintf(why, n, "replay of an outside recording (replay.video + replay.rails) is not supported yet; "
-                         "replay a stored trial");
+    pthread_mutex_lock(&d->lock);
+    replay_job *rj = running_replay(d);
+    if (rj) {
+        replay_job_status rs;
+        replay_job_status_get(rj, &rs);
+        pthread_mutex_unlock(&d->lock);
+        *http_status = 409;
+        snprintf(why, n, "replay trial %lld is running (frame %ld); abort it first", (long long)rs.trial_id, rs.frame);
         return -1;
     }
+    trial_replay *r = NULL;
+    int rc = files ? trial_replay_from_files(&d->cfg, &r, why, n)
+                   : trial_replay_from_trial(d->st, id, src ? NULL : (d->cfg.replay.video[0] ? d->cfg.replay.video : NULL),
+                                             &r, why, n);
     int64_t nid = 0;
-    trial_result r;
-    if (trial_replay_run(d->st, id, src ? NULL : (d->cfg.replay.video[0] ? d->cfg.replay.video : NULL), &nid, &r,
-                         NULL, NULL, why, n)) {
+    if (rc == 0)
+        rc = replay_job_start(r, d->st, d->cfg.store_path, note ? json_string_value(note) : NULL, &d->replay, &nid, why,
+                              n);
+    pthread_mutex_unlock(&d->lock);
+    if (rc) {
         *http_status = nid ? 500 : 400;
         return -1;
     }
-    say(d, "trial %lld replayed as trial %lld: %s at Delta W = %.5f", (long long)id, (long long)nid, r.regime,
-        r.snap_dw);
+    if (files)
+        say(d, "replay of %s started as trial %lld", d->cfg.replay.video, (long long)nid);
+    else
+        say(d, "replay of trial %lld started as trial %lld", (long long)id, (long long)nid);
     return store_trial_json(d->st, nid, out, why, n) == STORE_OK ? 0 : -1;
 }
 
@@ -280,6 +328,15 @@ static int op_abort(void *user, json_t **out, int *http_status, char *why, size_
 {
     rig_daemon *d = user;
     pthread_mutex_lock(&d->lock);
+    replay_job *rj = running_replay(d);
+    if (rj) {
+        replay_job_status rs;
+        replay_job_status_get(rj, &rs);
+        replay_job_abort(rj);
+        pthread_mutex_unlock(&d->lock);
+        *out = json_pack("{s:I, s:s, s:s}", "id", (json_int_t)rs.trial_id, "state", "replaying", "abort", "requested");
+        return 0;
+    }
     trial_session *s = running_session(d);
     if (!s) {
         pthread_mutex_unlock(&d->lock);

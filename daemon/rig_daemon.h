@@ -2,8 +2,8 @@
  * the current trial session, and the control API's operations on them.
  *
  * Threads: the API's operations run on the API server's thread (api_server.h); a trial runs on
- * its session's thread, which owns the rails while it runs; main() waits for signals. The daemon's
- * mutex guards `session`; the store handle `st` is used by the API thread only (each thread has its
+ * its session's thread, which owns the rails while it runs; a replay (replay mode) on its job's
+ * thread; main() waits for signals. The daemon's mutex guards `session` and `replay`; the store handle `st` is used by the API thread only (each thread has its
  * own connection). At start-up every trial the store still marks running is marked interrupted:
  * a restart never resumes motion. */
 #ifndef RIBBON_DAEMON_RIG_DAEMON_H
@@ -15,6 +15,7 @@
 #include "api_server.h"
 #include "rail.h"
 #include "rig_config.h"
+#include "replay_job.h"
 #include "store.h"
 #include "trial_session.h"
 
@@ -30,6 +31,7 @@ typedef struct rig_daemon {
     rail_vclock vclock;        /* mock mode's virtual clock */
     pthread_mutex_t lock;
     trial_session *session;    /* current or last trial, under lock */
+    replay_job *replay;        /* replay mode: the current or last replay, under lock */
     api_server *api;
     void (*log)(const char *line);
 } rig_daemon;
@@ -40,7 +42,7 @@ int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *o
                     void (*log)(const char *line), char *why, size_t why_len);
 /* Starts the control API; *port gets the bound port. */
 int rig_daemon_serve(rig_daemon *d, unsigned *port, char *why, size_t why_len);
-/* Stops a running trial (aborted with reason), waits for it, stops the API, closes the rails
+/* Stops a running trial or replay (aborted with reason), waits for it, stops the API, closes the rails
  * (stopped) and the store. */
 void rig_daemon_close(rig_daemon *d, const char *reason);
 

@@ -41,6 +41,9 @@ int trial_record_parse(const char *json, trial_record *out, char *why, size_t wh
  * from its state events; NaN for a state it never entered. */
 void trial_state_times(store *st, int64_t id, double *t_check, double *t_shear, double *t_return);
 
+/* The specimen record (store) a rig file describes: [specimen] and the scene's geometry. */
+void trial_specimen_from_config(const rig_config *cfg, store_specimen *sp);
+
 /* "# rig file PATH" + its text + "# scene file PATH" + its text (+ "# note: ..."), malloc'ed;
  * NULL when out of memory (a file that cannot be read is noted in the text instead). */
 char *trial_config_text(const rig_config *cfg, const char *note);

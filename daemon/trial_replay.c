@@ -1,14 +1,321 @@
-/* trial_replay.c: replay of a recorded trial (see trial_replay.h). */
+/* trial_replay.c: replay of a recording, stored or outside (see trial_replay.h). */
 #include "trial_replay.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include <jansson.h>
+
 #include "snap_detect.h"
 #include "trial_calib.h"
 #include "vision.h"
+
+#define REPLAY_RAILS_MAX 10000000 /* readings in a rails CSV */
+#define REPLAY_SHEAR_START_MM 0.05
+
+struct trial_replay {
+    char video[RIG_PATH_MAX];
+    trial_record rec;
+    char *calib_json;
+    char *config_text;
+    int64_t source_id;
+    double source_snap_dw; /* NaN = none */
+    int64_t specimen_id;
+    store_specimen specimen; /* files: recorded when the trial is created */
+    int has_specimen;
+    /* A stored trial's frame samples. */
+    store_sample *smp;
+    size_t ns, next;
+    /* An outside recording's rail readings. */
+    double *rt, *rc, *rs;
+    size_t nr, at;
+    double fps, t_offset;
+    double t_check, t_shear, t_return; /* NaN = none */
+    long frames_total;
+    int64_t new_id;
+};
+
+void trial_replay_free(trial_replay *r)
+{
+    if (!r) return;
+    free(r->calib_json);
+    free(r->config_text);
+    free(r->smp);
+    free(r->rt);
+    free(r->rc);
+    free(r->rs);
+    free(r);
+}
+
+int64_t trial_replay_source(const trial_replay *r) { return r->source_id; }
+long trial_replay_frame_count(const trial_replay *r) { return r->frames_total; }
+
+static trial_replay *replay_new(char *why, size_t why_len)
+{
+    trial_replay *r = calloc(1, sizeof *r);
+    if (!r) {
+        snprintf(why, why_len, "out of memory");
+        return NULL;
+    }
+    r->source_snap_dw = NAN;
+    r->t_check = r->t_shear = r->t_return = NAN;
+    r->frames_total = -1;
+    return r;
+}
+
+int trial_replay_from_trial(store *st, int64_t source_id, const char *video, trial_replay **out, char *why,
+                            size_t why_len)
+{
+    *out = NULL;
+    trial_replay *r = replay_new(why, why_len);
+    if (!r) return -1;
+    store_trial src;
+    char *config = NULL;
+    if (store_trial_get(st, source_id, &src, why, why_len) != STORE_OK ||
+        store_trial_texts(st, source_id, &config, &r->calib_json, why, why_len) != STORE_OK)
+        goto fail;
+    r->source_id = source_id;
+    r->specimen_id = src.specimen_id;
+    if (src.snapped) r->source_snap_dw = src.snap_dw_measured;
+    if (!r->calib_json) {
+        snprintf(why, why_len, "trial %lld has no calibration record to replay with", (long long)source_id);
+        goto fail;
+    }
+    if (trial_record_parse(r->calib_json, &r->rec, why, why_len)) goto fail;
+    if (!video || !*video) video = src.video_path;
+    if (!*video) {
+        snprintf(why, why_len, "trial %lld has no video to replay", (long long)source_id);
+        goto fail;
+    }
+    snprintf(r->video, sizeof r->video, "%s", video);
+    size_t tl = (config ? strlen(config) : 0) + 64;
+    r->config_text = malloc(tl);
+    if (!r->config_text) {
+        snprintf(why, why_len, "out of memory");
+        goto fail;
+    }
+    snprintf(r->config_text, tl, "%s# replay of trial %lld\n", config ? config : "", (long long)source_id);
+    if (store_samples_get(st, source_id, &r->smp, &r->ns, why, why_len) != STORE_OK) goto fail;
+    trial_state_times(st, source_id, &r->t_check, &r->t_shear, &r->t_return);
+    free(config);
+    *out = r;
+    return 0;
+fail:
+    free(config);
+    trial_replay_free(r);
+    return -1;
+}
+
+/* Reads the rails CSV: t_s,compress_mm,shear_mm per line; an optional header line, '#' comments
+ * and blank lines; t strictly increasing; at least two readings. */
+static int read_rails(trial_replay *r, const char *path, char *why, size_t why_len)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        snprintf(why, why_len, "rails CSV %.300s: %s", path, strerror(errno));
+        return -1;
+    }
+    size_t cap = 0;
+    char line[512];
+    long lineno = 0;
+    int rc = -1, seen_header = 0;
+    while (fgets(line, sizeof line, f)) {
+        lineno++;
+        char *p = line;
+        while (*p == ' ' || *p == '\t') p++;
+        if (*p == '#' || *p == '\n' || *p == '\r' || !*p) continue;
+        double v[3];
+        char *q = p;
+        int k = 0, bad = 0;
+        for (; k < 3 && !bad; k++) {
+            char *e;
+            errno = 0;
+            v[k] = strtod(q, &e);
+            if (e == q || errno || !isfinite(v[k])) {
+                bad = 1;
+                break;
+            }
+            q = e;
+            while (*q == ' ' || *q == '\t') q++;
+            if (k < 2 && *q++ != ',') bad = 1;
+        }
+        if (bad && k == 0 && r->nr == 0 && !seen_header) { /* a header line */
+            seen_header = 1;
+            continue;
+        }
+        while (*q == ' ' || *q == '\t' || *q == '\r' || *q == '\n') q++;
+        if (bad || *q) {
+            snprintf(why, why_len, "rails CSV %.300s line %ld: expected t_s,compress_mm,shear_mm (three finite numbers)",
+                     path, lineno);
+            goto out;
+        }
+        if (r->nr > 0 && !(v[0] > r->rt[r->nr - 1])) {
+            snprintf(why, why_len, "rails CSV %.300s line %ld: t_s must increase (%.9g after %.9g)", path, lineno, v[0],
+                     r->rt[r->nr - 1]);
+            goto out;
+        }
+        if (r->nr == cap) {
+            if (cap >= REPLAY_RAILS_MAX) {
+                snprintf(why, why_len, "rails CSV %.300s: more than %d readings", path, REPLAY_RAILS_MAX);
+                goto out;
+            }
+            size_t nc = cap ? 2 * cap : 1024;
+            double *a = realloc(r->rt, nc * sizeof *a), *b = a ? realloc(r->rc, nc * sizeof *b) : NULL;
+            if (a) r->rt = a;
+            if (b) r->rc = b;
+            double *c = b ? realloc(r->rs, nc * sizeof *c) : NULL;
+            if (c) r->rs = c;
+            if (!a || !b || !c) {
+                snprintf(why, why_len, "rails CSV %.300s: out of memory", path);
+                goto out;
+            }
+            cap = nc;
+        }
+        r->rt[r->nr] = v[0];
+        r->rc[r->nr] = v[1];
+        r->rs[r->nr] = v[2];
+        r->nr++;
+    }
+    if (ferror(f)) {
+        snprintf(why, why_len, "rails CSV %.300s: read error", path);
+        goto out;
+    }
+    if (r->nr < 2) {
+        snprintf(why, why_len, "rails CSV %.300s: needs at least two readings (t_s,compress_mm,shear_mm)", path);
+        goto out;
+    }
+    rc = 0;
+out:
+    fclose(f);
+    return rc;
+}
+
+/* Shearing: from the first reading off the first shear position to the reading of largest Delta W. */
+static void shear_window(trial_replay *r)
+{
+    const rig_calibration *c = &r->rec.calib;
+    size_t k0 = r->nr, kmax = 0;
+    double best = -INFINITY;
+    for (size_t k = 0; k < r->nr; k++) {
+        if (k0 == r->nr && fabs(r->rs[k] - r->rs[0]) > REPLAY_SHEAR_START_MM) k0 = k;
+        double dw = rig_calib_dw(c, r->rec.length_m, r->rs[k]);
+        if (dw > best) {
+            best = dw;
+            kmax = k;
+        }
+    }
+    if (k0 < r->nr && kmax > k0) {
+        r->t_check = r->t_shear = r->rt[k0 - (k0 > 0)];
+        r->t_return = r->rt[kmax];
+    }
+}
+
+int trial_replay_from_files(const rig_config *cfg, trial_replay **out, char *why, size_t why_len)
+{
+    *out = NULL;
+    if (cfg->mode != RIG_MODE_REPLAY || !cfg->replay.video[0] || !cfg->replay.rails[0] || !cfg->camera.calibration[0]) {
+        snprintf(why, why_len, "a replay of files needs a replay-mode rig file with replay.video, replay.rails and "
+                               "camera.calibration");
+        return -1;
+    }
+    trial_replay *r = replay_new(why, why_len);
+    if (!r) return -1;
+    vis_error ve = {0};
+    vis_source *vs = NULL;
+    vis_frame *frame = NULL;
+    json_t *root = NULL;
+    vis_calib cal;
+    if (vis_calib_load(&cal, cfg->camera.calibration, &ve) != VIS_OK) {
+        snprintf(why, why_len, "camera calibration %.300s: %s", cfg->camera.calibration, ve.message);
+        goto fail;
+    }
+    snprintf(r->video, sizeof r->video, "%s", cfg->replay.video);
+    vs = vis_source_open_video(r->video, &ve);
+    frame = vis_frame_alloc(16, 16, 1, &ve);
+    if (!vs || !frame) {
+        snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
+        goto fail;
+    }
+    if (vis_source_read(vs, frame, NULL, &ve) != VIS_OK) {
+        snprintf(why, why_len, "video %.300s: no first frame: %s", r->video, ve.message);
+        goto fail;
+    }
+    r->frames_total = vis_source_frame_count(vs);
+    r->fps = vis_source_fps(vs);
+    if (!(r->fps > 0)) r->fps = cfg->camera.fps;
+    if (!(r->fps > 0 && isfinite(r->fps))) {
+        snprintf(why, why_len, "video %.300s does not give its frame rate; set camera.fps", r->video);
+        goto fail;
+    }
+    /* The record: the rig file's calibration and detection, the whole frame as the region. */
+    trial_roi roi = {0, 0, vis_frame_width(frame), vis_frame_height(frame)};
+    char *rec = trial_calib_json(cfg, &cal, roi, why, why_len);
+    json_error_t je;
+    root = rec ? json_loads(rec, 0, &je) : NULL;
+    free(rec);
+    if (!root) goto fail;
+    json_object_set_new(root, "fps", json_real(r->fps));
+    r->calib_json = json_dumps(root, JSON_COMPACT);
+    if (!r->calib_json) {
+        snprintf(why, why_len, "out of memory");
+        goto fail;
+    }
+    if (trial_record_parse(r->calib_json, &r->rec, why, why_len)) goto fail;
+    r->t_offset = r->rec.calib.camera_time_offset_s;
+    if (read_rails(r, cfg->replay.rails, why, why_len)) goto fail;
+    shear_window(r);
+    r->config_text = trial_config_text(cfg, NULL);
+    if (!r->config_text) {
+        snprintf(why, why_len, "out of memory");
+        goto fail;
+    }
+    trial_specimen_from_config(cfg, &r->specimen);
+    r->has_specimen = 1;
+    json_decref(root);
+    vis_frame_free(frame);
+    vis_source_close(vs);
+    *out = r;
+    return 0;
+fail:
+    json_decref(root);
+    vis_frame_free(frame);
+    if (vs) vis_source_close(vs);
+    trial_replay_free(r);
+    return -1;
+}
+
+int trial_replay_create(trial_replay *r, store *st, const char *note, int64_t *new_id, char *why, size_t why_len)
+{
+    *new_id = 0;
+    if (r->has_specimen && store_specimen_upsert(st, &r->specimen, &r->specimen_id, why, why_len) != STORE_OK)
+        return -1;
+    size_t tl = strlen(r->config_text) + (note ? strlen(note) : 0) + 16;
+    char *text = malloc(tl);
+    if (!text) {
+        snprintf(why, why_len, "out of memory");
+        return -1;
+    }
+    snprintf(text, tl, "%s%s%s%s", r->config_text, note && *note ? "# note: " : "", note && *note ? note : "",
+             note && *note ? "\n" : "");
+    store_trial_def def = store_trial_def_default();
+    def.mode = STORE_MODE_REPLAY;
+    def.config_text = text;
+    def.calibration_json = r->calib_json;
+    def.specimen_id = r->specimen_id;
+    def.source_trial_id = r->source_id;
+    def.video_path = r->video;
+    def.created_wall_s = store_wall_now();
+    store_err e = store_trial_create(st, &def, new_id, why, why_len);
+    free(text);
+    if (e != STORE_OK) return -1;
+    char w[256];
+    store_trial_set_status(st, *new_id, STORE_STATUS_RUNNING, NULL, store_wall_now(), w, sizeof w);
+    r->new_id = *new_id;
+    return 0;
+}
 
 static void add_event(store *st, int64_t id, double t, store_event_kind kind, const char *msg)
 {
@@ -24,125 +331,125 @@ static void add_event(store *st, int64_t id, double t, store_event_kind kind, co
     store_event_append(st, &ev, why, sizeof why);
 }
 
-int trial_replay_run(store *st, int64_t source_id, const char *video, int64_t *new_id, trial_result *res,
-                     void (*progress)(void *u, long frame, long total), void *u, char *why, size_t why_len)
+/* Frame f's rail positions into x (t_s, compress_mm, shear_mm, dl, dw). 0 = found, 1 = the
+ * recording has none for it (outside files' readings), -1 = error with why. */
+static int frame_rails(trial_replay *r, long f, store_sample *x, char *why, size_t why_len)
+{
+    if (r->smp) {
+        while (r->next < r->ns && !(r->smp[r->next].kind == STORE_SAMPLE_FRAME && r->smp[r->next].frame >= f))
+            r->next++;
+        if (r->next >= r->ns || r->smp[r->next].frame != f) {
+            snprintf(why, why_len, "frame %ld of the video has no recorded rail positions", f);
+            return -1;
+        }
+        const store_sample *s = &r->smp[r->next];
+        x->t_s = s->t_s;
+        x->compress_mm = s->compress_mm;
+        x->shear_mm = s->shear_mm;
+        x->dl = s->dl;
+        x->dw = s->dw;
+        return 0;
+    }
+    const double t = (double)f / r->fps + r->t_offset;
+    if (t < r->rt[0] || t > r->rt[r->nr - 1]) return 1;
+    while (r->at + 2 < r->nr && r->rt[r->at + 1] < t) r->at++;
+    const size_t k = r->at;
+    const double w = (t - r->rt[k]) / (r->rt[k + 1] - r->rt[k]);
+    x->t_s = t;
+    x->compress_mm = r->rc[k] + w * (r->rc[k + 1] - r->rc[k]);
+    x->shear_mm = r->rs[k] + w * (r->rs[k + 1] - r->rs[k]);
+    x->dl = rig_calib_dl(&r->rec.calib, r->rec.length_m, x->compress_mm);
+    x->dw = rig_calib_dw(&r->rec.calib, r->rec.length_m, x->shear_mm);
+    return 0;
+}
+
+int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
+                         void (*progress)(void *u, long frame, long total), void *u, trial_result *res, char *why,
+                         size_t why_len)
 {
     memset(res, 0, sizeof *res);
     snprintf(res->regime, sizeof res->regime, "no snap");
-    *new_id = 0;
-    store_trial src;
-    if (store_trial_get(st, source_id, &src, why, why_len) != STORE_OK) return -1;
-    char *config = NULL, *calib = NULL;
-    if (store_trial_texts(st, source_id, &config, &calib, why, why_len) != STORE_OK) return -1;
-    trial_record rec;
-    int rc = -1;
-    store_sample *smp = NULL;
-    size_t ns = 0;
+    const int64_t id = r->new_id;
+    int rc = -1, aborted = 0;
     vis_source *vs = NULL;
     vis_tracker *trk = NULL;
     vis_frame *frame = NULL;
     store_samples *w = NULL;
-    char *text = NULL;
-    if (trial_record_parse(calib, &rec, why, why_len)) goto done;
-    if (!video || !*video) video = src.video_path;
-    if (!*video) {
-        snprintf(why, why_len, "trial %lld has no video to replay", (long long)source_id);
+    char w2[256];
+    if (!id) {
+        snprintf(why, why_len, "replay: no trial was created");
         goto done;
     }
-    if (store_samples_get(st, source_id, &smp, &ns, why, why_len) != STORE_OK) goto done;
     vis_error ve = {0};
-    vs = vis_source_open_video(video, &ve);
+    vs = vis_source_open_video(r->video, &ve);
     if (!vs) {
-        snprintf(why, why_len, "video %s: %s", video, ve.message);
-        goto done;
+        snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
+        goto fail;
     }
-    /* The tracker sees the cropped frames: move the calibration into the region's pixels. */
-    vis_calib cal = rec.camera;
-    cal.clamp_left_px[0] -= rec.roi.x;
-    cal.clamp_left_px[1] -= rec.roi.y;
-    cal.clamp_right_px[0] -= rec.roi.x;
-    cal.clamp_right_px[1] -= rec.roi.y;
+    /* The tracker sees the recorded frames: move the calibration into the region's pixels. */
+    const trial_record *rec = &r->rec;
+    vis_calib cal = rec->camera;
+    cal.clamp_left_px[0] -= rec->roi.x;
+    cal.clamp_left_px[1] -= rec->roi.y;
+    cal.clamp_right_px[0] -= rec->roi.x;
+    cal.clamp_right_px[1] -= rec->roi.y;
     if (cal.principal_px[0] >= 0) {
-        cal.principal_px[0] -= rec.roi.x;
-        cal.principal_px[1] -= rec.roi.y;
+        cal.principal_px[0] -= rec->roi.x;
+        cal.principal_px[1] -= rec->roi.y;
     }
     if (cal.has_intrinsics) {
-        cal.camera_matrix[2] -= rec.roi.x;
-        cal.camera_matrix[5] -= rec.roi.y;
+        cal.camera_matrix[2] -= rec->roi.x;
+        cal.camera_matrix[5] -= rec->roi.y;
     }
     vis_track_params tp = vis_track_params_default();
-    tp.length_mm = rec.length_m * 1000.0;
+    tp.length_mm = rec->length_m * 1000.0;
     trk = vis_tracker_create(&tp, &cal, &ve);
     frame = vis_frame_alloc(16, 16, 1, &ve);
     if (!trk || !frame) {
         snprintf(why, why_len, "tracker: %s", ve.message);
-        goto done;
+        goto fail;
     }
-    /* The new trial. */
-    size_t tl = (config ? strlen(config) : 0) + 64;
-    text = malloc(tl);
-    if (!text) {
-        snprintf(why, why_len, "out of memory");
-        goto done;
-    }
-    snprintf(text, tl, "%s# replay of trial %lld\n", config ? config : "", (long long)source_id);
-    store_trial_def def = store_trial_def_default();
-    def.mode = STORE_MODE_REPLAY;
-    def.config_text = text;
-    def.calibration_json = calib;
-    def.specimen_id = src.specimen_id;
-    def.source_trial_id = source_id;
-    def.video_path = video;
-    def.created_wall_s = store_wall_now();
-    if (store_trial_create(st, &def, new_id, why, why_len) != STORE_OK) goto done;
-    char w2[256];
-    store_trial_set_status(st, *new_id, STORE_STATUS_RUNNING, NULL, store_wall_now(), w2, sizeof w2);
-    if (store_samples_begin(st, *new_id, NULL, &w, why, why_len) != STORE_OK) goto fail;
-    double t_check, t_shear, t_return;
-    trial_state_times(st, source_id, &t_check, &t_shear, &t_return);
+    if (store_samples_begin(st, id, NULL, &w, why, why_len) != STORE_OK) goto fail;
     snap_detect det;
-    snap_detect_init(&det, &rec.snap);
-    long total = vis_source_frame_count(vs);
-    size_t next = 0;
+    snap_detect_init(&det, &rec->snap);
+    long total = vis_source_frame_count(vs), skipped = 0;
     int reset_done = 0;
     for (long f = 0;; f++) {
+        if (cancel && atomic_load(cancel)) {
+            snprintf(why, why_len, "replay aborted at frame %ld", f);
+            aborted = 1;
+            goto fail;
+        }
         vis_status s = vis_source_read(vs, frame, NULL, &ve);
         if (s == VIS_ERR_END) break;
         if (s != VIS_OK) {
-            snprintf(why, why_len, "video %s: %s", video, ve.message);
+            snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
             goto fail;
         }
-        /* This frame's recorded rail positions. */
-        while (next < ns && !(smp[next].kind == STORE_SAMPLE_FRAME && smp[next].frame >= f)) next++;
-        if (next >= ns || smp[next].frame != f) {
-            snprintf(why, why_len, "frame %ld of the video has no recorded rail positions", f);
-            goto fail;
+        store_sample x = store_sample_default();
+        int fr = frame_rails(r, f, &x, why, why_len);
+        if (fr < 0) goto fail;
+        if (fr > 0) {
+            skipped++;
+            continue;
         }
-        const store_sample *r = &smp[next];
-        if (!reset_done && isfinite(t_check) && r->t_s >= t_check) {
+        if (!reset_done && isfinite(r->t_check) && x.t_s >= r->t_check) {
             vis_tracker_reset(trk);
             reset_done = 1;
         }
         vis_measure m;
-        if (vis_tracker_process(trk, frame, r->dw * rec.length_m * 1000.0, &m, &ve) != VIS_OK) {
+        if (vis_tracker_process(trk, frame, x.dw * rec->length_m * 1000.0, &m, &ve) != VIS_OK) {
             snprintf(why, why_len, "tracker: %s", ve.message);
             goto fail;
         }
-        int measured = m.reason == VIS_REASON_NONE && m.quality >= rec.min_quality && isfinite(m.dz) &&
+        int measured = m.reason == VIS_REASON_NONE && m.quality >= rec->min_quality && isfinite(m.dz) &&
                        isfinite(m.a);
-        double a = rig_calib_a_sign(&rec.calib) * m.a;
-        store_sample x = store_sample_default();
-        x.t_s = r->t_s;
         x.kind = STORE_SAMPLE_FRAME;
         x.frame = f;
-        x.compress_mm = r->compress_mm;
-        x.shear_mm = r->shear_mm;
-        x.dl = r->dl;
-        x.dw = r->dw;
         x.quality = isfinite(m.quality) ? m.quality : 0.0;
         if (measured) {
             x.dz = m.dz;
-            x.a = a;
+            x.a = rig_calib_a_sign(&rec->calib) * m.a;
             res->measured_frames++;
         } else {
             snprintf(x.reason, sizeof x.reason, "%s",
@@ -150,9 +457,10 @@ int trial_replay_run(store *st, int64_t source_id, const char *video, int64_t *n
         }
         if (store_samples_add(w, &x, why, why_len) != STORE_OK) goto fail;
         res->frames++;
-        int in_shear = isfinite(t_shear) ? (r->t_s >= t_shear && (!isfinite(t_return) || r->t_s < t_return)) : 1;
-        if (in_shear) snap_detect_add(&det, f, r->t_s, r->dw, x.dz, x.a, measured);
-        res->duration_s = r->t_s;
+        int in_shear = isfinite(r->t_shear) ? (x.t_s >= r->t_shear && (!isfinite(r->t_return) || x.t_s < r->t_return))
+                                            : 1;
+        if (in_shear) snap_detect_add(&det, f, x.t_s, x.dw, x.dz, x.a, measured);
+        res->duration_s = x.t_s;
         if (progress && f % 50 == 0) progress(u, f, total);
     }
     if (store_samples_end(w, why, why_len) != STORE_OK) {
@@ -160,6 +468,11 @@ int trial_replay_run(store *st, int64_t source_id, const char *video, int64_t *n
         goto fail;
     }
     w = NULL;
+    if (res->frames == 0) {
+        snprintf(why, why_len, "no frame of %.300s falls within the rail readings (check "
+                               "calibration.camera_time_offset_s)", r->video);
+        goto fail;
+    }
     res->snapped = snap_detect_snapped(&det);
     res->snap_dw = res->snapped ? snap_detect_dw(&det) : 0.0;
     res->asymmetric = snap_detect_asymmetric(&det);
@@ -168,12 +481,16 @@ int trial_replay_run(store *st, int64_t source_id, const char *video, int64_t *n
     store_regime reg = !res->snapped ? STORE_REGIME_NO_SNAP
                        : res->asymmetric ? STORE_REGIME_ASYMMETRIC
                                          : STORE_REGIME_SYMMETRIC;
-    store_trial_set_result(st, *new_id, res->snapped, res->snapped ? res->snap_dw : NAN, reg, w2, sizeof w2);
-    char msg[256];
-    snprintf(msg, sizeof msg, "replayed %ld frames of trial %lld: %s at Delta W = %.5f (source: %.5f)", res->frames,
-             (long long)source_id, res->regime, res->snap_dw, src.snap_dw_measured);
-    add_event(st, *new_id, res->duration_s, STORE_EVENT_INFO, msg);
-    store_trial_set_status(st, *new_id, STORE_STATUS_DONE, NULL, store_wall_now(), w2, sizeof w2);
+    store_trial_set_result(st, id, res->snapped, res->snapped ? res->snap_dw : NAN, reg, w2, sizeof w2);
+    char msg[400];
+    if (r->source_id)
+        snprintf(msg, sizeof msg, "replayed %ld frames of trial %lld: %s at Delta W = %.5f (source: %.5f)", res->frames,
+                 (long long)r->source_id, res->regime, res->snap_dw, r->source_snap_dw);
+    else
+        snprintf(msg, sizeof msg, "replayed %ld frames of %.200s (%ld outside the rail readings, skipped): %s at "
+                 "Delta W = %.5f", res->frames, r->video, skipped, res->regime, res->snap_dw);
+    add_event(st, id, res->duration_s, STORE_EVENT_INFO, msg);
+    store_trial_set_status(st, id, STORE_STATUS_DONE, NULL, store_wall_now(), w2, sizeof w2);
     res->final = TRIAL_DONE;
     rc = 0;
     goto done;
@@ -182,19 +499,30 @@ fail:
         store_samples_end(w, w2, sizeof w2);
         w = NULL;
     }
-    if (*new_id) {
-        add_event(st, *new_id, NAN, STORE_EVENT_FAULT, why);
-        store_trial_set_status(st, *new_id, STORE_STATUS_FAILED, why, store_wall_now(), w2, sizeof w2);
+    if (id) {
+        add_event(st, id, NAN, aborted ? STORE_EVENT_INFO : STORE_EVENT_FAULT, why);
+        store_trial_set_status(st, id, aborted ? STORE_STATUS_ABORTED : STORE_STATUS_FAILED, why, store_wall_now(), w2,
+                               sizeof w2);
     }
-    res->final = TRIAL_FAILED;
+    res->final = aborted ? TRIAL_ABORTED : TRIAL_FAILED;
     snprintf(res->reason, sizeof res->reason, "%s", why);
 done:
-    free(text);
-    free(smp);
-    free(config);
-    free(calib);
     vis_frame_free(frame);
     vis_tracker_free(trk);
     if (vs) vis_source_close(vs);
     return rc;
+}
+
+int trial_replay_run(store *st, int64_t source_id, const char *video, int64_t *new_id, trial_result *res,
+                     void (*progress)(void *u, long frame, long total), void *u, char *why, size_t why_len)
+{
+    memset(res, 0, sizeof *res);
+    snprintf(res->regime, sizeof res->regime, "no snap");
+    *new_id = 0;
+    trial_replay *r = NULL;
+    if (trial_replay_from_trial(st, source_id, video, &r, why, why_len)) return -1;
+    int rc = trial_replay_create(r, st, NULL, new_id, why, why_len) ||
+             trial_replay_execute(r, st, NULL, progress, u, res, why, why_len);
+    trial_replay_free(r);
+    return rc ? -1 : 0;
 }

@@ -1,22 +1,56 @@
-/* trial_replay.h: a recorded trial through the same measurement pipeline again.
+/* trial_replay.h: a recording through the same measurement pipeline again.
  *
- * The recorded video (cropped, lossless) and the recorded rail positions of every frame (the
- * source trial's frame samples) go through a fresh tracker with the source's calibration record
- * (clamp points shifted by the video's region of interest) and the same snap detection, fed the
- * frames the source fed it (those from the start of shearing until the return, found from the
- * source's state events; the tracker starts fresh where the source's did, at the upper-state
- * check). The result is a new trial, mode replay, linked to its source, with its own samples and
- * events. Works without a daemon (ribbonctl replay --db) and inside one. */
+ * Two kinds of recording:
+ *  - a stored trial: its video (cropped, lossless) and the rail positions recorded with every frame
+ *    (its frame samples), with its calibration record (clamp points shifted by the video's region
+ *    of interest) and snap settings. The frames fed to snap detection are the ones the source fed
+ *    it (from the start of shearing until the return, found from its state events); the tracker
+ *    starts fresh where the source's did, at the upper-state check;
+ *  - outside files named by a replay-mode rig file: replay.video, replay.rails (a CSV of rail
+ *    readings t_s,compress_mm,shear_mm on the rails' clock) and camera.calibration, with the rig
+ *    file's [calibration], [detect] and scene. Frame f is at t = f / fps + camera_time_offset_s on
+ *    the rails' clock; its rail positions are interpolated linearly between the readings (frames
+ *    outside the readings are skipped and counted). Shearing is taken to run from the first reading
+ *    where the shear rail has left its first position by more than 0.05 mm to the reading of
+ *    largest Delta W; the tracker starts fresh at its start and snap detection sees only it.
+ * The result is a new trial, mode replay, linked to its source trial if there is one, with its own
+ * samples and events. Works without a daemon (ribbonctl replay) and inside one (on a thread of its
+ * own: create on one store connection, execute on another). */
 #ifndef RIBBON_DAEMON_TRIAL_REPLAY_H
 #define RIBBON_DAEMON_TRIAL_REPLAY_H
 
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdint.h>
 
+#include "rig_config.h"
 #include "store.h"
 #include "trial_runner.h"
 
-/* video: NULL = the source's video. progress (may be NULL) is told every 50 frames. */
+typedef struct trial_replay trial_replay;
+
+/* A stored trial; video NULL = the trial's own. */
+int trial_replay_from_trial(store *st, int64_t source_id, const char *video, trial_replay **out, char *why,
+                            size_t why_len);
+/* Outside files named by a replay-mode rig file (checks that the video opens and the CSV parses). */
+int trial_replay_from_files(const rig_config *cfg, trial_replay **out, char *why, size_t why_len);
+
+/* Records the new trial (mode replay, status running); note may be NULL. */
+int trial_replay_create(trial_replay *r, store *st, const char *note, int64_t *new_id, char *why, size_t why_len);
+/* Tracks every frame and detects the snap, writing samples and events to the trial created above.
+ * cancel (may be NULL) is polled every frame: when set the trial ends aborted. progress (may be
+ * NULL) is told every 50 frames; total is -1 when the video does not say. Returns 0 when the trial
+ * ended done, -1 with why otherwise (the trial is then failed or aborted, with the reason). */
+int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
+                         void (*progress)(void *u, long frame, long total), void *u, trial_result *res, char *why,
+                         size_t why_len);
+void trial_replay_free(trial_replay *r);
+
+/* The source trial (0 for files) and the video's frame count (-1 = unknown). */
+int64_t trial_replay_source(const trial_replay *r);
+long trial_replay_frame_count(const trial_replay *r);
+
+/* from_trial + create + execute + free, for a stored trial. */
 int trial_replay_run(store *st, int64_t source_id, const char *video, int64_t *new_id, trial_result *res,
                      void (*progress)(void *u, long frame, long total), void *u, char *why, size_t why_len);
 

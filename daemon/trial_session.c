@@ -624,21 +624,8 @@ int trial_session_start(const rig_config *cfg, rail *compress, rail *shear, cons
     if (store_open(cfg->store_path, &s->st, why, why_len) != STORE_OK) goto fail;
 
     /* The specimen and the trial row. */
-    store_specimen sp = store_specimen_default();
-    snprintf(sp.name, sizeof sp.name, "%s", cfg->specimen.name[0] ? cfg->specimen.name : "unnamed");
-    sp.length_m = cfg->scene.length;
-    sp.width_m = cfg->scene.width;
-    sp.thickness_m = cfg->scene.thickness;
-    sp.youngs_modulus_pa = cfg->scene.youngs_modulus;
-    sp.density_kg_m3 = cfg->scene.density;
-    snprintf(sp.material, sizeof sp.material, "%.31s", cfg->specimen.material);
-    sp.crease_angle_left_deg = cfg->specimen.crease_angle_left_deg;
-    sp.crease_angle_right_deg = cfg->specimen.crease_angle_right_deg;
-    sp.fold_position = cfg->scene.fold_position;
-    snprintf(sp.crease_orientation, sizeof sp.crease_orientation, "%s",
-             cfg->specimen.crease_orientation == RIG_CREASE_UP     ? "up"
-             : cfg->specimen.crease_orientation == RIG_CREASE_DOWN ? "down"
-                                                                   : "");
+    store_specimen sp;
+    trial_specimen_from_config(cfg, &sp);
     int64_t spid = 0;
     if (store_specimen_upsert(s->st, &sp, &spid, why, why_len) != STORE_OK) goto fail;
     if (trial_camera_setup(cfg, &s->cal, &s->width, &s->height, &s->roi, why, why_len)) goto fail;

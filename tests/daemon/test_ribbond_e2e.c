@@ -4,7 +4,8 @@
  *      the measured snap Delta W is within 2% of the prediction made at the same resolution and
  *      the regimes agree; samples, events, the video and the prediction are stored.
  *   2. Replaying that trial (its video and recorded rail positions) reproduces its measured snap
- *      within one frame's Delta W.
+ *      within one frame's Delta W; so does its video, rails CSV and camera calibration replayed as
+ *      an outside recording by ribbond in replay mode (on the replay thread; an abort ends it).
  *   3. API error cases: unknown trial 404, bad fields 400 (naming the key), abort when idle 409.
  *   4. kill -9 in the middle of a trial, then a restart: integrity_check ok, the trial is marked
  *      interrupted, and the committed samples are all there (contiguous sequence numbers). */
@@ -29,7 +30,9 @@
 #include "api_client.h"
 #include "rig_daemon.h"
 #include "store.h"
+#include "trial_calib.h"
 #include "trial_replay.h"
+#include "vision.h"
 
 static char dir[64];
 static char set_store[256], set_video[256];
@@ -92,6 +95,121 @@ static void sleep_s(double s)
 {
     struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
     nanosleep(&ts, NULL);
+}
+
+/* Polls GET /status until the daemon is idle; returns 1 when it became idle in time. */
+static int wait_idle(unsigned port, double max_s)
+{
+    char why[256];
+    for (double t = 0; t < max_s; t += 0.1) {
+        json_t *s = NULL;
+        assert_int_equal(http(port, "GET", "/status", NULL, &s, why, sizeof why), 200);
+        int running = !strcmp(json_string_value(json_object_get(s, "state")), "running");
+        json_decref(s);
+        if (!running) return 1;
+        sleep_s(0.1);
+    }
+    return 0;
+}
+
+/* The stored trial `id` written out as an outside recording would come: its video, a rails CSV
+ * (t_s,compress_mm,shear_mm), a camera calibration file in the video's pixels and a replay rig
+ * file naming them; ribbond in replay mode replays it on its replay thread (answering the API
+ * meanwhile) to the same snap within one frame, and an abort right after a start ends aborted. */
+static void replay_outside_recording(store *st, int64_t id, double meas, double frame_dw)
+{
+    char why[512];
+    store_trial src;
+    assert_int_equal(store_trial_get(st, id, &src, why, sizeof why), STORE_OK);
+    char *config = NULL, *calib = NULL;
+    assert_int_equal(store_trial_texts(st, id, &config, &calib, why, sizeof why), STORE_OK);
+    trial_record rec;
+    assert_int_equal(trial_record_parse(calib, &rec, why, sizeof why), 0);
+    free(config);
+    free(calib);
+    store_sample *smp = NULL;
+    size_t ns = 0;
+    assert_int_equal(store_samples_get(st, id, &smp, &ns, why, sizeof why), STORE_OK);
+    char rails[128], cam[128], ini[128];
+    snprintf(rails, sizeof rails, "%s/rails.csv", dir);
+    snprintf(cam, sizeof cam, "%s/camera.calib", dir);
+    snprintf(ini, sizeof ini, "%s/replay-files.ini", dir);
+    FILE *f = fopen(rails, "w");
+    assert_non_null(f);
+    fprintf(f, "t_s,compress_mm,shear_mm\n");
+    double t0 = NAN;
+    for (size_t k = 0; k < ns; k++) {
+        if (smp[k].kind != STORE_SAMPLE_FRAME) continue;
+        if (smp[k].frame == 0) t0 = smp[k].t_s;
+        fprintf(f, "%.9f,%.9f,%.9f\n", smp[k].t_s, smp[k].compress_mm, smp[k].shear_mm);
+    }
+    fclose(f);
+    free(smp);
+    assert_true(isfinite(t0));
+    vis_calib cal = rec.camera; /* in the video's (cropped) pixels */
+    cal.clamp_left_px[0] -= rec.roi.x;
+    cal.clamp_left_px[1] -= rec.roi.y;
+    cal.clamp_right_px[0] -= rec.roi.x;
+    cal.clamp_right_px[1] -= rec.roi.y;
+    if (cal.principal_px[0] >= 0) {
+        cal.principal_px[0] -= rec.roi.x;
+        cal.principal_px[1] -= rec.roi.y;
+    }
+    vis_error ve;
+    assert_int_equal(vis_calib_save(&cal, cam, &ve), VIS_OK);
+    f = fopen(ini, "w");
+    assert_non_null(f);
+    fprintf(f,
+            "[rig]\nmode = replay\nscene = %s/config/scenes/mock-gamma013.ini\n"
+            "[calibration]\ncompress_zero_mm = %.9g\nshear_zero_mm = %.9g\ncompress_sign = %d\nshear_sign = %d\n"
+            "camera_side = front\ncamera_time_offset_s = %.9f\n"
+            "[camera]\ncalibration = %s\n"
+            "[replay]\nvideo = %s\nrails = %s\n"
+            "[detect]\ndz_jump = %.9g\nmin_quality = %.9g\n"
+            "[store]\npath = %s/trials.db\n[api]\nport = 0\n",
+            RIBBON_SOURCE_DIR, rec.calib.compress_zero_mm, rec.calib.shear_zero_mm, rec.calib.compress_sign,
+            rec.calib.shear_sign, t0, cam, src.video_path, rails, rec.snap.dz_jump, rec.min_quality, dir);
+    fclose(f);
+
+    rig_daemon d;
+    assert_int_equal(rig_daemon_open(&d, ini, NULL, 0, NULL, why, sizeof why), 0);
+    unsigned port = 0;
+    assert_int_equal(rig_daemon_serve(&d, &port, why, sizeof why), 0);
+    json_t *t = NULL;
+    int code = http(port, "POST", "/trials", "{\"note\": \"outside files\"}", &t, why, sizeof why);
+    if (code != 201) fprintf(stderr, "replay of files: %d %s\n", code, why);
+    assert_int_equal(code, 201);
+    json_int_t nid = json_integer_value(json_object_get(t, "id"));
+    json_decref(t);
+    assert_true(wait_idle(port, 600));
+    char path[64];
+    snprintf(path, sizeof path, "/trials/%lld", (long long)nid);
+    t = NULL;
+    assert_int_equal(http(port, "GET", path, NULL, &t, why, sizeof why), 200);
+    const char *status = json_string_value(json_object_get(t, "status"));
+    double got = json_number_value(json_object_get(t, "snap_dw_measured"));
+    printf("replay of files: trial %lld %s at %.5f (source %.5f)\n", (long long)nid, status, got, meas);
+    assert_string_equal(status, "done");
+    assert_true(fabs(got - meas) <= frame_dw + 1e-9);
+    assert_true(json_is_null(json_object_get(t, "source_trial_id")) ||
+                json_integer_value(json_object_get(t, "source_trial_id")) == 0);
+    json_decref(t);
+
+    /* An abort right after the start: the replay thread stops, the trial ends aborted. */
+    t = NULL;
+    assert_int_equal(http(port, "POST", "/trials", NULL, &t, why, sizeof why), 201);
+    nid = json_integer_value(json_object_get(t, "id"));
+    json_decref(t);
+    t = NULL;
+    assert_int_equal(http(port, "POST", "/trials/current/abort", NULL, &t, why, sizeof why), 200);
+    json_decref(t);
+    assert_true(wait_idle(port, 60));
+    snprintf(path, sizeof path, "/trials/%lld", (long long)nid);
+    t = NULL;
+    assert_int_equal(http(port, "GET", path, NULL, &t, why, sizeof why), 200);
+    assert_string_equal(json_string_value(json_object_get(t, "status")), "aborted");
+    json_decref(t);
+    rig_daemon_close(&d, "test done");
 }
 
 static void mock_trial_then_replay(void **state)
@@ -210,6 +328,7 @@ static void mock_trial_then_replay(void **state)
     assert_int_equal(store_trial_get(st, rid, &rt, why, sizeof why), STORE_OK);
     assert_int_equal(rt.source_trial_id, id);
     assert_int_equal(rt.mode, STORE_MODE_REPLAY);
+    replay_outside_recording(st, id, meas, frame_dw);
     store_close(st);
 }
 
