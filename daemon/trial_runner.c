@@ -105,15 +105,39 @@ static void enter(run_ctx *c, trial_state s, double limit_s, const char *why)
     if (c->tr->sink.state) c->tr->sink.state(c->tr->sink.user, s, c->t, why ? why : "");
 }
 
-/* Ends the trial: stops both rails (estop on failure), records the reason. */
+#define RUNNER_STOP_WAIT_S 10.0 /* rail clock time an aborted trial waits for the rails to stand */
+
+/* After a stop: waits on the rail clock (which a mock rig's virtual clock needs to reach the end
+ * of the deceleration) until neither rail is moving or homing, at most RUNNER_STOP_WAIT_S, so the
+ * trial ends with the rails standing and the next one finds them idle. 0 = standing. */
+static int wait_rails_standing(run_ctx *c)
+{
+    const double t_end = rail_clock_now(c->clock) + RUNNER_STOP_WAIT_S;
+    for (int k = 0; k < 100000; k++) {
+        rail_status sc, ss;
+        char why[128];
+        if (rail_pair_poll(c->tr->compress, c->tr->shear, &sc, &ss, why, sizeof why) != RAIL_OK) return -1;
+        int moving = sc.state == RAIL_STATE_MOVING || sc.state == RAIL_STATE_HOMING ||
+                     ss.state == RAIL_STATE_MOVING || ss.state == RAIL_STATE_HOMING;
+        if (!moving) return 0;
+        if (rail_clock_now(c->clock) >= t_end) return -1;
+        rail_clock_sleep(c->clock, 0.01);
+    }
+    return -1;
+}
+
+/* Ends the trial: stops both rails (estop on failure; an abort waits for them to stand), records
+ * the reason. */
 static void finish(run_ctx *c, trial_state s, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static void finish(run_ctx *c, trial_state s, const char *fmt, ...)
 {
+    int still_moving = 0;
     if (s == TRIAL_FAILED)
         rail_pair_estop(c->tr->compress, c->tr->shear);
     else if (s == TRIAL_ABORTED) {
         rail_stop(c->tr->compress);
         rail_stop(c->tr->shear);
+        still_moving = wait_rails_standing(c) != 0;
     }
     c->res->reason[0] = '\0';
     if (fmt) {
@@ -121,6 +145,11 @@ static void finish(run_ctx *c, trial_state s, const char *fmt, ...)
         va_start(ap, fmt);
         vsnprintf(c->res->reason, sizeof c->res->reason, fmt, ap);
         va_end(ap);
+    }
+    if (still_moving) {
+        size_t n = strlen(c->res->reason);
+        snprintf(c->res->reason + n, sizeof c->res->reason - n, " (rails not standing %.0f s after the stop)",
+                 RUNNER_STOP_WAIT_S);
     }
     c->res->final = s;
     if (s != TRIAL_DONE) emit_event(c, s == TRIAL_FAILED ? "fault" : "info", "%s", c->res->reason);
