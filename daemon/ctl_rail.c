@@ -21,6 +21,7 @@
 
 #include "ctl.h"
 #include "rail_config.h"
+#include "rig_config.h"
 #include "rail_gcode.h"
 #include "rail_mock.h"
 #include "rail_modbus.h"
@@ -314,6 +315,46 @@ static int bench(rail_cli *c, rail *r)
     return fails ? 1 : 0;
 }
 
+/* 1 when the file has a [rig] section (a whole rig file), 0 for a file of rail sections only. */
+static int rail_file_is_rig(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) return 0; /* rail_config_load reports the reason */
+    char line[512];
+    int rig = 0;
+    while (!rig && fgets(line, sizeof line, f)) {
+        const char *p = line;
+        while (*p == ' ' || *p == '\t') p++;
+        rig = !strncmp(p, "[rig]", 5);
+    }
+    fclose(f);
+    return rig;
+}
+
+/* The named rail of a rig file, as the rig loader checked and completed it. */
+static int load_rig_rail(const char *path, const char *name, rail_config *out, char *why, size_t why_len)
+{
+    rig_config *rig = malloc(sizeof *rig);
+    if (!rig) {
+        snprintf(why, why_len, "out of memory");
+        return -1;
+    }
+    cfg_error ce;
+    int rc = -1;
+    if (rig_config_load(path, NULL, 0, rig, &ce) != CFG_OK) {
+        cfg_error_format(&ce, why, why_len);
+    } else if (!rig->has_rails) {
+        snprintf(why, why_len, "%.300s: a %s-mode rig file has no rails", path, rig_mode_name(rig->mode));
+    } else if (strcmp(name, "compress") && strcmp(name, "shear")) {
+        snprintf(why, why_len, "--rail must be compress or shear");
+    } else {
+        *out = !strcmp(name, "compress") ? rig->compress : rig->shear;
+        rc = 0;
+    }
+    free(rig);
+    return rc;
+}
+
 int ctl_rail_main(int argc, char **argv)
 {
     rail_cli c;
@@ -337,7 +378,14 @@ int ctl_rail_main(int argc, char **argv)
             fprintf(stderr, "ribbonctl rail: --config needs --rail compress|shear\n");
             return 2;
         }
-        if (rail_config_load(c.config, c.rail_name, &cfg, why, sizeof why) != 0) {
+        if (rail_file_is_rig(c.config)) {
+            /* A whole rig file: its loader also pushes the specimen's minimum clamp gap and the
+             * calibration's gap model into the compression rail, as ribbond does. */
+            if (load_rig_rail(c.config, c.rail_name, &cfg, why, sizeof why)) {
+                fprintf(stderr, "ribbonctl rail: %s\n", why);
+                return 1;
+            }
+        } else if (rail_config_load(c.config, c.rail_name, &cfg, why, sizeof why) != 0) {
             fprintf(stderr, "ribbonctl rail: %s\n", why);
             return 1;
         }

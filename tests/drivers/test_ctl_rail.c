@@ -86,6 +86,42 @@ static void test_config_rail(void **s)
     unlink(rig);
 }
 
+/* A whole rig file: the rig loader's rails, with the specimen's minimum clamp gap pushed into the
+ * compression rail (the rail section alone allows 50 mm; the specimen asks for 100 mm, the gap of
+ * its scene's Delta L = 0.5). */
+static void test_rig_file_rail(void **s)
+{
+    (void)s;
+    char rig[128], out[4096], args[512];
+    snprintf(rig, sizeof rig, "/tmp/ribbon-test-ctl-rig-%d.ini", (int)getpid());
+    FILE *f = fopen(rig, "w");
+    assert_non_null(f);
+    fprintf(f,
+            "[rig]\nmode = mock\nscene = %s/config/scenes/mock-gamma013.ini\n"
+            "[rail.compress]\ndriver = mock\ntravel_mm = 200\nstart_mm = 90\nsoft_min_mm = 0\nsoft_max_mm = 200\n"
+            "max_speed_mm_s = 50\nmin_gap_mm = 50\n"
+            "[rail.shear]\ndriver = mock\ntravel_mm = 250\nstart_mm = 50\nsoft_min_mm = 0\nsoft_max_mm = 200\n"
+            "max_speed_mm_s = 50\n"
+            "[calibration]\ncompress_zero_mm = 50\nshear_zero_mm = 50\ncompress_sign = +1\nshear_sign = +1\n"
+            "[specimen]\nmin_clamp_gap_mm = 100\n[store]\npath = /tmp/ribbon-test-ctl-rig.db\n",
+            RIBBON_SOURCE_DIR);
+    fclose(f);
+    /* Gap at 155 mm: 200 - (155 - 50) = 95 mm < 100 mm: refused; 150 mm (gap 100) is fine. */
+    snprintf(args, sizeof args, "rail --config %s --rail compress move-abs 155", rig);
+    int rc = run(args, out, sizeof out);
+    printf("rig file, move to a 95 mm gap: exit %d: %s", rc, out);
+    assert_int_equal(rc, 1);
+    assert_non_null(strstr(out, "minimum"));
+    snprintf(args, sizeof args, "rail --config %s --rail compress move-abs 150", rig);
+    assert_int_equal(run(args, out, sizeof out), 0);
+    snprintf(args, sizeof args, "rail --config %s --rail shear --json status", rig);
+    assert_int_equal(run(args, out, sizeof out), 0);
+    json_t *o = parse_json_line(out);
+    assert_string_equal(json_string_value(json_object_get(o, "rail")), "shear");
+    json_decref(o);
+    unlink(rig);
+}
+
 static void test_refusals_and_usage(void **s)
 {
     (void)s;
@@ -159,6 +195,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_mock_status_json),
         cmocka_unit_test(test_config_rail),
+        cmocka_unit_test(test_rig_file_rail),
         cmocka_unit_test(test_refusals_and_usage),
         cmocka_unit_test(test_gcode_and_modbus),
     };
