@@ -1,16 +1,23 @@
 /* ctl_track.c: `ribbonctl track`: measure Delta Z and A in every frame of a recorded video.
  *
- *   ribbonctl track VIDEO|PATTERN [--calib FILE | --px-per-mm S --clamp-left X,Y --clamp-right X,Y
- *                   | --clamp-spacing-mm MM --clamp-left X,Y --clamp-right X,Y]
+ *   ribbonctl track VIDEO|PATTERN [--calib FILE | SCALE [--clamp-left X,Y --clamp-right X,Y]]
  *                   [--camera-distance-mm D] [--camera-tilt-rad T] [--shear-csv FILE] [--length-mm L]
  *                   [--polarity auto|dark|light] [--csv OUT] [--overlay OUT.mkv]
  *                   [--save-calib FILE] [--json] [--quiet]
+ *   SCALE: --px-per-mm S | --clamp-spacing-mm MM | --length-mm L alone
  *
  * PATTERN: an image sequence such as dir/frame_%04d.png (numbered from 0).
+ * Without --calib the calibration is put together from two independent parts. Clamp points: given,
+ * or found (vis_find_clamps) in the first frame where a clamp pair shows, at zero shear; frames before
+ * it are reported as clamp_not_found. Scale: --px-per-mm, the clamp spacing, or, with --length-mm
+ * alone, the ribbon's measured length in the first tracked frame (tracked in pixels first; Delta Z is
+ * a ratio of lengths, so pixels suffice, and the frame is then measured again in the calibration so
+ * found). --save-calib writes the calibration once it is complete.
  * Reads the video through vision's frame source, tracks every frame, writes one CSV row per frame
  * (frame, t, dz, a, quality, reason: dz and a empty when the frame has no measurement, never NaN),
  * optionally an FFV1 overlay video, and prints a summary (--json: frames, tracked, mean_quality,
- * snap_frame, damaged, error). A progress bar goes to stderr. A video that stops before its
+ * snap_frame, damaged, error, and the calibration used: px_per_mm, clamp_left, clamp_right,
+ * clamps_frame where the clamps were found, null when given or never found). A progress bar goes to stderr. A video that stops before its
  * announced length is read up to the damage; the outputs keep every frame read, the damage is
  * reported and the exit status is 1. Exit status: 0 done, 1 input or output failed, 2 usage.
  * --shear-csv gives the shear rail position per frame (lines "frame,shear_mm", header allowed) for
@@ -35,16 +42,29 @@ typedef struct track_cli {
     vis_track_params tp;
 } track_cli;
 
+/* Where the calibration stands while frames are read (without --calib it completes on the way). */
+typedef struct track_cal {
+    vis_calib cal;       /* complete once have_clamps && !scale_pending */
+    int have_clamps;     /* clamp points known (given or found) */
+    int scale_pending;   /* scale to come from --length-mm and the first tracked frame */
+    char why[300];       /* last reason the clamps were not found */
+} track_cal;
+
 static void usage(FILE *f)
 {
     fprintf(f,
             "usage: ribbonctl track VIDEO|IMAGE_PATTERN [calibration] [options]\n"
             "  IMAGE_PATTERN: an image sequence such as dir/frame_%%04d.png, numbered from 0\n"
-            "calibration (one of):\n"
-            "  --calib FILE                         saved calibration (vision/calib.cpp format)\n"
-            "  --px-per-mm S --clamp-left X,Y --clamp-right X,Y\n"
-            "  --clamp-spacing-mm MM --clamp-left X,Y --clamp-right X,Y   (scale from the clamps)\n"
-            "  clamp points are pixel coordinates of the ribbon's centre at each clamp, zero shear\n"
+            "calibration: --calib FILE (saved calibration), or a scale and, optionally, clamp points\n"
+            "  scale (one of):\n"
+            "    --px-per-mm S             pixels per mm in the ribbon's plane\n"
+            "    --clamp-spacing-mm MM     from the clamp points and their known spacing\n"
+            "    --length-mm L             with neither of the above: from the ribbon's length in\n"
+            "                              the first tracked frame (take it at zero shear)\n"
+            "  clamp points: --clamp-left X,Y --clamp-right X,Y, pixel coordinates of the ribbon's\n"
+            "    centre where it leaves each clamp, at zero shear; when not given they are found in\n"
+            "    the first frame that shows both clamp jaws (at zero shear), and earlier frames are\n"
+            "    reported as clamp_not_found\n"
             "options:\n"
             "  --camera-distance-mm D   camera to ribbon plane, enables the depth correction\n"
             "  --camera-tilt-rad T      camera pitch, positive looking down (with a distance)\n"
@@ -53,7 +73,7 @@ static void usage(FILE *f)
             "  --polarity auto|dark|light\n"
             "  --csv OUT                per-frame CSV: frame,t,dz,a,quality,reason\n"
             "  --overlay OUT.mkv        overlay video (FFV1)\n"
-            "  --save-calib FILE        write the calibration used\n"
+            "  --save-calib FILE        write the calibration used (given or found)\n"
             "  --json                   summary as JSON on stdout\n"
             "  --quiet                  no progress bar\n");
 }
@@ -180,9 +200,14 @@ static int parse_args(int argc, char **argv, track_cli *c)
         fprintf(stderr, "ribbonctl track: --calib excludes --px-per-mm/--clamp-*\n");
         return -1;
     }
-    if (!c->calib_file && (!explicit_scale || !c->have_left || !c->have_right)) {
-        fprintf(stderr, "ribbonctl track: need --calib FILE, or --px-per-mm (or --clamp-spacing-mm) "
-                        "with --clamp-left and --clamp-right\n");
+    if (c->have_left != c->have_right) {
+        fprintf(stderr, "ribbonctl track: give both --clamp-left and --clamp-right, or neither "
+                        "(found in the video)\n");
+        return -1;
+    }
+    if (!c->calib_file && !explicit_scale && !(c->tp.length_mm > 0)) {
+        fprintf(stderr, "ribbonctl track: need --calib FILE or a scale: --px-per-mm, "
+                        "--clamp-spacing-mm or --length-mm\n");
         return -1;
     }
     if (c->px_per_mm > 0 && c->spacing_mm > 0) {
@@ -284,6 +309,51 @@ static void progress(size_t i, int total, int final)
     fflush(stderr);
 }
 
+/* Clamp points known: the scale from the spacing or --px-per-mm, or (--length-mm alone) a provisional
+ * 1 px/mm until the first tracked frame; the camera's distance and pitch once the scale is real. */
+static vis_status cal_complete(const track_cli *c, track_cal *tc, const double left[2],
+                               const double right[2], vis_error *err)
+{
+    vis_calib *cal = &tc->cal;
+    if (c->spacing_mm > 0) {
+        if (vis_calib_from_clamps(cal, left, right, c->spacing_mm, err) != VIS_OK)
+            return err->code;
+    } else {
+        memcpy(cal->clamp_left_px, left, sizeof cal->clamp_left_px);
+        memcpy(cal->clamp_right_px, right, sizeof cal->clamp_right_px);
+        cal->px_per_mm = c->px_per_mm > 0 ? c->px_per_mm : 1.0;
+        tc->scale_pending = !(c->px_per_mm > 0);
+    }
+    if (!tc->scale_pending) {
+        if (c->distance_mm > 0)
+            cal->camera_distance_mm = c->distance_mm;
+        if (c->have_tilt)
+            cal->camera_tilt_rad = c->tilt_rad;
+    }
+    if (vis_calib_check(cal, err) != VIS_OK)
+        return err->code;
+    tc->have_clamps = 1;
+    return VIS_OK;
+}
+
+/* A tracker for the calibration as it stands (in pixels, l measured, while the scale is pending). */
+static vis_tracker *tracker_for(const track_cli *c, const track_cal *tc, vis_tracker *old, vis_error *err)
+{
+    vis_tracker_free(old);
+    vis_track_params tp = c->tp;
+    if (tc->scale_pending)
+        tp.length_mm = 0.0;
+    return vis_tracker_create(&tp, &tc->cal, err);
+}
+
+static json_t *json_point(const double p[2])
+{
+    json_t *a = json_array();
+    json_array_append_new(a, json_real(p[0]));
+    json_array_append_new(a, json_real(p[1]));
+    return a;
+}
+
 int ctl_track_main(int argc, char **argv)
 {
     track_cli c;
@@ -295,31 +365,21 @@ int ctl_track_main(int argc, char **argv)
         return 2;
     }
     vis_error err;
-    vis_calib cal = vis_calib_default();
+    track_cal tc;
+    memset(&tc, 0, sizeof tc);
+    tc.cal = vis_calib_default();
     if (c.calib_file) {
-        if (vis_calib_load(&cal, c.calib_file, &err) != VIS_OK) {
+        if (vis_calib_load(&tc.cal, c.calib_file, &err) != VIS_OK) {
             fprintf(stderr, "ribbonctl track: %s\n", err.message);
             return 1;
         }
-    } else if (c.spacing_mm > 0) {
-        if (vis_calib_from_clamps(&cal, c.left, c.right, c.spacing_mm, &err) != VIS_OK) {
-            fprintf(stderr, "ribbonctl track: %s\n", err.message);
-            return 2;
-        }
-    } else {
-        cal.px_per_mm = c.px_per_mm;
-        memcpy(cal.clamp_left_px, c.left, sizeof c.left);
-        memcpy(cal.clamp_right_px, c.right, sizeof c.right);
-    }
-    if (c.distance_mm > 0)
-        cal.camera_distance_mm = c.distance_mm;
-    if (c.have_tilt)
-        cal.camera_tilt_rad = c.tilt_rad;
-    if (vis_calib_check(&cal, &err) != VIS_OK) {
+        tc.have_clamps = 1;
+    } else if (c.have_left && cal_complete(&c, &tc, c.left, c.right, &err) != VIS_OK) {
         fprintf(stderr, "ribbonctl track: %s\n", err.message);
         return 2;
     }
-    if (c.save_calib && vis_calib_save(&cal, c.save_calib, &err) != VIS_OK) {
+    if (tc.have_clamps && !tc.scale_pending && c.save_calib &&
+        vis_calib_save(&tc.cal, c.save_calib, &err) != VIS_OK) {
         fprintf(stderr, "ribbonctl track: %s\n", err.message);
         return 1;
     }
@@ -340,7 +400,8 @@ int ctl_track_main(int argc, char **argv)
     size_t n = 0, cap = 0, tracked = 0;
     double qsum = 0.0;
     int damaged = 0;
-    char failure[300] = "";
+    long clamps_frame = -1; /* frame where the clamps were found, -1 when given */
+    char failure[400] = "";
 
     /* A name with a printf conversion is an image sequence ("dir/frame_%04d.png", from 0). */
     src = strchr(c.video, '%') ? vis_source_open_images(c.video, 0, &err) : vis_source_open_video(c.video, &err);
@@ -349,10 +410,11 @@ int ctl_track_main(int argc, char **argv)
         rc = 1;
         goto done;
     }
-    trk = vis_tracker_create(&c.tp, &cal, &err);
+    if (tc.have_clamps)
+        trk = tracker_for(&c, &tc, NULL, &err);
     frame = vis_frame_alloc(8, 8, 1, &err);
     over = vis_frame_alloc(8, 8, 3, &err);
-    if (!trk || !frame || !over) {
+    if ((tc.have_clamps && !trk) || !frame || !over) {
         snprintf(failure, sizeof failure, "%s", err.message);
         rc = 1;
         goto done;
@@ -381,10 +443,62 @@ int ctl_track_main(int argc, char **argv)
             break;
         }
         vis_measure m;
-        if (vis_tracker_process(trk, frame, shear_at(&shear, i), &m, &err) != VIS_OK) {
+        memset(&m, 0, sizeof m);
+        m.reason = VIS_REASON_CLAMP_NOT_FOUND;
+        const double sh = shear_at(&shear, i);
+        if (!tc.have_clamps) {
+            double lp[2], rp[2], q = 0;
+            const vis_status fs = sh != 0.0 ? VIS_ERR_NOT_FOUND
+                                            : vis_find_clamps(frame, &c.tp, lp, rp, &q, &err);
+            if (sh != 0.0)
+                snprintf(tc.why, sizeof tc.why, "frame %zu: clamps are looked for at zero shear only", i);
+            else if (fs == VIS_ERR_NOT_FOUND)
+                snprintf(tc.why, sizeof tc.why, "frame %zu: %s", i, err.message);
+            else if (fs != VIS_OK || cal_complete(&c, &tc, lp, rp, &err) != VIS_OK ||
+                     !(trk = tracker_for(&c, &tc, NULL, &err))) {
+                snprintf(failure, sizeof failure, "frame %zu: clamps: %s", i, err.message);
+                rc = 1;
+                break;
+            } else {
+                clamps_frame = (long)i;
+                if (show)
+                    fprintf(stderr, "\rtrack: clamps found in frame %zu at (%.2f, %.2f) and (%.2f, %.2f) "
+                                    "px, quality %.2f\n", i, lp[0], lp[1], rp[0], rp[1], q);
+                if (!tc.scale_pending && c.save_calib &&
+                    vis_calib_save(&tc.cal, c.save_calib, &err) != VIS_OK) {
+                    snprintf(failure, sizeof failure, "%s", err.message);
+                    rc = 1;
+                    break;
+                }
+            }
+        }
+        if (trk && vis_tracker_process(trk, frame, sh, &m, &err) != VIS_OK) {
             snprintf(failure, sizeof failure, "frame %zu: %s", i, err.message);
             rc = 1;
             break;
+        }
+        if (trk && tc.scale_pending && m.reason == VIS_REASON_NONE) {
+            /* First tracked frame in pixels: the scale is its length over l; measure it again. */
+            tc.cal.px_per_mm = m.length_mm / c.tp.length_mm;
+            tc.scale_pending = 0;
+            if (c.distance_mm > 0)
+                tc.cal.camera_distance_mm = c.distance_mm;
+            if (c.have_tilt)
+                tc.cal.camera_tilt_rad = c.tilt_rad;
+            if (vis_calib_check(&tc.cal, &err) != VIS_OK || !(trk = tracker_for(&c, &tc, trk, &err)) ||
+                vis_tracker_process(trk, frame, sh, &m, &err) != VIS_OK) {
+                snprintf(failure, sizeof failure, "frame %zu: scale from the length: %s", i, err.message);
+                rc = 1;
+                break;
+            }
+            if (show)
+                fprintf(stderr, "\rtrack: scale %.4f px/mm from the ribbon's length in frame %zu\n",
+                        tc.cal.px_per_mm, i);
+            if (c.save_calib && vis_calib_save(&tc.cal, c.save_calib, &err) != VIS_OK) {
+                snprintf(failure, sizeof failure, "%s", err.message);
+                rc = 1;
+                break;
+            }
         }
         if (n == cap) {
             const size_t nc = cap ? 2 * cap : 1024;
@@ -443,6 +557,14 @@ int ctl_track_main(int argc, char **argv)
         progress(n, total, 1);
 
 done:;
+    if (!failure[0] && src && n > 0 && !tc.have_clamps) {
+        snprintf(failure, sizeof failure, "no clamp pair found in any frame (last: %s)", tc.why);
+        rc = 1;
+    } else if (!failure[0] && src && n > 0 && tc.scale_pending) {
+        snprintf(failure, sizeof failure, "no frame was tracked, so the scale from --length-mm is "
+                                          "unknown%s", c.save_calib ? " (no calibration saved)" : "");
+        rc = 1;
+    }
     const int snap = n ? vis_snap_find(dz, valid, n, 0.02, 0.3) : -1;
     if (csv && fclose(csv) != 0 && !rc) {
         snprintf(failure, sizeof failure, "cannot write %s", c.csv);
@@ -459,6 +581,11 @@ done:;
         json_object_set_new(o, "tracked", json_integer((json_int_t)tracked));
         json_object_set_new(o, "mean_quality", json_real(mean_q));
         json_object_set_new(o, "snap_frame", snap >= 0 ? json_integer(snap) : json_null());
+        const int cal_ok = tc.have_clamps && !tc.scale_pending;
+        json_object_set_new(o, "px_per_mm", cal_ok ? json_real(tc.cal.px_per_mm) : json_null());
+        json_object_set_new(o, "clamp_left", tc.have_clamps ? json_point(tc.cal.clamp_left_px) : json_null());
+        json_object_set_new(o, "clamp_right", tc.have_clamps ? json_point(tc.cal.clamp_right_px) : json_null());
+        json_object_set_new(o, "clamps_frame", clamps_frame >= 0 ? json_integer(clamps_frame) : json_null());
         json_object_set_new(o, "damaged", json_boolean(damaged));
         json_object_set_new(o, "error", failure[0] ? json_string(failure) : json_null());
         char *s = json_dumps(o, JSON_COMPACT);

@@ -19,7 +19,7 @@ static const ctl_cmd commands[] = {
     {"ports", ctl_ports_main, "list serial ports (path, USB VID:PID, serial number)"},
 #ifdef RIBBON_HAVE_VISION
     {"track", ctl_track_main, "measure Delta Z and A in every frame of a video: CSV, overlay, --json summary"},
-    {"vision-bench", ctl_vision_bench_main, "speed of the tracker and of decode + track, one JSON line"},
+    {"vision-bench", ctl_vision_bench_main, "speed of the tracker, of decoding and of decode + track, one JSON line"},
     {"render", ctl_render_main, "simulate a scene's trial and film it: FFV1 video + ground truth CSV, JSON summary"},
 #endif
 #ifdef RIBBON_HAVE_TRIALS

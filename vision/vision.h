@@ -270,6 +270,19 @@ typedef struct vis_track_params {
 } vis_track_params;
 vis_track_params vis_track_params_default(void);
 
+/* Find the two clamp points in a frame: where the ribbon leaves each clamp jaw, at the ribbon's
+ * centre, sub-pixel (vision/clamps.cpp). The jaws are the two thick blobs that contrast with the
+ * backdrop the way the ribbon does and that the ribbon joins; `p` (NULL = defaults) gives the
+ * polarity (AUTO decides from the frame), ribbon_max_px (thicker than this counts as a jaw) and
+ * min_contrast. `left_px` is the one further left in the image. `quality` (may be NULL) gets 0..1:
+ * share of the ribbon seen leaving each jaw / (1 + (spread of the jaw face / 0.5 px)^2), the worse
+ * jaw. Under perspective the point sits about |u - u0| w / (2 D) px toward the image centre (the
+ * jaw's silhouette face is its face nearer the optical axis; w the jaw depth, D the distance).
+ * Returns VIS_ERR_NOT_FOUND with the cause in `err` when no clamp pair is found (no jaws, one jaw,
+ * no ribbon between them, a black or saturated frame). */
+vis_status vis_find_clamps(const vis_frame *f, const vis_track_params *p, double left_px[2],
+                           double right_px[2], double *quality, vis_error *err);
+
 typedef struct vis_measure {
     vis_reason reason;         /* VIS_REASON_NONE when dz and a are valid */
     double dz;                 /* Delta Z, normalised by l (positive up) */

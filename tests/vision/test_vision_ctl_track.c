@@ -6,6 +6,11 @@
  * truncated copy of the video is tracked up to the damage (exit status 1, "damaged": true, the
  * frames before the damage in the CSV); usage errors exit with 2; an image sequence is tracked too;
  * --shear-csv drives the depth correction (Delta Z within 0.2 px with the clamp 30 mm deeper).
+ * Without clamp points the clamps are found in the video: with --clamp-spacing-mm (scale from the
+ * found points) and with --length-mm alone (scale from the first tracked frame) every frame is
+ * tracked, the scale is within 0.5% of the camera's, the heights agree with the --calib run within
+ * 0.2 px and --save-calib writes the calibration found; a video without clamp jaws reports every
+ * frame as clamp_not_found and exits 1 with the reason.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -240,6 +245,129 @@ static void test_shear_csv_depth_correction(void **state)
     fclose(f);
 }
 
+/* Column `col` (0-based) of the data rows of a CSV into v (up to n), returns the rows read. */
+static int csv_column(const char *path, int col, double *v, char reasons[][32], int n)
+{
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return -1;
+    char line[512];
+    int k = 0;
+    if (!fgets(line, sizeof line, f)) {
+        fclose(f);
+        return 0;
+    }
+    while (k < n && fgets(line, sizeof line, f)) {
+        char *p = line;
+        for (int c = 0; c < col && p; c++) {
+            p = strchr(p, ',');
+            if (p)
+                p++;
+        }
+        v[k] = p && *p != ',' ? atof(p) : NAN;
+        const char *r = strrchr(line, ',');
+        if (reasons)
+            snprintf(reasons[k], 32, "%.*s", r ? (int)strcspn(r + 1, "\r\n") : 0, r ? r + 1 : "");
+        k++;
+    }
+    fclose(f);
+    return k;
+}
+
+static void test_track_with_found_clamps(void **state)
+{
+    (void)state;
+    char cmd[3000], out[4096], ref_csv[620], auto_csv[620], cal[620];
+    double ref[NF], got[NF];
+    snprintf(ref_csv, sizeof ref_csv, "%s/auto_ref.csv", vt_tmpdir());
+    snprintf(auto_csv, sizeof auto_csv, "%s/auto.csv", vt_tmpdir());
+    snprintf(cal, sizeof cal, "%s/auto_calib.txt", vt_tmpdir());
+    snprintf(cmd, sizeof cmd, "'%s' track '%s' --calib '%s' --length-mm 200 --csv '%s' --quiet",
+             RIBBONCTL_PATH, video, calib, ref_csv);
+    assert_int_equal(run(cmd, out, sizeof out), 0);
+    assert_int_equal(csv_column(ref_csv, 2, ref, NULL, NF), NF);
+    vis_calib truth;
+    assert_int_equal(vis_calib_load(&truth, calib, NULL), VIS_OK);
+    const char *scale_opt[2] = {"--clamp-spacing-mm 160", ""};
+    for (int k = 0; k < 2; k++) {
+        snprintf(cmd, sizeof cmd, "'%s' track '%s' %s --length-mm 200 --csv '%s' --save-calib '%s' --json --quiet",
+                 RIBBONCTL_PATH, video, scale_opt[k], auto_csv, cal);
+        assert_int_equal(run(cmd, out, sizeof out), 0);
+        printf("%s", out);
+        json_error_t je;
+        json_t *o = json_loads(out, 0, &je);
+        assert_non_null(o);
+        assert_int_equal(json_integer_value(json_object_get(o, "tracked")), NF);
+        assert_int_equal(json_integer_value(json_object_get(o, "clamps_frame")), 0);
+        assert_int_equal(json_integer_value(json_object_get(o, "snap_frame")), SNAP_AT);
+        const double ppmm = json_real_value(json_object_get(o, "px_per_mm"));
+        json_decref(o);
+        vis_calib found;
+        assert_int_equal(vis_calib_load(&found, cal, NULL), VIS_OK);
+        printf("%s: scale %.4f px/mm (camera %.4f), left (%.2f, %.2f) vs (%.2f, %.2f), right (%.2f, %.2f) "
+               "vs (%.2f, %.2f)\n", k ? "length" : "spacing", found.px_per_mm, truth.px_per_mm,
+               found.clamp_left_px[0], found.clamp_left_px[1], truth.clamp_left_px[0], truth.clamp_left_px[1],
+               found.clamp_right_px[0], found.clamp_right_px[1], truth.clamp_right_px[0],
+               truth.clamp_right_px[1]);
+        assert_true(fabs(found.px_per_mm - ppmm) < 1e-9 * ppmm);
+        assert_true(fabs(found.px_per_mm / truth.px_per_mm - 1) < 0.005);
+        assert_true(fabs(found.clamp_left_px[1] - truth.clamp_left_px[1]) < 0.5);
+        assert_true(fabs(found.clamp_right_px[1] - truth.clamp_right_px[1]) < 0.5);
+        assert_int_equal(csv_column(auto_csv, 2, got, NULL, NF), NF);
+        /* Heights compared in pixels (each run's Delta Z times l in its own scale): the scale from
+         * the spacing runs about w / 2D low (the jaws' silhouette faces are their far faces), which
+         * changes Delta Z by that fraction, not the pixels measured. */
+        double worst = 0, worst_raw = 0;
+        for (int i = 0; i < NF; i++) {
+            worst = fmax(worst, fabs(got[i] * found.px_per_mm - ref[i] * truth.px_per_mm) * 200.0);
+            worst_raw = fmax(worst_raw, fabs(got[i] - ref[i]) * 200.0 * truth.px_per_mm);
+        }
+        printf("height against the --calib run: worst %.3f px (Delta Z alone: %.3f px)\n", worst, worst_raw);
+        assert_true(worst < 0.2);
+    }
+}
+
+static void test_video_without_clamps(void **state)
+{
+    (void)state;
+    static vt_shape s;
+    char vid[600], truth[600], out_csv[600], cmd[3000], out[4096], reasons[4][32];
+    double dz[4];
+    snprintf(vid, sizeof vid, "%s/noclamp.mkv", vt_tmpdir());
+    snprintf(truth, sizeof truth, "%s/noclamp_truth.csv", vt_tmpdir());
+    snprintf(out_csv, sizeof out_csv, "%s/noclamp_out.csv", vt_tmpdir());
+    vt_arch(&s, 301, 0.2, 0.16, 0.2, 0.0);
+    vis_render_params p = vis_render_params_default();
+    vis_camera_fit(&p.camera, -0.02, 0.18, -0.07, 0.07, 0.9, NULL);
+    p.clamp_length_m = 0.0;
+    vis_synth_writer *w = vis_synth_writer_open(vid, truth, &p, 25.0, NULL);
+    assert_non_null(w);
+    for (int i = 0; i < 4; i++)
+        assert_int_equal(vis_synth_writer_add(w, &s.view, NULL, NULL), VIS_OK);
+    assert_int_equal(vis_synth_writer_close(w, NULL), VIS_OK);
+    snprintf(cmd, sizeof cmd, "'%s' track '%s' --clamp-spacing-mm 160 --csv '%s' --json --quiet 2>/dev/null",
+             RIBBONCTL_PATH, vid, out_csv);
+    assert_int_equal(run(cmd, out, sizeof out), 1);
+    printf("%s", out);
+    json_error_t je;
+    json_t *o = json_loads(out, 0, &je);
+    assert_non_null(o);
+    assert_int_equal(json_integer_value(json_object_get(o, "frames")), 4);
+    assert_int_equal(json_integer_value(json_object_get(o, "tracked")), 0);
+    assert_true(json_is_null(json_object_get(o, "clamp_left")));
+    assert_non_null(strstr(json_string_value(json_object_get(o, "error")), "no clamp pair found"));
+    json_decref(o);
+    assert_int_equal(csv_column(out_csv, 2, dz, reasons, 4), 4);
+    for (int i = 0; i < 4; i++) {
+        assert_true(isnan(dz[i]));
+        assert_string_equal(reasons[i], "clamp_not_found");
+    }
+    /* One clamp point without the other is a usage error. */
+    snprintf(cmd, sizeof cmd, "'%s' track '%s' --clamp-spacing-mm 160 --clamp-left 1,2 2>/dev/null",
+             RIBBONCTL_PATH, vid);
+    assert_int_equal(run(cmd, out, sizeof out), 2);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -247,6 +375,8 @@ int main(void)
         cmocka_unit_test(test_truncated_video_and_usage),
         cmocka_unit_test(test_track_image_sequence),
         cmocka_unit_test(test_shear_csv_depth_correction),
+        cmocka_unit_test(test_track_with_found_clamps),
+        cmocka_unit_test(test_video_without_clamps),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }
