@@ -5,6 +5,7 @@
  * 1e-9 l. Every iteration is capped and every failure has a named reason; a NaN anywhere in the
  * residual stops the solve with ROD_ERR_NAN instead of propagating. */
 #include "rod_solver.h"
+#include "rod_band.h"
 
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_linalg.h>
@@ -20,7 +21,9 @@ struct rod_solver {
     int ndof, nfree;
     double *g;        /* full gradient (ndof) */
     double *res;      /* free residual (nfree) */
-    double *H;        /* symmetric band (nfree x (ROD_BAND + 1)) */
+    double *H;        /* symmetric band (nfree x (ROD_BAND + 1)), factorised in place */
+    double *Hraw;     /* Hessian of E alone at the state of the last residual that asked for it */
+    int hraw_valid;   /* Hraw belongs to the current q (cleared whenever q changes) */
     gsl_matrix *LU;   /* general band for LU (nfree x (3 ROD_BAND + 1)) */
     gsl_vector_uint *piv;
     double *dq;       /* Newton step (nfree) */
@@ -73,10 +76,11 @@ rod_solver *rod_solver_alloc(const rod *r)
     s->g = malloc(sizeof(double) * (size_t)s->ndof);
     s->res = malloc(sizeof(double) * (size_t)s->nfree);
     s->H = malloc(sizeof(double) * (size_t)s->nfree * (ROD_BAND + 1));
+    s->Hraw = malloc(sizeof(double) * (size_t)s->nfree * (ROD_BAND + 1));
     s->dq = malloc(sizeof(double) * (size_t)s->nfree);
     s->LU = gsl_matrix_alloc((size_t)s->nfree, 3 * ROD_BAND + 1);
     s->piv = gsl_vector_uint_alloc((size_t)s->nfree);
-    int ok = s->g && s->res && s->H && s->dq && s->LU && s->piv && frames_alloc(&s->base, r->ndof, r->n);
+    int ok = s->g && s->res && s->H && s->Hraw && s->dq && s->LU && s->piv && frames_alloc(&s->base, r->ndof, r->n);
     for (int k = 0; k < ROD_SOLVER_SLOTS; k++) ok = ok && frames_alloc(&s->slot[k], r->ndof, r->n);
     if (!ok) {
         rod_solver_free(s);
@@ -88,7 +92,7 @@ rod_solver *rod_solver_alloc(const rod *r)
 void rod_solver_free(rod_solver *s)
 {
     if (!s) return;
-    free(s->g); free(s->res); free(s->H); free(s->dq);
+    free(s->g); free(s->res); free(s->H); free(s->Hraw); free(s->dq);
     if (s->LU) gsl_matrix_free(s->LU);
     if (s->piv) gsl_vector_uint_free(s->piv);
     frames_free(&s->base);
@@ -113,12 +117,20 @@ rod_newton_opts rod_newton_opts_static(const rod_scene *scene)
 
 /* Residual at the current q (frames transported from the solve's base). Returns max |R| or
  * NAN when anything is not finite; *l2 receives |R|_2 (the line search's merit: the Newton
- * direction is a descent direction for |R|_2, not for max |R|). */
-static double residual(rod *r, rod_solver *s, const rod_newton_opts *o, double *l2)
+ * direction is a descent direction for |R|_2, not for max |R|). With_hessian also assembles
+ * the Hessian of E at q into Hraw in the same pass over the elements (they share the geometry):
+ * worth it where a Newton iteration is expected to follow, as at the start of a solve. */
+static double residual_h(rod *r, rod_solver *s, const rod_newton_opts *o, double *l2, int with_hessian)
 {
     frames_load(r, &s->base, 0);
     rod_frames_update(r);
-    rod_gradient(r, s->g);
+    if (with_hessian) {
+        memset(s->Hraw, 0, sizeof(double) * (size_t)s->nfree * (ROD_BAND + 1));
+        rod_gradient_hessian(r, s->g, 1.0, s->Hraw);
+    } else {
+        rod_gradient(r, s->g);
+    }
+    s->hraw_valid = with_hessian;
     double mx = 0.0, ss = 0.0;
     for (int a = 0; a < s->nfree; a++) {
         int k = a + ROD_FREE_BEGIN;
@@ -136,6 +148,11 @@ static double residual(rod *r, rod_solver *s, const rod_newton_opts *o, double *
 }
 
 /* Incremental potential whose gradient is R: E(q) + c1/2 |q - q_n|_M^2 - c2 v_n . M q. */
+static double residual(rod *r, rod_solver *s, const rod_newton_opts *o, double *l2)
+{
+    return residual_h(r, s, o, l2, 0);
+}
+
 static double potential(rod *r, const rod_newton_opts *o)
 {
     double phi = rod_energy(r);
@@ -149,8 +166,12 @@ static double potential(rod *r, const rod_newton_opts *o)
 static void assemble(rod *r, rod_solver *s, const rod_newton_opts *o, double shift)
 {
     int nf = s->nfree, w = ROD_BAND + 1;
-    memset(s->H, 0, sizeof(double) * (size_t)nf * (size_t)w);
-    rod_hessian_add(r, 1.0, s->H);
+    if (!s->hraw_valid) {
+        memset(s->Hraw, 0, sizeof(double) * (size_t)nf * (size_t)w);
+        rod_hessian_add(r, 1.0, s->Hraw);
+        s->hraw_valid = 1;
+    }
+    memcpy(s->H, s->Hraw, sizeof(double) * (size_t)nf * (size_t)w);
     if (o->c1 != 0.0)
         for (int a = 0; a < nf; a++) s->H[a * w] += o->c1 * r->mass[a + ROD_FREE_BEGIN];
     if (shift > 0.0)
@@ -171,12 +192,14 @@ static rod_status linear_solve(rod *r, rod_solver *s, const rod_newton_opts *o)
         for (int attempt = 0; attempt < 7; attempt++) {
             assemble(r, s, o, shift);
             r->count.factorisations++;
-            gsl_matrix_view A = gsl_matrix_view_array(s->H, (size_t)nf, (size_t)w);
-            if (gsl_linalg_ldlt_band_decomp(&A.matrix) == GSL_SUCCESS) {
+            if (rod_band_ldlt_decomp(s->H, nf) == 0) {
                 int ok = 1;
                 for (int a = 0; a < nf; a++)
                     if (!(s->H[a * w] > 0.0)) { ok = 0; break; }
-                if (ok && gsl_linalg_ldlt_band_svx(&A.matrix, &x.vector) == GSL_SUCCESS) return ROD_OK;
+                if (ok) {
+                    rod_band_ldlt_solve(s->H, nf, s->dq);
+                    return ROD_OK;
+                }
             }
             shift = shift == 0.0 ? 1e-4 : shift * 10.0;
         }
@@ -209,7 +232,7 @@ rod_status rod_newton_solve(rod *r, rod_solver *s, const rod_newton_opts *o, rod
     /* base anchors the frames: it is the start state, then each accepted iterate. */
     frames_save(r, &s->base);
     double l2 = 0.0, nl2 = 0.0;
-    double res = residual(r, s, o, &l2);
+    double res = residual_h(r, s, o, &l2, 1);
     double phi0 = NAN; /* potential at the base, computed only when the line search needs it */
     rod_status st = ROD_OK;
     int it = 0;
