@@ -42,12 +42,14 @@ int rod_band_ldlt_decomp(double *A, int n)
 
 void rod_band_ldlt_solve(const double *LD, int n, double *b)
 {
-    /* L y = b: column-oriented, y_j is final once every earlier column has been applied. */
-    for (int j = 0; j < n; j++) {
-        const double *row = LD + (size_t)j * W;
-        double y = b[j];
-        int p = n - 1 - j < ROD_BAND ? n - 1 - j : ROD_BAND;
-        for (int k = 1; k <= p; k++) b[j + k] -= row[k] * y;
+    /* L y = b, row by row: y_j = b_j - sum_k L(j, j - k) y_{j - k}, L(j, j - k) stored in row
+     * j - k at offset k. (Row-oriented, so each y_j is one dot product and no store waits on the
+     * previous row's.) */
+    for (int j = 1; j < n; j++) {
+        int p = j < ROD_BAND ? j : ROD_BAND;
+        double acc = b[j];
+        for (int k = 1; k <= p; k++) acc -= LD[(size_t)(j - k) * W + k] * b[j - k];
+        b[j] = acc;
     }
     for (int j = 0; j < n; j++) b[j] /= LD[(size_t)j * W];
     /* L^T x = z: row j of L^T holds L(j + k, j) = row[k]. */

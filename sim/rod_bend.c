@@ -275,7 +275,8 @@ static double curvature_grad(const double te[3], const double tf[3], double c, d
  * a = w1 m1e + w2 m2e, a' = w1 m2e - w2 m1e (and the same for b): the same numbers as
  * rod_bend_element up to round-off, at about half the cost. Its gradient is w1 g1 + w2 g2.
  * Returns the energy; g8 and H8 (may be NULL) are overwritten. */
-double rod_node_ef(const rod *r, int i, double g8[8], double H8[8][8])
+double rod_node_ef(const rod *r, int i, const double mf_e[6], const double mf_f[6], double g8[8],
+                   double H8[8][8])
 {
     double te[3], tf[3], ne, nf;
     node_geometry(r, i, te, tf, &ne, &nf);
@@ -297,8 +298,15 @@ double rod_node_ef(const rod *r, int i, double g8[8], double H8[8][8])
 
     if (r->terms.bend) {
         double m1e[3], m2e[3], m1f[3], m2f[3], nm1e[3], nm1f[3];
-        rod_material_frame(r, i - 1, m1e, m2e);
-        rod_material_frame(r, i, m1f, m2f);
+        if (mf_e) {
+            for (int k = 0; k < 3; k++) {
+                m1e[k] = mf_e[k], m2e[k] = mf_e[3 + k];
+                m1f[k] = mf_f[k], m2f[k] = mf_f[3 + k];
+            }
+        } else {
+            rod_material_frame(r, i - 1, m1e, m2e);
+            rod_material_frame(r, i, m1f, m2f);
+        }
         v3_scale(m1e, -1.0, nm1e);
         v3_scale(m1f, -1.0, nm1f);
         double w = 1.0 / r->vor0[i];

@@ -83,8 +83,13 @@ void rod_gradient_hessian(rod *r, double *g, double s, double *H)
     if (g) memset(g, 0, sizeof(double) * (size_t)r->ndof);
     double g8[8], H8[8][8], gl[11], Hl[11][11];
     double gbuf[ROD_BAND + 1];
+    /* Material frames of edges i-1 and i: each edge's is computed once and used by two nodes. */
+    double mf[2][6];
+    rod_material_frame(r, 0, mf[0], mf[0] + 3);
     for (int i = 1; i < n - 1; i++) {
-        rod_node_ef(r, i, g8, H ? H8 : NULL);
+        double *mfe = mf[(i - 1) & 1], *mff = mf[i & 1];
+        rod_material_frame(r, i, mff, mff + 3);
+        rod_node_ef(r, i, mfe, mff, g8, H ? H8 : NULL);
         ef_to_local(g8, H ? H8 : NULL, gl, H ? Hl : NULL);
         int g0 = 4 * (i - 1);
         if (g)

@@ -44,7 +44,7 @@ rod_predict_opts rod_predict_opts_fast(const rod_scene *sc)
     rod_predict_opts o = rod_predict_opts_default();
     o.adaptive = 1;
     o.quasi_static = 1;
-    o.post_snap_dt_max = 10.0 * sc->dt;
+    o.post_snap_dt_max = 5.0 * sc->dt;
     return o;
 }
 

@@ -48,7 +48,7 @@ typedef struct rod_predict_opts {
 
 rod_predict_opts rod_predict_opts_default(void);
 /* The fast prediction (ribbon-sim predict --fast, bench fast_predict): adaptive, quasi-static
- * start, post-snap steps up to 10 dt (README "Fast mode"). */
+ * start, post-snap steps up to 5 dt (README "Fast mode"). */
 rod_predict_opts rod_predict_opts_fast(const rod_scene *sc);
 
 typedef struct rod_prediction {
