@@ -1,8 +1,11 @@
 /* sim_cmd_bench.c: `ribbon-sim bench`: the simulator's speed and memory on the paper scene, as
  * one machine-readable line (a benchmark, never a timed test).
  *   newton_iter_banded_s / newton_iter_dense_s: one Newton iteration's linear algebra on the
- *     N = 201 upper state: assembly of gradient and Hessian plus factorisation and solve, banded
- *     (GSL LDL^T band) and dense (GSL LU with GSL's own CBLAS), in the same run;
+ *     N = 201 upper state: assembly of gradient and Hessian (one pass, as rod_solver.c does) plus
+ *     factorisation and solve of the same system c1 M + H, banded (rod_band.c, the production
+ *     LDL^T) and dense (GSL LU with GSL's own CBLAS), in the same run; newton_iter_dense_ldlt_s
+ *     is the dense side with GSL's dense LDL^T instead, the like-for-like factorisation (about
+ *     half the flops of LU), reported so the ratio's fairness can be judged;
  *   paper_predict_wall_s, realtime_factor: the full Gamma = 0.13 prediction at the paper's
  *     fixed dt = 1 ms, N = 201, and its simulated time over wall time;
  *   fast_predict_wall_s, fast_predict_rel_diff: the same prediction in fast mode and its relative
@@ -11,6 +14,7 @@
  *     the upper state, primary branch, the branch switched at the first pitchfork, all events
  *     located), with continue_route_wall_s, the route's share, and continue_first_dw;
  *   peak_rss_mb: the process's peak resident memory. */
+#include "rod_band.h"
 #include "rod_bifurcation.h"
 #include "rod_protocol.h"
 #include "rod_route.h"
@@ -42,7 +46,7 @@ static double now(void)
 }
 
 /* Times one banded and one dense Newton iteration's linear algebra at the upper state. */
-static int time_newton(const rod_scene *sc, double *banded, double *dense)
+static int time_newton(const rod_scene *sc, double *banded, double *dense, double *dense_ldlt)
 {
     rod *r = NULL;
     char err[256];
@@ -58,24 +62,22 @@ static int time_newton(const rod_scene *sc, double *banded, double *dense)
     gsl_matrix *D = gsl_matrix_alloc((size_t)nf, (size_t)nf);
     gsl_permutation *p = gsl_permutation_alloc((size_t)nf);
     if (!s || !g || !H || !x || !D || !p || rod_route_to_state(r, s, sc, +1, NULL) != ROD_OK) goto out;
-    const int nb = 200, nd = 3;
+    const int nb = 400, nd = 3;
     double t0 = now();
     for (int it = 0; it < nb; it++) {
-        rod_gradient(r, g);
         memset(H, 0, sizeof(double) * (size_t)nf * (size_t)w);
-        rod_hessian_add(r, 1.0, H);
+        rod_gradient_hessian(r, g, 1.0, H);
         for (int a = 0; a < nf; a++) H[a * w] += 1e3 * r->mass[a + ROD_FREE_BEGIN];
-        gsl_matrix_view A = gsl_matrix_view_array(H, (size_t)nf, (size_t)w);
         for (int a = 0; a < nf; a++) x[a] = -g[a + ROD_FREE_BEGIN];
-        gsl_vector_view xv = gsl_vector_view_array(x, (size_t)nf);
-        if (gsl_linalg_ldlt_band_decomp(&A.matrix) || gsl_linalg_ldlt_band_svx(&A.matrix, &xv.vector)) goto out;
+        if (rod_band_ldlt_decomp(H, nf)) goto out;
+        rod_band_ldlt_solve(H, nf, x);
     }
     *banded = (now() - t0) / nb;
+    for (int kind = 0; kind < 2; kind++) {
     t0 = now();
     for (int it = 0; it < nd; it++) {
-        rod_gradient(r, g);
         memset(H, 0, sizeof(double) * (size_t)nf * (size_t)w);
-        rod_hessian_add(r, 1.0, H);
+        rod_gradient_hessian(r, g, 1.0, H);
         gsl_matrix_set_zero(D);
         for (int a = 0; a < nf; a++)
             for (int k = 0; k < w && a + k < nf; k++) {
@@ -86,9 +88,12 @@ static int time_newton(const rod_scene *sc, double *banded, double *dense)
         int sign;
         for (int a = 0; a < nf; a++) x[a] = -g[a + ROD_FREE_BEGIN];
         gsl_vector_view xv = gsl_vector_view_array(x, (size_t)nf);
-        if (gsl_linalg_LU_decomp(D, p, &sign) || gsl_linalg_LU_svx(D, p, &xv.vector)) goto out;
+        if (kind == 0 && (gsl_linalg_LU_decomp(D, p, &sign) || gsl_linalg_LU_svx(D, p, &xv.vector))) goto out;
+        if (kind == 1 && (gsl_linalg_ldlt_decomp(D) || gsl_linalg_ldlt_svx(D, &xv.vector))) goto out;
     }
-    *dense = (now() - t0) / nd;
+    if (kind == 0) *dense = (now() - t0) / nd;
+    else *dense_ldlt = (now() - t0) / nd;
+    }
     ok = 1;
 out:
     if (!ok) fprintf(stderr, "ribbon-sim bench: the Newton timing failed\n");
@@ -102,8 +107,7 @@ out:
 
 static int predict(const rod_scene *sc, int fast, rod_prediction *p)
 {
-    rod_predict_opts o = rod_predict_opts_default();
-    o.adaptive = fast;
+    rod_predict_opts o = fast ? rod_predict_opts_fast(sc) : rod_predict_opts_default();
     char err[512] = "";
     rod_status st = rod_predict(sc, &o, p, err, sizeof err);
     if (st != ROD_OK || !p->snapped) {
@@ -121,9 +125,9 @@ int sim_cmd_bench(int argc, char **argv)
     if (rc) return rc == 1 ? 0 : 2;
     rod_scene sc;
     if (!sim_opts_load_scene(&o, &sc)) return 2;
-    double banded = 0, dense = 0;
+    double banded = 0, dense = 0, dense_ldlt = 0;
     rod_prediction fixed, fast;
-    if (!time_newton(&sc, &banded, &dense)) return 1;
+    if (!time_newton(&sc, &banded, &dense, &dense_ldlt)) return 1;
     if (!predict(&sc, 0, &fixed) || !predict(&sc, 1, &fast)) return 1;
     rod_analysis an;
     char cerr[512] = "";
@@ -139,9 +143,10 @@ int sim_cmd_bench(int argc, char **argv)
     getrusage(RUSAGE_SELF, &ru);
     double rss_mb = (double)ru.ru_maxrss / 1024.0;
     double rel = fabs(fast.snap_dw - fixed.snap_dw) / fabs(fixed.snap_dw);
-    json_t *j = json_pack("{s:i,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f}", "nodes", sc.nodes,
-                          "newton_iter_banded_s", banded, "newton_iter_dense_s", dense, "banded_vs_dense",
-                          dense / banded, "paper_predict_wall_s", fixed.wall_s, "realtime_factor",
+    json_t *j = json_pack("{s:i,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f}", "nodes",
+                          sc.nodes, "newton_iter_banded_s", banded, "newton_iter_dense_s", dense, "banded_vs_dense",
+                          dense / banded, "newton_iter_dense_ldlt_s", dense_ldlt, "banded_vs_dense_ldlt",
+                          dense_ldlt / banded, "fast_switch_dw", fast.dw_switch, "paper_predict_wall_s", fixed.wall_s, "realtime_factor",
                           fixed.sim_time / fixed.wall_s, "fast_predict_wall_s", fast.wall_s,
                           "fast_predict_rel_diff", rel, "peak_rss_mb", rss_mb, "snap_dw_fixed", fixed.snap_dw,
                           "snap_dw_fast", fast.snap_dw, "continue_wall_s", cont_wall, "continue_route_wall_s",

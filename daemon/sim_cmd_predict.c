@@ -37,9 +37,8 @@ int sim_cmd_predict(int argc, char **argv)
     if (rc) return rc == 1 ? 0 : 2;
     rod_scene sc;
     if (!sim_opts_load_scene(&o, &sc)) return 2;
-    rod_predict_opts po = rod_predict_opts_default();
+    rod_predict_opts po = o.fast ? rod_predict_opts_fast(&sc) : rod_predict_opts_default();
     progress pr = {isatty(2) && !o.json, 0};
-    po.adaptive = o.fast;
     po.on_sample = on_sample;
     po.user = &pr;
     rod_prediction p;

@@ -124,6 +124,10 @@ void rod_gradient(rod *r, double *g);
  * symmetric band layout, row i holding A(i, i + k)). Only the free block is assembled. */
 void rod_hessian_add(rod *r, double s, double *H);
 
+/* Both in one pass over the elements (they share the geometry): overwrites g (ndof values)
+ * unless NULL and adds s * Hessian into H as rod_hessian_add unless H is NULL. */
+void rod_gradient_hessian(rod *r, double *g, double s, double *H);
+
 /* Integrated curvature kappa1 at each interior node (N values, 0 at the ends). */
 void rod_kappa1(const rod *r, double *k1);
 

@@ -239,3 +239,142 @@ double rod_twist_element(const rod *r, int i, double g[11], double H[11][11])
     rod_local_from_ef(1.0, G8, H ? HH : NULL, g, H);
     return energy;
 }
+
+/* Gradient only of one curvature (the first half of curvature_derivs): g8 overwritten. */
+static double curvature_grad(const double te[3], const double tf[3], double c, double ne, double nf,
+                             const double a[3], const double ap[3], const double b[3], const double bp[3],
+                             double g8[8])
+{
+    double ic = 1.0 / (1.0 + c);
+    double kap = (v3_dot(a, tf) - v3_dot(b, te)) * ic;
+    double Ge[3], Gf[3];
+    for (int k = 0; k < 3; k++) {
+        Ge[k] = (-c * a[k] - b[k] - kap * tf[k]) * ic;
+        Gf[k] = (a[k] + c * b[k] - kap * te[k]) * ic;
+    }
+    /* J G = (G - t (t . G)) / n */
+    double se = v3_dot(te, Ge), sf = v3_dot(tf, Gf);
+    for (int k = 0; k < 3; k++) {
+        g8[k] = (Ge[k] - se * te[k]) / ne;
+        g8[3 + k] = (Gf[k] - sf * tf[k]) / nf;
+    }
+    g8[6] = v3_dot(ap, tf) * ic;
+    g8[7] = -v3_dot(bp, te) * ic;
+    return kap;
+}
+
+/* The node element in (e, f, th_e, th_f) space: bending and twist at interior node i plus the
+ * stretching of edge i-1 (which depends on e alone), each as the scene's terms ask.
+ *
+ * Why one kernel: the three terms share the edge geometry (tangents, lengths, the projectors
+ * J) and the 8 -> 11 map to the local DOFs, and the bending Hessian needs only one second-
+ * derivative pass: with weights w1 = K1 (kappa1 - kappa1_hat), w2 = K2 kappa2,
+ *     Hess E_bend = K1 g1 g1^T + K2 g2 g2^T + w1 Hess kappa1 + w2 Hess kappa2,
+ * and Hess kappa (curvature_derivs) is linear in the directors (a, a', b, b'), so
+ * w1 Hess kappa1 + w2 Hess kappa2 is Hess kappa evaluated with the combined directors
+ * a = w1 m1e + w2 m2e, a' = w1 m2e - w2 m1e (and the same for b): the same numbers as
+ * rod_bend_element up to round-off, at about half the cost. Its gradient is w1 g1 + w2 g2.
+ * Returns the energy; g8 and H8 (may be NULL) are overwritten. */
+double rod_node_ef(const rod *r, int i, const double mf_e[6], const double mf_f[6], double g8[8],
+                   double H8[8][8])
+{
+    double te[3], tf[3], ne, nf;
+    node_geometry(r, i, te, tf, &ne, &nf);
+    double c = v3_dot(te, tf), chi = 1.0 + c, energy = 0.0;
+    for (int a = 0; a < 8; a++) g8[a] = 0.0;
+    if (H8) memset(H8, 0, sizeof(double) * 64);
+
+    if (r->terms.stretch) {
+        double l0 = r->len0[i - 1], strain = ne / l0 - 1.0;
+        energy += 0.5 * r->EA * strain * strain * l0;
+        for (int k = 0; k < 3; k++) g8[k] += r->EA * strain * te[k];
+        if (H8) {
+            double a = r->EA / l0, b = r->EA * strain / ne;
+            for (int p = 0; p < 3; p++)
+                for (int q = 0; q < 3; q++)
+                    H8[p][q] += a * te[p] * te[q] + b * ((p == q ? 1.0 : 0.0) - te[p] * te[q]);
+        }
+    }
+
+    if (r->terms.bend) {
+        double m1e[3], m2e[3], m1f[3], m2f[3], nm1e[3], nm1f[3];
+        if (mf_e) {
+            for (int k = 0; k < 3; k++) {
+                m1e[k] = mf_e[k], m2e[k] = mf_e[3 + k];
+                m1f[k] = mf_f[k], m2f[k] = mf_f[3 + k];
+            }
+        } else {
+            rod_material_frame(r, i - 1, m1e, m2e);
+            rod_material_frame(r, i, m1f, m2f);
+        }
+        v3_scale(m1e, -1.0, nm1e);
+        v3_scale(m1f, -1.0, nm1f);
+        double w = 1.0 / r->vor0[i];
+        double K1 = r->EI1[i] * w, K2 = r->EI2 * w;
+        double g1[8], g2[8];
+        double k1 = curvature_grad(te, tf, c, ne, nf, m1e, m2e, m1f, m2f, g1);
+        double k2 = curvature_grad(te, tf, c, ne, nf, m2e, nm1e, m2f, nm1f, g2);
+        double d1 = k1 - r->kap1_hat[i];
+        energy += 0.5 * K1 * d1 * d1 + 0.5 * K2 * k2 * k2;
+        double w1 = K1 * d1, w2 = K2 * k2;
+        for (int a = 0; a < 8; a++) g8[a] += w1 * g1[a] + w2 * g2[a];
+        if (H8) {
+            double A[3], Ap[3], B[3], Bp[3], gc[8], Hc[8][8];
+            for (int k = 0; k < 3; k++) {
+                A[k] = w1 * m1e[k] + w2 * m2e[k];
+                Ap[k] = w1 * m2e[k] - w2 * m1e[k];
+                B[k] = w1 * m1f[k] + w2 * m2f[k];
+                Bp[k] = w1 * m2f[k] - w2 * m1f[k];
+            }
+            curvature_derivs(te, tf, ne, nf, A, Ap, B, Bp, gc, Hc);
+            for (int a = 0; a < 8; a++)
+                for (int b = 0; b < 8; b++) H8[a][b] += K1 * g1[a] * g1[b] + K2 * g2[a] * g2[b] + Hc[a][b];
+        }
+    }
+
+    if (r->terms.twist) {
+        double K = r->GJ / r->vor0[i];
+        double k3 = rod_theta(r, i) - rod_theta(r, i - 1) + r->mref[i];
+        energy += 0.5 * K * k3 * k3;
+        /* As rod_twist_element: d m_ref / de = kb / (2 |e|), d m_ref / df = kb / (2 |f|). */
+        double kb[3], gt[8];
+        v3_cross(te, tf, kb);
+        v3_scale(kb, 2.0 / chi, kb);
+        for (int k = 0; k < 3; k++) {
+            gt[k] = 0.5 * kb[k] / ne;
+            gt[3 + k] = 0.5 * kb[k] / nf;
+        }
+        gt[6] = -1.0;
+        gt[7] = 1.0;
+        for (int a = 0; a < 8; a++) g8[a] += K * k3 * gt[a];
+        if (H8) {
+            double Kbe[3][3] = {{0}}, Kbf[3][3] = {{0}}, Je[3][3], Jf[3][3], Me[3][3], Mf[3][3];
+            m3_add_cross(Kbe, -2.0 / chi, tf);
+            m3_add_outer(Kbe, -1.0 / chi, kb, tf);
+            m3_add_cross(Kbf, 2.0 / chi, te);
+            m3_add_outer(Kbf, -1.0 / chi, kb, te);
+            m3_tangent_jacobian(te, ne, Je);
+            m3_tangent_jacobian(tf, nf, Jf);
+            m3_mul(Kbe, Je, Me);
+            m3_mul(Kbf, Jf, Mf);
+            double s = K * k3;
+            for (int p = 0; p < 3; p++)
+                for (int q = 0; q < 3; q++) {
+                    /* The symmetric part of d(gt)/d(e, f), as rod_twist_element. */
+                    double hee = 0.5 * Me[p][q] / ne - 0.5 * kb[p] * te[q] / (ne * ne);
+                    double hee_t = 0.5 * Me[q][p] / ne - 0.5 * kb[q] * te[p] / (ne * ne);
+                    double hff = 0.5 * Mf[p][q] / nf - 0.5 * kb[p] * tf[q] / (nf * nf);
+                    double hff_t = 0.5 * Mf[q][p] / nf - 0.5 * kb[q] * tf[p] / (nf * nf);
+                    /* (e row p, f col q): 1/2 (d gt_e[p] / df_q + d gt_f[q] / de_p) */
+                    double hef = 0.5 * (0.5 * Mf[p][q] / ne + 0.5 * Me[q][p] / nf);
+                    H8[p][q] += s * 0.5 * (hee + hee_t);
+                    H8[3 + p][3 + q] += s * 0.5 * (hff + hff_t);
+                    H8[p][3 + q] += s * hef;
+                    H8[3 + q][p] += s * hef;
+                }
+            for (int a = 0; a < 8; a++)
+                for (int b = 0; b < 8; b++) H8[a][b] += K * gt[a] * gt[b];
+        }
+    }
+    return energy;
+}

@@ -17,8 +17,9 @@ rod_status rod_dyn_open(rod_dyn *d, const rod_scene *sc, char *err, size_t errle
     d->s = rod_solver_alloc(d->r);
     d->q_n = malloc(sizeof(double) * nd);
     d->v = calloc(nd, sizeof(double));
+    d->v_prev = calloc(nd, sizeof(double));
     d->g_old = calloc(nd, sizeof(double));
-    if (!d->s || !d->q_n || !d->v || !d->g_old) {
+    if (!d->s || !d->q_n || !d->v || !d->v_prev || !d->g_old) {
         rod_dyn_close(d);
         if (err) snprintf(err, errlen, "out of memory allocating the dynamics workspace");
         return ROD_ERR_ALLOC;
@@ -36,6 +37,7 @@ void rod_dyn_close(rod_dyn *d)
 {
     free(d->q_n);
     free(d->v);
+    free(d->v_prev);
     free(d->g_old);
     rod_solver_free(d->s);
     rod_free(d->r);
@@ -47,6 +49,8 @@ void rod_dyn_start(rod_dyn *d, double dl, double dw)
     size_t nd = (size_t)d->r->ndof;
     memcpy(d->g_old, rod_solver_gradient(d->s), sizeof(double) * nd);
     memset(d->v, 0, sizeof(double) * nd);
+    memset(d->v_prev, 0, sizeof(double) * nd);
+    d->h_prev = 0.0;
     d->dl = dl;
     d->dw = dw;
     d->h = 0.0;
@@ -59,7 +63,15 @@ rod_status rod_dyn_try(rod_dyn *d, double h, double dl, double dw, rod_newton_re
     memcpy(d->q_n, r->q, sizeof(double) * (size_t)r->ndof);
     rod_state_save(r, d->s, DYN_SLOT);
     rod_set_clamps(r, dl, dw);
-    for (int k = ROD_FREE_BEGIN; k < r->free_end; k++) r->q[k] += h * d->v[k];
+    /* Predictor (see rod_dynamics.h): a better start saves Newton iterations; the converged
+     * step does not depend on it beyond the tolerance. */
+    if (d->h_prev > 0.0) {
+        double c = h / d->h_prev;
+        for (int k = ROD_FREE_BEGIN; k < r->free_end; k++)
+            r->q[k] += h * (d->v[k] + c * (d->v[k] - d->v_prev[k]));
+    } else {
+        for (int k = ROD_FREE_BEGIN; k < r->free_end; k++) r->q[k] += h * d->v[k];
+    }
     d->no.c1 = 1.0 / (h * h) + d->mu / h;
     d->no.c2 = 1.0 / h;
     rod_status st = rod_newton_solve(r, d->s, &d->no, nr);
@@ -87,6 +99,8 @@ void rod_dyn_accept(rod_dyn *d)
     if (!(h > 0.0)) return;
     const double *g = rod_solver_gradient(d->s);
     double kin = 0.0, dis = 0.0, work = 0.0;
+    memcpy(d->v_prev, d->v, sizeof(double) * (size_t)r->ndof);
+    d->h_prev = h;
     for (int k = 0; k < r->ndof; k++) {
         d->v[k] = (r->q[k] - d->q_n[k]) / h;
         if (k >= ROD_FREE_BEGIN && k < r->free_end) {

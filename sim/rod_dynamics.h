@@ -2,7 +2,9 @@
  *
  * Shared by the simulated protocol (rod_protocol.c: the clamp follows the scene's shear rate) and
  * the digital twin (rod_twin.c: the clamps follow the rails). A step places the clamps at the new
- * (Delta L, Delta W), predicts the free DOFs with the previous velocity and solves
+ * (Delta L, Delta W), predicts the free DOFs by extrapolating the last two velocities
+ * (q_n + h v_n + h^2 (v_n - v_{n-1}) / h_{n-1}: implicit Euler's own update with the last
+ * acceleration; with one velocity known, q_n + h v_n) and solves
  *     M (q - q_n - h v_n) / h^2 + mu M (q - q_n) / h + grad E(q) = 0
  * with Newton (rod_solver.h). A solved step is pending until the caller accepts it (velocities,
  * clamp work by the trapezoidal rule on the reaction, damping losses mu v^T M v h) or rejects it
@@ -19,6 +21,8 @@ typedef struct rod_dyn {
     rod_solver *s;       /* its Newton workspace (owned) */
     double *q_n;         /* DOFs at the start of the pending step */
     double *v;           /* DOF velocities after the last accepted step */
+    double *v_prev;      /* DOF velocities after the step before it */
+    double h_prev;       /* length of the last accepted step, s (0 when none since the start) */
     double *g_old;       /* full gradient (clamp reactions) of the last accepted state */
     double dl, dw;       /* clamp placement of the last accepted state */
     double h;            /* length of the pending step, s (0 when none) */

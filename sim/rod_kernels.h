@@ -21,6 +21,14 @@ double rod_twist_element(const rod *r, int i, double g[11], double H[11][11]);
 
 /* Maps a gradient and Hessian in (e, f, th_e, th_f) space (8 values: e, f, th_e, th_f) to the
  * node element's 11 local DOFs, using e = x_i - x_{i-1}, f = x_{i+1} - x_i. Adds s times. */
+/* Bending and twist at interior node i plus the stretching of edge i-1, as the rod's terms ask,
+ * in (e, f, th_e, th_f) space (rod_bend.c explains the shared evaluation): returns the energy,
+ * overwrites g8 and, when non-NULL, the symmetric H8. Map to local DOFs as rod_local_from_ef.
+ * mf_e and mf_f (m1 then m2 of edges i-1 and i) may carry the material frames when the caller
+ * has them (each edge serves two nodes); NULL computes them. */
+double rod_node_ef(const rod *r, int i, const double mf_e[6], const double mf_f[6], double g8[8],
+                   double H8[8][8]);
+
 void rod_local_from_ef(double s, const double g8[8], double H8[8][8], double g[11], double H[11][11]);
 
 #endif

@@ -7,6 +7,7 @@
 #include "rod_protocol.h"
 #include "rod_dynamics.h"
 #include "rod_observe.h"
+#include "rod_quasi.h"
 #include "rod_route.h"
 
 #include <math.h>
@@ -35,6 +36,15 @@ rod_predict_opts rod_predict_opts_default(void)
     rod_predict_opts o;
     memset(&o, 0, sizeof o);
     o.post_snap_time = 2.0;
+    return o;
+}
+
+rod_predict_opts rod_predict_opts_fast(const rod_scene *sc)
+{
+    rod_predict_opts o = rod_predict_opts_default();
+    o.adaptive = 1;
+    o.quasi_static = 1;
+    o.post_snap_dt_max = 5.0 * sc->dt;
     return o;
 }
 
@@ -78,7 +88,21 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
     rod_dyn_start(&dyn, dl, 0.0);
 
     double dt_base = sc->dt, dt = dt_base, dt_max = 100.0 * dt_base;
-    double t = 0.0, dw = 0.0, dz_prev = ob.dz, a_prev = ob.a;
+    double t = 0.0, dw = 0.0;
+    if (o->adaptive && o->quasi_static && o->ramp_time <= 0.0 && rate > 0.0) {
+        rod_quasi_report qr;
+        st = rod_quasi_follow(&dyn, sc, dl, rate, sc->shear_max, &qr);
+        if (st != ROD_OK) {
+            if (err) snprintf(err, errlen, "out of memory in the quasi-static start");
+            goto done;
+        }
+        dw = qr.dw_switch;
+        t = dw / rate;
+        out->quasi_solves = qr.solves;
+        out->dw_switch = qr.dw_switch;
+        rod_observe(r, k1, &ob);
+    }
+    double dz_prev = ob.dz, a_prev = ob.a;
     double onset_dw = 0.0, t_detect = 0.0, peak = 0.0;
     double slow = 0.1 * sc->snap_speed;
     int detected = 0;
@@ -116,7 +140,16 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
             continue;
         }
         rod_observe(r, k1, &ob);
-        if (o->adaptive && h > dt_base) {
+        if (o->adaptive && detected && o->post_snap_dt_max > dt_base) {
+            /* After detection only the peak |A| is still measured: a step may be long while
+             * Delta Z and A change by less than 0.06 in it. */
+            if (h > dt_base && fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev)) > 0.06) {
+                rod_dyn_reject(&dyn);
+                out->rejected++;
+                dt = fmax(0.5 * dt, dt_base);
+                continue;
+            }
+        } else if (o->adaptive && h > dt_base) {
             /* Fast mode resolves every fast motion with the base step: a long step that moved
              * the ribbon noticeably is redone shorter, and so is one during which the asymmetry
              * grew by more than 5%: the ribbon is near an instability, where the growth from the
@@ -164,7 +197,10 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
         int a_steady = fabs(ob.a - a_prev) <= 0.02 * fabs(a_prev) + 1e-12;
         dz_prev = ob.dz;
         a_prev = ob.a;
-        if (o->adaptive) {
+        if (o->adaptive && detected && o->post_snap_dt_max > dt_base) {
+            if (change < 0.03) dt = fmin(1.5 * dt, o->post_snap_dt_max);
+            else dt = fmax(0.5 * dt, dt_base);
+        } else if (o->adaptive) {
             if (!detected && change < 5e-4 && nr.iterations <= 4 && speed < 0.5 * slow && a_steady)
                 dt = fmin(1.5 * dt, dt_max);
             else if (change > 1e-3 || speed >= 0.5 * slow || detected)

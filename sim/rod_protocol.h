@@ -10,10 +10,12 @@
  * detection) exceeds snap.asym_threshold, symmetric otherwise. A run that reaches
  * protocol.shear_max without a snap reports "no snap".
  *
- * Fast mode (adaptive time stepping): the step grows up to 100 dt while the ribbon moves
+ * Adaptive time stepping: the step grows up to 100 dt while the ribbon moves
  * quasi-statically (|change of Delta Z| per step below 5e-4 and Newton converging in few
  * iterations) and returns to dt as soon as it speeds up; steps are rejected and halved when
- * Newton fails. */
+ * Newton fails. The fast prediction adds a quasi-static start (rod_quasi.h) and longer steps
+ * after the snap is detected (up to post_snap_dt_max while Delta Z and A change by less than
+ * 0.03 per step), which change the snap Delta W not at all and the peak |A| slightly. */
 #ifndef RIBBON_SIM_ROD_PROTOCOL_H
 #define RIBBON_SIM_ROD_PROTOCOL_H
 
@@ -33,6 +35,10 @@ typedef int (*rod_sample_fn)(void *user, const rod_sample *s, const rod *r);
 
 typedef struct rod_predict_opts {
     int adaptive;          /* 1: adaptive time stepping (fast mode) */
+    int quasi_static;      /* with adaptive: start with the quasi-static branch (rod_quasi.h) up
+                              to a margin before the first instability (ignored with a ramp) */
+    double post_snap_dt_max; /* with adaptive: longest step after the snap is detected, s
+                                (0: the scene's dt); steps stay short enough to resolve A */
     double post_snap_time; /* s of simulated time followed after the snap is detected (2) */
     double ramp_time;      /* s over which the shear velocity rises smoothly from 0 to the rate,
                               v = rate (1 - cos(pi t / T)) / 2 (0: starts at full rate) */
@@ -41,6 +47,9 @@ typedef struct rod_predict_opts {
 } rod_predict_opts;
 
 rod_predict_opts rod_predict_opts_default(void);
+/* The fast prediction (ribbon-sim predict --fast, bench fast_predict): adaptive, quasi-static
+ * start, post-snap steps up to 5 dt (README "Fast mode"). */
+rod_predict_opts rod_predict_opts_fast(const rod_scene *sc);
 
 typedef struct rod_prediction {
     int snapped;           /* 1 when a snap was detected */
@@ -52,6 +61,8 @@ typedef struct rod_prediction {
     double dz_final;       /* Delta Z at the end of the run */
     long steps;            /* accepted time steps */
     long rejected;         /* rejected (halved) steps */
+    int quasi_solves;      /* static solves of the quasi-static start (0 without it) */
+    double dw_switch;      /* Delta W where the dynamics started (0 without the quasi-static start) */
     double sim_time;       /* s of simulated shear time */
     double wall_s;         /* s of wall time for the whole prediction */
     rod_counters count;    /* what was evaluated */

@@ -4,6 +4,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* Arc length over [0, 1] of u -> (D u, H (1 - cos 2 pi u) / 2), by the midpoint rule. */
 static double arch_length(double D, double H, int m)
@@ -67,40 +68,81 @@ typedef struct stage {
     double f0, f1;      /* crease fraction from, to */
 } stage;
 
+/* One stage: parameter p from 0 to 1, dl and the crease fraction linear in p.
+ *
+ * Predictor: after two converged states the free DOFs are extrapolated along the secant through
+ * them (the path is smooth in p), which starts Newton within a few iterations of the new state;
+ * before that, the affine move of the nodes with the clamp. The affine move alone is a poor
+ * start for long compressions: it shortens every edge, the compressed edges make the Hessian
+ * indefinite, and Newton needed 12-50 shifted iterations per step.
+ * Step: from 1 / nsteps, halved on failure (at most 10 halvings in a row), grown by half while
+ * Newton converges in at most 5 iterations, never beyond 2 / nsteps.
+ * Tolerance: intermediate states only seed the next step, so they are solved to a looser
+ * residual (ROUTE_LOOSE, relative to E I1 / l^2, or the scene's if looser); the stage's last
+ * state is solved to the scene's tolerance. */
+#define ROUTE_LOOSE 1e-3
+
 static rod_status run_stage(rod *r, rod_solver *s, const rod_scene *sc, const stage *g, int nsteps,
                             rod_route_report *rep)
 {
     rod_newton_opts o = rod_newton_opts_static(sc);
     o.positive_definite = 1; /* the route and the followed branch are stable states */
-    double p = 0.0, dp = 1.0 / nsteps;
-    int halvings = 0;
+    double tol_final = o.tolerance, tol_loose = fmax(o.tolerance, ROUTE_LOOSE);
+    size_t nd = (size_t)r->ndof;
+    double *q0 = malloc(sizeof(double) * nd), *q1 = malloc(sizeof(double) * nd);
+    if (!q0 || !q1) {
+        free(q0);
+        free(q1);
+        return ROD_ERR_ALLOC;
+    }
+    double p = 0.0, p_prev = 0.0, dp = 1.0 / nsteps, dp_max = 2.0 / nsteps;
+    int halvings = 0, have_prev = 0;
+    rod_status st = ROD_OK;
     rod_state_save(r, s, 0);
+    memcpy(q0, r->q, sizeof(double) * nd);
     while (p < 1.0) {
         double pn = fmin(1.0, p + dp);
+        if (1.0 - pn < 0.25 * dp) pn = 1.0; /* no sliver of a last step */
         double dl_old = g->dl0 + p * (g->dl1 - g->dl0), dl = g->dl0 + pn * (g->dl1 - g->dl0);
-        move_clamps(r, dl_old, 0.0, dl, 0.0);
+        if (have_prev) {
+            double c = (pn - p) / (p - p_prev);
+            for (int k = ROD_FREE_BEGIN; k < r->free_end; k++) r->q[k] = q0[k] + c * (q0[k] - q1[k]);
+            rod_set_clamps(r, dl, 0.0);
+        } else {
+            move_clamps(r, dl_old, 0.0, dl, 0.0);
+        }
         double f = g->f0 + pn * (g->f1 - g->f0);
         rod_set_folds(r, f, f);
+        o.tolerance = pn >= 1.0 ? tol_final : tol_loose;
         rod_newton_report nr;
-        rod_status st = rod_newton_solve(r, s, &o, &nr);
+        st = rod_newton_solve(r, s, &o, &nr);
         rep->solves++;
         rep->newton_iterations += nr.iterations;
         rep->residual_rel = nr.residual_rel;
         if (st == ROD_OK) {
+            p_prev = p;
             p = pn;
+            memcpy(q1, q0, sizeof(double) * nd);
+            memcpy(q0, r->q, sizeof(double) * nd);
+            have_prev = 1;
             rod_state_save(r, s, 0);
-            if (halvings > 0 && nr.iterations < 6) { dp *= 2.0; halvings--; }
+            halvings = 0;
+            if (nr.iterations <= 5) dp = fmin(1.5 * dp, dp_max);
             continue;
         }
         rod_state_restore(r, s, 0);
         rod_set_folds(r, g->f0 + p * (g->f1 - g->f0), g->f0 + p * (g->f1 - g->f0));
         if (++halvings > 10) {
             rep->reached = p;
+            free(q0);
+            free(q1);
             return st;
         }
         dp *= 0.5;
     }
     rep->reached = 1.0;
+    free(q0);
+    free(q1);
     return ROD_OK;
 }
 

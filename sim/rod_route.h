@@ -8,8 +8,10 @@
  *   2. compress-then-fold (default): compress to Delta L with the creases off, then ramp the
  *      crease angle and the crease stiffness factor together from 0 to their scene values at
  *      fixed Delta L. together: ramp compression and creases at the same time.
- * Every stage is a sequence of static Newton solves whose increments halve on failure (at most
- * 10 halvings per stage step). Tests check that both routes end in the same equilibrium. */
+ * Every stage is a sequence of static Newton solves started from the secant through the last
+ * two states, whose increments halve on failure (at most 10 halvings in a row) and grow while
+ * Newton converges quickly; intermediate states are solved to a looser residual than the last
+ * one (rod_route.c). Tests check that both routes end in the same equilibrium. */
 #ifndef RIBBON_SIM_ROD_ROUTE_H
 #define RIBBON_SIM_ROD_ROUTE_H
 
