@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "rod_protocol.h"
+#include "rod_richardson.h"
 
 static uint64_t fnv(uint64_t h, const char *s)
 {
@@ -40,15 +41,15 @@ void ladder_estimate_errors(ladder_rung *r, int n)
     double ratio = (double)(r[n - 1].nodes - 1) / (double)(r[n - 2].nodes - 1); /* mesh refinement */
     double p = 1.0;
     if (n >= 3) {
-        double s0 = r[n - 3].snap_dw, d1 = s1 - s0, d2 = s2 - s1;
+        double s0 = r[n - 3].snap_dw;
         double ratio0 = (double)(r[n - 2].nodes - 1) / (double)(r[n - 3].nodes - 1);
         /* Observed order when the differences shrink monotonically with the same sign. */
-        if (d1 * d2 > 0.0 && fabs(d2) < fabs(d1) && fabs(ratio - ratio0) < 1e-9 * ratio) {
-            double po = log(fabs(d1 / d2)) / log(ratio);
+        if (fabs(ratio - ratio0) < 1e-9 * ratio) {
+            double po = rod_observed_order(s0, s1, s2, ratio);
             if (po > 0.5 && po < 4.0) p = po;
         }
     }
-    double ref = s2 + (s2 - s1) / (pow(ratio, p) - 1.0);
+    double ref = rod_richardson(s1, s2, ratio, p);
     if (!(fabs(ref) > 0.0) || !isfinite(ref)) return;
     for (int k = 0; k < n; k++) r[k].est_error = fabs(r[k].snap_dw - ref) / fabs(ref);
 }

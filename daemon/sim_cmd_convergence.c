@@ -3,6 +3,7 @@
  * estimates each rung's error in the snap Delta W against the Richardson extrapolation of the
  * three finest rungs (the observed order is printed, not assumed). */
 #include "rod_protocol.h"
+#include "rod_richardson.h"
 #include "sim_cmd.h"
 #include "sim_opts.h"
 
@@ -55,12 +56,9 @@ int sim_cmd_convergence(int argc, char **argv)
         snap[k] = p.snap_dw;
         wall[k] = p.wall_s;
     }
-    double d1 = snap[RUNGS - 3] - snap[RUNGS - 2], d2 = snap[RUNGS - 2] - snap[RUNGS - 1];
-    double order = NAN, extrap = snap[RUNGS - 1];
-    if (d1 != 0.0 && d2 != 0.0 && d1 / d2 > 1.0) {
-        order = log2(d1 / d2);
-        extrap = snap[RUNGS - 1] - d2 / (pow(2.0, order) - 1.0);
-    }
+    double order = rod_observed_order(snap[RUNGS - 3], snap[RUNGS - 2], snap[RUNGS - 1], 2.0);
+    double extrap = snap[RUNGS - 1];
+    if (isfinite(order)) extrap = rod_richardson(snap[RUNGS - 2], snap[RUNGS - 1], 2.0, order);
     if (o.json) {
         json_t *j = json_object(), *arr = json_array();
         for (int k = 0; k < RUNGS; k++)
