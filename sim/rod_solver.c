@@ -346,7 +346,7 @@ rod_status rod_newton_solve(rod *r, rod_solver *s, const rod_newton_opts *o, rod
         last_step = alpha == 1.0 ? step_max : INFINITY;
         if (!accepted) {
             /* At the round-off floor a tiny full step cannot reduce |R|: that is convergence. */
-            if (step_max < 1e-9 * r->length) {
+            if (step_max < 1e-9 * r->length && turn_max < 1e-7) {
                 for (int a = 0; a < nf; a++) r->q[a + ROD_FREE_BEGIN] = s->base.q[a + ROD_FREE_BEGIN];
                 res = residual(r, s, o, &l2);
                 break;
@@ -356,7 +356,7 @@ rod_status rod_newton_solve(rod *r, rod_solver *s, const rod_newton_opts *o, rod
         }
         /* Re-anchor the frames at the accepted state. */
         frames_save(r, &s->base);
-        if (alpha == 1.0 && step_max < 1e-9 * r->length) break;
+        if (alpha == 1.0 && step_max < 1e-9 * r->length && turn_max < 1e-7) break;
     }
     if (rep) {
         rep->iterations = it;
