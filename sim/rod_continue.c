@@ -204,13 +204,17 @@ static rod_status assemble_factor(rod_tracer *t)
     memset(t->H, 0, sizeof(double) * (size_t)nf * (size_t)w);
     rod_hessian_add(t->r, 1.0, t->H);
     rod_load_vector(t->r, &t->load, t->f);
+    /* GSL's band LU layout: row a holds A(a, a + j - 2B) in column j (B fill-in columns first);
+     * written through the data pointer (gsl_matrix_set checks bounds per element). */
     gsl_matrix_set_zero(t->lu);
+    double *L = t->lu->data;
+    size_t tda = t->lu->tda;
     for (int a = 0; a < nf; a++)
         for (int k = 0; k <= ROD_BAND && a + k < nf; k++) {
             double v = t->H[a * w + k];
             if (!isfinite(v)) return ROD_ERR_NAN;
-            gsl_matrix_set(t->lu, (size_t)a, (size_t)(2 * ROD_BAND + k), v);
-            gsl_matrix_set(t->lu, (size_t)(a + k), (size_t)(2 * ROD_BAND - k), v);
+            L[(size_t)a * tda + (size_t)(2 * ROD_BAND + k)] = v;
+            L[(size_t)(a + k) * tda + (size_t)(2 * ROD_BAND - k)] = v;
         }
     t->r->count.factorisations++;
     if (gsl_linalg_LU_band_decomp((size_t)nf, ROD_BAND, ROD_BAND, t->lu, t->piv) != GSL_SUCCESS)
@@ -321,6 +325,7 @@ static rod_status correct(rod_tracer *t, const cpoint *p, const double *tq, doub
     rod_status st;
     double hist[3] = {INFINITY, INFINITY, INFINITY}, res0 = INFINITY;
     int have_lu = 0; /* a factorisation of an iterate of this corrector is in t->lu */
+    int fresh;       /* this iteration factorised (else a chord step: t->b is still K^-1 f) */
     for (int it = 0;; it++) {
         double res = residual(t);
         if (isnan(res)) {
@@ -360,18 +365,21 @@ static rod_status correct(rod_tracer *t, const cpoint *p, const double *tq, doub
          * falling at least fourfold per iteration, the factorisation of an earlier iterate is
          * kept (the remaining correction is small); otherwise, and always at the accepted
          * state, where the tangent and the inertia need it, the Hessian is assembled again. */
+        fresh = 0;
         if (!have_lu || res > STALL_FACTOR * tol || res > 0.25 * hist[1]) {
             if ((st = assemble_factor(t)) != ROD_OK) {
                 snprintf(t->why, sizeof t->why, "singular Jacobian in the corrector");
                 return st;
             }
             have_lu = 1;
+            fresh = 1;
         }
         t->corrector_iterations++;
         r->count.newton_iterations++;
+        /* b = K^-1 f changes only with the factorisation (a chord step keeps the last one). */
         for (int k = 0; k < nf; k++) t->a[k] = -t->R[k];
-        memcpy(t->b, t->f, sizeof(double) * (size_t)nf);
-        if ((st = solve(t, t->a)) != ROD_OK || (st = solve(t, t->b)) != ROD_OK) {
+        if (fresh) memcpy(t->b, t->f, sizeof(double) * (size_t)nf);
+        if ((st = solve(t, t->a)) != ROD_OK || (fresh && (st = solve(t, t->b)) != ROD_OK)) {
             snprintf(t->why, sizeof t->why, "singular Jacobian in the corrector");
             return st;
         }
