@@ -13,6 +13,8 @@
  *   continue_wall_s: the full bifurcation analysis of the scene (`ribbon-sim continue`: route to
  *     the upper state, primary branch, the branch switched at the first pitchfork, all events
  *     located), with continue_route_wall_s, the route's share, and continue_first_dw;
+ *   sweep_point_wall_s: one `ribbon-sim sweep` task (route and primary branch to its first
+ *     instability), the mean of the scene's Gamma and Gamma 0.21, at the scene's mesh;
  *   peak_rss_mb: the process's peak resident memory. */
 #include "rod_band.h"
 #include "rod_bifurcation.h"
@@ -139,18 +141,33 @@ int sim_cmd_bench(int argc, char **argv)
     double cont_wall = an.wall_s, cont_route = an.route_wall_s;
     double cont_first = an.first >= 0 ? an.events[an.first].at.dw : 0.0;
     rod_analysis_free(&an);
+    /* sweep_point_wall_s: one sweep task (classification only) at the scene's mesh, averaged
+     * over the scene's Gamma and a symmetric-snap Gamma 0.21. */
+    double sweep_pt = 0.0;
+    const double sweep_gammas[2] = {sc.fold_position, 0.21};
+    rod_analysis_opts so = rod_analysis_opts_classify();
+    for (int k = 0; k < 2; k++) {
+        rod_scene ss = sc;
+        ss.fold_position = sweep_gammas[k];
+        if (rod_bifurcation_analyse(&ss, &so, &an, cerr, sizeof cerr) != ROD_OK) {
+            fprintf(stderr, "ribbon-sim bench: sweep point: %s\n", cerr);
+            return 1;
+        }
+        sweep_pt += 0.5 * an.wall_s;
+        rod_analysis_free(&an);
+    }
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     double rss_mb = (double)ru.ru_maxrss / 1024.0;
     double rel = fabs(fast.snap_dw - fixed.snap_dw) / fabs(fixed.snap_dw);
-    json_t *j = json_pack("{s:i,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f}", "nodes",
+    json_t *j = json_pack("{s:i,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f}", "nodes",
                           sc.nodes, "newton_iter_banded_s", banded, "newton_iter_dense_s", dense, "banded_vs_dense",
                           dense / banded, "newton_iter_dense_ldlt_s", dense_ldlt, "banded_vs_dense_ldlt",
                           dense_ldlt / banded, "fast_switch_dw", fast.dw_switch, "paper_predict_wall_s", fixed.wall_s, "realtime_factor",
                           fixed.sim_time / fixed.wall_s, "fast_predict_wall_s", fast.wall_s,
                           "fast_predict_rel_diff", rel, "peak_rss_mb", rss_mb, "snap_dw_fixed", fixed.snap_dw,
                           "snap_dw_fast", fast.snap_dw, "continue_wall_s", cont_wall, "continue_route_wall_s",
-                          cont_route, "continue_first_dw", cont_first);
+                          cont_route, "continue_first_dw", cont_first, "sweep_point_wall_s", sweep_pt);
     char *txt = json_dumps(j, JSON_COMPACT | JSON_REAL_PRECISION(6));
     if (o.json) puts(txt);
     else

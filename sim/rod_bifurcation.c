@@ -107,6 +107,9 @@ rod_status rod_bifurcation_analyse(const rod_scene *scene, const rod_analysis_op
     if (o->switch_branches)
         for (int e = 0; e < ne && out->nbranches < ROD_ANALYSIS_MAX_BRANCHES; e++) {
             if (ev[e].branch != 0 || ev[e].kind != ROD_EVENT_PITCHFORK) continue;
+            /* An unfolded (imperfect) pitchfork is a limit point: the primary branch itself
+             * turns onto the asymmetric branch there, so there is nothing to switch to. */
+            if (ev[e].fold) break;
             rod_branch *bs = &out->branches[out->nbranches];
             bs->id = out->nbranches++;
             bs->parent_event = e;

@@ -8,9 +8,13 @@
  * disconnected branch. By default the analysis therefore traces the scene with
  * imperfection.fold_angle_rel = 0, whose discrete model is exactly C2-symmetric (rod.c), so the
  * primary branch stays symmetric and the pitchfork is a clean change of the negative count with
- * an antisymmetric mode. keep_imperfection = 1 traces the scene as given; the classification
- * still works (an imperfect pitchfork is a fold with a nearly antisymmetric mode, classified by
- * parity as a pitchfork).
+ * an antisymmetric mode. keep_imperfection = 1 traces the scene as given: the primary branch
+ * then turns at a limit point in Delta W a little before the perfect pitchfork (subcritical
+ * case) and goes on as the asymmetric branch. That limit point is the imperfect pitchfork: it is
+ * located like any fold and reported as a pitchfork (critical mode nearly antisymmetric) with
+ * fold = 1, and no branch is switched onto there (the primary branch already is the asymmetric
+ * one). Its tracer steps that jump across the sharp turn onto the disconnected branch nearby are
+ * refused (rod_continue.c: the event's bracket does not close) and redone shorter.
  *
  * Regime: the first instability met on the primary branch starting from the stable upper state
  * (the first event where the negative count leaves 0) decides: pitchfork first is an asymmetric

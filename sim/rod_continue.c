@@ -2,7 +2,7 @@
  * point, step control, event location and classification, branch switching.
  *
  * Workspace: everything (band Hessian, band LU, the bordering vectors, the snapshots of the
- * current point and of the bisection bracket, the events' modes and states) is allocated once in
+ * current point and of the event bracket, the events' modes and states) is allocated once in
  * rod_tracer_alloc; the stepping allocates only when a branch's point list grows. */
 #include "rod_continue.h"
 #include "rod_observe.h"
@@ -38,6 +38,8 @@ struct rod_tracer {
     gsl_vector_uint *piv;
     double *g;              /* full gradient */
     double *R, *f, *a, *b, *qp, *v, *k1;
+    double *kq, kl;         /* curvature of the path at cur in Y (quadratic predictor) */
+    int have_k;             /* kq, kl valid: cur was reached by an accepted step from a previous point */
     double worst_res;       /* largest residual (over the force scale) of an accepted stalled corrector */
     rod_stab_ws *sw;
     cpoint cur, trial, next, lo, hi;
@@ -118,7 +120,7 @@ void rod_tracer_free(rod_tracer *t)
 {
     if (!t) return;
     free(t->u); free(t->H); free(t->g); free(t->R); free(t->f); free(t->a); free(t->b);
-    free(t->qp); free(t->v); free(t->k1);
+    free(t->qp); free(t->v); free(t->k1); free(t->kq);
     if (t->lu) gsl_matrix_free(t->lu);
     if (t->piv) gsl_vector_uint_free(t->piv);
     rod_stab_ws_free(t->sw);
@@ -151,10 +153,11 @@ rod_tracer *rod_tracer_alloc(rod *r, const rod_load *p, const rod_cont_opts *o)
     t->qp = malloc(sizeof(double) * n);
     t->v = calloc(n, sizeof(double));
     t->k1 = malloc(sizeof(double) * (size_t)r->n);
+    t->kq = calloc(n, sizeof(double));
     t->lu = gsl_matrix_alloc(n, 3 * ROD_BAND + 1);
     t->piv = gsl_vector_uint_alloc(n);
     t->sw = rod_stab_ws_alloc(nf);
-    int ok = t->u && t->H && t->g && t->R && t->f && t->a && t->b && t->qp && t->v && t->k1 && t->lu &&
+    int ok = t->u && t->H && t->g && t->R && t->f && t->a && t->b && t->qp && t->v && t->k1 && t->kq && t->lu &&
              t->piv && t->sw;
     ok = ok && cpoint_alloc(r, nf, &t->cur) && cpoint_alloc(r, nf, &t->trial) && cpoint_alloc(r, nf, &t->lo) &&
          cpoint_alloc(r, nf, &t->hi) && cpoint_alloc(r, nf, &t->next);
@@ -201,13 +204,17 @@ static rod_status assemble_factor(rod_tracer *t)
     memset(t->H, 0, sizeof(double) * (size_t)nf * (size_t)w);
     rod_hessian_add(t->r, 1.0, t->H);
     rod_load_vector(t->r, &t->load, t->f);
+    /* GSL's band LU layout: row a holds A(a, a + j - 2B) in column j (B fill-in columns first);
+     * written through the data pointer (gsl_matrix_set checks bounds per element). */
     gsl_matrix_set_zero(t->lu);
+    double *L = t->lu->data;
+    size_t tda = t->lu->tda;
     for (int a = 0; a < nf; a++)
         for (int k = 0; k <= ROD_BAND && a + k < nf; k++) {
             double v = t->H[a * w + k];
             if (!isfinite(v)) return ROD_ERR_NAN;
-            gsl_matrix_set(t->lu, (size_t)a, (size_t)(2 * ROD_BAND + k), v);
-            gsl_matrix_set(t->lu, (size_t)(a + k), (size_t)(2 * ROD_BAND - k), v);
+            L[(size_t)a * tda + (size_t)(2 * ROD_BAND + k)] = v;
+            L[(size_t)(a + k) * tda + (size_t)(2 * ROD_BAND - k)] = v;
         }
     t->r->count.factorisations++;
     if (gsl_linalg_LU_band_decomp((size_t)nf, ROD_BAND, ROD_BAND, t->lu, t->piv) != GSL_SUCCESS)
@@ -299,32 +306,31 @@ static void observe(rod_tracer *t, const cpoint *p, double s, rod_cont_point *ou
  * tau . (Y - Y_pred) = 0. On success the rod holds the new state at *lambda_out and H is
  * assembled and factorised there; returns the status otherwise (the rod is then undefined:
  * callers reload a snapshot). */
-static rod_status correct(rod_tracer *t, const cpoint *p, const double *tq, double tl, double h,
-                          double *lambda_out)
+static rod_status correct(rod_tracer *t, const cpoint *p, const double *tq, double tl, const double *kq, double kl,
+                          double h, double *lambda_out)
 {
     rod *r = t->r;
     int nf = t->nf;
     const rod_cont_opts *o = &t->o;
     rod_snapshot_load(r, &p->snap);
+    double h2 = 0.5 * h * h;
     for (int k = 0; k < nf; k++) {
-        t->qp[k] = r->q[k + ROD_FREE_BEGIN] + h * tq[k] * t->u[k] * t->sq;
+        t->qp[k] = r->q[k + ROD_FREE_BEGIN] + (h * tq[k] + (kq ? h2 * kq[k] : 0.0)) * t->u[k] * t->sq;
         r->q[k + ROD_FREE_BEGIN] = t->qp[k];
     }
-    double lp = p->lambda + h * tl * o->lambda_scale, lambda = lp;
+    double lp = p->lambda + (h * tl + (kq ? h2 * kl : 0.0)) * o->lambda_scale, lambda = lp;
     set_state(t, lambda);
     double tol = o->tolerance * r->force_scale;
     t->corrector_iterations = 0;
     rod_status st;
-    double hist[3] = {INFINITY, INFINITY, INFINITY};
+    double hist[3] = {INFINITY, INFINITY, INFINITY}, res0 = INFINITY;
+    int have_lu = 0; /* a factorisation of an iterate of this corrector is in t->lu */
+    int fresh;       /* this iteration factorised (else a chord step: t->b is still K^-1 f) */
     for (int it = 0;; it++) {
         double res = residual(t);
         if (isnan(res)) {
             snprintf(t->why, sizeof t->why, "non-finite residual in the corrector");
             return ROD_ERR_NAN;
-        }
-        if ((st = assemble_factor(t)) != ROD_OK) {
-            snprintf(t->why, sizeof t->why, "singular Jacobian in the corrector");
-            return st;
         }
         /* Constraint residual c = tau . (Y - Y_pred). */
         double c = tl * (lambda - lp) / o->lambda_scale;
@@ -338,6 +344,15 @@ static rod_status correct(rod_tracer *t, const cpoint *p, const double *tq, doub
             t->worst_res = fmax(t->worst_res, res / r->force_scale);
             break;
         }
+        /* Diverging: undamped Newton from a predictor too far from the branch grows the
+         * residual past where it started; the step is redone shorter at once instead of
+         * spending the whole iteration cap. */
+        if (it == 0) res0 = res;
+        else if (res > 2.0 * res0 && res > STALL_FACTOR * tol) {
+            snprintf(t->why, sizeof t->why, "corrector diverged (residual %.3g of the force scale after %d iterations)",
+                     res / r->force_scale, it);
+            return ROD_ERR_MAXITER;
+        }
         hist[0] = hist[1];
         hist[1] = hist[2];
         hist[2] = res;
@@ -346,11 +361,25 @@ static rod_status correct(rod_tracer *t, const cpoint *p, const double *tq, doub
                      o->max_corrector, res / r->force_scale);
             return ROD_ERR_MAXITER;
         }
+        /* Chord tail: within STALL_FACTOR of the tolerance, and while the residual keeps
+         * falling at least fourfold per iteration, the factorisation of an earlier iterate is
+         * kept (the remaining correction is small); otherwise, and always at the accepted
+         * state, where the tangent and the inertia need it, the Hessian is assembled again. */
+        fresh = 0;
+        if (!have_lu || res > STALL_FACTOR * tol || res > 0.25 * hist[1]) {
+            if ((st = assemble_factor(t)) != ROD_OK) {
+                snprintf(t->why, sizeof t->why, "singular Jacobian in the corrector");
+                return st;
+            }
+            have_lu = 1;
+            fresh = 1;
+        }
         t->corrector_iterations++;
         r->count.newton_iterations++;
+        /* b = K^-1 f changes only with the factorisation (a chord step keeps the last one). */
         for (int k = 0; k < nf; k++) t->a[k] = -t->R[k];
-        memcpy(t->b, t->f, sizeof(double) * (size_t)nf);
-        if ((st = solve(t, t->a)) != ROD_OK || (st = solve(t, t->b)) != ROD_OK) {
+        if (fresh) memcpy(t->b, t->f, sizeof(double) * (size_t)nf);
+        if ((st = solve(t, t->a)) != ROD_OK || (fresh && (st = solve(t, t->b)) != ROD_OK)) {
             snprintf(t->why, sizeof t->why, "singular Jacobian in the corrector");
             return st;
         }
@@ -384,9 +413,13 @@ static rod_status correct(rod_tracer *t, const cpoint *p, const double *tq, doub
         if (step < 1e-12 && res <= 1e3 * tol) {
             double res2 = residual(t);
             if (isnan(res2)) return ROD_ERR_NAN;
-            if ((st = assemble_factor(t)) != ROD_OK) return st;
             break;
         }
+    }
+    /* Every exit above leaves a state whose Hessian is not yet assembled. */
+    if ((st = assemble_factor(t)) != ROD_OK) {
+        snprintf(t->why, sizeof t->why, "singular Jacobian at the corrected point");
+        return st;
     }
     /* Jump guard: the corrector must stay within the step length of the predictor. */
     double dev = (lambda - lp) / o->lambda_scale;
@@ -409,7 +442,8 @@ static rod_status correct(rod_tracer *t, const cpoint *p, const double *tq, doub
 static rod_status step_to(rod_tracer *t, const cpoint *p, double h, cpoint *q)
 {
     double lambda;
-    rod_status st = correct(t, p, p->tq, p->tl, h, &lambda);
+    int quad = p == &t->cur && t->have_k;
+    rod_status st = correct(t, p, p->tq, p->tl, quad ? t->kq : NULL, t->kl, h, &lambda);
     if (st != ROD_OK) return st;
     q->lambda = lambda;
     if ((st = tangent(t, q, p->tq, p->tl)) != ROD_OK) {
@@ -445,6 +479,17 @@ static rod_event_kind classify(double parity, int fold)
     return ROD_EVENT_UNCLASSIFIED;
 }
 
+/* Eigenvalue nearest zero of the Hessian assembled at the rod's current state (t->H, as
+ * assemble_factor and step_to leave it) into *value, with v as start vector and result. */
+static rod_status eig_here(rod_tracer *t, double *v, double *value)
+{
+    rod_eigpair ep;
+    rod_status st = rod_eig_nearest(t->H, t->nf, 0.0, t->o.eig_max_iter, t->o.eig_tol, t->sw, v, &ep, t->why,
+                                    sizeof t->why);
+    *value = ep.value;
+    return st;
+}
+
 /* Eigenpair nearest zero at the state of c (reloaded and reassembled) into v. */
 static rod_status critical_eig(rod_tracer *t, const cpoint *c, double *v, double *value)
 {
@@ -453,51 +498,86 @@ static rod_status critical_eig(rod_tracer *t, const cpoint *c, double *v, double
     rod_frames_update(t->r);
     rod_status st = assemble_factor(t);
     if (st != ROD_OK) return st;
-    rod_eigpair ep;
-    st = rod_eig_nearest(t->H, t->nf, 0.0, t->o.eig_max_iter, t->o.eig_tol, t->sw, v, &ep, t->why, sizeof t->why);
-    *value = ep.value;
-    return st;
+    return eig_here(t, v, value);
+}
+
+/* Next trial step length in the bracket (hlo, hhi): the secant root of the critical eigenvalue
+ * (mu_lo, mu_hi: its values at the ends, ok when they have opposite signs), kept at least eps
+ * inside the bracket, so that once the root is known to eps the next trial lands on its other
+ * side and closes the bracket to about eps; bisection when the secant is not usable or when the
+ * last two trials did not halve the bracket (the guarantee of convergence). */
+static double locate_next(double hlo, double hhi, double mu_lo, double mu_hi, int secant_ok, double eps)
+{
+    double w = hhi - hlo, hm = 0.5 * (hlo + hhi);
+    if (!secant_ok || !isfinite(mu_lo) || !isfinite(mu_hi) || !((mu_lo > 0.0) != (mu_hi > 0.0)) || w <= 2.0 * eps)
+        return hm;
+    double r = hlo + w * mu_lo / (mu_lo - mu_hi);
+    if (!isfinite(r)) return hm;
+    return fmin(fmax(r, hlo + eps), hhi - eps);
 }
 
 /* Locates the change of n_negative between t->cur and the accepted step q (at arclength h from
- * cur), classifies it and records it. Leaves the rod in an undefined state (the caller reloads). */
-static void locate_event(rod_tracer *t, rod_branch *b, const cpoint *q, double h, double s_cur)
+ * cur; the rod holds q's state with its Hessian assembled, as step_to leaves it), classifies it
+ * and records it. Location: safeguarded secant (regula falsi) on the critical eigenvalue along
+ * the step length, each trial point corrected onto the branch from cur; which side a trial lies
+ * on is decided by its verified negative count, the eigenvalue only chooses where to try.
+ * Typically 3-5 trials instead of bisection's 15. Returns 0, recording nothing, when the bracket
+ * did not close and may_refuse is set; 1 otherwise. Leaves the rod in an undefined state (the
+ * caller reloads). */
+static int locate_event(rod_tracer *t, rod_branch *b, const cpoint *q, double h, double s_cur, int may_refuse)
 {
-    if (t->nevents >= ROD_CONT_MAX_EVENTS) return;
+    if (t->nevents >= ROD_CONT_MAX_EVENTS) return 1;
     rod_event *e = &t->events[t->nevents];
     memset(e, 0, sizeof *e);
     e->branch = b->id;
     e->index = (int)b->n - 1;
     e->n_negative_before = t->cur.n_negative;
     e->n_negative_after = q->n_negative;
+    double *v = t->v;
+    memset(v, 0, sizeof(double) * (size_t)t->nf);
+    double mu_lo = NAN, mu_hi = NAN, mu;
+    if (eig_here(t, v, &mu) == ROD_OK) mu_hi = mu;
     cpoint_copy(t, &t->cur, &t->lo);
     cpoint_copy(t, q, &t->hi);
-    double hlo = 0.0, hhi = h;
-    int located = 0;
+    if (critical_eig(t, &t->lo, v, &mu) == ROD_OK) mu_lo = mu;
+    double hlo = 0.0, hhi = h, eps = 0.4 * t->o.locate_tol, w_prev = INFINITY;
+    int located = 0, secant_ok = 1;
     for (int it = 0; it < t->o.max_locate; it++) {
         if (fabs(t->hi.lambda - t->lo.lambda) <= t->o.locate_tol * t->o.lambda_scale &&
             hhi - hlo <= 10.0 * t->o.locate_tol) {
             located = 1;
             break;
         }
-        double hm = 0.5 * (hlo + hhi);
+        double w0 = hhi - hlo;
+        double hm = locate_next(hlo, hhi, mu_lo, mu_hi, secant_ok, eps);
         if (step_to(t, &t->cur, hm, &t->trial) != ROD_OK) break;
-        if (t->trial.n_negative == t->cur.n_negative) {
+        int have_mu = eig_here(t, v, &mu) == ROD_OK;
+        int lo_side = t->trial.n_negative == t->cur.n_negative;
+        if (lo_side) {
             cpoint_copy(t, &t->trial, &t->lo);
             hlo = hm;
+            mu_lo = have_mu ? mu : NAN;
         } else {
             cpoint_copy(t, &t->trial, &t->hi);
             hhi = hm;
+            mu_hi = have_mu ? mu : NAN;
         }
+        secant_ok = have_mu && hhi - hlo <= 0.5 * w_prev;
+        w_prev = w0;
     }
+    /* A bracket that does not close, because the trial points inside the step cannot be
+     * corrected onto the branch, means the step left it: typically it jumped over a sharp fold
+     * (a pitchfork unfolded by an imperfection) onto the nearby disconnected branch. The caller
+     * redoes the step shorter. */
+    if (!located && may_refuse) return 0;
     e->located = located;
     e->lambda_width = fabs(t->hi.lambda - t->lo.lambda);
-    double *v = t->v;
-    memset(v, 0, sizeof(double) * (size_t)t->nf);
-    double mu_lo = 0.0, mu_hi = 0.0;
-    rod_status s1 = critical_eig(t, &t->lo, v, &mu_lo);
-    rod_status s2 = critical_eig(t, &t->hi, v, &mu_hi);
-    if (s1 != ROD_OK || s2 != ROD_OK) e->located = 0;
+    /* The mode at hi (with f assembled there) and, when the bracket start's eigenvalue was not
+     * computed, the one at lo first. */
+    if (!isfinite(mu_lo) && critical_eig(t, &t->lo, v, &mu) == ROD_OK) mu_lo = mu;
+    rod_status s2 = critical_eig(t, &t->hi, v, &mu);
+    if (s2 == ROD_OK) mu_hi = mu;
+    if (s2 != ROD_OK || !isfinite(mu_lo)) e->located = 0;
     e->eig_before = isfinite(mu_lo) ? mu_lo : 0.0;
     e->eig_after = isfinite(mu_hi) ? mu_hi : 0.0;
     /* The rod is at hi with f assembled there: parity and load projection of the mode. */
@@ -529,12 +609,19 @@ static void locate_event(rod_tracer *t, rod_branch *b, const cpoint *q, double h
         cpoint_copy(t, &t->lo, &t->estate[k]);
     }
     t->nevents++;
+    return 1;
 }
 
 /* ---- the stepping loop ---- */
 
+/* A step across which the count changed but whose event could not be located is redone at half
+ * the length while it is longer than this many ds_min (then the event is kept, marked not
+ * located). */
+#define REFUSE_STEPS 16.0
+
 static rod_status trace_from_cur(rod_tracer *t, rod_branch *b, double s0)
 {
+    t->have_k = 0;
     const rod_cont_opts *o = &t->o;
     double h = o->ds, s = s0;
     int steps = 0;
@@ -579,7 +666,11 @@ static rod_status trace_from_cur(rod_tracer *t, rod_branch *b, double s0)
         }
         int iters = t->corrector_iterations;
         cpoint_copy(t, &t->trial, &t->next);
-        if (t->next.n_negative != t->cur.n_negative) locate_event(t, b, &t->next, h, s);
+        if (t->next.n_negative != t->cur.n_negative &&
+            !locate_event(t, b, &t->next, h, s, h > REFUSE_STEPS * o->ds_min)) {
+            h = fmax(0.5 * h, o->ds_min);
+            continue;
+        }
         rod_snapshot_load(t->r, &t->next.snap);
         s += h;
         rod_cont_point pt;
@@ -588,6 +679,9 @@ static rod_status trace_from_cur(rod_tracer *t, rod_branch *b, double s0)
             snprintf(b->end_reason, sizeof b->end_reason, "out of memory");
             return ROD_ERR_ALLOC;
         }
+        for (int k = 0; k < t->nf; k++) t->kq[k] = (t->next.tq[k] - t->cur.tq[k]) / h;
+        t->kl = (t->next.tl - t->cur.tl) / h;
+        t->have_k = 1;
         cpoint_copy(t, &t->next, &t->cur);
         if (iters <= 5 && turn > 0.995) h = fmin(1.5 * h, o->ds_max);
     }
@@ -657,7 +751,7 @@ rod_status rod_trace_switch(rod_tracer *t, int e, double sign, double offset, ro
     double h = offset, lambda = 0.0;
     rod_status st = ROD_ERR_BRANCH_LOST;
     for (int attempt = 0; attempt < 8; attempt++, h *= 0.5) {
-        st = correct(t, ps, dq, 0.0, h, &lambda);
+        st = correct(t, ps, dq, 0.0, NULL, 0.0, h, &lambda);
         if (st == ROD_OK) break;
     }
     if (st == ROD_OK) {

@@ -12,6 +12,11 @@
  *               path, non-zero projection); the switched branch of the pitchfork is asymmetric
  *               and unstable (subcritical). (test_rod_continue_protocol compares with the
  *               simulated protocol.)
+ *   accuracy    the first instability of both paper scenes against a reference traced with
+ *               shorter steps and located to 1e-8, within 1e-4 in Delta W.
+ *   imperfect   with the imperfection kept, the pitchfork of Gamma 0.13 is a located limit
+ *               point of the primary branch just before the perfect one (fold, antisymmetric
+ *               mode), and the branch goes on as the asymmetric one.
  *   robustness  a branch cut by its step cap ends with a status and a reason; nothing is NaN. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -182,6 +187,72 @@ static void test_gamma021_saddle_node_first(void **state)
     rod_analysis_free(&a);
 }
 
+/* Event accuracy: the first instability located with the default options (secant trials from
+ * steps up to 0.02) against a reference traced with steps five times shorter and located to
+ * 1e-8: the two brackets come from different points, so agreement to LOCATE_TOL checks the
+ * location itself, not only the width it reports. */
+static void test_event_accuracy(void **state)
+{
+    (void)state;
+    const double gammas[2] = {0.13, 0.21};
+    for (int g = 0; g < 2; g++) {
+        rod_scene s = coarse_paper(gammas[g]);
+        rod_analysis_opts o = rod_analysis_opts_classify(), ref = o;
+        ref.cont.ds = 0.002;
+        ref.cont.ds_max = 0.004;
+        ref.cont.locate_tol = 1e-8;
+        rod_analysis a, b;
+        char err[512] = "";
+        assert_int_equal(rod_bifurcation_analyse(&s, &o, &a, err, sizeof err), ROD_OK);
+        assert_int_equal(rod_bifurcation_analyse(&s, &ref, &b, err, sizeof err), ROD_OK);
+        const rod_event *f = first_event(&a), *fr = first_event(&b);
+        print_message("Gamma %.2f: %s at %.7f (width %.1e), reference %s at %.7f (width %.1e): diff %.1e\n",
+                      gammas[g], rod_event_name(f->kind), f->at.dw, f->lambda_width, rod_event_name(fr->kind),
+                      fr->at.dw, fr->lambda_width, fabs(f->at.dw - fr->at.dw));
+        assert_int_equal(f->kind, fr->kind);
+        assert_true(f->located && fr->located);
+        assert_true(fabs(f->at.dw - fr->at.dw) <= LOCATE_TOL);
+        rod_analysis_free(&a);
+        rod_analysis_free(&b);
+    }
+}
+
+/* Imperfect pitchfork: with the scene's imperfection kept, the primary branch of Gamma 0.13
+ * turns at a limit point in Delta W just before the perfect pitchfork (subcritical) and goes on
+ * as the asymmetric branch. The first instability is that limit point: located, a fold of the
+ * load path, nearly antisymmetric mode (so reported as a pitchfork), within 1e-3 before the
+ * perfect one; no branch is switched onto. (Tracer steps used to jump the sharp turn onto the
+ * disconnected branch and leave the event unlocated.) */
+static void test_imperfect_pitchfork(void **state)
+{
+    (void)state;
+    rod_scene s = coarse_paper(0.13);
+    s.fold_angle_rel = 1e-6;
+    rod_analysis_opts o = rod_analysis_opts_default(), p = rod_analysis_opts_classify();
+    o.keep_imperfection = 1;
+    rod_analysis a, b;
+    char err[512] = "";
+    assert_int_equal(rod_bifurcation_analyse(&s, &o, &a, err, sizeof err), ROD_OK);
+    assert_int_equal(rod_bifurcation_analyse(&s, &p, &b, err, sizeof err), ROD_OK);
+    check_points_finite(&a);
+    const rod_event *f = first_event(&a), *fp = first_event(&b);
+    print_message("imperfect: %s at %.7f (fold %d, located %d, width %.1e, parity %+.4f, A %.4f); perfect %.7f\n",
+                  rod_event_name(f->kind), f->at.dw, f->fold, f->located, f->lambda_width, f->parity, f->at.a,
+                  fp->at.dw);
+    assert_int_equal(f->kind, ROD_EVENT_PITCHFORK);
+    assert_string_equal(a.regime, "asymmetric");
+    assert_true(f->located && f->lambda_width <= LOCATE_TOL);
+    assert_true(f->fold);
+    assert_true(f->parity < -0.99);
+    assert_true(f->at.dw < fp->at.dw && f->at.dw > fp->at.dw - 1e-3);
+    assert_int_equal(a.nbranches, 1);
+    double amax = 0.0;
+    for (size_t i = 0; i < a.branches[0].n; i++) amax = fmax(amax, fabs(a.branches[0].points[i].a));
+    assert_true(amax > 0.1);
+    rod_analysis_free(&a);
+    rod_analysis_free(&b);
+}
+
 static void test_branch_end_reason(void **state)
 {
     (void)state;
@@ -209,6 +280,8 @@ int main(void)
         cmocka_unit_test(test_euler_loads),
         cmocka_unit_test(test_gamma013_pitchfork_first),
         cmocka_unit_test(test_gamma021_saddle_node_first),
+        cmocka_unit_test(test_event_accuracy),
+        cmocka_unit_test(test_imperfect_pitchfork),
         cmocka_unit_test(test_branch_end_reason),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
