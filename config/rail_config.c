@@ -62,7 +62,8 @@ static const key_def keys[] = {
     D("speed_per_mm_s", modbus.map.speed_per_mm_s, 0, 1e9),
     D("accel_per_mm_s2", modbus.map.accel_per_mm_s2, 0, 1e9),
     REG(target_pos), REG(speed), REG(accel), REG(decel), REG(op_type), REG(trigger), REG(control),
-    REG(actual_pos), REG(actual_vel), REG(status), REG(alarm), REG(watchdog), REG(ident),
+    REG(actual_pos), REG(actual_vel), REG(status), REG(alarm), REG(watchdog), REG(ident), REG(load),
+    D("load_scale", modbus.map.load_scale, -1e9, 1e9),
     L("op_type_abs", modbus.map.op_type_abs, -2147483648.0, 2147483647.0),
     L("trigger_value", modbus.map.trigger_value, -2147483648.0, 2147483647.0),
     L("ctl_stop", modbus.map.ctl_stop, 0, 4294967295.0),
@@ -301,7 +302,7 @@ static void blamed_key(const char *why, char *key, size_t key_len)
     static const char *const fields[] = {"soft_min_mm",    "soft_max_mm",    "max_speed_mm_s",
                                          "accel_mm_s2",    "poll_hz",        "min_gap_mm",
                                          "gap_at_zero_mm", "gap_per_mm",     "counts_per_mm",
-                                         "speed_per_mm_s", "word_order"};
+                                         "speed_per_mm_s", "word_order",     "load_scale"};
     const char *p = strstr(why, ": ");
     p = p ? p + 2 : why;
     for (size_t i = 0; i < sizeof fields / sizeof fields[0]; i++) {

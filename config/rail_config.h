@@ -9,7 +9,8 @@
  *   address, rtu, parity, slave, timeout_s, watchdog_s, map, allow_unverified,
  *   watchdog_external, counts_per_mm, speed_per_mm_s, accel_per_mm_s2, word_order,
  *   reg_<name> = ADDR[/WORDS] for target_pos speed accel decel op_type trigger control
- *   actual_pos actual_vel status alarm watchdog ident (-1 = none), op_type_abs, trigger_value,
+ *   actual_pos actual_vel status alarm watchdog ident load (-1 = none), load_scale, op_type_abs,
+ *   trigger_value,
  *   ctl_stop ctl_estop ctl_home ctl_reset, st_ready st_moving st_in_pos st_alarm st_homing
  *   st_home_end, ident_value                                     (modbus; map = preset first)
  *   start_mm, travel_mm, home_speed_mm_s, stall_at_mm, comm_loss_after_s, alarm_after_s,

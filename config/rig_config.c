@@ -158,7 +158,10 @@ static const rig_key rig_keys[] = {
      "1", "0.3", "frames tracked below this quality (0..1) count as not measured"},
     {"detect", "torque_witness", RIG_KEY_ENUM, OFF(detect.torque_witness), 0, 0, 0, SWITCH, 0,
      off_on, "-", "off",
-     "on: a drive's torque or following error is a second snap witness (Modbus shear rail only)"},
+     "on: the shear drive's load (torque, following error; mock: the twin's shear force) is a second snap witness (Modbus shear rail with reg_load, or mock)"},
+    {"detect", "load_jump", RIG_KEY_DOUBLE, OFF(detect.load_jump), 0, 0.0, 10.0, MINO, 0, NULL, "1",
+     "0.5",
+     "witness: a jump of the shear load between consecutive readings above this fraction of the load range seen so far in the shear"},
 
     {"sim", "target_error", RIG_KEY_DOUBLE, OFF(sim.target_error), 0, 0.0, 0.5, MINO, 0, NULL,
      "1", "0.01",
@@ -1075,12 +1078,21 @@ static cfg_status check_mode(load_ctx *c)
     }
 
     /* Detection. */
-    if (cfg->detect.torque_witness && m != RIG_MODE_REPLAY &&
-        (!cfg->has_rails || strcmp(cfg->shear.driver, "modbus") != 0))
-        return fail_key(c, CFG_ERR_CHECK, "detect.torque_witness",
-                        "only a Modbus shear drive can report torque or following error; the "
-                        "shear rail's driver is %s",
-                        cfg->has_rails ? cfg->shear.driver : "none");
+    if (cfg->detect.torque_witness && m != RIG_MODE_REPLAY) {
+        const char *drv = cfg->has_rails ? cfg->shear.driver : "none";
+        if (!cfg->has_rails || (strcmp(drv, "modbus") != 0 && strcmp(drv, "mock") != 0))
+            return fail_key(c, CFG_ERR_CHECK, "detect.torque_witness",
+                            "only a Modbus shear drive with a load register (or a mock rail, which "
+                            "reports the twin's shear force) can report torque or following error; "
+                            "the shear rail's driver is %s%s",
+                            drv, strcmp(drv, "gcode") == 0 ? " (GRBL reports no torque)" : "");
+        if (strcmp(drv, "modbus") == 0 && cfg->shear.modbus.map.load.addr < 0)
+            return fail_key(c, CFG_ERR_CHECK, "detect.torque_witness",
+                            "the Modbus shear rail's map (%s) names no load register: set "
+                            "rail.shear.reg_load (and load_scale) to the drive's torque or "
+                            "following-error register",
+                            cfg->shear.modbus.map.name);
+    }
 
     /* Prediction resolution. */
     cfg->sim.explicit_resolution = cfg->sim.nodes > 0 || cfg->sim.dt > 0.0;
@@ -1231,6 +1243,7 @@ static void config_defaults(rig_config *cfg)
     cfg->detect.dz_jump = 0.02;
     cfg->detect.jump_fraction = 0.3;
     cfg->detect.min_quality = 0.3;
+    cfg->detect.load_jump = 0.5;
     cfg->sim.target_error = 0.01;
     cfg->sim.fast = true;
     static const int ladder[] = {39, 75, 147, 291};

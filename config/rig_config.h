@@ -114,7 +114,10 @@ typedef struct rig_detect {
     double dz_jump;       /* smallest jump of Delta Z between consecutive frames that is a snap */
     double jump_fraction; /* ... and at least this fraction of the trial's Delta Z range */
     double min_quality;   /* frames tracked below this quality (0..1) are not measured */
-    bool torque_witness;  /* use the drive's torque / following error as a second witness */
+    bool torque_witness;  /* use the shear drive's load (torque / following error; mock: the
+                             twin's shear force) as a second witness */
+    double load_jump;     /* witness: a load jump between consecutive readings above this
+                             fraction of the load range seen so far in the shear */
 } rig_detect;
 
 typedef struct rig_sim {

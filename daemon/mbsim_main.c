@@ -36,6 +36,7 @@ static void usage(FILE *f)
             "  --alarm-after S      raise an alarm S seconds after start\n"
             "  --alarm-code N       alarm code for --alarm-after (default 0x30)\n"
             "  --seed N             fault random seed\n"
+            "  --load N             initial external load, register 18 (signed 16-bit counts)\n"
             "  --duration S         exit after S seconds (default: until signalled)\n"
             "Registers: see drivers/rail_modbus_map.c (map \"ribbon-sim\").\n");
 }
@@ -100,6 +101,9 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--alarm-code")) {
             bad = num(a, v, 1, 65535, &x);
             p.alarm_code = (int)x;
+        } else if (!strcmp(a, "--load")) {
+            bad = num(a, v, -32768, 32767, &x);
+            p.load_counts = (int)x;
         } else if (!strcmp(a, "--seed")) {
             bad = num(a, v, 0, 4294967295.0, &x);
             p.seed = (unsigned)x;

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "rail_mock.h"
 #include "rod_twin.h"
 #include "twin_shape.h"
 
@@ -15,6 +16,7 @@ struct mock_camera {
     vis_renderer *ren;
     int started;
     double t0;
+    rail *load_rail;  /* borrowed: the mock shear rail that reports the twin's shear force */
 };
 
 int mock_camera_open(const rod_scene *sc, double dl_start, const twin_camera_params *cp, double noise_sigma,
@@ -82,8 +84,29 @@ vis_status mock_camera_grab(void *ctx, double t_s, double dl, double dw, vis_fra
         }
         return VIS_ERR_INTERNAL;
     }
+    if (mc->load_rail && rail_mock_set_load(mc->load_rail, rod_twin_shear_force(mc->twin)) != RAIL_OK) {
+        if (err) {
+            err->code = VIS_ERR_INTERNAL;
+            snprintf(err->message, sizeof err->message, "mock ribbon: shear load: %.200s",
+                     rail_last_error(mc->load_rail));
+        }
+        return VIS_ERR_INTERNAL;
+    }
     *t_frame = t_s;
     return vis_renderer_draw(mc->ren, &mc->shape.view, out, NULL, err);
+}
+
+int mock_camera_feed_load(mock_camera *mc, rail *shear, char *why, size_t why_len)
+{
+    mc->load_rail = NULL;
+    if (!shear) return 0;
+    if (rail_mock_set_load(shear, rod_twin_shear_force(mc->twin)) != RAIL_OK) {
+        snprintf(why, why_len, "mock camera: cannot feed the shear force to rail %s: %.200s",
+                 rail_get_params(shear)->name, rail_last_error(shear));
+        return -1;
+    }
+    mc->load_rail = shear;
+    return 0;
 }
 
 double mock_camera_true_dz(mock_camera *mc)

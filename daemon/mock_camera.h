@@ -5,13 +5,15 @@
  * a shape (twin_shape.h) and renders it through a fixed synthetic side camera (twin_camera.h). The
  * frames go through the same tracker and snap detector as a real camera's, so a mock trial has a
  * real snap for the vision to find. The twin starts at rest in the upper state at the mounting
- * compression (the compression rail's position when the trial starts). */
+ * compression (the compression rail's position when the trial starts). With mock_camera_feed_load
+ * the twin's shear force also goes to the mock shear rail's load, the runner's second witness. */
 #ifndef RIBBON_DAEMON_MOCK_CAMERA_H
 #define RIBBON_DAEMON_MOCK_CAMERA_H
 
 #include <stddef.h>
 #include <stdint.h>
 
+#include "rail.h"
 #include "scene.h"
 #include "twin_camera.h"
 #include "vision.h"
@@ -30,6 +32,12 @@ void mock_camera_close(mock_camera *mc);
  * under the clamp placement (dl, dw) and renders it into out. *t_frame = t_s. */
 vis_status mock_camera_grab(void *ctx, double t_s, double dl, double dw, vis_frame *out, double *t_frame,
                             vis_error *err);
+
+/* Feeds the twin's shear force (rod_twin_shear_force, N, along +Delta W) into the load of the mock
+ * rail shear (rail_mock_set_load) after every grab, so a mock trial's shear drive reports a load
+ * as a position-controlled drive with a force sensor would, and feels the snap. NULL stops it.
+ * 0, or -1 with the reason when shear is not a mock rail. */
+int mock_camera_feed_load(mock_camera *mc, rail *shear, char *why, size_t why_len);
 
 /* The twin's current Delta Z (the truth the tracker should find), for tests and logs. */
 double mock_camera_true_dz(mock_camera *mc);

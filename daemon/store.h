@@ -196,7 +196,8 @@ store_err store_trial_set_status(store *st, int64_t id, store_status status, con
                                  char *why, size_t why_len);
 /* The runner's current state name ("compressing", "shearing", ...; < 32 bytes). */
 store_err store_trial_set_state(store *st, int64_t id, const char *state, char *why, size_t why_len);
-/* The measured result. snapped: snap_dw finite, regime symmetric or asymmetric.
+/* The measured result. snapped: snap_dw finite, regime symmetric or asymmetric, or unknown (SQL
+ * NULL: a snap only the shear drive's load witnessed, the camera saw no pathway).
  * Not snapped: snap_dw NaN, regime no-snap. */
 store_err store_trial_set_result(store *st, int64_t id, bool snapped, double snap_dw, store_regime regime,
                                  char *why, size_t why_len);

@@ -207,9 +207,9 @@ store_err store_trial_set_result(store *st, int64_t id, bool snapped, double sna
     if (snapped) {
         if ((e = store_need_finite(snap_dw, "measured snap_dw", why, why_len)))
             return e;
-        if (regime != STORE_REGIME_SYMMETRIC && regime != STORE_REGIME_ASYMMETRIC)
+        if (regime == STORE_REGIME_NO_SNAP || regime < 0 || regime >= STORE_REGIME_COUNT)
             return store_fail(why, why_len, STORE_E_INVALID,
-                              "a snapped trial's regime must be symmetric or asymmetric");
+                              "a snapped trial's regime must be symmetric, asymmetric or unknown");
     } else {
         if (!isnan(snap_dw))
             return store_fail(why, why_len, STORE_E_INVALID,

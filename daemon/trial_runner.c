@@ -37,6 +37,10 @@ int trial_runner_init(trial_runner *tr, const trial_plan *plan, rail *compress, 
         snprintf(why, why_len, "trial runner: missing rail, camera or tracker");
         return -1;
     }
+    if (plan && plan->torque_witness && !(plan->load_jump > 0.0 && isfinite(plan->load_jump))) {
+        snprintf(why, why_len, "trial runner: the load witness needs a positive load_jump (got %g)", plan->load_jump);
+        return -1;
+    }
     if (!(plan->fps > 0.0) || !(plan->compress_speed_mm_s > 0.0) || !(plan->return_speed_mm_s > 0.0) ||
         !(plan->scene.length > 0.0) || !(plan->scene.shear_rate > 0.0)) {
         snprintf(why, why_len, "trial runner: fps, speeds, length and shear rate must be positive");
@@ -82,6 +86,14 @@ typedef struct run_ctx {
     int check_n;
     double t_snap;
     rail_status sc, ss;
+    /* The load witness (plan.torque_witness), over the fresh shear readings of this shear. */
+    int w_n;              /* readings with a load seen */
+    double w_prev, w_prev_dw, w_min, w_max;
+    int w_fired;          /* the jump was seen */
+    double w_dw;          /* Delta W of the reading before the jump */
+    double w_until;       /* rail-clock time (trial time) after which a late witness no longer counts */
+    int vision_noted;     /* the camera's snap has been handled */
+    int w_warned;         /* "no load" warning given */
 } run_ctx;
 
 static int emit_event(run_ctx *c, const char *kind, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
@@ -177,6 +189,53 @@ static int command(run_ctx *c, rail *r, rail_err e, const char *what)
     return -1;
 }
 
+/* Enters snapped: stop the shear. Returns 1 when the stop was refused (trial failed). */
+static int stop_for_snap(run_ctx *c)
+{
+    if (command(c, c->tr->shear, rail_stop(c->tr->shear), "shear stop")) return 1;
+    c->t_snap = c->t;
+    enter(c, TRIAL_SNAPPED, c->tr->plan.post_snap_s + 30.0, NULL);
+    return 0;
+}
+
+/* One fresh shear reading for the load witness (see trial_runner.h), at trial time t and Delta W
+ * dw. Returns 1 when the trial ended (the stop was refused). */
+static int witness_add(run_ctx *c, double load, double dw, double t)
+{
+    const trial_plan *p = &c->tr->plan;
+    if (c->st != TRIAL_SHEARING && !(c->st == TRIAL_SNAPPED && t <= c->w_until)) return 0;
+    if (c->w_n == 0) {
+        c->w_min = c->w_max = c->w_prev = load;
+        c->w_prev_dw = dw;
+        c->w_n = 1;
+        return 0;
+    }
+    double range = c->w_max - c->w_min, jump = fabs(load - c->w_prev);
+    int fire = !c->w_fired && c->w_n >= TRIAL_WITNESS_MIN_READINGS && jump > 0.0 && jump > p->load_jump * range;
+    double before = c->w_prev, at_dw = c->w_prev_dw;
+    c->w_min = fmin(c->w_min, load);
+    c->w_max = fmax(c->w_max, load);
+    c->w_prev = load;
+    c->w_prev_dw = dw;
+    c->w_n++;
+    if (!fire) return 0;
+    c->w_fired = 1;
+    c->w_dw = at_dw;
+    if (c->tr->det.phase != SNAP_WAITING) {
+        emit_event(c, "info",
+                   "snap seen by both witnesses: vision at Delta W = %.5f, load at Delta W = %.5f (shear load %.4g -> "
+                   "%.4g, %.2f of its range)",
+                   snap_detect_dw(&c->tr->det), at_dw, before, load, range > 0.0 ? jump / range : 0.0);
+        return 0;
+    }
+    emit_event(c, "info",
+               "load witness: the shear load jumped %.4g -> %.4g (%.2f of its range %.4g, threshold %.2f) after "
+               "Delta W = %.5f; the camera sees no snap yet",
+               before, load, range > 0.0 ? jump / range : 0.0, range, p->load_jump, at_dw);
+    if (c->st == TRIAL_SHEARING) return stop_for_snap(c);
+    return 0;
+}
+
 /* One step of the state machine after this iteration's frame. Returns 1 when the trial ended. */
 static int step(run_ctx *c, const trial_sample *smp)
 {
@@ -228,12 +287,18 @@ static int step(run_ctx *c, const trial_sample *smp)
         }
         return 0;
     case TRIAL_SHEARING:
+        if (p->torque_witness && !c->w_warned && c->t - c->t_state > 2.0 / rail_get_params(tr->shear)->poll_hz &&
+            !c->ss.has_load) {
+            c->w_warned = 1;
+            emit_event(c, "warning", "load witness on, but the shear rail (%s) reports no load: the camera is the "
+                       "only witness", rail_driver_name(tr->shear));
+        }
         if (tr->det.phase != SNAP_WAITING) {
-            if (command(c, tr->shear, rail_stop(tr->shear), "shear stop")) return 1;
-            c->t_snap = c->t;
+            c->vision_noted = 1;
+            c->w_until = c->t + TRIAL_WITNESS_LATE_POLLS / rail_get_params(tr->shear)->poll_hz + 2.0 / p->fps;
             emit_event(c, "info", "snap detected at frame %ld; onset Delta W = %.5f", tr->det.detect_frame,
                        snap_detect_dw(&tr->det));
-            enter(c, TRIAL_SNAPPED, p->post_snap_s + 30.0, NULL);
+            if (stop_for_snap(c)) return 1;
             return 0;
         }
         if (rail_idle_at(&c->ss, c->target_shear_mm)) {
@@ -242,6 +307,13 @@ static int step(run_ctx *c, const trial_sample *smp)
         }
         return 0;
     case TRIAL_SNAPPED:
+        if (!c->vision_noted && tr->det.phase != SNAP_WAITING) {
+            /* The load witness stopped the shear; now the camera sees the snap too. */
+            c->vision_noted = 1;
+            emit_event(c, "info",
+                       "snap seen by both witnesses: vision at Delta W = %.5f (frame %ld), load at Delta W = %.5f",
+                       snap_detect_dw(&tr->det), tr->det.detect_frame, c->w_dw);
+        }
         if (tr->det.phase == SNAP_DONE || c->t - c->t_snap >= p->post_snap_s) goto start_return;
         return 0;
     case TRIAL_RETURNING:
@@ -349,6 +421,9 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
                 finish(&c, TRIAL_FAILED, "sample not stored: %s", why);
                 goto end;
             }
+            if (k == 1 && p->torque_witness && st->has_load && isfinite(st->load) &&
+                witness_add(&c, st->load, smp.dw, smp.t_s))
+                goto end;
         }
         /* The frame of this instant, with the rails where they are at its time. */
         double pos_c = position_at(&c.sc, now, now), pos_s = position_at(&c.ss, now, now);
@@ -400,10 +475,15 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
     }
 end:
     out->duration_s = rail_clock_now(c.clock) - c.t0;
-    out->snapped = snap_detect_snapped(&tr->det);
-    out->snap_dw = out->snapped ? snap_detect_dw(&tr->det) : 0.0;
+    out->vision_snapped = snap_detect_snapped(&tr->det);
+    out->load_witnessed = c.w_fired;
+    out->load_dw = c.w_fired ? c.w_dw : 0.0;
+    out->snapped = out->vision_snapped || c.w_fired;
+    out->snap_dw = out->vision_snapped ? snap_detect_dw(&tr->det) : c.w_fired ? c.w_dw : 0.0;
     out->asymmetric = snap_detect_asymmetric(&tr->det);
     out->peak_abs_a = tr->det.peak_abs_a;
-    snprintf(out->regime, sizeof out->regime, "%s", snap_detect_regime(&tr->det));
+    /* A snap only the load witness saw has no pathway to classify. */
+    snprintf(out->regime, sizeof out->regime, "%s",
+             out->vision_snapped || !c.w_fired ? snap_detect_regime(&tr->det) : "unknown");
     if (!trial_state_final(out->final)) out->final = TRIAL_FAILED;
 }

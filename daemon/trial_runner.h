@@ -14,7 +14,17 @@
  * then take the state machine's next step. Rails move only by commands from here; each state has
  * a time limit; a time limit or a refused command ends the trial as failed with the reason.
  * One thread owns a trial (the rails are not thread-safe); trial_runner_abort may be called from
- * any thread. The runner allocates nothing per frame. */
+ * any thread. The runner allocates nothing per frame.
+ *
+ * Second witness (plan.torque_witness): position-controlled rails do not feel the snap, but a drive
+ * that reports a load (torque, following error; mock mode: the twin's shear force) does. From the
+ * start of the shear, every fresh shear reading with a load is compared with the one before: once
+ * TRIAL_WITNESS_MIN_READINGS readings are in, a change of more than plan.load_jump times the range
+ * (max - min) of the loads read so far in this shear is the witness event, at the Delta W of the
+ * reading before the jump. In shearing it stops the shear like a camera snap does (the camera keeps
+ * watching the pathway); after a camera snap it is still watched for TRIAL_WITNESS_LATE_POLLS shear
+ * polls plus two frames, since a load reading may lag the camera, and the event names both. A snap
+ * only the witness saw ends the trial snapped at the witness's Delta W, regime "unknown". */
 #ifndef RIBBON_DAEMON_TRIAL_RUNNER_H
 #define RIBBON_DAEMON_TRIAL_RUNNER_H
 
@@ -26,6 +36,9 @@
 #include "scene.h"
 #include "snap_detect.h"
 #include "vision.h"
+
+#define TRIAL_WITNESS_MIN_READINGS 5 /* shear readings with a load before a jump may count */
+#define TRIAL_WITNESS_LATE_POLLS 2   /* shear polls after a camera snap the witness is watched */
 
 typedef enum trial_state {
     TRIAL_IDLE = 0,
@@ -59,6 +72,8 @@ typedef struct trial_plan {
     double fps;                  /* frames per second of the loop */
     int paced_by_camera;         /* 1: the camera blocks until its next frame; 0: the runner sleeps
                                     on the rails' clock (mock mode, real or virtual) */
+    int torque_witness;          /* 1: the shear rail's load (rail_status.load) is a second witness */
+    double load_jump;            /* witness threshold, fraction of the load range seen in the shear */
 } trial_plan;
 
 /* A camera as the runner sees it: the frame of time t_s (rail clock) with the clamps at (dl, dw).
@@ -95,10 +110,15 @@ typedef struct trial_sink {
 typedef struct trial_result {
     trial_state final;           /* done, aborted or failed */
     char reason[256];            /* why it ended (failures and aborts), "" when done */
-    int snapped;
-    double snap_dw;              /* valid when snapped */
+    int snapped;                 /* the camera or the load witness saw a snap */
+    double snap_dw;              /* valid when snapped: the camera's onset, else the witness's */
     int asymmetric;
-    char regime[16];             /* "asymmetric", "symmetric", "no snap" */
+    char regime[16];             /* "asymmetric", "symmetric", "no snap", or "unknown" (a snap only
+                                    the load witness saw: the camera saw no pathway) */
+    int vision_snapped;          /* the camera saw the snap */
+    int load_witnessed;          /* the shear load jumped (plan.torque_witness) */
+    double load_dw;              /* valid when load_witnessed: Delta W of the last reading before
+                                    the jump */
     double peak_abs_a;
     double upper_dz;             /* Delta Z seen by the check */
     long frames, measured_frames, rail_readings;

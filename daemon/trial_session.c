@@ -468,6 +468,12 @@ static void *session_main(void *arg)
         }
         cam.grab = mock_camera_grab;
         cam.ctx = mock;
+        /* The twin's shear force is the mock shear drive's load (its force sensor): the runner's
+         * second witness when detect.torque_witness is on. */
+        if (cfg->detect.torque_witness && mock_camera_feed_load(mock, s->shear, why, sizeof why)) {
+            fail_early(s, why);
+            goto end;
+        }
     } else {
         vis_camera_settings cs = vis_camera_settings_default();
         cs.index = cfg->camera.index;
@@ -523,6 +529,8 @@ static void *session_main(void *arg)
     plan.snap.dz_jump = cfg->detect.dz_jump;
     plan.snap.post_snap_s = cfg->trial.post_snap_s;
     plan.fps = cfg->camera.fps;
+    plan.torque_witness = cfg->detect.torque_witness;
+    plan.load_jump = cfg->detect.load_jump;
     plan.paced_by_camera = cfg->mode == RIG_MODE_RIG;
     if (store_samples_begin(s->st, s->trial_id, NULL, &s->writer, why, sizeof why) != STORE_OK) {
         fail_early(s, why);
@@ -564,8 +572,9 @@ static void *session_main(void *arg)
         long frames = trial_video_close(s->video, w, sizeof w);
         s->video = NULL;
         (void)frames;
-        store_regime reg = !s->result.snapped ? STORE_REGIME_NO_SNAP
-                           : s->result.asymmetric ? STORE_REGIME_ASYMMETRIC
+        store_regime reg = !s->result.snapped          ? STORE_REGIME_NO_SNAP
+                           : !s->result.vision_snapped ? STORE_REGIME_UNKNOWN /* load witness only */
+                           : s->result.asymmetric      ? STORE_REGIME_ASYMMETRIC
                                                   : STORE_REGIME_SYMMETRIC;
         if (s->result.final == TRIAL_DONE || s->result.snapped)
             store_trial_set_result(s->st, s->trial_id, s->result.snapped, s->result.snapped ? s->result.snap_dw : NAN,

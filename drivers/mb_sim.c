@@ -7,7 +7,9 @@
  * decide, reply with libmodbus, then act on a non-zero command register (and clear it: the
  * command register is a trigger).
  * Read-only registers (8..13, 16, 17) are rewritten from the axis before every reply, so a
- * client writing them changes nothing. */
+ * client writing them changes nothing. Register 18 is the external load input: nothing in the
+ * simulator writes it after start (mb_sim_params.load_counts), so whoever plays the drive's load
+ * sensor writes it (function 6 or 16) and every reader then sees that value. */
 #define _XOPEN_SOURCE 700
 #include "mb_sim.h"
 
@@ -32,6 +34,7 @@
 
 #define MBS_CLIENTS 8
 #define MBS_REGS 64
+#define MBS_REG_LOAD 18 /* external load: written by the test or a client, never by the axis */
 
 enum { ST_READY = 1, ST_MOVING = 2, ST_INPOS = 4, ST_HOMING = 8, ST_HOMED = 16, ST_ALARM = 32 };
 enum { CORRUPT_CRC = 1, CORRUPT_ID = 2 };
@@ -70,6 +73,7 @@ mb_sim_params mb_sim_params_default(void)
     p.alarm_after_s = -1.0;
     p.alarm_code = 0x30;
     p.seed = 4242u;
+    p.load_counts = 0;
     return p;
 }
 
@@ -357,6 +361,10 @@ rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t n)
                          "home speed positive, start inside the travel");
         return RAIL_E_INVALID;
     }
+    if (p->load_counts < -32768 || p->load_counts > 32767) {
+        snprintf(why, n, "mbsim: load_counts %d outside the signed 16-bit range", p->load_counts);
+        return RAIL_E_INVALID;
+    }
     mb_sim *s = calloc(1, sizeof *s);
     if (!s) {
         snprintf(why, n, "mbsim: out of memory");
@@ -374,6 +382,7 @@ rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t n)
         mb_sim_close(s);
         return RAIL_E_NOMEM;
     }
+    s->map->tab_registers[MBS_REG_LOAD] = (uint16_t)(int16_t)p->load_counts;
     modbus_set_slave(s->ctx, p->slave);
     modbus_set_indication_timeout(s->ctx, 0, 500000);
     if (p->rtu) {

@@ -10,7 +10,10 @@
  * replies (bytes that are no Modbus frame), answer a fraction with exception 6 (busy), stall
  * the axis at a position (alarm 0x10, position deviation), raise an alarm after a time; on RTU
  * a garbled reply is a frame with a bad CRC, and wrong_id_prob answers as another slave.
- * On RTU, requests for another slave id are ignored (silence), as on a real bus. */
+ * On RTU, requests for another slave id are ignored (silence), as on a real bus.
+ * Register 18 is an external load input (a torque monitor or following error, signed 16-bit):
+ * it starts at load_counts and then holds whatever a client last wrote into it, so a test can
+ * play the load sensor while the driver reads it (reg_load = 18). */
 #ifndef RIBBON_DRIVERS_MB_SIM_H
 #define RIBBON_DRIVERS_MB_SIM_H
 
@@ -36,6 +39,9 @@ typedef struct mb_sim_params {
     double alarm_after_s;      /* s after start, negative = off */
     int alarm_code;            /* drive alarm code for alarm_after_s */
     unsigned seed;             /* fault random stream */
+    int load_counts;           /* initial value of register 18, the external load input (signed
+                                  16-bit counts, -32768..32767): a torque or following-error
+                                  reading that clients may overwrite (functions 6, 16) */
 } mb_sim_params;
 
 typedef struct mb_sim mb_sim;

@@ -204,6 +204,11 @@ const rail_params *rail_get_params(const rail *r)
 {
     return &r->p;
 }
+void *rail_driver_impl(rail *r, const rail_ops *ops)
+{
+    return r && ops && r->ops == ops ? r->impl : NULL;
+}
+
 const char *rail_driver_name(const rail *r)
 {
     return r->ops->name;

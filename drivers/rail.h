@@ -92,6 +92,12 @@ typedef struct rail_status {
     double t_s;            /* s, monotonic time of the device reading this comes from */
     bool extrapolated;     /* true if position and velocity were reconstructed since the
                               reading at t_s (see "Reconstruction" above) */
+    bool has_load;         /* the drive reported a load with this reading (a second snap witness) */
+    double load;           /* the drive's own load unit, valid when has_load: what the Modbus map's
+                              reg_load holds times load_scale (torque in % of rated, or following
+                              error in mm, as the map says), or the mock's external load
+                              (rail_mock_set_load; mock mode: the twin's shear force in N). GRBL
+                              reports none. Extrapolated statuses carry the last reading's load. */
     char message[160];     /* human text for state/code ("" when idle and fine) */
 } rail_status;
 
@@ -159,6 +165,10 @@ double rail_stop_distance_mm(const rail *r, double v_mm_s);
 /* For drivers: record the reason of a failure (printf style); returns err. */
 rail_err rail_set_error(rail *r, rail_err err, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
+
+/* For drivers' own extensions (rail_mock_set_load): the driver object of r when r runs on ops,
+ * NULL when it is another driver's rail. */
+void *rail_driver_impl(rail *r, const rail_ops *ops);
 
 /* Copy src into dst (n bytes), truncating, always terminated. */
 void rail_text_copy(char *dst, size_t n, const char *src);

@@ -22,6 +22,8 @@ typedef struct mock {
     double t_last;    /* s, clock time the axis was last advanced to */
     double t_open;    /* s */
     bool stalled, alarmed, lost, homing;
+    bool has_load;    /* an external load was set (rail_mock_set_load) */
+    double load;      /* its value, reported with every reading from then on */
 } mock;
 
 rail_mock_params rail_mock_params_default(void)
@@ -86,6 +88,8 @@ static rail_err mock_poll(rail *r, void *impl, rail_status *out)
     out->velocity_mm_s = k->ax.vel_mm_s;
     out->code = 0;
     out->message[0] = 0;
+    out->has_load = k->has_load && e == RAIL_OK;
+    out->load = out->has_load ? k->load : 0.0;
     if (e != RAIL_OK) {
         out->state = RAIL_STATE_DISCONNECTED;
         rail_text_copy(out->message, sizeof out->message, rail_last_error(r));
@@ -193,6 +197,20 @@ static const rail_ops mock_ops = {
     .reset = mock_reset,
     .close = mock_close,
 };
+
+rail_err rail_mock_set_load(rail *r, double load)
+{
+    mock *k = rail_driver_impl(r, &mock_ops);
+    if (!k)
+        return r ? rail_set_error(r, RAIL_E_UNSUPPORTED, "rail %s runs the %s driver, not the mock: no external load",
+                                  rail_get_params(r)->name, rail_driver_name(r))
+                 : RAIL_E_INVALID;
+    if (!isfinite(load))
+        return rail_set_error(r, RAIL_E_INVALID, "external load %g is not finite", load);
+    k->has_load = true;
+    k->load = load;
+    return RAIL_OK;
+}
 
 rail_err rail_mock_open(rail **out, const rail_params *p, const rail_mock_params *m, rail_clock clock,
                         char *why, size_t why_len)

@@ -209,45 +209,37 @@ static rail_err mb_poll(rail *r, void *impl, rail_status *out)
             return e;
         }
     }
-    rail_mb_reg regs[4] = {m->actual_pos, m->actual_vel, m->status, m->alarm};
+    /* Position, velocity, status, alarm and load: one block read when they lie within 64
+     * registers of each other, else one read each. */
+    rail_mb_reg regs[5] = {m->actual_pos, m->actual_vel, m->status, m->alarm, m->load};
+    const bool is_signed[5] = {true, true, false, false, true};
     int lo = 65536, hi = -1;
-    for (int i = 0; i < 4; i++)
+    for (int i = 0; i < 5; i++)
         if (regs[i].addr >= 0) {
             lo = regs[i].addr < lo ? regs[i].addr : lo;
             hi = regs[i].addr + regs[i].words - 1 > hi ? regs[i].addr + regs[i].words - 1 : hi;
         }
     uint16_t blk[64];
-    long pos_c = 0, vel_c = 0, status = 0, alarm = 0;
+    long val[5] = {0, 0, 0, 0, 0};
     rail_err e = RAIL_E_TIMEOUT;
     for (int attempt = 0; attempt < 2; attempt++) { /* one retry for a single bad reply */
         if (hi - lo + 1 <= 64) {
             e = read_regs(r, k, lo, hi - lo + 1, blk, "reading status");
-            if (e == RAIL_OK) {
-                pos_c = reg_get(k, m->actual_pos, blk, lo, true);
-                vel_c = m->actual_vel.addr >= 0 ? reg_get(k, m->actual_vel, blk, lo, true) : 0;
-                status = reg_get(k, m->status, blk, lo, false);
-                alarm = m->alarm.addr >= 0 ? reg_get(k, m->alarm, blk, lo, false) : 0;
-            }
+            for (int i = 0; i < 5 && e == RAIL_OK; i++)
+                val[i] = regs[i].addr >= 0 ? reg_get(k, regs[i], blk, lo, is_signed[i]) : 0;
         } else {
             e = RAIL_OK;
-            for (int i = 0; i < 4 && e == RAIL_OK; i++) {
+            for (int i = 0; i < 5 && e == RAIL_OK; i++) {
                 if (regs[i].addr < 0)
                     continue;
-                e = read_regs(r, k, regs[i].addr, regs[i].words, blk, "reading status");
-                long v = e == RAIL_OK ? reg_get(k, regs[i], blk, regs[i].addr, i < 2) : 0;
-                if (i == 0)
-                    pos_c = v;
-                else if (i == 1)
-                    vel_c = v;
-                else if (i == 2)
-                    status = v;
-                else
-                    alarm = v;
+                e = read_regs(r, k, regs[i].addr, regs[i].words, blk, i == 4 ? "reading the load" : "reading status");
+                val[i] = e == RAIL_OK ? reg_get(k, regs[i], blk, regs[i].addr, is_signed[i]) : 0;
             }
         }
         if (e == RAIL_OK || e == RAIL_E_DISCONNECTED || e == RAIL_E_DEVICE)
             break;
     }
+    long pos_c = val[0], vel_c = val[1], status = val[2], alarm = val[3];
     if (e != RAIL_OK) {
         out->state = e == RAIL_E_DEVICE || e == RAIL_E_PROTOCOL ? RAIL_STATE_FAULT : RAIL_STATE_DISCONNECTED;
         rail_text_copy(out->message, sizeof out->message, rail_last_error(r));
@@ -257,6 +249,8 @@ static rail_err mb_poll(rail *r, void *impl, rail_status *out)
     double pos = (double)pos_c / m->counts_per_mm;
     out->position_mm = pos;
     k->pos_mm = pos;
+    out->has_load = m->load.addr >= 0;
+    out->load = out->has_load ? (double)val[4] * m->load_scale : 0.0;
     if (m->actual_vel.addr >= 0)
         out->velocity_mm_s = (double)vel_c / k->speed_scale;
     else

@@ -11,7 +11,10 @@
  * running: the map's watchdog register is programmed at open (the drive stops and alarms when
  * polls cease), or, for a map without one, the user must state that the drive's own
  * communication timeout is configured (watchdog_external). Opening never re-sends a motion and
- * stops one found in progress. Jogs are bounded moves to the limit in their direction. */
+ * stops one found in progress. Jogs are bounded moves to the limit in their direction.
+ * A map may name a load register (reg_load: torque or following error, signed, 16 or 32 bits,
+ * a holding register read with function 3 like the rest): every status then carries its value
+ * times load_scale in rail_status.load, the trial runner's second snap witness. */
 #ifndef RIBBON_DRIVERS_RAIL_MODBUS_H
 #define RIBBON_DRIVERS_RAIL_MODBUS_H
 
@@ -41,6 +44,10 @@ typedef struct rail_modbus_map {
     double accel_per_mm_s2;        /* drive acceleration units per mm/s^2 (0: = counts_per_mm) */
     rail_mb_reg target_pos, speed, accel, decel, op_type, trigger, control;
     rail_mb_reg actual_pos, actual_vel, status, alarm, watchdog, ident;
+    rail_mb_reg load;              /* optional (addr -1 = none): a signed load reading, torque or
+                                      following error, read with every status (rail_status.load) */
+    double load_scale;             /* rail_status.load per register count (e.g. 0.1 for a torque
+                                      register in 0.1 % units); finite and non-zero */
     long op_type_abs;              /* value of op_type meaning "absolute positioning" */
     long trigger_value;            /* written to trigger to start the move */
     long ctl_stop, ctl_estop, ctl_home, ctl_reset; /* control values; 0 = not supported */

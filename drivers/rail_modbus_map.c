@@ -7,6 +7,8 @@
  *   8-9 actual position (counts)  10-11 actual velocity (counts/s)
  *   12  status bits: 0 ready, 1 moving, 2 in position, 3 homing, 4 homed, 5 alarm
  *   13  alarm code                14 watchdog (ms, 0 = off)   16 identity 0x5242   17 version
+ *   18  external load (signed 16-bit, written by whoever plays the load sensor; not in the
+ *       preset: reg_load = 18 reads it)
  *
  * "oriental-az": Oriental Motor AZ series drivers with RS-485 (AZD-KD, AZD-CD, ...), direct data
  * operation, from "AZ Series / Motorized actuators equipped with AZ Series, Function Edition"
@@ -72,6 +74,8 @@ static void map_sim(rail_modbus_map *m)
     m->st_alarm = 1u << 5;
     m->ident_value = 0x5242;
     m->watchdog_units_per_s = 1000.0;
+    m->load = NONE; /* register 18 serves the simulator's external load: reg_load = 18 to read it */
+    m->load_scale = 1.0;
 }
 
 static void map_oriental_az(rail_modbus_map *m)
@@ -111,6 +115,8 @@ static void map_oriental_az(rail_modbus_map *m)
     m->st_homing = 0;
     m->ident_value = -1;
     m->watchdog_units_per_s = 1000.0;
+    m->load = NONE; /* the AZ monitors torque too, but no address is checked: configure reg_load */
+    m->load_scale = 1.0;
 }
 
 rail_err rail_modbus_preset(const char *name, rail_modbus_map *out)
@@ -144,7 +150,7 @@ rail_err rail_modbus_map_check(const rail_modbus_map *m, char *why, size_t n)
         {"control", m->control, true},       {"actual_pos", m->actual_pos, true},
         {"actual_vel", m->actual_vel, false}, {"status", m->status, true},
         {"alarm", m->alarm, false},          {"watchdog", m->watchdog, false},
-        {"ident", m->ident, false},
+        {"ident", m->ident, false},          {"load", m->load, false},
     };
     for (size_t i = 0; i < sizeof regs / sizeof regs[0]; i++) {
         if (!reg_ok(regs[i].r)) {
@@ -165,6 +171,10 @@ rail_err rail_modbus_map_check(const rail_modbus_map *m, char *why, size_t n)
     if (m->speed_per_mm_s < 0.0 || m->accel_per_mm_s2 < 0.0 || !isfinite(m->speed_per_mm_s) ||
         !isfinite(m->accel_per_mm_s2)) {
         snprintf(why, n, "modbus map %s: speed_per_mm_s and accel_per_mm_s2 must be >= 0", m->name);
+        return RAIL_E_INVALID;
+    }
+    if (!isfinite(m->load_scale) || m->load_scale == 0.0) {
+        snprintf(why, n, "modbus map %s: load_scale must be finite and non-zero", m->name);
         return RAIL_E_INVALID;
     }
     if (m->ctl_stop == 0 || m->st_moving == 0) {

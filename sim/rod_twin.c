@@ -114,6 +114,17 @@ rod_status rod_twin_advance(rod_twin *tw, double t_to, double dl, double dw, cha
 
 double rod_twin_time(const rod_twin *tw) { return tw->t; }
 const rod *rod_twin_rod(const rod_twin *tw) { return tw->dyn.r; }
+double rod_twin_shear_force(const rod_twin *tw)
+{
+    /* g_old holds dE/dq of the last accepted state; the y entries of the clamp nodes are the
+     * reactions across the ribbon. Nodes N-2, N-1 move by +x/2, nodes 0, 1 by -x/2. */
+    const rod *r = tw->dyn.r;
+    const double *g = tw->dyn.g_old;
+    int n = r->n;
+    double f = 0.5 * (g[4 * (n - 2) + 1] + g[4 * (n - 1) + 1] - g[1] - g[4 + 1]);
+    return isfinite(f) ? f : 0.0;
+}
+
 double rod_twin_kinetic(const rod_twin *tw) { return tw->dyn.kinetic; }
 long rod_twin_halvings(const rod_twin *tw) { return tw->halvings; }
 

@@ -28,6 +28,12 @@ double rod_twin_time(const rod_twin *tw);
 void rod_twin_observe(rod_twin *tw, rod_obs *o);
 /* The current state, for rendering. */
 const rod *rod_twin_rod(const rod_twin *tw);
+/* N: the shear force the clamps hold the rod with, along +Delta W, at the last accepted state:
+ * the generalised force conjugate to the rail's shear displacement x = Delta W l, i.e. dE/dx
+ * summed over the prescribed DOFs (each clamp moves by x / 2, in opposite directions,
+ * rod_set_clamps). It is what a force sensor in series with a position-controlled shear rail
+ * reads (the rod's elastic reaction; the clamps' own inertia excluded), and it drops at the snap. */
+double rod_twin_shear_force(const rod_twin *tw);
 /* Kinetic energy (J) of the last step and the total count of Newton failures recovered by halving. */
 double rod_twin_kinetic(const rod_twin *tw);
 long rod_twin_halvings(const rod_twin *tw);

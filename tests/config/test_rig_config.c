@@ -478,8 +478,24 @@ static void test_mode_rules_exact(void **state)
     assert_int_equal(parse(make1(32, "listen = ::\ntoken = abcdefghijklmnopq"), &cfg, &err),
                      CFG_OK);
     assert_false(cfg.api.loopback);
-    expect_line(make1(26, "torque_witness = on"), CFG_ERR_CHECK, 26, "detect.torque_witness",
-                "Modbus");
+    /* The load witness: a mock shear rail (the twin's shear force) is accepted, GRBL is refused
+     * with the reason, a Modbus rail needs a load register. */
+    assert_int_equal(parse(make1(26, "torque_witness = on\nload_jump = 0.8"), &cfg, &err), CFG_OK);
+    assert_true(cfg.detect.torque_witness);
+    assert_true(NEAR(cfg.detect.load_jump, 0.8));
+    assert_int_equal(parse(make1(26, "dz_jump = 0.02"), &cfg, &err), CFG_OK);
+    assert_true(NEAR(cfg.detect.load_jump, 0.5));
+    expect_line(make1(26, "load_jump = 0"), CFG_ERR_RANGE, 26, "detect.load_jump", "(0, 10]");
+    assert_int_equal(parse(make_rig(26, "torque_witness = on"), &cfg, &err), CFG_ERR_CHECK);
+    assert_string_equal(err.key, "detect.torque_witness");
+    assert_non_null(strstr(err.message, "GRBL reports no torque"));
+    const char *ovr[] = {"detect.torque_witness=on", "rail.shear.reg_load=18", "rail.shear.load_scale=0.1"};
+    assert_int_equal(rig_config_load(CONFIG_DIR "/rig-modbus.ini", ovr, 1, &cfg, &err), CFG_ERR_CHECK);
+    assert_string_equal(err.key, "detect.torque_witness");
+    assert_non_null(strstr(err.message, "reg_load"));
+    assert_int_equal(rig_config_load(CONFIG_DIR "/rig-modbus.ini", ovr, 3, &cfg, &err), CFG_OK);
+    assert_int_equal(cfg.shear.modbus.map.load.addr, 18);
+    assert_true(NEAR(cfg.shear.modbus.map.load_scale, 0.1));
 }
 
 /* Cross-checks with the scene: minimum gap, soft limits, speeds, crease orientation. */

@@ -217,6 +217,7 @@ static void mock_trial_then_replay(void **state)
     const char *ov[8];
     int nov;
     overrides(ov, &nov);
+    ov[nov++] = "detect.torque_witness=on"; /* the twin's shear force as the second witness */
     rig_daemon d;
     char why[512] = "";
     int rc = rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, nov, NULL, why, sizeof why);
@@ -267,6 +268,23 @@ static void mock_trial_then_replay(void **state)
     assert_int_equal(json_integer_value(json_object_get(pr, "nodes")), 61);
     assert_true(samples > 100);
     assert_true(json_array_size(json_object_get(t, "events")) >= 7);
+    /* The load witness (the twin's shear force on the mock shear rail) saw the snap too, within a
+     * few frames of the camera's onset: 0.01 / 30 / 0.2 of Delta W per frame. */
+    {
+        double v_dw = NAN, l_dw = NAN;
+        json_t *evs = json_object_get(t, "events");
+        for (size_t k = 0; k < json_array_size(evs); k++) {
+            const char *m = json_string_value(json_object_get(json_array_get(evs, k), "message"));
+            const char *b = m ? strstr(m, "vision at Delta W = ") : NULL;
+            if (b && strstr(m, "both witnesses"))
+                sscanf(b, "vision at Delta W = %lf%*[^=]= %lf", &v_dw, &l_dw);
+        }
+        printf("witnesses: vision at Delta W = %.5f, load at %.5f (%.1f frames apart)\n", v_dw, l_dw,
+               (l_dw - v_dw) / (0.01 / 30.0 / 0.2));
+        assert_true(isfinite(v_dw) && isfinite(l_dw));
+        assert_true(fabs(v_dw - meas) < 1e-5);
+        assert_true(fabs(l_dw - v_dw) <= 3.0 * 0.01 / 30.0 / 0.2 + 1e-9);
+    }
     const char *video = json_string_value(json_object_get(t, "video_path"));
     assert_non_null(video);
     struct stat sb;

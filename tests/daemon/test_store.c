@@ -498,6 +498,12 @@ static void test_trial_round_trip_and_life_cycle(void **state)
                      STORE_E_INVALID);
     OK(store_trial_get(st, id, &t, why, sizeof why));
     assert_int_equal(t.snapped, -1);
+    /* A snap only the load witness saw: snapped, a Delta W, the regime unknown (NULL). */
+    OK(store_trial_set_result(st, id, true, 0.43, STORE_REGIME_UNKNOWN, why, sizeof why));
+    OK(store_trial_get(st, id, &t, why, sizeof why));
+    assert_int_equal(t.snapped, 1);
+    assert_true(t.snap_dw_measured == 0.43);
+    assert_int_equal(t.regime_measured, STORE_REGIME_UNKNOWN);
     OK(store_trial_set_result(st, id, true, 0.4302, STORE_REGIME_SYMMETRIC, why, sizeof why));
     OK(store_trial_set_video(st, id, "/data/trials/1-crop.mkv", why, sizeof why));
     OK(store_trial_set_status(st, id, STORE_STATUS_DONE, "snapped", T0 + 61.5, why, sizeof why));

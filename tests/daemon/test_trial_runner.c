@@ -28,6 +28,8 @@ typedef struct fake {
     double t_snap;     /* rail time it started snapping, < 0 before */
     int lower;         /* starts in the lower state */
     double last_t;
+    rail *load_rail;   /* non-NULL: the fake also plays the shear drive's load sensor */
+    double load_at;    /* Delta W at which that load drops (the snap the drive feels) */
 } fake;
 
 static vis_status fake_grab(void *ctx, double t, double dl, double dw, vis_frame *out, double *t_frame, vis_error *err)
@@ -37,6 +39,9 @@ static vis_status fake_grab(void *ctx, double t, double dl, double dw, vis_frame
     if (f->snap_at >= 0.0 && f->t_snap < 0.0 && dw > f->snap_at) f->t_snap = t;
     if (f->t_snap >= 0.0) phi = fmin(M_PI, M_PI * (t - f->t_snap) / 0.3);
     vt_arch(&f->shape, 121, L, L * (1.0 - dl), phi, dw * L);
+    /* The load grows with the shear (100 per unit Delta W) and drops by 20 past load_at. */
+    if (f->load_rail && rail_mock_set_load(f->load_rail, 100.0 * dw - (dw > f->load_at ? 20.0 : 0.0)) != RAIL_OK)
+        return VIS_ERR_INTERNAL;
     *t_frame = t;
     f->last_t = t;
     return vis_renderer_draw(f->ren, &f->shape.view, out, NULL, err);
@@ -47,6 +52,8 @@ typedef struct log {
     int n_states;
     long samples, frames;
     char last_event[320];
+    char both_event[320]; /* the last event naming both witnesses */
+    int n_witness;        /* events of the load witness */
 } log_t;
 
 static int on_state(void *u, trial_state s, double t, const char *why)
@@ -63,6 +70,8 @@ static int on_event(void *u, double t, const char *kind, const char *msg)
     (void)kind;
     log_t *lg = u;
     snprintf(lg->last_event, sizeof lg->last_event, "%s", msg);
+    if (strstr(msg, "both witnesses")) snprintf(lg->both_event, sizeof lg->both_event, "%s", msg);
+    if (strstr(msg, "load witness") || strstr(msg, "both witnesses")) lg->n_witness++;
     return 0;
 }
 static int on_sample(void *u, const trial_sample *s, char *why, size_t n)
@@ -220,6 +229,81 @@ static void shear_limit_no_snap(void **state)
     rig_close(&r);
 }
 
+/* The load witness alone: the camera sees no snap, the shear drive's load drops at Delta W = 0.3.
+ * The witness stops the shear there (long before shear_max = 0.5) and the trial ends snapped at
+ * the witness's Delta W with regime unknown. One shear reading is 10 mm/s / 10 Hz over 0.2 m =
+ * 0.005 of Delta W, one frame 0.0025, and the load set at a frame is read at the next reading, so
+ * the reading before the jump lies within a reading and a frame of 0.3. */
+static void load_witness_alone(void **state)
+{
+    (void)state;
+    rig r;
+    rig_open(&r, NAN);
+    r.f.snap_at = -1.0;
+    r.f.load_rail = r.s;
+    r.f.load_at = 0.3;
+    r.plan.torque_witness = 1;
+    r.plan.load_jump = 0.5;
+    trial_result res;
+    rig_run(&r, &res);
+    printf("final %s (%s), snap Delta W %.5f %s, load Delta W %.5f\n", trial_state_name(res.final), res.reason,
+           res.snap_dw, res.regime, res.load_dw);
+    assert_int_equal(res.final, TRIAL_DONE);
+    assert_true(res.snapped);
+    assert_false(res.vision_snapped);
+    assert_true(res.load_witnessed);
+    assert_string_equal(res.regime, "unknown");
+    assert_true(res.snap_dw == res.load_dw);
+    assert_true(fabs(res.load_dw - 0.3) <= 0.0075 + 1e-9);
+    int saw_snapped = 0;
+    for (int k = 0; k < r.log.n_states; k++) saw_snapped |= r.log.states[k] == TRIAL_SNAPPED;
+    assert_true(saw_snapped);
+    assert_int_equal(r.log.n_witness, 1);
+    assert_string_equal(r.log.both_event, "");
+    rail_status ss;
+    assert_int_equal(rail_status_poll(r.s, &ss), RAIL_OK);
+    assert_true(fabs(ss.position_mm) < 0.05); /* returned */
+    rig_close(&r);
+
+    /* The same without the witness: the load is ignored and the shear runs to its limit. */
+    rig_open(&r, NAN);
+    r.f.snap_at = -1.0;
+    r.f.load_rail = r.s;
+    r.f.load_at = 0.3;
+    r.plan.scene.shear_max = 0.35;
+    rig_run(&r, &res);
+    assert_int_equal(res.final, TRIAL_DONE);
+    assert_false(res.snapped);
+    assert_false(res.load_witnessed);
+    assert_string_equal(res.regime, "no snap");
+    rig_close(&r);
+}
+
+/* Both witnesses see the snap at Delta W = 0.3: the camera's onset is the result (regime from the
+ * pathway) and one event names both Delta Ws. */
+static void load_and_vision_witnesses(void **state)
+{
+    (void)state;
+    rig r;
+    rig_open(&r, NAN);
+    r.f.load_rail = r.s;
+    r.f.load_at = 0.3;
+    r.plan.torque_witness = 1;
+    r.plan.load_jump = 0.5;
+    trial_result res;
+    rig_run(&r, &res);
+    printf("final %s, snap Delta W %.5f %s, load Delta W %.5f; %s\n", trial_state_name(res.final), res.snap_dw,
+           res.regime, res.load_dw, r.log.both_event);
+    assert_int_equal(res.final, TRIAL_DONE);
+    assert_true(res.snapped && res.vision_snapped && res.load_witnessed);
+    assert_true(res.snap_dw > 0.3 && res.snap_dw <= 0.3 + 0.0025 + 1e-9);
+    assert_string_equal(res.regime, "asymmetric");
+    assert_true(fabs(res.load_dw - 0.3) <= 0.0075 + 1e-9);
+    assert_non_null(strstr(r.log.both_event, "vision at Delta W = "));
+    assert_non_null(strstr(r.log.both_event, "load at Delta W = "));
+    rig_close(&r);
+}
+
 static void lower_state_refused(void **state)
 {
     (void)state;
@@ -295,6 +379,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(good_trial),
         cmocka_unit_test(shear_limit_no_snap),
+        cmocka_unit_test(load_witness_alone),
+        cmocka_unit_test(load_and_vision_witnesses),
         cmocka_unit_test(lower_state_refused),
         cmocka_unit_test(stall_fails_and_stops_both),
         cmocka_unit_test(abort_stops_rails),

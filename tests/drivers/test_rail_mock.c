@@ -184,13 +184,36 @@ static void test_bad_mock_params(void **s)
     assert_non_null(strstr(why, "poll_hz"));
 }
 
+/* The external load: none until set, then every fresh reading carries the last value set;
+ * NaN is refused and the value stands. */
+static void test_external_load(void **s)
+{
+    (void)s;
+    rail_vclock vc = {0};
+    rail *r = open_mock(&vc, "shear", rail_mock_params_default());
+    rail_status st;
+    assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
+    assert_false(st.has_load);
+    assert_int_equal(rail_mock_set_load(r, 2.5), RAIL_OK);
+    assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
+    assert_true(st.has_load);
+    assert_true(st.load == 2.5);
+    assert_int_equal(rail_mock_set_load(r, NAN), RAIL_E_INVALID);
+    assert_non_null(strstr(rail_last_error(r), "not finite"));
+    assert_int_equal(rail_mock_set_load(r, -1.0), RAIL_OK);
+    assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
+    assert_true(st.has_load && st.load == -1.0);
+    assert_int_equal(rail_mock_set_load(NULL, 1.0), RAIL_E_INVALID);
+    rail_close(r);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_compress_hold_shear_stop), cmocka_unit_test(test_stop_within_decel_distance),
         cmocka_unit_test(test_poll_rate_and_extrapolation), cmocka_unit_test(test_stall_is_a_fault),
         cmocka_unit_test(test_comm_loss_detected), cmocka_unit_test(test_alarm_after_time),
-        cmocka_unit_test(test_bad_mock_params),
+        cmocka_unit_test(test_bad_mock_params), cmocka_unit_test(test_external_load),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
