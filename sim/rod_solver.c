@@ -2,11 +2,10 @@
  *
  * Convergence: max |R| <= tolerance * EI1 / l^2 (the scene's bending force scale), or, when the
  * residual sits at the floor of round-off from the stiff terms, a full Newton step smaller than
- * 1e-9 l in every position and 1e-7 rad in every twist angle. Such a step is taken without
- * the residual pass that would only confirm it (near a solution the error after a Newton step
- * is second order in the step); the gradient kept for the clamp reactions is then that of the
- * state before it, so this is done only when that residual is already below 1e3 times the
- * tolerance (a tiny step along a stiff stretching direction can still carry a large force). (The paper scene's creases, 1e4 times
+ * 1e-9 l in every position and 1e-7 rad in every twist angle while the residual is below 1e3
+ * times the tolerance (every such exit checks it) (a tiny step along a stiff stretching direction can
+ * still carry a large force); near a solution the error after a Newton step is second order in
+ * the step, and the residual reported is the one computed after it. (The paper scene's creases, 1e4 times
  * stiffer than the ribbon, put the round-off floor of |R| near 1e-5 E I1 / l^2, above the default
  * tolerance, so most solves end this way; with the dynamics' predictor, after one iteration.)
  * Every iteration is capped and every failure has a named reason; a NaN anywhere in the
@@ -292,12 +291,16 @@ rod_status rod_newton_solve(rod *r, rod_solver *s, const rod_newton_opts *o, rod
             if ((a + ROD_FREE_BEGIN) % 4 != 3) step_max = fmax(step_max, fabs(s->dq[a]));
             else turn_max = fmax(turn_max, fabs(s->dq[a]));
         }
-        if (step_max < 1e-9 * r->length && turn_max < 1e-7 && res <= 1e3 * tol) {
-            /* Converged (see the top): take the step, whose error is second order in it, and
-             * carry the frames along, without the residual pass that would confirm it. */
+        if (!chord && step_max < 1e-9 * r->length && turn_max < 1e-7 && res <= 1e3 * tol) {
+            /* Converged (see the top; a chord step, converging only linearly, does not count): take the step, whose error is second order in it, and
+             * carry the frames along. One residual pass reports the residual actually reached
+             * (and keeps the gradient for the clamp reactions that of this state); the state is
+             * the same whatever it says. */
             for (int a = 0; a < nf; a++) r->q[a + ROD_FREE_BEGIN] += s->dq[a];
             frames_load(r, &s->base, 0);
             rod_frames_update(r);
+            res = residual(r, s, o, &l2);
+            if (isnan(res)) st = ROD_ERR_NAN;
             break;
         }
         int accepted = 0;
@@ -346,7 +349,7 @@ rod_status rod_newton_solve(rod *r, rod_solver *s, const rod_newton_opts *o, rod
         last_step = alpha == 1.0 ? step_max : INFINITY;
         if (!accepted) {
             /* At the round-off floor a tiny full step cannot reduce |R|: that is convergence. */
-            if (step_max < 1e-9 * r->length && turn_max < 1e-7) {
+            if (step_max < 1e-9 * r->length && turn_max < 1e-7 && res <= 1e3 * tol) {
                 for (int a = 0; a < nf; a++) r->q[a + ROD_FREE_BEGIN] = s->base.q[a + ROD_FREE_BEGIN];
                 res = residual(r, s, o, &l2);
                 break;
@@ -356,7 +359,13 @@ rod_status rod_newton_solve(rod *r, rod_solver *s, const rod_newton_opts *o, rod
         }
         /* Re-anchor the frames at the accepted state. */
         frames_save(r, &s->base);
-        if (alpha == 1.0 && step_max < 1e-9 * r->length && turn_max < 1e-7) break;
+        if (alpha == 1.0 && step_max < 1e-9 * r->length && turn_max < 1e-7 && res <= 1e3 * tol) {
+            if (!chord) break;
+            /* A chord step converges only linearly: its being short says little. The next
+             * iteration takes a fresh Jacobian, whose step decides. */
+            s->fact = 0;
+            last_step = INFINITY;
+        }
     }
     if (rep) {
         rep->iterations = it;
