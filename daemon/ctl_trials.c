@@ -544,16 +544,11 @@ static int cmd_replay(const ctl_opts *o)
     if (open_db(&oo, &st, 0)) return 1;
     char why[512];
     trial_replay *r = NULL;
-    int rc = files ? trial_replay_from_files(&cfg, &r, why, sizeof why)
-                   : trial_replay_from_trial(st, source, o->video ? o->video
-                                                     : have_cfg && cfg.replay.video[0] ? cfg.replay.video
-                                                                                       : NULL,
-                                             &r, why, sizeof why);
     int64_t nid = 0;
     trial_result res;
     memset(&res, 0, sizeof res);
-    if (rc == 0) rc = trial_replay_create(r, st, o->note, &nid, why, sizeof why);
-    if (rc == 0) rc = trial_replay_execute(r, st, NULL, replay_progress, NULL, &res, why, sizeof why);
+    int rc = trial_replay_prepare(st, have_cfg ? &cfg : NULL, o->id, o->video, &r, why, sizeof why);
+    if (rc == 0) rc = trial_replay_run(r, st, o->note, replay_progress, NULL, &nid, &res, why, sizeof why);
     trial_replay_free(r);
     fprintf(stderr, "\n");
     if (rc) {

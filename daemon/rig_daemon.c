@@ -79,10 +79,10 @@ void rig_daemon_close(rig_daemon *d, const char *reason)
     d->api = NULL;
     pthread_mutex_lock(&d->lock);
     trial_session *s = d->session;
-    d->session = NULL;
-    pthread_mutex_unlock(&d->lock);
     replay_job *rj = d->replay;
+    d->session = NULL;
     d->replay = NULL;
+    pthread_mutex_unlock(&d->lock);
     if (rj) {
         replay_job_abort(rj);
         replay_job_join(rj, NULL);
@@ -205,12 +205,10 @@ static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *ht
         snprintf(why, n, "\"note\" must be a string");
         return -1;
     }
-    int64_t id = src ? (int64_t)json_integer_value(src) : d->cfg.replay.source_trial;
-    int files = !src && !d->cfg.replay.source_trial && d->cfg.replay.video[0];
-    if (!files && ((src && !json_is_integer(src)) || id < 1)) {
+    int64_t id = src ? (int64_t)json_integer_value(src) : 0;
+    if (src && (!json_is_integer(src) || id < 1)) {
         *http_status = 400;
-        snprintf(why, n, "which trial? give \"source_trial\": ID (or [replay] source_trial, or replay.video and "
-                         "replay.rails, in the rig file)");
+        snprintf(why, n, "\"source_trial\" must be a trial id (an integer >= 1)");
         return -1;
     }
     pthread_mutex_lock(&d->lock);
@@ -224,22 +222,22 @@ static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *ht
         return -1;
     }
     trial_replay *r = NULL;
-    int rc = files ? trial_replay_from_files(&d->cfg, &r, why, n)
-                   : trial_replay_from_trial(d->st, id, src ? NULL : (d->cfg.replay.video[0] ? d->cfg.replay.video : NULL),
-                                             &r, why, n);
-    int64_t nid = 0;
-    if (rc == 0)
-        rc = replay_job_start(r, d->st, d->cfg.store_path, note ? json_string_value(note) : NULL, &d->replay, &nid, why,
-                              n);
-    pthread_mutex_unlock(&d->lock);
-    if (rc) {
-        *http_status = nid ? 500 : 400;
+    if (trial_replay_prepare(d->st, &d->cfg, id, NULL, &r, why, n)) {
+        pthread_mutex_unlock(&d->lock);
+        *http_status = 400; /* the recording named cannot be replayed */
         return -1;
     }
-    if (files)
-        say(d, "replay of %s started as trial %lld", d->cfg.replay.video, (long long)nid);
-    else
-        say(d, "replay of trial %lld started as trial %lld", (long long)id, (long long)nid);
+    char what[320]; /* r belongs to the job once it starts */
+    snprintf(what, sizeof what, "%.300s", trial_replay_video(r));
+    int64_t nid = 0;
+    int rc = replay_job_start(r, d->st, d->cfg.store_path, note ? json_string_value(note) : NULL, &d->replay, &nid,
+                              why, n);
+    pthread_mutex_unlock(&d->lock);
+    if (rc) {
+        *http_status = 500;
+        return -1;
+    }
+    say(d, "replay of %s started as trial %lld", what, (long long)nid);
     return store_trial_json(d->st, nid, out, why, n) == STORE_OK ? 0 : -1;
 }
 

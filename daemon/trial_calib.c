@@ -275,3 +275,20 @@ void trial_specimen_from_config(const rig_config *cfg, store_specimen *sp)
              : cfg->specimen.crease_orientation == RIG_CREASE_DOWN ? "down"
                                                                    : "");
 }
+
+void trial_record_video_calib(const trial_record *rec, vis_calib *out)
+{
+    *out = rec->camera;
+    out->clamp_left_px[0] -= rec->roi.x;
+    out->clamp_left_px[1] -= rec->roi.y;
+    out->clamp_right_px[0] -= rec->roi.x;
+    out->clamp_right_px[1] -= rec->roi.y;
+    if (out->principal_px[0] >= 0) {
+        out->principal_px[0] -= rec->roi.x;
+        out->principal_px[1] -= rec->roi.y;
+    }
+    if (out->has_intrinsics) {
+        out->camera_matrix[2] -= rec->roi.x;
+        out->camera_matrix[5] -= rec->roi.y;
+    }
+}

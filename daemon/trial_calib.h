@@ -36,6 +36,8 @@ typedef struct trial_record {
     double min_quality;
 } trial_record;
 int trial_record_parse(const char *json, trial_record *out, char *why, size_t why_len);
+/* The record's camera calibration in the saved video's pixels (moved by its region of interest). */
+void trial_record_video_calib(const trial_record *rec, vis_calib *out);
 
 /* Trial times (s) at which a stored trial entered the checking, shearing and returning states,
  * from its state events; NaN for a state it never entered. */

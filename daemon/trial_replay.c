@@ -16,6 +16,10 @@
 #define REPLAY_RAILS_MAX 10000000 /* readings in a rails CSV */
 #define REPLAY_SHEAR_START_MM 0.05
 
+typedef struct rail_reading {
+    double t, compress_mm, shear_mm;
+} rail_reading;
+
 struct trial_replay {
     char video[RIG_PATH_MAX];
     trial_record rec;
@@ -30,7 +34,7 @@ struct trial_replay {
     store_sample *smp;
     size_t ns, next;
     /* An outside recording's rail readings. */
-    double *rt, *rc, *rs;
+    rail_reading *rails;
     size_t nr, at;
     double fps, t_offset;
     double t_check, t_shear, t_return; /* NaN = none */
@@ -44,14 +48,13 @@ void trial_replay_free(trial_replay *r)
     free(r->calib_json);
     free(r->config_text);
     free(r->smp);
-    free(r->rt);
-    free(r->rc);
-    free(r->rs);
+    free(r->rails);
     free(r);
 }
 
 int64_t trial_replay_source(const trial_replay *r) { return r->source_id; }
 long trial_replay_frame_count(const trial_replay *r) { return r->frames_total; }
+const char *trial_replay_video(const trial_replay *r) { return r->video; }
 
 static trial_replay *replay_new(char *why, size_t why_len)
 {
@@ -152,32 +155,23 @@ static int read_rails(trial_replay *r, const char *path, char *why, size_t why_l
                      path, lineno);
             goto out;
         }
-        if (r->nr > 0 && !(v[0] > r->rt[r->nr - 1])) {
+        if (r->nr > 0 && !(v[0] > r->rails[r->nr - 1].t)) {
             snprintf(why, why_len, "rails CSV %.300s line %ld: t_s must increase (%.9g after %.9g)", path, lineno, v[0],
-                     r->rt[r->nr - 1]);
+                     r->rails[r->nr - 1].t);
             goto out;
         }
         if (r->nr == cap) {
-            if (cap >= REPLAY_RAILS_MAX) {
-                snprintf(why, why_len, "rails CSV %.300s: more than %d readings", path, REPLAY_RAILS_MAX);
-                goto out;
-            }
             size_t nc = cap ? 2 * cap : 1024;
-            double *a = realloc(r->rt, nc * sizeof *a), *b = a ? realloc(r->rc, nc * sizeof *b) : NULL;
-            if (a) r->rt = a;
-            if (b) r->rc = b;
-            double *c = b ? realloc(r->rs, nc * sizeof *c) : NULL;
-            if (c) r->rs = c;
-            if (!a || !b || !c) {
-                snprintf(why, why_len, "rails CSV %.300s: out of memory", path);
+            rail_reading *a = nc <= REPLAY_RAILS_MAX ? realloc(r->rails, nc * sizeof *a) : NULL;
+            if (!a) {
+                snprintf(why, why_len, "rails CSV %.300s: %s", path,
+                         nc > REPLAY_RAILS_MAX ? "too many readings" : "out of memory");
                 goto out;
             }
+            r->rails = a;
             cap = nc;
         }
-        r->rt[r->nr] = v[0];
-        r->rc[r->nr] = v[1];
-        r->rs[r->nr] = v[2];
-        r->nr++;
+        r->rails[r->nr++] = (rail_reading){v[0], v[1], v[2]};
     }
     if (ferror(f)) {
         snprintf(why, why_len, "rails CSV %.300s: read error", path);
@@ -200,16 +194,16 @@ static void shear_window(trial_replay *r)
     size_t k0 = r->nr, kmax = 0;
     double best = -INFINITY;
     for (size_t k = 0; k < r->nr; k++) {
-        if (k0 == r->nr && fabs(r->rs[k] - r->rs[0]) > REPLAY_SHEAR_START_MM) k0 = k;
-        double dw = rig_calib_dw(c, r->rec.length_m, r->rs[k]);
+        if (k0 == r->nr && fabs(r->rails[k].shear_mm - r->rails[0].shear_mm) > REPLAY_SHEAR_START_MM) k0 = k;
+        double dw = rig_calib_dw(c, r->rec.length_m, r->rails[k].shear_mm);
         if (dw > best) {
             best = dw;
             kmax = k;
         }
     }
     if (k0 < r->nr && kmax > k0) {
-        r->t_check = r->t_shear = r->rt[k0 - (k0 > 0)];
-        r->t_return = r->rt[kmax];
+        r->t_check = r->t_shear = r->rails[k0 - (k0 > 0)].t;
+        r->t_return = r->rails[kmax].t;
     }
 }
 
@@ -351,13 +345,14 @@ static int frame_rails(trial_replay *r, long f, store_sample *x, char *why, size
         return 0;
     }
     const double t = (double)f / r->fps + r->t_offset;
-    if (t < r->rt[0] || t > r->rt[r->nr - 1]) return 1;
-    while (r->at + 2 < r->nr && r->rt[r->at + 1] < t) r->at++;
+    const rail_reading *g = r->rails;
+    if (t < g[0].t || t > g[r->nr - 1].t) return 1;
+    while (r->at + 2 < r->nr && g[r->at + 1].t < t) r->at++;
     const size_t k = r->at;
-    const double w = (t - r->rt[k]) / (r->rt[k + 1] - r->rt[k]);
+    const double w = (t - g[k].t) / (g[k + 1].t - g[k].t);
     x->t_s = t;
-    x->compress_mm = r->rc[k] + w * (r->rc[k + 1] - r->rc[k]);
-    x->shear_mm = r->rs[k] + w * (r->rs[k + 1] - r->rs[k]);
+    x->compress_mm = g[k].compress_mm + w * (g[k + 1].compress_mm - g[k].compress_mm);
+    x->shear_mm = g[k].shear_mm + w * (g[k + 1].shear_mm - g[k].shear_mm);
     x->dl = rig_calib_dl(&r->rec.calib, r->rec.length_m, x->compress_mm);
     x->dw = rig_calib_dw(&r->rec.calib, r->rec.length_m, x->shear_mm);
     return 0;
@@ -386,21 +381,9 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
         snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
         goto fail;
     }
-    /* The tracker sees the recorded frames: move the calibration into the region's pixels. */
     const trial_record *rec = &r->rec;
-    vis_calib cal = rec->camera;
-    cal.clamp_left_px[0] -= rec->roi.x;
-    cal.clamp_left_px[1] -= rec->roi.y;
-    cal.clamp_right_px[0] -= rec->roi.x;
-    cal.clamp_right_px[1] -= rec->roi.y;
-    if (cal.principal_px[0] >= 0) {
-        cal.principal_px[0] -= rec->roi.x;
-        cal.principal_px[1] -= rec->roi.y;
-    }
-    if (cal.has_intrinsics) {
-        cal.camera_matrix[2] -= rec->roi.x;
-        cal.camera_matrix[5] -= rec->roi.y;
-    }
+    vis_calib cal;
+    trial_record_video_calib(rec, &cal);
     vis_track_params tp = vis_track_params_default();
     tp.length_mm = rec->length_m * 1000.0;
     trk = vis_tracker_create(&tp, &cal, &ve);
@@ -513,16 +496,25 @@ done:
     return rc;
 }
 
-int trial_replay_run(store *st, int64_t source_id, const char *video, int64_t *new_id, trial_result *res,
-                     void (*progress)(void *u, long frame, long total), void *u, char *why, size_t why_len)
+int trial_replay_prepare(store *st, const rig_config *cfg, int64_t source, const char *video, trial_replay **out,
+                         char *why, size_t why_len)
+{
+    *out = NULL;
+    if (source > 0) return trial_replay_from_trial(st, source, video, out, why, why_len);
+    if (cfg && cfg->replay.source_trial > 0)
+        return trial_replay_from_trial(st, cfg->replay.source_trial, cfg->replay.video[0] ? cfg->replay.video : NULL,
+                                       out, why, why_len);
+    if (cfg && cfg->replay.video[0]) return trial_replay_from_files(cfg, out, why, why_len);
+    snprintf(why, why_len, "which recording? give a trial id, or a replay rig file with [replay] source_trial, or "
+                           "replay.video and replay.rails");
+    return -1;
+}
+
+int trial_replay_run(trial_replay *r, store *st, const char *note, void (*progress)(void *u, long frame, long total),
+                     void *u, int64_t *new_id, trial_result *res, char *why, size_t why_len)
 {
     memset(res, 0, sizeof *res);
     snprintf(res->regime, sizeof res->regime, "no snap");
-    *new_id = 0;
-    trial_replay *r = NULL;
-    if (trial_replay_from_trial(st, source_id, video, &r, why, why_len)) return -1;
-    int rc = trial_replay_create(r, st, NULL, new_id, why, why_len) ||
-             trial_replay_execute(r, st, NULL, progress, u, res, why, why_len);
-    trial_replay_free(r);
-    return rc ? -1 : 0;
+    if (trial_replay_create(r, st, note, new_id, why, why_len)) return -1;
+    return trial_replay_execute(r, st, NULL, progress, u, res, why, why_len);
 }

@@ -48,10 +48,15 @@ void trial_replay_free(trial_replay *r);
 
 /* The source trial (0 for files) and the video's frame count (-1 = unknown). */
 int64_t trial_replay_source(const trial_replay *r);
+const char *trial_replay_video(const trial_replay *r); /* the video it reads */
 long trial_replay_frame_count(const trial_replay *r);
 
-/* from_trial + create + execute + free, for a stored trial. */
-int trial_replay_run(store *st, int64_t source_id, const char *video, int64_t *new_id, trial_result *res,
-                     void (*progress)(void *u, long frame, long total), void *u, char *why, size_t why_len);
+/* What a request names: trial `source` (> 0; video NULL = its own); else the rig file's [replay]
+ * source_trial (with replay.video if set); else the outside files it names. cfg may be NULL. */
+int trial_replay_prepare(store *st, const rig_config *cfg, int64_t source, const char *video, trial_replay **out,
+                         char *why, size_t why_len);
+/* create + execute on one connection (no cancel). */
+int trial_replay_run(trial_replay *r, store *st, const char *note, void (*progress)(void *u, long frame, long total),
+                     void *u, int64_t *new_id, trial_result *res, char *why, size_t why_len);
 
 #endif

@@ -146,15 +146,8 @@ static void replay_outside_recording(store *st, int64_t id, double meas, double 
     fclose(f);
     free(smp);
     assert_true(isfinite(t0));
-    vis_calib cal = rec.camera; /* in the video's (cropped) pixels */
-    cal.clamp_left_px[0] -= rec.roi.x;
-    cal.clamp_left_px[1] -= rec.roi.y;
-    cal.clamp_right_px[0] -= rec.roi.x;
-    cal.clamp_right_px[1] -= rec.roi.y;
-    if (cal.principal_px[0] >= 0) {
-        cal.principal_px[0] -= rec.roi.x;
-        cal.principal_px[1] -= rec.roi.y;
-    }
+    vis_calib cal; /* in the video's (cropped) pixels */
+    trial_record_video_calib(&rec, &cal);
     vis_error ve;
     assert_int_equal(vis_calib_save(&cal, cam, &ve), VIS_OK);
     f = fopen(ini, "w");
@@ -333,7 +326,10 @@ static void mock_trial_then_replay(void **state)
     assert_int_equal(store_open(db, &st, why, sizeof why), STORE_OK);
     int64_t rid = 0;
     trial_result r;
-    rc = trial_replay_run(st, id, NULL, &rid, &r, NULL, NULL, why, sizeof why);
+    trial_replay *rep = NULL;
+    rc = trial_replay_prepare(st, NULL, id, NULL, &rep, why, sizeof why);
+    if (rc == 0) rc = trial_replay_run(rep, st, NULL, NULL, NULL, &rid, &r, why, sizeof why);
+    trial_replay_free(rep);
     if (rc) fprintf(stderr, "replay: %s\n", why);
     assert_int_equal(rc, 0);
     double frame_dw = 0.01 / 30.0 / 0.2; /* shear rate / fps / l */
