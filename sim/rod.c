@@ -28,6 +28,7 @@ const char *rod_status_message(rod_status s)
     case ROD_ERR_LINESEARCH: return "the line search could not reduce the residual (diverged)";
     case ROD_ERR_BRANCH_LOST: return "the requested branch no longer exists";
     case ROD_ERR_TIME_LIMIT: return "the protocol reached its step cap";
+    case ROD_ERR_ROUTE_CAP: return "the route reached its cap on static solves";
     }
     return "unknown error";
 }

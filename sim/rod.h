@@ -46,7 +46,8 @@ typedef enum rod_status {
     ROD_ERR_MAXITER,     /* Newton reached its iteration cap without converging */
     ROD_ERR_LINESEARCH,  /* the line search could not reduce the residual */
     ROD_ERR_BRANCH_LOST, /* the requested branch ceased to exist (e.g. past its fold) */
-    ROD_ERR_TIME_LIMIT   /* the protocol reached its step cap */
+    ROD_ERR_TIME_LIMIT,  /* the protocol reached its step cap */
+    ROD_ERR_ROUTE_CAP    /* a route stage reached its cap on static solves (rod_route.c) */
 } rod_status;
 
 const char *rod_status_message(rod_status s);

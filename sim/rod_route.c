@@ -1,6 +1,7 @@
 /* rod_route.c: quasi-static stepping (see rod_route.h). */
 #include "rod_route.h"
 #include "rod_observe.h"
+#include "rod_stability.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -72,15 +73,62 @@ typedef struct stage {
  *
  * Predictor: after two converged states the free DOFs are extrapolated along the secant through
  * them (the path is smooth in p), which starts Newton within a few iterations of the new state;
- * before that, the affine move of the nodes with the clamp. The affine move alone is a poor
- * start for long compressions: it shortens every edge, the compressed edges make the Hessian
- * indefinite, and Newton needed 12-50 shifted iterations per step.
- * Step: from 1 / nsteps, halved on failure (at most 10 halvings in a row), grown by half while
- * Newton converges in at most 5 iterations, never beyond 2 / nsteps.
+ * before that, the affine move of the nodes with the clamp (the plain predictor). The affine move
+ * alone is a poor start for long compressions: it shortens every edge, the compressed edges make
+ * the Hessian indefinite, and Newton needed 12-50 shifted iterations per step. A secant start that
+ * ends in a non-finite value (ROD_ERR_NAN: a trial state with a degenerate edge or frame) is a
+ * failed trial, not the end of the route: the same step is retried once from the plain predictor
+ * on the last converged state, then halved as any other failure.
+ * Step: from 1 / nsteps, halved on failure, grown by half while Newton converges in at most 5
+ * iterations, never beyond 2 / nsteps nor below 2^-ROUTE_MIN_STEP_LOG2 / nsteps. Every accepted
+ * step therefore advances p by at least that minimum, so the secant's p - p_prev never vanishes.
+ * (Without the minimum, steps that failed at 50 iterations and succeeded at 0 iterations (a
+ * state already within the loose tolerance) shrank the step geometrically to below one ulp of
+ * p: p + dp == p was accepted, p_prev = p, and the next secant coefficient (pn - p) / (p - p_prev)
+ * was 0 / 0, which wrote NaN into every free DOF.)
+ * Stop: a failure that would cut the step below the minimum ends the stage. Its status is
+ * ROD_ERR_BRANCH_LOST when the last converged state has a (verified) negative eigenvalue of the
+ * Hessian: the stable state being followed has ceased to exist; otherwise the status of the
+ * last failed solve (iteration cap, line search, ...). At most ROUTE_SOLVES_PER_STEP * nsteps
+ * solves per stage (ROD_ERR_ROUTE_CAP). The residual reported on failure is the last failed
+ * solve's when finite, else the last converged state's.
  * Tolerance: intermediate states only seed the next step, so they are solved to a looser
  * residual (ROUTE_LOOSE, relative to E I1 / l^2, or the scene's if looser); the stage's last
  * state is solved to the scene's tolerance. */
 #define ROUTE_LOOSE 1e-3
+#define ROUTE_MIN_STEP_LOG2 10   /* smallest step 2^-10 / nsteps: the former cap of 10 halvings */
+#define ROUTE_SOLVES_PER_STEP 40 /* cap on static solves per stage, per nominal step */
+
+/* Why the stage stopped at its smallest step (see run_stage): a verified negative eigenvalue of
+ * the Hessian at the last converged state says the followed branch has lost its stability. */
+static rod_status stop_reason(rod *r, rod_status last_failure)
+{
+    int nf = rod_nfree(r);
+    double *H = calloc((size_t)nf * (ROD_BAND + 1), sizeof(double));
+    rod_stab_ws *w = rod_stab_ws_alloc(nf);
+    rod_status st = last_failure;
+    if (H && w) {
+        rod_inertia in;
+        char why[160];
+        rod_hessian_add(r, 1.0, H);
+        if (rod_inertia_eval(H, nf, ROD_INERTIA_SHIFT_REL, w, &in, why, sizeof why) == ROD_OK && in.verified &&
+            in.n_negative > 0)
+            st = ROD_ERR_BRANCH_LOST;
+    }
+    free(H);
+    rod_stab_ws_free(w);
+    return st;
+}
+
+/* Residual of the current state over the force scale, without moving it (a solve capped at zero
+ * iterations only evaluates the residual). */
+static double state_residual(rod *r, rod_solver *s, rod_newton_opts o)
+{
+    rod_newton_report nr;
+    o.max_iterations = 0;
+    rod_newton_solve(r, s, &o, &nr);
+    return nr.residual_rel;
+}
 
 static rod_status run_stage(rod *r, rod_solver *s, const rod_scene *sc, const stage *g, int nsteps,
                             rod_route_report *rep)
@@ -96,26 +144,37 @@ static rod_status run_stage(rod *r, rod_solver *s, const rod_scene *sc, const st
         return ROD_ERR_ALLOC;
     }
     double p = 0.0, p_prev = 0.0, dp = 1.0 / nsteps, dp_max = 2.0 / nsteps;
-    int halvings = 0, have_prev = 0;
-    rod_status st = ROD_OK;
+    double dp_min = ldexp(1.0 / nsteps, -ROUTE_MIN_STEP_LOG2);
+    int have_prev = 0, plain = 0, solves = 0, max_solves = ROUTE_SOLVES_PER_STEP * nsteps;
+    rod_status st = ROD_OK, last_failure = ROD_OK;
+    double fail_res = NAN;
     rod_state_save(r, s, 0);
     memcpy(q0, r->q, sizeof(double) * nd);
     while (p < 1.0) {
+        if (solves >= max_solves) {
+            st = ROD_ERR_ROUTE_CAP;
+            break;
+        }
         double pn = fmin(1.0, p + dp);
         if (1.0 - pn < 0.25 * dp) pn = 1.0; /* no sliver of a last step */
         double dl_old = g->dl0 + p * (g->dl1 - g->dl0), dl = g->dl0 + pn * (g->dl1 - g->dl0);
-        if (have_prev) {
+        int secant = have_prev && !plain;
+        if (secant) {
+            /* p - p_prev >= dp_min > 0: every accepted step advanced p by at least dp_min. */
             double c = (pn - p) / (p - p_prev);
             for (int k = ROD_FREE_BEGIN; k < r->free_end; k++) r->q[k] = q0[k] + c * (q0[k] - q1[k]);
             rod_set_clamps(r, dl, 0.0);
         } else {
             move_clamps(r, dl_old, 0.0, dl, 0.0);
         }
+        if (rep->inject_nan_solve > 0 && rep->solves + 1 == rep->inject_nan_solve)
+            r->q[r->free_end - 1] = NAN; /* fault injection (rod_route.h) */
         double f = g->f0 + pn * (g->f1 - g->f0);
         rod_set_folds(r, f, f);
         o.tolerance = pn >= 1.0 ? tol_final : tol_loose;
         rod_newton_report nr;
         st = rod_newton_solve(r, s, &o, &nr);
+        solves++;
         rep->solves++;
         rep->newton_iterations += nr.iterations;
         rep->residual_rel = nr.residual_rel;
@@ -125,24 +184,35 @@ static rod_status run_stage(rod *r, rod_solver *s, const rod_scene *sc, const st
             memcpy(q1, q0, sizeof(double) * nd);
             memcpy(q0, r->q, sizeof(double) * nd);
             have_prev = 1;
+            plain = 0;
             rod_state_save(r, s, 0);
-            halvings = 0;
             if (nr.iterations <= 5) dp = fmin(1.5 * dp, dp_max);
             continue;
         }
+        last_failure = st;
+        rep->last_failure = st;
+        if (isfinite(nr.residual_rel)) fail_res = nr.residual_rel;
         rod_state_restore(r, s, 0);
         rod_set_folds(r, g->f0 + p * (g->f1 - g->f0), g->f0 + p * (g->f1 - g->f0));
-        if (++halvings > 10) {
-            rep->reached = p;
-            free(q0);
-            free(q1);
-            return st;
+        if (secant && st == ROD_ERR_NAN) {
+            plain = 1; /* the same step once more, from the plain predictor */
+            continue;
+        }
+        plain = 0;
+        if (0.5 * dp < dp_min) {
+            st = stop_reason(r, last_failure);
+            break;
         }
         dp *= 0.5;
     }
-    rep->reached = 1.0;
     free(q0);
     free(q1);
+    if (st != ROD_OK) {
+        rep->reached = p;
+        rep->residual_rel = isfinite(fail_res) ? fail_res : state_residual(r, s, o);
+        return st;
+    }
+    rep->reached = 1.0;
     return ROD_OK;
 }
 

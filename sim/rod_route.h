@@ -9,9 +9,13 @@
  *      crease angle and the crease stiffness factor together from 0 to their scene values at
  *      fixed Delta L. together: ramp compression and creases at the same time.
  * Every stage is a sequence of static Newton solves started from the secant through the last
- * two states, whose increments halve on failure (at most 10 halvings in a row) and grow while
- * Newton converges quickly; intermediate states are solved to a looser residual than the last
- * one (rod_route.c). Tests check that both routes end in the same equilibrium. */
+ * two states, whose increments halve on failure (down to 2^-10 of the nominal step) and grow
+ * while Newton converges quickly; intermediate states are solved to a looser residual than the
+ * last one (rod_route.c). A trial that ends in a non-finite value is a failed step (retried from
+ * the affine predictor), never the end of the route. A stage that cannot go on stops with a named
+ * reason: the branch lost (the last converged state is unstable), else the last failed solve's
+ * status, or the cap on solves; the last converged state is left in the rod. Tests check that
+ * both routes end in the same equilibrium. */
 #ifndef RIBBON_SIM_ROD_ROUTE_H
 #define RIBBON_SIM_ROD_ROUTE_H
 
@@ -23,10 +27,16 @@ typedef struct rod_route_report {
     int newton_iterations; /* total Newton iterations */
     double residual_rel;   /* final residual over the force scale */
     double reached;        /* fraction of the last stage reached before a failure (1 on success) */
+    rod_status last_failure; /* status of the last failed solve (ROD_OK if none failed) */
+    int inject_nan_solve;  /* input, fault injection for tests: when > 0, the trial state of that
+                            * solve (1-based, as counted in solves) gets a NaN in a free DOF, as a
+                            * predictor gone wrong would give; 0 (the {0} initialiser) in production */
 } rod_route_report;
 
 /* branch: +1 upper (Delta Z > 0), -1 lower. Leaves the rod in equilibrium at Delta L, Delta W = 0
- * with the creases at full angle. */
+ * with the creases at full angle. On a failure (other than ROD_ERR_ALLOC) residual_rel is finite:
+ * the last failed solve's
+ * residual, or the residual of the state left in the rod. */
 rod_status rod_route_to_state(rod *r, rod_solver *s, const rod_scene *sc, int branch,
                               rod_route_report *rep);
 

@@ -19,8 +19,9 @@
  * REFUSED: the loader refused the scene, naming the key and where it was set. FAILED: a stage
  * stopped with a status and a message (allowed: a named failure is the required behaviour of a
  * case that cannot be computed). Never allowed: a non-finite number anywhere, an empty reason,
- * an OK status with a residual above tolerance, a hang (every loop is capped; ctest's timeout is
- * the backstop). Cases whose outcome is a property of the scene (the refusals, the base) assert it
+ * an OK status with a residual above tolerance, a route that stops on a non-finite trial state
+ * (ROD_ERR_NAN while the state it leaves is finite) or without a finite residual, a hang (every
+ * loop is capped; ctest's timeout is the backstop). Cases whose outcome is a property of the scene (the refusals, the base) assert it
  * exactly. The table of cases is printed.
  *
  * Usage: test_stiff_matrix [FAMILY], FAMILY one of the names in `families` below (default load);
@@ -185,11 +186,17 @@ static void run_slice(const rod_scene *sc, result *res)
     st = rod_route_to_state(r, dyn.s, sc, +1, &rr);
     res->route_s = wall_now() - t0;
     if (st != ROD_OK) {
-        char why[200];
-        snprintf(why, sizeof why, "%.0f%% of the route done, residual %.3g", 100.0 * rr.reached,
-                 isfinite(rr.residual_rel) ? rr.residual_rel : -1.0);
+        char why[200], last[100] = "";
+        if (rr.last_failure != ROD_OK && rr.last_failure != st)
+            snprintf(last, sizeof last, "; last solve: %.80s", rod_status_message(rr.last_failure));
+        snprintf(why, sizeof why, "%.1f%% of the route done, residual %.3g%.100s", 100.0 * rr.reached,
+                 isfinite(rr.residual_rel) ? rr.residual_rel : -1.0, last);
         fail_at(res, "route", "%.150s (%.200s)", rod_status_message(st), why);
         CHECK(rod_finite(r) || st == ROD_ERR_NAN, "the state went non-finite without ROD_ERR_NAN");
+        /* The route leaves its last converged state: a trial state that went non-finite is a failed
+         * step, so a route failure is never a NaN with a finite state, and its residual is real. */
+        CHECK(!(st == ROD_ERR_NAN && rod_finite(r)), "the route stopped on a non-finite trial state");
+        CHECK(isfinite(rr.residual_rel), "the route stopped without a finite residual");
         goto done;
     }
     res->route_res = static_residual(r);
