@@ -35,8 +35,7 @@ typedef struct rod_route_report {
 
 /* branch: +1 upper (Delta Z > 0), -1 lower. Leaves the rod in equilibrium at Delta L, Delta W = 0
  * with the creases at full angle. On a failure (other than ROD_ERR_ALLOC) residual_rel is finite:
- * the last failed solve's
- * residual, or the residual of the state left in the rod. */
+ * the last failed solve's residual, or the residual of the state left in the rod. */
 rod_status rod_route_to_state(rod *r, rod_solver *s, const rod_scene *sc, int branch,
                               rod_route_report *rep);
 
