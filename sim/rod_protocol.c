@@ -24,6 +24,11 @@ static double shear_at(double t, double rate, double T)
     return rate * (t - 0.5 * T);
 }
 
+/* Adaptive step control before the snap is detected (see the loop). */
+#define ADAPT_CHANGE 2e-3        /* target change of Delta Z and of A per step */
+#define ADAPT_CHANGE_MOVING 0.03 /* the same once Delta Z moves faster than the onset speed */
+#define ADAPT_GROWTH 0.05        /* target relative growth of |A| per step */
+
 static double wall_now(void)
 {
     struct timespec ts;
@@ -45,6 +50,7 @@ rod_predict_opts rod_predict_opts_fast(const rod_scene *sc)
     o.adaptive = 1;
     o.quasi_static = 1;
     o.post_snap_dt_max = 5.0 * sc->dt;
+    o.end_after_swing = 1;
     return o;
 }
 
@@ -105,14 +111,15 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
     double dz_prev = ob.dz, a_prev = ob.a;
     double onset_dw = 0.0, t_detect = 0.0, peak = 0.0;
     double slow = 0.1 * sc->snap_speed;
-    int detected = 0;
+    int detected = 0, swing_over = 0;
+    double snap_dir = 0.0; /* sign of d(Delta Z)/dt when the snap was detected */
     long cap = (long)ceil(sc->shear_max / rate / dt_base + o->post_snap_time / dt_base) + 1000;
     out->stage_shear = 1;
     out->stage_damping = sc->damping > 0.0;
 
     for (;;) {
         if (!detected && dw >= sc->shear_max - 1e-12) break;
-        if (detected && t - t_detect >= o->post_snap_time) break;
+        if (detected && (t - t_detect >= o->post_snap_time || swing_over)) break;
         if (out->steps + out->rejected >= cap) {
             st = ROD_ERR_TIME_LIMIT;
             if (err) snprintf(err, errlen, "step cap of %ld reached at Delta W = %g", cap, dw);
@@ -150,12 +157,11 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
                 continue;
             }
         } else if (o->adaptive && h > dt_base) {
-            /* Fast mode resolves every fast motion with the base step: a long step that moved
-             * the ribbon noticeably is redone shorter, and so is one during which the asymmetry
-             * grew by more than 5%: the ribbon is near an instability, where the growth from the
-             * imperfection sets the snap. */
-            if (fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev)) > 2e-3 ||
-                fabs(ob.a - a_prev) > 0.05 * fabs(a_prev) + 1e-12) {
+            /* A long step that overshot the step control's targets (below) twice over is
+             * redone shorter. */
+            double target = fabs(ob.dz - dz_prev) / h >= slow ? ADAPT_CHANGE_MOVING : ADAPT_CHANGE;
+            if (fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev)) > 2.0 * target ||
+                fabs(ob.a - a_prev) > 2.0 * ADAPT_GROWTH * fabs(a_prev) + 1e-12) {
                 rod_dyn_reject(&dyn);
                 out->rejected++;
                 dt = fmax(0.25 * dt, dt_base);
@@ -184,9 +190,12 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
                 t_detect = t;
                 out->snapped = 1;
                 out->snap_dw = onset_dw;
+                snap_dir = ob.dz > dz_prev ? 1.0 : -1.0;
             }
         } else {
             peak = fmax(peak, fabs(ob.a));
+            /* The first swing ends where Delta Z turns round. */
+            if (o->end_after_swing && (ob.dz - dz_prev) * snap_dir < 0.0) swing_over = 1;
         }
         if (o->on_sample) {
             rod_sample smp = {t, dw, ob.dz, ob.a, ob.a_cam, ob.dz_cam, 0, dyn.kinetic, dyn.work, dyn.damped};
@@ -194,17 +203,27 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
             if (o->on_sample(o->user, &smp, r)) break;
         }
         double change = fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev));
-        int a_steady = fabs(ob.a - a_prev) <= 0.02 * fabs(a_prev) + 1e-12;
+        double growth = fabs(ob.a - a_prev) / (fabs(a_prev) + 1e-12);
         dz_prev = ob.dz;
         a_prev = ob.a;
         if (o->adaptive && detected && o->post_snap_dt_max > dt_base) {
             if (change < 0.03) dt = fmin(1.5 * dt, o->post_snap_dt_max);
             else dt = fmax(0.5 * dt, dt_base);
+        } else if (o->adaptive && !detected) {
+            /* The next step aims at a change of ADAPT_CHANGE in Delta Z and in A, and at a
+             * relative growth of |A| of ADAPT_GROWTH: near an instability the asymmetry grows
+             * exponentially from the imperfection, and that growth sets the snap's delay. Once
+             * Delta Z moves faster than the onset speed the onset is behind (as long as it does
+             * not slow down again) and the steps need only find the detection, so the change
+             * aimed at is ADAPT_CHANGE_MOVING. The step changes by a factor within [0.5, 1.5],
+             * grows only while Newton needs at most 4 iterations, and stays within
+             * [dt, 100 dt]. */
+            double ratio = (speed >= slow ? ADAPT_CHANGE_MOVING : ADAPT_CHANGE) / fmax(change, 1e-300);
+            ratio = fmin(ratio, ADAPT_GROWTH / fmax(growth, 1e-300));
+            ratio = fmin(fmax(ratio, 0.5), nr.iterations <= 4 ? 1.5 : 1.0);
+            dt = fmin(fmax(dt * ratio, dt_base), dt_max);
         } else if (o->adaptive) {
-            if (!detected && change < 5e-4 && nr.iterations <= 4 && speed < 0.5 * slow && a_steady)
-                dt = fmin(1.5 * dt, dt_max);
-            else if (change > 1e-3 || speed >= 0.5 * slow || detected)
-                dt = fmax(0.5 * dt, dt_base);
+            dt = fmax(0.5 * dt, dt_base);
         } else if (dt < dt_base) {
             dt = fmin(2.0 * dt, dt_base);
         }
@@ -213,6 +232,7 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
     out->asymmetric = out->snapped && peak > sc->asym_threshold;
     out->dz_final = ob.dz;
     out->sim_time = t;
+    if (out->snapped) out->snap_end_t = t;
 
 done:
     out->count = r->count;
