@@ -171,7 +171,7 @@ static const rig_key rig_keys[] = {
     {"sim", "dt", RIG_KEY_DOUBLE, OFF(sim.dt), 0, 0.0, 10.0, MINO, 0, NULL, "s", "from the ladder",
      "explicit time step (wins over target_error)"},
     {"sim", "fast", RIG_KEY_ENUM, OFF(sim.fast), 0, 0, 0, SWITCH, 0, off_on, "-", "on",
-     "adaptive time step (ribbon-sim --fast)"},
+     "adaptive step control (README \"Fast mode\", phase 2 from Delta W = 0; every step is kept)"},
     {"sim", "ladder_nodes", RIG_KEY_LIST, OFF(sim), 0, 5, 100001, 0, 0, NULL, "1",
      "39,75,147,291",
      "N of each rung, increasing; dt scales with the edge length, the finest rung at the scene's dt"},
