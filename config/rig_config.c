@@ -28,6 +28,7 @@
 #include <unistd.h>
 
 #include "cfg_ini.h"
+#include "cfg_keys.h"
 #include "scene_file.h"
 
 _Static_assert(sizeof(rig_mode) == sizeof(int), "enums are stored as ints");
@@ -204,6 +205,8 @@ static const char *const section_list[] = {"rig",      "rail.compress", "rail.sh
 #define SEC_RAIL_COMPRESS 1
 #define SEC_RAIL_SHEAR 2
 
+static const cfg_key_table key_table = CFG_KEY_TABLE(rig_keys, rig_key);
+
 const rig_key *rig_config_keys(size_t *n)
 {
     if (n) *n = N_KEYS;
@@ -258,28 +261,7 @@ typedef struct load_ctx {
 
 static int find_section(const char *s)
 {
-    for (size_t i = 0; i < N_SECTIONS; i++)
-        if (strcmp(s, section_list[i]) == 0) return (int)i;
-    return -1;
-}
-
-static int find_key(const char *section, const char *name)
-{
-    for (size_t i = 0; i < N_KEYS; i++)
-        if (strcmp(section, rig_keys[i].section) == 0 && strcmp(name, rig_keys[i].name) == 0)
-            return (int)i;
-    return -1;
-}
-
-static int key_index(const char *dotted)
-{
-    for (size_t i = 0; i < N_KEYS; i++) {
-        size_t ls = strlen(rig_keys[i].section);
-        if (strncmp(dotted, rig_keys[i].section, ls) == 0 && dotted[ls] == '.' &&
-            strcmp(dotted + ls + 1, rig_keys[i].name) == 0)
-            return (int)i;
-    }
-    return -1;
+    return cfg_names_find(section_list, N_SECTIONS, s);
 }
 
 static int is_scene_section(const char *section)
@@ -321,7 +303,7 @@ static cfg_status fail_key(load_ctx *c, cfg_status st, const char *dotted, const
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    int k = key_index(dotted);
+    int k = cfg_keys_find_dotted(&key_table, dotted);
     origin from = {0, 0};
     if (k >= 0) from = c->from[k];
     return fail_from(c, st, from, dotted, "%s", msg);
@@ -370,16 +352,13 @@ static const char *skip_space(const char *p)
 
 static void range_text(const rig_key *k, char *buf, size_t len)
 {
-    int plain = strcmp(k->unit, "1") == 0 || strcmp(k->unit, "-") == 0;
-    snprintf(buf, len, "%c%.10g, %.10g%c%s%s", (k->flags & MINO) ? '(' : '[', k->min, k->max,
-             (k->flags & MAXO) ? ')' : ']', plain ? "" : " ", plain ? "" : k->unit);
+    cfg_range_text(buf, len, k->min, k->max, (k->flags & MINO) != 0, (k->flags & MAXO) != 0,
+                   k->unit);
 }
 
 static int in_range(const rig_key *k, double v)
 {
-    if ((k->flags & MINO) ? !(v > k->min) : !(v >= k->min)) return 0;
-    if ((k->flags & MAXO) ? !(v < k->max) : !(v <= k->max)) return 0;
-    return 1;
+    return cfg_in_range(v, k->min, k->max, (k->flags & MINO) != 0, (k->flags & MAXO) != 0);
 }
 
 /* One finite number; the whole of `value` must be used. */
@@ -552,14 +531,8 @@ static cfg_status value_apply(const rig_key *k, const char *value, rig_config *c
                 return CFG_OK;
             }
         }
-        char allowed[96] = "";
-        size_t used = 0;
-        for (int i = 0; k->names[i]; i++) {
-            int w = snprintf(allowed + used, sizeof allowed - used, "%s%s", i ? " | " : "",
-                             k->names[i]);
-            if (w < 0 || (size_t)w >= sizeof allowed - used) break;
-            used += (size_t)w;
-        }
+        char allowed[96];
+        cfg_names_join(k->names, allowed, sizeof allowed);
         snprintf(msg, len, "'%s' is not one of: %s", shown, allowed);
         return CFG_ERR_VALUE;
     }
@@ -733,17 +706,10 @@ static int on_key(void *user, int line, const char *section, const char *name, c
     }
     if (s == SEC_RAIL_COMPRESS || s == SEC_RAIL_SHEAR)
         return rail_keep(c, s == SEC_RAIL_COMPRESS ? 0 : 1, from, name, value);
-    int k = find_key(section, name);
+    int k = cfg_keys_find(&key_table, section, name);
     if (k < 0) {
-        char known[320] = "";
-        size_t used = 0;
-        for (size_t i = 0; i < N_KEYS; i++) {
-            if (strcmp(rig_keys[i].section, section) != 0) continue;
-            int w = snprintf(known + used, sizeof known - used, "%s%s", used ? " " : "",
-                             rig_keys[i].name);
-            if (w < 0 || (size_t)w >= sizeof known - used) break;
-            used += (size_t)w;
-        }
+        char known[320];
+        cfg_keys_known(&key_table, section, known, sizeof known);
         fail_from(c, CFG_ERR_UNKNOWN, from, dotted, "unknown key in [%s] (known: %s)", section,
                   known);
         return 1;
@@ -765,25 +731,15 @@ static int on_key(void *user, int line, const char *section, const char *name, c
 
 /* ---- overrides ------------------------------------------------------------------------------- */
 
-static int copy_trimmed(char *dst, size_t dstlen, const char *b, const char *e)
-{
-    while (b < e && isspace((unsigned char)*b)) b++;
-    while (e > b && isspace((unsigned char)e[-1])) e--;
-    if ((size_t)(e - b) >= dstlen) return -1;
-    memcpy(dst, b, (size_t)(e - b));
-    dst[e - b] = '\0';
-    return 0;
-}
-
 static cfg_status override_apply(load_ctx *c, int index)
 {
     const char *ovr = c->overrides[index];
     origin from = {0, index + 1};
     char key[128], value[CFG_INI_MAX_LINE + 1], msg[sizeof c->err->message];
-    const char *eq = ovr ? strchr(ovr, '=') : NULL;
-    if (!eq || copy_trimmed(key, sizeof key, ovr, eq) < 0)
+    cfg_split sp = cfg_override_split(ovr, key, sizeof key, value, sizeof value);
+    if (sp == CFG_SPLIT_NO_EQUALS || sp == CFG_SPLIT_KEY_TOO_LONG)
         return fail_from(c, CFG_ERR_SYNTAX, from, NULL, "expected section.key=value");
-    if (copy_trimmed(value, sizeof value, eq + 1, eq + strlen(eq)) < 0)
+    if (sp == CFG_SPLIT_VALUE_TOO_LONG)
         return fail_from(c, CFG_ERR_VALUE, from, key, "value too long");
     char *dot = strrchr(key, '.');
     if (!dot || dot == key || !dot[1])
@@ -802,7 +758,7 @@ static cfg_status override_apply(load_ctx *c, int index)
     if (s == SEC_RAIL_COMPRESS || s == SEC_RAIL_SHEAR)
         return rail_keep(c, s == SEC_RAIL_COMPRESS ? 0 : 1, from, name, value) ? c->err->status
                                                                                 : CFG_OK;
-    int k = find_key(section, name);
+    int k = cfg_keys_find(&key_table, section, name);
     if (k < 0)
         return fail_from(c, CFG_ERR_UNKNOWN, from, dotted,
                          "unknown key (README \"Rig files\" lists the keys)");
@@ -989,7 +945,7 @@ static int is_address(const char *addr)
 
 static int key_set(const load_ctx *c, const char *dotted)
 {
-    int k = key_index(dotted);
+    int k = cfg_keys_find_dotted(&key_table, dotted);
     return k >= 0 && (c->from[k].line || c->from[k].override);
 }
 
@@ -1067,7 +1023,7 @@ static cfg_status check_mode(load_ctx *c)
                         "'%s' is not an IPv4 or IPv6 address or localhost", api->listen);
     api->loopback = is_loopback(api->listen);
     if (!api->loopback && !api->token[0]) {
-        int k = key_index("api.listen");
+        int k = cfg_keys_find_dotted(&key_table, "api.listen");
         char why[160];
         snprintf(why, sizeof why,
                  "api.listen = %s (%s %d) is not a loopback address: a token of at least %d "

@@ -26,6 +26,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cfg_keys.h"
+
 _Static_assert(sizeof(rod_route) == sizeof(int), "rod_route is stored as an int");
 
 #define OFF(field) offsetof(rod_scene, field)
@@ -103,6 +105,8 @@ static const char *const section_names[] = {"ribbon", "folds",    "imperfection"
                                             "protocol", "solver", "snap"};
 #define N_SECTIONS (sizeof section_names / sizeof section_names[0])
 
+static const cfg_key_table key_table = CFG_KEY_TABLE(scene_keys, cfg_scene_key);
+
 const cfg_scene_key *cfg_scene_keys(size_t *n)
 {
     if (n) *n = N_KEYS;
@@ -126,28 +130,7 @@ static void copy_printable(char *dst, size_t dstlen, const char *src, size_t src
 
 static int find_section(const char *section)
 {
-    for (size_t i = 0; i < N_SECTIONS; i++)
-        if (strcmp(section, section_names[i]) == 0) return (int)i;
-    return -1;
-}
-
-static int find_key(const char *section, const char *name)
-{
-    for (size_t i = 0; i < N_KEYS; i++)
-        if (strcmp(section, scene_keys[i].section) == 0 && strcmp(name, scene_keys[i].name) == 0)
-            return (int)i;
-    return -1;
-}
-
-static int find_dotted_key(const char *dotted)
-{
-    for (size_t i = 0; i < N_KEYS; i++) {
-        size_t ls = strlen(scene_keys[i].section);
-        if (strncmp(dotted, scene_keys[i].section, ls) == 0 && dotted[ls] == '.' &&
-            strcmp(dotted + ls + 1, scene_keys[i].name) == 0)
-            return (int)i;
-    }
-    return -1;
+    return cfg_names_find(section_names, N_SECTIONS, section);
 }
 
 static void key_dotted(const cfg_scene_key *k, char *buf, size_t len)
@@ -158,17 +141,14 @@ static void key_dotted(const cfg_scene_key *k, char *buf, size_t len)
 /* Describe the allowed range of a numeric key, e.g. "(0, 100] m". */
 static void range_text(const cfg_scene_key *k, char *buf, size_t len)
 {
-    int dimensionless = strcmp(k->unit, "1") == 0 || strcmp(k->unit, "-") == 0;
-    snprintf(buf, len, "%c%.10g, %.10g%c%s%s", (k->flags & CFG_KEY_MIN_OPEN) ? '(' : '[', k->min,
-             k->max, (k->flags & CFG_KEY_MAX_OPEN) ? ')' : ']', dimensionless ? "" : " ",
-             dimensionless ? "" : k->unit);
+    cfg_range_text(buf, len, k->min, k->max, (k->flags & CFG_KEY_MIN_OPEN) != 0,
+                   (k->flags & CFG_KEY_MAX_OPEN) != 0, k->unit);
 }
 
 static int in_range(const cfg_scene_key *k, double v)
 {
-    if ((k->flags & CFG_KEY_MIN_OPEN) ? !(v > k->min) : !(v >= k->min)) return 0;
-    if ((k->flags & CFG_KEY_MAX_OPEN) ? !(v < k->max) : !(v <= k->max)) return 0;
-    return 1;
+    return cfg_in_range(v, k->min, k->max, (k->flags & CFG_KEY_MIN_OPEN) != 0,
+                        (k->flags & CFG_KEY_MAX_OPEN) != 0);
 }
 
 /* Parse one finite number at *p (leading whitespace allowed), advancing *p past it.
@@ -303,14 +283,8 @@ static cfg_status value_apply(const cfg_scene_key *k, const char *value, rod_sce
                 return CFG_OK;
             }
         }
-        char allowed[128] = "";
-        size_t used = 0;
-        for (int i = 0; k->names && k->names[i] && used < sizeof allowed; i++) {
-            int n = snprintf(allowed + used, sizeof allowed - used, "%s%s", i ? " | " : "",
-                             k->names[i]);
-            if (n < 0) break;
-            used += (size_t)n;
-        }
+        char allowed[128];
+        cfg_names_join(k->names, allowed, sizeof allowed);
         copy_printable(shown, sizeof shown, value, strlen(value));
         snprintf(msg, msglen, "'%s' is not one of: %s", shown, allowed);
         return CFG_ERR_VALUE;
@@ -472,17 +446,10 @@ static int on_key(void *user, const char *section, const char *name, const char 
         fail_line(c, CFG_ERR_SYNTAX, dotted, "empty key name before '='");
         return 0;
     }
-    int k = find_key(section, name);
+    int k = cfg_keys_find(&key_table, section, name);
     if (k < 0) {
-        char known[256] = "";
-        size_t used = 0;
-        for (size_t i = 0; i < N_KEYS; i++) {
-            if (strcmp(scene_keys[i].section, section) != 0) continue;
-            int w = snprintf(known + used, sizeof known - used, "%s%s", used ? " " : "",
-                             scene_keys[i].name);
-            if (w < 0 || (size_t)w >= sizeof known - used) break;
-            used += (size_t)w;
-        }
+        char known[256];
+        cfg_keys_known(&key_table, section, known, sizeof known);
         fail_line(c, CFG_ERR_UNKNOWN, dotted, "unknown key in [%s] (known: %s)", section, known);
         return 0;
     }
@@ -515,17 +482,6 @@ static void fail_override(load_ctx *c, cfg_status st, const char *ovr, const cha
     snprintf(e->message, sizeof e->message, "%s", msg);
 }
 
-/* Trim whitespace in place-free fashion: copy [b, e) of src, trimmed, into dst. */
-static int copy_trimmed(char *dst, size_t dstlen, const char *b, const char *e)
-{
-    while (b < e && isspace((unsigned char)*b)) b++;
-    while (e > b && isspace((unsigned char)e[-1])) e--;
-    if ((size_t)(e - b) >= dstlen) return -1;
-    memcpy(dst, b, (size_t)(e - b));
-    dst[e - b] = '\0';
-    return 0;
-}
-
 static void override_apply(load_ctx *c, const char *ovr, int index)
 {
     char key[128], value[CFG_SCENE_MAX_LINE + 1], msg[sizeof c->err->message];
@@ -533,20 +489,20 @@ static void override_apply(load_ctx *c, const char *ovr, int index)
         fail_override(c, CFG_ERR_SYNTAX, NULL, NULL, "missing override text");
         return;
     }
-    const char *eq = strchr(ovr, '=');
-    if (!eq) {
+    switch (cfg_override_split(ovr, key, sizeof key, value, sizeof value)) {
+    case CFG_SPLIT_OK:
+        break;
+    case CFG_SPLIT_NO_EQUALS:
         fail_override(c, CFG_ERR_SYNTAX, ovr, NULL, "expected section.key=value");
         return;
-    }
-    if (copy_trimmed(key, sizeof key, ovr, eq) < 0) {
+    case CFG_SPLIT_KEY_TOO_LONG:
         fail_override(c, CFG_ERR_UNKNOWN, ovr, NULL, "unknown key (name too long)");
         return;
-    }
-    if (copy_trimmed(value, sizeof value, eq + 1, eq + strlen(eq)) < 0) {
+    case CFG_SPLIT_VALUE_TOO_LONG:
         fail_override(c, CFG_ERR_VALUE, ovr, key, "value too long");
         return;
     }
-    int k = find_dotted_key(key);
+    int k = cfg_keys_find_dotted(&key_table, key);
     if (k < 0) {
         fail_override(c, CFG_ERR_UNKNOWN, ovr, key,
                       strchr(key, '.') ? "unknown key (see README, \"Scene files\")"
@@ -595,7 +551,7 @@ static void check_scene(load_ctx *c, const char *const *overrides)
     e->status = CFG_ERR_CHECK;
     snprintf(e->key, sizeof e->key, "%s", key);
     snprintf(e->message, sizeof e->message, "%s", msg[0] ? msg : "the scene is not usable");
-    int k = find_dotted_key(key);
+    int k = cfg_keys_find_dotted(&key_table, key);
     snprintf(e->file, sizeof e->file, "%s", c->name);
     e->line = 0;
     e->where[0] = '\0';
