@@ -56,12 +56,42 @@ cfg_status cfg_error_set(cfg_error *err, cfg_status st, cfg_origin origin, const
     return st;
 }
 
-static void fail_line(ini_ctx *c, const char *fmt, const char *arg)
+cfg_status cfg_error_from(cfg_error *err, cfg_status st, const char *file, int line,
+                          const char *ovr, const char *key, const char *msg)
+{
+    if (ovr) return cfg_error_set(err, st, CFG_ORIGIN_OVERRIDE, "--set", 0, ovr, key, "%s", msg);
+    if (line > 0) return cfg_error_set(err, st, CFG_ORIGIN_LINE, file, line, NULL, key, "%s", msg);
+    return cfg_error_set(err, st, CFG_ORIGIN_DEFAULT, file, 0, "default", key, "%s", msg);
+}
+
+int cfg_ini_count_lines(const char *text, size_t len)
+{
+    int lines = 0;
+    for (size_t i = 0; i < len; i++)
+        if (text[i] == '\n') lines++;
+    if (len > 0 && text[len - 1] != '\n') lines++;
+    return lines;
+}
+
+/* The first syntax error at the current line; `key` (may be NULL) goes to cfg_error.key. */
+static void fail_line_key(ini_ctx *c, const char *key, const char *fmt, const char *arg)
 {
     if (c->failed) return;
     c->failed = 1;
-    cfg_error_set(c->err, CFG_ERR_SYNTAX, CFG_ORIGIN_LINE, c->name, c->lineno, NULL, NULL, fmt,
+    cfg_error_set(c->err, CFG_ERR_SYNTAX, CFG_ORIGIN_LINE, c->name, c->lineno, NULL, key, fmt,
                   arg ? arg : "");
+}
+
+static void fail_line(ini_ctx *c, const char *fmt, const char *arg)
+{
+    fail_line_key(c, NULL, fmt, arg);
+}
+
+/* The handler's longest line (see cfg_ini_handler.max_line). */
+static size_t max_line(const ini_ctx *c)
+{
+    size_t m = c->h->max_line;
+    return m == 0 || m > CFG_INI_MAX_LINE ? CFG_INI_MAX_LINE : m;
 }
 
 /* Check one line (leading whitespace already removed, no newline) the way inih will read it. */
@@ -88,11 +118,7 @@ static void line_check(ini_ctx *c, const char *line, size_t n)
             fail_line(c, "unexpected text after the section header%s", NULL);
             return;
         }
-        char name[64];
-        if (i - 1 >= sizeof name) {
-            fail_line(c, "section name longer than 63 characters%s", NULL);
-            return;
-        }
+        char name[CFG_INI_MAX_LINE + 1]; /* i - 1 < n <= max_line(c) */
         memcpy(name, line + 1, i - 1);
         name[i - 1] = '\0';
         if (c->h->section && c->h->section(c->user, c->lineno, name)) c->failed = 1;
@@ -133,10 +159,10 @@ static char *line_read(char *str, int num, void *stream)
         n = (size_t)(nul - (c->text + start));
     }
     size_t cap = (size_t)num - 2; /* room for '\n' and '\0' */
-    if (cap > CFG_INI_MAX_LINE) cap = CFG_INI_MAX_LINE;
+    if (cap > max_line(c)) cap = max_line(c);
     if (n > cap) {
         char msg[64];
-        snprintf(msg, sizeof msg, "%d", CFG_INI_MAX_LINE);
+        snprintf(msg, sizeof msg, "%zu", max_line(c));
         fail_line(c, "line longer than %s characters", msg);
         n = cap;
     }
@@ -154,11 +180,13 @@ static int on_key(void *user, const char *section, const char *name, const char 
     if (section[0] == '\0') {
         char shown[64];
         cfg_text_printable(shown, sizeof shown, name, strlen(name));
-        fail_line(c, "key '%s' before any [section]", shown);
+        fail_line_key(c, c->h->name_keys ? name : NULL, "key '%s' before any [section]", shown);
         return 0;
     }
     if (name[0] == '\0') {
-        fail_line(c, "empty key name before '='%s", NULL);
+        char dotted[128];
+        snprintf(dotted, sizeof dotted, "%s.", section);
+        fail_line_key(c, c->h->name_keys ? dotted : NULL, "empty key name before '='%s", NULL);
         return 0;
     }
     if (c->h->key && c->h->key(c->user, c->lineno, section, name, value)) {

@@ -284,13 +284,12 @@ static cfg_status fail_from(load_ctx *c, cfg_status st, origin from, const char 
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    if (from.override)
-        return cfg_error_set(c->err, st, CFG_ORIGIN_OVERRIDE, "--set", 0,
-                             c->overrides[from.override - 1], dotted, "%s", msg);
-    if (from.line)
-        return cfg_error_set(c->err, st, CFG_ORIGIN_LINE, c->name, from.line, NULL, dotted, "%s",
-                             msg);
-    return cfg_error_set(c->err, st, CFG_ORIGIN_DEFAULT, c->name, 0, "default", dotted, "%s", msg);
+    const char *ovr = NULL;
+    if (from.override) {
+        ovr = c->overrides[from.override - 1];
+        if (!ovr) ovr = ""; /* a NULL override is still an override */
+    }
+    return cfg_error_from(c->err, st, c->name, from.line, ovr, dotted, msg);
 }
 
 /* Fail blaming table key `dotted` where it was last set. */
@@ -638,6 +637,11 @@ static cfg_status value_apply(const rig_key *k, const char *value, rig_config *c
 static int on_section(void *user, int line, const char *section)
 {
     load_ctx *c = user;
+    if (strlen(section) > 63) {
+        cfg_error_set(c->err, CFG_ERR_SYNTAX, CFG_ORIGIN_LINE, c->name, line, NULL, NULL,
+                      "section name longer than 63 characters");
+        return 1;
+    }
     int s = find_section(section);
     if (s < 0) {
         char shown[64];
@@ -1212,12 +1216,10 @@ static void config_defaults(rig_config *cfg)
 static cfg_status load_all(load_ctx *c, const char *dir, const char *text, size_t len,
                            int n_overrides)
 {
-    static const cfg_ini_handler h = {on_section, on_key};
+    static const cfg_ini_handler h = {.section = on_section, .key = on_key};
     cfg_status st = cfg_ini_parse(c->name, text, len, &h, c, c->err);
     if (st) return st;
-    for (size_t i = 0; i < len; i++)
-        if (text[i] == '\n') c->lines++;
-    if (len > 0 && text[len - 1] != '\n') c->lines++;
+    c->lines = cfg_ini_count_lines(text, len);
     for (int i = 0; i < n_overrides; i++)
         if ((st = override_apply(c, i))) return st;
     if (!c->from[0].line) return fail_missing(c, "rig", "rig.mode", "rig | mock | replay");

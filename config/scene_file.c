@@ -1,17 +1,14 @@
-/* scene_file.c: the scene INI loader. Owns the scene key table and the rules of the file format.
+/* scene_file.c: the scene INI loader. Owns the scene key table: which sections and keys a scene has
+ * and what their values may be.
  *
  * Design, in the spirit of Redis's config.c: one static table lists every key with its type,
  * bounds, offset into rod_scene, unit and doc; parsing, range checks, the "missing key" rule and
  * the README table all follow from it, so adding a key is one row here plus one line of README.
  *
- * inih does the splitting (sections, "key = value", comments, whitespace). We feed it through our
- * own line reader rather than ini_parse(), for three reasons: (1) Debian builds inih without
- * line numbers in the handler, and the reader, called exactly once per physical line, gives them
- * back; (2) the reader refuses what inih would silently accept or mangle: NUL bytes, over-long
- * lines (inih would split them), "key: value", text after "[section]", and it strips leading
- * whitespace so an indented line is never taken as a continuation of the previous value
- * (inih's multi-line mode); (3) we never touch inih's run-time option globals, which other
- * loaders in the same process share.
+ * The file format's rules (line numbers, NUL bytes, over-long lines, "key: value", text after
+ * "[section]", indented lines, keys before any section) are cfg_ini's, shared with the rig
+ * loader; this file says which sections and keys exist and what their values may be. Scene lines
+ * are at most CFG_SCENE_MAX_LINE long, and the two key-line syntax errors name the key.
  *
  * The first error wins and is reported with file, line (or `--set` text, or "default") and
  * "section.key". Nothing is written to the caller's scene unless the whole load succeeds. */
@@ -19,13 +16,13 @@
 
 #include <ctype.h>
 #include <errno.h>
-#include <ini.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "cfg_ini.h"
 #include "cfg_keys.h"
 
 _Static_assert(sizeof(rod_route) == sizeof(int), "rod_route is stored as an int");
@@ -115,19 +112,6 @@ const cfg_scene_key *cfg_scene_keys(size_t *n)
 
 /* ---- helpers ------------------------------------------------------------------------------ */
 
-/* Copy text into dst for an error message: at most dstlen - 1 bytes, non-printable bytes as '?',
- * so a corrupt file cannot put control characters on the user's terminal. */
-static void copy_printable(char *dst, size_t dstlen, const char *src, size_t srclen)
-{
-    if (dstlen == 0) return;
-    size_t n = 0;
-    for (size_t i = 0; i < srclen && src[i] && n + 1 < dstlen; i++) {
-        unsigned char ch = (unsigned char)src[i];
-        dst[n++] = (ch >= 0x20 && ch < 0x7f) ? (char)ch : '?';
-    }
-    dst[n] = '\0';
-}
-
 static int find_section(const char *section)
 {
     return cfg_names_find(section_names, N_SECTIONS, section);
@@ -160,12 +144,12 @@ static cfg_status parse_number(const char **p, double *out, char *msg, size_t ms
     errno = 0;
     double v = strtod(*p, &end);
     if (end == *p) {
-        copy_printable(shown, sizeof shown, *p, strlen(*p));
+        cfg_text_printable(shown, sizeof shown, *p, strlen(*p));
         snprintf(msg, msglen, "'%s' is not a number", shown);
         return CFG_ERR_VALUE;
     }
     if (!isfinite(v)) {
-        copy_printable(shown, sizeof shown, *p, (size_t)(end - *p));
+        cfg_text_printable(shown, sizeof shown, *p, (size_t)(end - *p));
         snprintf(msg, msglen, "'%s' is not a finite number", shown);
         return CFG_ERR_VALUE;
     }
@@ -183,8 +167,8 @@ static const char *skip_space(const char *p)
 static cfg_status trailing_error(const char *rest, const char *value, char *msg, size_t msglen)
 {
     char shown_rest[48], shown_value[64];
-    copy_printable(shown_rest, sizeof shown_rest, rest, strlen(rest));
-    copy_printable(shown_value, sizeof shown_value, value, strlen(value));
+    cfg_text_printable(shown_rest, sizeof shown_rest, rest, strlen(rest));
+    cfg_text_printable(shown_value, sizeof shown_value, value, strlen(value));
     snprintf(msg, msglen, "unexpected text '%s' after the value in '%s'", shown_rest, shown_value);
     return CFG_ERR_VALUE;
 }
@@ -225,13 +209,13 @@ static cfg_status value_apply(const cfg_scene_key *k, const char *value, rod_sce
         errno = 0;
         long long v = strtoll(p, &end, 10);
         if (end == p) {
-            copy_printable(shown, sizeof shown, value, strlen(value));
+            cfg_text_printable(shown, sizeof shown, value, strlen(value));
             snprintf(msg, msglen, "'%s' is not an integer", shown);
             return CFG_ERR_VALUE;
         }
         p = skip_space(end);
         if (*p == '.' || *p == 'e' || *p == 'E') {
-            copy_printable(shown, sizeof shown, value, strlen(value));
+            cfg_text_printable(shown, sizeof shown, value, strlen(value));
             snprintf(msg, msglen, "'%s' is not an integer (write whole numbers without '.' or 'e')",
                      shown);
             return CFG_ERR_VALUE;
@@ -239,7 +223,7 @@ static cfg_status value_apply(const cfg_scene_key *k, const char *value, rod_sce
         if (*p) return trailing_error(p, value, msg, msglen);
         if (errno == ERANGE || !in_range(k, (double)v)) {
             range_text(k, range, sizeof range);
-            copy_printable(shown, sizeof shown, value, strlen(value));
+            cfg_text_printable(shown, sizeof shown, value, strlen(value));
             snprintf(msg, msglen, "%s is out of range: allowed %s (%s)", shown, range, k->doc);
             return CFG_ERR_RANGE;
         }
@@ -285,7 +269,7 @@ static cfg_status value_apply(const cfg_scene_key *k, const char *value, rod_sce
         }
         char allowed[128];
         cfg_names_join(k->names, allowed, sizeof allowed);
-        copy_printable(shown, sizeof shown, value, strlen(value));
+        cfg_text_printable(shown, sizeof shown, value, strlen(value));
         snprintf(msg, msglen, "'%s' is not one of: %s", shown, allowed);
         return CFG_ERR_VALUE;
     }
@@ -304,10 +288,7 @@ typedef struct key_origin {
 
 typedef struct load_ctx {
     const char *name; /* file name for errors */
-    const char *text;
-    size_t len;
-    size_t pos;        /* next byte the reader hands out */
-    int lineno;        /* physical lines handed to inih so far = the current line */
+    int lines;        /* lines in the file */
     int section_line[N_SECTIONS]; /* first line of each [section], 0 if absent */
     rod_scene scene;
     key_origin origin[N_KEYS];
@@ -315,171 +296,71 @@ typedef struct load_ctx {
     int failed;
 } load_ctx;
 
-/* Record the first error at the current line. */
-static void fail_line(load_ctx *c, cfg_status st, const char *key, const char *fmt, ...)
+/* Record the first error, at line `line` of the file. Returns 1 (stop), as the reader wants. */
+static int fail_line(load_ctx *c, int line, cfg_status st, const char *key, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+static int fail_line(load_ctx *c, int line, cfg_status st, const char *key, const char *fmt, ...)
 {
-    if (c->failed) return;
+    if (c->failed) return 1;
     c->failed = 1;
-    cfg_error *e = c->err;
-    e->status = st;
-    e->origin = CFG_ORIGIN_LINE;
-    e->line = c->lineno;
-    snprintf(e->file, sizeof e->file, "%s", c->name);
-    e->where[0] = '\0';
-    copy_printable(e->key, sizeof e->key, key ? key : "", key ? strlen(key) : 0);
+    char msg[sizeof c->err->message];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(e->message, sizeof e->message, fmt, ap);
+    vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
+    cfg_error_set(c->err, st, CFG_ORIGIN_LINE, c->name, line, NULL, key, "%s", msg);
+    return 1;
 }
 
-/* Check one line (leading whitespace already removed, no newline) the way inih will read it, and
- * refuse what inih would accept silently. */
-static void line_classify(load_ctx *c, const char *line, size_t n)
-{
-    while (n > 0 && isspace((unsigned char)line[n - 1])) n--;
-    if (n == 0 || line[0] == ';' || line[0] == '#') return;
-    if (line[0] == '[') {
-        size_t i = 1;
-        while (i < n && line[i] != ']') i++;
-        if (i >= n) {
-            fail_line(c, CFG_ERR_SYNTAX, NULL, "section header without a closing ']'");
-            return;
-        }
-        char name[64];
-        if (i - 1 >= sizeof name) {
-            fail_line(c, CFG_ERR_UNKNOWN, NULL, "unknown section (name too long)");
-            return;
-        }
-        memcpy(name, line + 1, i - 1);
-        name[i - 1] = '\0';
-        for (size_t j = 0; j + 1 < i; j++) {
-            if (name[j] == ';' && j > 0 && isspace((unsigned char)name[j - 1])) {
-                fail_line(c, CFG_ERR_SYNTAX, NULL, "comment inside a section header");
-                return;
-            }
-        }
-        size_t r = i + 1;
-        while (r < n && isspace((unsigned char)line[r])) r++;
-        if (r < n && line[r] != ';' && line[r] != '#') {
-            fail_line(c, CFG_ERR_SYNTAX, NULL, "unexpected text after the section header");
-            return;
-        }
-        int s = find_section(name);
-        if (s < 0) {
-            char shown[64];
-            copy_printable(shown, sizeof shown, name, strlen(name));
-            fail_line(c, CFG_ERR_UNKNOWN, NULL,
-                      "unknown section [%s] (known: ribbon folds imperfection mesh protocol "
-                      "solver snap)",
-                      shown);
-            return;
-        }
-        if (!c->section_line[s]) c->section_line[s] = c->lineno;
-        return;
-    }
-    /* key = value: inih splits at the first '=' or ':' not inside an inline comment. */
-    for (size_t i = 0; i < n; i++) {
-        if (line[i] == '=') return;
-        if (line[i] == ':') {
-            fail_line(c, CFG_ERR_SYNTAX, NULL, "expected 'key = value' ('=' not ':')");
-            return;
-        }
-        if (line[i] == ';' && i > 0 && isspace((unsigned char)line[i - 1])) break;
-    }
-    fail_line(c, CFG_ERR_SYNTAX, NULL, "expected 'key = value', '[section]' or a comment");
-}
-
-/* inih reader: hand out exactly one physical line per call, so that the count of calls is the
- * line number. Strips a UTF-8 BOM on line 1, leading whitespace and a trailing '\r'. */
-static char *line_read(char *str, int num, void *stream)
-{
-    load_ctx *c = stream;
-    if (c->pos >= c->len || num < 3) return NULL;
-    size_t start = c->pos, end = c->pos;
-    while (end < c->len && c->text[end] != '\n') end++;
-    c->pos = end < c->len ? end + 1 : end;
-    c->lineno++;
-
-    if (c->lineno == 1 && end - start >= 3 && (unsigned char)c->text[start] == 0xEF &&
-        (unsigned char)c->text[start + 1] == 0xBB && (unsigned char)c->text[start + 2] == 0xBF)
-        start += 3;
-    if (end > start && c->text[end - 1] == '\r') end--;
-    while (start < end && isspace((unsigned char)c->text[start])) start++;
-
-    size_t n = end - start;
-    const char *nul = memchr(c->text + start, '\0', n);
-    if (nul) {
-        fail_line(c, CFG_ERR_SYNTAX, NULL, "NUL byte in the line (not a text file?)");
-        n = (size_t)(nul - (c->text + start));
-    }
-    size_t cap = (size_t)num - 2; /* room for '\n' and '\0' */
-    if (cap > CFG_SCENE_MAX_LINE) cap = CFG_SCENE_MAX_LINE;
-    if (n > cap) {
-        fail_line(c, CFG_ERR_SYNTAX, NULL, "line longer than %d characters",
-                  CFG_SCENE_MAX_LINE);
-        n = cap;
-    }
-    memcpy(str, c->text + start, n);
-    str[n] = '\n';
-    str[n + 1] = '\0';
-    line_classify(c, str, n);
-    return str;
-}
-
-static int on_key(void *user, const char *section, const char *name, const char *value)
+/* A [section] header (cfg_ini has checked its syntax): only the scene's sections exist. */
+static int on_section(void *user, int line, const char *section)
 {
     load_ctx *c = user;
-    if (c->failed) return 1; /* only the first error is reported */
-    char dotted[128], shown[64];
+    if (strlen(section) > 63)
+        return fail_line(c, line, CFG_ERR_UNKNOWN, NULL, "unknown section (name too long)");
+    int s = find_section(section);
+    if (s < 0) {
+        char shown[64];
+        cfg_text_printable(shown, sizeof shown, section, strlen(section));
+        return fail_line(c, line, CFG_ERR_UNKNOWN, NULL,
+                         "unknown section [%s] (known: ribbon folds imperfection mesh protocol "
+                         "solver snap)",
+                         shown);
+    }
+    if (!c->section_line[s]) c->section_line[s] = line;
+    return 0;
+}
+
+static int on_key(void *user, int line, const char *section, const char *name, const char *value)
+{
+    load_ctx *c = user;
+    char dotted[128];
     snprintf(dotted, sizeof dotted, "%s.%s", section, name);
-    if (section[0] == '\0') {
-        copy_printable(shown, sizeof shown, name, strlen(name));
-        fail_line(c, CFG_ERR_SYNTAX, name, "key '%s' before any [section]", shown);
-        return 0;
-    }
-    if (find_section(section) < 0) {
-        fail_line(c, CFG_ERR_UNKNOWN, dotted, "unknown section [%s]", section);
-        return 0;
-    }
-    if (name[0] == '\0') {
-        fail_line(c, CFG_ERR_SYNTAX, dotted, "empty key name before '='");
-        return 0;
-    }
+    if (find_section(section) < 0) /* on_section refused it already */
+        return fail_line(c, line, CFG_ERR_UNKNOWN, dotted, "unknown section [%s]", section);
     int k = cfg_keys_find(&key_table, section, name);
     if (k < 0) {
         char known[256];
         cfg_keys_known(&key_table, section, known, sizeof known);
-        fail_line(c, CFG_ERR_UNKNOWN, dotted, "unknown key in [%s] (known: %s)", section, known);
-        return 0;
+        return fail_line(c, line, CFG_ERR_UNKNOWN, dotted, "unknown key in [%s] (known: %s)",
+                         section, known);
     }
     key_dotted(&scene_keys[k], dotted, sizeof dotted);
-    if (c->origin[k].line) {
-        fail_line(c, CFG_ERR_DUPLICATE, dotted, "set twice (first on line %d)", c->origin[k].line);
-        return 0;
-    }
+    if (c->origin[k].line)
+        return fail_line(c, line, CFG_ERR_DUPLICATE, dotted, "set twice (first on line %d)",
+                         c->origin[k].line);
     char msg[sizeof c->err->message];
     cfg_status st = value_apply(&scene_keys[k], value, &c->scene, msg, sizeof msg);
-    if (st) {
-        fail_line(c, st, dotted, "%s", msg);
-        return 0;
-    }
-    c->origin[k].line = c->lineno;
-    return 1;
+    if (st) return fail_line(c, line, st, dotted, "%s", msg);
+    c->origin[k].line = line;
+    return 0;
 }
 
 static void fail_override(load_ctx *c, cfg_status st, const char *ovr, const char *key,
                           const char *msg)
 {
-    cfg_error *e = c->err;
     c->failed = 1;
-    e->status = st;
-    e->origin = CFG_ORIGIN_OVERRIDE;
-    e->line = 0;
-    snprintf(e->file, sizeof e->file, "--set");
-    copy_printable(e->where, sizeof e->where, ovr ? ovr : "(null)", ovr ? strlen(ovr) : 6);
-    copy_printable(e->key, sizeof e->key, key ? key : "", key ? strlen(key) : 0);
-    snprintf(e->message, sizeof e->message, "%s", msg);
+    cfg_error_from(c->err, st, NULL, 0, ovr ? ovr : "(null)", key, msg);
 }
 
 static void override_apply(load_ctx *c, const char *ovr, int index)
@@ -527,15 +408,15 @@ static void check_required(load_ctx *c)
         char dotted[128];
         key_dotted(k, dotted, sizeof dotted);
         int s = find_section(k->section);
-        int line = (s >= 0 && c->section_line[s]) ? c->section_line[s] : c->lineno;
-        c->lineno = line;
+        int line = (s >= 0 && c->section_line[s]) ? c->section_line[s] : c->lines;
         if (line > 0) {
-            fail_line(c, CFG_ERR_MISSING, dotted, "required key missing%s (%s, %s)",
+            fail_line(c, line, CFG_ERR_MISSING, dotted, "required key missing%s (%s, %s)",
                       c->section_line[s] ? " from this section" : " (no such section)", k->unit,
                       k->doc);
         } else {
-            fail_line(c, CFG_ERR_MISSING, dotted, "required key missing (the file is empty)");
-            c->err->origin = CFG_ORIGIN_FILE;
+            cfg_error_set(c->err, CFG_ERR_MISSING, CFG_ORIGIN_FILE, c->name, 0, NULL, dotted,
+                          "required key missing (the file is empty)");
+            c->failed = 1;
         }
     }
 }
@@ -546,29 +427,15 @@ static void check_scene(load_ctx *c, const char *const *overrides)
     char msg[sizeof c->err->message], key[96];
     msg[0] = key[0] = '\0';
     if (rod_scene_check(&c->scene, msg, sizeof msg, key, sizeof key) == 0) return;
-    cfg_error *e = c->err;
     c->failed = 1;
-    e->status = CFG_ERR_CHECK;
-    snprintf(e->key, sizeof e->key, "%s", key);
-    snprintf(e->message, sizeof e->message, "%s", msg[0] ? msg : "the scene is not usable");
+    const char *why = msg[0] ? msg : "the scene is not usable";
     int k = cfg_keys_find_dotted(&key_table, key);
-    snprintf(e->file, sizeof e->file, "%s", c->name);
-    e->line = 0;
-    e->where[0] = '\0';
     if (k < 0) {
-        e->origin = CFG_ORIGIN_FILE;
-    } else if (c->origin[k].override) {
-        const char *ovr = overrides[c->origin[k].override - 1];
-        e->origin = CFG_ORIGIN_OVERRIDE;
-        snprintf(e->file, sizeof e->file, "--set");
-        copy_printable(e->where, sizeof e->where, ovr, strlen(ovr));
-    } else if (c->origin[k].line) {
-        e->origin = CFG_ORIGIN_LINE;
-        e->line = c->origin[k].line;
-    } else {
-        e->origin = CFG_ORIGIN_DEFAULT;
-        snprintf(e->where, sizeof e->where, "default");
+        cfg_error_set(c->err, CFG_ERR_CHECK, CFG_ORIGIN_FILE, c->name, 0, NULL, key, "%s", why);
+        return;
     }
+    const char *ovr = c->origin[k].override ? overrides[c->origin[k].override - 1] : NULL;
+    cfg_error_from(c->err, CFG_ERR_CHECK, c->name, c->origin[k].line, ovr, key, why);
 }
 
 cfg_status cfg_scene_parse(const char *name, const char *text, size_t len,
@@ -580,26 +447,16 @@ cfg_status cfg_scene_parse(const char *name, const char *text, size_t len,
     cfg_error_clear(err);
     if (!name) name = "(scene)";
     load_ctx *c = calloc(1, sizeof *c);
-    if (!c) {
-        err->status = CFG_ERR_IO;
-        snprintf(err->file, sizeof err->file, "%s", name);
-        snprintf(err->message, sizeof err->message, "out of memory");
-        return err->status;
-    }
+    if (!c) return cfg_error_set(err, CFG_ERR_IO, CFG_ORIGIN_FILE, name, 0, NULL, NULL,
+                                 "out of memory");
     c->name = name;
-    c->text = text ? text : "";
-    c->len = text ? len : 0;
     c->scene = rod_scene_default();
     c->err = err;
 
-    int rc = ini_parse_stream(line_read, c, on_key, c);
-    if (!c->failed && rc != 0) {
-        /* inih saw an error we did not (should not happen: line_classify mirrors it). */
-        if (rc > 0) c->lineno = rc;
-        fail_line(c, rc > 0 ? CFG_ERR_SYNTAX : CFG_ERR_IO, NULL,
-                  rc > 0 ? "malformed line" : "the INI parser failed (out of memory?)");
-        if (rc <= 0) err->origin = CFG_ORIGIN_FILE, err->line = 0;
-    }
+    static const cfg_ini_handler h = {.section = on_section, .key = on_key,
+                                      .max_line = CFG_SCENE_MAX_LINE, .name_keys = 1};
+    if (cfg_ini_parse(name, text, len, &h, c, err)) c->failed = 1;
+    c->lines = cfg_ini_count_lines(text ? text : "", text ? len : 0);
     if (!c->failed) check_required(c);
     if (!c->failed && n_overrides > 0 && !overrides)
         fail_override(c, CFG_ERR_SYNTAX, NULL, NULL, "missing override list");
