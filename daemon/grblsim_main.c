@@ -2,22 +2,14 @@
  * drivers/grbl_sim.c). Prints "pty: PATH" as its first line on stdout, optionally makes a symlink
  * to it, then serves until SIGINT/SIGTERM (the handler only sets a flag). */
 #include <errno.h>
-#include <math.h>
-#include <signal.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
 #include "grbl_sim.h"
+#include "railsim_cli.h"
 
-static volatile sig_atomic_t g_stop; /* set by the signal handler only */
-
-static void on_signal(int sig)
-{
-    (void)sig;
-    g_stop = 1;
-}
+#define PROG "ribbon-grblsim"
 
 static void usage(FILE *f)
 {
@@ -42,15 +34,21 @@ static void usage(FILE *f)
 
 static int parse_double(const char *opt, const char *v, double lo, double hi, double *out)
 {
-    char *end = NULL;
-    double x = v ? strtod(v, &end) : NAN;
-    if (!v || end == v || *end || !(x >= lo && x <= hi)) {
-        fprintf(stderr, "ribbon-grblsim: %s needs a number in [%g, %g], got '%s'\n", opt, lo, hi,
-                v ? v : "");
-        return -1;
-    }
-    *out = x;
-    return 0;
+    return railsim_cli_num(PROG, opt, v, lo, hi, out);
+}
+
+/* "A[,B[,C]]": one number in [lo, hi] per axis into out[0..]; axes not named keep their value. */
+static int parse_axes(const char *opt, const char *v, double lo, double hi, double *out)
+{
+    if (!v)
+        return 1;
+    char buf[128];
+    snprintf(buf, sizeof buf, "%s", v);
+    int bad = 0;
+    char *save = NULL, *tok = strtok_r(buf, ",", &save);
+    for (int k = 0; tok && k < GRBL_SIM_AXES && !bad; k++, tok = strtok_r(NULL, ",", &save))
+        bad = parse_double(opt, tok, lo, hi, &out[k]);
+    return bad;
 }
 
 int main(int argc, char **argv)
@@ -79,27 +77,11 @@ int main(int argc, char **argv)
                 p.travel_mm[k] = x;
             i++;
         } else if (!strcmp(a, "--start")) {
-            if (!v) {
-                bad = 1;
-            } else {
-                char buf[128];
-                snprintf(buf, sizeof buf, "%s", v);
-                char *save = NULL, *tok = strtok_r(buf, ",", &save);
-                for (int k = 0; tok && k < GRBL_SIM_AXES && !bad; k++, tok = strtok_r(NULL, ",", &save))
-                    bad = parse_double(a, tok, 0, 1e5, &p.start_mm[k]);
-            }
+            bad = parse_axes(a, v, 0, 1e5, p.start_mm);
             i++;
         } else if (!strcmp(a, "--wco")) {
-            if (!v) {
-                bad = 1;
-            } else {
-                char buf[128];
-                snprintf(buf, sizeof buf, "%s", v);
-                char *save = NULL, *tok = strtok_r(buf, ",", &save);
-                for (int k = 0; tok && k < GRBL_SIM_AXES && !bad; k++, tok = strtok_r(NULL, ",", &save))
-                    bad = parse_double(a, tok, -1e5, 1e5, &p.wco_mm[k]);
-                p.report_wpos = true;
-            }
+            bad = parse_axes(a, v, -1e5, 1e5, p.wco_mm);
+            p.report_wpos = v != NULL;
             i++;
         } else if (!strcmp(a, "--accel")) {
             bad = parse_double(a, v, 1e-3, 1e5, &p.accel_mm_s2);
@@ -117,7 +99,7 @@ int main(int argc, char **argv)
             i++;
         } else if (!strcmp(a, "--stall")) {
             if (!v || (v[0] != 'X' && v[0] != 'Y' && v[0] != 'Z') || v[1] != ':') {
-                fprintf(stderr, "ribbon-grblsim: --stall needs AXIS:MM, e.g. X:12.5\n");
+                fprintf(stderr, PROG ": --stall needs AXIS:MM, e.g. X:12.5\n");
                 bad = 1;
             } else {
                 bad = parse_double(a, v + 2, 0, 1e5, &p.stall_at_mm[v[0] - 'X']);
@@ -138,7 +120,7 @@ int main(int argc, char **argv)
             bad = parse_double(a, v, 0, 1e7, &duration);
             i++;
         } else {
-            fprintf(stderr, "ribbon-grblsim: unknown option '%s'\n", a);
+            fprintf(stderr, PROG ": unknown option '%s'\n", a);
             usage(stderr);
             return 2;
         }
@@ -148,7 +130,7 @@ int main(int argc, char **argv)
     grbl_sim *s = NULL;
     char why[256];
     if (grbl_sim_open(&s, &p, why, sizeof why) != RAIL_OK) {
-        fprintf(stderr, "ribbon-grblsim: %s\n", why);
+        fprintf(stderr, PROG ": %s\n", why);
         return 1;
     }
     printf("pty: %s\n", grbl_sim_path(s));
@@ -156,17 +138,12 @@ int main(int argc, char **argv)
     if (link) {
         unlink(link);
         if (symlink(grbl_sim_path(s), link) != 0) {
-            fprintf(stderr, "ribbon-grblsim: cannot link %s: %s\n", link, strerror(errno));
+            fprintf(stderr, PROG ": cannot link %s: %s\n", link, strerror(errno));
             grbl_sim_close(s);
             return 1;
         }
     }
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
-    grbl_sim_run(s, duration, &g_stop);
+    grbl_sim_run(s, duration, railsim_cli_catch_stop());
     if (link)
         unlink(link);
     grbl_sim_close(s);

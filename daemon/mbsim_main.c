@@ -2,21 +2,13 @@
  * `ribbon-mbsim --listen 127.0.0.1:PORT [--slave N]` prints "listening: HOST:PORT" as its first
  * line (PORT 0 picks a free port and prints it); `--rtu` serves Modbus RTU on a pseudo-terminal
  * instead and prints "pty: PATH". Serves until SIGINT/SIGTERM (the handler only sets a flag). */
-#include <math.h>
-#include <signal.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "mb_sim.h"
+#include "railsim_cli.h"
 
-static volatile sig_atomic_t g_stop; /* set by the signal handler only */
-
-static void on_signal(int sig)
-{
-    (void)sig;
-    g_stop = 1;
-}
+#define PROG "ribbon-mbsim"
 
 static void usage(FILE *f)
 {
@@ -43,14 +35,7 @@ static void usage(FILE *f)
 
 static int num(const char *opt, const char *v, double lo, double hi, double *out)
 {
-    char *end = NULL;
-    double x = v ? strtod(v, &end) : NAN;
-    if (!v || end == v || *end || !(x >= lo && x <= hi)) {
-        fprintf(stderr, "ribbon-mbsim: %s needs a number in [%g, %g], got '%s'\n", opt, lo, hi, v ? v : "");
-        return -1;
-    }
-    *out = x;
-    return 0;
+    return railsim_cli_num(PROG, opt, v, lo, hi, out);
 }
 
 int main(int argc, char **argv)
@@ -67,7 +52,7 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--listen")) {
             const char *c = v ? strrchr(v, ':') : NULL;
             if (!c || c == v || (size_t)(c - v) >= sizeof p.host) {
-                fprintf(stderr, "ribbon-mbsim: --listen needs HOST:PORT, got '%s'\n", v ? v : "");
+                fprintf(stderr, PROG ": --listen needs HOST:PORT, got '%s'\n", v ? v : "");
                 return 2;
             }
             memcpy(p.host, v, (size_t)(c - v));
@@ -110,7 +95,7 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--duration")) {
             bad = num(a, v, 0, 1e7, &duration);
         } else {
-            fprintf(stderr, "ribbon-mbsim: unknown option '%s'\n", a);
+            fprintf(stderr, PROG ": unknown option '%s'\n", a);
             usage(stderr);
             return 2;
         }
@@ -121,7 +106,7 @@ int main(int argc, char **argv)
     mb_sim *s = NULL;
     char why[256];
     if (mb_sim_open(&s, &p, why, sizeof why) != RAIL_OK) {
-        fprintf(stderr, "ribbon-mbsim: %s\n", why);
+        fprintf(stderr, PROG ": %s\n", why);
         return 1;
     }
     if (p.rtu)
@@ -129,12 +114,7 @@ int main(int argc, char **argv)
     else
         printf("listening: %s:%d\n", p.host, mb_sim_port(s));
     fflush(stdout);
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
-    mb_sim_run(s, duration, &g_stop);
+    mb_sim_run(s, duration, railsim_cli_catch_stop());
     mb_sim_close(s);
     return 0;
 }

@@ -16,11 +16,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <termios.h>
 #include <unistd.h>
 
 #include "rail_axis.h"
 #include "rail_clock.h"
+#include "rail_sim.h"
 
 #define SIM_QUEUE 15
 #define SIM_LINE_MAX 80
@@ -77,17 +77,6 @@ grbl_sim_params grbl_sim_params_default(void)
     return p;
 }
 
-static double rnd(grbl_sim *s)
-{
-    /* xorshift32: a private stream so fault runs replay with their seed. */
-    unsigned x = s->rng ? s->rng : 1u;
-    x ^= x << 13;
-    x ^= x >> 17;
-    x ^= x << 5;
-    s->rng = x;
-    return (double)(x >> 8) / 16777216.0;
-}
-
 static void out_raw(grbl_sim *s, const char *b, size_t n)
 {
     /* Non-blocking: if nobody reads and the pty buffer fills, replies are lost like on a
@@ -105,7 +94,7 @@ static void out_raw(grbl_sim *s, const char *b, size_t n)
 static void reply(grbl_sim *s, const char *text)
 {
     char buf[256];
-    if (s->p.garble_prob > 0.0 && rnd(s) < s->p.garble_prob) {
+    if (s->p.garble_prob > 0.0 && rail_sim_rand(&s->rng) < s->p.garble_prob) {
         size_t n = strlen(text);
         size_t keep = n / 2;
         if (keep > 100)
@@ -448,7 +437,7 @@ static void handle_byte(grbl_sim *s, unsigned char c)
 {
     switch (c) {
     case '?':
-        if (s->p.drop_prob > 0.0 && rnd(s) < s->p.drop_prob)
+        if (s->p.drop_prob > 0.0 && rail_sim_rand(&s->rng) < s->p.drop_prob)
             return;
         status_report(s);
         return;
@@ -485,7 +474,7 @@ static void handle_byte(grbl_sim *s, unsigned char c)
         s->line[s->line_len] = 0;
         s->line_len = 0;
         s->line_overflow = false;
-        if (s->p.drop_prob > 0.0 && rnd(s) < s->p.drop_prob)
+        if (s->p.drop_prob > 0.0 && rail_sim_rand(&s->rng) < s->p.drop_prob)
             return;
         if (overflow) {
             reply_error(s, 11);
@@ -563,8 +552,7 @@ static void advance(grbl_sim *s)
         double before = s->ax[i].pos_mm;
         rail_axis_step(&s->ax[i], dt);
         double st = s->p.stall_at_mm[i];
-        if (!isnan(st) && !s->stalled[i] &&
-            ((before < st && s->ax[i].pos_mm >= st) || (before > st && s->ax[i].pos_mm <= st))) {
+        if (!isnan(st) && !s->stalled[i] && rail_sim_crossed(before, s->ax[i].pos_mm, st)) {
             s->stalled[i] = true;
         }
         if (s->stalled[i]) {
@@ -631,18 +619,14 @@ rail_err grbl_sim_step(grbl_sim *s, double max_wait_s)
     return RAIL_OK;
 }
 
+static rail_err step_any(void *s, double max_wait_s)
+{
+    return grbl_sim_step(s, max_wait_s);
+}
+
 rail_err grbl_sim_run(grbl_sim *s, double duration_s, volatile sig_atomic_t *stop)
 {
-    double t0 = rail_clock_now(s->clock);
-    /* Capped: at most one iteration per 2 ms of the requested duration, or forever when asked. */
-    for (unsigned long it = 0; duration_s < 0.0 || it < (unsigned long)(duration_s * 2000.0) + 10; it++) {
-        if (stop && *stop)
-            break;
-        if (duration_s >= 0.0 && rail_clock_now(s->clock) - t0 >= duration_s)
-            break;
-        grbl_sim_step(s, 0.002);
-    }
-    return RAIL_OK;
+    return rail_sim_run(step_any, s, s->clock, duration_s, stop);
 }
 
 rail_err grbl_sim_open(grbl_sim **out, const grbl_sim_params *p, char *why, size_t n)
@@ -664,32 +648,18 @@ rail_err grbl_sim_open(grbl_sim **out, const grbl_sim_params *p, char *why, size
         return RAIL_E_NOMEM;
     }
     s->p = *p;
-    s->slave = -1;
-    s->master = posix_openpt(O_RDWR | O_NOCTTY);
-    if (s->master < 0 || grantpt(s->master) != 0 || unlockpt(s->master) != 0) {
-        snprintf(why, n, "grblsim: cannot create a pseudo-terminal: %s", strerror(errno));
-        if (s->master >= 0)
-            close(s->master);
-        free(s);
-        return RAIL_E_IO;
-    }
-    const char *name = ptsname(s->master);
-    rail_text_copy(s->path, sizeof s->path, name ? name : "");
-    /* Hold the slave open in raw mode: no echo back into our own input, and clients that come
-       and go never hang the pty up. */
-    s->slave = open(s->path, O_RDWR | O_NOCTTY);
-    struct termios tio;
-    if (s->slave < 0 || tcgetattr(s->slave, &tio) != 0) {
-        snprintf(why, n, "grblsim: cannot open %s: %s", s->path, strerror(errno));
+    /* The slave is held open in raw mode (rail_sim_pty_open); replies must not block. */
+    rail_sim_pty_err pe = rail_sim_pty_open(&s->master, &s->slave, s->path, sizeof s->path);
+    if (pe != RAIL_SIM_PTY_OK) {
+        if (pe == RAIL_SIM_PTY_MASTER)
+            snprintf(why, n, "grblsim: cannot create a pseudo-terminal: %s", strerror(errno));
+        else
+            snprintf(why, n, "grblsim: cannot open %s: %s", s->path, strerror(errno));
         grbl_sim_close(s);
         return RAIL_E_IO;
     }
-    cfmakeraw(&tio);
-    tcsetattr(s->slave, TCSANOW, &tio);
     int fl = fcntl(s->master, F_GETFL);
     fcntl(s->master, F_SETFL, fl | O_NONBLOCK);
-    fcntl(s->master, F_SETFD, FD_CLOEXEC);
-    fcntl(s->slave, F_SETFD, FD_CLOEXEC);
     s->clock = rail_clock_real();
     s->t_start = s->t_last = rail_clock_now(s->clock);
     for (int i = 0; i < p->n_axes; i++)

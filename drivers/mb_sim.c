@@ -15,7 +15,6 @@
 
 #include <arpa/inet.h>
 #include <errno.h>
-#include <fcntl.h>
 #include <math.h>
 #include <modbus.h>
 #include <netinet/in.h>
@@ -25,12 +24,12 @@
 #include <string.h>
 #include <sys/select.h>
 #include <sys/socket.h>
-#include <termios.h>
 #include <unistd.h>
 
 #include "rail_axis.h"
 #include "rail_clock.h"
 #include "rail_modbus.h"
+#include "rail_sim.h"
 
 #define MBS_CLIENTS 8
 #define MBS_REGS 64
@@ -77,16 +76,6 @@ mb_sim_params mb_sim_params_default(void)
     return p;
 }
 
-static double rnd(mb_sim *s)
-{
-    unsigned x = s->rng ? s->rng : 1u;
-    x ^= x << 13;
-    x ^= x >> 17;
-    x ^= x << 5;
-    s->rng = x;
-    return (double)(x >> 8) / 16777216.0;
-}
-
 static void raise_alarm(mb_sim *s, int code)
 {
     rail_axis_halt(&s->ax);
@@ -111,8 +100,7 @@ static void advance(mb_sim *s)
         double before = s->ax.pos_mm;
         rail_axis_step(&s->ax, dt);
         double st = s->p.stall_at_mm;
-        if (!isnan(st) && !s->stalled &&
-            ((before < st && s->ax.pos_mm >= st) || (before > st && s->ax.pos_mm <= st))) {
+        if (!isnan(st) && !s->stalled && rail_sim_crossed(before, s->ax.pos_mm, st)) {
             s->stalled = true;
             s->ax.pos_mm = st;
             raise_alarm(s, ALM_DEVIATION);
@@ -221,9 +209,9 @@ static bool serve_request(mb_sim *s, int client_fd)
         return true;
     }
     s->t_request = rail_clock_now(s->clock);
-    if (s->p.drop_prob > 0.0 && rnd(s) < s->p.drop_prob)
+    if (s->p.drop_prob > 0.0 && rail_sim_rand(&s->rng) < s->p.drop_prob)
         return true;
-    if (s->p.garble_prob > 0.0 && rnd(s) < s->p.garble_prob) {
+    if (s->p.garble_prob > 0.0 && rail_sim_rand(&s->rng) < s->p.garble_prob) {
         if (s->p.rtu) {
             s->corrupt = CORRUPT_CRC; /* the relay spoils the reply's CRC */
         } else {
@@ -235,10 +223,10 @@ static bool serve_request(mb_sim *s, int client_fd)
             (void)w;
             return true;
         }
-    } else if (s->p.rtu && s->p.wrong_id_prob > 0.0 && rnd(s) < s->p.wrong_id_prob) {
+    } else if (s->p.rtu && s->p.wrong_id_prob > 0.0 && rail_sim_rand(&s->rng) < s->p.wrong_id_prob) {
         s->corrupt = CORRUPT_ID;
     }
-    if (s->p.exception_prob > 0.0 && rnd(s) < s->p.exception_prob) {
+    if (s->p.exception_prob > 0.0 && rail_sim_rand(&s->rng) < s->p.exception_prob) {
         modbus_reply_exception(s->ctx, q, MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY);
         return true;
     }
@@ -338,17 +326,14 @@ rail_err mb_sim_step(mb_sim *s, double max_wait_s)
     return RAIL_OK;
 }
 
+static rail_err step_any(void *s, double max_wait_s)
+{
+    return mb_sim_step(s, max_wait_s);
+}
+
 rail_err mb_sim_run(mb_sim *s, double duration_s, volatile sig_atomic_t *stop)
 {
-    double t0 = rail_clock_now(s->clock);
-    for (unsigned long it = 0; duration_s < 0.0 || it < (unsigned long)(duration_s * 2000.0) + 10; it++) {
-        if (stop && *stop)
-            break;
-        if (duration_s >= 0.0 && rail_clock_now(s->clock) - t0 >= duration_s)
-            break;
-        mb_sim_step(s, 0.002);
-    }
-    return RAIL_OK;
+    return rail_sim_run(step_any, s, s->clock, duration_s, stop);
 }
 
 rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t n)
@@ -387,22 +372,12 @@ rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t n)
     modbus_set_indication_timeout(s->ctx, 0, 500000);
     if (p->rtu) {
         /* The server never opens a device: it reads and writes a socketpair, relayed to a pty. */
-        s->master = posix_openpt(O_RDWR | O_NOCTTY);
-        const char *name = NULL;
-        if (s->master >= 0 && grantpt(s->master) == 0 && unlockpt(s->master) == 0)
-            name = ptsname(s->master);
-        rail_text_copy(s->path, sizeof s->path, name ? name : "");
-        struct termios tio;
-        if (!name || (s->slave = open(s->path, O_RDWR | O_NOCTTY)) < 0 || tcgetattr(s->slave, &tio) != 0 ||
+        if (rail_sim_pty_open(&s->master, &s->slave, s->path, sizeof s->path) != RAIL_SIM_PTY_OK ||
             socketpair(AF_UNIX, SOCK_STREAM, 0, s->sv) != 0) {
             snprintf(why, n, "mbsim: cannot set up the RTU pseudo-terminal: %s", strerror(errno));
             mb_sim_close(s);
             return RAIL_E_IO;
         }
-        cfmakeraw(&tio);
-        tcsetattr(s->slave, TCSANOW, &tio);
-        fcntl(s->master, F_SETFD, FD_CLOEXEC);
-        fcntl(s->slave, F_SETFD, FD_CLOEXEC);
         modbus_set_socket(s->ctx, s->sv[0]);
     } else {
         s->listen_fd = modbus_tcp_listen(s->ctx, 4);
