@@ -33,6 +33,11 @@ store_err store_err_of_rc(int rc);
 store_err store_sql_fail(sqlite3 *db, int rc, char *why, size_t why_len, const char *what);
 
 store_err store_prepare(store *st, const char *sql, sqlite3_stmt **stmt, char *why, size_t why_len);
+/* One value looked up by one id: runs sql (one statement, ?1 = id). A row puts its first column in
+ * *out (skipped when out is NULL: an existence check); no row is STORE_E_NOTFOUND "<noun> <id>
+ * does not exist"; an SQLite failure is "<what>: <SQLite's message>". */
+store_err store_lookup_id(store *st, const char *sql, int64_t id, const char *noun, const char *what, int64_t *out,
+                          char *why, size_t why_len);
 /* Run one statement that returns no rows (BEGIN, COMMIT, UPDATE without results...). */
 store_err store_exec(store *st, const char *sql, char *why, size_t why_len);
 /* Run every statement of a constant script (migrations); stops at the first failure. */

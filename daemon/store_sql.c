@@ -63,6 +63,27 @@ store_err store_prepare(store *st, const char *sql, sqlite3_stmt **stmt, char *w
     return STORE_OK;
 }
 
+store_err store_lookup_id(store *st, const char *sql, int64_t id, const char *noun, const char *what, int64_t *out,
+                          char *why, size_t why_len)
+{
+    sqlite3_stmt *s;
+    store_err e = store_prepare(st, sql, &s, why, why_len);
+    if (e != STORE_OK)
+        return e;
+    sqlite3_bind_int64(s, 1, id);
+    int rc = sqlite3_step(s);
+    if (rc == SQLITE_ROW) {
+        if (out)
+            *out = sqlite3_column_int64(s, 0);
+    } else if (rc == SQLITE_DONE) {
+        e = store_fail(why, why_len, STORE_E_NOTFOUND, "%s %lld does not exist", noun, (long long)id);
+    } else {
+        e = store_sql_fail(st->db, rc, why, why_len, what);
+    }
+    sqlite3_finalize(s);
+    return e;
+}
+
 store_err store_exec(store *st, const char *sql, char *why, size_t why_len)
 {
     sqlite3_stmt *s;
