@@ -58,6 +58,12 @@ int64_t store_col_id(sqlite3_stmt *s, int i);               /* NULL -> 0 */
 void store_col_text(sqlite3_stmt *s, int i, char *out, size_t out_len); /* NULL -> "" */
 char *store_col_strdup(sqlite3_stmt *s, int i);             /* NULL -> NULL; malloc'ed */
 
+/* Room for element len of a growing array v of *cap elements of elem_size bytes (the readers'
+ * row buffers): v itself while len < *cap, else v reallocated to twice the capacity (first
+ * elements the first time) with *cap updated. NULL when out of memory; v is then unchanged and
+ * still the caller's to free. */
+void *store_grow(void *v, size_t len, size_t *cap, size_t elem_size, size_t first);
+
 /* Value checks at the entry points; field names the value in the reason. */
 store_err store_need_finite(double v, const char *field, char *why, size_t why_len);
 store_err store_need_positive(double v, const char *field, char *why, size_t why_len);

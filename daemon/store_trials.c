@@ -340,16 +340,12 @@ store_err store_trial_list(store *st, store_trial **out, size_t *n, char *why, s
     size_t len = 0, cap = 0;
     int rc;
     while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
-        if (len == cap) {
-            size_t ncap = cap ? 2 * cap : 16;
-            store_trial *nv = realloc(v, ncap * sizeof *nv);
-            if (!nv) {
-                e = store_fail(why, why_len, STORE_E_NOMEM, "out of memory listing trials");
-                break;
-            }
-            v = nv;
-            cap = ncap;
+        store_trial *nv = store_grow(v, len, &cap, sizeof *v, 16);
+        if (!nv) {
+            e = store_fail(why, why_len, STORE_E_NOMEM, "out of memory listing trials");
+            break;
         }
+        v = nv;
         if (store_trial_read_row(s, &v[len]) != STORE_OK) {
             e = store_fail(why, why_len, STORE_E_CORRUPT, "trial %lld has an unknown mode, status or regime",
                            (long long)sqlite3_column_int64(s, 0));
