@@ -1,19 +1,13 @@
 /* ribbon_sim.c: the `ribbon-sim` program: the embedded simulator from the command line.
- * A table of subcommands, each in its own sim_cmd_<name>.c. GSL's abort-on-error handler is
- * switched off here, once, so every GSL failure comes back as a code with a reason. */
+ * A table of subcommands, each in its own sim_cmd_<name>.c, run by cli_dispatch. GSL's
+ * abort-on-error handler is switched off here, once, so every GSL failure comes back as a code
+ * with a reason. */
+#include "cli_dispatch.h"
 #include "sim_cmd.h"
 
 #include <gsl/gsl_errno.h>
-#include <stdio.h>
-#include <string.h>
 
-typedef struct sim_command {
-    const char *name;
-    int (*run)(int argc, char **argv);
-    const char *help;
-} sim_command;
-
-static const sim_command commands[] = {
+static const cli_command commands[] = {
     {"predict", sim_cmd_predict, "simulate the protocol: snap Delta W, regime, peak |A|"},
     {"equilibrium", sim_cmd_equilibrium, "static equilibrium at (Delta L, Delta W) on a branch"},
     {"trajectory", sim_cmd_trajectory, "the simulated protocol step by step, as CSV"},
@@ -26,28 +20,17 @@ static const sim_command commands[] = {
 #endif
 };
 
-static void usage(FILE *f)
-{
-    fprintf(f, "usage: ribbon-sim COMMAND [options]   (ribbon-sim COMMAND --help for its options)\n\n");
-    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        fprintf(f, "  %-12s %s\n", commands[i].name, commands[i].help);
-    fprintf(f, "\nScenes are INI files (config/scenes/); README \"Scene files\" lists every key.\n");
-}
+static const cli_program program = {
+    .name = "ribbon-sim",
+    .usage = "usage: ribbon-sim COMMAND [options]   (ribbon-sim COMMAND --help for its options)\n\n",
+    .footer = "\nScenes are INI files (config/scenes/); README \"Scene files\" lists every key.\n",
+    .commands = commands,
+    .ncommands = sizeof commands / sizeof commands[0],
+    .blank_line_after_error = true,
+};
 
 int main(int argc, char **argv)
 {
     gsl_set_error_handler_off();
-    if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
-        usage(argc < 2 ? stderr : stdout);
-        return argc < 2 ? 2 : 0;
-    }
-    if (!strcmp(argv[1], "--version")) {
-        printf("ribbon-sim %s\n", RIBBON_VERSION);
-        return 0;
-    }
-    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        if (!strcmp(argv[1], commands[i].name)) return commands[i].run(argc - 1, argv + 1);
-    fprintf(stderr, "ribbon-sim: unknown command '%s'\n\n", argv[1]);
-    usage(stderr);
-    return 2;
+    return cli_dispatch(&program, argc, argv);
 }

@@ -1,20 +1,12 @@
 /* ribbonctl.c: `ribbonctl`, the bench-top and scripting command line of the rig. This file is
- * only the dispatcher: a table of subcommands {name, function, one-line help}; each subcommand's
+ * only the table of subcommands {name, function, one-line help}, run by cli_dispatch; each subcommand's
  * code is in its own ctl_<name>.c (see ctl.h for how to add one). */
-#include <stdio.h>
-#include <string.h>
-
 #include <gsl/gsl_errno.h>
 
+#include "cli_dispatch.h"
 #include "ctl.h"
 
-typedef struct ctl_cmd {
-    const char *name;
-    int (*run)(int argc, char **argv);
-    const char *help;
-} ctl_cmd;
-
-static const ctl_cmd commands[] = {
+static const cli_command commands[] = {
     {"rail", ctl_rail_main, "drive one rail: status | home | move-abs MM | move-rel MM | jog MM_S | stop | estop | reset | bench"},
     {"ports", ctl_ports_main, "list serial ports (path, USB VID:PID, serial number)"},
 #ifdef RIBBON_HAVE_VISION
@@ -35,30 +27,17 @@ static const ctl_cmd commands[] = {
 #endif
 };
 
-static void usage(FILE *f)
-{
-    fprintf(f, "usage: ribbonctl COMMAND [options]   (ribbonctl COMMAND --help for details)\n\n");
-    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        fprintf(f, "  %-12s %s\n", commands[i].name, commands[i].help);
-}
+static const cli_program program = {
+    .name = "ribbonctl",
+    .usage = "usage: ribbonctl COMMAND [options]   (ribbonctl COMMAND --help for details)\n\n",
+    .commands = commands,
+    .ncommands = sizeof commands / sizeof commands[0],
+};
 
 int main(int argc, char **argv)
 {
     /* GSL's default handler aborts; the simulator's callers (render, phase-report) take every GSL
      * failure as a returned status instead. */
     gsl_set_error_handler_off();
-    if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
-        usage(argc < 2 ? stderr : stdout);
-        return argc < 2 ? 2 : 0;
-    }
-    if (!strcmp(argv[1], "--version")) {
-        printf("ribbonctl %s\n", RIBBON_VERSION);
-        return 0;
-    }
-    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        if (!strcmp(argv[1], commands[i].name))
-            return commands[i].run(argc - 1, argv + 1);
-    fprintf(stderr, "ribbonctl: unknown command '%s'\n", argv[1]);
-    usage(stderr);
-    return 2;
+    return cli_dispatch(&program, argc, argv);
 }

@@ -4,9 +4,10 @@
  * as runs of consecutive points of equal stability (a segment is stable when both its ends are),
  * stable in black, unstable in grey, switched branches dashed. Events are outlined circles
  * (pitchfork) and squares (saddle-node), other events diamonds, sized in page units so they stay
- * round whatever the axis ranges. PLplot keeps its state in a stream: this file creates one
- * stream, draws, and ends it, so nothing outlives the call. */
+ * round whatever the axis ranges. PLplot keeps its state in a stream: the page (sim_plot_page.h)
+ * is one stream of this call's own, ended before it returns, so nothing outlives the call. */
 #include "sim_plot_continue.h"
+#include "sim_plot_page.h"
 
 #include <math.h>
 #include <plplot.h>
@@ -42,19 +43,6 @@ static range data_range(const rod_analysis *a, int panel)
     return r;
 }
 
-/* An outlined marker of n_sides (4: square, rotated by rot) at (x, y), radius rad in x units and
- * rad * yscale in y units. */
-static void marker(double x, double y, double rx, double ry, int n_sides, double rot)
-{
-    PLFLT px[65], py[65];
-    for (int k = 0; k <= n_sides; k++) {
-        double t = rot + 2.0 * M_PI * k / n_sides;
-        px[k] = x + rx * cos(t);
-        py[k] = y + ry * sin(t);
-    }
-    plline(n_sides + 1, px, py);
-}
-
 static void draw_panel(const rod_analysis *a, int panel, const char *title)
 {
     range r = data_range(a, panel);
@@ -81,26 +69,20 @@ static void draw_panel(const rod_analysis *a, int panel, const char *title)
     for (int e = 0; e < a->nevents; e++) {
         const rod_event *ev = &a->events[e];
         double x = ev->at.dw, y = value(&ev->at, panel);
-        if (ev->kind == ROD_EVENT_PITCHFORK) marker(x, y, rx, ry, 48, 0.0);
-        else if (ev->kind == ROD_EVENT_SADDLE_NODE) marker(x, y, rx * M_SQRT2, ry * M_SQRT2, 4, M_PI / 4);
-        else marker(x, y, rx, ry, 4, 0.0);
+        if (ev->kind == ROD_EVENT_PITCHFORK)
+            sim_plot_polygon(x, y, rx, ry, 48, 0.0);
+        else if (ev->kind == ROD_EVENT_SADDLE_NODE)
+            sim_plot_polygon(x, y, rx * M_SQRT2, ry * M_SQRT2, 4, M_PI / 4);
+        else
+            sim_plot_polygon(x, y, rx, ry, 4, 0.0);
     }
     plwidth(1.0);
 }
 
 int sim_plot_continue(const char *path, const rod_analysis *a, const char *title, char *err, size_t errlen)
 {
-    FILE *probe = fopen(path, "wb");
-    if (!probe) {
-        snprintf(err, errlen, "cannot write %s", path);
+    if (sim_plot_page_open(path, PAGE_W, PAGE_H, err, errlen) != 0)
         return -1;
-    }
-    fclose(probe);
-    PLINT stream;
-    plmkstrm(&stream);
-    plsdev("pngcairo");
-    plsfnam(path);
-    plspage(0, 0, PAGE_W, PAGE_H, 0, 0);
     plscol0(COL_BG, 255, 255, 255);
     plscol0(COL_FG, 0, 0, 0);
     plscol0(COL_STABLE, 0, 0, 0);
@@ -109,15 +91,7 @@ int sim_plot_continue(const char *path, const rod_analysis *a, const char *title
     plssub(2, 1);
     plinit();
     for (int panel = 0; panel < 2; panel++) draw_panel(a, panel, title);
-    plend1();
-    FILE *check = fopen(path, "rb");
-    long size = 0;
-    if (check) {
-        fseek(check, 0, SEEK_END);
-        size = ftell(check);
-        fclose(check);
-    }
-    if (size <= 0) {
+    if (!sim_plot_page_close(path)) {
         snprintf(err, errlen, "PLplot wrote nothing to %s (is the pngcairo driver, plplot-driver-cairo, installed?)",
                  path);
         return -1;

@@ -1,6 +1,7 @@
 /* sim_plot_sweep.c: the sweep figure with PLplot (see sim_plot_sweep.h). One PLplot stream is
- * created and ended per call; markers are drawn as outlined polygons in data units scaled to
- * stay round on the page. */
+ * created and ended per call (sim_plot_page.h); markers are drawn as outlined polygons in data
+ * units scaled to stay round on the page. */
+#include "sim_plot_page.h"
 #include "sim_plot_sweep.h"
 
 #include <math.h>
@@ -11,16 +12,6 @@
 
 #define PAGE_W 900
 #define PAGE_H 650
-
-static void polygon(double x, double y, double rx, double ry, int n, double rot)
-{
-    PLFLT px[49], py[49];
-    for (int k = 0; k <= n; k++) {
-        px[k] = x + rx * cos(rot + 2.0 * M_PI * k / n);
-        py[k] = y + ry * sin(rot + 2.0 * M_PI * k / n);
-    }
-    plline(n + 1, px, py);
-}
 
 static void cross(double x, double y, double rx, double ry)
 {
@@ -40,12 +31,6 @@ static int by_phi(const void *a, const void *b)
 int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double phi_b, double gamma_a,
                    double gamma_b, char *err, size_t errlen)
 {
-    FILE *probe = fopen(path, "wb");
-    if (!probe) {
-        snprintf(err, errlen, "cannot write %s", path);
-        return -1;
-    }
-    fclose(probe);
     int line = phi_a == phi_b;
     double x0 = fmin(gamma_a, gamma_b), x1 = fmax(gamma_a, gamma_b), y0 = INFINITY, y1 = -INFINITY;
     if (line) {
@@ -65,11 +50,8 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
     }
     double mx = 0.06 * (x1 - x0 > 0 ? x1 - x0 : 1.0), my = 0.08 * (y1 - y0 > 0 ? y1 - y0 : 1.0);
     x0 -= mx; x1 += mx; y0 -= my; y1 += my;
-    PLINT stream;
-    plmkstrm(&stream);
-    plsdev("pngcairo");
-    plsfnam(path);
-    plspage(0, 0, PAGE_W, PAGE_H, 0, 0);
+    if (sim_plot_page_open(path, PAGE_W, PAGE_H, err, errlen) != 0)
+        return -1;
     plscol0(0, 255, 255, 255);
     plscol0(1, 0, 0, 0);
     plscol0(2, 120, 120, 120);
@@ -93,8 +75,8 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
         if (line && fail) continue;
         plcol0(1);
         if (fail) cross(x, y, rx, ry);
-        else if (!strcmp(r->regime, "asymmetric")) polygon(x, y, rx, ry, 36, 0.0);
-        else polygon(x, y, rx * M_SQRT2, ry * M_SQRT2, 4, M_PI / 4);
+        else if (!strcmp(r->regime, "asymmetric")) sim_plot_polygon(x, y, rx, ry, 36, 0.0);
+        else sim_plot_polygon(x, y, rx * M_SQRT2, ry * M_SQRT2, 4, M_PI / 4);
     }
     /* Boundaries. */
     sweep_row *b = malloc(sizeof(sweep_row) * (t->n ? t->n : 1));
@@ -130,7 +112,7 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
                 }
             pllsty(strstr(b[k].note, "asymmetric below; symmetric above") ? 1 : 2);
             if (m > 1) plline(m, x, y);
-            for (int q = 0; q < m; q++) polygon(x[q], y[q], 0.4 * rx, 0.4 * ry, 4, 0.0);
+            for (int q = 0; q < m; q++) sim_plot_polygon(x[q], y[q], 0.4 * rx, 0.4 * ry, 4, 0.0);
         }
         pllsty(1);
         free(done);
@@ -138,15 +120,7 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
         free(y);
     }
     free(b);
-    plend1();
-    FILE *check = fopen(path, "rb");
-    long size = 0;
-    if (check) {
-        fseek(check, 0, SEEK_END);
-        size = ftell(check);
-        fclose(check);
-    }
-    if (size <= 0) {
+    if (!sim_plot_page_close(path)) {
         snprintf(err, errlen, "PLplot wrote nothing to %s (is plplot-driver-cairo installed?)", path);
         return -1;
     }

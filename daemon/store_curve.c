@@ -14,30 +14,15 @@ void store_curve_free(store_curve *c)
     memset(c, 0, sizeof *c);
 }
 
-static store_err count_rows(store *st, const char *sql, int64_t id, size_t *n, char *why, size_t why_len)
-{
-    sqlite3_stmt *s;
-    store_err e = store_prepare(st, sql, &s, why, why_len);
-    if (e != STORE_OK)
-        return e;
-    sqlite3_bind_int64(s, 1, id);
-    int rc = sqlite3_step(s);
-    if (rc == SQLITE_ROW)
-        *n = (size_t)sqlite3_column_int64(s, 0);
-    else
-        e = store_sql_fail(st->db, rc == SQLITE_DONE ? SQLITE_ERROR : rc, why, why_len, "counting curve points");
-    sqlite3_finalize(s);
-    return e;
-}
-
 store_err store_curve_query(store *st, const char *count_sql, const char *rows_sql, int64_t id, store_curve *out,
                             char *why, size_t why_len)
 {
     memset(out, 0, sizeof *out);
-    size_t n = 0;
-    store_err e = count_rows(st, count_sql, id, &n, why, why_len);
-    if (e != STORE_OK || n == 0)
+    int64_t count = 0; /* count(*): always one row */
+    store_err e = store_lookup_id(st, count_sql, id, "record", "counting curve points", &count, why, why_len);
+    if (e != STORE_OK || count <= 0)
         return e;
+    size_t n = (size_t)count;
     double *block = malloc(4 * n * sizeof *block);
     if (!block)
         return store_fail(why, why_len, STORE_E_NOMEM, "out of memory for a curve of %zu points", n);

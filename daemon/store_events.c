@@ -61,16 +61,12 @@ store_err store_events_get(store *st, int64_t trial_id, store_event **out, size_
     size_t len = 0, cap = 0;
     int rc;
     while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
-        if (len == cap) {
-            size_t ncap = cap ? 2 * cap : 16;
-            store_event *nv = realloc(v, ncap * sizeof *nv);
-            if (!nv) {
-                e = store_fail(why, why_len, STORE_E_NOMEM, "out of memory reading events");
-                break;
-            }
-            v = nv;
-            cap = ncap;
+        store_event *nv = store_grow(v, len, &cap, sizeof *v, 16);
+        if (!nv) {
+            e = store_fail(why, why_len, STORE_E_NOMEM, "out of memory reading events");
+            break;
         }
+        v = nv;
         store_event *ev = &v[len++];
         memset(ev, 0, sizeof *ev);
         ev->id = sqlite3_column_int64(s, 0);

@@ -33,6 +33,11 @@ store_err store_err_of_rc(int rc);
 store_err store_sql_fail(sqlite3 *db, int rc, char *why, size_t why_len, const char *what);
 
 store_err store_prepare(store *st, const char *sql, sqlite3_stmt **stmt, char *why, size_t why_len);
+/* One value looked up by one id: runs sql (one statement, ?1 = id). A row puts its first column in
+ * *out (skipped when out is NULL: an existence check); no row is STORE_E_NOTFOUND "<noun> <id>
+ * does not exist"; an SQLite failure is "<what>: <SQLite's message>". */
+store_err store_lookup_id(store *st, const char *sql, int64_t id, const char *noun, const char *what, int64_t *out,
+                          char *why, size_t why_len);
 /* Run one statement that returns no rows (BEGIN, COMMIT, UPDATE without results...). */
 store_err store_exec(store *st, const char *sql, char *why, size_t why_len);
 /* Run every statement of a constant script (migrations); stops at the first failure. */
@@ -52,6 +57,12 @@ double store_col_real(sqlite3_stmt *s, int i);              /* NULL -> NaN */
 int64_t store_col_id(sqlite3_stmt *s, int i);               /* NULL -> 0 */
 void store_col_text(sqlite3_stmt *s, int i, char *out, size_t out_len); /* NULL -> "" */
 char *store_col_strdup(sqlite3_stmt *s, int i);             /* NULL -> NULL; malloc'ed */
+
+/* Room for element len of a growing array v of *cap elements of elem_size bytes (the readers'
+ * row buffers): v itself while len < *cap, else v reallocated to twice the capacity (first
+ * elements the first time) with *cap updated. NULL when out of memory; v is then unchanged and
+ * still the caller's to free. */
+void *store_grow(void *v, size_t len, size_t *cap, size_t elem_size, size_t first);
 
 /* Value checks at the entry points; field names the value in the reason. */
 store_err store_need_finite(double v, const char *field, char *why, size_t why_len);

@@ -106,16 +106,12 @@ store_err store_ladder_get(store *st, const char *scene_hash, store_ladder_rung 
     size_t len = 0, cap = 0;
     int rc;
     while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
-        if (len == cap) {
-            size_t ncap = cap ? 2 * cap : 8;
-            store_ladder_rung *nv = realloc(v, ncap * sizeof *nv);
-            if (!nv) {
-                e = store_fail(why, why_len, STORE_E_NOMEM, "out of memory reading a ladder");
-                break;
-            }
-            v = nv;
-            cap = ncap;
+        store_ladder_rung *nv = store_grow(v, len, &cap, sizeof *v, 8);
+        if (!nv) {
+            e = store_fail(why, why_len, STORE_E_NOMEM, "out of memory reading a ladder");
+            break;
         }
+        v = nv;
         store_ladder_rung *r = &v[len++];
         r->nodes = sqlite3_column_int(s, 0);
         r->dt = store_col_real(s, 1);

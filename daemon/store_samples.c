@@ -249,20 +249,8 @@ size_t store_samples_pending(const store_samples *w)
 store_err store_samples_count(store *st, int64_t trial_id, int64_t *count, char *why, size_t why_len)
 {
     *count = 0;
-    sqlite3_stmt *s;
-    store_err e = store_prepare(st, "SELECT samples_count FROM trials WHERE id = ?1", &s, why, why_len);
-    if (e != STORE_OK)
-        return e;
-    sqlite3_bind_int64(s, 1, trial_id);
-    int rc = sqlite3_step(s);
-    if (rc == SQLITE_ROW)
-        *count = sqlite3_column_int64(s, 0);
-    else if (rc == SQLITE_DONE)
-        e = store_fail(why, why_len, STORE_E_NOTFOUND, "trial %lld does not exist", (long long)trial_id);
-    else
-        e = store_sql_fail(st->db, rc, why, why_len, "counting samples");
-    sqlite3_finalize(s);
-    return e;
+    return store_lookup_id(st, "SELECT samples_count FROM trials WHERE id = ?1", trial_id, "trial", "counting samples",
+                           count, why, why_len);
 }
 
 /* The rows themselves counted (store_samples_get sizes its array by what is really there). */
@@ -272,18 +260,8 @@ static store_err count_rows(store *st, int64_t trial_id, int64_t *count, char *w
     store_err e = store_samples_count(st, trial_id, &cached, why, why_len); /* NOTFOUND for a bad id */
     if (e != STORE_OK)
         return e;
-    sqlite3_stmt *s;
-    e = store_prepare(st, "SELECT count(*) FROM samples WHERE trial_id = ?1", &s, why, why_len);
-    if (e != STORE_OK)
-        return e;
-    sqlite3_bind_int64(s, 1, trial_id);
-    int rc = sqlite3_step(s);
-    if (rc == SQLITE_ROW)
-        *count = sqlite3_column_int64(s, 0);
-    else
-        e = store_sql_fail(st->db, rc, why, why_len, "counting samples");
-    sqlite3_finalize(s);
-    return e;
+    return store_lookup_id(st, "SELECT count(*) FROM samples WHERE trial_id = ?1", trial_id, "trial",
+                           "counting samples", count, why, why_len);
 }
 
 store_err store_samples_get(store *st, int64_t trial_id, store_sample **out, size_t *n, char *why, size_t why_len)

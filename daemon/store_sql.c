@@ -1,10 +1,12 @@
 /* store_sql.c: the store's SQL plumbing (see store_int.h): failing with a reason, preparing,
- * binding and reading columns under one NULL convention, transactions, and the entry-point value
- * checks. Nothing here knows a table. */
+ * binding and reading columns under one NULL convention, one-value lookups by id, the readers'
+ * growing row arrays, transactions, and the entry-point value checks. Nothing here knows a
+ * table. */
 #include "store_int.h"
 
 #include <math.h>
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -61,6 +63,40 @@ store_err store_prepare(store *st, const char *sql, sqlite3_stmt **stmt, char *w
         return store_sql_fail(st->db, rc, why, why_len, "preparing a statement");
     }
     return STORE_OK;
+}
+
+store_err store_lookup_id(store *st, const char *sql, int64_t id, const char *noun, const char *what, int64_t *out,
+                          char *why, size_t why_len)
+{
+    sqlite3_stmt *s;
+    store_err e = store_prepare(st, sql, &s, why, why_len);
+    if (e != STORE_OK)
+        return e;
+    sqlite3_bind_int64(s, 1, id);
+    int rc = sqlite3_step(s);
+    if (rc == SQLITE_ROW) {
+        if (out)
+            *out = sqlite3_column_int64(s, 0);
+    } else if (rc == SQLITE_DONE) {
+        e = store_fail(why, why_len, STORE_E_NOTFOUND, "%s %lld does not exist", noun, (long long)id);
+    } else {
+        e = store_sql_fail(st->db, rc, why, why_len, what);
+    }
+    sqlite3_finalize(s);
+    return e;
+}
+
+void *store_grow(void *v, size_t len, size_t *cap, size_t elem_size, size_t first)
+{
+    if (len < *cap)
+        return v;
+    size_t ncap = *cap ? 2 * *cap : first;
+    if (ncap < *cap || ncap > SIZE_MAX / elem_size)
+        return NULL;
+    void *nv = realloc(v, ncap * elem_size);
+    if (nv)
+        *cap = ncap;
+    return nv;
 }
 
 store_err store_exec(store *st, const char *sql, char *why, size_t why_len)

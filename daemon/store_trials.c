@@ -18,22 +18,6 @@ store_trial_def store_trial_def_default(void)
     return (store_trial_def){.mode = STORE_MODE_MOCK, .config_text = "", .created_wall_s = store_wall_now()};
 }
 
-static store_err check_exists(store *st, const char *sql, int64_t id, const char *what, char *why, size_t why_len)
-{
-    sqlite3_stmt *s;
-    store_err e = store_prepare(st, sql, &s, why, why_len);
-    if (e != STORE_OK)
-        return e;
-    sqlite3_bind_int64(s, 1, id);
-    int rc = sqlite3_step(s);
-    if (rc == SQLITE_DONE)
-        e = store_fail(why, why_len, STORE_E_NOTFOUND, "%s %lld does not exist", what, (long long)id);
-    else if (rc != SQLITE_ROW)
-        e = store_sql_fail(st->db, rc, why, why_len, "looking up a record");
-    sqlite3_finalize(s);
-    return e;
-}
-
 store_err store_trial_create(store *st, const store_trial_def *def, int64_t *id, char *why, size_t why_len)
 {
     char created[32];
@@ -55,11 +39,11 @@ store_err store_trial_create(store *st, const store_trial_def *def, int64_t *id,
         return e;
     if (def->specimen_id < 0 || def->source_trial_id < 0)
         return store_fail(why, why_len, STORE_E_INVALID, "trial specimen_id and source_trial_id must be >= 0");
-    if (def->specimen_id &&
-        (e = check_exists(st, "SELECT 1 FROM specimens WHERE id = ?1", def->specimen_id, "specimen", why, why_len)))
+    if (def->specimen_id && (e = store_lookup_id(st, "SELECT 1 FROM specimens WHERE id = ?1", def->specimen_id,
+                                                 "specimen", "looking up a record", NULL, why, why_len)))
         return e;
-    if (def->source_trial_id && (e = check_exists(st, "SELECT 1 FROM trials WHERE id = ?1", def->source_trial_id,
-                                                  "source trial", why, why_len)))
+    if (def->source_trial_id && (e = store_lookup_id(st, "SELECT 1 FROM trials WHERE id = ?1", def->source_trial_id,
+                                                     "source trial", "looking up a record", NULL, why, why_len)))
         return e;
     sqlite3_stmt *s;
     e = store_prepare(st,
@@ -356,16 +340,12 @@ store_err store_trial_list(store *st, store_trial **out, size_t *n, char *why, s
     size_t len = 0, cap = 0;
     int rc;
     while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
-        if (len == cap) {
-            size_t ncap = cap ? 2 * cap : 16;
-            store_trial *nv = realloc(v, ncap * sizeof *nv);
-            if (!nv) {
-                e = store_fail(why, why_len, STORE_E_NOMEM, "out of memory listing trials");
-                break;
-            }
-            v = nv;
-            cap = ncap;
+        store_trial *nv = store_grow(v, len, &cap, sizeof *v, 16);
+        if (!nv) {
+            e = store_fail(why, why_len, STORE_E_NOMEM, "out of memory listing trials");
+            break;
         }
+        v = nv;
         if (store_trial_read_row(s, &v[len]) != STORE_OK) {
             e = store_fail(why, why_len, STORE_E_CORRUPT, "trial %lld has an unknown mode, status or regime",
                            (long long)sqlite3_column_int64(s, 0));
