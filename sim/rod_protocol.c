@@ -232,7 +232,6 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
     out->asymmetric = out->snapped && peak > sc->asym_threshold;
     out->dz_final = ob.dz;
     out->sim_time = t;
-    if (out->snapped) out->snap_end_t = t;
 
 done:
     out->count = r->count;

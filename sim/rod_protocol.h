@@ -18,7 +18,8 @@
  * (up to post_snap_dt_max while Delta Z and A change by less than 0.03 per step), and stops
  * following the snap at the end of its first swing (end_after_swing): Delta Z turning round in
  * the lower state. The peak |A| is then that of the passage, without the ringing afterwards
- * (on the paper's Gamma = 0.13 scene 1.98 rad, against 2.10 over the fixed run's 2 s). */
+ * (paper Gamma = 0.13 scene: 1.99 rad fast, 1.98 over the fixed run's passage, 2.10 over its
+ * 2 s). */
 #ifndef RIBBON_SIM_ROD_PROTOCOL_H
 #define RIBBON_SIM_ROD_PROTOCOL_H
 
@@ -69,8 +70,8 @@ typedef struct rod_prediction {
     long rejected;         /* rejected (halved) steps */
     int quasi_solves;      /* static solves of the quasi-static start (0 without it) */
     double dw_switch;      /* Delta W where the dynamics started (0 without the quasi-static start) */
-    double snap_end_t;     /* s: time the run stopped following the snap (valid when snapped) */
-    double sim_time;       /* s of simulated shear time */
+    double sim_time;       /* s of simulated shear time (with a snap: where the run stopped
+                              following it) */
     double wall_s;         /* s of wall time for the whole prediction */
     rod_counters count;    /* what was evaluated */
     int stage_route, stage_shear, stage_damping; /* stages that ran */

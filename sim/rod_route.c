@@ -146,7 +146,7 @@ static rod_status run_stage(rod *r, rod_solver *s, const rod_scene *sc, const st
     double p = 0.0, p_prev = 0.0, dp = 1.0 / nsteps, dp_max = 2.0 / nsteps;
     double dp_min = ldexp(1.0 / nsteps, -ROUTE_MIN_STEP_LOG2);
     int have_prev = 0, plain = 0, solves = 0, max_solves = ROUTE_SOLVES_PER_STEP * nsteps;
-    rod_status st = ROD_OK, last_failure = ROD_OK;
+    rod_status st = ROD_OK;
     double fail_res = NAN;
     rod_state_save(r, s, 0);
     memcpy(q0, r->q, sizeof(double) * nd);
@@ -189,7 +189,6 @@ static rod_status run_stage(rod *r, rod_solver *s, const rod_scene *sc, const st
             if (nr.iterations <= 5) dp = fmin(1.5 * dp, dp_max);
             continue;
         }
-        last_failure = st;
         rep->last_failure = st;
         if (isfinite(nr.residual_rel)) fail_res = nr.residual_rel;
         rod_state_restore(r, s, 0);
@@ -200,7 +199,7 @@ static rod_status run_stage(rod *r, rod_solver *s, const rod_scene *sc, const st
         }
         plain = 0;
         if (0.5 * dp < dp_min) {
-            st = stop_reason(r, last_failure);
+            st = stop_reason(r, rep->last_failure);
             break;
         }
         dp *= 0.5;
