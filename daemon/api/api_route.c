@@ -39,12 +39,43 @@ static int parse_id(const char *seg, size_t len, int64_t *id, char *why, size_t 
     return 0;
 }
 
+int api_path_grammar_ok(const char *path, char *why, size_t n)
+{
+    if (path == NULL || path[0] != '/') {
+        snprintf(why, n, "request path must start with '/'");
+        return 0;
+    }
+    for (size_t i = 0; path[i] != '\0'; i++) {
+        unsigned char c = (unsigned char)path[i];
+        int ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
+                 c == '_' || c == '/' || c == '-';
+        if (!ok) {
+            if (c > 0x20 && c < 0x7f)
+                snprintf(why, n, "byte '%c' at offset %zu of the path is outside the API's path grammar "
+                                 "[A-Za-z0-9._/-] (percent-escapes are not decoded)", (char)c, i);
+            else
+                snprintf(why, n, "byte 0x%02x at offset %zu of the path is outside the API's path grammar "
+                                 "[A-Za-z0-9._/-]", c, i);
+            return 0;
+        }
+    }
+    return 1;
+}
+
 api_route api_route_parse(const char *path, int64_t *id, char *why, size_t n)
 {
     static const char prefix[] = "/trials/";
     static const char report[] = "/report.png";
     if (path == NULL)
         return API_ROUTE_NONE;
+    if (!api_path_grammar_ok(path, why, n))
+        return API_ROUTE_BAD_PATH;
+    if (strcmp(path, "/live/events") == 0)
+        return API_ROUTE_EVENTS;
+    if (strcmp(path, "/live/camera.jpg") == 0)
+        return API_ROUTE_CAMERA;
+    if (strcmp(path, "/live/prediction") == 0)
+        return API_ROUTE_PREDICTION;
     if (strcmp(path, "/status") == 0)
         return API_ROUTE_STATUS;
     if (strcmp(path, "/trials") == 0)
@@ -81,6 +112,9 @@ const char *api_route_allow(api_route r)
     case API_ROUTE_STATUS:
     case API_ROUTE_TRIAL:
     case API_ROUTE_REPORT:
+    case API_ROUTE_EVENTS:
+    case API_ROUTE_CAMERA:
+    case API_ROUTE_PREDICTION:
         return "GET";
     case API_ROUTE_TRIALS:
         return "GET, POST";
@@ -88,6 +122,7 @@ const char *api_route_allow(api_route r)
         return "POST";
     case API_ROUTE_NONE:
     case API_ROUTE_BAD_ID:
+    case API_ROUTE_BAD_PATH:
         break;
     }
     return NULL;
@@ -103,6 +138,9 @@ int api_route_method_ok(api_route r, const char *method)
     case API_ROUTE_STATUS:
     case API_ROUTE_TRIAL:
     case API_ROUTE_REPORT:
+    case API_ROUTE_EVENTS:
+    case API_ROUTE_CAMERA:
+    case API_ROUTE_PREDICTION:
         return get;
     case API_ROUTE_TRIALS:
         return get || post;
@@ -110,6 +148,7 @@ int api_route_method_ok(api_route r, const char *method)
         return post;
     case API_ROUTE_NONE:
     case API_ROUTE_BAD_ID:
+    case API_ROUTE_BAD_PATH:
         break;
     }
     return 0;

@@ -15,9 +15,18 @@ typedef enum api_route {
     API_ROUTE_ABORT,    /* /trials/current/abort     POST */
     API_ROUTE_TRIAL,    /* /trials/{id}              GET */
     API_ROUTE_REPORT,   /* /trials/{id}/report.png   GET */
+    API_ROUTE_EVENTS,   /* /live/events              GET (the stream pool) */
+    API_ROUTE_CAMERA,   /* /live/camera.jpg          GET */
+    API_ROUTE_PREDICTION, /* /live/prediction        GET */
+    API_ROUTE_BAD_PATH, /* a byte outside the grammar (or not starting with '/'): 400 */
 } api_route;
 
-/* Parse a request path. For {id} routes *id gets the id (1 .. INT64_MAX, decimal digits only);
+/* 1 when path is made only of the bytes the routes use, [A-Za-z0-9._/-], and starts with '/';
+ * else 0 with the offending byte and its offset in why. libmicrohttpd is told not to decode
+ * percent-escapes, so "%00" or "%2F" arrive as they were sent and are refused here. */
+int api_path_grammar_ok(const char *path, char *why, size_t n);
+
+/* Parse a request path (API_ROUTE_BAD_PATH when api_path_grammar_ok refuses it). For {id} routes *id gets the id (1 .. INT64_MAX, decimal digits only);
  * a path of an {id} route whose id is not that gives API_ROUTE_BAD_ID and a reason in why. */
 api_route api_route_parse(const char *path, int64_t *id, char *why, size_t n);
 

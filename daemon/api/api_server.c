@@ -18,9 +18,17 @@
  * its log messages are captured only while api_server_start runs so a failure to start names the
  * reason ("Address already in use"), and dropped afterwards (library code prints nothing). Reply
  * bodies are serialised into our own malloc'ed buffer and handed over with MHD_RESPMEM_MUST_FREE,
- * so the server does not depend on jansson's allocator. The token is compared in constant time. */
+ * so the server does not depend on jansson's allocator. The token is compared in constant time.
+ *
+ * Connections (see api_server.h): api_guard accepts and waits for the headers; take_connection()
+ * sorts a complete head into the control pool (MHD internal polling thread, as above) or the
+ * stream pool (a second libmicrohttpd daemon, one thread per stream, so a stream's read may wait
+ * for the live bus without stalling anyone), counting open connections per pool through
+ * libmicrohttpd's connection notifications. Neither daemon listens: the guard hands sockets over
+ * with MHD_add_connection. */
 #include "api_server.h"
 
+#include "api_guard.h"
 #include "api_route.h"
 
 #include <arpa/inet.h>
@@ -34,13 +42,28 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <fcntl.h>
+#include <stdatomic.h>
 #include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
 
-#define API_TOKEN_MAX 256
 #define API_WHY_MAX 512
 
+typedef struct api_pool {
+    struct api_server *s;
+    int stream;                /* 1: the stream pool */
+    atomic_int open;           /* connections handed over and not yet closed */
+} api_pool;
+
 struct api_server {
-    struct MHD_Daemon *mhd;
+    struct MHD_Daemon *mhd;    /* control pool */
+    struct MHD_Daemon *smhd;   /* stream pool */
+    api_guard *guard;
+    api_pool pool[2];          /* [0] control, [1] stream */
+    unsigned max_control, max_streams;
+    api_asset *assets;
+    size_t n_assets;
     api_ops ops;
     void *user;
     char token[API_TOKEN_MAX + 1]; /* "" = no token */
@@ -61,6 +84,7 @@ typedef struct api_request {
     int64_t id;
     bool answered;  /* a reply was queued before the body was read */
     bool too_big;   /* the body went past max_body: drained, answered 413 */
+    uint64_t started_ms; /* headers in (monotonic), for the body deadline */
     char *body;
     size_t len, cap;
 } api_request;
@@ -74,6 +98,9 @@ api_server_config api_server_config_default(void)
         .max_body_bytes = 64 * 1024,
         .connection_timeout_s = 30,
         .max_connections = 64,
+        .max_streams = 32,
+        .header_timeout_ms = 5000,
+        .pending_max = 256,
     };
     return c;
 }
@@ -92,6 +119,8 @@ static enum MHD_Result reply_buffer(struct MHD_Connection *c, int status, const 
     enum MHD_Result ok = MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE, ctype);
     if (ok == MHD_YES)
         ok = MHD_add_response_header(r, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    if (ok == MHD_YES) /* one request per control connection: a slot is never held idle */
+        ok = MHD_add_response_header(r, MHD_HTTP_HEADER_CONNECTION, "close");
     if (ok == MHD_YES && allow != NULL)
         ok = MHD_add_response_header(r, MHD_HTTP_HEADER_ALLOW, allow);
     if (ok == MHD_YES && status == MHD_HTTP_UNAUTHORIZED)
@@ -201,13 +230,29 @@ static enum MHD_Result finish_op(struct MHD_Connection *c, const char *op, int r
 
 /* ---------------------------------------------------------------- checks */
 
-/* Constant-time comparison: the time taken does not tell how many leading bytes were right. */
-static bool same_secret(const char *a, size_t alen, const char *b, size_t blen)
+/* Constant-time comparison: the loop always runs over API_TOKEN_MAX + 1 bytes, whatever either
+ * length is, so the time taken tells neither how many leading bytes were right nor how long the
+ * token is. Bytes past a string's end compare as 0 (read from a zeroed copy, never out of bounds);
+ * the lengths are compared too, so a prefix of the token never matches. */
+bool api_token_equal(const char *given, size_t glen, const char *want, size_t wlen)
 {
-    unsigned char diff = (unsigned char)(alen != blen);
-    size_t n = alen < blen ? alen : blen;
-    for (size_t i = 0; i < n; i++)
+    unsigned char a[API_TOKEN_MAX + 1] = {0}, b[API_TOKEN_MAX + 1] = {0};
+    volatile unsigned char diff = 0;
+    if (glen > API_TOKEN_MAX) { /* longer than any token: still compared over the same bytes */
+        glen = API_TOKEN_MAX + 1;
+        diff = 1;
+    }
+    if (wlen > API_TOKEN_MAX) {
+        wlen = API_TOKEN_MAX + 1;
+        diff = 1;
+    }
+    memcpy(a, given, glen > API_TOKEN_MAX ? API_TOKEN_MAX : glen);
+    memcpy(b, want, wlen > API_TOKEN_MAX ? API_TOKEN_MAX : wlen);
+    size_t lx = glen ^ wlen;
+    for (size_t i = 0; i < API_TOKEN_MAX + 1; i++)
         diff |= (unsigned char)(a[i] ^ b[i]);
+    for (size_t k = 0; k < sizeof lx; k++)
+        diff |= (unsigned char)(lx >> (8 * k));
     return diff == 0;
 }
 
@@ -232,28 +277,69 @@ static int check_token(const api_server *s, struct MHD_Connection *c, char *why,
     size_t len = strlen(t);
     while (len > 0 && (t[len - 1] == ' ' || t[len - 1] == '\t'))
         len--;
-    if (!same_secret(t, len, s->token, s->token_len)) {
+    if (!api_token_equal(t, len, s->token, s->token_len)) {
         snprintf(why, n, "wrong token");
         return -1;
     }
     return 0;
 }
 
+static uint64_t mono_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000u + (uint64_t)ts.tv_nsec / 1000000u;
+}
+
+static const api_asset *find_asset(const api_server *s, const char *url)
+{
+    for (size_t i = 0; i < s->n_assets; i++)
+        if (strcmp(s->assets[i].path, url) == 0)
+            return &s->assets[i];
+    return NULL;
+}
+
+static enum MHD_Result reply_asset(struct MHD_Connection *c, const api_asset *a)
+{
+    struct MHD_Response *r = MHD_create_response_from_buffer(a->len, (void *)a->data, MHD_RESPMEM_PERSISTENT);
+    if (r == NULL)
+        return MHD_NO;
+    enum MHD_Result ok = MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE, a->content_type);
+    if (ok == MHD_YES)
+        ok = MHD_add_response_header(r, MHD_HTTP_HEADER_CACHE_CONTROL, "no-cache");
+    if (ok == MHD_YES)
+        ok = MHD_add_response_header(r, MHD_HTTP_HEADER_CONNECTION, "close");
+    if (ok == MHD_YES)
+        ok = MHD_queue_response(c, MHD_HTTP_OK, r);
+    MHD_destroy_response(r);
+    return ok;
+}
+
 /* Headers are in: run every check that needs no body. Returns MHD_YES to go on reading. */
-static enum MHD_Result on_headers(api_server *s, struct MHD_Connection *c, const char *url, const char *method,
-                                  api_request *req)
+static enum MHD_Result on_headers(api_server *s, int stream_pool, struct MHD_Connection *c, const char *url,
+                                  const char *method, api_request *req)
 {
     char why[API_WHY_MAX] = "";
+    req->started_ms = mono_ms();
+    const api_asset *asset = stream_pool ? NULL : find_asset(s, url);
+    if (asset != NULL && strcmp(method, "GET") == 0) { /* the page's own files: no data, no token */
+        req->answered = true;
+        return reply_asset(c, asset);
+    }
     if (check_token(s, c, why, sizeof why) != 0) {
         req->answered = true;
         return reply_error(c, MHD_HTTP_UNAUTHORIZED, why, NULL);
     }
     req->route = api_route_parse(url, &req->id, why, sizeof why);
+    if (req->route == API_ROUTE_BAD_PATH) {
+        req->answered = true;
+        return reply_error(c, MHD_HTTP_BAD_REQUEST, why, NULL);
+    }
     if (req->route == API_ROUTE_NONE) {
         req->answered = true;
         return reply_errorf(c, MHD_HTTP_NOT_FOUND, NULL,
                             "no such path: %.200s (paths: /status, /trials, /trials/current/abort, /trials/ID, "
-                            "/trials/ID/report.png)",
+                            "/trials/ID/report.png, /live/events, /live/camera.jpg, /live/prediction)",
                             url);
     }
     if (req->route == API_ROUTE_BAD_ID) {
@@ -265,6 +351,10 @@ static enum MHD_Result on_headers(api_server *s, struct MHD_Connection *c, const
         req->answered = true;
         return reply_errorf(c, MHD_HTTP_METHOD_NOT_ALLOWED, allow, "method %.20s not allowed on %.200s (allowed: %s)",
                             method, url, allow);
+    }
+    if ((req->route == API_ROUTE_EVENTS) != (stream_pool != 0)) { /* take_connection sorts by the same path */
+        req->answered = true;
+        return reply_error(c, 500, "internal error: request reached the wrong connection pool", NULL);
     }
     const char *cl = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
     if (cl != NULL) {
@@ -339,6 +429,50 @@ static json_t *body_object(const api_request *req, char *why, size_t n)
     return j;
 }
 
+/* ---------------------------------------------------------------- streams */
+
+static ssize_t stream_read(void *cls, uint64_t pos, char *buf, size_t max)
+{
+    (void)pos;
+    api_stream *st = cls;
+    long n = st->read(st->ctx, buf, max);
+    if (n <= 0)
+        return MHD_CONTENT_READER_END_OF_STREAM;
+    return (ssize_t)n;
+}
+
+static void stream_free(void *cls)
+{
+    api_stream *st = cls;
+    if (st->close)
+        st->close(st->ctx);
+    free(st);
+}
+
+/* An unending text/event-stream reply pulled from st (copied; closed when the stream ends). */
+static enum MHD_Result reply_stream(struct MHD_Connection *c, const api_stream *st_in)
+{
+    api_stream *st = malloc(sizeof *st);
+    if (st == NULL) {
+        if (st_in->close)
+            st_in->close(st_in->ctx);
+        return MHD_NO;
+    }
+    *st = *st_in;
+    struct MHD_Response *r = MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, 16384, stream_read, st, stream_free);
+    if (r == NULL) {
+        stream_free(st);
+        return MHD_NO;
+    }
+    enum MHD_Result ok = MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE, "text/event-stream");
+    if (ok == MHD_YES)
+        ok = MHD_add_response_header(r, MHD_HTTP_HEADER_CACHE_CONTROL, "no-store");
+    if (ok == MHD_YES)
+        ok = MHD_queue_response(c, MHD_HTTP_OK, r);
+    MHD_destroy_response(r);
+    return ok;
+}
+
 /* ---------------------------------------------------------------- dispatch */
 
 static enum MHD_Result dispatch(api_server *s, struct MHD_Connection *c, const char *method, api_request *req)
@@ -400,8 +534,38 @@ static enum MHD_Result dispatch(api_server *s, struct MHD_Connection *c, const c
         return finish_op(c, "report_png", rc, NULL, status, why);
     }
 
+    case API_ROUTE_EVENTS: {
+        if (ops->events == NULL)
+            break;
+        api_stream st = {0};
+        if (ops->events(s->user, &st, why, sizeof why) != 0 || st.read == NULL)
+            return reply_error(c, 500, why[0] ? why : "events failed (no reason given)", NULL);
+        return reply_stream(c, &st);
+    }
+
+    case API_ROUTE_CAMERA: {
+        if (ops->camera_jpeg == NULL)
+            break;
+        unsigned char *jpg = NULL;
+        size_t len = 0;
+        rc = ops->camera_jpeg(s->user, &jpg, &len, &status, why, sizeof why);
+        if (rc == 0 && jpg != NULL && len > 0 && status >= 200 && status <= 299)
+            return reply_buffer(c, status, "image/jpeg", jpg, len, NULL);
+        free(jpg);
+        if (rc == 0)
+            return reply_error(c, 500, "internal error: ops->camera_jpeg succeeded without an image", NULL);
+        return finish_op(c, "camera_jpeg", rc, NULL, status, why);
+    }
+
+    case API_ROUTE_PREDICTION:
+        if (ops->prediction == NULL)
+            break;
+        rc = ops->prediction(s->user, &out, &status, why, sizeof why);
+        return finish_op(c, "prediction", rc, out, status, why);
+
     case API_ROUTE_NONE:
     case API_ROUTE_BAD_ID:
+    case API_ROUTE_BAD_PATH:
         return reply_error(c, 500, "internal error: request reached dispatch without a route", NULL);
     }
     return reply_error(c, MHD_HTTP_NOT_IMPLEMENTED, "this daemon does not serve that request yet", NULL);
@@ -414,18 +578,21 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
                                   void **con_cls)
 {
     (void)version;
-    api_server *s = cls;
+    api_pool *pool = cls;
+    api_server *s = pool->s;
     api_request *req = *con_cls;
     if (req == NULL) {
         req = calloc(1, sizeof *req);
         if (req == NULL)
             return MHD_NO;
         *con_cls = req;
-        enum MHD_Result ok = on_headers(s, c, url, method, req);
+        enum MHD_Result ok = on_headers(s, pool->stream, c, url, method, req);
         if (ok != MHD_YES || req->answered || *upload_data_size == 0)
             return ok;
     }
     if (*upload_data_size != 0) {
+        if (mono_ms() - req->started_ms > API_BODY_TIMEOUT_MS)
+            return MHD_NO; /* a body trickled in slowly: the slot goes back to the pool */
         if (!req->answered)
             body_append(s, req, upload_data, *upload_data_size);
         *upload_data_size = 0;
@@ -453,6 +620,97 @@ static void on_completed(void *cls, struct MHD_Connection *c, void **con_cls, en
     }
 }
 
+static void on_connection(void *cls, struct MHD_Connection *c, void **socket_ctx, enum MHD_ConnectionNotificationCode code)
+{
+    (void)c;
+    (void)socket_ctx;
+    api_pool *pool = cls;
+    if (code == MHD_CONNECTION_NOTIFY_CLOSED)
+        atomic_fetch_sub(&pool->open, 1);
+}
+
+/* Percent-escapes stay as they were sent (the path grammar refuses '%'): nothing is decoded, so
+ * nothing can be truncated by a decoded NUL. */
+static size_t keep_escapes(void *cls, struct MHD_Connection *c, char *s)
+{
+    (void)cls;
+    (void)c;
+    return strlen(s);
+}
+
+/* The path of a request line "METHOD SP target SP version" in head: method and path (up to '?')
+ * copied, bounded. */
+static void request_line(const char *head, size_t len, char *method, size_t mcap, char *path, size_t pcap)
+{
+    size_t i = 0, k = 0;
+    while (i < len && head[i] != ' ' && head[i] != '\r' && head[i] != '\n') {
+        if (k + 1 < mcap)
+            method[k++] = head[i];
+        i++;
+    }
+    method[k] = '\0';
+    while (i < len && head[i] == ' ')
+        i++;
+    k = 0;
+    while (i < len && head[i] != ' ' && head[i] != '?' && head[i] != '\r' && head[i] != '\n') {
+        if (k + 1 < pcap)
+            path[k++] = head[i];
+        i++;
+    }
+    path[k] = '\0';
+}
+
+/* 1 when head (up to its blank line) has a header of that name (case-insensitive). */
+static bool has_header(const char *head, size_t len, const char *name)
+{
+    size_t nl = strlen(name);
+    for (size_t i = 0; i + 1 < len; i++) {
+        if (head[i] != '\n')
+            continue;
+        if (i + 1 + nl < len && strncasecmp(head + i + 1, name, nl) == 0 && head[i + 1 + nl] == ':') {
+            if (strncasecmp(name, "content-length", nl) == 0) { /* "Content-Length: 0" is no body */
+                const char *v = head + i + 2 + nl;
+                while (*v == ' ' || *v == '\t')
+                    v++;
+                if (*v == '0' && (v[1] == '\r' || v[1] == '\n'))
+                    continue;
+            }
+            return true;
+        }
+    }
+    return false;
+}
+
+/* api_guard's take: sort a complete head into a pool, or refuse with 503. */
+static int take_connection(void *user, int fd, const struct sockaddr *peer, socklen_t peer_len, const char *head,
+                           size_t len, char *why, size_t n)
+{
+    api_server *s = user;
+    char method[16], path[64];
+    request_line(head, len, method, sizeof method, path, sizeof path);
+    bool get = strcmp(method, "GET") == 0, post = strcmp(method, "POST") == 0;
+    int stream = get && strcmp(path, "/live/events") == 0;
+    api_pool *pool = &s->pool[stream];
+    unsigned limit = stream ? s->max_streams : s->max_control;
+    bool control = ((get && strcmp(path, "/status") == 0) || (post && strcmp(path, "/trials/current/abort") == 0)) &&
+                   !has_header(head, len, "content-length") && !has_header(head, len, "transfer-encoding");
+    if (control)
+        limit += API_RESERVED_CONTROL;
+    if (atomic_load(&pool->open) >= (int)limit) {
+        snprintf(why, n, stream ? "too many live streams open (%u); close a page and retry"
+                                : "the API is busy (%u connections in use); retry",
+                 limit);
+        return 503;
+    }
+    /* Counted here, on the only thread that hands sockets over, so the count is never behind;
+     * libmicrohttpd's own limit is set above ours and never reached (reaching it made
+     * libmicrohttpd 0.9.75 hang at stop). On failure libmicrohttpd has closed the socket. */
+    atomic_fetch_add(&pool->open, 1);
+    if (MHD_add_connection(stream ? s->smhd : s->mhd, fd, peer, peer_len) != MHD_YES)
+        atomic_fetch_sub(&pool->open, 1);
+    return 0;
+}
+
 static void on_log(void *cls, const char *fmt, va_list ap)
 {
     api_server *s = cls;
@@ -467,6 +725,11 @@ static void on_log(void *cls, const char *fmt, va_list ap)
 }
 
 /* ---------------------------------------------------------------- start / stop */
+
+static int listen_on(int fd)
+{
+    return listen(fd, 1024);
+}
 
 /* Parse a numeric listen address into sa; tell whether it is a loopback address. */
 static int parse_listen(const char *listen, struct sockaddr_storage *sa, bool *v6, bool *loopback, char *why, size_t n)
@@ -510,6 +773,18 @@ static int check_config(const api_server_config *cfg, char *why, size_t n)
     }
     if (cfg->max_connections < 1 || cfg->max_connections > 1000) {
         snprintf(why, n, "api max_connections %u is out of range (1 .. 1000)", cfg->max_connections);
+        return -1;
+    }
+    if (cfg->max_streams < 1 || cfg->max_streams > 256) {
+        snprintf(why, n, "api max_streams %u is out of range (1 .. 256)", cfg->max_streams);
+        return -1;
+    }
+    if (cfg->header_timeout_ms < 100 || cfg->header_timeout_ms > 60000) {
+        snprintf(why, n, "api header_timeout_ms %u is out of range (100 .. 60000)", cfg->header_timeout_ms);
+        return -1;
+    }
+    if (cfg->pending_max < 16 || cfg->pending_max > 4096) {
+        snprintf(why, n, "api pending_max %u is out of range (16 .. 4096)", cfg->pending_max);
         return -1;
     }
     if (cfg->token != NULL) {
@@ -578,37 +853,97 @@ int api_server_start(const api_server_config *cfg_in, const api_ops *ops, void *
     }
     s->log_capture = true;
 
-    unsigned flags = MHD_USE_AUTO_INTERNAL_THREAD | MHD_USE_ITC | MHD_USE_ERROR_LOG;
+    s->pool[0].s = s->pool[1].s = s;
+    s->pool[1].stream = 1;
+    s->max_control = cfg.max_connections;
+    s->max_streams = cfg.max_streams;
+    if (cfg.n_assets > 0) {
+        s->assets = calloc(cfg.n_assets, sizeof *s->assets);
+        if (s->assets == NULL) {
+            snprintf(why, n, "out of memory");
+            goto fail;
+        }
+        memcpy(s->assets, cfg.assets, cfg.n_assets * sizeof *s->assets);
+        s->n_assets = cfg.n_assets;
+    }
+
+    /* The listening socket is ours (the guard's): bound here so a failure names its reason. */
+    int lfd = socket(v6 ? AF_INET6 : AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (lfd < 0) {
+        snprintf(why, n, "cannot serve the API on %s port %u: socket: %s", listen, cfg.port, strerror(errno));
+        goto fail;
+    }
+    int one = 1;
+    setsockopt(lfd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
     if (v6)
-        flags |= MHD_USE_IPv6;
+        setsockopt(lfd, IPPROTO_IPV6, IPV6_V6ONLY, &one, sizeof one);
+    socklen_t salen = v6 ? sizeof(struct sockaddr_in6) : sizeof(struct sockaddr_in);
+    if (bind(lfd, (struct sockaddr *)&sa, salen) != 0 || listen_on(lfd) != 0) {
+        snprintf(why, n, "cannot serve the API on %s port %u: %s", listen, cfg.port, strerror(errno));
+        close(lfd);
+        goto fail;
+    }
+    struct sockaddr_storage bound;
+    socklen_t blen = sizeof bound;
+    if (getsockname(lfd, (struct sockaddr *)&bound, &blen) != 0) {
+        snprintf(why, n, "cannot tell which port the API listens on: %s", strerror(errno));
+        close(lfd);
+        goto fail;
+    }
+    s->port = ntohs(v6 ? ((struct sockaddr_in6 *)&bound)->sin6_port : ((struct sockaddr_in *)&bound)->sin_port);
+
     errno = 0;
-    s->mhd = MHD_start_daemon(flags, (uint16_t)cfg.port, NULL, NULL, on_request, s,
+    s->mhd = MHD_start_daemon(MHD_USE_AUTO_INTERNAL_THREAD | MHD_USE_ITC | MHD_USE_ERROR_LOG | MHD_USE_NO_LISTEN_SOCKET,
+                              0, NULL, NULL, on_request, &s->pool[0],
                               MHD_OPTION_EXTERNAL_LOGGER, on_log, s,
-                              MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&sa,
                               MHD_OPTION_NOTIFY_COMPLETED, on_completed, s,
+                              MHD_OPTION_NOTIFY_CONNECTION, on_connection, &s->pool[0],
+                              MHD_OPTION_UNESCAPE_CALLBACK, keep_escapes, NULL,
+                              MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)(4 * API_HEAD_MAX),
                               MHD_OPTION_CONNECTION_TIMEOUT, cfg.connection_timeout_s,
-                              MHD_OPTION_CONNECTION_LIMIT, cfg.max_connections,
+                              MHD_OPTION_CONNECTION_LIMIT, cfg.max_connections + API_RESERVED_CONTROL + 16,
                               MHD_OPTION_END);
+    if (s->mhd != NULL)
+        s->smhd = MHD_start_daemon(MHD_USE_THREAD_PER_CONNECTION | MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_ITC |
+                                       MHD_USE_ERROR_LOG | MHD_USE_NO_LISTEN_SOCKET,
+                                   0, NULL, NULL, on_request, &s->pool[1],
+                                   MHD_OPTION_EXTERNAL_LOGGER, on_log, s,
+                                   MHD_OPTION_NOTIFY_COMPLETED, on_completed, s,
+                                   MHD_OPTION_NOTIFY_CONNECTION, on_connection, &s->pool[1],
+                                   MHD_OPTION_UNESCAPE_CALLBACK, keep_escapes, NULL,
+                                   MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)(4 * API_HEAD_MAX),
+                                   /* a client that reads nothing for this long is dropped */
+                                   MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)60,
+                                   MHD_OPTION_CONNECTION_LIMIT, cfg.max_streams + 16,
+                                   MHD_OPTION_END);
     int err = errno;
     pthread_mutex_lock(&s->log_lock);
     s->log_capture = false;
     pthread_mutex_unlock(&s->log_lock);
-    if (s->mhd == NULL) {
+    if (s->mhd == NULL || s->smhd == NULL) {
         const char *reason = s->log[0] ? s->log : err ? strerror(err) : "libmicrohttpd gave no reason";
         snprintf(why, n, "cannot serve the API on %s port %u: %s", listen, cfg.port, reason);
-        pthread_mutex_destroy(&s->log_lock);
-        free(s);
-        return -1;
+        close(lfd);
+        goto fail;
     }
-    const union MHD_DaemonInfo *info = MHD_get_daemon_info(s->mhd, MHD_DAEMON_INFO_BIND_PORT);
-    s->port = info ? info->port : cfg.port;
-    if (s->port == 0) {
-        snprintf(why, n, "cannot tell which port the API listens on");
-        api_server_stop(s);
-        return -1;
+    api_guard_config gc = {
+        .listen_fd = lfd,
+        .header_timeout_ms = cfg.header_timeout_ms,
+        .pending_max = cfg.pending_max,
+        .line_max = API_LINE_MAX,
+        .head_max = API_HEAD_MAX,
+        .take = take_connection,
+        .user = s,
+    };
+    if (api_guard_start(&gc, &s->guard, why, n) != 0) {
+        close(lfd);
+        goto fail;
     }
     *out = s;
     return 0;
+fail:
+    api_server_stop(s);
+    return -1;
 }
 
 unsigned api_server_port(const api_server *s)
@@ -620,8 +955,12 @@ void api_server_stop(api_server *s)
 {
     if (s == NULL)
         return;
+    api_guard_stop(s->guard); /* first: no new connection reaches the pools */
+    if (s->smhd)
+        MHD_stop_daemon(s->smhd);
     if (s->mhd)
         MHD_stop_daemon(s->mhd);
     pthread_mutex_destroy(&s->log_lock);
+    free(s->assets);
     free(s);
 }

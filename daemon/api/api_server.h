@@ -11,15 +11,33 @@
  *   GET  /trials                   list                       200 array    500
  *   GET  /trials/{id}              show(id)                   200 object   404 no such trial
  *   GET  /trials/{id}/report.png   report_png(id)             200 PNG      404, 500
+ *   GET  /live/events              events                     200 text/event-stream (never ends)
+ *   GET  /live/camera.jpg          camera_jpeg                200 JPEG     404 no frame yet
+ *   GET  /live/prediction          prediction                 200 object   404 none yet
+ *   GET  any path of cfg.assets    (served by the server)     200 the asset, no token needed
  *
- * Errors found by the server itself: 400 ({id} not a positive integer, malformed JSON body with
+ * The live routes feed the live page (docs/live-page.md); the assets are the page itself (HTML,
+ * CSS, JavaScript: no data, no power), served without the token so the page can ask for it.
+ *
+ * CONNECTIONS. The server accepts every connection itself (api_guard.h) and hands it to
+ * libmicrohttpd only once its request headers are complete (header_timeout_ms after the accept at
+ * most, else 408), into one of two pools: GET /live/events to the stream pool (one thread per
+ * stream, at most max_streams, else 503), everything else to the control pool (max_connections,
+ * else 503). The control pool keeps RESERVED_CONTROL more slots for bodiless GET /status and
+ * POST /trials/current/abort, so that stopping a trial never waits for a free slot. Control
+ * replies close their connection (no keep-alive), and a request body must arrive within
+ * API_BODY_TIMEOUT_MS, so a control slot is held for one request's time only. A request line
+ * over API_LINE_MAX bytes gets 414, a head over API_HEAD_MAX bytes 431, as JSON.
+ *
+ * Errors found by the server itself: 400 (a path byte outside the routes' grammar [A-Za-z0-9._/-]:
+ * percent-escapes are not decoded, so "%00" is refused, never truncates; {id} not a positive integer, malformed JSON body with
  * line and column, body not an object), 401 (token missing or wrong), 404 (unknown path),
  * 405 (known path, wrong method; the reply carries an Allow header), 413 (body larger than
  * max_body_bytes), 500 (an op broke its contract), 501 (op left NULL). Every error reply is
  * application/json: {"error": "human message", "status": N}.
  *
  * THREADING CONTRACT. The server runs libmicrohttpd's internal polling thread (one thread for
- * every connection). Every op is called from that thread, one at a time: two ops never run
+ * every control connection). Every op but events is called from that thread, one at a time: two ops never run
  * concurrently, and no op ever runs on the thread that called api_server_start. An op shares
  * the runner's state with the runner's own thread, so it takes the runner's mutex, copies what it
  * needs into JSON, releases the mutex and returns; it must not block for long (a slow op stalls
@@ -38,8 +56,33 @@
 #define RIBBON_DAEMON_API_SERVER_H
 
 #include <jansson.h>
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+
+#define API_LINE_MAX 8192          /* request line, bytes: longer is 414 */
+#define API_HEAD_MAX 16384         /* request line and headers, bytes: longer is 431 */
+#define API_BODY_TIMEOUT_MS 10000  /* from the headers to the end of the body */
+#define API_RESERVED_CONTROL 8     /* control slots only bodiless /status and abort may use */
+
+/* A file of the page, served as is to GET path (no token). data is borrowed: it must outlive
+ * the server. */
+typedef struct api_asset {
+    const char *path;            /* "/", "/live.js", ... (in the routes' grammar) */
+    const char *content_type;
+    const unsigned char *data;
+    size_t len;
+} api_asset;
+
+/* A reply that does not end by itself (an event stream). The server calls read from the stream's
+ * own thread whenever it can send more: read writes up to max bytes into buf and returns how many
+ * (> 0; it may wait, but at most about a second, and then return a keep-alive), or -1 to end the
+ * stream. close is called once when the stream ends for any reason (client gone, shutdown). */
+typedef struct api_stream {
+    long (*read)(void *ctx, char *buf, size_t max);
+    void (*close)(void *ctx);
+    void *ctx;
+} api_stream;
 
 /* Creation parameters. Start from api_server_config_default() and change what you mean to. */
 typedef struct api_server_config {
@@ -55,7 +98,14 @@ typedef struct api_server_config {
                                     larger gets 413. Default 64 KiB. */
     unsigned connection_timeout_s; /* idle connection closed after this many seconds (1..3600);
                                     default 30 */
-    unsigned max_connections;    /* simultaneous connections (1..1000); default 64 */
+    unsigned max_connections;    /* simultaneous control connections (1..1000), besides the
+                                    reserved ones and the streams; default 64 */
+    unsigned max_streams;        /* simultaneous event streams (1..256); default 32 */
+    unsigned header_timeout_ms;  /* accept to complete headers (100..60000); default 5000 */
+    unsigned pending_max;        /* connections waiting for their headers (16..4096); the oldest
+                                    is closed when a new one comes and this many wait; default 256 */
+    const api_asset *assets;     /* the page's files (array copied, data borrowed); may be NULL */
+    size_t n_assets;
 } api_server_config;
 
 api_server_config api_server_config_default(void);
@@ -81,6 +131,14 @@ typedef struct api_ops {
      * free()); *len > 0. 404 when the trial does not exist. */
     int (*report_png)(void *user, int64_t id, unsigned char **png, size_t *len, int *http_status,
                       char *why, size_t n);
+    /* GET /live/events: a new event stream for one client (see api_stream). The exception to the
+     * threading contract: it is called on the stream pool's thread for that client, so it may run
+     * concurrently with the other ops (and with itself); it must only touch thread-safe state. */
+    int (*events)(void *user, api_stream *out, char *why, size_t n);
+    /* GET /live/camera.jpg: the latest camera frame as JPEG bytes, malloc'ed; 404 when none. */
+    int (*camera_jpeg)(void *user, unsigned char **jpg, size_t *len, int *http_status, char *why, size_t n);
+    /* GET /live/prediction: the current trial's predicted curve; 404 when none yet. */
+    int (*prediction)(void *user, json_t **out, int *http_status, char *why, size_t n);
 } api_ops;
 
 typedef struct api_server api_server;
@@ -90,6 +148,12 @@ typedef struct api_server api_server;
  * use, non-loopback without a token, ...). */
 int api_server_start(const api_server_config *cfg, const api_ops *ops, void *user, api_server **out,
                      char *why, size_t n);
+
+/* The token comparison the server uses: 1 when given[0..glen) equals want[0..wlen). Its running
+ * time depends on neither length nor content (always API_TOKEN_MAX + 1 bytes compared); exposed
+ * for tests. */
+#define API_TOKEN_MAX 256
+bool api_token_equal(const char *given, size_t glen, const char *want, size_t wlen);
 
 /* The TCP port actually bound (useful with port 0). */
 unsigned api_server_port(const api_server *s);

@@ -351,12 +351,23 @@ static void test_route_table(void **state)
     assert_int_equal(id, INT64_MAX);
     assert_int_equal(api_route_parse("/trials/9223372036854775808", &id, why, sizeof why), API_ROUTE_BAD_ID);
     assert_non_null(strstr(why, "too large"));
-    const char *bad[] = {"/trials/0", "/trials/-1", "/trials/+1", "/trials/1x", "/trials/", "/trials/current",
-                         "/trials/ 1", "/trials/abc/report.png"};
+    const char *bad[] = {"/trials/0", "/trials/-1", "/trials/1x", "/trials/", "/trials/current",
+                         "/trials/abc/report.png"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
         assert_int_equal(api_route_parse(bad[i], &id, why, sizeof why), API_ROUTE_BAD_ID);
-    const char *none[] = {"/", "", "/statu", "/status/", "/trials/1/report.jpg", "/trials/1/report.png/x",
-                          "/trialsx", "/trials/current/abort/"};
+    /* Outside the grammar [A-Za-z0-9._/-] (escapes are not decoded, so '%' itself is refused). */
+    const char *bad_path[] = {"", "status", "/trials/+1", "/trials/ 1", "/trials/1%00/report.png",
+                              "/status%00garbage", "/trials%00/1", "/trials/current/abort%00zz", "/status?x",
+                              "/st\x01tus", "/trials/1\xff"};
+    for (size_t i = 0; i < sizeof bad_path / sizeof bad_path[0]; i++)
+        assert_int_equal(api_route_parse(bad_path[i], &id, why, sizeof why), API_ROUTE_BAD_PATH);
+    assert_int_equal(api_route_parse("/status%00garbage", &id, why, sizeof why), API_ROUTE_BAD_PATH);
+    assert_non_null(strstr(why, "'%' at offset 7"));
+    assert_int_equal(api_route_parse("/live/events", &id, why, sizeof why), API_ROUTE_EVENTS);
+    assert_int_equal(api_route_parse("/live/camera.jpg", &id, why, sizeof why), API_ROUTE_CAMERA);
+    assert_int_equal(api_route_parse("/live/prediction", &id, why, sizeof why), API_ROUTE_PREDICTION);
+    const char *none[] = {"/", "/statu", "/status/", "/trials/1/report.jpg", "/trials/1/report.png/x",
+                          "/trialsx", "/trials/current/abort/", "/live", "/live/events/"};
     for (size_t i = 0; i < sizeof none / sizeof none[0]; i++)
         assert_int_equal(api_route_parse(none[i], &id, why, sizeof why), API_ROUTE_NONE);
     assert_string_equal(api_route_allow(API_ROUTE_TRIALS), "GET, POST");
