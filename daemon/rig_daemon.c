@@ -7,6 +7,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "live_routes.h"
 #include "trial_replay.h"
 #include "trial_report.h"
 
@@ -66,6 +67,14 @@ int rig_daemon_serve(rig_daemon *d, unsigned *port, char *why, size_t why_len)
     ac.listen = d->cfg.api.listen;
     ac.port = (unsigned)d->cfg.api.port;
     ac.token = d->cfg.api.token[0] ? d->cfg.api.token : NULL;
+    if (!d->bus && !(d->bus = live_bus_create())) {
+        snprintf(why, why_len, "out of memory for the live page's buffers");
+        return -1;
+    }
+    live_assets_load(&d->assets);
+    if (d->assets.warning[0]) say(d, "%s", d->assets.warning);
+    ac.assets = d->assets.list;
+    ac.n_assets = d->assets.n;
     api_ops ops = rig_daemon_ops();
     if (api_server_start(&ac, &ops, d, &d->api, why, why_len)) return -1;
     *port = api_server_port(d->api);
@@ -74,7 +83,9 @@ int rig_daemon_serve(rig_daemon *d, unsigned *port, char *why, size_t why_len)
 
 void rig_daemon_close(rig_daemon *d, const char *reason)
 {
-    /* The API first: no new trial can start while the running one is stopped. */
+    /* The API first: no new trial can start while the running one is stopped (the bus is closed
+     * first so every event stream ends at once). */
+    live_bus_close(d->bus);
     api_server_stop(d->api);
     d->api = NULL;
     pthread_mutex_lock(&d->lock);
@@ -100,6 +111,9 @@ void rig_daemon_close(rig_daemon *d, const char *reason)
     d->compress = d->shear = NULL;
     store_close(d->st);
     d->st = NULL;
+    live_bus_free(d->bus); /* after the session: it published until it ended */
+    d->bus = NULL;
+    live_assets_free(&d->assets);
     pthread_mutex_destroy(&d->lock);
 }
 
@@ -308,7 +322,7 @@ static int op_start(void *user, const json_t *body, json_t **out, int *http_stat
     }
     int64_t id = 0;
     int rc = trial_session_start(&cfg, d->compress, d->shear, note ? json_string_value(note) : NULL, d->log,
-                                 &d->session, &id, why, n);
+                                 d->bus, &d->session, &id, why, n);
     pthread_mutex_unlock(&d->lock);
     if (rc) {
         *http_status = 500;
@@ -378,6 +392,24 @@ static int op_report(void *user, int64_t id, unsigned char **png, size_t *len, i
     return 0;
 }
 
+static int op_events(void *user, api_stream *out, char *why, size_t n)
+{
+    rig_daemon *d = user; /* d->bus is set before the server starts and freed after it stops */
+    return live_route_events(d->bus, out, why, n);
+}
+
+static int op_camera(void *user, unsigned char **jpg, size_t *len, int *http_status, char *why, size_t n)
+{
+    rig_daemon *d = user;
+    return live_route_camera(d->bus, jpg, len, http_status, why, n);
+}
+
+static int op_prediction(void *user, json_t **out, int *http_status, char *why, size_t n)
+{
+    rig_daemon *d = user;
+    return live_route_prediction(d->bus, out, http_status, why, n);
+}
+
 api_ops rig_daemon_ops(void)
 {
     api_ops o;
@@ -388,5 +420,8 @@ api_ops rig_daemon_ops(void)
     o.list = op_list;
     o.show = op_show;
     o.report_png = op_report;
+    o.events = op_events;
+    o.camera_jpeg = op_camera;
+    o.prediction = op_prediction;
     return o;
 }

@@ -13,6 +13,8 @@
 #include <stddef.h>
 
 #include "api_server.h"
+#include "live_assets.h"
+#include "live_bus.h"
 #include "rail.h"
 #include "rig_config.h"
 #include "replay_job.h"
@@ -33,6 +35,8 @@ typedef struct rig_daemon {
     trial_session *session;    /* current or last trial, under lock */
     replay_job *replay;        /* replay mode: the current or last replay, under lock */
     api_server *api;
+    live_bus *bus;             /* the live page's: every trial publishes into it */
+    live_assets assets;        /* the live page's files */
     void (*log)(const char *line);
 } rig_daemon;
 

@@ -17,6 +17,7 @@
 #include "rod_protocol.h"
 #include "store.h"
 #include "trial_calib.h"
+#include "trial_live.h"
 #include "trial_video.h"
 
 #ifndef RIBBON_VERSION
@@ -60,6 +61,7 @@ struct trial_session {
     vis_calib cal;          /* the camera calibration of this trial */
     trial_roi roi;          /* the saved video's region */
     int width, height;      /* frame size */
+    live_bus *bus;          /* the live page's (may be NULL): published into, never waited on */
 };
 
 /* 1 when an abort arrived before the runner took over (the trial then ends before moving). */
@@ -102,6 +104,7 @@ static void session_event(trial_session *s, double t_s, store_event_kind kind, c
     pthread_mutex_unlock(&s->lock);
     ev.kind = kind;
     snprintf(ev.message, sizeof ev.message, "%s", msg);
+    trial_live_event(s->bus, s->trial_id, t_s, store_event_kind_name(kind), msg);
     char why[256];
     if (store_event_append(s->st, &ev, why, sizeof why) != STORE_OK) logf_(s, "event not stored: %s", why);
     logf_(s, "%s", msg);
@@ -173,6 +176,7 @@ static void *pred_main(void *arg)
         pthread_mutex_lock(&s->lock);
         s->status.prediction_failed = 1;
         pthread_mutex_unlock(&s->lock);
+        trial_live_prediction(s->bus, j->trial_id, 0, 0, NAN, NULL, 0, NULL, NULL, NULL, msg);
         logf_(s, "%s", msg);
         goto out;
     }
@@ -214,6 +218,8 @@ static void *pred_main(void *arg)
     snprintf(s->status.regime_predicted, sizeof s->status.regime_predicted, "%s",
              store_regime_name(sp.regime));
     pthread_mutex_unlock(&s->lock);
+    trial_live_prediction(s->bus, j->trial_id, 1, p.snapped, p.snap_dw, store_regime_name(sp.regime), j->n, j->dw,
+                          j->dz, j->a, NULL);
     logf_(s, "predicted: %s at Delta W = %.5f (N = %d, dt = %g s%s, %.2f s wall)", store_regime_name(sp.regime),
           p.snap_dw, j->scene.nodes, j->scene.dt, j->adaptive ? ", fast" : "", p.wall_s);
 out:
@@ -292,6 +298,7 @@ static int sink_state(void *user, trial_state st, double t_s, const char *why)
     pthread_mutex_lock(&s->lock);
     s->status.state = st;
     pthread_mutex_unlock(&s->lock);
+    trial_live_state(s->bus, s->trial_id, st, t_s, why);
     char w[256];
     store_trial_set_state(s->st, s->trial_id, trial_state_name(st), w, sizeof w);
     char msg[400];
@@ -341,14 +348,15 @@ static int sink_sample(void *user, const trial_sample *smp, char *why, size_t wh
         }
         pthread_mutex_unlock(&s->lock);
     }
+    trial_live_sample(s->bus, s->trial_id, smp);
     if (store_samples_add(s->writer, &x, why, why_len) != STORE_OK) return -1;
     return 0;
 }
 
 static int sink_frame(void *user, const vis_frame *f, long index, char *why, size_t why_len)
 {
-    (void)index;
     trial_session *s = user;
+    trial_live_frame(s->bus, f, s->runner.tracker, index, s->status.t_s); /* t_s: written by this thread */
     return s->video ? trial_video_add(s->video, f, why, why_len) : 0;
 }
 
@@ -560,6 +568,7 @@ static void *session_main(void *arg)
         }
     }
     trial_runner_run(&s->runner, &s->result);
+    trial_live_result(s->bus, s->trial_id, &s->result);
     pthread_mutex_lock(&s->lock);
     s->runner_ready = 0;
     pthread_mutex_unlock(&s->lock);
@@ -614,8 +623,8 @@ end:
 }
 
 int trial_session_start(const rig_config *cfg, rail *compress, rail *shear, const char *note,
-                        void (*log)(const char *line), trial_session **out, int64_t *trial_id, char *why,
-                        size_t why_len)
+                        void (*log)(const char *line), live_bus *bus, trial_session **out, int64_t *trial_id,
+                        char *why, size_t why_len)
 {
     *out = NULL;
     trial_session *s = calloc(1, sizeof *s);
@@ -627,6 +636,7 @@ int trial_session_start(const rig_config *cfg, rail *compress, rail *shear, cons
     s->compress = compress;
     s->shear = shear;
     s->log = log;
+    s->bus = bus;
     snprintf(s->note, sizeof s->note, "%s", note ? note : "");
     pthread_mutex_init(&s->lock, NULL);
     s->status.snap_dw_predicted = NAN;
@@ -656,6 +666,7 @@ int trial_session_start(const rig_config *cfg, rail *compress, rail *shear, cons
     if (se != STORE_OK) goto fail;
     s->status.trial_id = s->trial_id;
     s->status.state = TRIAL_IDLE;
+    trial_live_begin(bus, s->trial_id, cfg->mode == RIG_MODE_RIG ? "rig" : "mock", s->note);
     if (pthread_create(&s->thread, NULL, session_main, s) != 0) {
         snprintf(why, why_len, "could not start the trial thread");
         char w[256];

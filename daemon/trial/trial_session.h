@@ -21,6 +21,7 @@
 
 #include "rail.h"
 #include "rig_config.h"
+#include "live_bus.h"
 #include "trial_runner.h"
 
 typedef struct trial_session trial_session;
@@ -42,10 +43,12 @@ typedef struct session_status {
 } session_status;
 
 /* cfg is copied. The rails stay the caller's and must not be used by anyone else until the
- * session has finished. log (may be NULL) receives one line per event. */
+ * session has finished. log (may be NULL) receives one line per event. bus (may be NULL) is the
+ * live page's: the session publishes every state, event, sample, frame (at most 10/s), the
+ * prediction and the result into it, and never waits on it; it must outlive the session. */
 int trial_session_start(const rig_config *cfg, rail *compress, rail *shear, const char *note,
-                        void (*log)(const char *line), trial_session **out, int64_t *trial_id, char *why,
-                        size_t why_len);
+                        void (*log)(const char *line), live_bus *bus, trial_session **out, int64_t *trial_id,
+                        char *why, size_t why_len);
 void trial_session_abort(trial_session *s, const char *reason);
 void trial_session_status(trial_session *s, session_status *out);
 /* Waits for the thread and frees. The result is in the store. */

@@ -363,7 +363,7 @@ static void kill9_then_restart(void **state)
         if (rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, nov, NULL, why, sizeof why)) _exit(3);
         trial_session *s;
         int64_t id;
-        if (trial_session_start(&d.cfg, d.compress, d.shear, "to be killed", NULL, &s, &id, why, sizeof why)) _exit(4);
+        if (trial_session_start(&d.cfg, d.compress, d.shear, "to be killed", NULL, NULL, &s, &id, why, sizeof why)) _exit(4);
         for (;;) pause();
     }
     /* Wait until the trial is well under way, then kill it without warning. */

@@ -1,0 +1,297 @@
+// live.js: the live page's behaviour (docs/live-page.md). Follows ribbond's event stream
+// (GET /live/events, read with fetch so the token can travel in the Authorization header),
+// draws the measured points against the prediction with Chart.js, refreshes the camera picture,
+// and calls the existing API for start and abort: the page has no power the API does not have.
+'use strict';
+
+const $ = (id) => document.getElementById(id);
+const TOKEN_KEY = 'ribbon-token';
+let token = sessionStorage.getItem(TOKEN_KEY) || '';
+let tokenWaiters = [];
+
+// ---- the API, with the token when this ribbond needs one ------------------------------------
+function askToken() {
+  $('token-form').hidden = false;
+  $('token').focus();
+  return new Promise((resolve) => tokenWaiters.push(resolve));
+}
+$('token-form').addEventListener('submit', (e) => {
+  e.preventDefault();
+  token = $('token').value.trim();
+  sessionStorage.setItem(TOKEN_KEY, token);
+  $('token-form').hidden = true;
+  const w = tokenWaiters;
+  tokenWaiters = [];
+  w.forEach((r) => r());
+});
+
+async function api(path, opts = {}) {
+  for (;;) {
+    const headers = Object.assign({}, opts.headers || {});
+    if (token) headers['Authorization'] = 'Bearer ' + token;
+    const r = await fetch(path, Object.assign({}, opts, { headers, cache: 'no-store' }));
+    if (r.status !== 401) return r;
+    await askToken();
+  }
+}
+
+// ---- numbers --------------------------------------------------------------------------------
+const fmt = (v, d = 5) => (v === null || v === undefined || Number.isNaN(v) ? '-' : Number(v).toFixed(d));
+function setNum(id, v, d) {
+  const e = $(id);
+  e.textContent = fmt(v, d);
+  e.dataset.value = v === null || v === undefined ? '' : String(v);
+}
+
+let view = null;
+function resetView(trial) {
+  view = { trial, samples: 0, frames: 0, measured: 0, missed: 0, haveFrame: false, predSnap: null, measSnap: null };
+  $('trial-id').textContent = trial === null ? '-' : String(trial);
+  for (const id of ['v-dl', 'v-dw', 'v-dz', 'v-a', 'v-q', 'v-t', 'snap-predicted', 'snap-measured']) setNum(id, null);
+  for (const id of ['v-samples', 'v-frames', 'v-measured']) $(id).textContent = '0';
+  $('regime-predicted').textContent = '-';
+  $('regime-measured').textContent = '-';
+  $('events').textContent = '';
+  for (const c of charts) {
+    c.data.datasets.forEach((ds) => (ds.data = []));
+  }
+  dirty = true;
+}
+
+function setState(s) {
+  $('state').textContent = s;
+  $('v-state').textContent = s;
+  $('state').dataset.state = s;
+  const seen = ($('state').dataset.seen || '').split(' ').filter((x) => x);
+  if (!seen.includes(s)) seen.push(s);
+  $('state').dataset.seen = seen.join(' ');
+}
+
+// ---- plots ------------------------------------------------------------------------------------
+const charts = [];
+let dirty = false;
+function makeChart(canvas, ylabel) {
+  if (typeof Chart === 'undefined') return null;
+  return new Chart($(canvas), {
+    type: 'scatter',
+    data: {
+      datasets: [
+        { label: 'measured', data: [], pointRadius: 2, backgroundColor: '#1565c0', borderColor: '#1565c0' },
+        { label: 'predicted', data: [], showLine: true, pointRadius: 0, borderWidth: 2, borderColor: '#ef6c00' },
+        { label: 'predicted snap', data: [], showLine: true, pointRadius: 0, borderDash: [6, 4], borderColor: '#ef6c00' },
+        { label: 'measured snap', data: [], showLine: true, pointRadius: 0, borderDash: [2, 2], borderColor: '#1565c0' },
+      ],
+    },
+    options: {
+      animation: false, maintainAspectRatio: false, parsing: false, normalized: true,
+      scales: { x: { title: { display: true, text: '\u0394W' } }, y: { title: { display: true, text: ylabel } } },
+    },
+  });
+}
+function markSnaps() {
+  for (const c of charts) {
+    const ys = c.data.datasets[0].data.concat(c.data.datasets[1].data).map((p) => p.y);
+    if (ys.length === 0) continue;
+    const lo = Math.min(...ys), hi = Math.max(...ys);
+    c.data.datasets[2].data = view && view.predSnap !== null ? [{ x: view.predSnap, y: lo }, { x: view.predSnap, y: hi }] : [];
+    c.data.datasets[3].data = view && view.measSnap !== null ? [{ x: view.measSnap, y: lo }, { x: view.measSnap, y: hi }] : [];
+  }
+}
+setInterval(() => {
+  if (!dirty) return;
+  dirty = false;
+  markSnaps();
+  charts.forEach((c) => c.update('none'));
+  const n = charts.length ? charts[0].data.datasets[0].data.length : 0;
+  $('plot-dz').dataset.points = String(n);
+  $('plot-dz').dataset.predicted = String(charts.length ? charts[0].data.datasets[1].data.length : 0);
+}, 250);
+
+// ---- messages ---------------------------------------------------------------------------------
+function addEvent(m) {
+  const li = document.createElement('li');
+  li.className = m.kind || '';
+  li.textContent = (m.t === null || m.t === undefined ? '' : fmt(m.t, 2) + ' s  ') + (m.kind ? m.kind + ': ' : '') + m.message;
+  $('events').appendChild(li);
+  $('events').scrollTop = $('events').scrollHeight;
+}
+
+async function loadPrediction(trial) {
+  const r = await api('/live/prediction');
+  if (!r.ok) return;
+  const p = await r.json();
+  if (!view || p.trial !== view.trial || !charts.length) return;
+  const zs = [], as = [];
+  for (let i = 0; i < p.dw.length; i++) {
+    if (p.dz[i] !== null) zs.push({ x: p.dw[i], y: p.dz[i] });
+    if (p.a[i] !== null) as.push({ x: p.dw[i], y: p.a[i] });
+  }
+  charts[0].data.datasets[1].data = zs;
+  charts[1].data.datasets[1].data = as;
+  dirty = true;
+}
+
+function handle(m) {
+  switch (m.type) {
+    case 'hello': resetView(null); break;
+    case 'trial': resetView(m.trial); setState('created'); $('mode').textContent = '(' + m.mode + ')'; break;
+    case 'gap': view.missed += m.missed; $('v-missed').textContent = String(view.missed); break;
+    case 'state': if (!view || view.trial !== m.trial) resetView(m.trial); setState(m.state); break;
+    case 'event': addEvent(m); if (m.kind === 'fault' || m.kind === 'warning') $('v-dropped').dataset.faults = '1'; break;
+    case 'sample':
+      if (!view || view.trial !== m.trial) resetView(m.trial);
+      view.samples++;
+      $('v-samples').textContent = String(view.samples);
+      setNum('v-dl', m.dl); setNum('v-dw', m.dw); setNum('v-t', m.t, 2);
+      if (m.kind === 'frame') {
+        view.frames++;
+        view.haveFrame = true;
+        $('v-frames').textContent = String(view.frames);
+        setNum('v-q', m.quality, 3);
+        if (m.measured) {
+          view.measured++;
+          $('v-measured').textContent = String(view.measured);
+          setNum('v-dz', m.dz); setNum('v-a', m.a);
+          if (charts.length) {
+            charts[0].data.datasets[0].data.push({ x: m.dw, y: m.dz });
+            charts[1].data.datasets[0].data.push({ x: m.dw, y: m.a });
+            dirty = true;
+          }
+        }
+      }
+      break;
+    case 'prediction':
+      if (!view || view.trial !== m.trial) resetView(m.trial);
+      if (m.ok) {
+        view.predSnap = m.snapped ? m.snap_dw : null;
+        setNum('snap-predicted', m.snapped ? m.snap_dw : null);
+        $('regime-predicted').textContent = m.regime;
+        loadPrediction(m.trial).catch(() => {});
+      } else {
+        $('regime-predicted').textContent = 'failed';
+      }
+      dirty = true;
+      break;
+    case 'result':
+      view.measSnap = m.snapped ? m.snap_dw : null;
+      setNum('snap-measured', m.snapped ? m.snap_dw : null);
+      $('regime-measured').textContent = m.regime;
+      dirty = true;
+      loadTrials().catch(() => {});
+      break;
+    default: break;
+  }
+}
+
+// ---- the stream, reconnecting -----------------------------------------------------------------
+function setLink(up, text) {
+  $('link').className = 'link ' + (up ? 'up' : 'down');
+  $('link').textContent = text;
+  $('link').dataset.up = up ? '1' : '0';
+  if (!up) $('link').dataset.wasDown = '1';
+}
+
+async function follow() {
+  for (;;) {
+    try {
+      const r = await api('/live/events');
+      if (!r.ok || !r.body) throw new Error('events: HTTP ' + r.status);
+      setLink(true, 'live');
+      loadStatus().catch(() => {});
+      loadTrials().catch(() => {});
+      const reader = r.body.getReader();
+      const dec = new TextDecoder();
+      let buf = '';
+      for (;;) {
+        const { value, done } = await reader.read();
+        if (done) break;
+        buf += dec.decode(value, { stream: true });
+        let k;
+        while ((k = buf.indexOf('\n\n')) >= 0) {
+          const block = buf.slice(0, k);
+          buf = buf.slice(k + 2);
+          const data = block.split('\n').filter((l) => l.startsWith('data: ')).map((l) => l.slice(6)).join('\n');
+          if (data) handle(JSON.parse(data));
+        }
+      }
+    } catch (e) {
+      /* ribbond gone or restarting: said on the page, tried again */
+    }
+    setLink(false, 'ribbond unreachable, retrying');
+    await new Promise((res) => setTimeout(res, 1000));
+  }
+}
+
+async function loadStatus() {
+  const r = await api('/status');
+  if (!r.ok) return;
+  const s = await r.json();
+  $('mode').textContent = '(' + s.mode + ')';
+  if (s.state === 'idle' && (!view || view.trial === null)) setState('idle');
+}
+
+async function loadTrials() {
+  const r = await api('/trials');
+  if (!r.ok) return;
+  const list = await r.json();
+  const body = $('trials').tBodies[0];
+  body.textContent = '';
+  for (const t of list.slice(-30).reverse()) {
+    const tr = body.insertRow();
+    const cells = [t.id, t.status, fmt(t.snap_dw_measured), t.regime_measured || '-', fmt(t.snap_dw_predicted),
+      t.regime_predicted || '-'];
+    for (const c of cells) tr.insertCell().textContent = String(c);
+    const a = document.createElement('a');
+    a.href = '/trials/' + t.id + '/report.png';
+    a.textContent = 'PNG';
+    tr.insertCell().appendChild(a);
+  }
+}
+
+// ---- camera -----------------------------------------------------------------------------------
+let camUrl = null, camCount = 0;
+async function camera() {
+  for (;;) {
+    await new Promise((res) => setTimeout(res, 200));
+    if (!view || !view.haveFrame || document.hidden) continue;
+    try {
+      const r = await api('/live/camera.jpg');
+      if (!r.ok) continue;
+      const blob = await r.blob();
+      const url = URL.createObjectURL(blob);
+      $('camera').src = url;
+      if (camUrl) URL.revokeObjectURL(camUrl);
+      camUrl = url;
+      camCount++;
+      $('camera').dataset.updates = String(camCount);
+      $('camera-info').textContent = camCount + ' pictures';
+    } catch (e) {
+      /* unreachable: the stream's loop says so */
+    }
+  }
+}
+
+// ---- controls ---------------------------------------------------------------------------------
+async function control(path, body) {
+  const r = await api(path, { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) });
+  const j = await r.json().catch(() => ({}));
+  $('control-msg').textContent = r.ok ? path + ': ' + (j.abort || j.status || 'ok') : 'refused (' + r.status + '): ' + (j.error || '');
+  $('control-msg').dataset.status = String(r.status);
+}
+$('start').addEventListener('click', () => {
+  const body = {};
+  const note = $('note').value.trim();
+  if (note) body.note = note;
+  const set = $('overrides').value.split('\n').map((l) => l.trim()).filter((l) => l);
+  if (set.length) body.set = set;
+  control('/trials', body).catch((e) => ($('control-msg').textContent = String(e)));
+});
+$('abort').addEventListener('click', () => control('/trials/current/abort', {}).catch((e) => ($('control-msg').textContent = String(e))));
+
+// ---- start ------------------------------------------------------------------------------------
+const c1 = makeChart('plot-dz', '\u0394Z'), c2 = makeChart('plot-a', 'A (rad)');
+if (c1 && c2) charts.push(c1, c2);
+else $('control-msg').textContent = 'Chart.js is missing (install libjs-chart.js): no plots';
+resetView(null);
+follow();
+camera();
