@@ -48,7 +48,7 @@ function resetView(trial) {
   view = { trial, samples: 0, frames: 0, measured: 0, missed: 0, haveFrame: false, predSnap: null, measSnap: null };
   $('trial-id').textContent = trial === null ? '-' : String(trial);
   for (const id of ['v-dl', 'v-dw', 'v-dz', 'v-a', 'v-q', 'v-t', 'snap-predicted', 'snap-measured']) setNum(id, null);
-  for (const id of ['v-samples', 'v-frames', 'v-measured']) $(id).textContent = '0';
+  for (const id of ['v-samples', 'v-frames', 'v-measured', 'v-unmeasured', 'v-missed']) $(id).textContent = '0';
   $('regime-predicted').textContent = '-';
   $('regime-measured').textContent = '-';
   $('events').textContent = '';
@@ -137,7 +137,7 @@ function handle(m) {
     case 'trial': resetView(m.trial); setState('created'); $('mode').textContent = '(' + m.mode + ')'; break;
     case 'gap': view.missed += m.missed; $('v-missed').textContent = String(view.missed); break;
     case 'state': if (!view || view.trial !== m.trial) resetView(m.trial); setState(m.state); break;
-    case 'event': addEvent(m); if (m.kind === 'fault' || m.kind === 'warning') $('v-dropped').dataset.faults = '1'; break;
+    case 'event': addEvent(m); break;
     case 'sample':
       if (!view || view.trial !== m.trial) resetView(m.trial);
       view.samples++;
@@ -147,6 +147,7 @@ function handle(m) {
         view.frames++;
         view.haveFrame = true;
         $('v-frames').textContent = String(view.frames);
+        $('v-unmeasured').textContent = String(view.frames - view.measured - (m.measured ? 1 : 0));
         setNum('v-q', m.quality, 3);
         if (m.measured) {
           view.measured++;

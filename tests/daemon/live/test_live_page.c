@@ -1,0 +1,263 @@
+/* test_live_page.c: the live page in a real browser (Debian's chromium, headless, driven through
+ * chromedriver's WebDriver API on loopback) against ribbond in mock mode:
+ *   1. the page loads and follows a whole mock trial started from its own Start button: the state
+ *      goes through every step, measured points appear on the plot while the trial runs, the
+ *      prediction's curve appears, the camera picture updates, and the final measured and
+ *      predicted snap on the page are the ones `ribbonctl show --json` gives; no console error;
+ *   2. Abort on the page aborts a running trial;
+ *   3. ribbond restarted under the page: the page shows it was gone and reconnects.
+ * Screenshots go to the build folder (test-output/live_page/); with RIBBON_LIVE_FIGURE=path the
+ * one taken during the shear is also written there (the README's figure is made so).
+ * Heavy and labelled "browser": the sanitizer build skips it. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "live_testkit.h"
+#include "webdriver.h"
+
+static const char SNAPSHOT[] =
+    "const g = (id) => document.getElementById(id);"
+    "return {state: g('state').dataset.state || '', seen: g('state').dataset.seen || '',"
+    " points: +(g('plot-dz').dataset.points || 0), predicted: +(g('plot-dz').dataset.predicted || 0),"
+    " cam: +(g('camera').dataset.updates || 0), trial: g('trial-id').textContent,"
+    " sm: g('snap-measured').dataset.value || '', sp: g('snap-predicted').dataset.value || '',"
+    " link: g('link').dataset.up || '', down: g('link').dataset.wasDown || '',"
+    " msg: g('control-msg').textContent};";
+
+typedef struct page_view {
+    char state[32], seen[200], trial[32], sm[64], sp[64], link[4], down[4], msg[300];
+    long points, predicted, cam;
+} page_view;
+
+static void look(webdriver *wd, page_view *v)
+{
+    char why[512];
+    json_t *j = wd_exec(wd, SNAPSHOT, why, sizeof why);
+    if (!j) fail_msg("snapshot: %s", why);
+    memset(v, 0, sizeof *v);
+#define STR(k) snprintf(v->k, sizeof v->k, "%s", json_string_value(json_object_get(j, #k)) ? json_string_value(json_object_get(j, #k)) : "")
+    STR(state);
+    STR(seen);
+    STR(trial);
+    STR(sm);
+    STR(sp);
+    STR(link);
+    STR(down);
+    STR(msg);
+#undef STR
+    v->points = (long)json_number_value(json_object_get(j, "points"));
+    v->predicted = (long)json_number_value(json_object_get(j, "predicted"));
+    v->cam = (long)json_number_value(json_object_get(j, "cam"));
+    json_decref(j);
+}
+
+static void click(webdriver *wd, const char *id)
+{
+    char s[200], why[512];
+    snprintf(s, sizeof s, "document.getElementById('%s').click(); return 1;", id);
+    json_t *j = wd_exec(wd, s, why, sizeof why);
+    if (!j) fail_msg("click %s: %s", id, why);
+    json_decref(j);
+}
+
+/* `ribbonctl show ID --json` through the real CLI. */
+static json_t *ribbonctl_show(const char *url, const char *id)
+{
+    char cmd[600];
+    snprintf(cmd, sizeof cmd, "'%s/ribbonctl' show %s --json --url %s", RIBBON_BIN_DIR, id, url);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    json_error_t e;
+    json_t *j = json_loadf(p, 0, &e);
+    pclose(p);
+    if (!j) fail_msg("ribbonctl show %s: not JSON (%s)", id, e.text);
+    return j;
+}
+
+static int has_word(const char *list, const char *w)
+{
+    size_t n = strlen(w);
+    for (const char *p = list; (p = strstr(p, w)) != NULL; p += n)
+        if ((p == list || p[-1] == ' ') && (p[n] == ' ' || p[n] == '\0')) return 1;
+    return 0;
+}
+
+static void save_shot(webdriver *wd, const char *dir, const char *name)
+{
+    char path[400], why[512];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    if (wd_screenshot(wd, path, why, sizeof why) != 0) fail_msg("screenshot: %s", why);
+    printf("# screenshot %s\n", path);
+}
+
+/* Stopped by the teardown however the test ends (a failed assertion jumps out of the test). */
+static ribbond_child c;
+static webdriver wd;
+
+static int teardown(void **state)
+{
+    (void)state;
+    wd_close(&wd);
+    if (c.pid > 0) kit_ribbond_stop(&c);
+    return 0;
+}
+
+static void test_live_page(void **state)
+{
+    (void)state;
+    if (!wd_available()) {
+        printf("# chromium or chromedriver missing (Debian packages chromium, chromium-driver): skipped\n");
+        skip();
+    }
+    char dir[300], profile[400], why[512];
+    kit_fresh_dir("live_page", dir, sizeof dir);
+    /* A fresh profile outside the build folder: chromium writes its DevTools port file there and
+     * chromedriver reads it back by the same path, which must not wander through "..". */
+    snprintf(profile, sizeof profile, "/tmp/ribbon-live-page-XXXXXX");
+    if (!mkdtemp(profile)) fail_msg("mkdtemp failed");
+    assert_int_equal(kit_ribbond_start(&c, dir, 0, NULL), 0);
+    if (wd_open(&wd, profile, 1400, 1100, why, sizeof why) != 0) fail_msg("webdriver: %s", why);
+    char page[128];
+    snprintf(page, sizeof page, "%s/", c.url);
+    if (wd_navigate(&wd, page, why, sizeof why) != 0) fail_msg("navigate: %s", why);
+    page_view v;
+    double t0 = kit_now();
+    do {
+        look(&wd, &v);
+        if (strcmp(v.link, "1") == 0) break;
+        kit_sleep_ms(100);
+    } while (kit_now() - t0 < 20);
+    assert_string_equal(v.link, "1");
+
+    /* 1. A whole trial, started from the page. */
+    json_t *ok = wd_exec(&wd, "document.getElementById('note').value = 'browser test'; return 1;", why, sizeof why);
+    json_decref(ok);
+    click(&wd, "start");
+    long points_running = 0, predicted_running = 0, cam_first = -1, cam_last = 0;
+    int shot = 0;
+    t0 = kit_now();
+    static const char *const running[] = {"compressing", "holding", "checking", "shearing", "snapped", "returning"};
+    for (;;) {
+        look(&wd, &v);
+        int is_running = 0;
+        for (size_t k = 0; k < sizeof running / sizeof *running; k++) is_running |= strcmp(v.state, running[k]) == 0;
+        if (is_running) {
+            if (v.points > points_running) points_running = v.points;
+            if (v.predicted > predicted_running) predicted_running = v.predicted;
+            if (v.cam > 0 && cam_first < 0) cam_first = v.cam;
+            cam_last = v.cam;
+        }
+        if (!shot && strcmp(v.state, "shearing") == 0 && v.points >= 40 && v.predicted > 0) {
+            save_shot(&wd, dir, "live-page-running.png");
+            const char *fig = getenv("RIBBON_LIVE_FIGURE");
+            if (fig && *fig) {
+                if (wd_screenshot(&wd, fig, why, sizeof why) != 0) fail_msg("figure: %s", why);
+                printf("# figure %s\n", fig);
+            }
+            shot = 1;
+        }
+        if (strcmp(v.state, "done") == 0 && v.sm[0]) break;
+        if (strcmp(v.state, "aborted") == 0 || strcmp(v.state, "failed") == 0)
+            fail_msg("trial ended %s (page says: %s)", v.state, v.msg);
+        if (kit_now() - t0 > 240) fail_msg("no end of the trial after 240 s (state %s)", v.state);
+        kit_sleep_ms(100);
+    }
+    save_shot(&wd, dir, "live-page-done.png");
+    printf("# trial %s: states seen '%s'; %ld points and %ld predicted points while running; camera pictures "
+           "%ld .. %ld while running\n",
+           v.trial, v.seen, points_running, predicted_running, cam_first, cam_last);
+    static const char *const steps[] = {"compressing", "holding", "checking", "shearing", "snapped", "returning",
+                                        "done"};
+    for (size_t k = 0; k < sizeof steps / sizeof *steps; k++)
+        if (!has_word(v.seen, steps[k])) fail_msg("state %s never shown (seen: %s)", steps[k], v.seen);
+    assert_true(points_running > 0);
+    assert_true(predicted_running > 0);
+    assert_true(cam_first > 0 && cam_last >= cam_first + 3); /* the picture kept changing */
+    json_t *show = ribbonctl_show(c.url, v.trial);
+    double sm = json_real_value(json_object_get(show, "snap_dw_measured"));
+    double sp = json_real_value(json_object_get(show, "snap_dw_predicted"));
+    printf("# page: measured %s predicted %s; ribbonctl show: measured %.9g predicted %.9g\n", v.sm, v.sp, sm, sp);
+    assert_true(fabs(atof(v.sm) - sm) < 1e-8);
+    assert_true(fabs(atof(v.sp) - sp) < 1e-8);
+    json_decref(show);
+    json_t *log = wd_console(&wd, why, sizeof why);
+    if (!log) fail_msg("console: %s", why);
+    size_t i;
+    json_t *e;
+    int severe = 0;
+    json_array_foreach(log, i, e)
+    {
+        const char *lvl = json_string_value(json_object_get(e, "level"));
+        printf("# console %s: %s\n", lvl, json_string_value(json_object_get(e, "message")));
+        severe += lvl && strcmp(lvl, "SEVERE") == 0;
+    }
+    json_decref(log);
+    assert_int_equal(severe, 0);
+
+    /* 2. Abort from the page. */
+    char first_trial[32];
+    snprintf(first_trial, sizeof first_trial, "%s", v.trial);
+    click(&wd, "start");
+    t0 = kit_now();
+    int clicked = 0;
+    for (;;) {
+        look(&wd, &v);
+        if (!clicked && strcmp(v.trial, first_trial) != 0 &&
+            (strcmp(v.state, "compressing") == 0 || strcmp(v.state, "holding") == 0)) {
+            click(&wd, "abort");
+            clicked = 1;
+        }
+        if (strcmp(v.trial, first_trial) != 0 && strcmp(v.state, "aborted") == 0) break;
+        if (strcmp(v.trial, first_trial) != 0 && strcmp(v.state, "done") == 0) fail_msg("abort did not stop the trial");
+        if (kit_now() - t0 > 120) fail_msg("no abort after 120 s (state %s, %s)", v.state, v.msg);
+        kit_sleep_ms(100);
+    }
+    assert_true(clicked);
+    show = ribbonctl_show(c.url, v.trial);
+    assert_string_equal(json_string_value(json_object_get(show, "status")), "aborted");
+    json_decref(show);
+    printf("# trial %s aborted from the page\n", v.trial);
+
+    /* 3. ribbond restarted under the page. */
+    unsigned port = c.port;
+    assert_int_equal(kit_ribbond_stop(&c), 0);
+    t0 = kit_now();
+    do {
+        look(&wd, &v);
+        if (strcmp(v.link, "0") == 0) break;
+        kit_sleep_ms(100);
+    } while (kit_now() - t0 < 15);
+    assert_string_equal(v.link, "0");
+    save_shot(&wd, dir, "live-page-gone.png");
+    assert_int_equal(kit_ribbond_start(&c, dir, port, NULL), 0);
+    t0 = kit_now();
+    do {
+        look(&wd, &v);
+        if (strcmp(v.link, "1") == 0) break;
+        kit_sleep_ms(100);
+    } while (kit_now() - t0 < 30);
+    assert_string_equal(v.link, "1");
+    assert_string_equal(v.down, "1");
+    printf("# reconnected %.1f s after ribbond came back\n", kit_now() - t0);
+    wd_close(&wd);
+    assert_int_equal(kit_ribbond_stop(&c), 0);
+    char cmd[500];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", profile);
+    if (system(cmd) != 0) printf("# could not remove %s\n", profile);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {cmocka_unit_test_teardown(test_live_page, teardown)};
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
