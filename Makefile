@@ -8,9 +8,12 @@ DEB_PACKAGES := cmake make gcc g++ pkg-config \
 	libgsl-dev libinih-dev libsqlite3-dev libserialport-dev libmodbus-dev \
 	libopencv-dev libmicrohttpd-dev libjansson-dev libcmocka-dev libcairo2-dev \
 	libcurl4-openssl-dev libplplot-dev plplot-driver-cairo libsystemd-dev \
-	clang libclang-rt-14-dev
+	clang libclang-rt-14-dev \
+	libjpeg62-turbo-dev libjs-chart.js chromium chromium-driver
 # clang with libclang-rt-14-dev: libFuzzer (libclang_rt.fuzzer-x86_64.a) and clang's sanitizer
 # runtimes for the fuzz build (clang-14 only recommends them, and deps skips recommends).
+# libjpeg62-turbo-dev and libjs-chart.js: the live page's camera JPEG and plots (docs/live-page.md);
+# chromium and chromium-driver: the live page's browser test.
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 BUILD ?= build
 ASAN_BUILD ?= build-asan
@@ -64,6 +67,7 @@ demo: build
 	  kill -0 $$pid 2>/dev/null || break; sleep 0.1; done; \
 	if [ -z "$$url" ]; then cat $$log; echo "ribbond did not start"; kill $$pid 2>/dev/null; exit 1; fi; \
 	echo "ribbond on $$url (log: $$log)"; \
+	echo "live page: $$url/  (open it in a browser while the trial runs)"; \
 	./$(BUILD)/bin/ribbonctl start --url $$url --note "make demo" --wait --out $(DEMO_REPORT); rc=$$?; \
 	kill -TERM $$pid; wait $$pid; exit $$rc
 
