@@ -157,7 +157,10 @@ static void test_live_page(void **state)
             if (v.cam > 0 && cam_first < 0) cam_first = v.cam;
             cam_last = v.cam;
         }
-        if (!shot && strcmp(v.state, "shearing") == 0 && v.points >= 40 && v.predicted > 0) {
+        /* The figure: well into the shear (the measured points along the predicted curve), or at
+         * the snap if the page never showed that many points before it. */
+        if (!shot && v.predicted > 0 &&
+            ((strcmp(v.state, "shearing") == 0 && v.points >= 250) || strcmp(v.state, "snapped") == 0)) {
             save_shot(&wd, dir, "live-page-running.png");
             const char *fig = getenv("RIBBON_LIVE_FIGURE");
             if (fig && *fig) {
