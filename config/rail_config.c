@@ -14,6 +14,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "grbl_link.h"
+
 typedef enum kind { K_DOUBLE, K_INT, K_BOOL, K_STRING, K_CHAR, K_REG, K_LONG } kind;
 
 typedef struct key_def {
