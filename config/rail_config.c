@@ -14,7 +14,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "grbl_link.h"
 
 typedef enum kind { K_DOUBLE, K_INT, K_BOOL, K_STRING, K_CHAR, K_REG, K_LONG } kind;
 
@@ -402,47 +401,6 @@ int rail_config_load_string(const char *text, const char *name, const char *rail
     return load(NULL, text, name, rail_name, out, why, why_len);
 }
 
-rail_err rail_config_open(const rail_config *c, rail_clock clock, grbl_link *shared, rail **out, char *why,
-                          size_t why_len)
-{
-    *out = NULL;
-    if (!strcmp(c->driver, "mock"))
-        return rail_mock_open(out, &c->params, &c->mock, clock, why, why_len);
-    if (!strcmp(c->driver, "gcode"))
-        return rail_gcode_open(out, &c->params, &c->gcode, shared, clock, why, why_len);
-    if (!strcmp(c->driver, "modbus"))
-        return rail_modbus_open(out, &c->params, &c->modbus, clock, why, why_len);
-    snprintf(why, why_len, "rail %s: unknown driver '%s'", c->params.name, c->driver);
-    return RAIL_E_INVALID;
-}
-
-rail_err rail_config_open_pair(const rail_config *cc, const rail_config *cs, rail_clock clock, rail **compress,
-                               rail **shear, char *why, size_t why_len)
-{
-    *compress = *shear = NULL;
-    grbl_link *link = NULL;
-    bool share = !strcmp(cc->driver, "gcode") && !strcmp(cs->driver, "gcode") &&
-                 !strcmp(cc->gcode.port, cs->gcode.port);
-    if (share) {
-        if (cc->gcode.axis == cs->gcode.axis) {
-            snprintf(why, why_len, "both rails are axis %c of controller %s", cc->gcode.axis, cc->gcode.port);
-            return RAIL_E_INVALID;
-        }
-        rail_err e = grbl_link_open(&link, &cc->gcode, clock, why, why_len);
-        if (e != RAIL_OK)
-            return e;
-    }
-    rail_err e = rail_config_open(cc, clock, link, compress, why, why_len);
-    if (e == RAIL_OK)
-        e = rail_config_open(cs, clock, link, shear, why, why_len);
-    grbl_link_release(link); /* the rails hold their own references */
-    if (e != RAIL_OK) {
-        rail_close(*compress);
-        *compress = NULL;
-    }
-    return e;
-}
-
 rail_err rail_config_open_rig(const char *path, rail_clock clock, rail **compress, rail **shear, char *why,
                               size_t why_len)
 {
@@ -451,5 +409,5 @@ rail_err rail_config_open_rig(const char *path, rail_clock clock, rail **compres
     if (rail_config_load(path, "compress", &cc, why, why_len) != 0 ||
         rail_config_load(path, "shear", &cs, why, why_len) != 0)
         return RAIL_E_INVALID;
-    return rail_config_open_pair(&cc, &cs, clock, compress, shear, why, why_len);
+    return rail_open_pair(&cc, &cs, clock, compress, shear, why, why_len);
 }

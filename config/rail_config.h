@@ -22,17 +22,11 @@
 
 #include <stddef.h>
 
-#include "rail_gcode.h"
-#include "rail_mock.h"
-#include "rail_modbus.h"
+#include "rail_open.h"
 
-typedef struct rail_config {
-    char driver[16];          /* "mock", "gcode" or "modbus" */
-    rail_params params;
-    rail_gcode_params gcode;
-    rail_modbus_params modbus;
-    rail_mock_params mock;
-} rail_config;
+/* A rail section is a driver spec: which driver, and its parameters (drivers/rail_open.h, which
+ * opens it). */
+typedef rail_open_spec rail_config;
 
 /* Load section [rail.<rail_name>] of path. Returns 0, or -1 with the reason in why. */
 int rail_config_load(const char *path, const char *rail_name, rail_config *out, char *why, size_t why_len);
@@ -55,16 +49,8 @@ int rail_config_set(rail_config *c, const char *key, const char *value, char *wh
 int rail_config_check(const rail_config *c, char *why, size_t why_len, char *key, size_t key_len);
 const char *rail_config_key_name(size_t i);
 
-/* Open the rail a config describes. shared: a GRBL link to use for a gcode rail (NULL: open one). */
-rail_err rail_config_open(const rail_config *c, rail_clock clock, grbl_link *shared, rail **out, char *why,
-                          size_t why_len);
-
-/* Load and open both rails of a rig file. Two gcode rails naming the same port share one
- * controller link (two axes of one board). On failure nothing stays open. */
-/* Open both rails from configs already loaded (e.g. by rig_config): two gcode rails naming the
- * same port share one controller link. On failure nothing stays open. */
-rail_err rail_config_open_pair(const rail_config *compress_cfg, const rail_config *shear_cfg, rail_clock clock,
-                               rail **compress, rail **shear, char *why, size_t why_len);
+/* Load both rail sections of a rig file and open them (rail_open_pair: two gcode rails naming
+ * the same port share one controller link). On failure nothing stays open. */
 rail_err rail_config_open_rig(const char *path, rail_clock clock, rail **compress, rail **shear, char *why,
                               size_t why_len);
 

@@ -1336,27 +1336,7 @@ static json_t *json_num(double v)
 
 char *rig_calibration_json(const rig_config *c)
 {
-    if (!c) return NULL;
-    double gap0, gap_per;
-    rig_calib_gap_model(&c->calib, c->scene.length, &gap0, &gap_per);
-    json_t *o = json_object();
-    if (!o) return NULL;
-    int bad = 0;
-    bad |= json_object_set_new(o, "compress_zero_mm", json_num(c->calib.compress_zero_mm));
-    bad |= json_object_set_new(o, "shear_zero_mm", json_num(c->calib.shear_zero_mm));
-    bad |= json_object_set_new(o, "compress_sign", json_integer(c->calib.compress_sign));
-    bad |= json_object_set_new(o, "shear_sign", json_integer(c->calib.shear_sign));
-    bad |= json_object_set_new(o, "camera_side",
-                               json_string(rig_camera_side_name(c->calib.camera_side)));
-    bad |= json_object_set_new(o, "camera_time_offset_s", json_num(c->calib.camera_time_offset_s));
-    bad |= json_object_set_new(o, "free_length_mm", json_num(1000.0 * c->scene.length));
-    bad |= json_object_set_new(o, "gap_at_zero_mm", json_num(gap0));
-    bad |= json_object_set_new(o, "gap_per_mm", json_num(gap_per));
-    if (bad) {
-        json_decref(o);
-        return NULL;
-    }
-    return json_finish(o);
+    return c ? rig_calib_json(&c->calib, c->scene.length) : NULL;
 }
 
 char *rig_specimen_json(const rig_config *c)
