@@ -21,9 +21,7 @@
 #include "rod_bifurcation.h"
 #include "sim_cmd.h"
 #include "sim_opts.h"
-#ifdef RIBBON_HAVE_PLPLOT
 #include "sim_plot_sweep.h"
-#endif
 #include "sim_sweep_row.h"
 
 #include <errno.h>
@@ -344,12 +342,6 @@ int sim_cmd_sweep(int argc, char **argv)
         fprintf(stderr, "ribbon-sim sweep: --out FILE.csv is required\n");
         return 2;
     }
-#ifndef RIBBON_HAVE_PLPLOT
-    if (plot) {
-        fprintf(stderr, "ribbon-sim sweep: --plot needs PLplot, which this build does not have\n");
-        return 2;
-    }
-#endif
     long jobs = sysconf(_SC_NPROCESSORS_ONLN);
     if (jobs_s) {
         char *end;
@@ -462,7 +454,6 @@ int sim_cmd_sweep(int argc, char **argv)
     }
     free(bs);
     status = 0;
-#ifdef RIBBON_HAVE_PLPLOT
     if (plot) {
         char perr[256];
         if (sim_plot_sweep(plot, &sw.table, pa, pb, ga, gb, perr, sizeof perr) != 0) {
@@ -470,7 +461,6 @@ int sim_cmd_sweep(int argc, char **argv)
             status = 1;
         }
     }
-#endif
     (void)npoints;
 
 done_sig:
