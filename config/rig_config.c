@@ -673,8 +673,8 @@ static int rail_keep(load_ctx *c, int r, origin from, const char *key, const cha
     }
     rail_config scratch;
     rail_config_init(&scratch, rail_name(r));
-    int rc = rail_config_set(&scratch, key, value, why, sizeof why);
-    if (rc == -2) {
+    cfg_status rc = rail_config_set(&scratch, key, value, why, sizeof why);
+    if (rc == CFG_ERR_UNKNOWN) {
         fail_from(c, CFG_ERR_UNKNOWN, from, dotted,
                   "unknown key in [rail.%s] (README \"Rig file keys\" lists the rail keys)",
                   rail_name(r));
