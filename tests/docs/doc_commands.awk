@@ -4,7 +4,8 @@
 # (\037, so an empty field stays a field); OPTIONS is every --name in the command (bracketed or
 # not, =VALUE dropped), space-separated. A command runs from its program's name to the end of the span or line, a `;`, `&&`, ` #` comment or the next program's name; a
 # code line ending in `\`, or indented deeper than its command's first line (a usage text wrapped
-# over lines), continues the command above. POSIX awk (Debian's mawk runs it).
+# over lines), continues the command above. A block that shows a session marks its commands with a
+# `$ ` prompt, and its other lines are output. POSIX awk (Debian's mawk runs it).
 
 BEGIN {
     progs = "(ribbonctl|ribbon-sim|ribbond|ribbon-grblsim|ribbon-mbsim|ribbon-store-bench|make)"
@@ -53,6 +54,21 @@ function code_line(text, ln,    ind, s) {
     match(text, /^[ \t]*/)
     ind = RLENGTH
     s = substr(text, RLENGTH + 1)
+    # In a block that shows a session ("$ command", then what it printed), only the prompted
+    # lines and their `\` continuations are commands; the rest is output.
+    if (!cont && substr(s, 1, 2) == "$ ") {
+        flush_code()
+        prompt = 1
+        code = substr(s, 3)
+        code_ln = ln
+        code_ind = ind
+        cont = sub(/\\$/, "", code)
+        return
+    }
+    if (prompt && !cont) {
+        flush_code()
+        return
+    }
     if (cont || (code != "" && ind > code_ind && !match(" " s, progre))) {
         code = code " " s
     } else {
@@ -95,11 +111,13 @@ FNR == 1 {
     fence = 0
     prevblank = 1
     incode = 0
+    prompt = 0
 }
 
 /^[ \t]*```/ {
     flush_para()
     flush_code()
+    prompt = 0
     fence = !fence
     next
 }
@@ -127,6 +145,7 @@ fence {
 {
     if (incode) flush_code()
     incode = 0
+    prompt = 0
     prevblank = 0
     if ($0 ~ /^[ \t]*(\||#)/) {
         flush_para()
