@@ -7,7 +7,7 @@
 
 #include <stddef.h>
 
-#include "api_server.h"
+#include "api.h"
 
 #define LIVE_CHARTJS_FILE "/usr/share/javascript/chart.js/chart.min.js"
 #define LIVE_CHARTJS_PATH "/javascript/chart.js/chart.min.js"

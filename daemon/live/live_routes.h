@@ -6,7 +6,7 @@
 #include <jansson.h>
 #include <stddef.h>
 
-#include "api_server.h"
+#include "api.h"
 #include "live_bus.h"
 
 #define LIVE_JPEG_QUALITY 80

@@ -5,7 +5,7 @@
 #ifndef RIBBON_DAEMON_LIVE_STREAM_H
 #define RIBBON_DAEMON_LIVE_STREAM_H
 
-#include "api_server.h"
+#include "api.h"
 #include "live_bus.h"
 
 /* A stream starting at the current trial's first message (live_bus_first), with a

@@ -8,7 +8,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "live_bus.h"
+#include "live.h"
 #include "trial_runner.h"
 #include "vision.h"
 
