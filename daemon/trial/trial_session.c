@@ -17,6 +17,7 @@
 #include "rod_protocol.h"
 #include "store.h"
 #include "trial_calib.h"
+#include "trial_live.h"
 #include "trial_video.h"
 
 #ifndef RIBBON_VERSION
@@ -52,6 +53,7 @@ struct trial_session {
     int runner_ready;
     trial_result result;
     trial_video *video;
+    trial_live *live;       /* rig mode: camera, capture pipeline, rail poller (trial_live.h) */
     pthread_mutex_t lock;
     session_status status;  /* under lock */
     int abort_pending;      /* under lock: an abort that came before the runner existed */
@@ -325,6 +327,10 @@ static int sink_sample(void *user, const trial_sample *smp, char *why, size_t wh
         if (smp->measured) {
             x.dz = smp->dz;
             x.a = smp->a;
+        } else if (smp->not_tracked) {
+            snprintf(x.reason, sizeof x.reason, "%s",
+                     smp->not_tracked == 2 ? "dropped (pipeline full, not in the video)"
+                                           : "not tracked (the trial loop was behind)");
         } else {
             snprintf(x.reason, sizeof x.reason, "%s",
                      smp->reason == VIS_REASON_NONE ? "low quality" : vis_reason_str(smp->reason));
@@ -372,6 +378,17 @@ static vis_status live_grab(void *ctx, double t_s, double dl, double dw, vis_fra
 }
 
 /* ---- the trial thread ----------------------------------------------------------------------------- */
+
+/* Rig mode: stops the live pipeline and stores its counts (and a failure of the video) as events. */
+static void session_live_close(trial_session *s)
+{
+    char summary[512], w[256] = "";
+    trial_capture_counts k;
+    int rc = trial_live_close(s->live, &k, summary, sizeof summary, w, sizeof w);
+    s->live = NULL;
+    session_event(s, NAN, k.lost || k.incomplete || k.dropped ? STORE_EVENT_WARNING : STORE_EVENT_INFO, summary);
+    if (rc) session_event(s, NAN, STORE_EVENT_FAULT, w);
+}
 
 static void fail_early(trial_session *s, const char *why)
 {
@@ -475,20 +492,17 @@ static void *session_main(void *arg)
             goto end;
         }
     } else {
-        vis_camera_settings cs = vis_camera_settings_default();
-        cs.index = cfg->camera.index;
-        cs.path = cfg->camera.source == RIG_SOURCE_DEVICE ? cfg->camera.device : NULL;
-        cs.width_px = cfg->camera.width_px;
-        cs.height_px = cfg->camera.height_px;
-        cs.fps = cfg->camera.fps;
-        live.src = vis_source_open_camera(&cs, &ve);
-        if (!live.src) {
-            snprintf(why, sizeof why, "camera: %s", ve.message);
+        /* Rig mode: the live pipeline (trial_live.h) records the video (raw Y800 AVI). */
+        char vpath[RIG_PATH_MAX + 64];
+        snprintf(vpath, sizeof vpath, "%s/trial-%lld.avi", cfg->camera.video_dir, (long long)s->trial_id);
+        if (trial_live_open(cfg, s->compress, s->shear, vpath, s->roi, width, height, &s->live, why, sizeof why)) {
             fail_early(s, why);
             goto end;
         }
+        char w[256];
+        store_trial_set_video(s->st, s->trial_id, vpath, w, sizeof w);
         live.clock = rail_get_clock(s->compress);
-        cam.grab = live_grab;
+        cam.grab = live_grab; /* not called: the runner takes the capture's frames */
         cam.ctx = &live;
     }
     vis_track_params tp = vis_track_params_default();
@@ -502,12 +516,12 @@ static void *session_main(void *arg)
     trial_roi roi = s->roi;
     char video_path[RIG_PATH_MAX + 64];
     snprintf(video_path, sizeof video_path, "%s/trial-%lld.mkv", cfg->camera.video_dir, (long long)s->trial_id);
-    s->video = trial_video_open(video_path, roi, cfg->camera.fps, why, sizeof why);
-    if (!s->video) {
+    if (!s->live) s->video = trial_video_open(video_path, roi, cfg->camera.fps, why, sizeof why);
+    if (!s->video && !s->live) {
         fail_early(s, why);
         goto end;
     }
-    {
+    if (!s->live) {
         char w[256];
         store_trial_set_video(s->st, s->trial_id, video_path, w, sizeof w);
     }
@@ -541,6 +555,7 @@ static void *session_main(void *arg)
         fail_early(s, why);
         goto end;
     }
+    if (s->live) trial_live_attach(s->live, &s->runner);
     pthread_mutex_lock(&s->lock);
     s->runner_ready = 1;
     if (s->abort_pending) trial_runner_abort(&s->runner, s->abort_reason);
@@ -572,6 +587,7 @@ static void *session_main(void *arg)
         long frames = trial_video_close(s->video, w, sizeof w);
         s->video = NULL;
         (void)frames;
+        if (s->live) session_live_close(s);
         store_regime reg = !s->result.snapped          ? STORE_REGIME_NO_SNAP
                            : !s->result.vision_snapped ? STORE_REGIME_UNKNOWN /* load witness only */
                            : s->result.asymmetric      ? STORE_REGIME_ASYMMETRIC
@@ -598,6 +614,7 @@ end:
         trial_video_close(s->video, w, sizeof w);
         s->video = NULL;
     }
+    if (s->live) session_live_close(s);
     if (s->pred_started) {
         pthread_join(s->pred_thread, NULL);
         s->pred_started = 0;
