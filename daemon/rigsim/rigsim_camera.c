@@ -12,6 +12,8 @@
 #include "mock_camera.h"
 #include "twin_camera.h"
 
+#define RIGSIM_IDLE_GAP_S 0.25 /* s without an image after which the twin's clock pauses */
+
 struct rigsim_camera {
     ArvGvFakeCamera *gv;
     rigsim_rails *rails;
@@ -48,6 +50,12 @@ static void fill(ArvBuffer *b, void *user, guint32 exposure_us, guint32 gain, Ar
     const int w = arv_buffer_get_image_width(b), h = arv_buffer_get_image_height(b);
     const double mono = clock_s(CLOCK_MONOTONIC);
     pthread_mutex_lock(&c->lock);
+    /* While nobody streams the twin's clock pauses: a gap of more than RIGSIM_IDLE_GAP_S since the
+     * last image (before the first one, between ribbond's sessions) is skipped, not simulated, so
+     * the next image does not wait for seconds of dynamics at rest. ribbond streams whenever it
+     * moves the rails, so no motion falls in a gap. */
+    double last = c->frames > 0 ? c->prev_t : c->t0;
+    if (mono - last > RIGSIM_IDLE_GAP_S) c->t0 += mono - last - 1.0 / 60.0;
     double pc, ps, tr;
     rigsim_rails_positions(c->rails, &pc, &ps, &tr);
     /* The image is sent when this callback returns, about one fill time from now: the twin is
@@ -83,9 +91,9 @@ static void fill(ArvBuffer *b, void *user, guint32 exposure_us, guint32 gain, Ar
     double sc_, ss_;
     rigsim_rails_positions(c->rails, &sc_, &ss_, NULL);
     if (c->truth)
-        fprintf(c->truth, "%ld,%.9f,%.9f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,%.9f\n", c->frames, send_mono, send_real, sc_, ss_,
-                rig_calib_dl(&c->calib, c->length_m, sc_), rig_calib_dw(&c->calib, c->length_m, ss_), dz, frozen,
-                mono + ahead);
+        fprintf(c->truth, "%ld,%.9f,%.9f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,%.9f,%.6f\n", c->frames, send_mono, send_real, sc_,
+                ss_, rig_calib_dl(&c->calib, c->length_m, sc_), rig_calib_dw(&c->calib, c->length_m, ss_), dz, frozen,
+                mono + ahead - c->t0, send_mono - mono);
     c->frames++;
     double took = send_mono - mono;
     if (took > c->max_fill_s) c->max_fill_s = took;
@@ -136,7 +144,19 @@ int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_st
             snprintf(why, why_len, "truth log %s cannot be written", truth_path);
             goto fail;
         }
-        fprintf(c->truth, "image,mono_s,real_s,compress_mm,shear_mm,dl,dw,dz,frozen,twin_t_s\n");
+        fprintf(c->truth, "image,mono_s,real_s,compress_mm,shear_mm,dl,dw,dz,frozen,twin_t_s,fill_s\n");
+    }
+    /* The twin's first grab finds its mounted state (a static solve, seconds): done here, at the
+     * twin's time 0, before any image is due. */
+    {
+        double pc, ps, tf;
+        rigsim_rails_positions(rails, &pc, &ps, NULL);
+        if (mock_camera_grab(c->twin, 0.0, rig_calib_dl(&c->calib, c->length_m, pc),
+                             rig_calib_dw(&c->calib, c->length_m, ps), c->frame, &tf, &ve) != VIS_OK) {
+            snprintf(why, why_len, "twin: %s", ve.message);
+            goto fail;
+        }
+        c->have_image = 1;
     }
     c->t0 = clock_s(CLOCK_MONOTONIC);
     c->gv = arv_gv_fake_camera_new("127.0.0.1", serial);

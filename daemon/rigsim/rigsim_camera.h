@@ -13,7 +13,7 @@
  * stamps its exposure: the delay from stamp to ribbond is then only the loopback transport.
  * Truth log (CSV, one line per image sent): index, host monotonic time of the send, real-time clock
  * time (the camera's timestamp), the axes' actual positions at the send (mm), Delta L, Delta W,
- * the twin's Delta Z, frozen, and the time the twin was stepped to. Faults: the camera stops (the device goes away) or the image freezes (the last
+ * the twin's Delta Z, frozen, the twin time it was stepped to (s), and how long the fill took (s). Faults: the camera stops (the device goes away) or the image freezes (the last
  * image is sent again) from a time on. */
 #ifndef RIBBON_RIGSIM_CAMERA_H
 #define RIBBON_RIGSIM_CAMERA_H
