@@ -65,6 +65,7 @@ trial_capture_params trial_capture_params_default(void)
     memset(&p, 0, sizeof p);
     p.slots = 64;
     p.track_max_lag = 16;
+    p.track_max_age_s = 0.1;
     p.frame_timeout_s = 1.0;
     p.fps = 60.0;
     return p;
@@ -202,7 +203,7 @@ static void free_storage(trial_capture *c)
 trial_capture *trial_capture_start(vis_source *src, const trial_capture_params *p, char *why, size_t why_len)
 {
     if (!src || !p || p->slots < 4 || p->track_max_lag < 1 || p->track_max_lag >= p->slots ||
-        !(p->frame_timeout_s > 0.0) || !(p->fps > 0.0) || !(p->track_delay_s >= 0.0)) {
+        !(p->frame_timeout_s > 0.0) || !(p->fps > 0.0) || !(p->track_delay_s >= 0.0) || !(p->track_max_age_s >= 0.0)) {
         snprintf(why, why_len, "capture: need a source, slots >= 4, 1 <= track_max_lag < slots, positive timeout "
                                "and fps");
         return NULL;
@@ -290,7 +291,8 @@ int trial_capture_next(trial_capture *c, vis_frame *out, trial_frame_info *info,
     *info = r->fi;
     long lag = c->info_head - c->trk_seq;
     int safe = r->pseq >= 0 && r->pseq > c->fill - c->p.slots;
-    info->skip = !info->dropped && (lag > c->p.track_max_lag || !safe);
+    int old = c->p.track_max_age_s > 0.0 && mono_s() - r->fi.host_t_s > c->p.track_max_age_s;
+    info->skip = !info->dropped && (lag > c->p.track_max_lag || old || !safe);
     if (!info->dropped && !info->skip) {
         const vis_frame *src = c->slot[r->pseq % c->p.slots];
         vis_error ve = {0};

@@ -11,7 +11,8 @@
  * the frame-times file beside it (video index, capture index, camera id, camera time, host time,
  * mapped time), so a replay has each frame's true time.
  * Runner (trial_capture_next): gets every frame's record in order (dropped ones too, flagged). When
- * it is more than `track_max_lag` frames behind the camera, frames come flagged `skip`: the runner
+ * it is more than `track_max_lag` frames behind the camera, or the frame arrived more than
+ * `track_max_age_s` ago, frames come flagged `skip`: the runner
  * stores their sample (time, rail positions) without tracking them, and the count says how many.
  * So under overload what gives way is tracking, then (only if the recorder itself falls `slots`
  * frames behind) the video; capture never does.
@@ -29,6 +30,9 @@
 typedef struct trial_capture_params {
     int slots;               /* ring size, frames (>= 4) */
     int track_max_lag;       /* frames behind the camera after which tracking skips (1..slots-1) */
+    double track_max_age_s;  /* ... or a frame older than this when its turn comes (s, 0 = no limit):
+                                bounds the delay from exposure to the snap detector (and so to the
+                                stop) when the loop falls behind */
     double frame_timeout_s;  /* trial_capture_next waits this long for a frame before an error */
     const char *video_path;  /* .avi (raw Y800) or .mkv (FFV1); NULL = no video */
     trial_roi roi;           /* the video's region */
