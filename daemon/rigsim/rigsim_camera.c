@@ -184,6 +184,8 @@ int rigsim_camera_tick(rigsim_camera *c)
         g_object_unref(c->gv); /* joins its threads: no fill runs after this */
         c->gv = NULL;
         c->stopped = 1;
+        printf("fault: camera stopped at %.3f (unix time)\n", clock_s(CLOCK_REALTIME));
+        fflush(stdout);
         if (c->truth) fflush(c->truth);
     }
     return c->stopped;

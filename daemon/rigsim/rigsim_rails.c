@@ -18,6 +18,7 @@ struct rigsim_rails {
     pthread_mutex_t lock;       /* held during each step and each read of the positions */
     int stop;
     double t0, link_lost_after_s;
+    int lost_noted;             /* the link-lost time has been printed */
 };
 
 static double mono_s(void)
@@ -34,6 +35,13 @@ static void *rails_main(void *arg)
         pthread_mutex_lock(&r->lock);
         int stop = r->stop;
         int lost = r->link_lost_after_s >= 0.0 && mono_s() - r->t0 >= r->link_lost_after_s;
+        if (lost && !r->lost_noted) {
+            r->lost_noted = 1;
+            struct timespec rt;
+            clock_gettime(CLOCK_REALTIME, &rt);
+            printf("fault: link lost at %.3f (unix time)\n", (double)rt.tv_sec + 1e-9 * (double)rt.tv_nsec);
+            fflush(stdout);
+        }
         if (!stop && !lost) grbl_sim_step(r->sim, 0.0);
         pthread_mutex_unlock(&r->lock);
         if (stop) break;
