@@ -22,7 +22,8 @@
 namespace vis {
 namespace {
 
-constexpr guint64 ARV_READ_TIMEOUT_US = 400000;  // a camera silent this long has stopped
+constexpr guint64 ARV_READ_TIMEOUT_US = 400000;   // a camera silent this long has stopped
+constexpr guint64 ARV_FIRST_TIMEOUT_US = 3000000; // ... and one that sends no first frame
 
 double clock_s(clockid_t id)
 {
@@ -70,10 +71,12 @@ public:
     vis_status read_meta(cv::Mat &grey, vis_frame_meta &m, vis_error *err) override
     {
         for (int tries = 0; tries < 1000; tries++) {
-            ArvBuffer *b = arv_stream_timeout_pop_buffer(stream, ARV_READ_TIMEOUT_US);
+            // The first frame may take the stream's set-up (packet size, the camera's own start).
+            const guint64 wait = have_id ? ARV_READ_TIMEOUT_US : ARV_FIRST_TIMEOUT_US;
+            ArvBuffer *b = arv_stream_timeout_pop_buffer(stream, wait);
             if (!b)
-                return fail(err, VIS_ERR_IO, "camera %s stopped sending: no frame for %.1f s",
-                            name.c_str(), ARV_READ_TIMEOUT_US * 1e-6);
+                return fail(err, VIS_ERR_IO, "camera %s %s: no frame for %.1f s", name.c_str(),
+                            have_id ? "stopped sending" : "sends nothing", wait * 1e-6);
             const double mono = clock_s(CLOCK_MONOTONIC), real = clock_s(CLOCK_REALTIME);
             const guint64 id = arv_buffer_get_frame_id(b);
             long gap = 0;

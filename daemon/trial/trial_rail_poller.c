@@ -35,11 +35,38 @@ static void *poll_main(void *arg)
         if (stop) break;
         rail_status sc, ss;
         char why[256] = "";
+        /* The rails one at a time (rail_pair_judge), so a fault is published after its own round
+         * trip, before the other rail is read over what may be the same dead link; the other is
+         * then stopped at once (rail_pair_poll's rule). */
         pthread_mutex_lock(&p->rails);
         double t0 = rail_clock_now(p->clock);
-        rail_err e = rail_pair_poll(p->compress, p->shear, &sc, &ss, why, sizeof why);
+        memset(&sc, 0, sizeof sc);
+        memset(&ss, 0, sizeof ss);
+        rail *other = NULL;
+        rail_err e = rail_pair_judge(p->compress, rail_status_get(p->compress, &sc), &sc, why, sizeof why);
+        if (e != RAIL_OK) {
+            other = p->shear;
+            ss = p->ss;
+        } else {
+            e = rail_pair_judge(p->shear, rail_status_get(p->shear, &ss), &ss, why, sizeof why);
+            if (e != RAIL_OK) other = p->compress;
+        }
         double t1 = rail_clock_now(p->clock);
         pthread_mutex_unlock(&p->rails);
+        if (e != RAIL_OK) {
+            pthread_mutex_lock(&p->lock);
+            p->sc = sc;
+            p->ss = ss;
+            p->t_poll = t1;
+            p->err = e;
+            snprintf(p->why, sizeof p->why, "%s", why);
+            p->have = 1;
+            pthread_cond_broadcast(&p->first);
+            pthread_mutex_unlock(&p->lock);
+            pthread_mutex_lock(&p->rails);
+            rail_estop(other);
+            pthread_mutex_unlock(&p->rails);
+        }
         pthread_mutex_lock(&p->lock);
         p->sc = sc;
         p->ss = ss;

@@ -3,7 +3,8 @@
  * A real poll is a blocking round trip (Modbus RTU at 19200 baud: 15-25 ms per read; GRBL: a status
  * report), so in rig mode the runner does not poll: this thread calls rail_pair_poll (both rails,
  * rate-limited to each driver's poll_hz, a fault of either stops both) every `period_s` and
- * publishes the latest pair of statuses with the time of the poll. The runner reads them at once
+ * publishes the latest pair of statuses with the time of the poll (a fault of the first rail is
+ * published before the second is read, and the other rail is then emergency-stopped). The runner reads them at once
  * and reconstructs each frame's positions from them at the frame's own time (as before).
  * The rails are not thread-safe: every other call on them (moves, stops) goes through
  * trial_rail_poller_lock/unlock, which waits at most for one poll in flight.

