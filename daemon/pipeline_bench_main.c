@@ -21,11 +21,10 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "mock_camera.h"
 #include "rig_config.h"
 #include "store.h"
-#include "trial_capture.h"
-#include "twin_camera.h"
+#include "trial.h"
+#include "twin.h"
 
 static double mono(void)
 {

@@ -11,12 +11,22 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "railsim_cli.h"
+#include <signal.h>
+
+#include "cli.h"
 #include "rig_config.h"
-#include "rigsim_camera.h"
-#include "rigsim_rails.h"
+#include "rigsim.h"
 
 #define PROG "ribbon-rigsim"
+
+/* Faults on command: SIGUSR1 cuts the controller's link, SIGUSR2 stops the camera (the handler
+ * only sets a flag; the main loop applies it). */
+static volatile sig_atomic_t cut_link, stop_camera;
+static void on_usr(int sig)
+{
+    if (sig == SIGUSR1) cut_link = 1;
+    if (sig == SIGUSR2) stop_camera = 1;
+}
 #define MAX_SETS 32
 
 static void usage(FILE *f)
@@ -32,7 +42,8 @@ static void usage(FILE *f)
             "  --link-lost-after S   the controller stops answering S seconds after start\n"
             "  --stall AXIS:MM       axis X|Y stalls at MM\n"
             "  --camera-stop-after S the camera stops sending S seconds after start\n"
-            "  --freeze-after S      the image freezes S seconds after start\n");
+            "  --freeze-after S      the image freezes S seconds after start\n"
+            "signals: SIGUSR1 cuts the controller's link now, SIGUSR2 stops the camera now\n");
 }
 
 static int num(const char *opt, const char *v, double lo, double hi, double *out)
@@ -129,11 +140,24 @@ int main(int argc, char **argv)
            rigsim_rails_port(rails), serial, cfg.camera.calibration, sc.nodes, sc.dt);
     fflush(stdout);
     volatile sig_atomic_t *stop = railsim_cli_catch_stop();
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_usr;
+    sigaction(SIGUSR1, &sa, NULL);
+    sigaction(SIGUSR2, &sa, NULL);
     struct timespec t0;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     while (!*stop) {
         struct timespec ts = {0, 10000000};
         nanosleep(&ts, NULL);
+        if (cut_link) {
+            cut_link = 0;
+            rigsim_rails_cut_link(rails);
+        }
+        if (stop_camera) {
+            stop_camera = 0;
+            rigsim_camera_stop_sending(cam);
+        }
         rigsim_camera_tick(cam);
         struct timespec t;
         clock_gettime(CLOCK_MONOTONIC, &t);

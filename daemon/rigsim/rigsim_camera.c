@@ -9,8 +9,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "mock_camera.h"
-#include "twin_camera.h"
+#include "twin.h"
 
 #define RIGSIM_IDLE_GAP_S 0.25 /* s without an image after which the twin's clock pauses */
 
@@ -256,6 +255,8 @@ int rigsim_camera_tick(rigsim_camera *c)
     }
     return c->stopped;
 }
+
+void rigsim_camera_stop_sending(rigsim_camera *c) { c->f.stop_after_s = 0.0; }
 
 long rigsim_camera_frames(rigsim_camera *c)
 {

@@ -40,6 +40,8 @@ int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_st
 /* Call now and then from the main loop: applies the scheduled stop. 1 once stopped. */
 int rigsim_camera_tick(rigsim_camera *c);
 long rigsim_camera_frames(rigsim_camera *c);
+/* Fault on command: the camera stops sending at the next tick. */
+void rigsim_camera_stop_sending(rigsim_camera *c);
 /* Longest twin step + render, s. */
 double rigsim_camera_max_fill_s(rigsim_camera *c);
 void rigsim_camera_stop(rigsim_camera *c);

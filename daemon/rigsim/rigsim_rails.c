@@ -128,6 +128,13 @@ void rigsim_rails_positions(rigsim_rails *r, double *compress_mm, double *shear_
 
 const char *rigsim_rails_port(const rigsim_rails *r) { return r->port; }
 
+void rigsim_rails_cut_link(rigsim_rails *r)
+{
+    pthread_mutex_lock(&r->lock);
+    r->link_lost_after_s = mono_s() - r->t0;
+    pthread_mutex_unlock(&r->lock);
+}
+
 void rigsim_rails_stop(rigsim_rails *r)
 {
     if (!r) return;

@@ -33,6 +33,8 @@ int rigsim_rails_start(const rig_config *cfg, double compress_start_mm, const ri
  * the step they are from. */
 void rigsim_rails_positions(rigsim_rails *r, double *compress_mm, double *shear_mm, double *t_s);
 const char *rigsim_rails_port(const rigsim_rails *r);
+/* Fault on command: the controller stops answering from now on (thread-safe). */
+void rigsim_rails_cut_link(rigsim_rails *r);
 void rigsim_rails_stop(rigsim_rails *r);
 
 #endif

@@ -386,6 +386,16 @@ static int step(run_ctx *c, const trial_sample *smp)
         return 0;
     }
 start_return : {
+    if (!c->stand_noted && isfinite(c->t_stop_cmd) && isfinite(c->t_det_frame)) {
+        /* The return starts before a fresh shear reading showed the rail standing: the command
+         * latency is known, the standing one is not (it would be the end of the return). */
+        c->stand_noted = 1;
+        c->res->stop_cmd_latency_s = c->t_stop_cmd - c->t_det_frame;
+        emit_event(c, "info",
+                   "snap-to-stop latency: detection frame -> stop command %.1f ms; the shear rail was not read "
+                   "standing before the return (rail poll period %.1f ms)",
+                   1e3 * c->res->stop_cmd_latency_s, 1e3 / rail_get_params(tr->shear)->poll_hz);
+    }
     double dist = fmax(fabs(c->ss.position_mm - p->calib.shear_zero_mm),
                        fabs(c->sc.position_mm - c->start_compress_mm));
     /* Shear back first in the same command batch; both move at the return speed. */

@@ -6,6 +6,7 @@
  *     frame's stamp against the simulator's true send time (median within 1 ms, every one within
  *     a frame period: the honest margin on a shared 2-core machine), the snap-to-stop latency
  *     stored, PRAGMA integrity_check ok;
+ * Faults come on command (SIGUSR1 / SIGUSR2 to ribbon-rigsim) once the trial is shearing.
  *   - the controller's link lost mid-shear: failed with the rail named, detected within the GRBL
  *     driver's bound (a status request and its retry unanswered: 2 x reply_timeout_s) plus a poll
  *     period, samples stored, integrity ok;
@@ -302,16 +303,49 @@ static void test_gcode_trial(void **state)
     assert_true(worst < 1.0 / FPS);
 }
 
+/* Waits (at most 90 s) until trial 1 is shearing; 0 when it is. */
+static int wait_shearing(rehearsal *r)
+{
+    sqlite3 *db = db_open(r);
+    double t_end = now_real() + 90.0;
+    char st[64] = "";
+    while (now_real() < t_end) {
+        q_text(db, "select coalesce(state,'') from trials where id = 1", st, sizeof st);
+        if (!strcmp(st, "shearing") || !strcmp(st, "failed") || !strcmp(st, "done")) break;
+        sleep_s(0.05);
+    }
+    sqlite3_close(db);
+    return strcmp(st, "shearing") ? -1 : 0;
+}
+
+/* A fault on command mid-shear (SIGUSR1 link, SIGUSR2 camera), then the trial's end. */
+static void fault_mid_shear(rehearsal *r, int sig)
+{
+    start(r, NULL);
+    assert_int_equal(trial(r, 0), 0);
+    assert_int_equal(wait_shearing(r), 0);
+    sleep_s(0.5);
+    kill(r->sim, sig);
+    /* until the trial has ended */
+    sqlite3 *db = db_open(r);
+    double t_end = now_real() + 60.0;
+    char status[64] = "";
+    while (now_real() < t_end) {
+        q_text(db, "select status from trials where id = 1", status, sizeof status);
+        if (strcmp(status, "running") && strcmp(status, "created")) break;
+        sleep_s(0.1);
+    }
+    sqlite3_close(db);
+    stop(r);
+}
+
 static void test_link_lost_mid_shear(void **state)
 {
     (void)state;
     /* shearing starts about 6.5 s into the trial (3 s compression, 3 s hold, the check) and the
      * trial starts within 2 s of the simulator: 10 s after it is mid-shear, before the snap. */
-    const char *extra[] = {"--link-lost-after", "10", NULL};
     rehearsal r;
-    start(&r, extra);
-    trial(&r, 1);
-    stop(&r);
+    fault_mid_shear(&r, SIGUSR1);
     sqlite3 *db = db_open(&r);
     char status[64], why[512], st[64];
     q_text(db, "select status from trials where id = 1", status, sizeof status);
@@ -334,18 +368,18 @@ static void test_link_lost_mid_shear(void **state)
 static void test_camera_stops_mid_shear(void **state)
 {
     (void)state;
-    const char *extra[] = {"--camera-stop-after", "10", NULL};
     rehearsal r;
-    start(&r, extra);
-    trial(&r, 1);
-    stop(&r);
+    fault_mid_shear(&r, SIGUSR2);
     sqlite3 *db = db_open(&r);
     char status[64], why[512];
     q_text(db, "select status from trials where id = 1", status, sizeof status);
     q_text(db, "select coalesce(reason,'') from trials where id = 1", why, sizeof why);
+    char st[64];
+    q_text(db, "select state from events where trial_id = 1 and kind = 'fault' order by id limit 1", st, sizeof st);
     double cut = cut_time(&r, "camera stopped"), seen = wall_of(db, "camera:%");
-    printf("# %s: %s; detected %.3f s after the camera stopped\n", status, why, seen - cut);
+    printf("# %s in %s: %s; detected %.3f s after the camera stopped\n", status, st, why, seen - cut);
     assert_string_equal(status, "failed");
+    assert_string_equal(st, "shearing");
     assert_non_null(strstr(why, "camera"));
     assert_true(seen - cut < 0.5 + 0.1);
     check_integrity(db);
