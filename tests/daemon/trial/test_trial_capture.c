@@ -27,8 +27,15 @@
 
 #if defined(__SANITIZE_ADDRESS__)
 #define FPS 20.0
+/* Under the sanitizers on a loaded machine the transport floor itself wanders (2-13 ms seen at
+ * load 18): the bounds are half a frame period and the stop's 0.4 s plus half a second; the
+ * normal build checks the tight ones. */
+#define MEDIAN_BOUND_S (0.5 / FPS)
+#define STOP_SLACK_S 0.5
 #else
 #define FPS 60.0
+#define MEDIAN_BOUND_S 2e-3
+#define STOP_SLACK_S 0.1
 #endif
 #define W 640
 #define H 480
@@ -222,9 +229,10 @@ static void test_every_frame_recorded_bit_exact_and_stamped(void **state)
     assert_int_equal(k.recorded, k.captured);
     assert_int_equal(n, k.recorded);
     assert_int_equal(k.lost + k.incomplete, 0);
-    /* A frame's mapped time: the camera's stamp plus the fastest arrival's delay (loopback
-     * transport of 300 kB); within one frame period of the truth always, 2 ms typically. */
-    assert_true(median < 2e-3);
+    /* A frame's mapped time: the camera's stamp plus the fastest arrival's delay (the loopback
+     * transport of 300 kB, which the mapping keeps: the rig's camera_time_offset_s removes it);
+     * within one frame period of the truth always; the floor is 0.3-0.6 ms in Release. */
+    assert_true(median < MEDIAN_BOUND_S);
     assert_true(worst < 1.0 / FPS);
     free(f);
 }
@@ -276,7 +284,7 @@ static void test_camera_stops_is_an_error_soon(void **state)
         }
     printf("# camera stopped: error after %.3f s: %s\n", t_err - t_stop, why);
     assert_true(isfinite(t_err));
-    assert_true(t_err - t_stop < 0.5 + 0.1);
+    assert_true(t_err - t_stop < 0.5 + STOP_SLACK_S);
     assert_non_null(strstr(why, "camera"));
     trial_capture_counts k;
     trial_capture_stop(c, &k, why, sizeof why);
