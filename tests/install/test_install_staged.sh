@@ -3,8 +3,9 @@
 # from the installed programs and files only. Checks the layout (programs in bin/, rig files and
 # scenes in share/ribbon/, the unit in lib/systemd/system/ naming the prefix, nothing in etc/ or
 # var/, the unit not enabled), that no installed file names a path into the source or build tree
-# (other than the names of source files, .c .cpp .h .hpp, in assertion messages), then runs ribbond on the installed
-# mock.ini from an empty working directory and `ribbonctl start --wait` against it. Where a mount
+# (other than the names of source files, .c .cpp .h .hpp, in assertion messages), then runs
+# ribbond on the installed mock.ini from an empty working directory and `ribbonctl start --wait`
+# against it. Where a mount
 # namespace is available (unshare, as root), the trial runs with the source and build trees hidden
 # under empty tmpfs mounts, so a read from either fails.
 #
