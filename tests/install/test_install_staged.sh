@@ -5,9 +5,8 @@
 # var/, the unit not enabled), that no installed file names a path into the source or build tree
 # (other than the names of source files, .c .cpp .h .hpp, in assertion messages), then runs
 # ribbond on the installed mock.ini from an empty working directory and `ribbonctl start --wait`
-# against it. Where a mount
-# namespace is available (unshare, as root), the trial runs with the source and build trees hidden
-# under empty tmpfs mounts, so a read from either fails.
+# against it. Where a mount namespace is available (unshare, as root), the trial runs with the
+# source and build trees hidden under empty tmpfs mounts, so a read from either fails.
 #
 # usage: test_install_staged.sh BUILD_DIR SOURCE_DIR [LSAN_SUPPRESSIONS]
 # The trial is cut short to stay quick in both builds: N = 31 (the twin and the prediction), 10
