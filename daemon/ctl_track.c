@@ -291,6 +291,8 @@ static const char *reason_id(vis_reason r)
     case VIS_REASON_CLAMP_NOT_FOUND: return "clamp_not_found";
     case VIS_REASON_LOST: return "lost";
     case VIS_REASON_OCCLUDED: return "occluded";
+    case VIS_REASON_NOISE: return "noise";
+    case VIS_REASON_NO_RIBBON: return "no_ribbon";
     }
     return "unknown";
 }

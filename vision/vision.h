@@ -251,7 +251,9 @@ typedef enum vis_reason {
     VIS_REASON_SATURATED,      /* the frame is (nearly) saturated: no contrast */
     VIS_REASON_CLAMP_NOT_FOUND,/* the clamp points are unknown or outside the image */
     VIS_REASON_LOST,           /* no ribbon-like ridge joins the clamps */
-    VIS_REASON_OCCLUDED        /* the ridge is broken over part of its length */
+    VIS_REASON_OCCLUDED,       /* the ridge is broken over part of its length */
+    VIS_REASON_NOISE,          /* the frame is noise: neighbouring pixels unrelated, no structure */
+    VIS_REASON_NO_RIBBON       /* no ribbon-like ridge leaves the clamps anywhere in the frame */
 } vis_reason;
 const char *vis_reason_str(vis_reason r);
 
