@@ -1,4 +1,5 @@
-// video_writer.cpp: lossless video output (FFV1 in Matroska) through OpenCV's ffmpeg backend.
+// video_writer.cpp: lossless video output (FFV1 in Matroska, or raw 8-bit grey Y800 in AVI: no
+// compression, so decoding costs next to nothing) through OpenCV's ffmpeg backend.
 //
 // FFV1 is the codec chosen because Debian's OpenCV writes it and reads it back bit-exact (checked by
 // test_vision_video); lossy codecs would bias sub-pixel tracking. Grey frames are written as grey;
@@ -25,9 +26,15 @@ extern "C" vis_video_writer *vis_video_writer_open(const char *path, int width_p
         return nullptr;
     }
     const size_t len = std::strlen(path);
-    if (len < 4 || std::strcmp(path + len - 4, ".mkv") != 0) {
-        vis::fail(err, VIS_ERR_ARG, "video %s: lossless output needs a .mkv name (FFV1 in Matroska)",
+    const bool avi = len >= 4 && std::strcmp(path + len - 4, ".avi") == 0;
+    if (len < 4 || (std::strcmp(path + len - 4, ".mkv") != 0 && !avi)) {
+        vis::fail(err, VIS_ERR_ARG,
+                  "video %s: lossless output needs a .mkv name (FFV1 in Matroska) or .avi (raw Y800)",
                   path);
+        return nullptr;
+    }
+    if (avi && channels != 1) {
+        vis::fail(err, VIS_ERR_ARG, "video %s: raw Y800 AVI holds grey frames only", path);
         return nullptr;
     }
     VIS_GUARD(err, nullptr, {
@@ -36,11 +43,12 @@ extern "C" vis_video_writer *vis_video_writer_open(const char *path, int width_p
         v->height = height_px;
         v->channels = channels;
         v->path = path;
-        v->w.open(path, cv::CAP_FFMPEG, cv::VideoWriter::fourcc('F', 'F', 'V', '1'), fps,
-                  cv::Size(width_px, height_px), channels == 3);
+        const int fcc = avi ? cv::VideoWriter::fourcc('Y', '8', '0', '0')
+                            : cv::VideoWriter::fourcc('F', 'F', 'V', '1');
+        v->w.open(path, cv::CAP_FFMPEG, fcc, fps, cv::Size(width_px, height_px), channels == 3);
         if (!v->w.isOpened()) {
             delete v;
-            vis::fail(err, VIS_ERR_IO, "cannot open video %s for writing (FFV1)", path);
+            vis::fail(err, VIS_ERR_IO, "cannot open video %s for writing (%s)", path, avi ? "Y800" : "FFV1");
             return nullptr;
         }
         vis::ok(err);

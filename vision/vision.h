@@ -153,7 +153,9 @@ vis_status vis_renderer_draw(vis_renderer *r, const vis_shape *shape, vis_frame 
 
 /* ---------------------------------------------------------------- video writing */
 
-/* Lossless FFV1 in Matroska (.mkv): grey frames read back bit-exact. */
+/* Lossless FFV1 in Matroska (.mkv), or raw 8-bit grey Y800 in AVI (.avi, 1 channel only: what a rig
+ * recording in real time writes, since it costs no CPU to encode or decode): grey frames read back
+ * bit-exact. */
 typedef struct vis_video_writer vis_video_writer;
 vis_video_writer *vis_video_writer_open(const char *path, int width_px, int height_px, int channels,
                                         double fps, vis_error *err);
@@ -310,6 +312,15 @@ void vis_tracker_skip(vis_tracker *t, vis_measure *out);
 size_t vis_tracker_curve(const vis_tracker *t, double *uv, size_t max);
 /* Forget the previous curve (the next frame is searched from scratch). */
 void vis_tracker_reset(vis_tracker *t);
+
+/* Track every frame of the video at `path` (up to max_frames) with `t`, in order, into out[0..]:
+ * decoding on another thread while this one tracks (`threads` 0 = every core, 1 = the plain serial
+ * loop). out[i] is exactly what vis_tracker_process would give on frame i in a serial loop.
+ * shear_mm[i] (NULL or i >= n_shear: 0) is frame i's shear. *n_frames gets the frames done; a
+ * damaged video returns its error after the frames before the damage (vision/track_video.cpp). */
+vis_status vis_track_video(const char *path, vis_tracker *t, const double *shear_mm, size_t n_shear,
+                           int threads, vis_measure *out, size_t max_frames, size_t *n_frames,
+                           vis_error *err);
 
 /* Draw the tracked centreline, midpoint and values over `in` into `out` (3-channel). */
 vis_status vis_overlay_draw(const vis_frame *in, const vis_tracker *t, const vis_measure *m, int frame,
