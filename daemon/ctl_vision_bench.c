@@ -182,7 +182,9 @@ static int bench_video_format(const char *path, const char *format, vis_frame **
     const double par_s = now_s() - t0;
     int identical = na == nb;
     for (size_t i = 0; identical && i < na; i++)
-        identical = memcmp(&a[i], &b[i], sizeof a[i]) == 0;
+        identical = a[i].reason == b[i].reason && a[i].dz == b[i].dz && a[i].a == b[i].a &&
+                    a[i].quality == b[i].quality && a[i].length_mm == b[i].length_mm &&
+                    a[i].mid_px[0] == b[i].mid_px[0] && a[i].mid_px[1] == b[i].mid_px[1];
     const long cores = sysconf(_SC_NPROCESSORS_ONLN);
     printf("{\"bench\":\"vision_video\",\"format\":\"%s\",\"width\":%d,\"height\":%d,\"frames\":%zu,"
            "\"one_core_pinned\":%s,\"fps_one_core\":%.1f,\"fps_all_cores\":%.1f,\"cores\":%ld,"
