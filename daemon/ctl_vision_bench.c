@@ -152,7 +152,8 @@ static void unpin(const cpu_set_t *saved) { sched_setaffinity(0, sizeof *saved, 
 static int bench_video_format(const char *path, const char *format, vis_frame **mem, int frames, int w, int h,
                               const vis_calib *cal, const vis_track_params *tp, vis_error *err)
 {
-    vis_video_writer *vw = vis_video_writer_open(path, w, h, 1, 30.0, err);
+    vis_video_writer *vw = strcmp(format, "y800") == 0 ? vis_video_writer_open_y800(path, w, h, 30.0, err)
+                                                        : vis_video_writer_open(path, w, h, 1, 30.0, err);
     if (!vw)
         return 1;
     for (int i = 0; i < frames; i++)

@@ -1,5 +1,7 @@
-// video_writer.cpp: lossless video output (FFV1 in Matroska, or raw 8-bit grey Y800 in AVI: no
-// compression, so decoding costs next to nothing) through OpenCV's ffmpeg backend.
+// video_writer.cpp: lossless video output (FFV1 in Matroska; or, by vis_video_writer_open_y800,
+// raw 8-bit grey Y800 in AVI: no compression, so decoding costs next to nothing) through OpenCV's
+// ffmpeg backend. vis_video_writer_open keeps refusing other names (an .avi there would be taken
+// for a lossy codec); the raw writer is asked for by name.
 //
 // FFV1 is the codec chosen because Debian's OpenCV writes it and reads it back bit-exact (checked by
 // test_vision_video); lossy codecs would bias sub-pixel tracking. Grey frames are written as grey;
@@ -16,8 +18,23 @@ struct vis_video_writer {
     std::string path;
 };
 
+static vis_video_writer *writer_open(const char *path, int width_px, int height_px, int channels,
+                                     double fps, bool y800, vis_error *err);
+
 extern "C" vis_video_writer *vis_video_writer_open(const char *path, int width_px, int height_px,
                                                    int channels, double fps, vis_error *err)
+{
+    return writer_open(path, width_px, height_px, channels, fps, false, err);
+}
+
+extern "C" vis_video_writer *vis_video_writer_open_y800(const char *path, int width_px, int height_px,
+                                                        double fps, vis_error *err)
+{
+    return writer_open(path, width_px, height_px, 1, fps, true, err);
+}
+
+static vis_video_writer *writer_open(const char *path, int width_px, int height_px, int channels,
+                                     double fps, bool y800, vis_error *err)
 {
     if (!path || width_px < 8 || height_px < 8 || width_px > 8192 || height_px > 8192 ||
         (channels != 1 && channels != 3) || !vis::finite(fps) || fps <= 0 || fps > 10000) {
@@ -26,15 +43,13 @@ extern "C" vis_video_writer *vis_video_writer_open(const char *path, int width_p
         return nullptr;
     }
     const size_t len = std::strlen(path);
-    const bool avi = len >= 4 && std::strcmp(path + len - 4, ".avi") == 0;
-    if (len < 4 || (std::strcmp(path + len - 4, ".mkv") != 0 && !avi)) {
-        vis::fail(err, VIS_ERR_ARG,
-                  "video %s: lossless output needs a .mkv name (FFV1 in Matroska) or .avi (raw Y800)",
-                  path);
+    if (y800 && (len < 4 || std::strcmp(path + len - 4, ".avi") != 0)) {
+        vis::fail(err, VIS_ERR_ARG, "video %s: raw Y800 output needs an .avi name", path);
         return nullptr;
     }
-    if (avi && channels != 1) {
-        vis::fail(err, VIS_ERR_ARG, "video %s: raw Y800 AVI holds grey frames only", path);
+    if (!y800 && (len < 4 || std::strcmp(path + len - 4, ".mkv") != 0)) {
+        vis::fail(err, VIS_ERR_ARG, "video %s: lossless output needs a .mkv name (FFV1 in Matroska)",
+                  path);
         return nullptr;
     }
     VIS_GUARD(err, nullptr, {
@@ -43,12 +58,12 @@ extern "C" vis_video_writer *vis_video_writer_open(const char *path, int width_p
         v->height = height_px;
         v->channels = channels;
         v->path = path;
-        const int fcc = avi ? cv::VideoWriter::fourcc('Y', '8', '0', '0')
-                            : cv::VideoWriter::fourcc('F', 'F', 'V', '1');
+        const int fcc = y800 ? cv::VideoWriter::fourcc('Y', '8', '0', '0')
+                             : cv::VideoWriter::fourcc('F', 'F', 'V', '1');
         v->w.open(path, cv::CAP_FFMPEG, fcc, fps, cv::Size(width_px, height_px), channels == 3);
         if (!v->w.isOpened()) {
             delete v;
-            vis::fail(err, VIS_ERR_IO, "cannot open video %s for writing (%s)", path, avi ? "Y800" : "FFV1");
+            vis::fail(err, VIS_ERR_IO, "cannot open video %s for writing (%s)", path, y800 ? "Y800" : "FFV1");
             return nullptr;
         }
         vis::ok(err);

@@ -153,12 +153,14 @@ vis_status vis_renderer_draw(vis_renderer *r, const vis_shape *shape, vis_frame 
 
 /* ---------------------------------------------------------------- video writing */
 
-/* Lossless FFV1 in Matroska (.mkv), or raw 8-bit grey Y800 in AVI (.avi, 1 channel only: what a rig
- * recording in real time writes, since it costs no CPU to encode or decode): grey frames read back
- * bit-exact. */
+/* Lossless FFV1 in Matroska (.mkv): grey frames read back bit-exact. */
 typedef struct vis_video_writer vis_video_writer;
 vis_video_writer *vis_video_writer_open(const char *path, int width_px, int height_px, int channels,
                                         double fps, vis_error *err);
+/* Raw 8-bit grey Y800 in AVI (.avi): bit-exact too, and no CPU to encode or decode (what a rig
+ * recording in real time would write). Same write and close calls. */
+vis_video_writer *vis_video_writer_open_y800(const char *path, int width_px, int height_px, double fps,
+                                             vis_error *err);
 vis_status vis_video_writer_write(vis_video_writer *w, const vis_frame *f, vis_error *err);
 void vis_video_writer_close(vis_video_writer *w);
 
