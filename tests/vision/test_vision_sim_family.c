@@ -2,7 +2,8 @@
  * (issue 14, parts A and B).
  *
  * Family: the DER model's trials (rod_predict, fast mode) on the lab's PET strip (pet-200x5.ini,
- * N = 41) at Delta L from 0.05 to 0.7, with and without creases, the creases at Gamma = 0.21
+ * N = 101: 2 mm edges, so the rendered polygon is within 0.05 px of the smooth curve and the
+ * truth's tangents within a few mrad) at Delta L from 0.05 to 0.7, with and without creases, the creases at Gamma = 0.21
  * (symmetric snap) and 0.13, sheared; from every trial, states before the snap (upper state,
  * sheared), inside the dynamic snap and after it (lower state). Each state becomes a frame through
  * the twin glue (daemon/twin_*.h: the camera that frames the scene, the rig's frame), with noise
@@ -16,7 +17,8 @@
  * Sequences: the snap of two trials (one per regime) filmed at 30, 120 and 500 fps and tracked
  * frame after frame by one tracker: every frame of the snap measured, the snap frame within one
  * frame of the truth's, and the regime read from the tracked |A| the simulator's.
- * `--quick` (the sanitizer build): two trials, every third state, one sequence at 30 fps. */
+ * `--quick` (the sanitizer build): two trials, 7 states each, one sequence at 30 fps.
+ * FAM_VERBOSE=1 prints every state's errors. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -41,6 +43,11 @@
 #define WRONG_DZ_PX 2.0
 #define WRONG_A_RAD 0.1
 #define MAX_STATES 20000
+/* The camera 10 m away (as the twin's camera for the paper's ribbon), not the twin's automatic 1 m
+ * for this strip: sheared 60-90 mm, the DER strip is nowhere near any depth profile the tracker
+ * can assume (it stays near y = 0 for the first third and turns to the shear in the middle), and
+ * at 1 m that depth error alone moves Delta Z by 2-2.6 px and A by 0.07-0.27 rad (measured). */
+#define CAMERA_DISTANCE_M 10.0
 
 static int quick;
 
@@ -86,7 +93,7 @@ static rod_scene load_scene(const trial_spec *sp)
     snprintf(s0, sizeof s0, "protocol.compression=%g", sp->dl);
     snprintf(s1, sizeof s1, "folds.angle_deg=%g", sp->fold_deg);
     snprintf(s2, sizeof s2, "folds.position=%g", sp->gamma);
-    const char *sets[] = {"mesh.nodes=41", "solver.dt=0.002", "protocol.shear_rate=0.01", s0, s1, s2};
+    const char *sets[] = {"mesh.nodes=101", "solver.dt=0.002", "protocol.shear_rate=0.01", s0, s1, s2};
     rod_scene sc;
     cfg_error ce;
     char buf[1200];
@@ -113,7 +120,9 @@ static void run_trial(const trial_spec *sp, trial_states *st, rod_prediction *pr
     po.post_snap_time = 0.3;
     po.on_sample = on_sample;
     po.user = st;
-    assert_int_equal(rod_predict(&st->sc, &po, pred, err, sizeof err), ROD_OK);
+    const rod_status rs = rod_predict(&st->sc, &po, pred, err, sizeof err);
+    if (rs != ROD_OK)
+        fail_msg("rod_predict at Delta L %g, creases %g deg at %g: %s", sp->dl, sp->fold_deg, sp->gamma, err);
     assert_false(st->failed);
 }
 
@@ -129,6 +138,7 @@ static void scene_camera(const rod_scene *sc, vis_render_params *rp, vis_calib *
 {
     char err[256];
     twin_camera_params cp = twin_camera_params_default();
+    cp.distance_m = CAMERA_DISTANCE_M;
     assert_int_equal(twin_render_params_for_scene(sc, &cp, rp, err, sizeof err), TWIN_OK);
     assert_int_equal(twin_calib_for_scene(sc, &rp->camera, cal, err, sizeof err), TWIN_OK);
     rp->noise_sigma = 3.0;
@@ -179,6 +189,9 @@ static int render_track(vis_renderer *r, vis_tracker *trk, const trial_states *s
     s->sa += ea * ea;
     s->dz_max = fmax(s->dz_max, fabs(edz));
     s->a_max = fmax(s->a_max, fabs(ea));
+    if (getenv("FAM_VERBOSE"))
+        printf("  state %d (t %.3f s, shear %.1f mm): dz %.4f (true %.4f, %+.3f px), A %+.4f (true %+.4f, %+.4f), q %.3f\n",
+               k, st->t[k], shear_mm, m.dz, g->dz_cam, edz, m.a, g->a_cam, ea, m.quality);
     if (fabs(edz) > WRONG_DZ_PX || fabs(ea) > WRONG_A_RAD) {
         s->wrong++;
         printf("  state %d (t %.3f s, shear %.1f mm): WRONG: Delta Z off %.2f px, A off %.3f rad, quality %.3f\n", k,
@@ -225,16 +238,16 @@ static int pick_states(const trial_states *st, int pre, int mid, int post, int *
 }
 
 static const trial_spec FAMILY[] = {
-    {0.05, 0, 0.21}, {0.15, 0, 0.21}, {0.3, 0, 0.21},    {0.5, 0, 0.21},  {0.7, 0, 0.21},
-    {0.15, -90, 0.21}, {0.3, -90, 0.21}, {0.5, -90, 0.21}, {0.7, -90, 0.21}, {0.3, -90, 0.13},
-    {0.5, -90, 0.13},
+    {0.05, 0, 0.21},   {0.15, 0, 0.21},   {0.3, 0, 0.21},    {0.5, 0, 0.21},   {0.7, 0, 0.21},
+    {0.3, -90, 0.21},  {0.4, -90, 0.21},  {0.5, -90, 0.21},  {0.6, -90, 0.21}, {0.7, -90, 0.21},
+    {0.3, -90, 0.13},  {0.5, -90, 0.13},
 };
 
 static void test_family_from_scratch(void **state)
 {
     (void)state;
     const int nfam = quick ? 2 : (int)(sizeof FAMILY / sizeof FAMILY[0]);
-    const int fam_idx_quick[2] = {2, 8};
+    const int fam_idx_quick[2] = {2, 9};
     score tot = {0};
     static trial_states st;
     vis_frame *f = vis_frame_alloc(8, 8, 1, NULL);
