@@ -406,7 +406,7 @@ int ctl_track_main(int argc, char **argv)
     char failure[400] = "";
 
     /* A name with a printf conversion is an image sequence ("dir/frame_%04d.png", from 0). */
-    src = strchr(c.video, '%') ? vis_source_open_images(c.video, 0, &err) : vis_source_open_video(c.video, &err);
+    src = strchr(c.video, '%') ? vis_source_open_images(c.video, 0, &err) : vis_source_open_video_prefetch(c.video, &err);
     if (!src) {
         snprintf(failure, sizeof failure, "%s", err.message);
         rc = 1;

@@ -194,6 +194,10 @@ typedef int (*vis_shape_fn)(void *user, int index, vis_shape *shape);
 typedef struct vis_source vis_source;
 vis_source *vis_source_open_camera(const vis_camera_settings *s, vis_error *err);
 vis_source *vis_source_open_video(const char *path, vis_error *err);
+/* The same video decoded ahead on a thread of its own (up to 16 frames), so decoding runs while the
+ * caller tracks: the frames, their order, times and errors are exactly vis_source_open_video's
+ * (vision/source_prefetch.cpp). For replays and `ribbonctl track`, which use every core this way. */
+vis_source *vis_source_open_video_prefetch(const char *path, vis_error *err);
 /* printf-style pattern with one integer conversion, e.g. "dir/frame_%04d.png", starting at `first`. */
 vis_source *vis_source_open_images(const char *pattern, int first, vis_error *err);
 vis_source *vis_source_open_synthetic(const vis_render_params *p, double fps, vis_shape_fn fn,
@@ -316,8 +320,8 @@ size_t vis_tracker_curve(const vis_tracker *t, double *uv, size_t max);
 void vis_tracker_reset(vis_tracker *t);
 
 /* Track every frame of the video at `path` (up to max_frames) with `t`, in order, into out[0..]:
- * decoding on another thread while this one tracks (`threads` 0 = every core, 1 = the plain serial
- * loop). out[i] is exactly what vis_tracker_process would give on frame i in a serial loop.
+ * decoding ahead on another thread while this one tracks (vis_source_open_video_prefetch;
+ * `threads` 1 = the plain serial loop, any other value the prefetching one). out[i] is exactly what vis_tracker_process would give on frame i in a serial loop.
  * shear_mm[i] (NULL or i >= n_shear: 0) is frame i's shear. *n_frames gets the frames done; a
  * damaged video returns its error after the frames before the damage (vision/track_video.cpp). */
 vis_status vis_track_video(const char *path, vis_tracker *t, const double *shear_mm, size_t n_shear,

@@ -3,8 +3,10 @@
  * A rendered asymmetric sequence is written as FFV1 (.mkv) and as raw Y800 (.avi,
  * vis_video_writer_open_y800); the Y800 file
  * reads back bit-exact; tracking it with the engine on every core gives, frame by frame, exactly
- * (memcmp) what the serial loop (threads = 1) and a hand-written vis_source_read +
- * vis_tracker_process loop give; max_frames stops early; a missing file and bad arguments fail
+ * what the serial loop (threads = 1) and a hand-written vis_source_read + vis_tracker_process
+ * loop give, bit for bit; max_frames stops early; the prefetching source
+ * (vis_source_open_video_prefetch) hands out the plain source's frames, times, count, rate and,
+ * on a cut file, the same damage after the same frames; a missing file and bad arguments fail
  * with a reason. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -112,6 +114,75 @@ static void test_engine_identical(void **state)
     vis_renderer_free(r);
 }
 
+/* The prefetching source hands out what the plain one does, damage included. */
+static void test_prefetch_same_as_plain(void **state)
+{
+    (void)state;
+    vt_arch(&shape, 301, 0.2, 0.16, 0.3, 0.0);
+    vis_render_params p = vt_render_params(&shape, 320, 240);
+    p.noise_sigma = 20; /* big FFV1 frames, so the cut falls inside the sequence */
+    vis_renderer *r = vis_renderer_create(&p, NULL);
+    vis_frame *mem[NF];
+    for (int i = 0; i < NF; i++) {
+        mem[i] = vis_frame_alloc(8, 8, 1, NULL);
+        assert_int_equal(vis_renderer_draw(r, &shape.view, mem[i], NULL, NULL), VIS_OK);
+    }
+    char path[600], cut[600];
+    snprintf(path, sizeof path, "%s/pf.mkv", vt_tmpdir());
+    snprintf(cut, sizeof cut, "%s/pf_cut.mkv", vt_tmpdir());
+    write_video(path, mem, &p);
+    FILE *in = fopen(path, "rb"), *out = fopen(cut, "wb");
+    assert_non_null(in);
+    assert_non_null(out);
+    fseek(in, 0, SEEK_END);
+    const long size = ftell(in);
+    fseek(in, 0, SEEK_SET);
+    for (long k = 0; k < size * 6 / 10; k++)
+        fputc(fgetc(in), out);
+    fclose(in);
+    fclose(out);
+    const char *files[2] = {path, cut};
+    for (int w = 0; w < 2; w++) {
+        vis_error e1, e2;
+        vis_source *a = vis_source_open_video(files[w], &e1), *b = vis_source_open_video_prefetch(files[w], &e2);
+        assert_non_null(a);
+        assert_non_null(b);
+        assert_int_equal(vis_source_frame_count(a), vis_source_frame_count(b));
+        assert_true(vis_source_fps(a) == vis_source_fps(b));
+        vis_frame *fa = vis_frame_alloc(8, 8, 1, NULL), *fb = vis_frame_alloc(8, 8, 1, NULL);
+        int n = 0;
+        for (;; n++) {
+            double ta = -1, tb = -2;
+            const vis_status sa = vis_source_read(a, fa, &ta, &e1), sb = vis_source_read(b, fb, &tb, &e2);
+            assert_int_equal(sa, sb);
+            if (sa != VIS_OK) {
+                assert_string_equal(e1.message, e2.message);
+                printf("%s: %d frames, then %s: %s\n", w ? "cut" : "whole", n, vis_status_str(sa), e1.message);
+                break;
+            }
+            assert_true(ta == tb);
+            assert_int_equal(memcmp(vis_frame_data(fa), vis_frame_data(fb),
+                                    vis_frame_stride(fa) * (size_t)vis_frame_height(fa)), 0);
+        }
+        assert_int_equal(n > 0, 1);
+        if (w == 0)
+            assert_int_equal(n, NF);
+        else
+            assert_true(n < NF);
+        vis_frame_free(fa);
+        vis_frame_free(fb);
+        vis_source_close(a);
+        vis_source_close(b);
+    }
+    /* Closed early, with frames still queued: no hang, no leak. */
+    vis_source *b = vis_source_open_video_prefetch(path, NULL);
+    assert_non_null(b);
+    vis_source_close(b);
+    for (int i = 0; i < NF; i++)
+        vis_frame_free(mem[i]);
+    vis_renderer_free(r);
+}
+
 static void test_engine_errors(void **state)
 {
     (void)state;
@@ -141,6 +212,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_engine_identical),
+        cmocka_unit_test(test_prefetch_same_as_plain),
         cmocka_unit_test(test_engine_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
