@@ -236,8 +236,8 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
     for (int pass = 0; pass < passes; pass++) {
         guide.front() = g.left;
         guide.back() = g.right;
-        // Passes before the last only refine the guide: every second sample is plenty there.
-        const double step = pass + 1 < passes ? 2.0 * p.step_px : p.step_px;
+        // Following, the first pass only refines the guide: every second sample is plenty there.
+        const double step = pass + 1 < passes && passes == 2 ? 2.0 * p.step_px : p.step_px;
         vis::resample(guide, step, &len_px, ws.cum, ws.rs);
         if (len_px < 4 * p.end_margin_px + 8 || ws.rs.size() < 8) {
             at.reason = VIS_REASON_LOST;

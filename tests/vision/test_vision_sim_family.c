@@ -317,6 +317,24 @@ typedef struct seq_run {
     score s;
 } seq_run;
 
+static int halfway_frame(const double *dz, const unsigned char *valid, int n)
+{
+    int first = -1, last = -1;
+    for (int k = 0; k < n; k++)
+        if (valid[k]) {
+            if (first < 0)
+                first = k;
+            last = k;
+        }
+    if (first < 0 || last == first)
+        return -1;
+    const double mid = 0.5 * (dz[first] + dz[last]), sgn = dz[last] > dz[first] ? 1.0 : -1.0;
+    for (int k = first; k <= last; k++)
+        if (valid[k] && sgn * (dz[k] - mid) > 0)
+            return k;
+    return -1;
+}
+
 static void test_sequences(void **state)
 {
     (void)state;
@@ -324,6 +342,7 @@ static void test_sequences(void **state)
     static const double fps_list[3] = {30, 120, 500};
     static trial_states st;
     static seq_run sr;
+    int failures = 0;
     vis_frame *f = vis_frame_alloc(8, 8, 1, NULL);
     for (int g = 0; g < (quick ? 1 : 2); g++) {
         rod_prediction pred;
@@ -373,8 +392,11 @@ static void test_sequences(void **state)
                 sr.lost_in_snap += sr.snap[k] && !ok;
                 sr.frames++;
             }
-            const int snap_m = vis_snap_find(sr.dz, sr.valid, (size_t)sr.frames, 0.02, 0.3);
-            const int snap_t = vis_snap_find(sr.dz_true, sr.valid_true, (size_t)sr.frames, 0.02, 0.3);
+            /* The snap frame: the first frame past halfway from the first frame's Delta Z to the
+             * last one's (vis_snap_find's one-frame jump rule finds nothing at 120 or 500 fps,
+             * where the snap takes many frames). Same rule on the truth and on the tracked frames. */
+            const int snap_m = halfway_frame(sr.dz, sr.valid, sr.frames);
+            const int snap_t = halfway_frame(sr.dz_true, sr.valid_true, sr.frames);
             double peak = 0;
             for (int k = 0; k < sr.frames; k++)
                 if (sr.snap[k] && sr.valid[k])
@@ -384,16 +406,17 @@ static void test_sequences(void **state)
                    "peak |A| %.3f: %s (simulator: %s); %d wrong\n",
                    g ? "Gamma 0.13" : "Gamma 0.21", fps, sr.frames, sr.in_snap, sr.lost_in_snap, snap_m, snap_t, peak,
                    asym ? "asymmetric" : "symmetric", pred.asymmetric ? "asymmetric" : "symmetric", sr.s.wrong);
-            assert_int_equal(sr.lost_in_snap, 0);
-            assert_true(abs(snap_m - snap_t) <= 1);
-            assert_int_equal(asym, pred.asymmetric);
-            assert_int_equal(sr.s.wrong, 0);
+            /* Every sequence is run and printed; the bars are checked at the end. */
+            failures += sr.lost_in_snap != 0 || snap_t < 0 || abs(snap_m - snap_t) > 1 ||
+                        asym != pred.asymmetric || sr.s.wrong != 0;
             vis_tracker_free(sr.trk);
             vis_renderer_free(sr.r);
         }
         trial_free(&st);
     }
     vis_frame_free(f);
+    printf("sequences failing a bar: %d\n", failures);
+    assert_int_equal(failures, 0);
 }
 
 int main(int argc, char **argv)
