@@ -15,7 +15,13 @@
  * what one thread could do at best. decode_threads counts the threads that took at least a tenth
  * of the CPU time while decoding (from /proc/self/task; -1 where that cannot be read).
  * Issue 5's targets (one thread): track_fps >= 500, decode_track_fps >= 150. Rendering is not
- * timed. */
+ * timed. Then (issue 14) one line per recording format ("bench":"vision_video", FFV1 .mkv and raw
+ * Y800 .avi of the same frames): decode + track through vis_track_video serially on one pinned
+ * CPU and with decoding ahead on its own thread, the speed-up, whether every frame's result is
+ * identical, the CPU ms of decoding and of tracking apart and the bound overlapping them gives on
+ * two free cores (the machine is shared, so wall clock alone says little), the load average; and
+ * one line for the tracker alone on a 1280 x 256 ROI on one pinned CPU ("bench":"vision_roi",
+ * target 1000 fps). docs/vision-acquisition-and-replay-speed.md has the measured figures. */
 #define _GNU_SOURCE /* sched_setaffinity: the one-core figures run pinned to one CPU */
 #include <math.h>
 #include <sched.h>
@@ -146,9 +152,9 @@ static int pin_one_core(cpu_set_t *saved)
 
 static void unpin(const cpu_set_t *saved) { sched_setaffinity(0, sizeof *saved, saved); }
 
-/* Decode + track of one recording (issue 14): vis_track_video serial on one pinned core, then on
- * every core; one JSON line with both rates, the speed-up and whether every frame's result is
- * identical. */
+/* Decode + track of one recording (issue 14): the serial loop on one pinned core, then
+ * vis_track_video on every core; one JSON line with both rates, the speed-up and whether every
+ * frame's result is identical. */
 static int bench_video_format(const char *path, const char *format, vis_frame **mem, int frames, int w, int h,
                               const vis_calib *cal, const vis_track_params *tp, vis_error *err)
 {
