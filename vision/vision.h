@@ -66,6 +66,8 @@ int vis_frame_height(const vis_frame *f);
 int vis_frame_channels(const vis_frame *f);
 size_t vis_frame_stride(const vis_frame *f);   /* bytes between rows */
 uint8_t *vis_frame_data(vis_frame *f);         /* row-major pixels, `stride` bytes per row */
+/* Copies src into dst (reallocated when its size or channels differ; no allocation otherwise). */
+vis_status vis_frame_copy(const vis_frame *src, vis_frame *dst, vis_error *err);
 /* Write/read an image file (format from the extension; PNG is lossless). Read resizes `f`. */
 vis_status vis_frame_save(const vis_frame *f, const char *path, vis_error *err);
 vis_status vis_frame_load(vis_frame *f, const char *path, vis_error *err);
@@ -153,10 +155,16 @@ vis_status vis_renderer_draw(vis_renderer *r, const vis_shape *shape, vis_frame 
 
 /* ---------------------------------------------------------------- video writing */
 
-/* Lossless FFV1 in Matroska (.mkv): grey frames read back bit-exact. */
+/* Lossless video. By the name's ending: .mkv = FFV1 in Matroska (compressed, 16.7 ms per 1280x720
+ * grey frame on one core); .avi = raw Y800 (uncompressed 8-bit grey, 1 byte per pixel) in AVI, about
+ * 0.3 ms per frame, what live trials record. Both read back bit-exact. */
 typedef struct vis_video_writer vis_video_writer;
 vis_video_writer *vis_video_writer_open(const char *path, int width_px, int height_px, int channels,
                                         double fps, vis_error *err);
+/* Raw 8-bit grey Y800 in AVI (.avi): bit-exact too, and no CPU to encode or decode (what a rig
+ * recording in real time would write). Same write and close calls. */
+vis_video_writer *vis_video_writer_open_y800(const char *path, int width_px, int height_px, double fps,
+                                             vis_error *err);
 vis_status vis_video_writer_write(vis_video_writer *w, const vis_frame *f, vis_error *err);
 void vis_video_writer_close(vis_video_writer *w);
 
@@ -180,6 +188,13 @@ typedef struct vis_camera_settings {
     int height_px;            /* requested height, pixels (0 = driver default) */
     double fps;               /* requested frame rate, 1/s (0 = driver default) */
     char fourcc[5];           /* requested pixel format such as "MJPG" ("" = driver default) */
+    /* GenICam (Aravis) cameras only: aravis = 1 opens `path` as an Aravis device id ("" or NULL =
+     * the first camera found). Mono8 always; 0 / negative = leave the camera's own setting. */
+    int aravis;
+    int offset_x_px, offset_y_px; /* ROI origin on the sensor, pixels (-1 = leave) */
+    double exposure_us;           /* ExposureTime, microseconds (0 = leave) */
+    double gain_db;               /* Gain, dB (< 0 = leave) */
+    int n_buffers;                /* stream buffers (0 = 32) */
 } vis_camera_settings;
 vis_camera_settings vis_camera_settings_default(void);
 
@@ -190,6 +205,10 @@ typedef int (*vis_shape_fn)(void *user, int index, vis_shape *shape);
 typedef struct vis_source vis_source;
 vis_source *vis_source_open_camera(const vis_camera_settings *s, vis_error *err);
 vis_source *vis_source_open_video(const char *path, vis_error *err);
+/* The same video decoded ahead on a thread of its own (up to 16 frames), so decoding runs while the
+ * caller tracks: the frames, their order, times and errors are exactly vis_source_open_video's
+ * (vision/source_prefetch.cpp). For replays and `ribbonctl track`, which use every core this way. */
+vis_source *vis_source_open_video_prefetch(const char *path, vis_error *err);
 /* printf-style pattern with one integer conversion, e.g. "dir/frame_%04d.png", starting at `first`. */
 vis_source *vis_source_open_images(const char *pattern, int first, vis_error *err);
 vis_source *vis_source_open_synthetic(const vis_render_params *p, double fps, vis_shape_fn fn,
@@ -198,6 +217,30 @@ vis_source *vis_source_open_synthetic(const vis_render_params *p, double fps, vi
  * Returns VIS_ERR_END at a clean end; VIS_ERR_FORMAT when the stream is damaged (a video that stops
  * before its announced length, an unreadable image): the message says after which frame. */
 vis_status vis_source_read(vis_source *src, vis_frame *out, double *t_s, vis_error *err);
+/* What a live camera says about one frame (vis_source_read_meta).
+ * camera_t_s: the camera's own timestamp of the frame, seconds on the camera's clock (GenICam buffer
+ *   timestamp; V4L2 buffer timestamp, CLOCK_MONOTONIC for UVC); NaN when the source has none.
+ * host_t_s: CLOCK_MONOTONIC when the frame was handed to the program (seconds).
+ * frame_id: the camera's frame counter (GenICam block id); sources without one count frames.
+ * lost_before: frames that never arrived just before this one (a gap in the camera's ids).
+ * incomplete: buffers the transport delivered damaged (missing packets, timeout) just before this
+ *   one; they are dropped unread (their pixels are not an image). */
+typedef struct vis_frame_meta {
+    double camera_t_s;
+    double host_t_s;
+    uint64_t frame_id;
+    long lost_before;
+    int incomplete;
+} vis_frame_meta;
+/* Like vis_source_read, with the frame's metadata. A source that is not a live camera gives
+ * camera_t_s = its own time (t_s) and counts frames. */
+vis_status vis_source_read_meta(vis_source *src, vis_frame *out, vis_frame_meta *meta, vis_error *err);
+/* Lists the GenICam cameras Aravis sees: calls fn once per camera with its device id, vendor, model,
+ * and transport ("GigEVision", "USB3Vision"); returns how many, or -1 with err when Aravis cannot
+ * enumerate. */
+int vis_aravis_list(void (*fn)(void *user, const char *id, const char *vendor, const char *model,
+                               const char *protocol),
+                    void *user, vis_error *err);
 int vis_source_frame_count(const vis_source *src);  /* announced count, or -1 if unknown */
 double vis_source_fps(const vis_source *src);       /* frames per second, or 0 if unknown */
 void vis_source_close(vis_source *src);
@@ -251,7 +294,9 @@ typedef enum vis_reason {
     VIS_REASON_SATURATED,      /* the frame is (nearly) saturated: no contrast */
     VIS_REASON_CLAMP_NOT_FOUND,/* the clamp points are unknown or outside the image */
     VIS_REASON_LOST,           /* no ribbon-like ridge joins the clamps */
-    VIS_REASON_OCCLUDED        /* the ridge is broken over part of its length */
+    VIS_REASON_OCCLUDED,       /* the ridge is broken over part of its length */
+    VIS_REASON_NOISE,          /* the frame is noise: neighbouring pixels unrelated, no structure */
+    VIS_REASON_NO_RIBBON       /* no ribbon-like ridge leaves the clamps anywhere in the frame */
 } vis_reason;
 const char *vis_reason_str(vis_reason r);
 
@@ -308,6 +353,15 @@ void vis_tracker_skip(vis_tracker *t, vis_measure *out);
 size_t vis_tracker_curve(const vis_tracker *t, double *uv, size_t max);
 /* Forget the previous curve (the next frame is searched from scratch). */
 void vis_tracker_reset(vis_tracker *t);
+
+/* Track every frame of the video at `path` (up to max_frames) with `t`, in order, into out[0..]:
+ * decoding ahead on another thread while this one tracks (vis_source_open_video_prefetch;
+ * `threads` 1 = the plain serial loop, any other value the prefetching one). out[i] is exactly what vis_tracker_process would give on frame i in a serial loop.
+ * shear_mm[i] (NULL or i >= n_shear: 0) is frame i's shear. *n_frames gets the frames done; a
+ * damaged video returns its error after the frames before the damage (vision/track_video.cpp). */
+vis_status vis_track_video(const char *path, vis_tracker *t, const double *shear_mm, size_t n_shear,
+                           int threads, vis_measure *out, size_t max_frames, size_t *n_frames,
+                           vis_error *err);
 
 /* Draw the tracked centreline, midpoint and values over `in` into `out` (3-channel). */
 vis_status vis_overlay_draw(const vis_frame *in, const vis_tracker *t, const vis_measure *m, int frame,

@@ -13,7 +13,8 @@
  *   trial_replay.h       a recording through the same pipeline again
  *   replay_job.h         a replay on a thread of its own inside ribbond
  * Used inside the room only: trial_prediction.h (the prediction beside a trial),
- * trial_camera_setup.h, trial_specimen.h, trial_config_text.h. */
+ * trial_camera_setup.h, trial_specimen.h, trial_config_text.h, trial_publish.h (the session's hook
+ * into the live page's bus). */
 #ifndef RIBBON_TRIAL_H
 #define RIBBON_TRIAL_H
 
@@ -21,6 +22,7 @@
 #include "snap_detect.h"
 #include "predict_ladder.h"
 #include "trial_runner.h"
+#include "trial_capture.h"
 #include "trial_video.h"
 #include "trial_record.h"
 #include "trial_session.h"

@@ -1,25 +1,31 @@
-/* trial_live.h: the trial session's publish hook into the live page's bus (live_bus.h): one call
- * per state, event, sample, frame, prediction and result, each formatted into one JSON message
- * (the messages are documented in docs/live-page.md). Every call is a bounded copy into the bus,
- * never a wait on a browser; a NULL bus makes every call a no-op. */
+/* trial_live.h: what a rig-mode trial opens for its live pipeline, in one place.
+ *
+ * The camera from the rig file (V4L2 index or path, or a GenICam camera through Aravis with its
+ * Mono8, region, frame rate, exposure and gain), the capture pipeline on it (trial_capture.h: the
+ * capture and recorder threads, the video as raw Y800 AVI with its frame-times file), and the rails'
+ * polling thread (trial_rail_poller.h). trial_live_close stops them in reverse order and writes the
+ * pipeline's counts as one line for the trial's events. The session calls these three and nothing
+ * else of the live pipeline. */
 #ifndef RIBBON_DAEMON_TRIAL_LIVE_H
 #define RIBBON_DAEMON_TRIAL_LIVE_H
 
 #include <stddef.h>
-#include <stdint.h>
 
-#include "live.h"
+#include "rig_config.h"
+#include "trial_capture.h"
 #include "trial_runner.h"
-#include "vision.h"
 
-void trial_live_begin(live_bus *b, int64_t trial_id, const char *mode, const char *note);
-void trial_live_state(live_bus *b, int64_t trial_id, trial_state s, double t_s, const char *why);
-void trial_live_event(live_bus *b, int64_t trial_id, double t_s, const char *kind, const char *message);
-void trial_live_sample(live_bus *b, int64_t trial_id, const trial_sample *smp);
-/* The frame with the tracker's last centreline, when the bus wants one (at most 10 a second). */
-void trial_live_frame(live_bus *b, const vis_frame *f, const vis_tracker *trk, long index, double t_s);
-void trial_live_prediction(live_bus *b, int64_t trial_id, int ok, int snapped, double snap_dw, const char *regime,
-                           size_t n, const double *dw, const double *dz, const double *a, const char *why);
-void trial_live_result(live_bus *b, int64_t trial_id, const trial_result *r);
+typedef struct trial_live trial_live;
+
+/* Opens the camera and starts capture (recording into video_path, region roi) and the rail poller.
+ * expect_w/expect_h (> 0): the calibration's frame size; the first frame must have it. */
+int trial_live_open(const rig_config *cfg, rail *compress, rail *shear, const char *video_path, trial_roi roi,
+                    int expect_w, int expect_h, trial_live **out, char *why, size_t why_len);
+/* Hands the pipeline to the runner (trial_runner_set_live). */
+void trial_live_attach(trial_live *l, trial_runner *tr);
+/* Stops everything; `summary` gets the counts line ("pipeline: N frames captured, ..."). Returns 0,
+ * or -1 (why) when the video could not be completed. NULL is a no-op. */
+int trial_live_close(trial_live *l, trial_capture_counts *counts, char *summary, size_t summary_len, char *why,
+                     size_t why_len);
 
 #endif
