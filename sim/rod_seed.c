@@ -120,6 +120,24 @@ static double lowest_eigenvalue(rod *r)
     return out;
 }
 
+int rod_seed_is_stable(rod *r)
+{
+    int nf = rod_nfree(r);
+    double *H = calloc((size_t)nf * (ROD_BAND + 1), sizeof(double));
+    rod_stab_ws *w = rod_stab_ws_alloc(nf);
+    int stable = -1;
+    if (H && w) {
+        rod_inertia in;
+        char why[160];
+        rod_hessian_add(r, 1.0, H);
+        if (rod_inertia_eval(H, nf, ROD_INERTIA_SHIFT_REL, w, &in, why, sizeof why) == ROD_OK)
+            stable = in.n_negative == 0;
+    }
+    free(H);
+    rod_stab_ws_free(w);
+    return stable;
+}
+
 static rod_scene scene_at(const rod_scene *a, const rod_scene *b, double p)
 {
     rod_scene sc = *b;
@@ -182,6 +200,11 @@ rod_status rod_seed_continue(const rod *from, const rod_scene *from_sc, const ro
             rod_observe(trial, k1, &ob);
             /* A jump in Delta Z far beyond the step's: Newton slid onto another state. */
             if (!(fabs(ob.dz - dz_last) <= 0.02 + 2.0 * (pn - p))) st = ROD_ERR_BRANCH_LOST;
+        }
+        if (st == ROD_OK && rod_seed_is_stable(trial) == 0) {
+            /* A negative eigenvalue: the followed stable state lost its stability within the
+             * step (an eigenvalue crossed zero), or Newton converged to a saddle nearby. */
+            st = ROD_ERR_BRANCH_LOST;
         }
         if (st == ROD_OK) {
             rod_free(cur);

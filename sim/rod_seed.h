@@ -14,7 +14,9 @@
  * follow it): the status is ROD_ERR_BRANCH_LOST and the report keeps where the state was last
  * solved and its lowest Hessian eigenvalue there against the start's, the evidence that it
  * vanishes (at a fold that eigenvalue goes to zero). A step whose solution jumps in Delta Z
- * (Newton slid onto another state) counts as failed. */
+ * (Newton slid onto another state) or is not stable (a negative eigenvalue: the state lost its
+ * stability within the step, where an eigenvalue crosses zero) counts as failed, so the path
+ * ends at the last stable state before a fold or a loss of stability. */
 #ifndef RIBBON_SIM_ROD_SEED_H
 #define RIBBON_SIM_ROD_SEED_H
 
@@ -38,6 +40,10 @@ typedef struct rod_seed_report {
  * corresponding edge, then dst's clamps at (dl, 0) and frames updated. ROD_ERR_SCENE when
  * the node counts differ. */
 rod_status rod_seed_remap(const rod *src, rod *dst, double dl);
+
+/* 1 when the Hessian at r's state has no negative eigenvalue (its inertia, one banded LDL^T),
+ * 0 when it has, -1 when it cannot be told (out of memory, factorisation failed). */
+int rod_seed_is_stable(rod *r);
 
 /* From the equilibrium in `from` (a rod of scene from_sc) to a new rod in equilibrium at to_sc
  * (*out, the caller frees it with rod_free). from_sc and to_sc may differ only in the crease

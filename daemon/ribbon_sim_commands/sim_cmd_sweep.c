@@ -264,7 +264,7 @@ static int parse_shard(const char *v, int *i, int *n)
     return 1;
 }
 
-/* RIBBON_SWEEP_TEST_DIE=rank:task (tests only, sim_sweep_farm.h). */
+/* RIBBON_SWEEP_TEST_DIE=rank:n (tests only, sim_sweep_farm.h). */
 static void test_hook(sweep_farm_opts *fo)
 {
     fo->die_rank = fo->die_task = -1;

@@ -148,12 +148,15 @@ static int outbox_flush(outbox *b)
 
 static int worker(int rank, sweep_task_fn run, void *run_ctx, const sweep_farm_opts *o)
 {
-    for (;;) {
+    for (int given = 1;; given++) {
         int dummy = 0, task = -1;
         MPI_Send(&dummy, 1, MPI_INT, 0, TAG_READY, MPI_COMM_WORLD);
         if (MPI_Recv(&task, 1, MPI_INT, 0, TAG_TASK, MPI_COMM_WORLD, MPI_STATUS_IGNORE) != MPI_SUCCESS) return 1;
         if (task < 0) return 0;
-        if (o && o->die_rank == rank && o->die_task == task) _exit(7); /* test hook (sim_sweep_farm.h) */
+        if (o && o->die_rank == rank && o->die_task == given) { /* test hook (sim_sweep_farm.h) */
+            fprintf(stderr, "\nribbon-sim sweep: test hook: rank %d exits on task %d\n", rank, task);
+            _exit(7);
+        }
         outbox b;
         memset(&b, 0, sizeof b);
         pthread_mutex_init(&b.mu, NULL);

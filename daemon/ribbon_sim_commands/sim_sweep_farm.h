@@ -32,8 +32,9 @@ typedef void (*sweep_task_fn)(void *ctx, int task, sweep_emit_fn emit, void *emi
 
 typedef struct sweep_farm_opts {
     double heartbeat_timeout_s; /* a worker silent this long is taken for dead (default 30) */
-    int die_rank, die_task;     /* test hook: rank die_rank exits (status 7) when given task
-                                 * die_task; -1: never (RIBBON_SWEEP_TEST_DIE=rank:task) */
+    int die_rank, die_task;     /* test hook: rank die_rank (>= 1) exits (status 7) when handed
+                                 * its die_task-th task (1-based), without a word to rank 0;
+                                 * -1: never (RIBBON_SWEEP_TEST_DIE=rank:n) */
 } sweep_farm_opts;
 
 /* Runs the farm over tasks 0..ntasks-1. On rank 0 every row reaches write(write_ctx, ...), from

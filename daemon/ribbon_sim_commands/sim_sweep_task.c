@@ -30,8 +30,9 @@ typedef struct upper {
     rod_scene sc;        /* its scene */
     double wall_s;       /* s spent reaching it */
     char how[12];        /* route / continued */
-    char why[160];       /* when not reached: the evidence */
+    char why[320];       /* when not reached: the evidence */
     int lost;            /* not reached, and both paths lost it as a stable state */
+    double lost_at;      /* Gamma of the last stable state continuation reached */
 } upper;
 
 typedef struct row_task {
@@ -66,12 +67,15 @@ static void by_route(row_task *t, upper *u, double gamma)
     if (st == ROD_OK) {
         rod_route_report rep = {0};
         st = rod_route_to_state(r, t->s, &u->sc, +1, &rep);
-        if (st == ROD_OK) {
+        if (st == ROD_OK && rod_seed_is_stable(r) == 0) {
+            st = ROD_ERR_BRANCH_LOST;
+            snprintf(err, sizeof err, "route: its state at Delta W = 0 is unstable (a negative eigenvalue)");
+            rod_free(r);
+        } else if (st == ROD_OK) {
             u->r = r;
             snprintf(u->how, sizeof u->how, "route");
         } else {
-            snprintf(err, sizeof err, "route: %s at %.0f%% of its last stage", rod_status_message(st),
-                     100.0 * rep.reached);
+            snprintf(err, sizeof err, "route: %s", rod_status_message(st));
             rod_free(r);
         }
     }
@@ -94,8 +98,8 @@ static void by_continuation(row_task *t, const upper *from, upper *u, double gam
         snprintf(u->how, sizeof u->how, "continued");
     } else {
         u->lost = st == ROD_ERR_BRANCH_LOST;
-        snprintf(u->why, sizeof u->why,
-                 "continued from Gamma %.4g the upper state is lost at Gamma %.4g (lowest eigenvalue %.3g -> %.3g)",
+        u->lost_at = rep.gamma_reached;
+        snprintf(u->why, sizeof u->why, "continued from Gamma %.4g: lost at Gamma %.4g (lowest eigenvalue %.3g -> %.3g)",
                  from->sc.fold_position, rep.gamma_reached, rep.eig_start, rep.eig_last);
     }
     u->wall_s += now() - t0;
@@ -138,6 +142,28 @@ static void chain(row_task *t, upper *ups)
             if (ups[j].r) last = j;
         }
     }
+    /* Another path to the points still unreached: continuation back from the next solved point
+     * beyond them (away from the anchor), when there is one. */
+    for (int j = 0; j < ng && !*t->cancel; j++) {
+        if (ups[j].r) continue;
+        int dir = j < anchor ? -1 : 1, k = j + dir;
+        while (k >= 0 && k < ng && !ups[k].r) k += dir;
+        if (k < 0 || k >= ng) continue;
+        upper back;
+        memset(&back, 0, sizeof back);
+        by_continuation(t, &ups[k], &back, t->sp->gamma[j]);
+        if (back.r) {
+            back.wall_s += ups[j].wall_s;
+            snprintf(back.how, sizeof back.how, "continued");
+            ups[j] = back;
+        } else {
+            size_t len = strlen(ups[j].why);
+            snprintf(ups[j].why + len, sizeof ups[j].why - len, "; back from %.4g: lost at %.4g",
+                     ups[k].sc.fold_position, back.lost_at);
+            ups[j].wall_s += back.wall_s;
+            ups[j].lost = ups[j].lost && back.lost;
+        }
+    }
 }
 
 static void row_init(const row_task *t, sweep_row *row, char kind, double gamma)
@@ -157,7 +183,7 @@ static void classify(const upper *u, sweep_row *row)
     snprintf(row->first_type, sizeof row->first_type, "none");
     if (!u->r) {
         snprintf(row->regime, sizeof row->regime, "%s", u->lost ? "no-upper" : "failed");
-        snprintf(row->note, sizeof row->note, "%s", u->why[0] ? u->why : "the upper state was not reached");
+        snprintf(row->note, sizeof row->note, "%.159s", u->why[0] ? u->why : "the upper state was not reached");
         row->wall_s = u->wall_s;
         return;
     }
