@@ -2,7 +2,7 @@
  * A table of subcommands, each in its own sim_cmd_<name>.c, run by cli_dispatch. GSL's
  * abort-on-error handler is switched off here, once, so every GSL failure comes back as a code
  * with a reason. */
-#include "cli_dispatch.h"
+#include "cli.h"
 #include "sim_cmd.h"
 
 #include <gsl/gsl_errno.h>

@@ -3,7 +3,7 @@
  * code is in its own ctl_<name>.c (see ctl.h for how to add one). */
 #include <gsl/gsl_errno.h>
 
-#include "cli_dispatch.h"
+#include "cli.h"
 #include "ctl.h"
 
 static const cli_command commands[] = {

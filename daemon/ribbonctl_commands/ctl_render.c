@@ -34,8 +34,7 @@
 #include "ctl.h"
 #include "rod_protocol.h"
 #include "scene_file.h"
-#include "twin_camera.h"
-#include "twin_frames.h"
+#include "twin.h"
 #include "vision.h"
 
 #define RENDER_MAX_SETS 64
