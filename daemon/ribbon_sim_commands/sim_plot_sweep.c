@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define PAGE_W 1150
+#define PAGE_W 1250
 #define PAGE_H 650
 
 static void cross(double x, double y, double rx, double ry)
@@ -54,16 +54,15 @@ static void marker(const char *regime, double x, double y, double rx, double ry)
 /* The legend, in its own viewport on the right of the page. */
 static void legend(int line)
 {
-    plvpor(0.74, 0.99, 0.12, 0.90);
+    plvpor(0.70, 0.995, 0.12, 0.90);
     plwind(0.0, 1.0, 0.0, 1.0);
-    plschr(0.0, 0.72);
-    double rx = 0.035, ry = rx * (0.25 * PAGE_W) / (0.78 * PAGE_H), y = 0.97, dy = 0.085;
+    plschr(0.0, 0.62);
+    double rx = 0.03, ry = rx * (0.295 * PAGE_W) / (0.78 * PAGE_H), y = 0.97, dy = 0.085;
     static const char *const regimes[] = {"asymmetric", "symmetric", "none", "no-upper", "failed"};
     static const char *const text[] = {"pitchfork first: asymmetric snap", "saddle-node first: symmetric snap",
-                                       "no instability to #gDW = 1: no snap",
-                                       "no stable upper state found", "analysis failed (reason in the CSV)"};
-    for (int k = 0; k < 5; k++, y -= dy) {
-        if (line && k == 3) continue;
+                                       "no instability up to #gDW = 1: no snap",
+                                       "no stable upper state found", "analysis failed (reason in the CSV note)"};
+    for (int k = 0; k < (line ? 2 : 5); k++, y -= dy) {
         marker(regimes[k], 0.06, y, rx, ry);
         plcol0(1);
         plptex(0.14, y - 0.012, 1.0, 0.0, 0.0, text[k]);
@@ -83,8 +82,8 @@ static void legend(int line)
         plline(2, lx, ly);
         pllsty(1);
         plcol0(1);
-        plptex(0.14, y - 0.012, 1.0, 0.0, 0.0, "other boundary (edges of the");
-        plptex(0.14, y - 0.012 - 0.045, 1.0, 0.0, 0.0, "no-snap band, none inside)");
+        plptex(0.14, y - 0.012, 1.0, 0.0, 0.0, "other boundary: edges of the no-snap");
+        plptex(0.14, y - 0.012 - 0.045, 1.0, 0.0, 0.0, "band, or back to pitchfork first above");
         y -= dy + 0.045;
         plcol0(2);
         sim_plot_polygon(0.055, y, 0.4 * rx, 0.4 * ry, 4, 0.0);
@@ -105,6 +104,8 @@ static void legend(int line)
         pllsty(1);
         plcol0(1);
         plptex(0.14, y - 0.012, 1.0, 0.0, 0.0, "boundary located by bisection");
+        plptex(0.14, y - 0.012 - dy, 1.0, 0.0, 0.0, "(no snap, no upper state and failed");
+        plptex(0.14, y - 0.012 - dy - 0.045, 1.0, 0.0, 0.0, "points have no #gDW: not drawn)");
     }
     plschr(0.0, 1.0);
 }
@@ -143,7 +144,7 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
     pladv(0);
     legend(line);
     plcol0(1);
-    plvpor(0.08, 0.70, 0.12, 0.90);
+    plvpor(0.09, 0.66, 0.12, 0.90);
     plwind(x0, x1, y0, y1);
     plbox("bcnst", 0.0, 0, "bcnstv", 0.0, 0);
     char title[128];
@@ -154,7 +155,7 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
         snprintf(title, sizeof title, "regime of the snap over (#gf, #gG) at #gDL = %g", dl);
         pllab("#gf (deg)", "#gG", title);
     }
-    double rx = 0.012 * (x1 - x0), ry = rx / (x1 - x0) * (y1 - y0) * (0.62 * PAGE_W) / (0.78 * PAGE_H);
+    double rx = 0.012 * (x1 - x0), ry = rx / (x1 - x0) * (y1 - y0) * (0.57 * PAGE_W) / (0.78 * PAGE_H);
     if (!line) {
         /* Grey bars: each no-upper point up to the Gamma where continuation lost the state. */
         for (size_t k = 0; k < t->n; k++) {
