@@ -7,7 +7,12 @@
  *     route per point (--seed route) and with the upper states continued in Gamma (the default),
  *     and sweep_seed_saving = 1 - continue / route;
  *   sweep_same_rows: 1 when the one-process and the mpirun files hold the same rows bit for bit
- *     (wall_s aside).
+ *     (wall_s aside);
+ *   sweep_mpi_cpu_efficiency, sweep_seed_cpu_saving: the same ratios in CPU time (user + system
+ *     of the child and its descendants), which a machine shared with other work does not blur
+ *     as it blurs wall time (load_avg: the 1-minute load average at the end; the wall-time
+ *     figures mean something only when it is below the core count). mpirun runs with
+ *     --bind-to none so a busy core does not hold a rank.
  * Each sweep runs as a child process (this binary, /proc/self/exe), the mpirun one under Open
  * MPI's mpirun (--allow-run-as-root when run as root), into a fresh temporary directory that is
  * removed afterwards. */
@@ -20,6 +25,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -33,9 +39,19 @@ static double now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* Runs argv (stdout to /dev/null), returns its wall time or -1 on failure. */
-static double run_timed(char *const argv[])
+static double children_cpu_s(void)
 {
+    struct rusage ru;
+    getrusage(RUSAGE_CHILDREN, &ru);
+    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec + (double)ru.ru_stime.tv_sec +
+           1e-6 * (double)ru.ru_stime.tv_usec;
+}
+
+/* Runs argv (stdout to /dev/null), returns its wall time or -1 on failure; *cpu: the CPU time of
+ * it and its descendants (mpirun waits for its ranks, so theirs is counted). */
+static double run_timed(char *const argv[], double *cpu)
+{
+    double c0 = children_cpu_s();
     posix_spawn_file_actions_t fa;
     posix_spawn_file_actions_init(&fa);
     posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", 0x1 /* O_WRONLY */, 0);
@@ -52,7 +68,9 @@ static double run_timed(char *const argv[])
         fprintf(stderr, "ribbon-sim bench: %s failed\n", argv[0]);
         return -1.0;
     }
-    return now() - t0;
+    double wall = now() - t0;
+    *cpu = children_cpu_s() - c0;
+    return wall;
 }
 
 /* The rows of a sweep file in canonical order without wall_s, or -1. */
@@ -101,13 +119,15 @@ int sim_bench_sweep(const char *scene, const char *const *sets, int nsets, int j
     for (int k = 0; k < 4; k++) snprintf(out[k], sizeof out[k], "%s/%s", dir, names[k]);
     /* argv: [mpirun opts] self sweep --scene F [--set ...] --phi --gamma --out X --jobs 1 [--seed route] */
     char *argv[64];
-    double t[3] = {-1, -1, -1};
+    double t[3] = {-1, -1, -1}, cpu[3] = {0, 0, 0};
     for (int run = 0; run < 3; run++) {
         int a = 0;
         if (run == 1) {
             argv[a++] = "mpirun";
             if (geteuid() == 0) argv[a++] = "--allow-run-as-root";
             argv[a++] = "--oversubscribe";
+            argv[a++] = "--bind-to";
+            argv[a++] = "none"; /* a shared machine: let the kernel move the ranks */
             argv[a++] = "-np";
             argv[a++] = "2";
         }
@@ -132,23 +152,28 @@ int sim_bench_sweep(const char *scene, const char *const *sets, int nsets, int j
             argv[a++] = "route";
         }
         argv[a] = NULL;
-        t[run] = run_timed(argv);
+        t[run] = run_timed(argv, &cpu[run]);
         if (t[run] < 0) break;
     }
     int same = t[1] > 0 ? same_rows(out[0], out[1]) : -1;
     for (int k = 0; k < 4; k++) unlink(out[k]);
     rmdir(dir);
     if (t[0] < 0 || t[1] < 0 || t[2] < 0) return 1;
-    double eff = t[0] / (2.0 * t[1]), saving = 1.0 - t[0] / t[2];
+    double eff = t[0] / (2.0 * t[1]), saving = 1.0 - t[0] / t[2], cpu_eff = cpu[0] / cpu[1];
+    double cpu_saving = 1.0 - cpu[0] / cpu[2];
+    double load[1] = {0.0};
+    if (getloadavg(load, 1) < 1) load[0] = -1.0;
     if (json)
         printf("{\"sweep_mpi_efficiency\":%.3f,\"sweep_1proc_wall_s\":%.2f,\"sweep_np2_wall_s\":%.2f,"
+               "\"sweep_mpi_cpu_efficiency\":%.3f,\"sweep_1proc_cpu_s\":%.2f,\"sweep_np2_cpu_s\":%.2f,"
                "\"sweep_seed_route_wall_s\":%.2f,\"sweep_seed_continue_wall_s\":%.2f,\"sweep_seed_saving\":%.3f,"
-               "\"sweep_same_rows\":%d,\"points\":100}\n",
-               eff, t[0], t[1], t[2], t[0], saving, same);
+               "\"sweep_seed_cpu_saving\":%.3f,\"sweep_same_rows\":%d,\"points\":100,\"load_avg\":%.2f}\n",
+               eff, t[0], t[1], cpu_eff, cpu[0], cpu[1], t[2], t[0], saving, cpu_saving, same, load[0]);
     else
         printf("bench-sweep sweep_mpi_efficiency=%.3f sweep_1proc_wall_s=%.2f sweep_np2_wall_s=%.2f "
+               "sweep_mpi_cpu_efficiency=%.3f sweep_1proc_cpu_s=%.2f sweep_np2_cpu_s=%.2f "
                "sweep_seed_route_wall_s=%.2f sweep_seed_continue_wall_s=%.2f sweep_seed_saving=%.3f "
-               "sweep_same_rows=%d points=100\n",
-               eff, t[0], t[1], t[2], t[0], saving, same);
+               "sweep_seed_cpu_saving=%.3f sweep_same_rows=%d points=100 load_avg=%.2f\n",
+               eff, t[0], t[1], cpu_eff, cpu[0], cpu[1], t[2], t[0], saving, cpu_saving, same, load[0]);
     return 0;
 }
