@@ -151,6 +151,12 @@ static int worker(int rank, sweep_task_fn run, void *run_ctx, const sweep_farm_o
     for (int given = 1;; given++) {
         int dummy = 0, task = -1;
         MPI_Send(&dummy, 1, MPI_INT, 0, TAG_READY, MPI_COMM_WORLD);
+        /* Wait by polling, not in a blocking MPI_Recv: Open MPI's blocking calls spin on a core,
+         * which an idle worker would take from the ranks still computing (oversubscribed runs). */
+        for (int flag = 0; !flag;) {
+            if (MPI_Iprobe(0, TAG_TASK, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE) != MPI_SUCCESS) return 1;
+            if (!flag) usleep(2000);
+        }
         if (MPI_Recv(&task, 1, MPI_INT, 0, TAG_TASK, MPI_COMM_WORLD, MPI_STATUS_IGNORE) != MPI_SUCCESS) return 1;
         if (task < 0) return 0;
         if (o && o->die_rank == rank && o->die_task == given) { /* test hook (sim_sweep_farm.h) */
