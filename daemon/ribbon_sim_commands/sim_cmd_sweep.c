@@ -107,11 +107,13 @@ static double *grid(double a, double b, int n)
 static void progress(sweep *sw)
 {
     if (!sw->tty) return;
-    int width = 40, filled = sw->points_total ? width * sw->points_done / sw->points_total : width;
+    /* A task retried after a lost worker passes its points again: never past the total. */
+    int done = sw->points_done < sw->points_total ? sw->points_done : sw->points_total;
+    int width = 40, filled = sw->points_total ? width * done / sw->points_total : width;
     char bar[64];
     for (int i = 0; i < width; i++) bar[i] = i < filled ? '#' : '.';
     bar[width] = '\0';
-    fprintf(stderr, "\r  points [%s] %d/%d  %.0f s ", bar, sw->points_done, sw->points_total, now() - sw->t0);
+    fprintf(stderr, "\r  points [%s] %d/%d  %.0f s ", bar, done, sw->points_total, now() - sw->t0);
 }
 
 /* Every row of every task comes here (any thread): a new one is appended to the table and the
