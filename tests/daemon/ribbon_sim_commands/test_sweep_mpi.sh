@@ -14,7 +14,13 @@ DIR=$(mktemp -d /tmp/test_sweep_mpi.XXXXXX)
 trap 'rm -rf "$DIR"' EXIT
 ROOT=""
 [ "$(id -u)" = 0 ] && ROOT="--allow-run-as-root"
-MPI="$MPIRUN $ROOT --oversubscribe"
+# Sanitizer builds: Open MPI dlcloses its components in MPI_Finalize, before LeakSanitizer's
+# check at exit, so their allocations kept until exit show up as leaks from "<unknown module>"
+# that no suppression can name (tried: suppressions by library, and
+# OMPI_MCA_/PMIX_MCA_mca_base_component_disable_dlclose=1). Leak detection is therefore off for
+# the ranks under mpirun (the other sanitizer checks stay on); the one-process and shard runs
+# here and test_sweep_cli run the same tasks with it on.
+MPI="env ASAN_OPTIONS=${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0 $MPIRUN $ROOT --oversubscribe"
 ARGS="--scene $SCENE --set mesh.nodes=41 --phi 60:120:3 --gamma 0.1:0.28:3 --dl 0.4:0.5:2 --gamma-tol 0.01"
 fail() { echo "FAIL: $*"; exit 1; }
 # The rows, sorted, without wall_s (column 12).
