@@ -16,9 +16,7 @@ static const cli_command commands[] = {
     {"sweep", sim_cmd_sweep, "phase diagram over (phi, Gamma): regime per point, boundary Gamma*(phi)"},
     {"sweep-merge", sim_cmd_sweep_merge, "join the shard files of `sweep --shard i/N` into one sweep file"},
     {"bench", sim_cmd_bench, "speed and memory on a scene, one machine-readable line"},
-#ifdef RIBBON_HAVE_TRUSS
     {"truss", sim_cmd_truss, "the reduced double-mass von Mises truss model (paper section 4)"},
-#endif
 };
 
 static const cli_program program = {

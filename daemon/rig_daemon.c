@@ -7,6 +7,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "rail_open.h"
 #include "trial.h"
 #include "trial_report.h"
 
@@ -51,7 +52,7 @@ int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *o
     rail_clock clk = d->cfg.clock == RIG_CLOCK_VIRTUAL ? rail_clock_virtual(&d->vclock) : rail_clock_real();
     rail_err re = RAIL_OK;
     /* Both rails from the same (checked) config the loader produced. */
-    re = rail_config_open_pair(&d->cfg.compress, &d->cfg.shear, clk, &d->compress, &d->shear, why, why_len);
+    re = rail_open_pair(&d->cfg.compress, &d->cfg.shear, clk, &d->compress, &d->shear, why, why_len);
     if (re != RAIL_OK) {
         store_close(d->st);
         d->st = NULL;

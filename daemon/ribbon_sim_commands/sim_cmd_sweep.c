@@ -16,9 +16,7 @@
  * scene's (the paper scenes use -90, README "Crease orientation"). */
 #include "sim_cmd.h"
 #include "sim_opts.h"
-#ifdef RIBBON_HAVE_PLPLOT
 #include "sim_plot_sweep.h"
-#endif
 #include "sim_sweep_farm.h"
 #include "sim_sweep_row.h"
 #include "sim_sweep_task.h"
@@ -250,6 +248,39 @@ static void print_summary(const sweep *sw, const char *out, int json, int jobs, 
     free(bs);
 }
 
+/* --jobs (default every online core, at most 64). 0, or 2 (usage) after saying why. */
+static int parse_jobs(const char *jobs_s, long *out)
+{
+    long jobs = sysconf(_SC_NPROCESSORS_ONLN);
+    if (jobs_s) {
+        char *end;
+        jobs = strtol(jobs_s, &end, 10);
+        if (*end || jobs < 1 || jobs > 64) {
+            fprintf(stderr, "ribbon-sim sweep: --jobs needs 1..64, got '%s'\n", jobs_s);
+            return 2;
+        }
+    }
+    if (jobs < 1) jobs = 1;
+    if (jobs > 64) jobs = 64;
+    *out = jobs;
+    return 0;
+}
+
+/* --gamma-tol (default 1e-3). 0, or 2 (usage) after saying why. */
+static int parse_gamma_tol(const char *tol_s, double *out)
+{
+    *out = 1e-3;
+    if (tol_s) {
+        char *end;
+        *out = strtod(tol_s, &end);
+        if (*end || !(*out > 0.0) || !isfinite(*out)) {
+            fprintf(stderr, "ribbon-sim sweep: --gamma-tol needs a positive number, got '%s'\n", tol_s);
+            return 2;
+        }
+    }
+    return 0;
+}
+
 /* "--shard i/N": 0 <= i < N. */
 static int parse_shard(const char *v, int *i, int *n)
 {
@@ -308,23 +339,8 @@ int sim_cmd_sweep(int argc, char **argv)
         fprintf(stderr, "ribbon-sim sweep: --dl needs compressions in (0, 1)\n");
         return 2;
     }
-#ifndef RIBBON_HAVE_PLPLOT
-    if (x.plot) {
-        fprintf(stderr, "ribbon-sim sweep: --plot needs PLplot, which this build does not have\n");
-        return 2;
-    }
-#endif
-    long jobs = sysconf(_SC_NPROCESSORS_ONLN);
-    if (x.jobs) {
-        char *end;
-        jobs = strtol(x.jobs, &end, 10);
-        if (*end || jobs < 1 || jobs > 64) {
-            fprintf(stderr, "ribbon-sim sweep: --jobs needs 1..64, got '%s'\n", x.jobs);
-            return 2;
-        }
-    }
-    if (jobs < 1) jobs = 1;
-    if (jobs > 64) jobs = 64;
+    long jobs;
+    if (parse_jobs(x.jobs, &jobs)) return 2;
     sweep_farm_opts fo;
     memset(&fo, 0, sizeof fo);
     fo.heartbeat_timeout_s = 30.0;
@@ -340,16 +356,8 @@ int sim_cmd_sweep(int argc, char **argv)
     sweep sw;
     memset(&sw, 0, sizeof sw);
     interrupted = 0;
-    sw.spec.gamma_tol = 1e-3;
     sw.spec.seed_route = x.seed && !strcmp(x.seed, "route");
-    if (x.tol) {
-        char *end;
-        sw.spec.gamma_tol = strtod(x.tol, &end);
-        if (*end || !(sw.spec.gamma_tol > 0.0) || !isfinite(sw.spec.gamma_tol)) {
-            fprintf(stderr, "ribbon-sim sweep: --gamma-tol needs a positive number, got '%s'\n", x.tol);
-            return 2;
-        }
-    }
+    if (parse_gamma_tol(x.tol, &sw.spec.gamma_tol)) return 2;
     if (!sim_opts_load_scene(&o, &sw.spec.base)) return 2;
     if (!x.dl) da = db = sw.spec.base.compression;
     sw.spec.sign = sw.spec.base.fold_angle_deg < 0.0 ? -1.0 : 1.0;
@@ -435,7 +443,6 @@ int sim_cmd_sweep(int argc, char **argv)
     }
     print_summary(&sw, o.out, o.json, ranks > 1 ? 1 : (int)jobs, ranks, ga, gb);
     status = 0;
-#ifdef RIBBON_HAVE_PLPLOT
     if (x.plot) {
         char perr[256];
         if (sim_plot_sweep(x.plot, &sw.table, pa, pb, ga, gb, sw.dl[0], perr, sizeof perr) != 0) {
@@ -443,7 +450,6 @@ int sim_cmd_sweep(int argc, char **argv)
             status = 1;
         }
     }
-#endif
 
 done:
     if (sig_set) sigaction(SIGINT, &old, NULL);

@@ -1,11 +1,15 @@
-/* sim_plot_sweep.c: the sweep figure with PLplot (see sim_plot_sweep.h). One PLplot stream is
- * created and ended per call (sim_plot_page.h); markers are drawn as outlined polygons in data
- * units scaled to stay round on the page. */
-#include "sim_plot_page.h"
+/* sim_plot_sweep.c: the figure of `ribbon-sim sweep --plot` (see sim_plot_sweep.h), drawn by the
+ * plot module (plot.h: plot_sweep, which also contains PLplot's fatal errors). This file only
+ * picks the sweep's rows inside the requested box (and of one Delta L) and turns them into plain
+ * arrays: a marker per point (no-upper points with a bar up to the Gamma where continuation lost
+ * the upper state, read from the row's note), and the boundaries, as vertical lines at Gamma* for one phi, or for several phi one line
+ * per kind of boundary (the regimes either side, in the row's note) through its points in order
+ * of phi, asymmetric/symmetric solid, the others dashed. */
 #include "sim_plot_sweep.h"
 
+#include "plot.h"
+
 #include <math.h>
-#include <plplot.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,109 +17,49 @@
 #define PAGE_W 1250
 #define PAGE_H 650
 
-static void cross(double x, double y, double rx, double ry)
-{
-    PLFLT a[2] = {x - rx, x + rx}, b[2] = {y - ry, y + ry}, c[2] = {y + ry, y - ry};
-    plline(2, a, b);
-    plline(2, a, c);
-}
-
 static int inside(double v, double a, double b) { return v >= fmin(a, b) - 1e-9 && v <= fmax(a, b) + 1e-9; }
 
 static int by_phi(const void *a, const void *b)
 {
     const sweep_row *x = a, *y = b;
-    return x->phi < y->phi ? -1 : x->phi > y->phi;
+    if (x->phi != y->phi) return x->phi < y->phi ? -1 : 1;
+    return x->gamma < y->gamma ? -1 : x->gamma > y->gamma;
+}
+
+/* A regime as the legend names it, short enough for its width. */
+static const char *short_regime(const char *r)
+{
+    return !strcmp(r, "none") ? "no snap" : !strcmp(r, "asymmetric") ? "asym." : !strcmp(r, "symmetric") ? "sym." : r;
 }
 
 static int same_dl(double a, double b) { return fabs(a - b) <= 1e-9 * fmax(1.0, fabs(a)); }
-
-static void diamond_filled(double x, double y, double rx, double ry)
-{
-    PLFLT px[4] = {x - rx, x, x + rx, x}, py[4] = {y, y + ry, y, y - ry};
-    plcol0(3);
-    plfill(4, px, py);
-    plcol0(1);
-    plline(4, px, py);
-    PLFLT cx[2] = {x, x - rx}, cy[2] = {y - ry, y};
-    plline(2, cx, cy);
-}
-
-static void marker(const char *regime, double x, double y, double rx, double ry)
-{
-    plcol0(1);
-    if (!strcmp(regime, "asymmetric")) sim_plot_polygon(x, y, rx, ry, 36, 0.0);
-    else if (!strcmp(regime, "symmetric")) sim_plot_polygon(x, y, rx * M_SQRT2, ry * M_SQRT2, 4, M_PI / 4);
-    else if (!strcmp(regime, "none")) sim_plot_polygon(x, y, rx * 1.2, ry * 1.2, 3, M_PI / 2);
-    else if (!strcmp(regime, "no-upper")) diamond_filled(x, y, rx, ry);
-    else cross(x, y, rx, ry);
-}
-
-/* The legend, in its own viewport on the right of the page. */
-static void legend(int line)
-{
-    plvpor(0.70, 0.995, 0.12, 0.90);
-    plwind(0.0, 1.0, 0.0, 1.0);
-    plschr(0.0, 0.62);
-    double rx = 0.03, ry = rx * (0.295 * PAGE_W) / (0.78 * PAGE_H), y = 0.97, dy = 0.085;
-    static const char *const regimes[] = {"asymmetric", "symmetric", "none", "no-upper", "failed"};
-    static const char *const text[] = {"pitchfork first: asymmetric snap", "saddle-node first: symmetric snap",
-                                       "no instability up to #gDW = 1: no snap",
-                                       "no stable upper state found", "analysis failed (reason in the CSV note)"};
-    for (int k = 0; k < (line ? 2 : 5); k++, y -= dy) {
-        marker(regimes[k], 0.06, y, rx, ry);
-        plcol0(1);
-        plptex(0.14, y - 0.012, 1.0, 0.0, 0.0, text[k]);
-    }
-    plcol0(2);
-    plwidth(2.0);
-    PLFLT lx[2] = {0.0, 0.11}, ly[2];
-    if (!line) {
-        ly[0] = ly[1] = y;
-        plline(2, lx, ly);
-        plcol0(1);
-        plptex(0.14, y - 0.012, 1.0, 0.0, 0.0, "#gG*: asymmetric below, symmetric above");
-        y -= dy;
-        plcol0(2);
-        pllsty(2);
-        ly[0] = ly[1] = y;
-        plline(2, lx, ly);
-        pllsty(1);
-        plcol0(1);
-        plptex(0.14, y - 0.012, 1.0, 0.0, 0.0, "other boundary: edges of the no-snap");
-        plptex(0.14, y - 0.012 - 0.045, 1.0, 0.0, 0.0, "band, or back to pitchfork first above");
-        y -= dy + 0.045;
-        plcol0(2);
-        sim_plot_polygon(0.055, y, 0.4 * rx, 0.4 * ry, 4, 0.0);
-        plcol0(1);
-        plptex(0.14, y - 0.012, 1.0, 0.0, 0.0, "boundary located by bisection");
-        y -= dy;
-        plcol0(3);
-        PLFLT bx[4] = {0.03, 0.09, 0.09, 0.03}, by[4] = {y - 0.03, y - 0.03, y + 0.03, y + 0.03};
-        plfill(4, bx, by);
-        plcol0(1);
-        plptex(0.14, y - 0.012, 1.0, 0.0, 0.0, "grey bar: up to the #gG where");
-        plptex(0.14, y - 0.012 - 0.045, 1.0, 0.0, 0.0, "continuation in #gG lost the upper");
-        plptex(0.14, y - 0.012 - 0.090, 1.0, 0.0, 0.0, "state (the route fails there too)");
-    } else {
-        pllsty(2);
-        ly[0] = ly[1] = y;
-        plline(2, lx, ly);
-        pllsty(1);
-        plcol0(1);
-        plptex(0.14, y - 0.012, 1.0, 0.0, 0.0, "boundary located by bisection");
-        plptex(0.14, y - 0.012 - dy, 1.0, 0.0, 0.0, "(no snap, no upper state and failed");
-        plptex(0.14, y - 0.012 - dy - 0.045, 1.0, 0.0, 0.0, "points have no #gDW: not drawn)");
-    }
-    plschr(0.0, 1.0);
-}
 
 int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double phi_b, double gamma_a,
                    double gamma_b, double dl, char *err, size_t errlen)
 {
     int line = phi_a == phi_b;
-    double x0 = fmin(gamma_a, gamma_b), x1 = fmax(gamma_a, gamma_b), y0 = INFINITY, y1 = -INFINITY;
+    size_t n = t->n ? t->n : 1;
+    plot_sweep_point *pts = malloc(n * sizeof *pts);
+    sweep_row *b = malloc(n * sizeof *b);
+    plot_sweep_line *lines = malloc(n * sizeof *lines);
+    double *lx = malloc(2 * n * sizeof *lx), *ly = malloc(2 * n * sizeof *ly);
+    char *done = calloc(n, 1);
+    char (*texts)[96] = malloc(n * sizeof *texts); /* the legend's text of each line */
+    int rc = -1;
+    if (!pts || !b || !lines || !lx || !ly || !done || !texts) {
+        snprintf(err, errlen, "out of memory drawing %s", path);
+        goto out;
+    }
+    plot_sweep_data d;
+    plot_sweep_data_default(&d);
+    d.width_px = PAGE_W;
+    d.height_px = PAGE_H;
+    char title[128];
     if (line) {
+        /* Gamma against the first instability's Delta W, over the Delta W the points reach. */
+        d.x0 = gamma_a;
+        d.x1 = gamma_b;
+        double y0 = INFINITY, y1 = -INFINITY;
         for (size_t k = 0; k < t->n; k++) {
             const sweep_row *r = &t->rows[k];
             if (r->kind == 'b' || !inside(r->phi, phi_a, phi_b) || !inside(r->gamma, gamma_a, gamma_b) ||
@@ -126,108 +70,94 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
             y1 = fmax(y1, r->first_dw);
         }
         if (!(y1 > y0)) { y0 = 0.0; y1 = 1.0; }
-    } else {
-        x0 = fmin(phi_a, phi_b);
-        x1 = fmax(phi_a, phi_b);
-        y0 = fmin(gamma_a, gamma_b);
-        y1 = fmax(gamma_a, gamma_b);
-    }
-    double mx = 0.06 * (x1 - x0 > 0 ? x1 - x0 : 1.0), my = 0.08 * (y1 - y0 > 0 ? y1 - y0 : 1.0);
-    x0 -= mx; x1 += mx; y0 -= my; y1 += my;
-    if (sim_plot_page_open(path, PAGE_W, PAGE_H, err, errlen) != 0)
-        return -1;
-    plscol0(0, 255, 255, 255);
-    plscol0(1, 0, 0, 0);
-    plscol0(2, 120, 120, 120);
-    plscol0(3, 200, 200, 200);
-    plinit();
-    pladv(0);
-    legend(line);
-    plcol0(1);
-    plvpor(0.09, 0.66, 0.12, 0.90);
-    plwind(x0, x1, y0, y1);
-    plbox("bcnst", 0.0, 0, "bcnstv", 0.0, 0);
-    char title[128];
-    if (line) {
+        d.y0 = y0;
+        d.y1 = y1;
         snprintf(title, sizeof title, "#gf = %g#uo#d, #gDL = %g: the first instability along #gG", phi_a, dl);
-        pllab("#gG", "#gDW at the first instability", title);
+        d.title = title;
+        d.x_label = "#gG";
+        d.y_label = "#gDW at the first instability";
     } else {
+        d.x0 = phi_a;
+        d.x1 = phi_b;
+        d.y0 = gamma_a;
+        d.y1 = gamma_b;
         snprintf(title, sizeof title, "regime of the snap over (#gf, #gG) at #gDL = %g", dl);
-        pllab("#gf (deg)", "#gG", title);
+        d.title = title;
+        d.x_label = "#gf (deg)";
+        d.y_label = "#gG";
     }
-    double rx = 0.012 * (x1 - x0), ry = rx / (x1 - x0) * (y1 - y0) * (0.57 * PAGE_W) / (0.78 * PAGE_H);
-    if (!line) {
-        /* Grey bars: each no-upper point up to the Gamma where continuation lost the state. */
-        for (size_t k = 0; k < t->n; k++) {
-            const sweep_row *r = &t->rows[k];
-            if (r->kind != 'p' || strcmp(r->regime, "no-upper") || !same_dl(r->dl, dl) ||
-                !inside(r->phi, phi_a, phi_b))
-                continue;
-            const char *at = strstr(r->note, "lost at Gamma ");
-            double g = at ? strtod(at + 14, NULL) : r->gamma;
-            PLFLT bx[4] = {r->phi - 0.6 * rx, r->phi + 0.6 * rx, r->phi + 0.6 * rx, r->phi - 0.6 * rx};
-            PLFLT by[4] = {r->gamma, r->gamma, g, g};
-            plcol0(3);
-            plfill(4, bx, by);
-        }
-    }
-    plwidth(1.5);
+    size_t np = 0;
     for (size_t k = 0; k < t->n; k++) {
         const sweep_row *r = &t->rows[k];
         if (r->kind != 'p' || !inside(r->phi, phi_a, phi_b) || !inside(r->gamma, gamma_a, gamma_b) ||
             !same_dl(r->dl, dl))
             continue;
-        double x = line ? r->gamma : r->phi, y = line ? r->first_dw : r->gamma;
-        int fail = strcmp(r->regime, "asymmetric") && strcmp(r->regime, "symmetric");
-        if (line && fail) continue;
-        marker(r->regime, x, y, rx, ry);
+        plot_regime g = plot_regime_parse(r->regime);
+        bool no_state = !strcmp(r->regime, "no-upper");
+        /* Only snaps have a Delta W at their first instability. */
+        if (line && (no_state || (g != PLOT_REGIME_ASYMMETRIC && g != PLOT_REGIME_SYMMETRIC))) continue;
+        const char *at = strstr(r->note, "lost at Gamma ");
+        double bar = no_state && at ? strtod(at + 14, NULL) : NAN;
+        pts[np++] = (plot_sweep_point){line ? r->gamma : r->phi, line ? r->first_dw : r->gamma, g, no_state, bar};
     }
+    d.points = pts;
+    d.n_points = np;
     /* Boundaries. */
-    sweep_row *b = malloc(sizeof(sweep_row) * (t->n ? t->n : 1));
-    int nb = 0;
-    for (size_t k = 0; b && k < t->n; k++) {
+    size_t nb = 0, nl = 0, used = 0;
+    for (size_t k = 0; k < t->n; k++) {
         const sweep_row *r = &t->rows[k];
         if (r->kind == 'b' && inside(r->phi, phi_a, phi_b) && inside(r->gamma, gamma_a, gamma_b) && same_dl(r->dl, dl))
             b[nb++] = *r;
     }
-    if (b) qsort(b, (size_t)nb, sizeof *b, by_phi);
-    plcol0(2);
-    plwidth(2.0);
+    qsort(b, nb, sizeof *b, by_phi);
     if (line) {
-        pllsty(2);
-        for (int k = 0; k < nb; k++) {
-            PLFLT x[2] = {b[k].gamma, b[k].gamma}, y[2] = {y0, y1};
-            plline(2, x, y);
+        double y0 = d.y0 - 0.08 * (d.y1 - d.y0 > 0 ? d.y1 - d.y0 : 1.0);
+        double y1 = d.y1 + 0.08 * (d.y1 - d.y0 > 0 ? d.y1 - d.y0 : 1.0);
+        for (size_t k = 0; k < nb; k++) {
+            lx[used] = lx[used + 1] = b[k].gamma;
+            ly[used] = y0;
+            ly[used + 1] = y1;
+            /* Named in the legend by where it is and what it separates ("none": no snap). */
+            char lo[16], hi[16];
+            if (sscanf(b[k].note, "%15s below; %15s above", lo, hi) == 2)
+                snprintf(texts[nl], sizeof texts[nl], "#gG = %.4f: %s below, %s above", b[k].gamma,
+                         short_regime(lo), short_regime(hi));
+            else
+                snprintf(texts[nl], sizeof texts[nl], "#gG = %.4f (bisected)", b[k].gamma);
+            lines[nl] = (plot_sweep_line){&lx[used], &ly[used], 2, true, false, texts[nl]};
+            nl++;
+            used += 2;
         }
-        pllsty(1);
-    } else if (nb > 0) {
-        /* One line per kind of boundary (the regimes either side, in the note), through its
-         * points in order of phi: asymmetric/symmetric solid, the others dashed. */
-        PLFLT *x = malloc(sizeof(PLFLT) * (size_t)nb), *y = malloc(sizeof(PLFLT) * (size_t)nb);
-        char *done = calloc((size_t)nb, 1);
-        for (int k = 0; x && y && done && k < nb; k++) {
+    } else {
+        for (size_t k = 0; k < nb; k++) {
             if (done[k]) continue;
-            int m = 0;
-            for (int q = k; q < nb; q++)
+            size_t m = 0;
+            for (size_t q = k; q < nb; q++)
                 if (!done[q] && !strcmp(b[q].note, b[k].note)) {
                     done[q] = 1;
-                    x[m] = b[q].phi;
-                    y[m] = b[q].gamma;
+                    lx[used + m] = b[q].phi;
+                    ly[used + m] = b[q].gamma;
                     m++;
                 }
-            pllsty(strstr(b[k].note, "asymmetric below; symmetric above") ? 1 : 2);
-            if (m > 1) plline(m, x, y);
-            for (int q = 0; q < m; q++) sim_plot_polygon(x[q], y[q], 0.4 * rx, 0.4 * ry, 4, 0.0);
+            bool dashed = !strstr(b[k].note, "asymmetric below; symmetric above");
+            lines[nl++] = (plot_sweep_line){&lx[used], &ly[used], m, dashed, true,
+                                            dashed ? "other: no-snap band edges, pitchfork again"
+                                                   : "#gG*: asymmetric below, symmetric above"};
+            used += m;
         }
-        pllsty(1);
-        free(done);
-        free(x);
-        free(y);
     }
+    d.lines = lines;
+    d.n_lines = nl;
+    d.legend = true;
+    if (plot_sweep(path, &d, err, errlen) == PLOT_OK)
+        rc = 0;
+out:
+    free(pts);
     free(b);
-    if (!sim_plot_page_close(path)) {
-        snprintf(err, errlen, "PLplot wrote nothing to %s (is plplot-driver-cairo installed?)", path);
-        return -1;
-    }
-    return 0;
+    free(lines);
+    free(lx);
+    free(ly);
+    free(done);
+    free(texts);
+    return rc;
 }

@@ -76,12 +76,4 @@ store_err store_need_fits(const char *t, size_t cap, const char *field, char *wh
 /* A JSON text that must parse (NULL allowed). */
 store_err store_need_json(const char *t, const char *field, char *why, size_t why_len);
 
-/* Read a curve (store_curve.c): count_sql gives the number of rows and rows_sql the rows as
- * (t_s, dw, dz, a), both with ?1 = id. out gets one block; rows beyond the count are dropped. */
-store_err store_curve_query(store *st, const char *count_sql, const char *rows_sql, int64_t id, store_curve *out,
-                            char *why, size_t why_len);
-
-/* The shared trial row behind store_trial_get/_list (store_trials.c). */
-store_err store_trial_read_row(sqlite3_stmt *s, store_trial *out);
-
 #endif

@@ -284,7 +284,8 @@ store_err store_trial_mark_interrupted(store *st, double wall_s, int *count, cha
     " t.regime_measured, t.software_version, t.samples_count"                                               \
     " FROM trials t LEFT JOIN specimens s ON s.id = t.specimen_id "
 
-store_err store_trial_read_row(sqlite3_stmt *s, store_trial *out)
+/* The shared trial row behind store_trial_get/_list. */
+static store_err store_trial_read_row(sqlite3_stmt *s, store_trial *out)
 {
     memset(out, 0, sizeof *out);
     out->id = sqlite3_column_int64(s, 0);
