@@ -410,6 +410,7 @@ int sim_cmd_sweep(int argc, char **argv)
         }
         if (fresh) sweep_row_write_header(sw.out);
         else sweep_table_fix_tail(o.out, sw.out);
+        fflush(sw.out); /* a job killed before its first row still leaves a sweep file to resume */
         sw.tty = isatty(2);
         if (sw.table.n) fprintf(stderr, "ribbon-sim sweep: resuming %s (%zu rows kept)\n", o.out, sw.table.n);
     }
