@@ -49,6 +49,12 @@ enum { TAG_READY = 1, TAG_TASK, TAG_ROW, TAG_DONE, TAG_BEAT };
 #define MAX_ATTEMPTS 3
 
 static int mpi_started;
+/* A rank was lost: MPI_Finalize's closing fence would wait for it for ever (seen with
+ * --enable-recovery under load), so the survivors leave without it; mpirun --enable-recovery
+ * accepts that (exit status 0). Set on rank 0 when it takes a worker for dead, and on workers by
+ * the stop message STOP_LOST. */
+static int rank_lost;
+#define STOP_LOST (-2)
 
 static double now(void)
 {
@@ -73,7 +79,7 @@ void sweep_farm_start(int *argc, char ***argv, int *rank, int *size)
 
 void sweep_farm_stop(void)
 {
-    if (mpi_started) MPI_Finalize();
+    if (mpi_started && !rank_lost) MPI_Finalize();
     mpi_started = 0;
 }
 
@@ -158,6 +164,7 @@ static int worker(int rank, sweep_task_fn run, void *run_ctx, const sweep_farm_o
             if (!flag) usleep(2000);
         }
         if (MPI_Recv(&task, 1, MPI_INT, 0, TAG_TASK, MPI_COMM_WORLD, MPI_STATUS_IGNORE) != MPI_SUCCESS) return 1;
+        if (task == STOP_LOST) rank_lost = 1;
         if (task < 0) return 0;
         if (o && o->die_rank == rank && o->die_task == given) { /* test hook (sim_sweep_farm.h) */
             fprintf(stderr, "\nribbon-sim sweep: test hook: rank %d exits on task %d\n", rank, task);
@@ -294,6 +301,7 @@ static int master(int size, farm *f, const sweep_farm_opts *o, char *why, size_t
             if (!w[k].dead && !w[k].stopped && w[k].task >= 0 && now() - w[k].last_seen > timeout) {
                 int t = w[k].task;
                 w[k].dead = 1;
+                rank_lost = 1;
                 w[k].task = -1;
                 w[k].waiting = 0;
                 if (f->state[t] == T_RUNNING && f->owner[t] == k) {
@@ -314,7 +322,7 @@ static int master(int size, farm *f, const sweep_farm_opts *o, char *why, size_t
                 w[k].last_seen = now();
                 MPI_Send(&t, 1, MPI_INT, k, TAG_TASK, MPI_COMM_WORLD);
             } else if (open == 0 || cancelled) {
-                int stop = -1;
+                int stop = rank_lost ? STOP_LOST : -1;
                 w[k].waiting = 0;
                 w[k].stopped = 1;
                 MPI_Send(&stop, 1, MPI_INT, k, TAG_TASK, MPI_COMM_WORLD);

@@ -22,7 +22,8 @@
 /* Initialises MPI when this process was started by mpirun with more than one rank (Open MPI's
  * environment says so); a plain run never touches MPI. *rank, *size: 0 and 1 for a plain run. */
 void sweep_farm_start(int *argc, char ***argv, int *rank, int *size);
-/* MPI_Finalize when sweep_farm_start initialised MPI. */
+/* MPI_Finalize when sweep_farm_start initialised MPI, unless a rank was lost (then its closing
+ * fence would wait for the dead rank: the process leaves without it). */
 void sweep_farm_stop(void);
 /* Waits until every rank got here (no-op for one process). */
 void sweep_farm_barrier(void);
