@@ -177,6 +177,15 @@ const rod_event *rod_tracer_events(const rod_tracer *t, int *n)
     return t->events;
 }
 
+double rod_tracer_event_state(rod_tracer *t, int e)
+{
+    if (e < 0 || e >= t->nevents || !t->modes[e]) return NAN;
+    rod_snapshot_load(t->r, &t->estate[e].snap);
+    rod_load_apply(t->r, &t->load, t->estate[e].lambda);
+    rod_frames_update(t->r);
+    return t->estate[e].lambda;
+}
+
 const double *rod_tracer_mode(const rod_tracer *t, int e)
 {
     return (e >= 0 && e < t->nevents) ? t->modes[e] : NULL;
