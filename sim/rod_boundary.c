@@ -126,8 +126,9 @@ static void save_point(rod_boundary *b, const double *p, bpoint *bp)
  * augmented Newton then starts from an equilibrium. p[DW] is lowered accordingly. */
 static void remesh(rod_boundary *b, double *p, int n_out)
 {
+    int changed = n_out != b->r->fold_outer_edges;
     rod_crit_move_gamma(b->c, p, n_out);
-    if (!b->solver) return;
+    if (!b->solver || !changed) return;
     double p2[ROD_NPAR];
     memcpy(p2, p, sizeof p2);
     p2[ROD_PAR_DW] = p[ROD_PAR_DW] - 0.01;
@@ -240,6 +241,13 @@ static rod_status search(rod_boundary *b, rod_crit_kind kind, int scan, double *
             if (have_prev) rod_params_apply(b->r, pn);
             else remesh(b, pn, b->r->fold_outer_edges);
             ok = rod_crit_solve(b->c, kind, dw_free, pn, &rep, b->why, sizeof b->why) == ROD_OK;
+        }
+        if (!ok && !scanning && fabs(step) < 1e-5) {
+            /* Within 1e-5 of the root the solves sit at their round-off floor: the last point is it. */
+            load_point(b, &b->scur);
+            memcpy(p, b->scur.p, sizeof b->scur.p);
+            b->slope = slope;
+            return ROD_OK;
         }
         if (!ok) {
             snprintf(why, whylen, "codim-2 point not found: the %s curve could not be followed past Gamma %.4f: %.120s",
@@ -404,8 +412,7 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
             return st;
         }
     }
-    b->slope = NAN;
-    st = solve_codim2(b, p, &rep);
+    st = rod_crit_eval(b->c, p, &rep, b->msg, sizeof b->msg);
     if (st != ROD_OK || !codim2_ok(&rep)) {
         if (st == ROD_OK)
             snprintf(why, whylen, "codim-2 point not found: the critical modes at Gamma %.4f have parities %.2f and %.2f, "
@@ -422,6 +429,8 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
     save_point(b, p, &b->cur);
     fill_info(b, p, &rep, &b->cur.info);
     *out = b->cur.info;
+    rod_crit_update_borders(b->c, p);
+    load_point(b, &b->cur);
     return ROD_OK;
 }
 
@@ -480,10 +489,6 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
         }
         pn[par] = cv + hh;
         rod_params_apply(b->r, pn);
-            int bad = 0;
-            for (int i = 0; i < b->r->ndof; i++) bad += !isfinite(b->r->q[i]);
-            fprintf(stderr, "move to %g: %d non-finite, gamma %g dw %g\n", pn[par], bad, pn[ROD_PAR_GAMMA], pn[ROD_PAR_DW]);
-        }
         rod_crit_report rep;
         rod_status s2 = solve_codim2(b, pn, &rep);
         if (s2 == ROD_OK && !codim2_ok(&rep)) {
@@ -512,6 +517,7 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
         have_prev = 1;
         save_point(b, pn, &b->cur);
         fill_info(b, pn, &rep, &b->cur.info);
+        rod_crit_update_borders(b->c, pn);
         if (rec && !append_c2(rec, &b->cur.info)) {
             snprintf(reason, sizeof reason, "out of memory");
             st = ROD_ERR_ALLOC;

@@ -240,7 +240,7 @@ static rod_status testfn(rod_crit *c, int b)
 }
 
 /* The next bordering vector: the normalised w (the critical mode's best estimate). */
-static void __attribute__((unused)) update_border(rod_crit *c, int b)
+static void update_border(rod_crit *c, int b)
 {
     double n = norm(c->w[b], c->nf);
     if (n > 0.0 && isfinite(n))
@@ -441,6 +441,14 @@ rod_status rod_crit_refine_mode(rod_crit *c, const double *p, int sign, const do
     return ROD_OK;
 }
 
+rod_status rod_crit_update_borders(rod_crit *c, const double *p)
+{
+    rod_status st = eval_here(c, p, NULL, 0);
+    if (st != ROD_OK) return st;
+    for (int b = 0; b < 2; b++) update_border(c, b);
+    return ROD_OK;
+}
+
 rod_status rod_crit_eval(rod_crit *c, const double *p, rod_crit_report *rep, char *why, size_t whylen)
 {
     rod_status st = eval_here(c, p, why, whylen);
@@ -576,7 +584,7 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
         }
         if (st == ROD_ERR_NAN) { snprintf(buf, sizeof buf, "non-finite Newton step"); break; }
         double res = residual_rel(c);
-        /* Converged: residual within tolerance and a negligible step, or a small step that no
+        /* Converged: residual within tolerance and a negligible step, or a step below 1e4 step_tol that no
          * longer shrinks (the test functions' round-off floor, ~1e-16 max |K_ii|, reached). */
         double dqmax = 0.0;
         for (int k = 0; k < nf; k++) {
@@ -586,10 +594,11 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
         }
         /* The residual's own round-off floor (stiff creases put it near 1e-5 E I1 / l^2, as
          * rod_solver.c explains): below 1e3 tolerances with a full step under 1e-9 l (1e-7 rad)
-         * it is converged. */
-        int res_ok = res <= c->o.tolerance || (res <= 1e3 * c->o.tolerance && dqmax <= 1e-7);
+         * it is converged; likewise below 1e2 of it with a step under 1e-6 l that the test functions' round-off keeps from
+         * shrinking. */
+        int res_ok = res <= c->o.tolerance || (res <= 1e2 * c->o.tolerance && dqmax <= 1e-6);
         if (res_ok &&
-            (dpmax <= c->o.step_tol || (it >= 2 && dpmax <= 1e3 * c->o.step_tol && dpmax >= 0.5 * prev_dp))) {
+            (dpmax <= c->o.step_tol || (it >= 2 && dpmax <= 1e4 * c->o.step_tol && dpmax >= 0.5 * prev_dp))) {
             st = ROD_OK;
             break;
         }

@@ -78,7 +78,7 @@ typedef struct rod_crit_opts {
     double max_dp[ROD_NPAR]; /* largest parameter change per Newton iteration (else scaled down) */
 } rod_crit_opts;
 
-/* tolerance 1e-6 (or below 1e3 of it with a step under 1e-7 l: the stiff floor), step_tol 1e-9 (or a step below 1e3 step_tol that stopped halving: round-off), 40 iterations, eps_q 1e-5, eps_p 1e-6, max_dp (0.05, 0.02,
+/* tolerance 1e-6 (or below 1e2 of it with a step under 1e-6 l: the stiff floor), step_tol 1e-9 (or a step below 1e4 step_tol that stopped halving: round-off), 40 iterations, eps_q 1e-5, eps_p 1e-6, max_dp (0.05, 0.02,
  * 0.05, 0.05). */
 rod_crit_opts rod_crit_opts_default(void);
 
@@ -110,6 +110,11 @@ void rod_crit_set_mode(rod_crit *c, int sign, const double *v);
  * steps), its Rayleigh quotient into *eig (may be NULL): picks a given mode when another of the
  * block lies nearer zero. */
 rod_status rod_crit_refine_mode(rod_crit *c, const double *p, int sign, const double *v0, double sigma, double *eig);
+
+/* Sets both bordering vectors to the normalised w's at the rod's state under p (one step of
+ * inverse iteration in each block): at a codim-2 point, where both blocks' critical modes are the
+ * ones nearest zero, this keeps the borders aligned with them as the point moves. */
+rod_status rod_crit_update_borders(rod_crit *c, const double *p);
 
 /* Evaluates R and both test functions at the rod's state under p, without moving anything. */
 rod_status rod_crit_eval(rod_crit *c, const double *p, rod_crit_report *rep, char *why, size_t whylen);
