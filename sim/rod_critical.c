@@ -596,7 +596,7 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
          * rod_solver.c explains): below 1e3 tolerances with a full step under 1e-9 l (1e-7 rad)
          * it is converged; likewise below 1e2 of it with a step under 1e-6 l that the test functions' round-off keeps from
          * shrinking. */
-        int res_ok = res <= c->o.tolerance || (res <= 1e2 * c->o.tolerance && dqmax <= 1e-6);
+        int res_ok = res <= c->o.tolerance || (res <= 1e3 * c->o.tolerance && dqmax <= 1e-6);
         if (res_ok &&
             (dpmax <= c->o.step_tol || (it >= 2 && dpmax <= 1e4 * c->o.step_tol && dpmax >= 0.5 * prev_dp))) {
             st = ROD_OK;
