@@ -625,15 +625,25 @@ rod_status rod_boundary_crit_curve(rod_boundary *b, rod_crit_kind kind, double g
             if (gn < gamma_lo - 1e-12 || gn > gamma_hi + 1e-12) break;
             double pn[ROD_NPAR];
             rod_crit_report rep;
-            rod_status st = curve_try(b, kind, have_prev, gn, pn, &rep);
-            /* On failure, halfway first (the start of the secant is the codim-2 point). */
-            if (st != ROD_OK) {
-                double mid = 0.5 * (gn + b->cur.p[ROD_PAR_GAMMA]);
-                if (curve_try(b, kind, have_prev, mid, pn, &rep) == ROD_OK) {
+            /* Substeps toward gn, halved on failure (to 1/64 of the grid step), grown after a
+             * success; the secant predictor uses the last two accepted substeps. */
+            rod_status st = ROD_OK;
+            double h = dgamma;
+            while (fabs(gn - b->cur.p[ROD_PAR_GAMMA]) > 1e-12) {
+                double left = gn - b->cur.p[ROD_PAR_GAMMA], gs = fabs(left) <= h ? gn : b->cur.p[ROD_PAR_GAMMA] + copysign(h, left);
+                st = curve_try(b, kind, have_prev, gs, pn, &rep);
+                if (st != ROD_OK) {
+                    h *= 0.5;
+                    if (h < dgamma / 64.0) break;
+                    continue;
+                }
+                if (gs != gn) {
                     bpoint_copy(&b->cur, &b->prev);
                     save_point(b, pn, &b->cur);
                     have_prev = 1;
-                    st = curve_try(b, kind, have_prev, gn, pn, &rep);
+                    h = fmin(2.0 * h, dgamma);
+                } else {
+                    break;
                 }
             }
             if (st != ROD_OK) {

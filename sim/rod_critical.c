@@ -49,8 +49,8 @@ rod_crit_opts rod_crit_opts_default(void)
     o.tolerance = 1e-6;
     o.step_tol = 1e-9;
     o.max_iterations = 40;
-    o.eps_q = 1e-5;
-    o.eps_p = 1e-6;
+    o.eps_q = 1e-7;
+    o.eps_p = 1e-8;
     o.max_dp[ROD_PAR_DW] = 0.05;
     o.max_dp[ROD_PAR_GAMMA] = 0.02;
     o.max_dp[ROD_PAR_PHI] = 0.05;
@@ -497,6 +497,10 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
     rod_status st = ROD_ERR_MAXITER;
     char buf[160] = "";
     double prev_dp = INFINITY;
+    /* Phase 1 on the pitchfork curve holds Delta W (the even block is regular there); next to
+     * the codim-2 point the even block is nearly singular too, and a phase-1 step that cannot
+     * reduce the residual switches to the fold-safe constraint for the rest of the solve. */
+    int p1_hold_dw = kind == ROD_CRIT_PITCHFORK;
     for (int it = 0; it < c->o.max_iterations; it++) {
         if ((st = eval_here(c, p, buf, sizeof buf)) != ROD_OK) break;
         if (rep) rep->iterations = it;
@@ -518,7 +522,7 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
             double vy = dot(c->v[0], c->Y[0], nf), ddw = fabs(vy) > 0.0 ? dot(c->v[0], c->z, nf) / vy : 0.0;
             /* On the pitchfork curve the even block is regular: restore equilibrium at fixed
              * Delta W (holding v_even's component there would undo the step along the branch). */
-            if (!isfinite(ddw) || kind == ROD_CRIT_PITCHFORK) ddw = 0.0;
+            if (!isfinite(ddw) || p1_hold_dw) ddw = 0.0;
             ddw = fmax(-c->o.max_dp[ROD_PAR_DW], fmin(c->o.max_dp[ROD_PAR_DW], ddw));
             for (int k = 0; k < nf; k++) c->step[k] = c->z[k] - c->Y[0][k] * ddw;
             double pbase[ROD_NPAR];
@@ -536,6 +540,7 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
                 for (int k = 0; k < nf; k++) rn = fmax(rn, fabs(c->g[k + ROD_FREE_BEGIN]));
                 rn /= r->force_scale;
                 if (isfinite(rn) && rn < res0) break;
+                if (bt == 7) p1_hold_dw = 0;
             }
             st = ROD_ERR_MAXITER;
             snprintf(buf, sizeof buf, "Newton cap %d reached far from equilibrium (residual %.3g)", c->o.max_iterations, res0);
