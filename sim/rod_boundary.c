@@ -625,7 +625,7 @@ rod_status rod_boundary_crit_curve(rod_boundary *b, rod_crit_kind kind, double g
             if (gn < gamma_lo - 1e-12 || gn > gamma_hi + 1e-12) break;
             double pn[ROD_NPAR];
             rod_crit_report rep;
-            /* Substeps toward gn, halved on failure (to 1/64 of the grid step), grown after a
+            /* Substeps toward gn, halved on failure (to 1/256 of the grid step), grown after a
              * success; the secant predictor uses the last two accepted substeps. */
             rod_status st = ROD_OK;
             double h = dgamma;
@@ -634,7 +634,7 @@ rod_status rod_boundary_crit_curve(rod_boundary *b, rod_crit_kind kind, double g
                 st = curve_try(b, kind, have_prev, gs, pn, &rep);
                 if (st != ROD_OK) {
                     h *= 0.5;
-                    if (h < dgamma / 64.0) break;
+                    if (h < dgamma / 256.0) break;
                     continue;
                 }
                 if (gs != gn) {

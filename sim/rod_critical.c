@@ -500,7 +500,7 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
     /* Phase 1 on the pitchfork curve holds Delta W (the even block is regular there); next to
      * the codim-2 point the even block is nearly singular too, and a phase-1 step that cannot
      * reduce the residual switches to the fold-safe constraint for the rest of the solve. */
-    int p1_hold_dw = kind == ROD_CRIT_PITCHFORK;
+    int p1_hold_dw = 0;
     for (int it = 0; it < c->o.max_iterations; it++) {
         if ((st = eval_here(c, p, buf, sizeof buf)) != ROD_OK) break;
         if (rep) rep->iterations = it;

@@ -261,10 +261,10 @@ static void test_curves_through_continue_events(void **state)
     char why[512] = "";
     assert_int_equal(rod_boundary_start(&sc, &o, &b, &pt, why, sizeof why), ROD_OK);
     rod_crit_curve fold, pf;
-    const double g3[3] = {0.165, 0.1725, 0.18};
-    rod_status s1 = rod_boundary_crit_curve(b, ROD_CRIT_FOLD, g3[0], g3[2], 0.0075, &fold);
+    const double g3[3] = {0.168, 0.1735, 0.179};
+    rod_status s1 = rod_boundary_crit_curve(b, ROD_CRIT_FOLD, g3[0], g3[2], 0.0055, &fold);
     if (s1 != ROD_OK) print_error("saddle-node curve: %s\n", fold.end_reason);
-    rod_status s2 = rod_boundary_crit_curve(b, ROD_CRIT_PITCHFORK, g3[0], g3[2], 0.0075, &pf);
+    rod_status s2 = rod_boundary_crit_curve(b, ROD_CRIT_PITCHFORK, g3[0], g3[2], 0.0055, &pf);
     if (s2 != ROD_OK) print_error("pitchfork curve: %s\n", pf.end_reason);
     assert_int_equal(s1, ROD_OK);
     assert_int_equal(s2, ROD_OK);
