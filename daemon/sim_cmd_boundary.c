@@ -139,42 +139,91 @@ static json_t *crit_json(const rod_crit_curve *c)
     return json_pack("{s:o,s:s}", "points", a, "end", c->end_reason);
 }
 
-/* Traces the boundary at one Delta L from the current point into rec (the point at A first). */
+static int push(rod_boundary_curve *rec, const rod_codim2_point *p)
+{
+    if (rec->n == rec->cap) {
+        size_t cap = rec->cap ? 2 * rec->cap : 64;
+        rod_codim2_point *np = realloc(rec->pts, cap * sizeof *np);
+        if (!np) return 0;
+        rec->pts = np;
+        rec->cap = cap;
+    }
+    rec->pts[rec->n++] = *p;
+    return 1;
+}
+
+/* Traces the boundary at one Delta L into rec, in increasing phi. From the start point (the
+ * mark), moved in Delta L at the scene's phi; then, when the scene's phi lies inside [A, B],
+ * down to A and (from the same point again) up to B, else to A unrecorded and on to B. The ends
+ * are kept inside [1, 179] deg. */
 static void trace_one(rod_boundary *b, const bopts *o, double dl, double phi_scene, rod_boundary_curve *rec)
 {
-    rod_boundary_curve skip = {0};
-    double a = o->has_phi ? o->phi_a : phi_scene, bb = o->has_phi ? o->phi_b : phi_scene;
+    rod_boundary_curve part = {0};
+    double a = o->has_phi ? fmin(o->phi_a, o->phi_b) : phi_scene, bb = o->has_phi ? fmax(o->phi_a, o->phi_b) : phi_scene;
+    double a1 = fmin(fmax(a, 1.0), 179.0), b1 = fmin(fmax(bb, 1.0), 179.0);
+    rod_boundary_return(b);
     rod_codim2_point cur;
     rod_boundary_current(b, &cur);
-    if (fabs(cur.dl - dl) > 1e-12 && rod_boundary_move(b, ROD_PAR_DL, dl, &skip) != ROD_OK) {
-        rec->end_status = skip.end_status;
-        snprintf(rec->end_reason, sizeof rec->end_reason, "moving to Delta L = %g: %.200s", dl, skip.end_reason);
-        rod_boundary_curve_free(&skip);
+    rec->end_status = ROD_OK;
+    rec->end_reason[0] = '\0';
+    if (fabs(cur.dl - dl) > 1e-12 && rod_boundary_move(b, ROD_PAR_DL, dl, &part) != ROD_OK) {
+        rec->end_status = part.end_status;
+        snprintf(rec->end_reason, sizeof rec->end_reason, "moving to Delta L = %g: %.200s", dl, part.end_reason);
+        rod_boundary_curve_free(&part);
         return;
     }
-    rod_boundary_curve_free(&skip);
-    /* The ends of the range, kept inside (0, 180) deg. */
-    double lo = 1.0, hi = 179.0, a1 = fmin(fmax(a, lo), hi), b1 = fmin(fmax(bb, lo), hi);
+    rod_boundary_curve_free(&part);
     rod_boundary_current(b, &cur);
-    if (fabs(cur.phi_deg - a1) > 1e-12 && rod_boundary_move(b, ROD_PAR_PHI, a1, &skip) != ROD_OK) {
-        rec->end_status = skip.end_status;
-        snprintf(rec->end_reason, sizeof rec->end_reason, "moving to phi = %g deg: %.200s", a1, skip.end_reason);
-        rod_boundary_curve_free(&skip);
-        return;
+    char reason[2][256] = {"", ""};
+    if (a1 < cur.phi_deg && cur.phi_deg < b1) {
+        rod_codim2_point mid = cur;
+        rod_boundary_mark(b);
+        rod_status s1 = rod_boundary_move(b, ROD_PAR_PHI, a1, &part);
+        for (size_t k = part.n; k-- > 0;) push(rec, &part.pts[k]);
+        if (s1 != ROD_OK) {
+            rec->end_status = s1;
+            snprintf(reason[0], sizeof reason[0], "toward %g deg: %.200s", a1, part.end_reason);
+        }
+        rod_boundary_curve_free(&part);
+        push(rec, &mid);
+        rod_boundary_return(b);
+        rod_status s2 = rod_boundary_move(b, ROD_PAR_PHI, b1, &part);
+        for (size_t k = 0; k < part.n; k++) push(rec, &part.pts[k]);
+        if (s2 != ROD_OK) {
+            rec->end_status = s2;
+            snprintf(reason[1], sizeof reason[1], "toward %g deg: %.200s", b1, part.end_reason);
+        }
+        rod_boundary_curve_free(&part);
+    } else {
+        if (fabs(cur.phi_deg - a1) > 1e-12 && rod_boundary_move(b, ROD_PAR_PHI, a1, &part) != ROD_OK) {
+            rec->end_status = part.end_status;
+            snprintf(rec->end_reason, sizeof rec->end_reason, "moving to phi = %g deg: %.200s", a1, part.end_reason);
+            rod_boundary_curve_free(&part);
+            return;
+        }
+        rod_boundary_curve_free(&part);
+        rod_boundary_current(b, &cur);
+        push(rec, &cur);
+        if (fabs(b1 - a1) > 1e-12) {
+            rod_status s2 = rod_boundary_move(b, ROD_PAR_PHI, b1, &part);
+            for (size_t k = 0; k < part.n; k++) push(rec, &part.pts[k]);
+            if (s2 != ROD_OK) {
+                rec->end_status = s2;
+                snprintf(reason[1], sizeof reason[1], "%.250s", part.end_reason);
+            }
+            rod_boundary_curve_free(&part);
+        }
     }
-    rod_boundary_curve_free(&skip);
-    rod_boundary_current(b, &cur);
-    rec->pts = malloc(sizeof cur * 32);
-    if (!rec->pts) return;
-    rec->cap = 32;
-    rec->pts[rec->n++] = cur;
-    if (fabs(b1 - a1) > 1e-12) rod_boundary_move(b, ROD_PAR_PHI, b1, rec);
-    else snprintf(rec->end_reason, sizeof rec->end_reason, "one phi");
-    if (rec->end_status == ROD_OK && (a != a1 || bb != b1)) {
+    if (rec->end_status != ROD_OK)
+        snprintf(rec->end_reason, sizeof rec->end_reason, "%.120s%s%.120s", reason[0], reason[0][0] && reason[1][0] ? "; " : "",
+                 reason[1]);
+    else if (a != a1 || bb != b1) {
         rec->end_status = ROD_ERR_SCENE;
         snprintf(rec->end_reason, sizeof rec->end_reason,
                  "the phi range %g:%g crosses %s deg (the creases vanish or close there): traced to %g deg", a, bb,
-                 (a <= 0.0 || bb <= 0.0) ? "0" : "180", (a != a1) ? a1 : b1);
+                 a <= 0.0 ? "0" : "180", a != a1 ? a1 : b1);
+    } else {
+        snprintf(rec->end_reason, sizeof rec->end_reason, "covered phi %g .. %g", a1, b1);
     }
 }
 
@@ -219,6 +268,7 @@ int sim_cmd_boundary(int argc, char **argv)
         sweep_table_free(&sweep);
         return 3;
     }
+    rod_boundary_mark(b);
     rod_crit_curve fold = {0}, pf = {0};
     if (o.curves) {
         double lo = fmax(bo.gamma_min, start.gamma - 0.05), hi = fmin(bo.gamma_max, start.gamma + 0.05);

@@ -7,6 +7,7 @@
  * linear interpolation in arc length of the node positions and of the twist angles (at edge
  * midpoints); the augmented Newton then re-converges from there. */
 #include "rod_boundary.h"
+#include "rod_bifurcation.h"
 #include "rod_observe.h"
 #include "rod_route.h"
 #include "rod_snapshot.h"
@@ -34,6 +35,7 @@ struct rod_boundary {
     double *k1;
     bpoint cur, prev, trial;
     bpoint scur, sprev;    /* the search's own last two points */
+    bpoint mark;           /* rod_boundary_mark */
     double slope;          /* d g_odd / d Gamma along the fold curve at the last codim-2 point */
     char why[200];         /* the last augmented solve's failure */
     char msg[400];         /* the last search's failure */
@@ -54,6 +56,7 @@ rod_boundary_opts rod_boundary_opts_default(void)
     o.min_step_frac = 1.0 / 64.0;
     o.max_steps = 400;
     o.match_mesh = 0;
+    o.verify_every = 10.0;
     return o;
 }
 
@@ -92,6 +95,7 @@ void rod_boundary_free(rod_boundary *b)
     rod_snapshot_free(&b->prev.snap);
     rod_snapshot_free(&b->trial.snap);
     rod_snapshot_free(&b->scur.snap);
+    rod_snapshot_free(&b->mark.snap);
     rod_snapshot_free(&b->sprev.snap);
     rod_crit_free(b->c);
     rod_solver_free(b->solver);
@@ -111,6 +115,16 @@ static void load_point(rod_boundary *b, const bpoint *bp)
     rod_params_apply(b->r, bp->p);
     rod_snapshot_load(b->r, &bp->snap);
     rod_params_apply(b->r, bp->p);
+}
+
+void rod_boundary_mark(rod_boundary *b) { bpoint_copy(&b->cur, &b->mark); }
+
+void rod_boundary_return(rod_boundary *b)
+{
+    bpoint_copy(&b->mark, &b->cur);
+    load_point(b, &b->cur);
+    rod_crit_update_borders(b->c, b->cur.p);
+    load_point(b, &b->cur);
 }
 
 static void save_point(rod_boundary *b, const double *p, bpoint *bp)
@@ -163,6 +177,7 @@ static void fill_info(rod_boundary *b, const double *p, const rod_crit_report *r
     pt->parity_odd = rep->parity_odd;
     pt->residual_rel = rep->residual_rel;
     pt->outer_edges = b->r->fold_outer_edges;
+    pt->n_negative = rep->n_negative;
     pt->iterations = rep->iterations;
 }
 
@@ -305,7 +320,8 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
     b->c = rod_crit_alloc(r, &b->o.crit);
     rod_solver *s = b->solver = rod_solver_alloc(r);
     if (!b->k1 || !b->c || !s || !bpoint_alloc(r, &b->cur) || !bpoint_alloc(r, &b->prev) ||
-        !bpoint_alloc(r, &b->trial) || !bpoint_alloc(r, &b->scur) || !bpoint_alloc(r, &b->sprev)) {
+        !bpoint_alloc(r, &b->trial) || !bpoint_alloc(r, &b->scur) || !bpoint_alloc(r, &b->sprev) ||
+        !bpoint_alloc(r, &b->mark)) {
         rod_boundary_free(b);
         snprintf(why, whylen, "out of memory");
         return ROD_ERR_ALLOC;
@@ -436,6 +452,28 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
 
 /* ---- continuation in phi or Delta L ---- */
 
+/* 1 when the first instability of the primary branch at (phi, Gamma* - 1e-3, Delta L) of pt lies
+ * within 0.02 of pt's Delta W (see rod_boundary.h); *first_dw gets it (0 when none). */
+static int is_regime_boundary(const rod_boundary *b, const rod_codim2_point *pt, double *first_dw)
+{
+    rod_scene sc = b->sc;
+    sc.fold_angle_deg = b->sign * pt->phi_deg;
+    sc.fold_position = pt->gamma - 1e-3;
+    sc.compression = pt->dl;
+    rod_analysis_opts o = rod_analysis_opts_classify();
+    rod_analysis a;
+    char err[256];
+    *first_dw = 0.0;
+    if (rod_bifurcation_analyse(&sc, &o, &a, err, sizeof err) != ROD_OK) return 1; /* cannot tell: keep */
+    int ok = 1;
+    if (a.first >= 0) {
+        *first_dw = a.events[a.first].at.dw;
+        ok = fabs(*first_dw - pt->dw) <= 0.02;
+    }
+    rod_analysis_free(&a);
+    return ok;
+}
+
 static int append_c2(rod_boundary_curve *c, const rod_codim2_point *pt)
 {
     if (c->n == c->cap) {
@@ -457,6 +495,8 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
     double h0 = par == ROD_PAR_PHI ? b->o.phi_step_deg * M_PI / 180.0 : b->o.dl_step, h = h0;
     const char *pname = par == ROD_PAR_PHI ? "phi" : "Delta L";
     int have_prev = 0;
+    double last_check = b->cur.p[par], check_step = par == ROD_PAR_PHI ? b->o.verify_every * M_PI / 180.0
+                                                                        : b->o.verify_every / 100.0;
     if (par == ROD_PAR_PHI && !(target > 0.0 && target < 180.0)) {
         snprintf(reason, sizeof reason, "phi %g deg is outside (0, 180): the creases vanish or close there", target);
         st = ROD_ERR_SCENE;
@@ -512,6 +552,29 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
                      par == ROD_PAR_PHI ? fabs(pn[par]) * 180.0 / M_PI : pn[par], pn[ROD_PAR_GAMMA]);
             st = ROD_ERR_BRANCH_LOST;
             break;
+        }
+        if (rep.n_negative != 0) {
+            snprintf(reason, sizeof reason,
+                     "at %s = %.6g (Gamma* %.4f) %d other eigenvalue%s already negative at the codim-2 point: an "
+                     "earlier instability decides the snap there, this is no longer the regime boundary",
+                     pname, par == ROD_PAR_PHI ? fabs(pn[par]) * 180.0 / M_PI : pn[par], pn[ROD_PAR_GAMMA],
+                     rep.n_negative, rep.n_negative == 1 ? " is" : "s are");
+            st = ROD_ERR_BRANCH_LOST;
+            break;
+        }
+        if (b->o.verify_every > 0.0 && (fabs(pn[par] - last_check) >= check_step || fabs(tv - pn[par]) <= 1e-12)) {
+            rod_codim2_point chk;
+            fill_info(b, pn, &rep, &chk);
+            double fdw;
+            if (!is_regime_boundary(b, &chk, &fdw)) {
+                snprintf(reason, sizeof reason,
+                         "at %s = %.6g the codim-2 point (Gamma* %.4f, Delta W %.4f) is no longer the regime boundary: "
+                         "just below it the first instability is at Delta W %.4f",
+                         pname, par == ROD_PAR_PHI ? chk.phi_deg : pn[par], chk.gamma, chk.dw, fdw);
+                st = ROD_ERR_BRANCH_LOST;
+                break;
+            }
+            last_check = pn[par]; /* the check builds its own rod: this one still holds the point */
         }
         bpoint_copy(&b->cur, &b->prev);
         have_prev = 1;

@@ -31,6 +31,16 @@
  * search again); it does not converge reliably yet (the interpolated state is strained), so it is
  * off by default.
  *
+ * Regime boundary. The codim-2 point decides the regime only while the upper branch is stable up
+ * to it: every other eigenvalue positive there (n_negative 0). Where another mode went unstable
+ * earlier on the branch (at phi 45 deg, N = 61, Gamma 0.13, another pitchfork at Delta W 0.32 comes
+ * before this codim-2 point at 0.54 and the branch restabilises in between, measured), the point
+ * is still a codim-2 point but no longer the boundary. The inertia at the point cannot see that
+ * (n_negative 0 there), so rod_boundary_move checks by the sweep's own classification
+ * (rod_bifurcation_analyse, rod_analysis_opts_classify) just below Gamma*, every verify_every:
+ * the first instability must lie within 0.02 of the point's Delta W. Where it does not, the move
+ * stops with a reason, the points before kept.
+ *
  * No result field is NaN; every stop has a reason. */
 #ifndef RIBBON_SIM_ROD_BOUNDARY_H
 #define RIBBON_SIM_ROD_BOUNDARY_H
@@ -52,10 +62,12 @@ typedef struct rod_boundary_opts {
     double min_step_frac;      /* a step below this fraction of the initial one stops */
     int max_steps;             /* cap on steps of one continuation */
     int match_mesh;            /* 1: re-mesh each point as rod_alloc would (see above) */
+    double verify_every;       /* check that the point is the regime boundary (see above) at
+                                  least every this far in phi (deg) or Delta L / 100; 0: never */
 } rod_boundary_opts;
 
 /* Gamma in [0.02, 0.45], gamma_step 0.02, 40 search steps, phi steps of 5 deg, Delta L steps of
- * 0.05, minimum 1/64 of them, 400 steps, match_mesh 0. */
+ * 0.05, minimum 1/64 of them, 400 steps, match_mesh 0, verify_every 10. */
 rod_boundary_opts rod_boundary_opts_default(void);
 
 typedef struct rod_codim2_point {
@@ -69,6 +81,8 @@ typedef struct rod_codim2_point {
     double parity_even, parity_odd; /* C2 parities of their modes (+1, -1) */
     double residual_rel;   /* equilibrium residual over EI1 / l^2 */
     int outer_edges;       /* mesh edges between clamp and crease */
+    int n_negative;        /* other eigenvalues already negative there: 0 on the regime boundary;
+                              > 0 means an earlier instability decides the snap (see move) */
     int iterations;        /* Newton iterations of its solve */
 } rod_codim2_point;
 
@@ -109,6 +123,11 @@ void rod_boundary_free(rod_boundary *b);
  * magnitude) or Delta L (ROD_PAR_DL) to target. Accepted points (not the start) are appended to
  * rec unless NULL. On a stop the current point is the last good one. rec's end fields are set. */
 rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_boundary_curve *rec);
+
+/* Keeps the current codimension-2 point (state included) as the mark / makes the mark current
+ * again: a caller that traces several ranges from one point returns there between them. */
+void rod_boundary_mark(rod_boundary *b);
+void rod_boundary_return(rod_boundary *b);
 
 /* The current codimension-2 point. */
 void rod_boundary_current(const rod_boundary *b, rod_codim2_point *out);

@@ -26,7 +26,7 @@ struct rod_crit {
     rod *r;
     rod_crit_opts o;
     int nf;
-    double *H, *Hp;          /* band Hessian at the state, and at a perturbed state */
+    double *H, *Hp, *Hm;     /* band Hessian at the state, and at two perturbed states */
     gsl_matrix *lu;
     gsl_vector_uint *piv;
     double *g;               /* full gradient */
@@ -40,6 +40,7 @@ struct rod_crit {
     double *step;            /* Newton step in q */
     int old_out;
     rod_snapshot base;
+    rod_stab_ws *sw;         /* inertia of the reported state */
     double scale;            /* max |K_ii| */
 };
 
@@ -118,13 +119,14 @@ void rod_crit_move_gamma(rod_crit *c, const double *p, int n_out)
 void rod_crit_free(rod_crit *c)
 {
     if (!c) return;
-    free(c->H); free(c->Hp); free(c->g); free(c->R); free(c->z); free(c->t1); free(c->t2);
+    free(c->H); free(c->Hp); free(c->Hm); free(c->g); free(c->R); free(c->z); free(c->t1); free(c->t2);
     free(c->old_s); free(c->old_q); free(c->step);
     for (int k = 0; k < 2; k++) { free(c->v[k]); free(c->w[k]); }
     for (int k = 0; k < MAXM; k++) { free(c->a[k]); free(c->Rp[k]); free(c->Y[k]); }
     if (c->lu) gsl_matrix_free(c->lu);
     if (c->piv) gsl_vector_uint_free(c->piv);
     rod_snapshot_free(&c->base);
+    rod_stab_ws_free(c->sw);
     free(c);
 }
 
@@ -138,6 +140,7 @@ rod_crit *rod_crit_alloc(rod *r, const rod_crit_opts *o)
     size_t n = (size_t)nf;
     c->H = malloc(sizeof(double) * n * W);
     c->Hp = malloc(sizeof(double) * n * W);
+    c->Hm = malloc(sizeof(double) * n * W);
     c->g = malloc(sizeof(double) * (size_t)r->ndof);
     c->R = malloc(sizeof(double) * n);
     c->z = malloc(sizeof(double) * n);
@@ -146,7 +149,7 @@ rod_crit *rod_crit_alloc(rod *r, const rod_crit_opts *o)
     c->old_s = malloc(sizeof(double) * (size_t)r->n);
     c->old_q = malloc(sizeof(double) * (size_t)r->ndof);
     c->step = malloc(sizeof(double) * n);
-    int ok = c->H && c->Hp && c->g && c->R && c->z && c->t1 && c->t2 && c->old_s && c->old_q && c->step;
+    int ok = c->H && c->Hp && c->Hm && c->g && c->R && c->z && c->t1 && c->t2 && c->old_s && c->old_q && c->step;
     for (int k = 0; k < 2; k++) {
         c->v[k] = calloc(n, sizeof(double));
         c->w[k] = calloc(n, sizeof(double));
@@ -160,7 +163,8 @@ rod_crit *rod_crit_alloc(rod *r, const rod_crit_opts *o)
     }
     c->lu = gsl_matrix_alloc(n, 3 * ROD_BAND + 1);
     c->piv = gsl_vector_uint_alloc(n);
-    ok = ok && c->lu && c->piv && rod_snapshot_alloc(r, &c->base);
+    c->sw = rod_stab_ws_alloc(nf);
+    ok = ok && c->lu && c->piv && c->sw && rod_snapshot_alloc(r, &c->base);
     if (!ok) {
         rod_crit_free(c);
         return NULL;
@@ -247,23 +251,28 @@ static void update_border(rod_crit *c, int b)
         for (int k = 0; k < c->nf; k++) c->v[b][k] = c->w[b][k] / n;
 }
 
-/* out = D3E[w, w, .] along the unit direction of w times |w|^2, at the state in c->base. */
+/* out = D3E[w, w, .] along the unit direction of w times |w|^2, at the state in c->base. The two
+ * Hessians are differenced entry by entry before the product with w, so the round-off is that of
+ * the entries that change, not of the whole K w. */
 static void third_along(rod_crit *c, const double *w, double *out)
 {
     rod *r = c->r;
     int nf = c->nf;
+    size_t nb = (size_t)nf * W;
     double wn = norm(w, nf), e = c->o.eps_q * r->length;
     memset(out, 0, sizeof(double) * (size_t)nf);
     if (!(wn > 0.0)) return;
     for (int s = -1; s <= 1; s += 2) {
+        double *Hs = s > 0 ? c->Hp : c->Hm;
         rod_snapshot_load(r, &c->base);
         for (int k = 0; k < nf; k++) r->q[k + ROD_FREE_BEGIN] += s * e * w[k] / wn;
         rod_frames_update(r);
-        memset(c->Hp, 0, sizeof(double) * (size_t)nf * W);
-        rod_hessian_add(r, 1.0, c->Hp);
-        rod_band_symv(c->Hp, nf, w, c->t1);
-        for (int k = 0; k < nf; k++) out[k] += s * c->t1[k] / (2.0 * e * wn);
+        memset(Hs, 0, sizeof(double) * nb);
+        rod_hessian_add(r, 1.0, Hs);
     }
+    for (size_t i = 0; i < nb; i++) c->Hp[i] -= c->Hm[i];
+    rod_band_symv(c->Hp, nf, w, out);
+    for (int k = 0; k < nf; k++) out[k] /= 2.0 * e * wn;
     rod_snapshot_load(r, &c->base);
 }
 
@@ -273,11 +282,13 @@ static void param_diff(rod_crit *c, const double *p, rod_par k, double *Rp, doub
 {
     rod *r = c->r;
     int nf = c->nf;
+    size_t nb = (size_t)nf * W;
     double pp[ROD_NPAR], e = c->o.eps_p;
     memcpy(pp, p, sizeof pp);
     if (Rp) memset(Rp, 0, sizeof(double) * (size_t)nf);
     gp[0] = gp[1] = 0.0;
     for (int s = -1; s <= 1; s += 2) {
+        double *Hs = s > 0 ? c->Hp : c->Hm;
         rod_snapshot_load(r, &c->base);
         pp[k] = p[k] + s * e;
         if (k == ROD_PAR_GAMMA) {
@@ -286,14 +297,16 @@ static void param_diff(rod_crit *c, const double *p, rod_par k, double *Rp, doub
         } else {
             rod_params_apply(r, pp);
         }
-        memset(c->Hp, 0, sizeof(double) * (size_t)nf * W);
-        rod_gradient_hessian(r, c->g, 1.0, c->Hp);
+        memset(Hs, 0, sizeof(double) * nb);
+        rod_gradient_hessian(r, c->g, 1.0, Hs);
         if (Rp)
             for (int j = 0; j < nf; j++) Rp[j] += s * c->g[j + ROD_FREE_BEGIN] / (2.0 * e);
-        for (int b = 0; b < 2; b++) {
-            rod_band_symv(c->Hp, nf, c->w[b], c->t1);
-            gp[b] -= s * dot(c->w[b], c->t1, nf) / (2.0 * e);
-        }
+    }
+    /* Entry by entry first (see third_along): a clamp or crease change touches few entries. */
+    for (size_t i = 0; i < nb; i++) c->Hp[i] -= c->Hm[i];
+    for (int b = 0; b < 2; b++) {
+        rod_band_symv(c->Hp, nf, c->w[b], c->t1);
+        gp[b] = -dot(c->w[b], c->t1, nf) / (2.0 * e);
     }
     rod_snapshot_load(r, &c->base);
     rod_params_apply(r, p);
@@ -333,6 +346,8 @@ static void fill_report(rod_crit *c, rod_crit_report *rep)
     rep->g_even = c->gval[0];
     rep->g_odd = c->gval[1];
     rep->scale = c->scale;
+    rod_inertia in;
+    rep->n_negative = rod_inertia_eval(c->H, nf, ROD_INERTIA_SHIFT_REL, c->sw, &in, NULL, 0) == ROD_OK ? in.below_minus : -1;
     for (int b = 0; b < 2; b++) {
         double n = norm(c->w[b], nf), *u = c->t1;
         for (int k = 0; k < nf; k++) u[k] = n > 0.0 ? c->w[b][k] / n : 0.0;
@@ -603,7 +618,7 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
          * shrinking. */
         int res_ok = res <= c->o.tolerance || (res <= 1e3 * c->o.tolerance && dqmax <= 1e-6);
         if (res_ok &&
-            (dpmax <= c->o.step_tol || (it >= 2 && dpmax <= 1e4 * c->o.step_tol && dpmax >= 0.5 * prev_dp))) {
+            (dpmax <= c->o.step_tol || (it >= 2 && dpmax <= 1e4 * c->o.step_tol && (dpmax >= 0.5 * prev_dp || it >= 6)))) {
             st = ROD_OK;
             break;
         }

@@ -95,6 +95,8 @@ typedef struct rod_crit_report {
     double eig_res_even, eig_res_odd; /* |K w - eig w| of the unit w's */
     double parity_even, parity_odd; /* rod_mode_parity of the two modes */
     double scale;         /* max |K_ii|: the round-off floor of the eigenvalues is ~1e-16 of it */
+    int n_negative;       /* eigenvalues below -1e-13 scale (the critical ones, ~0, not counted);
+                             -1 when the inertia could not be evaluated */
 } rod_crit_report;
 
 /* Critical modes at the rod's state under p: the eigenvector of the even and of the odd block
