@@ -8,7 +8,7 @@
 #include "scene.h"
 
 typedef struct sim_bench_boundary_result {
-    double boundary_wall_s;   /* s, start plus Gamma*(phi) at the 20 phi (45..135 deg) */
+    double boundary_wall_s;   /* s, start plus Gamma*(phi) at the 20 phi (60..130 deg) */
     double sweep_wall_s;      /* s, the sweep's work for the same 20 phi (see the .c) */
     double boundary_vs_sweep; /* sweep_wall_s / boundary_wall_s */
     double sweep_phi90_gamma; /* the bisected Gamma* at 90 deg, and the traced one there */
@@ -16,7 +16,7 @@ typedef struct sim_bench_boundary_result {
     int sweep_classifications;/* classifications of the measured phi */
 } sim_bench_boundary_result;
 
-/* Runs both on scene sc (its N, Delta L; phi magnitudes 45..135 deg). 0, or -1 with err. */
+/* Runs both on scene sc (its N, Delta L; phi magnitudes 60..130 deg). 0, or -1 with err. */
 int sim_bench_boundary(const rod_scene *sc, sim_bench_boundary_result *out, char *err, size_t errlen);
 
 #endif

@@ -229,7 +229,7 @@ static rod_status search(rod_boundary *b, rod_crit_kind kind, int scan, double *
         if (scanning) step = scan * SCAN_STEP;
         else if (isfinite(slope) && slope != 0.0) step = -G / slope;
         step = fmax(-b->o.gamma_step, fmin(b->o.gamma_step, step));
-        if (!scanning && (fabs(step) < 1e-7 || fabs(G) < 1e-15 * rep.scale) && k > 0) {
+        if (!scanning && (fabs(step) < 1e-7 * fmax(1.0, rep.scale / 1e9) || fabs(G) < 1e-15 * rep.scale) && k > 0) {
             b->slope = slope;
             return ROD_OK;
         }
@@ -257,7 +257,7 @@ static rod_status search(rod_boundary *b, rod_crit_kind kind, int scan, double *
             else remesh(b, pn, b->r->fold_outer_edges);
             ok = rod_crit_solve(b->c, kind, dw_free, pn, &rep, b->why, sizeof b->why) == ROD_OK;
         }
-        if (!ok && !scanning && fabs(step) < 1e-5) {
+        if (!ok && !scanning && fabs(step) < 1e-5 * fmax(1.0, rep.scale / 1e9)) {
             /* Within 1e-5 of the root the solves sit at their round-off floor: the last point is it. */
             load_point(b, &b->scur);
             memcpy(p, b->scur.p, sizeof b->scur.p);
