@@ -10,7 +10,9 @@
 typedef struct sim_bench_boundary_result {
     double boundary_wall_s;   /* s, start plus Gamma*(phi) at the 20 phi (60..130 deg) */
     double sweep_wall_s;      /* s, the sweep's work for the same 20 phi (see the .c) */
-    double boundary_vs_sweep; /* sweep_wall_s / boundary_wall_s */
+    double boundary_cpu_s;    /* s, CPU time of the same */
+    double sweep_cpu_s;       /* s, CPU time of the sweep's work */
+    double boundary_vs_sweep; /* sweep_cpu_s / boundary_cpu_s (one thread each) */
     double sweep_phi90_gamma; /* the bisected Gamma* at 90 deg, and the traced one there */
     double traced_phi90_gamma;
     int sweep_classifications;/* classifications of the measured phi */

@@ -177,6 +177,8 @@ int sim_cmd_bench(int argc, char **argv)
     json_object_set_new(j, "boundary_wall_s", json_real(bb.boundary_wall_s));
     json_object_set_new(j, "boundary_vs_sweep", json_real(bb.boundary_vs_sweep));
     json_object_set_new(j, "boundary_sweep_wall_s", json_real(bb.sweep_wall_s));
+    json_object_set_new(j, "boundary_cpu_s", json_real(bb.boundary_cpu_s));
+    json_object_set_new(j, "boundary_sweep_cpu_s", json_real(bb.sweep_cpu_s));
     char *txt = json_dumps(j, JSON_COMPACT | JSON_REAL_PRECISION(6));
     if (o.json) puts(txt);
     else

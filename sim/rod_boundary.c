@@ -36,6 +36,8 @@ struct rod_boundary {
     bpoint cur, prev, trial;
     bpoint scur, sprev;    /* the search's own last two points */
     bpoint mark;           /* rod_boundary_mark */
+    int prev_valid;        /* prev is the point before cur on a continuation in prev_par */
+    rod_par prev_par;
     double slope;          /* d g_odd / d Gamma along the fold curve at the last codim-2 point */
     char why[200];         /* the last augmented solve's failure */
     char msg[400];         /* the last search's failure */
@@ -121,6 +123,7 @@ void rod_boundary_mark(rod_boundary *b) { bpoint_copy(&b->cur, &b->mark); }
 
 void rod_boundary_return(rod_boundary *b)
 {
+    b->prev_valid = 0;
     bpoint_copy(&b->mark, &b->cur);
     load_point(b, &b->cur);
     rod_crit_update_borders(b->c, b->cur.p);
@@ -494,7 +497,8 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
     double tv = par == ROD_PAR_PHI ? b->sign * target * M_PI / 180.0 : target;
     double h0 = par == ROD_PAR_PHI ? b->o.phi_step_deg * M_PI / 180.0 : b->o.dl_step, h = h0;
     const char *pname = par == ROD_PAR_PHI ? "phi" : "Delta L";
-    int have_prev = 0;
+    /* The secant carries over from a previous move in the same parameter that ended here. */
+    int have_prev = b->prev_valid && b->prev_par == par;
     double last_check = b->cur.p[par], check_step = par == ROD_PAR_PHI ? b->o.verify_every * M_PI / 180.0
                                                                         : b->o.verify_every / 100.0;
     if (par == ROD_PAR_PHI && !(target > 0.0 && target < 180.0)) {
@@ -589,6 +593,8 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
         if (rep.iterations <= 5) h = fmin(1.5 * h, h0);
     }
     load_point(b, &b->cur);
+    b->prev_valid = have_prev;
+    b->prev_par = par;
     if (rec) {
         rec->end_status = st;
         snprintf(rec->end_reason, sizeof rec->end_reason, "%s", reason);
