@@ -1,0 +1,200 @@
+/* trial_report.c: report figures from the store (see trial_report.h). */
+#include "trial_report.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <jansson.h>
+
+#include "plot.h"
+#include "rod_protocol.h"
+
+trial_err trial_report_png(store *st, int64_t id, const char *png_path, char *why, size_t why_len)
+{
+    store_trial t;
+    store_err e = store_trial_get(st, id, &t, why, why_len);
+    if (e != STORE_OK) return e == STORE_E_NOTFOUND ? TRIAL_E_NOTFOUND : TRIAL_E_FAILED;
+    store_curve meas = {0}, pred = {0};
+    if (store_trial_curve(st, id, &meas, why, why_len) != STORE_OK) return TRIAL_E_FAILED;
+    /* Only the shear: frames from the start of shearing to the return (the compression's frames
+     * are at Delta W = 0 and the return's retrace the lower branch). */
+    double t_check, t_shear, t_return;
+    store_events_state_times(st, id, &t_check, &t_shear, &t_return);
+    if (isfinite(t_shear)) {
+        size_t m = 0;
+        for (size_t k = 0; k < meas.n; k++) {
+            if (meas.t_s[k] < t_shear || (isfinite(t_return) && meas.t_s[k] >= t_return)) continue;
+            meas.t_s[m] = meas.t_s[k];
+            meas.dw[m] = meas.dw[k];
+            meas.dz[m] = meas.dz[k];
+            meas.a[m] = meas.a[k];
+            m++;
+        }
+        meas.n = m;
+    }
+    store_prediction p = store_prediction_default();
+    int have_pred = store_prediction_get_by_trial(st, id, &p, why, why_len) == STORE_OK;
+    if (have_pred) pred = p.curve;
+    char title[160];
+    snprintf(title, sizeof title, "trial %lld (%s%s%s)", (long long)id, store_mode_name(t.mode),
+             t.specimen_name[0] ? ", " : "", t.specimen_name);
+    plot_trial_data d;
+    plot_trial_data_default(&d);
+    d.title = title;
+    d.measured.dw = meas.dw;
+    d.measured.dz = meas.dz;
+    d.measured.a = meas.a;
+    d.measured.n = meas.n;
+    d.predicted.dw = pred.dw;
+    d.predicted.dz = pred.dz;
+    d.predicted.a = pred.a;
+    d.predicted.n = pred.n;
+    d.snap_dw_measured = t.snapped == 1 ? t.snap_dw_measured : NAN;
+    d.snap_dw_predicted = have_pred && p.snapped ? p.snap_dw : NAN;
+    d.regime_measured = store_regime_name(t.regime_measured);
+    d.regime_predicted = have_pred ? store_regime_name(p.regime) : NULL;
+    plot_status ps = plot_trial_report(png_path, &d, why, why_len);
+    store_curve_free(&meas);
+    if (have_pred) store_prediction_free(&p);
+    return ps == PLOT_OK ? TRIAL_OK : TRIAL_E_FAILED;
+}
+
+trial_err trial_report_png_bytes(store *st, int64_t id, unsigned char **png, size_t *len, char *why, size_t why_len)
+{
+    char path[] = "/tmp/ribbon-report-XXXXXX.png";
+    int fd = mkstemps(path, 4);
+    if (fd < 0) {
+        snprintf(why, why_len, "report: no temporary file: %m");
+        return TRIAL_E_FAILED;
+    }
+    close(fd);
+    trial_err rc = trial_report_png(st, id, path, why, why_len);
+    if (rc == TRIAL_OK) {
+        FILE *f = fopen(path, "rb");
+        long n = -1;
+        if (f && fseek(f, 0, SEEK_END) == 0) n = ftell(f);
+        if (f) rewind(f);
+        *png = n > 0 ? malloc((size_t)n) : NULL;
+        if (!f || n <= 0 || !*png || fread(*png, 1, (size_t)n, f) != (size_t)n) {
+            free(*png);
+            *png = NULL;
+            snprintf(why, why_len, "report: could not read the image back");
+            rc = TRIAL_E_FAILED;
+        } else {
+            *len = (size_t)n;
+        }
+        if (f) fclose(f);
+    }
+    unlink(path);
+    return rc;
+}
+
+int phase_grid_compute(const rod_scene *base, double phi0, double phi1, size_t n_phi, double g0, double g1,
+                       size_t n_gamma, phase_grid *out, void (*progress)(void *u, size_t done, size_t total),
+                       void *u, char *why, size_t why_len)
+{
+    memset(out, 0, sizeof *out);
+    if (n_phi < 1 || n_gamma < 1 || n_phi > 64 || n_gamma > 64) {
+        snprintf(why, why_len, "phase grid: 1 to 64 values of each parameter");
+        return -1;
+    }
+    out->n_phi = n_phi;
+    out->n_gamma = n_gamma;
+    out->phi_deg = calloc(n_phi, sizeof(double));
+    out->gamma = calloc(n_gamma, sizeof(double));
+    out->regime = calloc(n_phi * n_gamma, sizeof(int));
+    if (!out->phi_deg || !out->gamma || !out->regime) {
+        phase_grid_free(out);
+        snprintf(why, why_len, "phase grid: out of memory");
+        return -1;
+    }
+    for (size_t i = 0; i < n_phi; i++) out->phi_deg[i] = n_phi > 1 ? phi0 + (phi1 - phi0) * i / (n_phi - 1) : phi0;
+    for (size_t j = 0; j < n_gamma; j++) out->gamma[j] = n_gamma > 1 ? g0 + (g1 - g0) * j / (n_gamma - 1) : g0;
+    double sign = base->fold_angle_deg < 0 ? -1.0 : 1.0;
+    for (size_t i = 0; i < n_phi; i++)
+        for (size_t j = 0; j < n_gamma; j++) {
+            rod_scene s = *base;
+            s.fold_angle_deg = sign * fabs(out->phi_deg[i]);
+            s.fold_position = out->gamma[j];
+            rod_predict_opts o = rod_predict_opts_default();
+            o.adaptive = 1;
+            rod_prediction p;
+            char err[256];
+            int code = PLOT_REGIME_UNKNOWN;
+            if (rod_scene_check(&s, NULL, 0, NULL, 0) == 0 && rod_predict(&s, &o, &p, err, sizeof err) == ROD_OK)
+                code = !p.snapped ? PLOT_REGIME_NO_SNAP : p.asymmetric ? PLOT_REGIME_ASYMMETRIC : PLOT_REGIME_SYMMETRIC;
+            out->regime[i * n_gamma + j] = code;
+            if (progress) progress(u, i * n_gamma + j + 1, n_phi * n_gamma);
+        }
+    return 0;
+}
+
+void phase_grid_free(phase_grid *g)
+{
+    free(g->phi_deg);
+    free(g->gamma);
+    free(g->regime);
+    memset(g, 0, sizeof *g);
+}
+
+int trial_phase_report_png(store *st, const phase_grid *grid, const char *png_path, char *why, size_t why_len)
+{
+    store_trial *list = NULL;
+    size_t n = 0;
+    if (store_trial_list(st, &list, &n, why, why_len) != STORE_OK) return -1;
+    plot_phase_trial *pts = calloc(n ? n : 1, sizeof *pts);
+    if (!pts) {
+        free(list);
+        snprintf(why, why_len, "phase report: out of memory");
+        return -1;
+    }
+    size_t m = 0;
+    for (size_t k = 0; k < n; k++) {
+        if (list[k].snapped < 0) continue; /* not measured */
+        char *cal = NULL;
+        char w[256];
+        if (store_trial_texts(st, list[k].id, NULL, &cal, w, sizeof w) != STORE_OK || !cal) {
+            free(cal);
+            continue;
+        }
+        json_error_t je;
+        json_t *o = json_loads(cal, 0, &je);
+        free(cal);
+        json_t *phi = json_object_get(o, "fold_angle_deg"), *g = json_object_get(o, "fold_position");
+        if (json_is_number(phi) && json_is_number(g)) {
+            pts[m].gamma = json_number_value(g);
+            pts[m].phi_deg = fabs(json_number_value(phi));
+            pts[m].regime = list[k].regime_measured == STORE_REGIME_ASYMMETRIC ? PLOT_REGIME_ASYMMETRIC
+                            : list[k].regime_measured == STORE_REGIME_SYMMETRIC ? PLOT_REGIME_SYMMETRIC
+                            : list[k].regime_measured == STORE_REGIME_NO_SNAP   ? PLOT_REGIME_NO_SNAP
+                                                                                : PLOT_REGIME_UNKNOWN;
+            m++;
+        }
+        json_decref(o);
+    }
+    free(list);
+    plot_phase_data d;
+    plot_phase_data_default(&d);
+    d.title = "measured regimes on the predicted phase diagram";
+    plot_regime *codes = NULL;
+    if (grid && grid->n_phi > 0) {
+        codes = calloc(grid->n_phi * grid->n_gamma, sizeof *codes);
+        if (codes) {
+            for (size_t k = 0; k < grid->n_phi * grid->n_gamma; k++) codes[k] = (plot_regime)grid->regime[k];
+            d.gamma = grid->gamma;
+            d.n_gamma = grid->n_gamma;
+            d.phi_deg = grid->phi_deg;
+            d.n_phi = grid->n_phi;
+            d.grid = codes;
+        }
+    }
+    d.trials = pts;
+    d.n_trials = m;
+    plot_status ps = plot_phase_report(png_path, &d, why, why_len);
+    free(codes);
+    free(pts);
+    return ps == PLOT_OK ? 0 : -1;
+}

@@ -1,0 +1,145 @@
+/* predict_ladder.c: resolution ladder of a scene's prediction (see predict_ladder.h). */
+#include "predict_ladder.h"
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "rod_protocol.h"
+#include "rod_richardson.h"
+
+static uint64_t fnv(uint64_t h, const char *s)
+{
+    for (; *s; s++) {
+        h ^= (unsigned char)*s;
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+void predict_scene_hash(const rod_scene *sc, char out[17])
+{
+    char buf[1024];
+    /* Every field but the mesh size, printed exactly (%a), so equal scenes hash equal. */
+    snprintf(buf, sizeof buf,
+             "%a %a %a %a %a %a %a %a %a|%a %a %a|%a|%a %a %a %d|%a %a %a %d|%a %a",
+             sc->length, sc->width, sc->thickness, sc->youngs_modulus, sc->shear_modulus, sc->density,
+             sc->gravity[0], sc->gravity[1], sc->gravity[2], sc->fold_angle_deg, sc->fold_position,
+             sc->fold_stiffness_factor, sc->fold_angle_rel, sc->compression, sc->shear_rate, sc->shear_max,
+             (int)sc->route, sc->dt, sc->damping, sc->tolerance, sc->max_iterations, sc->snap_speed,
+             sc->asym_threshold);
+    uint64_t h = fnv(1469598103934665603ull, buf);
+    snprintf(out, 17, "%016llx", (unsigned long long)h);
+}
+
+void predict_ladder_estimate_errors(predict_ladder_rung *r, int n)
+{
+    for (int k = 0; k < n; k++) r[k].est_error = -1.0;
+    if (n < 2) return;
+    double s2 = r[n - 1].snap_dw, s1 = r[n - 2].snap_dw;
+    double ratio = (double)(r[n - 1].nodes - 1) / (double)(r[n - 2].nodes - 1); /* mesh refinement */
+    double p = 1.0;
+    if (n >= 3) {
+        double s0 = r[n - 3].snap_dw;
+        double ratio0 = (double)(r[n - 2].nodes - 1) / (double)(r[n - 3].nodes - 1);
+        /* Observed order when the differences shrink monotonically with the same sign. */
+        if (fabs(ratio - ratio0) < 1e-9 * ratio) {
+            double po = rod_observed_order(s0, s1, s2, ratio);
+            if (po > 0.5 && po < 4.0) p = po;
+        }
+    }
+    double ref = rod_richardson(s1, s2, ratio, p);
+    if (!(fabs(ref) > 0.0) || !isfinite(ref)) return;
+    for (int k = 0; k < n; k++) r[k].est_error = fabs(r[k].snap_dw - ref) / fabs(ref);
+}
+
+/* rod_predict's per-step callback: stops the rung once the cancel flag is set. */
+static int stop_if_cancelled(void *user, const rod_sample *smp, const rod *r)
+{
+    (void)smp;
+    (void)r;
+    const atomic_int *cancel = user;
+    return cancel && atomic_load(cancel);
+}
+
+double predict_estimate_s(const rod_scene *sc, int adaptive)
+{
+    if (!(sc->shear_rate > 0) || !(sc->dt > 0)) return INFINITY;
+    double steps = sc->shear_max * sc->length / (sc->shear_rate * sc->dt); /* shear time / dt */
+    if (adaptive) steps /= PREDICT_FAST_STEP_RATIO;
+    return steps * (double)sc->nodes * PREDICT_STEP_NODE_S;
+}
+
+double predict_ladder_estimate_s(const rod_scene *sc, const int *nodes, int n, int adaptive)
+{
+    double total = 0.0;
+    for (int k = 0; k < n; k++) {
+        rod_scene s = *sc;
+        s.nodes = nodes[k];
+        total += predict_estimate_s(&s, adaptive);
+    }
+    return total;
+}
+
+int predict_ladder_compute(const rod_scene *sc, const int *nodes, int n, int adaptive, predict_ladder_rung *out,
+                           void (*progress)(void *user, const predict_ladder_rung *r, int k, int n), void *user,
+                           const atomic_int *cancel, char *why, size_t why_len)
+{
+    if (n < 1 || n > PREDICT_LADDER_MAX_RUNGS) {
+        snprintf(why, why_len, "a ladder needs 1 to %d rungs, got %d", PREDICT_LADDER_MAX_RUNGS, n);
+        return -1;
+    }
+    for (int k = 0; k < n; k++) {
+        if (nodes[k] < 5 || (k > 0 && nodes[k] <= nodes[k - 1])) {
+            snprintf(why, why_len, "ladder nodes must be increasing and at least 5 (rung %d: %d)", k + 1, nodes[k]);
+            return -1;
+        }
+        rod_scene s = *sc;
+        s.nodes = nodes[k];
+        rod_predict_opts o = rod_predict_opts_default();
+        o.adaptive = adaptive;
+        o.on_sample = stop_if_cancelled;
+        o.user = (void *)cancel;
+        rod_prediction p;
+        char err[256] = "";
+        rod_status st = rod_predict(&s, &o, &p, err, sizeof err);
+        if (cancel && atomic_load(cancel)) {
+            snprintf(why, why_len, "cancelled at ladder rung N = %d", nodes[k]);
+            return -1;
+        }
+        if (st != ROD_OK) {
+            snprintf(why, why_len, "ladder rung N = %d: %s", nodes[k], err);
+            return -1;
+        }
+        if (!p.snapped) {
+            snprintf(why, why_len, "ladder rung N = %d: no snap up to Delta W = %g, no error to estimate", nodes[k],
+                     sc->shear_max);
+            return -1;
+        }
+        predict_ladder_rung *r = &out[k];
+        memset(r, 0, sizeof *r);
+        r->nodes = nodes[k];
+        r->dt = s.dt;
+        r->adaptive = adaptive;
+        r->snapped = 1;
+        r->snap_dw = p.snap_dw;
+        r->asymmetric = p.asymmetric;
+        r->wall_s = p.wall_s;
+        r->est_error = -1.0;
+        if (progress) progress(user, r, k, n);
+    }
+    predict_ladder_estimate_errors(out, n);
+    return 0;
+}
+
+int predict_ladder_choose(const predict_ladder_rung *r, int n, double target_error)
+{
+    int best = -1, finest = n - 1;
+    for (int k = 0; k < n; k++) {
+        if (r[k].est_error >= 0.0 && r[k].est_error <= target_error && (best < 0 || r[k].wall_s < r[best].wall_s))
+            best = k;
+    }
+    return best >= 0 ? best : finest;
+}

@@ -1,0 +1,520 @@
+/* trial_replay.c: replay of a recording, stored or outside (see trial_replay.h). */
+#include "trial_replay.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <jansson.h>
+
+#include "snap_detect.h"
+#include "trial_config_text.h"
+#include "trial_record.h"
+#include "trial_specimen.h"
+#include "vision.h"
+
+#define REPLAY_RAILS_MAX 10000000 /* readings in a rails CSV */
+#define REPLAY_SHEAR_START_MM 0.05
+
+typedef struct rail_reading {
+    double t, compress_mm, shear_mm;
+} rail_reading;
+
+struct trial_replay {
+    char video[RIG_PATH_MAX];
+    trial_record rec;
+    char *calib_json;
+    char *config_text;
+    int64_t source_id;
+    double source_snap_dw; /* NaN = none */
+    int64_t specimen_id;
+    store_specimen specimen; /* files: recorded when the trial is created */
+    int has_specimen;
+    /* A stored trial's frame samples. */
+    store_sample *smp;
+    size_t ns, next;
+    /* An outside recording's rail readings. */
+    rail_reading *rails;
+    size_t nr, at;
+    double fps, t_offset;
+    double t_check, t_shear, t_return; /* NaN = none */
+    long frames_total;
+    int64_t new_id;
+};
+
+void trial_replay_free(trial_replay *r)
+{
+    if (!r) return;
+    free(r->calib_json);
+    free(r->config_text);
+    free(r->smp);
+    free(r->rails);
+    free(r);
+}
+
+int64_t trial_replay_source(const trial_replay *r) { return r->source_id; }
+long trial_replay_frame_count(const trial_replay *r) { return r->frames_total; }
+const char *trial_replay_video(const trial_replay *r) { return r->video; }
+
+static trial_replay *replay_new(char *why, size_t why_len)
+{
+    trial_replay *r = calloc(1, sizeof *r);
+    if (!r) {
+        snprintf(why, why_len, "out of memory");
+        return NULL;
+    }
+    r->source_snap_dw = NAN;
+    r->t_check = r->t_shear = r->t_return = NAN;
+    r->frames_total = -1;
+    return r;
+}
+
+int trial_replay_from_trial(store *st, int64_t source_id, const char *video, trial_replay **out, char *why,
+                            size_t why_len)
+{
+    *out = NULL;
+    trial_replay *r = replay_new(why, why_len);
+    if (!r) return -1;
+    store_trial src;
+    char *config = NULL;
+    if (store_trial_get(st, source_id, &src, why, why_len) != STORE_OK ||
+        store_trial_texts(st, source_id, &config, &r->calib_json, why, why_len) != STORE_OK)
+        goto fail;
+    r->source_id = source_id;
+    r->specimen_id = src.specimen_id;
+    if (src.snapped) r->source_snap_dw = src.snap_dw_measured;
+    if (!r->calib_json) {
+        snprintf(why, why_len, "trial %lld has no calibration record to replay with", (long long)source_id);
+        goto fail;
+    }
+    if (trial_record_parse(r->calib_json, &r->rec, why, why_len)) goto fail;
+    if (!video || !*video) video = src.video_path;
+    if (!*video) {
+        snprintf(why, why_len, "trial %lld has no video to replay", (long long)source_id);
+        goto fail;
+    }
+    snprintf(r->video, sizeof r->video, "%s", video);
+    size_t tl = (config ? strlen(config) : 0) + 64;
+    r->config_text = malloc(tl);
+    if (!r->config_text) {
+        snprintf(why, why_len, "out of memory");
+        goto fail;
+    }
+    snprintf(r->config_text, tl, "%s# replay of trial %lld\n", config ? config : "", (long long)source_id);
+    if (store_samples_get(st, source_id, &r->smp, &r->ns, why, why_len) != STORE_OK) goto fail;
+    store_events_state_times(st, source_id, &r->t_check, &r->t_shear, &r->t_return);
+    free(config);
+    *out = r;
+    return 0;
+fail:
+    free(config);
+    trial_replay_free(r);
+    return -1;
+}
+
+/* Reads the rails CSV: t_s,compress_mm,shear_mm per line; an optional header line, '#' comments
+ * and blank lines; t strictly increasing; at least two readings. */
+static int read_rails(trial_replay *r, const char *path, char *why, size_t why_len)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        snprintf(why, why_len, "rails CSV %.300s: %s", path, strerror(errno));
+        return -1;
+    }
+    size_t cap = 0;
+    char line[512];
+    long lineno = 0;
+    int rc = -1, seen_header = 0;
+    while (fgets(line, sizeof line, f)) {
+        lineno++;
+        char *p = line;
+        while (*p == ' ' || *p == '\t') p++;
+        if (*p == '#' || *p == '\n' || *p == '\r' || !*p) continue;
+        double v[3];
+        char *q = p;
+        int k = 0, bad = 0;
+        for (; k < 3 && !bad; k++) {
+            char *e;
+            errno = 0;
+            v[k] = strtod(q, &e);
+            if (e == q || errno || !isfinite(v[k])) {
+                bad = 1;
+                break;
+            }
+            q = e;
+            while (*q == ' ' || *q == '\t') q++;
+            if (k < 2 && *q++ != ',') bad = 1;
+        }
+        if (bad && k == 0 && r->nr == 0 && !seen_header) { /* a header line */
+            seen_header = 1;
+            continue;
+        }
+        while (*q == ' ' || *q == '\t' || *q == '\r' || *q == '\n') q++;
+        if (bad || *q) {
+            snprintf(why, why_len, "rails CSV %.300s line %ld: expected t_s,compress_mm,shear_mm (three finite numbers)",
+                     path, lineno);
+            goto out;
+        }
+        if (r->nr > 0 && !(v[0] > r->rails[r->nr - 1].t)) {
+            snprintf(why, why_len, "rails CSV %.300s line %ld: t_s must increase (%.9g after %.9g)", path, lineno, v[0],
+                     r->rails[r->nr - 1].t);
+            goto out;
+        }
+        if (r->nr == cap) {
+            size_t nc = cap ? 2 * cap : 1024;
+            rail_reading *a = nc <= REPLAY_RAILS_MAX ? realloc(r->rails, nc * sizeof *a) : NULL;
+            if (!a) {
+                snprintf(why, why_len, "rails CSV %.300s: %s", path,
+                         nc > REPLAY_RAILS_MAX ? "too many readings" : "out of memory");
+                goto out;
+            }
+            r->rails = a;
+            cap = nc;
+        }
+        r->rails[r->nr++] = (rail_reading){v[0], v[1], v[2]};
+    }
+    if (ferror(f)) {
+        snprintf(why, why_len, "rails CSV %.300s: read error", path);
+        goto out;
+    }
+    if (r->nr < 2) {
+        snprintf(why, why_len, "rails CSV %.300s: needs at least two readings (t_s,compress_mm,shear_mm)", path);
+        goto out;
+    }
+    rc = 0;
+out:
+    fclose(f);
+    return rc;
+}
+
+/* Shearing: from the first reading off the first shear position to the reading of largest Delta W. */
+static void shear_window(trial_replay *r)
+{
+    const rig_calibration *c = &r->rec.calib;
+    size_t k0 = r->nr, kmax = 0;
+    double best = -INFINITY;
+    for (size_t k = 0; k < r->nr; k++) {
+        if (k0 == r->nr && fabs(r->rails[k].shear_mm - r->rails[0].shear_mm) > REPLAY_SHEAR_START_MM) k0 = k;
+        double dw = rig_calib_dw(c, r->rec.length_m, r->rails[k].shear_mm);
+        if (dw > best) {
+            best = dw;
+            kmax = k;
+        }
+    }
+    if (k0 < r->nr && kmax > k0) {
+        r->t_check = r->t_shear = r->rails[k0 - (k0 > 0)].t;
+        r->t_return = r->rails[kmax].t;
+    }
+}
+
+int trial_replay_from_files(const rig_config *cfg, trial_replay **out, char *why, size_t why_len)
+{
+    *out = NULL;
+    if (cfg->mode != RIG_MODE_REPLAY || !cfg->replay.video[0] || !cfg->replay.rails[0] || !cfg->camera.calibration[0]) {
+        snprintf(why, why_len, "a replay of files needs a replay-mode rig file with replay.video, replay.rails and "
+                               "camera.calibration");
+        return -1;
+    }
+    trial_replay *r = replay_new(why, why_len);
+    if (!r) return -1;
+    vis_error ve = {0};
+    vis_source *vs = NULL;
+    vis_frame *frame = NULL;
+    json_t *root = NULL;
+    vis_calib cal;
+    if (vis_calib_load(&cal, cfg->camera.calibration, &ve) != VIS_OK) {
+        snprintf(why, why_len, "camera calibration %.300s: %s", cfg->camera.calibration, ve.message);
+        goto fail;
+    }
+    snprintf(r->video, sizeof r->video, "%s", cfg->replay.video);
+    vs = vis_source_open_video(r->video, &ve);
+    frame = vis_frame_alloc(16, 16, 1, &ve);
+    if (!vs || !frame) {
+        snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
+        goto fail;
+    }
+    if (vis_source_read(vs, frame, NULL, &ve) != VIS_OK) {
+        snprintf(why, why_len, "video %.300s: no first frame: %s", r->video, ve.message);
+        goto fail;
+    }
+    r->frames_total = vis_source_frame_count(vs);
+    r->fps = vis_source_fps(vs);
+    if (!(r->fps > 0)) r->fps = cfg->camera.fps;
+    if (!(r->fps > 0 && isfinite(r->fps))) {
+        snprintf(why, why_len, "video %.300s does not give its frame rate; set camera.fps", r->video);
+        goto fail;
+    }
+    /* The record: the rig file's calibration and detection, the whole frame as the region. */
+    trial_roi roi = {0, 0, vis_frame_width(frame), vis_frame_height(frame)};
+    char *rec = trial_record_json(cfg, &cal, roi, why, why_len);
+    json_error_t je;
+    root = rec ? json_loads(rec, 0, &je) : NULL;
+    free(rec);
+    if (!root) goto fail;
+    json_object_set_new(root, "fps", json_real(r->fps));
+    r->calib_json = json_dumps(root, JSON_COMPACT);
+    if (!r->calib_json) {
+        snprintf(why, why_len, "out of memory");
+        goto fail;
+    }
+    if (trial_record_parse(r->calib_json, &r->rec, why, why_len)) goto fail;
+    r->t_offset = r->rec.calib.camera_time_offset_s;
+    if (read_rails(r, cfg->replay.rails, why, why_len)) goto fail;
+    shear_window(r);
+    r->config_text = trial_config_text(cfg, NULL);
+    if (!r->config_text) {
+        snprintf(why, why_len, "out of memory");
+        goto fail;
+    }
+    trial_specimen_from_config(cfg, &r->specimen);
+    r->has_specimen = 1;
+    json_decref(root);
+    vis_frame_free(frame);
+    vis_source_close(vs);
+    *out = r;
+    return 0;
+fail:
+    json_decref(root);
+    vis_frame_free(frame);
+    if (vs) vis_source_close(vs);
+    trial_replay_free(r);
+    return -1;
+}
+
+int trial_replay_create(trial_replay *r, store *st, const char *note, int64_t *new_id, char *why, size_t why_len)
+{
+    *new_id = 0;
+    if (r->has_specimen && store_specimen_upsert(st, &r->specimen, &r->specimen_id, why, why_len) != STORE_OK)
+        return -1;
+    size_t tl = strlen(r->config_text) + (note ? strlen(note) : 0) + 16;
+    char *text = malloc(tl);
+    if (!text) {
+        snprintf(why, why_len, "out of memory");
+        return -1;
+    }
+    snprintf(text, tl, "%s%s%s%s", r->config_text, note && *note ? "# note: " : "", note && *note ? note : "",
+             note && *note ? "\n" : "");
+    store_trial_def def = store_trial_def_default();
+    def.mode = STORE_MODE_REPLAY;
+    def.config_text = text;
+    def.calibration_json = r->calib_json;
+    def.specimen_id = r->specimen_id;
+    def.source_trial_id = r->source_id;
+    def.video_path = r->video;
+    def.created_wall_s = store_wall_now();
+    store_err e = store_trial_create(st, &def, new_id, why, why_len);
+    free(text);
+    if (e != STORE_OK) return -1;
+    char w[256];
+    store_trial_set_status(st, *new_id, STORE_STATUS_RUNNING, NULL, store_wall_now(), w, sizeof w);
+    r->new_id = *new_id;
+    return 0;
+}
+
+static void add_event(store *st, int64_t id, double t, store_event_kind kind, const char *msg)
+{
+    store_event ev;
+    memset(&ev, 0, sizeof ev);
+    ev.trial_id = id;
+    ev.t_s = t;
+    ev.wall_s = store_wall_now();
+    ev.kind = kind;
+    snprintf(ev.state, sizeof ev.state, "replay");
+    snprintf(ev.message, sizeof ev.message, "%s", msg);
+    char why[256];
+    store_event_append(st, &ev, why, sizeof why);
+}
+
+/* Frame f's rail positions into x (t_s, compress_mm, shear_mm, dl, dw). 0 = found, 1 = the
+ * recording has none for it (outside files' readings), -1 = error with why. */
+static int frame_rails(trial_replay *r, long f, store_sample *x, char *why, size_t why_len)
+{
+    if (r->smp) {
+        while (r->next < r->ns && !(r->smp[r->next].kind == STORE_SAMPLE_FRAME && r->smp[r->next].frame >= f))
+            r->next++;
+        if (r->next >= r->ns || r->smp[r->next].frame != f) {
+            snprintf(why, why_len, "frame %ld of the video has no recorded rail positions", f);
+            return -1;
+        }
+        const store_sample *s = &r->smp[r->next];
+        x->t_s = s->t_s;
+        x->compress_mm = s->compress_mm;
+        x->shear_mm = s->shear_mm;
+        x->dl = s->dl;
+        x->dw = s->dw;
+        return 0;
+    }
+    const double t = (double)f / r->fps + r->t_offset;
+    const rail_reading *g = r->rails;
+    if (t < g[0].t || t > g[r->nr - 1].t) return 1;
+    while (r->at + 2 < r->nr && g[r->at + 1].t < t) r->at++;
+    const size_t k = r->at;
+    const double w = (t - g[k].t) / (g[k + 1].t - g[k].t);
+    x->t_s = t;
+    x->compress_mm = g[k].compress_mm + w * (g[k + 1].compress_mm - g[k].compress_mm);
+    x->shear_mm = g[k].shear_mm + w * (g[k + 1].shear_mm - g[k].shear_mm);
+    x->dl = rig_calib_dl(&r->rec.calib, r->rec.length_m, x->compress_mm);
+    x->dw = rig_calib_dw(&r->rec.calib, r->rec.length_m, x->shear_mm);
+    return 0;
+}
+
+int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
+                         void (*progress)(void *u, long frame, long total), void *u, trial_result *res, char *why,
+                         size_t why_len)
+{
+    memset(res, 0, sizeof *res);
+    snprintf(res->regime, sizeof res->regime, "no snap");
+    const int64_t id = r->new_id;
+    int rc = -1, aborted = 0;
+    vis_source *vs = NULL;
+    vis_tracker *trk = NULL;
+    vis_frame *frame = NULL;
+    store_samples *w = NULL;
+    char w2[256];
+    if (!id) {
+        snprintf(why, why_len, "replay: no trial was created");
+        goto done;
+    }
+    vis_error ve = {0};
+    vs = vis_source_open_video(r->video, &ve);
+    if (!vs) {
+        snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
+        goto fail;
+    }
+    const trial_record *rec = &r->rec;
+    vis_calib cal;
+    trial_record_video_calib(rec, &cal);
+    vis_track_params tp = vis_track_params_default();
+    tp.length_mm = rec->length_m * 1000.0;
+    trk = vis_tracker_create(&tp, &cal, &ve);
+    frame = vis_frame_alloc(16, 16, 1, &ve);
+    if (!trk || !frame) {
+        snprintf(why, why_len, "tracker: %s", ve.message);
+        goto fail;
+    }
+    if (store_samples_begin(st, id, NULL, &w, why, why_len) != STORE_OK) goto fail;
+    snap_detect det;
+    snap_detect_init(&det, &rec->snap);
+    long total = vis_source_frame_count(vs), skipped = 0;
+    int reset_done = 0;
+    for (long f = 0;; f++) {
+        if (cancel && atomic_load(cancel)) {
+            snprintf(why, why_len, "replay aborted at frame %ld", f);
+            aborted = 1;
+            goto fail;
+        }
+        vis_status s = vis_source_read(vs, frame, NULL, &ve);
+        if (s == VIS_ERR_END) break;
+        if (s != VIS_OK) {
+            snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
+            goto fail;
+        }
+        store_sample x = store_sample_default();
+        int fr = frame_rails(r, f, &x, why, why_len);
+        if (fr < 0) goto fail;
+        if (fr > 0) {
+            skipped++;
+            continue;
+        }
+        if (!reset_done && isfinite(r->t_check) && x.t_s >= r->t_check) {
+            vis_tracker_reset(trk);
+            reset_done = 1;
+        }
+        vis_measure m;
+        if (vis_tracker_process(trk, frame, x.dw * rec->length_m * 1000.0, &m, &ve) != VIS_OK) {
+            snprintf(why, why_len, "tracker: %s", ve.message);
+            goto fail;
+        }
+        int measured = m.reason == VIS_REASON_NONE && m.quality >= rec->min_quality && isfinite(m.dz) &&
+                       isfinite(m.a);
+        x.kind = STORE_SAMPLE_FRAME;
+        x.frame = f;
+        x.quality = isfinite(m.quality) ? m.quality : 0.0;
+        if (measured) {
+            x.dz = m.dz;
+            x.a = rig_calib_a_sign(&rec->calib) * m.a;
+            res->measured_frames++;
+        } else {
+            snprintf(x.reason, sizeof x.reason, "%s",
+                     m.reason == VIS_REASON_NONE ? "low quality" : vis_reason_str(m.reason));
+        }
+        if (store_samples_add(w, &x, why, why_len) != STORE_OK) goto fail;
+        res->frames++;
+        int in_shear = isfinite(r->t_shear) ? (x.t_s >= r->t_shear && (!isfinite(r->t_return) || x.t_s < r->t_return))
+                                            : 1;
+        if (in_shear) snap_detect_add(&det, f, x.t_s, x.dw, x.dz, x.a, measured);
+        res->duration_s = x.t_s;
+        if (progress && f % 50 == 0) progress(u, f, total);
+    }
+    if (store_samples_end(w, why, why_len) != STORE_OK) {
+        w = NULL;
+        goto fail;
+    }
+    w = NULL;
+    if (res->frames == 0) {
+        snprintf(why, why_len, "no frame of %.300s falls within the rail readings (check "
+                               "calibration.camera_time_offset_s)", r->video);
+        goto fail;
+    }
+    res->snapped = snap_detect_snapped(&det);
+    res->snap_dw = res->snapped ? snap_detect_dw(&det) : 0.0;
+    res->asymmetric = snap_detect_asymmetric(&det);
+    res->peak_abs_a = det.peak_abs_a;
+    snprintf(res->regime, sizeof res->regime, "%s", snap_detect_regime(&det));
+    store_regime reg = trial_regime_of(res->snapped, res->snapped, res->asymmetric);
+    store_trial_set_result(st, id, res->snapped, res->snapped ? res->snap_dw : NAN, reg, w2, sizeof w2);
+    char msg[400];
+    if (r->source_id)
+        snprintf(msg, sizeof msg, "replayed %ld frames of trial %lld: %s at Delta W = %.5f (source: %.5f)", res->frames,
+                 (long long)r->source_id, res->regime, res->snap_dw, r->source_snap_dw);
+    else
+        snprintf(msg, sizeof msg, "replayed %ld frames of %.200s (%ld outside the rail readings, skipped): %s at "
+                 "Delta W = %.5f", res->frames, r->video, skipped, res->regime, res->snap_dw);
+    add_event(st, id, res->duration_s, STORE_EVENT_INFO, msg);
+    store_trial_set_status(st, id, STORE_STATUS_DONE, NULL, store_wall_now(), w2, sizeof w2);
+    res->final = TRIAL_DONE;
+    rc = 0;
+    goto done;
+fail:
+    if (w) {
+        store_samples_end(w, w2, sizeof w2);
+        w = NULL;
+    }
+    if (id) {
+        add_event(st, id, NAN, aborted ? STORE_EVENT_INFO : STORE_EVENT_FAULT, why);
+        store_trial_set_status(st, id, aborted ? STORE_STATUS_ABORTED : STORE_STATUS_FAILED, why, store_wall_now(), w2,
+                               sizeof w2);
+    }
+    res->final = aborted ? TRIAL_ABORTED : TRIAL_FAILED;
+    snprintf(res->reason, sizeof res->reason, "%s", why);
+done:
+    vis_frame_free(frame);
+    vis_tracker_free(trk);
+    if (vs) vis_source_close(vs);
+    return rc;
+}
+
+int trial_replay_prepare(store *st, const rig_config *cfg, int64_t source, const char *video, trial_replay **out,
+                         char *why, size_t why_len)
+{
+    *out = NULL;
+    if (source > 0) return trial_replay_from_trial(st, source, video, out, why, why_len);
+    if (cfg && cfg->replay.source_trial > 0)
+        return trial_replay_from_trial(st, cfg->replay.source_trial, cfg->replay.video[0] ? cfg->replay.video : NULL,
+                                       out, why, why_len);
+    if (cfg && cfg->replay.video[0]) return trial_replay_from_files(cfg, out, why, why_len);
+    snprintf(why, why_len, "which recording? give a trial id, or a replay rig file with [replay] source_trial, or "
+                           "replay.video and replay.rails");
+    return -1;
+}
+
+int trial_replay_run(trial_replay *r, store *st, const char *note, void (*progress)(void *u, long frame, long total),
+                     void *u, int64_t *new_id, trial_result *res, char *why, size_t why_len)
+{
+    memset(res, 0, sizeof *res);
+    snprintf(res->regime, sizeof res->regime, "no snap");
+    if (trial_replay_create(r, st, note, new_id, why, why_len)) return -1;
+    return trial_replay_execute(r, st, NULL, progress, u, res, why, why_len);
+}

@@ -1,0 +1,618 @@
+/* trial_runner.c: the trial state machine and its acquisition loop (see trial_runner.h). */
+#include "trial_runner.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "rail_pair.h"
+
+/* Rail calls in a live trial go under the poller's lock (the rails are not thread-safe). */
+static void rails_lock(trial_runner *tr)
+{
+    if (tr->poller) trial_rail_poller_lock(tr->poller);
+}
+static void rails_unlock(trial_runner *tr)
+{
+    if (tr->poller) trial_rail_poller_unlock(tr->poller);
+}
+static rail_err r_move(trial_runner *tr, rail *r, double target, double speed)
+{
+    rails_lock(tr);
+    rail_err e = rail_move_abs(r, target, speed);
+    rails_unlock(tr);
+    return e;
+}
+static rail_err r_stop(trial_runner *tr, rail *r)
+{
+    rails_lock(tr);
+    rail_err e = rail_stop(r);
+    rails_unlock(tr);
+    return e;
+}
+static void r_estop_pair(trial_runner *tr)
+{
+    rails_lock(tr);
+    rail_pair_estop(tr->compress, tr->shear);
+    rails_unlock(tr);
+}
+
+void trial_runner_set_live(trial_runner *tr, trial_capture *capture, trial_rail_poller *poller)
+{
+    tr->capture = capture;
+    tr->poller = poller;
+}
+
+static const char *const state_names[TRIAL_STATE_COUNT] = {
+    "idle", "compressing", "holding", "checking", "shearing", "snapped", "returning", "done", "aborted",
+    "failed",
+};
+
+const char *trial_state_name(trial_state s)
+{
+    return (s >= 0 && s < TRIAL_STATE_COUNT) ? state_names[s] : "unknown";
+}
+
+int trial_state_final(trial_state s) { return s == TRIAL_DONE || s == TRIAL_ABORTED || s == TRIAL_FAILED; }
+
+/* Abort protocol: 0 none, 1 reason being written, 2 requested (reason readable). */
+void trial_runner_abort(trial_runner *tr, const char *reason)
+{
+    int expected = 0;
+    if (!atomic_compare_exchange_strong(&tr->abort_requested, &expected, 1)) return;
+    snprintf(tr->abort_reason, sizeof tr->abort_reason, "%s", reason && *reason ? reason : "abort requested");
+    atomic_store(&tr->abort_requested, 2);
+}
+
+int trial_runner_init(trial_runner *tr, const trial_plan *plan, rail *compress, rail *shear, trial_camera cam,
+                      vis_tracker *tracker, trial_sink sink, char *why, size_t why_len)
+{
+    memset(tr, 0, sizeof *tr);
+    if (!plan || !compress || !shear || !cam.grab || !tracker) {
+        snprintf(why, why_len, "trial runner: missing rail, camera or tracker");
+        return -1;
+    }
+    if (plan && plan->torque_witness && !(plan->load_jump > 0.0 && isfinite(plan->load_jump))) {
+        snprintf(why, why_len, "trial runner: the load witness needs a positive load_jump (got %g)", plan->load_jump);
+        return -1;
+    }
+    if (!(plan->fps > 0.0) || !(plan->compress_speed_mm_s > 0.0) || !(plan->return_speed_mm_s > 0.0) ||
+        !(plan->scene.length > 0.0) || !(plan->scene.shear_rate > 0.0)) {
+        snprintf(why, why_len, "trial runner: fps, speeds, length and shear rate must be positive");
+        return -1;
+    }
+    tr->plan = *plan;
+    tr->compress = compress;
+    tr->shear = shear;
+    tr->cam = cam;
+    tr->tracker = tracker;
+    tr->sink = sink;
+    atomic_init(&tr->abort_requested, 0);
+    atomic_init(&tr->state, TRIAL_IDLE);
+    vis_error ve;
+    tr->frame = vis_frame_alloc(16, 16, 1, &ve);
+    if (!tr->frame) {
+        snprintf(why, why_len, "trial runner: %s", ve.message);
+        return -1;
+    }
+    return 0;
+}
+
+void trial_runner_free(trial_runner *tr)
+{
+    vis_frame_free(tr->frame);
+    tr->frame = NULL;
+}
+
+/* The loop's working state. */
+typedef struct run_ctx {
+    trial_runner *tr;
+    trial_result *res;
+    rail_clock clock;
+    double t0;            /* rail clock at the start */
+    double t;             /* trial time of this iteration */
+    double t_state;       /* trial time the current state began */
+    double state_limit;   /* s the current state may last */
+    trial_state st;
+    double start_compress_mm;
+    double target_compress_mm, target_shear_mm;
+    double last_reading_c, last_reading_s;
+    double check_sum;
+    int check_n;
+    double t_snap;
+    rail_status sc, ss;
+    /* The load witness (plan.torque_witness), over the fresh shear readings of this shear. */
+    int w_n;              /* readings with a load seen */
+    double w_prev, w_prev_dw, w_min, w_max;
+    int w_fired;          /* the jump was seen */
+    double w_dw;          /* Delta W of the reading before the jump */
+    double w_until;       /* rail-clock time (trial time) after which a late witness no longer counts */
+    int vision_noted;     /* the camera's snap has been handled */
+    double t_poll;        /* rail-clock time of the poll that gave sc, ss */
+    double t_det_frame;   /* trial time of the frame in which the camera saw the snap (NaN: none) */
+    double t_stop_cmd;    /* trial time the shear stop command returned (NaN: none) */
+    int stand_noted;      /* the snap-to-stop latency has been reported */
+    int w_warned;         /* "no load" warning given */
+} run_ctx;
+
+static int emit_event(run_ctx *c, const char *kind, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static int emit_event(run_ctx *c, const char *kind, const char *fmt, ...)
+{
+    char msg[320];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    if (c->tr->sink.event) return c->tr->sink.event(c->tr->sink.user, c->t, kind, msg);
+    return 0;
+}
+
+static void enter(run_ctx *c, trial_state s, double limit_s, const char *why)
+{
+    c->st = s;
+    c->t_state = c->t;
+    c->state_limit = limit_s;
+    atomic_store(&c->tr->state, s);
+    if (c->tr->sink.state) c->tr->sink.state(c->tr->sink.user, s, c->t, why ? why : "");
+}
+
+#define RUNNER_STOP_WAIT_S 10.0 /* rail clock time an aborted trial waits for the rails to stand */
+
+/* After a stop: waits on the rail clock (which a mock rig's virtual clock needs to reach the end
+ * of the deceleration) until neither rail is moving or homing, at most RUNNER_STOP_WAIT_S, so the
+ * trial ends with the rails standing and the next one finds them idle. 0 = standing. */
+static int wait_rails_standing(run_ctx *c)
+{
+    const double t_end = rail_clock_now(c->clock) + RUNNER_STOP_WAIT_S;
+    for (int k = 0; k < 100000; k++) {
+        rail_status sc, ss;
+        char why[128];
+        double tp;
+        if (c->tr->poller) {
+            if (trial_rail_poller_latest(c->tr->poller, &sc, &ss, &tp, why, sizeof why) != RAIL_OK) return -1;
+        } else if (rail_pair_poll(c->tr->compress, c->tr->shear, &sc, &ss, why, sizeof why) != RAIL_OK)
+            return -1;
+        int moving = sc.state == RAIL_STATE_MOVING || sc.state == RAIL_STATE_HOMING ||
+                     ss.state == RAIL_STATE_MOVING || ss.state == RAIL_STATE_HOMING;
+        if (!moving) return 0;
+        if (rail_clock_now(c->clock) >= t_end) return -1;
+        rail_clock_sleep(c->clock, 0.01);
+    }
+    return -1;
+}
+
+/* Ends the trial: stops both rails (estop on failure; an abort waits for them to stand), records
+ * the reason. */
+static void finish(run_ctx *c, trial_state s, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void finish(run_ctx *c, trial_state s, const char *fmt, ...)
+{
+    int still_moving = 0;
+    if (s == TRIAL_FAILED) {
+        /* The fault is recorded when it is known, before the stops (over a dead link each stop
+         * waits out its write timeout). */
+        char reason[sizeof c->res->reason] = "";
+        if (fmt) {
+            va_list ap;
+            va_start(ap, fmt);
+            vsnprintf(reason, sizeof reason, fmt, ap);
+            va_end(ap);
+        }
+        emit_event(c, "fault", "%s", reason);
+        r_estop_pair(c->tr);
+        snprintf(c->res->reason, sizeof c->res->reason, "%s", reason);
+        c->res->final = s;
+        enter(c, s, 0.0, c->res->reason);
+        return;
+    } else if (s == TRIAL_ABORTED) {
+        r_stop(c->tr, c->tr->compress);
+        r_stop(c->tr, c->tr->shear);
+        still_moving = wait_rails_standing(c) != 0;
+    }
+    c->res->reason[0] = '\0';
+    if (fmt) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(c->res->reason, sizeof c->res->reason, fmt, ap);
+        va_end(ap);
+    }
+    if (still_moving) {
+        size_t n = strlen(c->res->reason);
+        snprintf(c->res->reason + n, sizeof c->res->reason - n, " (rails not standing %.0f s after the stop)",
+                 RUNNER_STOP_WAIT_S);
+    }
+    c->res->final = s;
+    if (s != TRIAL_DONE) emit_event(c, s == TRIAL_FAILED ? "fault" : "info", "%s", c->res->reason);
+    enter(c, s, 0.0, c->res->reason);
+}
+
+static int rail_idle_at(const rail_status *st, double target)
+{
+    return st->state == RAIL_STATE_IDLE && fabs(st->position_mm - target) < 0.05;
+}
+
+/* Position of a rail at time t (rail clock) from its latest status. A fresh reading is the
+ * position at its t_s; an extrapolated status (rail_status_get) is already the position at the
+ * poll time t_poll, so only the rest of the way is added. */
+static double position_at(const rail_status *st, double t_poll, double t)
+{
+    if (st->state != RAIL_STATE_MOVING && st->state != RAIL_STATE_HOMING) return st->position_mm;
+    return st->position_mm + st->velocity_mm_s * (t - (st->extrapolated ? t_poll : st->t_s));
+}
+
+static int command(run_ctx *c, rail *r, rail_err e, const char *what)
+{
+    if (e == RAIL_OK) return 0;
+    finish(c, TRIAL_FAILED, "%s refused: %s", what, rail_last_error(r));
+    return -1;
+}
+
+/* Enters snapped: stop the shear. Returns 1 when the stop was refused (trial failed). */
+static int stop_for_snap(run_ctx *c)
+{
+    if (command(c, c->tr->shear, r_stop(c->tr, c->tr->shear), "shear stop")) return 1;
+    c->t_snap = c->t;
+    c->t_stop_cmd = rail_clock_now(c->clock) - c->t0;
+    enter(c, TRIAL_SNAPPED, c->tr->plan.post_snap_s + 30.0, NULL);
+    return 0;
+}
+
+/* One fresh shear reading for the load witness (see trial_runner.h), at trial time t and Delta W
+ * dw. Returns 1 when the trial ended (the stop was refused). */
+static int witness_add(run_ctx *c, double load, double dw, double t)
+{
+    const trial_plan *p = &c->tr->plan;
+    if (c->st != TRIAL_SHEARING && !(c->st == TRIAL_SNAPPED && t <= c->w_until)) return 0;
+    if (c->w_n == 0) {
+        c->w_min = c->w_max = c->w_prev = load;
+        c->w_prev_dw = dw;
+        c->w_n = 1;
+        return 0;
+    }
+    double range = c->w_max - c->w_min, jump = fabs(load - c->w_prev);
+    int fire = !c->w_fired && c->w_n >= TRIAL_WITNESS_MIN_READINGS && jump > 0.0 && jump > p->load_jump * range;
+    double before = c->w_prev, at_dw = c->w_prev_dw;
+    c->w_min = fmin(c->w_min, load);
+    c->w_max = fmax(c->w_max, load);
+    c->w_prev = load;
+    c->w_prev_dw = dw;
+    c->w_n++;
+    if (!fire) return 0;
+    c->w_fired = 1;
+    c->w_dw = at_dw;
+    if (c->tr->det.phase != SNAP_WAITING) {
+        emit_event(c, "info",
+                   "snap seen by both witnesses: vision at Delta W = %.5f, load at Delta W = %.5f (shear load %.4g -> "
+                   "%.4g, %.2f of its range)",
+                   snap_detect_dw(&c->tr->det), at_dw, before, load, range > 0.0 ? jump / range : 0.0);
+        return 0;
+    }
+    emit_event(c, "info",
+               "load witness: the shear load jumped %.4g -> %.4g (%.2f of its range %.4g, threshold %.2f) after "
+               "Delta W = %.5f; the camera sees no snap yet",
+               before, load, range > 0.0 ? jump / range : 0.0, range, p->load_jump, at_dw);
+    if (c->st == TRIAL_SHEARING) return stop_for_snap(c);
+    return 0;
+}
+
+/* One step of the state machine after this iteration's frame. Returns 1 when the trial ended. */
+static int step(run_ctx *c, const trial_sample *smp)
+{
+    trial_runner *tr = c->tr;
+    const trial_plan *p = &tr->plan;
+    double l = p->scene.length;
+    if (c->state_limit > 0.0 && c->t - c->t_state > c->state_limit) {
+        finish(c, TRIAL_FAILED, "%s did not end within its time limit of %.0f s", trial_state_name(c->st),
+               c->state_limit);
+        return 1;
+    }
+    switch (c->st) {
+    case TRIAL_COMPRESSING:
+        if (rail_idle_at(&c->sc, c->target_compress_mm)) {
+            emit_event(c, "info", "compression reached: Delta L = %.4f (rail at %.3f mm)",
+                       rig_calib_dl(&p->calib, l, c->sc.position_mm), c->sc.position_mm);
+            enter(c, TRIAL_HOLDING, p->hold_s + 30.0, NULL);
+        }
+        return 0;
+    case TRIAL_HOLDING:
+        if (c->t - c->t_state >= p->hold_s) {
+            c->check_sum = 0.0;
+            c->check_n = 0;
+            vis_tracker_reset(tr->tracker); /* frames during the moves are not trusted */
+            enter(c, TRIAL_CHECKING, 10.0 + 10.0 / p->fps, NULL);
+        }
+        return 0;
+    case TRIAL_CHECKING:
+        if (smp->measured) {
+            c->check_sum += smp->dz;
+            c->check_n++;
+        }
+        if (c->check_n >= 5) {
+            double dz = c->check_sum / c->check_n;
+            c->res->upper_dz = dz;
+            if (!(dz > p->upper_dz_min)) {
+                finish(c, TRIAL_FAILED,
+                       "not in the upper state: the camera sees Delta Z = %.4f (needs more than %.4f); check the "
+                       "specimen and the calibration",
+                       dz, p->upper_dz_min);
+                return 1;
+            }
+            emit_event(c, "info", "upper state seen: Delta Z = %.4f", dz);
+            c->target_shear_mm = rig_calib_shear_mm(&p->calib, l, p->scene.shear_max);
+            double v = p->scene.shear_rate * 1000.0;
+            snap_detect_init(&tr->det, &p->snap);
+            if (command(c, tr->shear, r_move(tr, tr->shear, c->target_shear_mm, v), "shear move")) return 1;
+            enter(c, TRIAL_SHEARING, p->scene.shear_max / (p->scene.shear_rate / l) * 1.5 + 30.0, NULL);
+        }
+        return 0;
+    case TRIAL_SHEARING:
+        if (p->torque_witness && !c->w_warned && c->t - c->t_state > 2.0 / rail_get_params(tr->shear)->poll_hz &&
+            !c->ss.has_load) {
+            c->w_warned = 1;
+            emit_event(c, "warning", "load witness on, but the shear rail (%s) reports no load: the camera is the "
+                       "only witness", rail_driver_name(tr->shear));
+        }
+        if (tr->det.phase != SNAP_WAITING) {
+            c->vision_noted = 1;
+            c->w_until = c->t + TRIAL_WITNESS_LATE_POLLS / rail_get_params(tr->shear)->poll_hz + 2.0 / p->fps;
+            emit_event(c, "info", "snap detected at frame %ld; onset Delta W = %.5f", tr->det.detect_frame,
+                       snap_detect_dw(&tr->det));
+            c->t_det_frame = smp->t_s;
+            if (stop_for_snap(c)) return 1;
+            return 0;
+        }
+        if (rail_idle_at(&c->ss, c->target_shear_mm)) {
+            emit_event(c, "info", "shear limit reached, no snap (Delta W = %.4f)", p->scene.shear_max);
+            goto start_return;
+        }
+        return 0;
+    case TRIAL_SNAPPED:
+        if (!c->vision_noted && tr->det.phase != SNAP_WAITING) {
+            /* The load witness stopped the shear; now the camera sees the snap too. */
+            c->vision_noted = 1;
+            emit_event(c, "info",
+                       "snap seen by both witnesses: vision at Delta W = %.5f (frame %ld), load at Delta W = %.5f",
+                       snap_detect_dw(&tr->det), tr->det.detect_frame, c->w_dw);
+        }
+        if (tr->det.phase == SNAP_DONE || c->t - c->t_snap >= p->post_snap_s) goto start_return;
+        return 0;
+    case TRIAL_RETURNING:
+        if (rail_idle_at(&c->sc, c->start_compress_mm) && rail_idle_at(&c->ss, p->calib.shear_zero_mm)) {
+            finish(c, TRIAL_DONE, NULL);
+            return 1;
+        }
+        return 0;
+    default:
+        return 0;
+    }
+start_return : {
+    if (!c->stand_noted && isfinite(c->t_stop_cmd) && isfinite(c->t_det_frame)) {
+        /* The return starts before a fresh shear reading showed the rail standing: the command
+         * latency is known, the standing one is not (it would be the end of the return). */
+        c->stand_noted = 1;
+        c->res->stop_cmd_latency_s = c->t_stop_cmd - c->t_det_frame;
+        emit_event(c, "info",
+                   "snap-to-stop latency: detection frame -> stop command %.1f ms; the shear rail was not read "
+                   "standing before the return (rail poll period %.1f ms)",
+                   1e3 * c->res->stop_cmd_latency_s, 1e3 / rail_get_params(tr->shear)->poll_hz);
+    }
+    double dist = fmax(fabs(c->ss.position_mm - p->calib.shear_zero_mm),
+                       fabs(c->sc.position_mm - c->start_compress_mm));
+    /* Shear back first in the same command batch; both move at the return speed. */
+    if (command(c, tr->shear, r_move(tr, tr->shear, p->calib.shear_zero_mm, p->return_speed_mm_s),
+                "return of the shear rail"))
+        return 1;
+    if (command(c, tr->compress, r_move(tr, tr->compress, c->start_compress_mm, p->return_speed_mm_s),
+                "return of the compression rail"))
+        return 1;
+    enter(c, TRIAL_RETURNING, dist / p->return_speed_mm_s * 2.0 + 30.0, NULL);
+    return 0;
+}
+}
+
+/* The rails' statuses of this iteration: the poller's latest in a live trial, else a poll. */
+static rail_err poll_rails(run_ctx *c, char *why, size_t why_len)
+{
+    if (c->tr->poller) return trial_rail_poller_latest(c->tr->poller, &c->sc, &c->ss, &c->t_poll, why, why_len);
+    rail_err e = rail_pair_poll(c->tr->compress, c->tr->shear, &c->sc, &c->ss, why, why_len);
+    c->t_poll = rail_clock_now(c->clock);
+    return e;
+}
+
+/* After a snap stop: the first fresh shear reading that is not moving ends the snap-to-stop
+ * latency (measured from the detection frame's own time). */
+static void note_standing(run_ctx *c)
+{
+    if (c->stand_noted || !isfinite(c->t_stop_cmd) || !isfinite(c->t_det_frame)) return;
+    if (c->ss.extrapolated || c->ss.state == RAIL_STATE_MOVING || c->ss.state == RAIL_STATE_HOMING) return;
+    double t_stand = c->ss.t_s - c->t0;
+    if (t_stand < c->t_stop_cmd) return;
+    c->stand_noted = 1;
+    c->res->stop_cmd_latency_s = c->t_stop_cmd - c->t_det_frame;
+    c->res->stop_stand_latency_s = t_stand - c->t_det_frame;
+    emit_event(c, "info",
+               "snap-to-stop latency: detection frame -> stop command %.1f ms, -> shear rail standing %.1f ms "
+               "(rail poll period %.1f ms, frame period %.1f ms)",
+               1e3 * c->res->stop_cmd_latency_s, 1e3 * c->res->stop_stand_latency_s,
+               1e3 / rail_get_params(c->tr->shear)->poll_hz, 1e3 / c->tr->plan.fps);
+}
+
+void trial_runner_run(trial_runner *tr, trial_result *out)
+{
+    memset(out, 0, sizeof *out);
+    snprintf(out->regime, sizeof out->regime, "no snap");
+    const trial_plan *p = &tr->plan;
+    double l = p->scene.length;
+    run_ctx c;
+    memset(&c, 0, sizeof c);
+    c.tr = tr;
+    c.res = out;
+    c.clock = rail_get_clock(tr->compress);
+    c.t0 = rail_clock_now(c.clock);
+    c.last_reading_c = c.last_reading_s = -1.0;
+    snap_detect_init(&tr->det, &p->snap);
+    char why[256] = "";
+
+    c.t_det_frame = c.t_stop_cmd = NAN;
+    out->stop_cmd_latency_s = out->stop_stand_latency_s = NAN;
+    /* Where the rails are, and the preconditions. */
+    if (poll_rails(&c, why, sizeof why) != RAIL_OK) {
+        finish(&c, TRIAL_FAILED, "rails not ready: %s", why);
+        goto end;
+    }
+    if (c.sc.state != RAIL_STATE_IDLE || c.ss.state != RAIL_STATE_IDLE) {
+        finish(&c, TRIAL_FAILED, "rails not idle (compression %s, shear %s)", rail_state_name(c.sc.state),
+               rail_state_name(c.ss.state));
+        goto end;
+    }
+    if (fabs(c.ss.position_mm - p->calib.shear_zero_mm) > 0.5) {
+        finish(&c, TRIAL_FAILED, "the shear rail is at %.3f mm, not at its zero %.3f mm: return it first",
+               c.ss.position_mm, p->calib.shear_zero_mm);
+        goto end;
+    }
+    c.start_compress_mm = c.sc.position_mm;
+    c.target_compress_mm = rig_calib_compress_mm(&p->calib, l, p->scene.compression);
+    emit_event(&c, "info", "start: compression rail at %.3f mm (Delta L = %.4f), target %.3f mm (Delta L = %.4f)",
+               c.sc.position_mm, rig_calib_dl(&p->calib, l, c.sc.position_mm), c.target_compress_mm,
+               p->scene.compression);
+    if (r_move(tr, tr->compress, c.target_compress_mm, p->compress_speed_mm_s) != RAIL_OK) {
+        finish(&c, TRIAL_FAILED, "compression move refused: %s", rail_last_error(tr->compress));
+        goto end;
+    }
+    enter(&c, TRIAL_COMPRESSING,
+          fabs(c.target_compress_mm - c.start_compress_mm) / p->compress_speed_mm_s * 2.0 + 30.0, NULL);
+
+    double frame_dt = 1.0 / p->fps, t_next = c.t0;
+    for (long frame = 0;; frame++) {
+        if (!p->paced_by_camera && !tr->capture) {
+            t_next += frame_dt;
+            double now = rail_clock_now(c.clock);
+            if (t_next > now) rail_clock_sleep(c.clock, t_next - now);
+        }
+        if (atomic_load(&tr->abort_requested) == 2) {
+            finish(&c, TRIAL_ABORTED, "aborted in %s: %s", trial_state_name(c.st), tr->abort_reason);
+            break;
+        }
+        if (poll_rails(&c, why, sizeof why) != RAIL_OK) {
+            finish(&c, TRIAL_FAILED, "rail fault in %s: %s", trial_state_name(c.st), why);
+            break;
+        }
+        double now = rail_clock_now(c.clock), t_poll = tr->poller ? c.t_poll : now;
+        c.t = now - c.t0;
+        trial_sample smp;
+        /* Fresh rail readings (not extrapolations) are stored as they come. */
+        for (int k = 0; k < 2; k++) {
+            const rail_status *st = k ? &c.ss : &c.sc;
+            double *last = k ? &c.last_reading_s : &c.last_reading_c;
+            if (st->extrapolated || st->t_s == *last) continue;
+            *last = st->t_s;
+            memset(&smp, 0, sizeof smp);
+            smp.kind = 0;
+            smp.frame = -1;
+            smp.t_s = st->t_s - c.t0;
+            smp.compress_mm = position_at(&c.sc, t_poll, st->t_s);
+            smp.shear_mm = position_at(&c.ss, t_poll, st->t_s);
+            smp.dl = rig_calib_dl(&p->calib, l, smp.compress_mm);
+            smp.dw = rig_calib_dw(&p->calib, l, smp.shear_mm);
+            smp.reason = VIS_REASON_NONE;
+            out->rail_readings++;
+            if (tr->sink.sample && tr->sink.sample(tr->sink.user, &smp, why, sizeof why)) {
+                finish(&c, TRIAL_FAILED, "sample not stored: %s", why);
+                goto end;
+            }
+            if (k == 1 && p->torque_witness && st->has_load && isfinite(st->load) &&
+                witness_add(&c, st->load, smp.dw, smp.t_s))
+                goto end;
+        }
+        note_standing(&c);
+        /* The frame of this instant, with the rails where they are at its time. */
+        double pos_c = position_at(&c.sc, t_poll, now), pos_s = position_at(&c.ss, t_poll, now);
+        double dl = rig_calib_dl(&p->calib, l, pos_c), dw = rig_calib_dw(&p->calib, l, pos_s);
+        double t_frame = now;
+        vis_error ve = {0};
+        trial_frame_info fi;
+        memset(&fi, 0, sizeof fi);
+        fi.index = frame;
+        if (tr->capture) {
+            if (trial_capture_next(tr->capture, tr->frame, &fi, why, sizeof why)) {
+                finish(&c, TRIAL_FAILED, "%s", why);
+                break;
+            }
+            t_frame = fi.t_s;
+        } else {
+            vis_status vs = tr->cam.grab(tr->cam.ctx, now, dl, dw, tr->frame, &t_frame, &ve);
+            if (vs != VIS_OK) {
+                finish(&c, TRIAL_FAILED, "camera: %s", ve.message[0] ? ve.message : vis_status_str(vs));
+                break;
+            }
+        }
+        double t_rail = t_frame + p->calib.camera_time_offset_s;
+        pos_c = position_at(&c.sc, t_poll, t_rail);
+        pos_s = position_at(&c.ss, t_poll, t_rail);
+        memset(&smp, 0, sizeof smp);
+        smp.kind = 1;
+        smp.frame = tr->capture ? fi.index : frame;
+        smp.t_s = t_rail - c.t0;
+        smp.compress_mm = pos_c;
+        smp.shear_mm = pos_s;
+        smp.dl = rig_calib_dl(&p->calib, l, pos_c);
+        smp.dw = rig_calib_dw(&p->calib, l, pos_s);
+        if (fi.dropped || fi.skip) {
+            /* Stored with its time and positions, not tracked: the pipeline's give-way (trial_capture.h). */
+            smp.not_tracked = fi.dropped ? 2 : 1;
+            smp.reason = VIS_REASON_UNREADABLE;
+            if (fi.dropped)
+                out->dropped_frames++;
+            else
+                out->skipped_frames++;
+            out->frames++;
+            if (tr->sink.sample && tr->sink.sample(tr->sink.user, &smp, why, sizeof why)) {
+                finish(&c, TRIAL_FAILED, "sample not stored: %s", why);
+                break;
+            }
+            if (c.st == TRIAL_SHEARING || c.st == TRIAL_SNAPPED)
+                snap_detect_add(&tr->det, smp.frame, smp.t_s, smp.dw, 0.0, 0.0, 0);
+            if (step(&c, &smp)) break;
+            continue;
+        }
+        vis_measure m;
+        if (vis_tracker_process(tr->tracker, tr->frame, smp.dw * l * 1000.0, &m, &ve) != VIS_OK) {
+            finish(&c, TRIAL_FAILED, "tracker: %s", ve.message);
+            break;
+        }
+        smp.reason = m.reason;
+        smp.measured = m.reason == VIS_REASON_NONE && m.quality >= p->min_quality && isfinite(m.dz) &&
+                       isfinite(m.a);
+        if (smp.measured) {
+            smp.dz = m.dz;
+            smp.a = rig_calib_a_sign(&p->calib) * m.a;
+            out->measured_frames++;
+        }
+        smp.quality = isfinite(m.quality) ? m.quality : 0.0;
+        out->frames++;
+        if (tr->sink.sample && tr->sink.sample(tr->sink.user, &smp, why, sizeof why)) {
+            finish(&c, TRIAL_FAILED, "sample not stored: %s", why);
+            break;
+        }
+        if (!tr->capture && tr->sink.frame && tr->sink.frame(tr->sink.user, tr->frame, frame, why, sizeof why)) {
+            finish(&c, TRIAL_FAILED, "video: %s", why);
+            break;
+        }
+        if (c.st == TRIAL_SHEARING || c.st == TRIAL_SNAPPED)
+            snap_detect_add(&tr->det, frame, smp.t_s, smp.dw, smp.dz, smp.a, smp.measured);
+        if (step(&c, &smp)) break;
+    }
+end:
+    out->duration_s = rail_clock_now(c.clock) - c.t0;
+    out->vision_snapped = snap_detect_snapped(&tr->det);
+    out->load_witnessed = c.w_fired;
+    out->load_dw = c.w_fired ? c.w_dw : 0.0;
+    out->snapped = out->vision_snapped || c.w_fired;
+    out->snap_dw = out->vision_snapped ? snap_detect_dw(&tr->det) : c.w_fired ? c.w_dw : 0.0;
+    out->asymmetric = snap_detect_asymmetric(&tr->det);
+    out->peak_abs_a = tr->det.peak_abs_a;
+    /* A snap only the load witness saw has no pathway to classify. */
+    snprintf(out->regime, sizeof out->regime, "%s",
+             out->vision_snapped || !c.w_fired ? snap_detect_regime(&tr->det) : "unknown");
+    if (!trial_state_final(out->final)) out->final = TRIAL_FAILED;
+}

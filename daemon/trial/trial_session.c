@@ -1,0 +1,651 @@
+/* trial_session.c: one trial from request to stored result (see trial_session.h). */
+#include "trial_session.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <errno.h>
+#include <stdarg.h>
+#include <stdatomic.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
+
+#include "predict_ladder.h"
+#include "rod_protocol.h"
+#include "store.h"
+#include "trial_camera_setup.h"
+#include "trial_config_text.h"
+#include "trial_prediction.h"
+#include "trial_live.h"
+#include "trial_record.h"
+#include "trial_specimen.h"
+#include "trial_video.h"
+#include "twin.h"
+
+#ifndef RIBBON_VERSION
+#define RIBBON_VERSION "unknown"
+#endif
+
+struct trial_session {
+    rig_config cfg;
+    rail *compress, *shear;
+    void (*log)(const char *line);
+    store *st;              /* the trial thread's connection */
+    store_samples *writer;
+    int64_t trial_id;
+    pthread_t thread;
+    trial_prediction *prediction; /* the prediction beside the trial, once started */
+    atomic_int cancel;      /* set by abort: stops the ladder and the prediction at their next step */
+    trial_runner runner;
+    int runner_ready;
+    trial_result result;
+    trial_video *video;
+    trial_live *live;       /* rig mode: camera, capture pipeline, rail poller (trial_live.h) */
+    pthread_mutex_t lock;
+    session_status status;  /* under lock */
+    int abort_pending;      /* under lock: an abort that came before the runner existed */
+    char abort_reason[128];
+    char note[256];
+    vis_calib cal;          /* the camera calibration of this trial */
+    trial_roi roi;          /* the saved video's region */
+    int width, height;      /* frame size */
+};
+
+/* 1 when an abort arrived before the runner took over (the trial then ends before moving). */
+static int aborted_early(trial_session *s, char *why, size_t why_len)
+{
+    pthread_mutex_lock(&s->lock);
+    int a = s->abort_pending;
+    if (a) snprintf(why, why_len, "aborted before the rails moved: %s", s->abort_reason);
+    pthread_mutex_unlock(&s->lock);
+    return a;
+}
+
+static void logf_(trial_session *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void logf_(trial_session *s, const char *fmt, ...)
+{
+    char line[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    pthread_mutex_lock(&s->lock);
+    snprintf(s->status.message, sizeof s->status.message, "%.255s", line);
+    pthread_mutex_unlock(&s->lock);
+    if (s->log) {
+        char full[600];
+        snprintf(full, sizeof full, "trial %lld: %s", (long long)s->trial_id, line);
+        s->log(full);
+    }
+}
+
+static void session_event(trial_session *s, double t_s, store_event_kind kind, const char *msg)
+{
+    store_event ev;
+    memset(&ev, 0, sizeof ev);
+    ev.trial_id = s->trial_id;
+    ev.t_s = t_s;
+    ev.wall_s = store_wall_now();
+    pthread_mutex_lock(&s->lock);
+    snprintf(ev.state, sizeof ev.state, "%s", trial_state_name(s->status.state));
+    pthread_mutex_unlock(&s->lock);
+    ev.kind = kind;
+    snprintf(ev.message, sizeof ev.message, "%s", msg);
+    char why[256];
+    if (store_event_append(s->st, &ev, why, sizeof why) != STORE_OK) logf_(s, "event not stored: %s", why);
+    logf_(s, "%s", msg);
+}
+
+/* ---- the prediction's report ------------------------------------------------------------- */
+
+/* The prediction's one report (on its thread): the status the API shows, and the log. */
+static void prediction_done(void *user, const trial_prediction_report *r)
+{
+    trial_session *s = user;
+    pthread_mutex_lock(&s->lock);
+    if (r->outcome == TRIAL_PREDICTION_FAILED) s->status.prediction_failed = 1;
+    if (r->outcome == TRIAL_PREDICTION_STORED) {
+        s->status.prediction_done = 1;
+        s->status.snap_dw_predicted = r->snap_dw;
+        snprintf(s->status.regime_predicted, sizeof s->status.regime_predicted, "%s", store_regime_name(r->regime));
+    }
+    pthread_mutex_unlock(&s->lock);
+    logf_(s, "%s", r->message);
+}
+
+/* ---- resolution ----------------------------------------------------------------------------- */
+
+/* Picks nodes and dt for the prediction (and the mock twin). Returns 0, or -1 with why. */
+static int choose_resolution(trial_session *s, rod_scene *sc, double *est_error, char *hash, size_t hash_len,
+                             char *why, size_t why_len)
+{
+    const rig_sim *sim = &s->cfg.sim;
+    char h[17];
+    predict_scene_hash(sc, h);
+    snprintf(hash, hash_len, "%s-v%s-%s", h, RIBBON_VERSION, sim->fast ? "fast" : "fixed");
+    *est_error = NAN;
+    if (sim->explicit_resolution) {
+        if (sim->nodes > 0) sc->nodes = sim->nodes;
+        if (sim->dt > 0) sc->dt = sim->dt;
+        return 0;
+    }
+    store_ladder_rung *cached = NULL;
+    size_t n = 0;
+    predict_ladder_rung r[PREDICT_LADDER_MAX_RUNGS];
+    int nr = 0;
+    if (store_ladder_get(s->st, hash, &cached, &n, why, why_len) == STORE_OK && n > 0) {
+        for (size_t k = 0; k < n && nr < PREDICT_LADDER_MAX_RUNGS; k++) {
+            memset(&r[nr], 0, sizeof r[nr]);
+            r[nr].nodes = cached[k].nodes;
+            r[nr].dt = cached[k].dt;
+            r[nr].adaptive = cached[k].adaptive;
+            r[nr].snap_dw = cached[k].snap_dw;
+            r[nr].est_error = isfinite(cached[k].est_error) ? cached[k].est_error : -1.0;
+            r[nr].wall_s = cached[k].wall_s;
+            nr++;
+        }
+        free(cached);
+        session_event(s, NAN, STORE_EVENT_INFO, "resolution ladder taken from the store's cache");
+    } else {
+        free(cached);
+        char msg[128];
+        snprintf(msg, sizeof msg, "computing the resolution ladder (%d rungs), once for this scene", sim->n_ladder);
+        session_event(s, NAN, STORE_EVENT_INFO, msg);
+        if (predict_ladder_compute(sc, sim->ladder_nodes, sim->n_ladder, sim->fast, r, NULL, NULL, &s->cancel, why,
+                                   why_len))
+            return -1;
+        nr = sim->n_ladder;
+        store_ladder_rung sr[PREDICT_LADDER_MAX_RUNGS];
+        for (int k = 0; k < nr; k++) {
+            sr[k].nodes = r[k].nodes;
+            sr[k].dt = r[k].dt;
+            sr[k].adaptive = r[k].adaptive;
+            sr[k].snap_dw = r[k].snapped ? r[k].snap_dw : NAN;
+            sr[k].est_error = r[k].est_error >= 0 ? r[k].est_error : NAN;
+            sr[k].wall_s = r[k].wall_s;
+        }
+        char w2[256];
+        if (store_ladder_put(s->st, hash, sr, (size_t)nr, w2, sizeof w2) != STORE_OK)
+            session_event(s, NAN, STORE_EVENT_WARNING, w2);
+    }
+    int k = predict_ladder_choose(r, nr, sim->target_error);
+    sc->nodes = r[k].nodes;
+    *est_error = r[k].est_error >= 0 ? r[k].est_error : NAN;
+    char msg[200];
+    snprintf(msg, sizeof msg, "prediction resolution N = %d, dt = %g s: estimated error %.2g (target %.2g)", sc->nodes,
+             sc->dt, *est_error, sim->target_error);
+    session_event(s, NAN, STORE_EVENT_INFO, msg);
+    return 0;
+}
+
+/* ---- the runner's sink ------------------------------------------------------------------------ */
+
+static int sink_state(void *user, trial_state st, double t_s, const char *why)
+{
+    trial_session *s = user;
+    pthread_mutex_lock(&s->lock);
+    s->status.state = st;
+    pthread_mutex_unlock(&s->lock);
+    char w[256];
+    store_trial_set_state(s->st, s->trial_id, trial_state_name(st), w, sizeof w);
+    char msg[400];
+    snprintf(msg, sizeof msg, "state %s%s%s", trial_state_name(st), why && *why ? ": " : "", why ? why : "");
+    session_event(s, t_s, STORE_EVENT_STATE, msg);
+    return 0;
+}
+
+static int sink_event(void *user, double t_s, const char *kind, const char *message)
+{
+    trial_session *s = user;
+    store_event_kind k = STORE_EVENT_INFO;
+    store_event_kind_parse(kind, &k);
+    session_event(s, t_s, k, message);
+    return 0;
+}
+
+static int sink_sample(void *user, const trial_sample *smp, char *why, size_t why_len)
+{
+    trial_session *s = user;
+    store_sample x = store_sample_default();
+    x.t_s = smp->t_s;
+    x.kind = smp->kind ? STORE_SAMPLE_FRAME : STORE_SAMPLE_RAIL;
+    x.frame = smp->kind ? smp->frame : -1;
+    x.compress_mm = smp->compress_mm;
+    x.shear_mm = smp->shear_mm;
+    x.dl = smp->dl;
+    x.dw = smp->dw;
+    if (smp->kind) {
+        x.quality = smp->quality;
+        if (smp->measured) {
+            x.dz = smp->dz;
+            x.a = smp->a;
+        } else if (smp->not_tracked) {
+            snprintf(x.reason, sizeof x.reason, "%s",
+                     smp->not_tracked == 2 ? "dropped (pipeline full, not in the video)"
+                                           : "not tracked (the trial loop was behind)");
+        } else {
+            snprintf(x.reason, sizeof x.reason, "%s",
+                     smp->reason == VIS_REASON_NONE ? "low quality" : vis_reason_str(smp->reason));
+        }
+        pthread_mutex_lock(&s->lock);
+        s->status.frames++;
+        s->status.t_s = smp->t_s;
+        s->status.dl = smp->dl;
+        s->status.dw = smp->dw;
+        if (smp->measured) {
+            s->status.measured++;
+            s->status.dz = smp->dz;
+            s->status.a = smp->a;
+        }
+        pthread_mutex_unlock(&s->lock);
+    }
+    if (store_samples_add(s->writer, &x, why, why_len) != STORE_OK) return -1;
+    return 0;
+}
+
+static int sink_frame(void *user, const vis_frame *f, long index, char *why, size_t why_len)
+{
+    (void)index;
+    trial_session *s = user;
+    return s->video ? trial_video_add(s->video, f, why, why_len) : 0;
+}
+
+/* ---- cameras ------------------------------------------------------------------------------------ */
+
+typedef struct live_camera {
+    vis_source *src;
+    rail_clock clock;
+} live_camera;
+
+static vis_status live_grab(void *ctx, double t_s, double dl, double dw, vis_frame *out, double *t_frame,
+                            vis_error *err)
+{
+    (void)t_s;
+    (void)dl;
+    (void)dw;
+    live_camera *c = ctx;
+    vis_status st = vis_source_read(c->src, out, NULL, err);
+    *t_frame = rail_clock_now(c->clock);
+    return st;
+}
+
+/* ---- the trial thread's steps ------------------------------------------------------------------- */
+
+/* What the trial thread opens; session_release closes whatever is open. */
+typedef struct session_parts {
+    rod_scene sc;           /* the scene at the prediction's resolution (and the mock twin's) */
+    mock_camera *mock;
+    live_camera live;
+    trial_camera cam;
+    vis_tracker *trk;
+} session_parts;
+
+/* Rig mode: stops the live pipeline and stores its counts (and a failure of the video) as events. */
+static void session_live_close(trial_session *s)
+{
+    char summary[512], w[256] = "";
+    trial_capture_counts k;
+    int rc = trial_live_close(s->live, &k, summary, sizeof summary, w, sizeof w);
+    s->live = NULL;
+    session_event(s, NAN, k.lost || k.incomplete || k.dropped ? STORE_EVENT_WARNING : STORE_EVENT_INFO, summary);
+    if (rc) session_event(s, NAN, STORE_EVENT_FAULT, w);
+}
+
+static void fail_early(trial_session *s, const char *why)
+{
+    char w[256];
+    int aborted = strncmp(why, "aborted", 7) == 0;
+    session_event(s, NAN, aborted ? STORE_EVENT_INFO : STORE_EVENT_FAULT, why);
+    store_trial_set_status(s->st, s->trial_id, aborted ? STORE_STATUS_ABORTED : STORE_STATUS_FAILED, why,
+                           store_wall_now(), w, sizeof w);
+    s->result.final = aborted ? TRIAL_ABORTED : TRIAL_FAILED;
+    snprintf(s->result.reason, sizeof s->result.reason, "%s", why);
+    pthread_mutex_lock(&s->lock);
+    s->status.state = s->result.final;
+    pthread_mutex_unlock(&s->lock);
+}
+
+/* Step 1: the video directory exists and has trial.min_free_disk_mb free. */
+static int session_check_disk(trial_session *s, char *why, size_t why_len)
+{
+    const rig_config *cfg = &s->cfg;
+    struct statvfs fs;
+    if (mkdir(cfg->camera.video_dir, 0775) != 0 && errno != EEXIST) {
+        snprintf(why, why_len, "video directory %.300s cannot be created: %m", cfg->camera.video_dir);
+        return -1;
+    }
+    if (statvfs(cfg->camera.video_dir, &fs) != 0) {
+        snprintf(why, why_len, "video directory %.300s cannot be read: %m", cfg->camera.video_dir);
+        return -1;
+    }
+    double free_mb = (double)fs.f_bavail * (double)fs.f_frsize / 1e6;
+    if (free_mb < cfg->trial.min_free_disk_mb) {
+        snprintf(why, why_len, "only %.0f MB free in %.300s; a trial needs %.0f MB (trial.min_free_disk_mb)", free_mb,
+                 cfg->camera.video_dir, cfg->trial.min_free_disk_mb);
+        return -1;
+    }
+    return 0;
+}
+
+/* Step 2: the prediction's resolution, then the prediction on its own thread beside the trial. */
+static int session_start_prediction(trial_session *s, session_parts *p, char *why, size_t why_len)
+{
+    double est = NAN;
+    char hash[72];
+    char w[400];
+    if (choose_resolution(s, &p->sc, &est, hash, sizeof hash, w, sizeof w)) {
+        if (atomic_load(&s->cancel))
+            aborted_early(s, why, why_len);
+        else
+            snprintf(why, why_len, "no prediction resolution: %s", w);
+        return -1;
+    }
+    if (aborted_early(s, why, why_len)) return -1;
+    pthread_mutex_lock(&s->lock);
+    s->status.nodes = p->sc.nodes;
+    s->status.dt = p->sc.dt;
+    pthread_mutex_unlock(&s->lock);
+    trial_prediction_def def = {.scene = p->sc, .adaptive = s->cfg.sim.fast, .est_error = est,
+                                .trial_id = s->trial_id, .cancel = &s->cancel, .done = prediction_done, .user = s};
+    snprintf(def.hash, sizeof def.hash, "%s", hash);
+    snprintf(def.store_path, sizeof def.store_path, "%s", s->cfg.store_path);
+    if (trial_prediction_start(&def, &s->prediction, w, sizeof w))
+        session_event(s, NAN, STORE_EVENT_WARNING, "prediction thread could not start: no prediction for this trial");
+    return 0;
+}
+
+/* Step 3a: the camera: mock mode's twin at the prediction's resolution, mounted at the compression
+ * rail's current position; rig mode's live camera. */
+static int session_open_camera(trial_session *s, session_parts *p, char *why, size_t why_len)
+{
+    const rig_config *cfg = &s->cfg;
+    rail_status rs;
+    if (rail_status_poll(s->compress, &rs) != RAIL_OK) {
+        snprintf(why, why_len, "compression rail: %s", rail_last_error(s->compress));
+        return -1;
+    }
+    if (cfg->mode == RIG_MODE_MOCK) {
+        twin_camera_params cp = twin_camera_params_default();
+        cp.width_px = s->width;
+        cp.height_px = s->height;
+        double dl0 = rig_calib_dl(&cfg->calib, p->sc.length, rs.position_mm);
+        if (mock_camera_open(&p->sc, dl0, &cp, cfg->camera.noise_sigma, cfg->camera.blur_sigma_px,
+                             (uint64_t)s->trial_id, &p->mock, why, why_len))
+            return -1;
+        p->cam.grab = mock_camera_grab;
+        p->cam.ctx = p->mock;
+        /* The twin's shear force is the mock shear drive's load (its force sensor): the runner's
+         * second witness when detect.torque_witness is on. */
+        if (cfg->detect.torque_witness && mock_camera_feed_load(p->mock, s->shear, why, why_len)) return -1;
+        return 0;
+    }
+    /* Rig mode: the live pipeline (trial_live.h) opens the camera and records the video (raw Y800
+     * AVI); the runner takes its frames, so cam.grab is never called. */
+    char vpath[RIG_PATH_MAX + 64];
+    snprintf(vpath, sizeof vpath, "%s/trial-%lld.avi", cfg->camera.video_dir, (long long)s->trial_id);
+    if (trial_live_open(cfg, s->compress, s->shear, vpath, s->roi, s->width, s->height, &s->live, why, why_len))
+        return -1;
+    char w[256];
+    store_trial_set_video(s->st, s->trial_id, vpath, w, sizeof w);
+    p->live.clock = rail_get_clock(s->compress);
+    p->cam.grab = live_grab;
+    p->cam.ctx = &p->live;
+    return 0;
+}
+
+/* Step 3b: the tracker (with the calibration stored with the trial) and the cropped video. */
+static int session_open_tracker_and_video(trial_session *s, session_parts *p, char *why, size_t why_len)
+{
+    const rig_config *cfg = &s->cfg;
+    vis_error ve = {0};
+    vis_track_params tp = vis_track_params_default();
+    tp.length_mm = p->sc.length * 1000.0;
+    p->trk = vis_tracker_create(&tp, &s->cal, &ve);
+    if (!p->trk) {
+        snprintf(why, why_len, "tracker: %s", ve.message);
+        return -1;
+    }
+    if (s->live) return 0; /* the live pipeline records */
+    char video_path[RIG_PATH_MAX + 64];
+    snprintf(video_path, sizeof video_path, "%s/trial-%lld.mkv", cfg->camera.video_dir, (long long)s->trial_id);
+    s->video = trial_video_open(video_path, s->roi, cfg->camera.fps, why, why_len);
+    if (!s->video) return -1;
+    char w[256];
+    store_trial_set_video(s->st, s->trial_id, video_path, w, sizeof w);
+    return 0;
+}
+
+/* The runner's plan: the rig file's trial, detection and camera settings. */
+static trial_plan session_plan(const rig_config *cfg)
+{
+    trial_plan plan;
+    memset(&plan, 0, sizeof plan);
+    plan.scene = cfg->scene;
+    plan.calib = cfg->calib;
+    plan.compress_speed_mm_s = cfg->trial.compress_speed_mm_s;
+    plan.return_speed_mm_s = cfg->trial.return_speed_mm_s;
+    plan.hold_s = cfg->trial.hold_s;
+    plan.upper_dz_min = cfg->trial.upper_dz_min;
+    plan.post_snap_s = cfg->trial.post_snap_s;
+    plan.min_quality = cfg->detect.min_quality;
+    plan.snap = snap_params_default();
+    plan.snap.snap_speed = cfg->scene.snap_speed;
+    plan.snap.asym_threshold = cfg->scene.asym_threshold;
+    plan.snap.dz_jump = cfg->detect.dz_jump;
+    plan.snap.post_snap_s = cfg->trial.post_snap_s;
+    plan.fps = cfg->camera.fps;
+    plan.torque_witness = cfg->detect.torque_witness;
+    plan.load_jump = cfg->detect.load_jump;
+    plan.paced_by_camera = cfg->mode == RIG_MODE_RIG;
+    return plan;
+}
+
+/* Step 4: the runner, storing every sample (batched), event and state; the trial is running (and
+ * counted for its specimen) from here. */
+static int session_run(trial_session *s, session_parts *p, char *why, size_t why_len)
+{
+    trial_plan plan = session_plan(&s->cfg);
+    if (store_samples_begin(s->st, s->trial_id, NULL, &s->writer, why, why_len) != STORE_OK) return -1;
+    trial_sink sink = {sink_state, sink_event, sink_sample, sink_frame, s};
+    if (trial_runner_init(&s->runner, &plan, s->compress, s->shear, p->cam, p->trk, sink, why, why_len)) return -1;
+    if (s->live) trial_live_attach(s->live, &s->runner);
+    pthread_mutex_lock(&s->lock);
+    s->runner_ready = 1;
+    if (s->abort_pending) trial_runner_abort(&s->runner, s->abort_reason);
+    pthread_mutex_unlock(&s->lock);
+    if (store_trial_set_status(s->st, s->trial_id, STORE_STATUS_RUNNING, NULL, store_wall_now(), why, why_len) !=
+        STORE_OK)
+        return -1;
+    char w[256];
+    store_trial tr;
+    if (store_trial_get(s->st, s->trial_id, &tr, w, sizeof w) == STORE_OK && tr.specimen_id > 0)
+        store_specimen_count_trial(s->st, tr.specimen_id, w, sizeof w);
+    trial_runner_run(&s->runner, &s->result);
+    pthread_mutex_lock(&s->lock);
+    s->runner_ready = 0;
+    pthread_mutex_unlock(&s->lock);
+    return 0;
+}
+
+/* Step 5: the measured result and the final status. Samples first, so a stored result always has
+ * its samples. */
+static void session_store_result(trial_session *s)
+{
+    char w[256];
+    if (store_samples_end(s->writer, w, sizeof w) != STORE_OK) session_event(s, NAN, STORE_EVENT_FAULT, w);
+    s->writer = NULL;
+    trial_video_close(s->video, w, sizeof w);
+    s->video = NULL;
+    if (s->live) session_live_close(s);
+    store_regime reg = trial_regime_of(s->result.snapped, s->result.vision_snapped, s->result.asymmetric);
+    if (s->result.final == TRIAL_DONE || s->result.snapped)
+        store_trial_set_result(s->st, s->trial_id, s->result.snapped, s->result.snapped ? s->result.snap_dw : NAN, reg,
+                               w, sizeof w);
+    store_status fin = s->result.final == TRIAL_DONE      ? STORE_STATUS_DONE
+                       : s->result.final == TRIAL_ABORTED ? STORE_STATUS_ABORTED
+                                                          : STORE_STATUS_FAILED;
+    store_trial_set_status(s->st, s->trial_id, fin, s->result.reason[0] ? s->result.reason : NULL, store_wall_now(), w,
+                           sizeof w);
+    logf_(s, "%s%s%s; measured %s at Delta W = %.5f", trial_state_name(s->result.final),
+          s->result.reason[0] ? ": " : "", s->result.reason, s->result.regime, s->result.snap_dw);
+}
+
+/* Whatever the steps opened, closed; the prediction waited for (it stops at once when the trial
+ * was aborted); the status final. */
+static void session_release(trial_session *s, session_parts *p)
+{
+    char w[256];
+    if (s->writer) {
+        store_samples_end(s->writer, w, sizeof w);
+        s->writer = NULL;
+    }
+    if (s->video) {
+        trial_video_close(s->video, w, sizeof w);
+        s->video = NULL;
+    }
+    if (s->live) session_live_close(s);
+    trial_prediction_join(s->prediction);
+    s->prediction = NULL;
+    trial_runner_free(&s->runner);
+    vis_tracker_free(p->trk);
+    mock_camera_close(p->mock);
+    if (p->live.src) vis_source_close(p->live.src);
+    pthread_mutex_lock(&s->lock);
+    s->status.finished = 1;
+    if (!trial_state_final(s->status.state)) s->status.state = s->result.final;
+    pthread_mutex_unlock(&s->lock);
+}
+
+static void *session_main(void *arg)
+{
+    trial_session *s = arg;
+    session_parts p = {.sc = s->cfg.scene};
+    char why[512] = "";
+    if (session_check_disk(s, why, sizeof why) || session_start_prediction(s, &p, why, sizeof why) ||
+        session_open_camera(s, &p, why, sizeof why) || session_open_tracker_and_video(s, &p, why, sizeof why) ||
+        session_run(s, &p, why, sizeof why))
+        fail_early(s, why);
+    else
+        session_store_result(s);
+    session_release(s, &p);
+    return NULL;
+}
+
+/* The longest computation a start may ask for before its trial moves: the ladder when the store
+ * has none cached for the scene, or the prediction at an explicit resolution. A start whose
+ * estimate exceeds TRIAL_PREDICTION_MAX_S is refused with the estimate (nothing is recorded). */
+static trial_err check_prediction_cost(const rig_config *cfg, char *why, size_t why_len)
+{
+    const rig_sim *sim = &cfg->sim;
+    rod_scene sc = cfg->scene;
+    double est;
+    const char *what;
+    if (sim->explicit_resolution) {
+        if (sim->nodes > 0) sc.nodes = sim->nodes;
+        if (sim->dt > 0) sc.dt = sim->dt;
+        est = predict_estimate_s(&sc, sim->fast);
+        what = "the prediction";
+    } else {
+        est = predict_ladder_estimate_s(&sc, sim->ladder_nodes, sim->n_ladder, sim->fast);
+        what = "the resolution ladder (if not cached)";
+    }
+    if (est <= TRIAL_PREDICTION_MAX_S) return TRIAL_OK;
+    snprintf(why, why_len,
+             "%s would take about %.3g s (estimated: N = %d, dt = %g s, shear to Delta W = %g at %g m/s); a start "
+             "may ask for at most %g s: use a smaller sim.nodes or a larger solver.dt", what, est, sc.nodes, sc.dt,
+             sc.shear_max, sc.shear_rate, TRIAL_PREDICTION_MAX_S);
+    return TRIAL_E_REFUSED;
+}
+
+trial_err trial_session_start(const rig_config *cfg, rail *compress, rail *shear, const char *note,
+                              void (*log)(const char *line), trial_session **out, int64_t *trial_id, char *why,
+                              size_t why_len)
+{
+    *out = NULL;
+    trial_err te = check_prediction_cost(cfg, why, why_len);
+    if (te != TRIAL_OK) return te;
+    trial_session *s = calloc(1, sizeof *s);
+    if (!s) {
+        snprintf(why, why_len, "out of memory");
+        return TRIAL_E_FAILED;
+    }
+    s->cfg = *cfg;
+    s->compress = compress;
+    s->shear = shear;
+    s->log = log;
+    snprintf(s->note, sizeof s->note, "%s", note ? note : "");
+    pthread_mutex_init(&s->lock, NULL);
+    s->status.snap_dw_predicted = NAN;
+    if (store_open(cfg->store_path, &s->st, why, why_len) != STORE_OK) goto fail;
+
+    /* The specimen and the trial row. */
+    store_specimen sp;
+    trial_specimen_from_config(cfg, &sp);
+    int64_t spid = 0;
+    if (store_specimen_upsert(s->st, &sp, &spid, why, why_len) != STORE_OK) goto fail;
+    if (trial_camera_setup(cfg, &s->cal, &s->width, &s->height, &s->roi, why, why_len)) goto fail;
+    char *config_text = trial_config_text(cfg, s->note);
+    char *calib = trial_record_json(cfg, &s->cal, s->roi, why, why_len);
+    if (!calib) {
+        free(config_text);
+        goto fail;
+    }
+    store_trial_def def = store_trial_def_default();
+    def.mode = cfg->mode == RIG_MODE_RIG ? STORE_MODE_RIG : STORE_MODE_MOCK;
+    def.config_text = config_text ? config_text : "";
+    def.calibration_json = calib;
+    def.specimen_id = spid;
+    def.created_wall_s = store_wall_now();
+    store_err se = store_trial_create(s->st, &def, &s->trial_id, why, why_len);
+    free(config_text);
+    free(calib);
+    if (se != STORE_OK) goto fail;
+    s->status.trial_id = s->trial_id;
+    s->status.state = TRIAL_IDLE;
+    if (pthread_create(&s->thread, NULL, session_main, s) != 0) {
+        snprintf(why, why_len, "could not start the trial thread");
+        char w[256];
+        store_trial_set_status(s->st, s->trial_id, STORE_STATUS_FAILED, why, store_wall_now(), w, sizeof w);
+        goto fail;
+    }
+    *trial_id = s->trial_id;
+    *out = s;
+    return TRIAL_OK;
+fail:
+    store_close(s->st);
+    pthread_mutex_destroy(&s->lock);
+    free(s);
+    return TRIAL_E_FAILED;
+}
+
+void trial_session_abort(trial_session *s, const char *reason)
+{
+    atomic_store(&s->cancel, 1); /* the ladder or the prediction, if computing, stop at their next step */
+    pthread_mutex_lock(&s->lock);
+    if (s->runner_ready)
+        trial_runner_abort(&s->runner, reason);
+    else if (!s->abort_pending) {
+        s->abort_pending = 1;
+        snprintf(s->abort_reason, sizeof s->abort_reason, "%s", reason && *reason ? reason : "abort requested");
+    }
+    pthread_mutex_unlock(&s->lock);
+}
+
+void trial_session_status(trial_session *s, session_status *out)
+{
+    pthread_mutex_lock(&s->lock);
+    *out = s->status;
+    pthread_mutex_unlock(&s->lock);
+}
+
+void trial_session_join(trial_session *s, trial_result *result)
+{
+    if (!s) return;
+    pthread_join(s->thread, NULL);
+    if (result) *result = s->result;
+    store_close(s->st);
+    pthread_mutex_destroy(&s->lock);
+    free(s);
+}

@@ -1,0 +1,67 @@
+/* trial_session.h: one trial from request to stored result, on its own thread.
+ *
+ * trial_session_start (called from the API thread while no trial runs) refuses a start whose
+ * prediction would take longer than TRIAL_PREDICTION_MAX_S (estimated, with the estimate in the
+ * reason), records the trial in the store (status created, the rig and scene texts, the
+ * calibration record, the specimen) and starts the trial's thread, whose steps are functions of
+ * trial_session.c:
+ *   session_check_disk             the free disk space for the video;
+ *   session_start_prediction       the prediction's resolution: explicit in [sim], or the cheapest
+ *                                  rung of the scene's error-against-run-time ladder meeting [sim]
+ *                                  target_error (computed once per scene and cached in the store);
+ *                                  then the prediction on a thread of its own beside the trial
+ *                                  (trial_prediction.h), which never blocks the rails;
+ *   session_open_camera            mock mode: the digital twin at the prediction's resolution,
+ *                                  mounted at the compression rail's current position; rig: the camera;
+ *   session_open_tracker_and_video the tracker and the cropped video;
+ *   session_run                    the trial runner, storing every sample (batched), event and state;
+ *   session_store_result           the measured result and the final status;
+ *   session_release                closes what was opened and waits for the prediction.
+ * Every failure ends in the store as a failed trial with the reason, and in the log. An abort
+ * (or SIGTERM through it) also cancels the ladder and the prediction at their next time step, so
+ * it takes effect within a step whatever the trial is computing. */
+#ifndef RIBBON_TRIAL_SESSION_H
+#define RIBBON_TRIAL_SESSION_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rail.h"
+#include "rig_config.h"
+#include "trial_err.h"
+#include "trial_runner.h"
+
+/* s: the longest estimated prediction (or ladder) a start may ask for (predict_ladder.h). */
+#define TRIAL_PREDICTION_MAX_S 300.0
+
+typedef struct trial_session trial_session;
+
+/* What the API and the log see of a session. */
+typedef struct session_status {
+    int64_t trial_id;
+    trial_state state;
+    int finished;            /* the thread has ended */
+    long frames, measured;
+    double t_s, dl, dw, dz, a;
+    int prediction_done;
+    int prediction_failed;
+    double snap_dw_predicted;
+    char regime_predicted[16];
+    int nodes;               /* prediction resolution */
+    double dt;
+    char message[256];       /* last event */
+} session_status;
+
+/* cfg is copied. The rails stay the caller's and must not be used by anyone else until the
+ * session has finished. log (may be NULL) receives one line per event. TRIAL_E_REFUSED: the
+ * prediction's estimate exceeds the bound (nothing recorded); TRIAL_E_FAILED: the store or the
+ * thread failed. */
+trial_err trial_session_start(const rig_config *cfg, rail *compress, rail *shear, const char *note,
+                              void (*log)(const char *line), trial_session **out, int64_t *trial_id, char *why,
+                              size_t why_len);
+void trial_session_abort(trial_session *s, const char *reason);
+void trial_session_status(trial_session *s, session_status *out);
+/* Waits for the thread and frees. The result is in the store. */
+void trial_session_join(trial_session *s, trial_result *result);
+
+#endif

@@ -1,0 +1,126 @@
+/* test_snap_detect: the online snap detector on signals whose answer is known in closed form.
+ * Delta Z creeps down slowly, then drops by tanh over tau seconds at t0. The onset is the last
+ * frame whose speed is below a tenth of the snap speed, computed here from the formula; the
+ * pathway follows the peak |A| of a bump during the drop. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "trial.h"
+
+#define FPS 20.0
+#define RATE 0.01 /* Delta W per second */
+
+static double dz_at(double t, double t0, double tau) { return 0.3 - 0.002 * t - 0.3 * (1.0 + tanh((t - t0) / tau)); }
+static double a_at(double t, double t0, double tau, double amp)
+{
+    return amp * exp(-((t - t0) / tau) * ((t - t0) / tau));
+}
+
+/* Runs the detector over frames 0..n-1; every `hole`-th frame (if > 0) is unmeasured. */
+static snap_detect run(double t0, double tau, double amp, int hole, long n)
+{
+    snap_params p = snap_params_default();
+    snap_detect d;
+    snap_detect_init(&d, &p);
+    for (long k = 0; k < n; k++) {
+        double t = k / FPS;
+        int valid = !(hole > 0 && k % hole == 0 && k > 0);
+        snap_detect_add(&d, k, t, RATE * t, valid ? dz_at(t, t0, tau) : NAN, a_at(t, t0, tau, amp), valid);
+    }
+    return d;
+}
+
+/* The expected onset frame: the last frame before the first fast one whose backward speed is slow. */
+static long expected_onset(double t0, double tau)
+{
+    long onset = 0;
+    for (long k = 1; k < 100000; k++) {
+        double t = k / FPS, speed = fabs(dz_at(t, t0, tau) - dz_at(t - 1 / FPS, t0, tau)) * FPS;
+        if (speed < 0.1) onset = k;
+        if (speed > 1.0) return onset;
+    }
+    return -1;
+}
+
+static void asymmetric_snap(void **state)
+{
+    (void)state;
+    snap_detect d = run(10.0, 0.15, 1.2, 0, 600);
+    assert_int_equal(d.phase, SNAP_DONE);
+    assert_true(snap_detect_snapped(&d));
+    long k = expected_onset(10.0, 0.15);
+    assert_int_equal(d.onset_frame, k);
+    assert_true(fabs(snap_detect_dw(&d) - RATE * k / FPS) < 1e-12);
+    assert_string_equal(snap_detect_regime(&d), "asymmetric");
+    assert_true(fabs(d.peak_abs_a - 1.2) < 0.05);
+}
+
+static void symmetric_snap(void **state)
+{
+    (void)state;
+    snap_detect d = run(10.0, 0.15, 0.01, 0, 600);
+    assert_true(snap_detect_snapped(&d));
+    assert_string_equal(snap_detect_regime(&d), "symmetric");
+}
+
+static void unmeasured_frames_are_skipped(void **state)
+{
+    (void)state;
+    /* Every 7th frame missing: the speeds span the gaps, the onset stays within a frame. */
+    snap_detect d = run(10.0, 0.15, 1.2, 7, 600);
+    long k = expected_onset(10.0, 0.15);
+    assert_true(snap_detect_snapped(&d));
+    assert_true(labs(d.onset_frame - k) <= 1);
+}
+
+static void slow_creep_is_no_snap(void **state)
+{
+    (void)state;
+    snap_params p = snap_params_default();
+    snap_detect d;
+    snap_detect_init(&d, &p);
+    for (long k = 0; k < 2000; k++) {
+        double t = k / FPS;
+        /* 0.002/s creep plus +-1e-3 alternating noise: 0.04/s between frames, well below the
+         * snap speed; nothing here may count as a snap. */
+        double noise = (k % 2 ? 1e-3 : -1e-3);
+        snap_detect_add(&d, k, t, RATE * t, 0.3 - 0.002 * t + noise, 0.0, 1);
+    }
+    assert_false(snap_detect_snapped(&d));
+    assert_string_equal(snap_detect_regime(&d), "no snap");
+}
+
+static void noise_spikes_need_the_jump_floor(void **state)
+{
+    (void)state;
+    /* One frame with a 0.06 spike would be "fast" (1.2/s at 20 fps) and above the floor: it is
+     * detected, which is why dz_jump must sit above the tracker's noise; with the floor at 0.1
+     * the spike is ignored. */
+    snap_params p = snap_params_default();
+    p.dz_jump = 0.1;
+    snap_detect d;
+    snap_detect_init(&d, &p);
+    for (long k = 0; k < 200; k++) {
+        double t = k / FPS, dz = 0.3 + (k == 100 ? 0.06 : 0.0);
+        snap_detect_add(&d, k, t, RATE * t, dz, 0.0, 1);
+    }
+    assert_false(snap_detect_snapped(&d));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(asymmetric_snap),
+        cmocka_unit_test(symmetric_snap),
+        cmocka_unit_test(unmeasured_frames_are_skipped),
+        cmocka_unit_test(slow_creep_is_no_snap),
+        cmocka_unit_test(noise_spikes_need_the_jump_floor),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
