@@ -11,9 +11,7 @@
 #include "rod_boundary.h"
 #include "sim_cmd.h"
 #include "sim_opts.h"
-#ifdef RIBBON_HAVE_PLPLOT
 #include "sim_plot_boundary.h"
-#endif
 #include "sim_sweep_row.h"
 
 #include <jansson.h>
@@ -308,7 +306,6 @@ int sim_cmd_boundary(int argc, char **argv)
             fclose(f);
         }
     }
-#ifdef RIBBON_HAVE_PLPLOT
     if (o.plot) {
         char err[256];
         int pr = o.curves ? sim_plot_boundary_curves(o.plot, &fold, &pf, &start, err, sizeof err)
@@ -318,12 +315,6 @@ int sim_cmd_boundary(int argc, char **argv)
             stopped = 1;
         }
     }
-#else
-    if (o.plot) {
-        fprintf(stderr, "ribbon-sim boundary: built without PLplot, no --plot\n");
-        stopped = 1;
-    }
-#endif
     if (o.so.json) {
         json_t *bs = json_array();
         for (int k = 0; k < o.ndl; k++) {

@@ -1,7 +1,7 @@
-/* sim_plot_boundary.h: the two figures of `ribbon-sim boundary --plot FILE.png` (PLplot,
- * pngcairo): the traced boundary Gamma*(phi), one line per Delta L, over the classified points of
- * a sweep CSV when one is given; or, with --curves, the fold (saddle-node) and pitchfork curves in
- * (Gamma, Delta W) meeting at Gamma*, like the reference paper's figure 5b. */
+/* sim_plot_boundary.h: the two figures of `ribbon-sim boundary --plot FILE.png`, drawn by the plot
+ * module (plot.h: plot_boundary): the traced boundary Gamma*(phi), one line per Delta L, over the
+ * classified points of a sweep CSV when one is given; or, with --curves, the fold (saddle-node)
+ * and pitchfork curves in (Gamma, Delta W) meeting at Gamma*, like the reference paper's figure 5b. */
 #ifndef RIBBON_DAEMON_SIM_PLOT_BOUNDARY_H
 #define RIBBON_DAEMON_SIM_PLOT_BOUNDARY_H
 
@@ -10,7 +10,8 @@
 #include "rod_boundary.h"
 #include "sim_sweep_row.h"
 
-/* curves[k] are the boundaries at dl[k] (ncurves of them); sweep may be NULL. 0, or -1 with err. */
+/* curves[k] are the boundaries at dl[k] (ncurves of them, at most PLOT_BOUNDARY_CURVES_MAX);
+ * sweep may be NULL. 0, or -1 with err (nothing at path then). */
 int sim_plot_boundary(const char *path, const rod_boundary_curve *curves, const double *dl, int ncurves,
                       const sweep_table *sweep, char *err, size_t errlen);
 
