@@ -19,6 +19,12 @@
 #include <plplot.h>
 #include <stdio.h>
 
+/* The axes' box on the page, leaving room for the labels below and left. */
+#define VP_LEFT 0.11
+#define VP_RIGHT 0.96
+#define VP_BOTTOM 0.13
+#define VP_TOP 0.92
+
 static const int curve_color[PLOT_BOUNDARY_CURVES_MAX] = {PLOT_COL_SERIES_1, PLOT_COL_SERIES_2, PLOT_COL_SERIES_3,
                                                           PLOT_COL_SERIES_4, PLOT_COL_SERIES_5, PLOT_COL_SERIES_6};
 
@@ -90,10 +96,15 @@ static plot_status boundary_draw(void *vctx, char *why, size_t why_len)
     (void)why_len;
     const boundary_ctx *c = vctx;
     const plot_boundary_data *d = c->d;
+    pladv(0);
+    plvpor(VP_LEFT, VP_RIGHT, VP_BOTTOM, VP_TOP);
+    plwind(c->x0, c->x1, c->y0, c->y1);
     plcol0(PLOT_COL_INK);
     plwidth(PLOT_WIDTH_THIN);
-    plenv(c->x0, c->x1, c->y0, c->y1, 0, 0);
-    pllab(d->x_label ? d->x_label : "", d->y_label ? d->y_label : "", d->title ? d->title : "");
+    plbox("bcnst", 0.0, 0, "bcnstv", 0.0, 0);
+    plmtex("b", 2.6, 0.5, 0.5, d->x_label ? d->x_label : "");
+    plmtex("l", 4.2, 0.5, 0.5, d->y_label ? d->y_label : "");
+    plmtex("t", 1.4, 0.5, 0.5, d->title ? d->title : "");
     double rx = 0.008 * (c->x1 - c->x0);
     double ry = rx / (c->x1 - c->x0) * (c->y1 - c->y0) * c->w / c->h;
     plcol0(PLOT_COL_UNSTABLE);
