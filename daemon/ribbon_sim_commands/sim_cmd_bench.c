@@ -24,6 +24,7 @@
 #include "sim_bench_sweep.h"
 #include "sim_cmd.h"
 #include "sim_opts.h"
+#include "sim_bench_boundary.h"
 
 #include <gsl/gsl_linalg.h>
 #include <jansson.h>
@@ -166,6 +167,11 @@ int sim_cmd_bench(int argc, char **argv)
         sweep_pt += 0.5 * an.wall_s;
         rod_analysis_free(&an);
     }
+    sim_bench_boundary_result bb;
+    if (sim_bench_boundary(&sc, &bb, cerr, sizeof cerr) != 0) {
+        fprintf(stderr, "ribbon-sim bench: boundary: %s\n", cerr);
+        return 1;
+    }
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     double rss_mb = (double)ru.ru_maxrss / 1024.0;
@@ -178,13 +184,18 @@ int sim_cmd_bench(int argc, char **argv)
                           "fast_predict_rel_diff", rel, "peak_rss_mb", rss_mb, "snap_dw_fixed", fixed.snap_dw,
                           "snap_dw_fast", fast.snap_dw, "continue_wall_s", cont_wall, "continue_route_wall_s",
                           cont_route, "continue_first_dw", cont_first, "sweep_point_wall_s", sweep_pt);
+    json_object_set_new(j, "boundary_wall_s", json_real(bb.boundary_wall_s));
+    json_object_set_new(j, "boundary_vs_sweep", json_real(bb.boundary_vs_sweep));
+    json_object_set_new(j, "boundary_sweep_wall_s", json_real(bb.sweep_wall_s));
+    json_object_set_new(j, "boundary_cpu_s", json_real(bb.boundary_cpu_s));
+    json_object_set_new(j, "boundary_sweep_cpu_s", json_real(bb.sweep_cpu_s));
     char *txt = json_dumps(j, JSON_COMPACT | JSON_REAL_PRECISION(6));
     if (o.json) puts(txt);
     else
         printf("bench nodes=%d banded=%.3gs dense=%.3gs ratio=%.0f paper_wall=%.2fs realtime=%.2f fast_wall=%.2fs "
-               "fast_rel_diff=%.2e continue_wall=%.2fs rss=%.1fMB\n",
+               "fast_rel_diff=%.2e continue_wall=%.2fs boundary_wall=%.2fs boundary_vs_sweep=%.1f rss=%.1fMB\n",
                sc.nodes, banded, dense, dense / banded, fixed.wall_s, fixed.sim_time / fixed.wall_s, fast.wall_s, rel,
-               cont_wall, rss_mb);
+               cont_wall, bb.boundary_wall_s, bb.boundary_vs_sweep, rss_mb);
     free(txt);
     json_decref(j);
     return 0;

@@ -648,6 +648,71 @@ static void test_sweep_map(void **state)
     assert_non_null(strstr(why, "points[2]"));
 }
 
+/* A two-parameter continuation's curves: each in its own colour (none in a colour no curve has),
+ * the special point's dashed line and star add dark pixels in a strip around it, grey sweep
+ * points under the curves; too many curves, Inf and a NULL array are refused with a reason. */
+static void test_boundary_curves(void **state)
+{
+    (void)state;
+    double x[2][20], y[2][20];
+    for (int i = 0; i < 20; i++) {
+        x[0][i] = x[1][i] = 0.1 + 0.01 * i;
+        y[0][i] = 0.5 - 0.002 * i;
+        y[1][i] = 0.3 + 0.004 * i;
+    }
+    y[1][10] = NAN; /* a gap */
+    plot_boundary_curve cv[2] = {{x[0], y[0], 20, PLOT_CURVE_MARK_SQUARE, "fold"},
+                                 {x[1], y[1], 20, PLOT_CURVE_MARK_CIRCLE, "pitchfork"}};
+    plot_sweep_point pts[2] = {{0.12, 0.35, PLOT_REGIME_ASYMMETRIC, false, NAN}, {0.27, 0.45, PLOT_REGIME_SYMMETRIC, false, NAN}};
+    plot_boundary_data d;
+    plot_boundary_data_default(&d);
+    assert_true(isnan(d.star_x) && isnan(d.star_y));
+    d.curves = cv;
+    d.n_curves = 2;
+    d.points = pts;
+    d.n_points = 2;
+    d.width_px = 1000;
+    d.height_px = 700;
+    char why[256];
+    const char *p = out_path("boundary.png"), *q = out_path("boundary-star.png");
+    assert_int_equal(plot_boundary(p, &d, why, sizeof why), PLOT_OK);
+    assert_png(p, 1000, 700);
+    region plot_area = {0.12, 0.9, 0.12, 0.88};
+    assert_true(count_color(p, PLOT_COL_SERIES_1, plot_area) > 500);
+    assert_true(count_color(p, PLOT_COL_SERIES_2, plot_area) > 500);
+    assert_int_equal(count_color(p, PLOT_COL_SERIES_3, WHOLE), 0);
+    assert_true(count_color(p, PLOT_COL_UNSTABLE, plot_area) > 50);
+    d.star_x = 0.2;
+    d.star_y = 0.4;
+    d.star_label = "codim-2 point";
+    d.note = "a note";
+    assert_int_equal(plot_boundary(q, &d, why, sizeof why), PLOT_OK);
+    /* the star sits at x = 0.2, halfway along the data's x span: a strip around the page's middle */
+    region strip = {0.45, 0.6, 0.3, 0.95};
+    assert_true(count_color(q, COUNT_DARK, strip) > count_color(p, COUNT_DARK, strip) + 100);
+    plot_boundary_curve many[PLOT_BOUNDARY_CURVES_MAX + 1];
+    for (int k = 0; k <= PLOT_BOUNDARY_CURVES_MAX; k++) many[k] = cv[0];
+    d.curves = many;
+    d.n_curves = PLOT_BOUNDARY_CURVES_MAX + 1;
+    assert_int_equal(plot_boundary(p, &d, why, sizeof why), PLOT_ERR_ARG);
+    assert_non_null(strstr(why, "curves"));
+    d.curves = cv;
+    d.n_curves = 2;
+    y[0][3] = INFINITY;
+    assert_int_equal(plot_boundary(p, &d, why, sizeof why), PLOT_ERR_ARG);
+    assert_non_null(strstr(why, "curves[0].y"));
+    y[0][3] = 0.4;
+    d.star_y = -INFINITY;
+    assert_int_equal(plot_boundary(p, &d, why, sizeof why), PLOT_ERR_ARG);
+    assert_non_null(strstr(why, "star_y"));
+    d.star_y = 0.4;
+    d.points = NULL;
+    assert_int_equal(plot_boundary(p, &d, why, sizeof why), PLOT_ERR_ARG);
+    assert_int_equal(plot_boundary(p, NULL, why, sizeof why), PLOT_ERR_ARG);
+    unlink(p);
+    unlink(q);
+}
+
 /* ---- PLplot containment -------------------------------------------------------------------- */
 
 static plot_status draw_nothing(void *ctx, char *why, size_t why_len)
@@ -863,6 +928,7 @@ int main(void)
         cmocka_unit_test(test_branches_stable_black_unstable_grey),
         cmocka_unit_test(test_branch_panels_side_by_side),
         cmocka_unit_test(test_sweep_map),
+        cmocka_unit_test(test_boundary_curves),
         cmocka_unit_test(test_missing_driver_is_an_error),
         cmocka_unit_test(test_fatal_error_does_not_exit),
         cmocka_unit_test(test_abort_and_draw_errors_are_reported),
