@@ -6,6 +6,7 @@
  * to the drivers' own checks (rail_params_check, rail_modbus_map_check), which name the field,
  * and are run here too so a bad file fails at load, not at the first motion. */
 #include "rail_config.h"
+#include "cfg_number.h"
 
 #include <ini.h>
 #include <math.h>
@@ -112,13 +113,7 @@ static int fail(ctx *c, const char *key, const char *fmt, const char *val)
 
 static bool parse_num(const char *v, double *x)
 {
-    char *end = NULL;
-    *x = strtod(v, &end);
-    if (end == v)
-        return false;
-    while (*end == ' ' || *end == '\t')
-        end++;
-    return *end == 0 && isfinite(*x);
+    return cfg_number_parse(v, x) == CFG_NUMBER_OK; /* plain decimal only (cfg_number.h) */
 }
 
 /* Apply one key; 0, -1 (bad value) or -2 (unknown key), with the reason in why. */

@@ -19,6 +19,7 @@
  * Angles: --phi takes the crease angle magnitude in degrees (the paper's phi); the sign is the
  * scene's (the paper scenes use -90, README "Crease orientation"). */
 #include "rod_bifurcation.h"
+#include "cfg_number.h"
 #include "sim_cmd.h"
 #include "sim_opts.h"
 #ifdef RIBBON_HAVE_PLPLOT
@@ -81,9 +82,7 @@ static double now(void)
 
 static int parse_range(const char *flag, const char *v, double *a, double *b, int *n)
 {
-    char extra;
-    if (!v || sscanf(v, "%lf:%lf:%d%c", a, b, n, &extra) != 3 || !isfinite(*a) || !isfinite(*b) || *n < 1 ||
-        *n > 1000) {
+    if (cfg_number_range(v, a, b, n, 1000) != 0) {
         fprintf(stderr, "ribbon-sim sweep: %s needs A:B:n with finite A, B and 1 <= n <= 1000, got '%s'\n", flag,
                 v ? v : "");
         return 0;
@@ -367,7 +366,7 @@ int sim_cmd_sweep(int argc, char **argv)
     sw.gamma_tol = 1e-3;
     if (tol_s) {
         char *end;
-        sw.gamma_tol = strtod(tol_s, &end);
+        sw.gamma_tol = cfg_number_strtod(tol_s, &end);
         if (*end || !(sw.gamma_tol > 0.0) || !isfinite(sw.gamma_tol)) {
             fprintf(stderr, "ribbon-sim sweep: --gamma-tol needs a positive number, got '%s'\n", tol_s);
             return 2;

@@ -1,5 +1,6 @@
 /* sim_sweep_row.c: reading and writing sweep rows (see sim_sweep_row.h). */
 #include "sim_sweep_row.h"
+#include "cfg_number.h"
 
 #include <errno.h>
 #include <math.h>
@@ -46,7 +47,7 @@ static int parse_double(const char *s, double *out)
 {
     char *end;
     errno = 0;
-    double v = strtod(s, &end);
+    double v = cfg_number_strtod(s, &end);
     if (errno || end == s || *end || !isfinite(v)) return 0;
     *out = v;
     return 1;

@@ -20,6 +20,7 @@
 #include <string.h>
 
 #include "ctl.h"
+#include "cfg_number.h"
 #include "rail_config.h"
 #include "rig_config.h"
 #include "rail_gcode.h"
@@ -73,7 +74,7 @@ static void usage(FILE *f)
 static int num(const char *opt, const char *v, double *out)
 {
     char *end = NULL;
-    double x = v ? strtod(v, &end) : NAN;
+    double x = v ? cfg_number_strtod(v, &end) : NAN;
     if (!v || end == v || *end || !isfinite(x)) {
         fprintf(stderr, "ribbonctl rail: %s needs a number, got '%s'\n", opt, v ? v : "");
         return -1;

@@ -1,5 +1,6 @@
 /* trial_replay.c: replay of a recording, stored or outside (see trial_replay.h). */
 #include "trial_replay.h"
+#include "cfg_number.h"
 
 #include <errno.h>
 #include <math.h>
@@ -136,7 +137,7 @@ static int read_rails(trial_replay *r, const char *path, char *why, size_t why_l
         for (; k < 3 && !bad; k++) {
             char *e;
             errno = 0;
-            v[k] = strtod(q, &e);
+            v[k] = cfg_number_strtod(q, &e);
             if (e == q || errno || !isfinite(v[k])) {
                 bad = 1;
                 break;

@@ -18,6 +18,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+#include <sys/stat.h>
 
 #include "scene_file.h"
 
@@ -515,6 +517,11 @@ static void test_overrides_refused(void **state)
     expect_override_error("mesh.nodes=4", CFG_ERR_RANGE, "mesh.nodes", "out of range");
     expect_override_error("ribbon.length=nan", CFG_ERR_VALUE, "ribbon.length", "finite");
     expect_override_error("ribbon.length=2m", CFG_ERR_VALUE, "ribbon.length", "'m'");
+    /* One number grammar (cfg_number.h): plain decimal, no hex floats (issue 17, defect 11). */
+    expect_override_error("protocol.compression=0x1p-1", CFG_ERR_VALUE, "protocol.compression",
+                          "plain decimal");
+    expect_override_error("ribbon.length=0x1", CFG_ERR_VALUE, "ribbon.length", "plain decimal");
+    expect_override_error("ribbon.length=-inf", CFG_ERR_VALUE, "ribbon.length", "finite");
     expect_override_error("protocol.route=back", CFG_ERR_VALUE, "protocol.route", "together");
     /* A failed load leaves the caller's scene untouched. */
     rod_scene s;

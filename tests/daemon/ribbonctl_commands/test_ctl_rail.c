@@ -137,6 +137,10 @@ static void test_refusals_and_usage(void **s)
     json_decref(o);
     assert_int_equal(run("rail --driver mock wiggle", out, sizeof out), 2);
     assert_int_equal(run("rail --driver mock move-abs", out, sizeof out), 2);
+    /* Plain decimal only (issue 17, defect 11): a hex float was read as 4 mm. */
+    assert_int_equal(run("rail --driver mock move-abs 0x1p2", out, sizeof out), 2);
+    assert_non_null(strstr(out, "needs a number"));
+    assert_int_equal(run("rail --driver mock move-abs 4 --speed 0x8", out, sizeof out), 2);
     assert_int_equal(run("rail --driver warp status", out, sizeof out), 1);
     assert_non_null(strstr(out, "unknown driver"));
     assert_int_equal(run("nosuchcommand", out, sizeof out), 2);
