@@ -481,10 +481,9 @@ cfg_status cfg_scene_load(const char *path, const char *const *overrides, int n_
         snprintf(err->message, sizeof err->message, "no scene file given");
         return err->status;
     }
-    FILE *f = fopen(path, "rb");
+    FILE *f = cfg_open_regular(path, err->message, sizeof err->message);
     if (!f) {
         err->status = CFG_ERR_IO;
-        snprintf(err->message, sizeof err->message, "cannot open: %s", strerror(errno));
         return err->status;
     }
     char *buf = malloc(CFG_SCENE_MAX_FILE_BYTES + 1);

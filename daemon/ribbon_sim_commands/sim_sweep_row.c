@@ -1,5 +1,6 @@
 /* sim_sweep_row.c: reading and writing sweep rows (see sim_sweep_row.h). */
 #include "sim_sweep_row.h"
+#include "cfg_ini.h"
 #include "cfg_number.h"
 
 #include <errno.h>
@@ -87,10 +88,12 @@ static int parse_row(char *line, sweep_row *r)
 int sweep_table_load(const char *path, sweep_table *t, char *err, size_t errlen)
 {
     memset(t, 0, sizeof *t);
-    FILE *f = fopen(path, "r");
+    char why[160];
+    errno = 0;
+    FILE *f = cfg_open_regular(path, why, sizeof why);
     if (!f) {
         if (errno == ENOENT) return 0;
-        snprintf(err, errlen, "cannot read %s: %s", path, strerror(errno));
+        snprintf(err, errlen, "cannot read %s: %s", path, why);
         return -1;
     }
     char line[1024];

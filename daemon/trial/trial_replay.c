@@ -1,5 +1,6 @@
 /* trial_replay.c: replay of a recording, stored or outside (see trial_replay.h). */
 #include "trial_replay.h"
+#include "cfg_ini.h"
 #include "cfg_number.h"
 
 #include <errno.h>
@@ -117,9 +118,10 @@ fail:
  * and blank lines; t strictly increasing; at least two readings. */
 static int read_rails(trial_replay *r, const char *path, char *why, size_t why_len)
 {
-    FILE *f = fopen(path, "r");
+    char open_why[160];
+    FILE *f = cfg_open_regular(path, open_why, sizeof open_why);
     if (!f) {
-        snprintf(why, why_len, "rails CSV %.300s: %s", path, strerror(errno));
+        snprintf(why, why_len, "rails CSV %.300s: %s", path, open_why);
         return -1;
     }
     size_t cap = 0;

@@ -548,6 +548,30 @@ static void test_io_errors(void **state)
     assert_int_equal(cfg_scene_load("/nonexistent/scene.ini", NULL, 0, &s, NULL), CFG_ERR_IO);
 }
 
+/* Only regular files are read (issue 17, defect 9): a FIFO with no writer used to block the
+ * open for ever; a directory and a device are named as what they are. alarm() turns a hang into
+ * a failure. */
+static void test_only_regular_files(void **state)
+{
+    (void)state;
+    rod_scene s;
+    cfg_error err;
+    char dir[] = "/tmp/ribbon-scene-fifo-XXXXXX", fifo[64];
+    assert_non_null(mkdtemp(dir));
+    snprintf(fifo, sizeof fifo, "%s/scene.ini", dir);
+    assert_int_equal(mkfifo(fifo, 0600), 0);
+    alarm(10);
+    assert_int_equal(cfg_scene_load(fifo, NULL, 0, &s, &err), CFG_ERR_IO);
+    alarm(0);
+    assert_non_null(strstr(err.message, "not a regular file (a FIFO)"));
+    assert_int_equal(cfg_scene_load(dir, NULL, 0, &s, &err), CFG_ERR_IO);
+    assert_non_null(strstr(err.message, "not a regular file (a directory)"));
+    assert_int_equal(cfg_scene_load("/dev/zero", NULL, 0, &s, &err), CFG_ERR_IO);
+    assert_non_null(strstr(err.message, "not a regular file (a character device)"));
+    unlink(fifo);
+    rmdir(dir);
+}
+
 /* The README's "Scene files" table documents every key of the table. */
 static void test_readme_documents_every_key(void **state)
 {
@@ -731,6 +755,7 @@ int main(void)
         cmocka_unit_test(test_overrides_apply),
         cmocka_unit_test(test_overrides_refused),
         cmocka_unit_test(test_io_errors),
+        cmocka_unit_test(test_only_regular_files),
         cmocka_unit_test(test_readme_documents_every_key),
         cmocka_unit_test(test_fuzz_mutated_scenes),
     };
