@@ -15,6 +15,10 @@
 
 #include <stddef.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Why a text is not a number (cfg_number_scan, cfg_number_parse). */
 typedef enum cfg_number_status {
     CFG_NUMBER_OK = 0,
@@ -43,5 +47,9 @@ int cfg_number_range(const char *s, double *a, double *b, int *n, int n_max);
 
 /* A short phrase for a status, e.g. "is not a plain decimal number". */
 const char *cfg_number_why(cfg_number_status st);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -7,11 +7,15 @@
 // camera_tilt_rad,
 // camera_matrix (9 values, row-major), dist (5 values); the last two appear together or not at all.
 #include "vis_internal.hpp"
+#include "cfg_number.h"
 
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 extern "C" vis_calib vis_calib_default(void)
 {
@@ -135,10 +139,9 @@ static bool parse_numbers(const char *s, double *out, int n)
     for (int i = 0; i < n; i++) {
         while (*s == ' ' || *s == '\t' || (i > 0 && *s == ','))
             s++;
-        char *end;
-        errno = 0;
-        out[i] = std::strtod(s, &end);
-        if (end == s || errno || !std::isfinite(out[i]))
+        // The one number grammar of outside input (config/cfg_number.h): plain decimal only.
+        const char *end;
+        if (cfg_number_scan(s, &out[i], &end) != CFG_NUMBER_OK)
             return false;
         s = end;
     }
@@ -151,9 +154,21 @@ extern "C" vis_status vis_calib_load(vis_calib *c, const char *path, vis_error *
 {
     if (!c || !path)
         return vis::fail(err, VIS_ERR_ARG, "vis_calib_load: NULL argument");
-    FILE *f = std::fopen(path, "r");
-    if (!f)
+    // Only a regular file: opened without blocking (a FIFO would wait for a writer for ever).
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    if (fd < 0)
         return vis::fail(err, VIS_ERR_IO, "cannot read calibration %s: %s", path, std::strerror(errno));
+    struct stat fst;
+    if (fstat(fd, &fst) != 0 || !S_ISREG(fst.st_mode)) {
+        close(fd);
+        return vis::fail(err, VIS_ERR_IO, "cannot read calibration %s: not a regular file", path);
+    }
+    fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+    FILE *f = fdopen(fd, "r");
+    if (!f) {
+        close(fd);
+        return vis::fail(err, VIS_ERR_IO, "cannot read calibration %s: %s", path, std::strerror(errno));
+    }
     vis_calib r = vis_calib_default();
     char line[1024];
     int lineno = 0, have_k = 0, have_d = 0;

@@ -96,12 +96,24 @@ int sweep_table_load(const char *path, sweep_table *t, char *err, size_t errlen)
         snprintf(err, errlen, "cannot read %s: %s", path, why);
         return -1;
     }
+    int rc = sweep_table_read(f, path, t, err, errlen);
+    fclose(f);
+    return rc;
+}
+
+int sweep_table_read(FILE *f, const char *path, sweep_table *t, char *err, size_t errlen)
+{
+    memset(t, 0, sizeof *t);
     char line[1024];
-    int lineno = 0, rc = 0;
+    int lineno = 0, rc = 0, continued = 0;
     while (fgets(line, sizeof line, f)) {
-        lineno++;
         size_t len = strlen(line);
         int complete = len > 0 && line[len - 1] == '\n';
+        /* The rest of a line longer than the buffer is not a row of its own. */
+        int tail = continued;
+        continued = !complete;
+        if (tail) continue;
+        lineno++;
         while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r')) line[--len] = '\0';
         if (lineno == 1) {
             if (strcmp(line, header) != 0) {
@@ -125,7 +137,6 @@ int sweep_table_load(const char *path, sweep_table *t, char *err, size_t errlen)
         snprintf(err, errlen, "%s is empty; remove it or name another file", path);
         rc = -1;
     }
-    fclose(f);
     if (rc != 0) sweep_table_free(t);
     return rc;
 }

@@ -11,16 +11,12 @@
 
 #include <jansson.h>
 
+#include "replay_rails_csv.h"
 #include "snap_detect.h"
 #include "trial_calib.h"
 #include "vision.h"
 
-#define REPLAY_RAILS_MAX 10000000 /* readings in a rails CSV */
 #define REPLAY_SHEAR_START_MM 0.05
-
-typedef struct rail_reading {
-    double t, compress_mm, shear_mm;
-} rail_reading;
 
 struct trial_replay {
     char video[RIG_PATH_MAX];
@@ -114,8 +110,7 @@ fail:
     return -1;
 }
 
-/* Reads the rails CSV: t_s,compress_mm,shear_mm per line; an optional header line, '#' comments
- * and blank lines; t strictly increasing; at least two readings. */
+/* Reads the rails CSV (replay_rails_csv.h) into r->rails. */
 static int read_rails(trial_replay *r, const char *path, char *why, size_t why_len)
 {
     char open_why[160];
@@ -124,68 +119,7 @@ static int read_rails(trial_replay *r, const char *path, char *why, size_t why_l
         snprintf(why, why_len, "rails CSV %.300s: %s", path, open_why);
         return -1;
     }
-    size_t cap = 0;
-    char line[512];
-    long lineno = 0;
-    int rc = -1, seen_header = 0;
-    while (fgets(line, sizeof line, f)) {
-        lineno++;
-        char *p = line;
-        while (*p == ' ' || *p == '\t') p++;
-        if (*p == '#' || *p == '\n' || *p == '\r' || !*p) continue;
-        double v[3];
-        char *q = p;
-        int k = 0, bad = 0;
-        for (; k < 3 && !bad; k++) {
-            char *e;
-            errno = 0;
-            v[k] = cfg_number_strtod(q, &e);
-            if (e == q || errno || !isfinite(v[k])) {
-                bad = 1;
-                break;
-            }
-            q = e;
-            while (*q == ' ' || *q == '\t') q++;
-            if (k < 2 && *q++ != ',') bad = 1;
-        }
-        if (bad && k == 0 && r->nr == 0 && !seen_header) { /* a header line */
-            seen_header = 1;
-            continue;
-        }
-        while (*q == ' ' || *q == '\t' || *q == '\r' || *q == '\n') q++;
-        if (bad || *q) {
-            snprintf(why, why_len, "rails CSV %.300s line %ld: expected t_s,compress_mm,shear_mm (three finite numbers)",
-                     path, lineno);
-            goto out;
-        }
-        if (r->nr > 0 && !(v[0] > r->rails[r->nr - 1].t)) {
-            snprintf(why, why_len, "rails CSV %.300s line %ld: t_s must increase (%.9g after %.9g)", path, lineno, v[0],
-                     r->rails[r->nr - 1].t);
-            goto out;
-        }
-        if (r->nr == cap) {
-            size_t nc = cap ? 2 * cap : 1024;
-            rail_reading *a = nc <= REPLAY_RAILS_MAX ? realloc(r->rails, nc * sizeof *a) : NULL;
-            if (!a) {
-                snprintf(why, why_len, "rails CSV %.300s: %s", path,
-                         nc > REPLAY_RAILS_MAX ? "too many readings" : "out of memory");
-                goto out;
-            }
-            r->rails = a;
-            cap = nc;
-        }
-        r->rails[r->nr++] = (rail_reading){v[0], v[1], v[2]};
-    }
-    if (ferror(f)) {
-        snprintf(why, why_len, "rails CSV %.300s: read error", path);
-        goto out;
-    }
-    if (r->nr < 2) {
-        snprintf(why, why_len, "rails CSV %.300s: needs at least two readings (t_s,compress_mm,shear_mm)", path);
-        goto out;
-    }
-    rc = 0;
-out:
+    int rc = replay_rails_csv_read(f, path, &r->rails, &r->nr, why, why_len);
     fclose(f);
     return rc;
 }
