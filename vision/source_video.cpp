@@ -3,7 +3,10 @@
 // Damage detection: the container announces a frame count; a file that stops delivering frames
 // before that count is damaged (truncated or corrupt), and the read says so, naming the last good
 // frame, instead of looking like a clean end. Frames already read stay valid: the caller keeps
-// everything up to the damage. Cameras have no count: a failed grab is an I/O error.
+// everything up to the damage. A file whose container announces no count at all has lost its index
+// (Matroska's duration and cues are written last, so a writer killed by a signal or a full disk
+// leaves none): its end is damage too, never a clean end. Cameras have no count: a failed grab is
+// an I/O error.
 #include "source.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -35,6 +38,11 @@ public:
                             "video %s is damaged: %d of %d announced frames readable (last good "
                             "frame %d)",
                             name.c_str(), index, count, index - 1);
+            if (count <= 0)
+                return fail(err, VIS_ERR_FORMAT,
+                            "video %s is damaged: its container announces no frame count (index "
+                            "missing: the writer was killed or its disk filled?); %d frames readable",
+                            name.c_str(), index);
             return fail(err, VIS_ERR_END, "end of video %s after %d frames", name.c_str(), index);
         }
         if (raw.depth() != CV_8U)
