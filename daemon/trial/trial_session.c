@@ -571,7 +571,11 @@ static void *session_main(void *arg)
         s->writer = NULL;
         long frames = trial_video_close(s->video, w, sizeof w);
         s->video = NULL;
-        (void)frames;
+        if (frames < 0) { /* the video lost frames: a fault, and the trial is not done */
+            session_event(s, NAN, STORE_EVENT_FAULT, w);
+            if (s->result.final == TRIAL_DONE) s->result.final = TRIAL_FAILED;
+            if (!s->result.reason[0]) snprintf(s->result.reason, sizeof s->result.reason, "%s", w);
+        }
         store_regime reg = !s->result.snapped          ? STORE_REGIME_NO_SNAP
                            : !s->result.vision_snapped ? STORE_REGIME_UNKNOWN /* load witness only */
                            : s->result.asymmetric      ? STORE_REGIME_ASYMMETRIC
