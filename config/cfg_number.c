@@ -3,6 +3,7 @@
  * extensions (hex floats, inf, nan) never get a chance. */
 #include "cfg_number.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -59,6 +60,7 @@ cfg_number_status cfg_number_scan(const char *s, double *out, const char **end)
         free(heap);
     }
     if (!isfinite(v)) return CFG_NUMBER_NOT_FINITE;
+    if (v != 0.0 && fabs(v) < DBL_MIN) return CFG_NUMBER_SUBNORMAL;
     *out = v;
     if (end) *end = s + n;
     return CFG_NUMBER_OK;
@@ -111,6 +113,7 @@ const char *cfg_number_why(cfg_number_status st)
     case CFG_NUMBER_NOT_DECIMAL: return "is not a number (plain decimal only, no hex)";
     case CFG_NUMBER_NOT_FINITE: return "is not a finite number (plain decimal only)";
     case CFG_NUMBER_TRAILING: return "has text after the number";
+    case CFG_NUMBER_SUBNORMAL: return "is too small to compute with (a subnormal double, below 2.2e-308)";
     }
     return "is not a number";
 }

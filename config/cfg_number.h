@@ -9,7 +9,8 @@
  * strtod alone also takes hex floats ("0x1p1"), "inf", "nan" and "infinity", and depends on the
  * locale's decimal point; this grammar takes none of them. The value is then converted with
  * strtod (in the "C" locale's sense: only '.' is a decimal point, the span has been checked) and
- * must be finite. Nothing here allocates or keeps state. */
+ * must be finite and, unless zero, normal (a subnormal such as 1e-310 is refused). Nothing here
+ * allocates or keeps state. */
 #ifndef RIBBON_CONFIG_CFG_NUMBER_H
 #define RIBBON_CONFIG_CFG_NUMBER_H
 
@@ -24,7 +25,9 @@ typedef enum cfg_number_status {
     CFG_NUMBER_OK = 0,
     CFG_NUMBER_NOT_DECIMAL, /* no plain decimal number here (hex, letters, empty) */
     CFG_NUMBER_NOT_FINITE,  /* "inf", "nan", or decimal but too large for a double (1e999) */
-    CFG_NUMBER_TRAILING     /* cfg_number_parse only: a number followed by other text */
+    CFG_NUMBER_TRAILING,    /* cfg_number_parse only: a number followed by other text */
+    CFG_NUMBER_SUBNORMAL    /* non-zero but below DBL_MIN (1e-310): no value of any key, and
+                               arithmetic on it loses its precision (issue 17, item 12) */
 } cfg_number_status;
 
 /* Scan one number at s (leading spaces and tabs skipped). On CFG_NUMBER_OK, *out holds it and

@@ -522,6 +522,8 @@ static void test_overrides_refused(void **state)
                           "plain decimal");
     expect_override_error("ribbon.length=0x1", CFG_ERR_VALUE, "ribbon.length", "plain decimal");
     expect_override_error("ribbon.length=-inf", CFG_ERR_VALUE, "ribbon.length", "finite");
+    /* A subnormal thickness (issue 17, item 12: `equilibrium` exited 0 and omitted residual). */
+    expect_override_error("ribbon.thickness=1e-310", CFG_ERR_VALUE, "ribbon.thickness", "subnormal");
     expect_override_error("protocol.route=back", CFG_ERR_VALUE, "protocol.route", "together");
     /* A failed load leaves the caller's scene untouched. */
     rod_scene s;
