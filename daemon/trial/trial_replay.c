@@ -67,6 +67,8 @@ static trial_replay *replay_new(char *why, size_t why_len)
     return r;
 }
 
+static int check_video_belongs(trial_replay *r, char *why, size_t why_len);
+
 int trial_replay_from_trial(store *st, int64_t source_id, const char *video, trial_replay **out, char *why,
                             size_t why_len)
 {
@@ -100,6 +102,7 @@ int trial_replay_from_trial(store *st, int64_t source_id, const char *video, tri
     }
     snprintf(r->config_text, tl, "%s# replay of trial %lld\n", config ? config : "", (long long)source_id);
     if (store_samples_get(st, source_id, &r->smp, &r->ns, why, why_len) != STORE_OK) goto fail;
+    if (check_video_belongs(r, why, why_len)) goto fail;
     trial_state_times(st, source_id, &r->t_check, &r->t_shear, &r->t_return);
     free(config);
     *out = r;
@@ -108,6 +111,44 @@ fail:
     free(config);
     trial_replay_free(r);
     return -1;
+}
+
+/* The video must be the trial's (issue 17, item 12: any video was accepted): its frames the size
+ * of the recorded region of interest, and, when its container gives a count, as many frames as the
+ * trial stored frame samples. A video shorter than the store says (cut by a kill or a full disk)
+ * is refused here too, never replayed as if whole. */
+static int check_video_belongs(trial_replay *r, char *why, size_t why_len)
+{
+    long recorded = 0, last = -1;
+    for (size_t k = 0; k < r->ns; k++)
+        if (r->smp[k].kind == STORE_SAMPLE_FRAME && r->smp[k].frame > last) {
+            recorded++;
+            last = r->smp[k].frame;
+        }
+    vis_error ve = {0};
+    vis_source *vs = vis_source_open_video(r->video, &ve);
+    vis_frame *frame = vs ? vis_frame_alloc(16, 16, 1, &ve) : NULL;
+    int rc = -1;
+    if (!vs || !frame) {
+        snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
+    } else if (vis_source_read(vs, frame, NULL, &ve) != VIS_OK) {
+        snprintf(why, why_len, "video %.300s: no first frame: %s", r->video, ve.message);
+    } else if (r->rec.roi.w > 0 && r->rec.roi.h > 0 &&
+               (vis_frame_width(frame) != r->rec.roi.w || vis_frame_height(frame) != r->rec.roi.h)) {
+        snprintf(why, why_len, "video %.300s has %dx%d frames; trial %lld recorded %dx%d: not this trial's video",
+                 r->video, vis_frame_width(frame), vis_frame_height(frame), (long long)r->source_id,
+                 r->rec.roi.w, r->rec.roi.h);
+    } else if (vis_source_frame_count(vs) > 0 && recorded > 0 && vis_source_frame_count(vs) != last + 1) {
+        snprintf(why, why_len, "video %.300s has %d frames; trial %lld recorded %ld (frames 0..%ld): %s",
+                 r->video, vis_source_frame_count(vs), (long long)r->source_id, recorded, last,
+                 vis_source_frame_count(vs) < last + 1 ? "the video is incomplete" : "not this trial's video");
+    } else {
+        r->frames_total = vis_source_frame_count(vs);
+        rc = 0;
+    }
+    vis_frame_free(frame);
+    vis_source_close(vs);
+    return rc;
 }
 
 /* Reads the rails CSV (replay_rails_csv.h) into r->rails. */
