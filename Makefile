@@ -1,8 +1,10 @@
 # Thin wrapper giving the README's two commands:
-#   make demo   the main job: one mock trial through ribbond, measured beside predicted, report written
-#   make test   the whole test suite: normal build, then ASan+UBSan build without the heavy tests,
-#               then short libFuzzer runs of the fuzz targets (clang, build-fuzz: fuzz/)
-# Both first install missing Debian packages (as root) or print the exact command to run.
+#   make demo     the main job: one mock trial through ribbond, measured beside predicted, report written
+#   make test     the whole test suite: normal build, then ASan+UBSan build without the heavy tests,
+#                 then short libFuzzer runs of the fuzz targets (clang, build-fuzz: fuzz/)
+# and, for the rig computer (docs/install.md):
+#   make package  the Debian package (CPack's DEB generator): $(BUILD)/ribbon-rig_VERSION_ARCH.deb
+# All first install missing Debian packages (as root) or print the exact command to run.
 
 DEB_PACKAGES := cmake make gcc g++ pkg-config \
 	libgsl-dev libinih-dev libsqlite3-dev libserialport-dev libmodbus-dev \
@@ -20,7 +22,7 @@ FUZZ_BUILD ?= build-fuzz
 FUZZ_SECONDS ?= 20
 FUZZ_INPUT_SECONDS ?= 8
 
-.PHONY: all deps build build-asan build-fuzz demo test test-normal test-asan test-fuzz clean
+.PHONY: all deps build build-asan build-fuzz demo test test-normal test-asan test-fuzz package clean
 
 all: build
 
@@ -82,6 +84,12 @@ test-fuzz: build-fuzz
 	cd $(FUZZ_BUILD) && ctest --output-on-failure -j 2 -L fuzz
 
 test: test-normal test-asan test-fuzz
+
+# The Debian package of the Release build: programs in /usr/bin, rig files and scenes in
+# /usr/share/ribbon, the systemd unit in /usr/lib/systemd/system (installed disabled), depending
+# on the runtime libraries only (config/install.cmake).
+package: build
+	cd $(BUILD) && cpack -G DEB
 
 clean:
 	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD)

@@ -1,7 +1,10 @@
 /* rig_calib.c: rail mm <-> Delta L / Delta W for one rig calibration (formulas in rig_calib.h).
- * Pure arithmetic, no allocation; the JSON form of the record is rig_config.c's (it needs the
- * loaded file to say where the record came from). */
+ * Pure arithmetic, no allocation, except the record's JSON form (jansson), which sits beside
+ * the record it writes. */
 #include "rig_calib.h"
+
+#include <jansson.h>
+#include <math.h>
 
 double rig_calib_dl(const rig_calibration *c, double length_m, double compress_mm)
 {
@@ -44,4 +47,43 @@ double rig_calib_a_sign(const rig_calibration *c)
 const char *rig_camera_side_name(rig_camera_side s)
 {
     return s == RIG_CAMERA_BACK ? "back" : "front";
+}
+
+static char *json_finish(json_t *o)
+{
+    if (!o) return NULL;
+    char *s = json_dumps(o, JSON_COMPACT | JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17));
+    json_decref(o);
+    return s;
+}
+
+/* A number, or null when not finite (never NaN in JSON). */
+static json_t *json_num(double v)
+{
+    return isfinite(v) ? json_real(v) : json_null();
+}
+
+char *rig_calib_json(const rig_calibration *c, double length_m)
+{
+    if (!c) return NULL;
+    double gap0, gap_per;
+    rig_calib_gap_model(c, length_m, &gap0, &gap_per);
+    json_t *o = json_object();
+    if (!o) return NULL;
+    int bad = 0;
+    bad |= json_object_set_new(o, "compress_zero_mm", json_num(c->compress_zero_mm));
+    bad |= json_object_set_new(o, "shear_zero_mm", json_num(c->shear_zero_mm));
+    bad |= json_object_set_new(o, "compress_sign", json_integer(c->compress_sign));
+    bad |= json_object_set_new(o, "shear_sign", json_integer(c->shear_sign));
+    bad |= json_object_set_new(o, "camera_side",
+                               json_string(rig_camera_side_name(c->camera_side)));
+    bad |= json_object_set_new(o, "camera_time_offset_s", json_num(c->camera_time_offset_s));
+    bad |= json_object_set_new(o, "free_length_mm", json_num(1000.0 * length_m));
+    bad |= json_object_set_new(o, "gap_at_zero_mm", json_num(gap0));
+    bad |= json_object_set_new(o, "gap_per_mm", json_num(gap_per));
+    if (bad) {
+        json_decref(o);
+        return NULL;
+    }
+    return json_finish(o);
 }

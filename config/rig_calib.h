@@ -50,4 +50,11 @@ double rig_calib_a_sign(const rig_calibration *c);
 
 const char *rig_camera_side_name(rig_camera_side s); /* "front" / "back" */
 
+/* The record as compact JSON (malloc'd, free() it; NULL when out of memory):
+ * {"compress_zero_mm":..,"shear_zero_mm":..,"compress_sign":1,"shear_sign":1,
+ * "camera_side":"front","camera_time_offset_s":0,"free_length_mm":1000,"gap_at_zero_mm":..,
+ * "gap_per_mm":-1}. The last three are derived from length_m (the scene's free length, m), for
+ * readers of the store that do not load the scene. Non-finite numbers are written as null. */
+char *rig_calib_json(const rig_calibration *c, double length_m);
+
 #endif

@@ -462,10 +462,177 @@ static int parse_int_list(const char *value, long long *out, int max, char *msg,
 }
 
 /* Parse `value` (trimmed) for key k into cfg. */
+/* DOUBLE: a finite number within the key's bounds. */
+static cfg_status apply_double(unsigned char *field, const rig_key *k, const char *value, char *msg,
+                               size_t len)
+{
+    char range[96];
+    double v;
+    cfg_status st = parse_double(value, &v, msg, len);
+    if (st) return st;
+    if (!in_range(k, v)) {
+        range_text(k, range, sizeof range);
+        snprintf(msg, len, "%.10g is out of range: allowed %s (%s)", v, range, k->doc);
+        return CFG_ERR_RANGE;
+    }
+    memcpy(field, &v, sizeof v);
+    return CFG_OK;
+}
+
+/* INT and ID: an integer within the key's bounds, stored as int or int64_t. */
+static cfg_status apply_integer(unsigned char *field, const rig_key *k, const char *value,
+                                const char *shown, char *msg, size_t len)
+{
+    char range[96];
+    long long v;
+    cfg_status st = parse_integer(value, &v, msg, len);
+    if (st) return st;
+    if (!in_range(k, (double)v)) {
+        range_text(k, range, sizeof range);
+        snprintf(msg, len, "%s is out of range: allowed integer %s (%s)", shown, range, k->doc);
+        return CFG_ERR_RANGE;
+    }
+    if (k->type == RIG_KEY_INT) {
+        int iv = (int)v;
+        memcpy(field, &iv, sizeof iv);
+    } else {
+        int64_t iv = v;
+        memcpy(field, &iv, sizeof iv);
+    }
+    return CFG_OK;
+}
+
+/* SIGN: +1 or -1. */
+static cfg_status apply_sign(unsigned char *field, const rig_key *k, const char *value,
+                             const char *shown, char *msg, size_t len)
+{
+    int s = 0;
+    if (strcmp(value, "1") == 0 || strcmp(value, "+1") == 0) s = 1;
+    if (strcmp(value, "-1") == 0) s = -1;
+    if (!s) {
+        snprintf(msg, len, "'%s' is not +1 or -1 (%s)", shown, k->doc);
+        return CFG_ERR_VALUE;
+    }
+    memcpy(field, &s, sizeof s);
+    return CFG_OK;
+}
+
+/* ENUM: one of the key's names (stored as its index, from 1 with ENUM1, or as a bool for a
+ * SWITCH). */
+static cfg_status apply_enum(unsigned char *field, const rig_key *k, const char *value,
+                             const char *shown, char *msg, size_t len)
+{
+    for (int i = 0; k->names[i]; i++) {
+        if (strcmp(value, k->names[i]) == 0) {
+            if (k->flags & SWITCH) {
+                bool b = i == 1;
+                memcpy(field, &b, sizeof b);
+            } else {
+                int v = (k->flags & ENUM1) ? i + 1 : i;
+                memcpy(field, &v, sizeof v);
+            }
+            return CFG_OK;
+        }
+    }
+    char allowed[96];
+    cfg_names_join(k->names, allowed, sizeof allowed);
+    snprintf(msg, len, "'%s' is not one of: %s", shown, allowed);
+    return CFG_ERR_VALUE;
+}
+
+/* LIST: the simulator's ladder, increasing integers within the key's bounds. */
+static cfg_status apply_ladder(unsigned char *field, const rig_key *k, const char *value, char *msg,
+                               size_t len)
+{
+    char range[96];
+    long long v[RIG_LADDER_MAX];
+    int n = parse_int_list(value, v, RIG_LADDER_MAX, msg, len);
+    if (n < 0) return CFG_ERR_VALUE;
+    rig_sim *sim = (rig_sim *)field;
+    for (int i = 0; i < n; i++) {
+        if (!in_range(k, (double)v[i])) {
+            range_text(k, range, sizeof range);
+            snprintf(msg, len, "rung %d (%lld) is out of range: allowed integer %s each", i + 1,
+                     v[i], range);
+            return CFG_ERR_RANGE;
+        }
+        if (i > 0 && v[i] <= v[i - 1]) {
+            snprintf(msg, len, "rung %d (%lld) is not larger than the one before (%lld)", i + 1,
+                     v[i], v[i - 1]);
+            return CFG_ERR_VALUE;
+        }
+    }
+    for (int i = 0; i < n; i++) sim->ladder_nodes[i] = (int)v[i];
+    sim->n_ladder = n;
+    return CFG_OK;
+}
+
+/* ROI: auto, full or x,y,w,h in pixels. */
+static cfg_status apply_roi(unsigned char *field, const char *value, const char *shown, char *msg,
+                            size_t len)
+{
+    rig_camera *cam = (rig_camera *)field;
+    if (strcmp(value, "auto") == 0 || strcmp(value, "full") == 0) {
+        cam->roi = value[0] == 'a' ? RIG_ROI_AUTO : RIG_ROI_FULL;
+        return CFG_OK;
+    }
+    long long v[4];
+    int n = parse_int_list(value, v, 4, msg, len);
+    if (n != 4) {
+        snprintf(msg, len, "'%s' is not auto, full or x,y,w,h (pixels)", shown);
+        return CFG_ERR_VALUE;
+    }
+    if (v[0] < 0 || v[1] < 0 || v[2] < 1 || v[3] < 1 || v[0] + v[2] > 16384 ||
+        v[1] + v[3] > 16384) {
+        snprintf(msg, len, "'%s': x, y >= 0, w, h >= 1, and the box inside 16384 px", shown);
+        return CFG_ERR_RANGE;
+    }
+    cam->roi = RIG_ROI_RECT;
+    cam->roi_x = (int)v[0];
+    cam->roi_y = (int)v[1];
+    cam->roi_w = (int)v[2];
+    cam->roi_h = (int)v[3];
+    return CFG_OK;
+}
+
+/* SOURCE: a device index, a /dev/ path or synthetic (checked per mode later). */
+static cfg_status apply_source(unsigned char *field, const char *value, const char *shown, char *msg,
+                               size_t len)
+{
+    rig_camera *cam = (rig_camera *)field;
+    if (strcmp(value, "synthetic") == 0) {
+        cam->source = RIG_SOURCE_SYNTHETIC;
+        return CFG_OK;
+    }
+    if (isdigit((unsigned char)value[0])) {
+        long long v;
+        cfg_status st = parse_integer(value, &v, msg, len);
+        if (st) return st;
+        if (v < 0 || v > 255) {
+            snprintf(msg, len, "device index %s is out of range: allowed 0 to 255", shown);
+            return CFG_ERR_RANGE;
+        }
+        cam->source = RIG_SOURCE_INDEX;
+        cam->index = (int)v;
+        return CFG_OK;
+    }
+    if (strncmp(value, "/dev/", 5) == 0 && value[5]) {
+        cfg_status st = printable_text(value, 6, sizeof cam->device - 1, msg, len);
+        if (st) return st;
+        cam->source = RIG_SOURCE_DEVICE;
+        snprintf(cam->device, sizeof cam->device, "%s", value);
+        return CFG_OK;
+    }
+    snprintf(msg, len,
+             "'%s' is not a device index (0), a device path (/dev/video0) or synthetic",
+             shown);
+    return CFG_ERR_VALUE;
+}
+
 static cfg_status value_apply(const rig_key *k, const char *value, rig_config *cfg, char *msg,
                               size_t len)
 {
-    char range[96], shown[64];
+    char shown[64];
     unsigned char *field = (unsigned char *)cfg + k->offset;
     cfg_text_printable(shown, sizeof shown, value, strlen(value));
     if (value[0] == '\0') {
@@ -473,66 +640,15 @@ static cfg_status value_apply(const rig_key *k, const char *value, rig_config *c
         return CFG_ERR_VALUE;
     }
     switch (k->type) {
-    case RIG_KEY_DOUBLE: {
-        double v;
-        cfg_status st = parse_double(value, &v, msg, len);
-        if (st) return st;
-        if (!in_range(k, v)) {
-            range_text(k, range, sizeof range);
-            snprintf(msg, len, "%.10g is out of range: allowed %s (%s)", v, range, k->doc);
-            return CFG_ERR_RANGE;
-        }
-        memcpy(field, &v, sizeof v);
-        return CFG_OK;
-    }
+    case RIG_KEY_DOUBLE:
+        return apply_double(field, k, value, msg, len);
     case RIG_KEY_INT:
-    case RIG_KEY_ID: {
-        long long v;
-        cfg_status st = parse_integer(value, &v, msg, len);
-        if (st) return st;
-        if (!in_range(k, (double)v)) {
-            range_text(k, range, sizeof range);
-            snprintf(msg, len, "%s is out of range: allowed integer %s (%s)", shown, range, k->doc);
-            return CFG_ERR_RANGE;
-        }
-        if (k->type == RIG_KEY_INT) {
-            int iv = (int)v;
-            memcpy(field, &iv, sizeof iv);
-        } else {
-            int64_t iv = v;
-            memcpy(field, &iv, sizeof iv);
-        }
-        return CFG_OK;
-    }
-    case RIG_KEY_SIGN: {
-        int s = 0;
-        if (strcmp(value, "1") == 0 || strcmp(value, "+1") == 0) s = 1;
-        if (strcmp(value, "-1") == 0) s = -1;
-        if (!s) {
-            snprintf(msg, len, "'%s' is not +1 or -1 (%s)", shown, k->doc);
-            return CFG_ERR_VALUE;
-        }
-        memcpy(field, &s, sizeof s);
-        return CFG_OK;
-    }
-    case RIG_KEY_ENUM: {
-        for (int i = 0; k->names[i]; i++) {
-            if (strcmp(value, k->names[i]) == 0) {
-                if (k->flags & SWITCH) {
-                    bool b = i == 1;
-                    memcpy(field, &b, sizeof b);
-                } else {
-                    int v = (k->flags & ENUM1) ? i + 1 : i;
-                    memcpy(field, &v, sizeof v);
-                }
-                return CFG_OK;
-            }
-        }
-        char allowed[96];
-        cfg_names_join(k->names, allowed, sizeof allowed);
-        snprintf(msg, len, "'%s' is not one of: %s", shown, allowed);
-        return CFG_ERR_VALUE;
-    }
+    case RIG_KEY_ID:
+        return apply_integer(field, k, value, shown, msg, len);
+    case RIG_KEY_SIGN:
+        return apply_sign(field, k, value, shown, msg, len);
+    case RIG_KEY_ENUM:
+        return apply_enum(field, k, value, shown, msg, len);
     case RIG_KEY_TEXT: {
         cfg_status st = printable_text(value, (size_t)k->min, (size_t)k->max, msg, len);
         if (st) return st;
@@ -549,82 +665,12 @@ static cfg_status value_apply(const rig_key *k, const char *value, rig_config *c
         snprintf((char *)field, k->size, "%s", value);
         return CFG_OK;
     }
-    case RIG_KEY_LIST: {
-        long long v[RIG_LADDER_MAX];
-        int n = parse_int_list(value, v, RIG_LADDER_MAX, msg, len);
-        if (n < 0) return CFG_ERR_VALUE;
-        rig_sim *sim = (rig_sim *)field;
-        for (int i = 0; i < n; i++) {
-            if (!in_range(k, (double)v[i])) {
-                range_text(k, range, sizeof range);
-                snprintf(msg, len, "rung %d (%lld) is out of range: allowed integer %s each", i + 1,
-                         v[i], range);
-                return CFG_ERR_RANGE;
-            }
-            if (i > 0 && v[i] <= v[i - 1]) {
-                snprintf(msg, len, "rung %d (%lld) is not larger than the one before (%lld)", i + 1,
-                         v[i], v[i - 1]);
-                return CFG_ERR_VALUE;
-            }
-        }
-        for (int i = 0; i < n; i++) sim->ladder_nodes[i] = (int)v[i];
-        sim->n_ladder = n;
-        return CFG_OK;
-    }
-    case RIG_KEY_ROI: {
-        rig_camera *cam = (rig_camera *)field;
-        if (strcmp(value, "auto") == 0 || strcmp(value, "full") == 0) {
-            cam->roi = value[0] == 'a' ? RIG_ROI_AUTO : RIG_ROI_FULL;
-            return CFG_OK;
-        }
-        long long v[4];
-        int n = parse_int_list(value, v, 4, msg, len);
-        if (n != 4) {
-            snprintf(msg, len, "'%s' is not auto, full or x,y,w,h (pixels)", shown);
-            return CFG_ERR_VALUE;
-        }
-        if (v[0] < 0 || v[1] < 0 || v[2] < 1 || v[3] < 1 || v[0] + v[2] > 16384 ||
-            v[1] + v[3] > 16384) {
-            snprintf(msg, len, "'%s': x, y >= 0, w, h >= 1, and the box inside 16384 px", shown);
-            return CFG_ERR_RANGE;
-        }
-        cam->roi = RIG_ROI_RECT;
-        cam->roi_x = (int)v[0];
-        cam->roi_y = (int)v[1];
-        cam->roi_w = (int)v[2];
-        cam->roi_h = (int)v[3];
-        return CFG_OK;
-    }
-    case RIG_KEY_SOURCE: {
-        rig_camera *cam = (rig_camera *)field;
-        if (strcmp(value, "synthetic") == 0) {
-            cam->source = RIG_SOURCE_SYNTHETIC;
-            return CFG_OK;
-        }
-        if (isdigit((unsigned char)value[0])) {
-            long long v;
-            cfg_status st = parse_integer(value, &v, msg, len);
-            if (st) return st;
-            if (v < 0 || v > 255) {
-                snprintf(msg, len, "device index %s is out of range: allowed 0 to 255", shown);
-                return CFG_ERR_RANGE;
-            }
-            cam->source = RIG_SOURCE_INDEX;
-            cam->index = (int)v;
-            return CFG_OK;
-        }
-        if (strncmp(value, "/dev/", 5) == 0 && value[5]) {
-            cfg_status st = printable_text(value, 6, sizeof cam->device - 1, msg, len);
-            if (st) return st;
-            cam->source = RIG_SOURCE_DEVICE;
-            snprintf(cam->device, sizeof cam->device, "%s", value);
-            return CFG_OK;
-        }
-        snprintf(msg, len,
-                 "'%s' is not a device index (0), a device path (/dev/video0) or synthetic",
-                 shown);
-        return CFG_ERR_VALUE;
-    }
+    case RIG_KEY_LIST:
+        return apply_ladder(field, k, value, msg, len);
+    case RIG_KEY_ROI:
+        return apply_roi(field, value, shown, msg, len);
+    case RIG_KEY_SOURCE:
+        return apply_source(field, value, shown, msg, len);
     }
     snprintf(msg, len, "internal error: key of unknown type");
     return CFG_ERR_VALUE;
@@ -671,8 +717,8 @@ static int rail_keep(load_ctx *c, int r, origin from, const char *key, const cha
     }
     rail_config scratch;
     rail_config_init(&scratch, rail_name(r));
-    int rc = rail_config_set(&scratch, key, value, why, sizeof why);
-    if (rc == -2) {
+    cfg_status rc = rail_config_set(&scratch, key, value, why, sizeof why);
+    if (rc == CFG_ERR_UNKNOWN) {
         fail_from(c, CFG_ERR_UNKNOWN, from, dotted,
                   "unknown key in [rail.%s] (README \"Rig file keys\" lists the rail keys)",
                   rail_name(r));
@@ -1334,27 +1380,7 @@ static json_t *json_num(double v)
 
 char *rig_calibration_json(const rig_config *c)
 {
-    if (!c) return NULL;
-    double gap0, gap_per;
-    rig_calib_gap_model(&c->calib, c->scene.length, &gap0, &gap_per);
-    json_t *o = json_object();
-    if (!o) return NULL;
-    int bad = 0;
-    bad |= json_object_set_new(o, "compress_zero_mm", json_num(c->calib.compress_zero_mm));
-    bad |= json_object_set_new(o, "shear_zero_mm", json_num(c->calib.shear_zero_mm));
-    bad |= json_object_set_new(o, "compress_sign", json_integer(c->calib.compress_sign));
-    bad |= json_object_set_new(o, "shear_sign", json_integer(c->calib.shear_sign));
-    bad |= json_object_set_new(o, "camera_side",
-                               json_string(rig_camera_side_name(c->calib.camera_side)));
-    bad |= json_object_set_new(o, "camera_time_offset_s", json_num(c->calib.camera_time_offset_s));
-    bad |= json_object_set_new(o, "free_length_mm", json_num(1000.0 * c->scene.length));
-    bad |= json_object_set_new(o, "gap_at_zero_mm", json_num(gap0));
-    bad |= json_object_set_new(o, "gap_per_mm", json_num(gap_per));
-    if (bad) {
-        json_decref(o);
-        return NULL;
-    }
-    return json_finish(o);
+    return c ? rig_calib_json(&c->calib, c->scene.length) : NULL;
 }
 
 char *rig_specimen_json(const rig_config *c)

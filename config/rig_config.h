@@ -229,11 +229,8 @@ cfg_status rig_config_parse(const char *name, const char *dir, const char *text,
 
 /* ---- uses --------------------------------------------------------------------------------- */
 
-/* The calibration record stored with each trial, as compact JSON (malloc'd, free() it; NULL when
- * out of memory): {"compress_zero_mm":..,"shear_zero_mm":..,"compress_sign":1,"shear_sign":1,
- * "camera_side":"front","camera_time_offset_s":0,"free_length_mm":1000,"gap_at_zero_mm":..,
- * "gap_per_mm":-1}. The last three are derived (from the scene's length), for readers of the
- * store that do not load the scene. */
+/* The calibration record stored with each trial, as compact JSON: rig_calib_json() of this rig's
+ * calibration and the scene's free length (malloc'd, free() it; NULL when out of memory). */
 char *rig_calibration_json(const rig_config *c);
 
 /* The specimen record as compact JSON (malloc'd, free() it): name, material, measured crease

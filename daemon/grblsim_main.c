@@ -7,7 +7,7 @@
 #include <unistd.h>
 
 #include "grbl_sim.h"
-#include "railsim_cli.h"
+#include "cli.h"
 
 #define PROG "ribbon-grblsim"
 

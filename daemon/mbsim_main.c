@@ -6,7 +6,7 @@
 #include <string.h>
 
 #include "mb_sim.h"
-#include "railsim_cli.h"
+#include "cli.h"
 
 #define PROG "ribbon-mbsim"
 

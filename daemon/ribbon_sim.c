@@ -2,7 +2,7 @@
  * A table of subcommands, each in its own sim_cmd_<name>.c, run by cli_dispatch. GSL's
  * abort-on-error handler is switched off here, once, so every GSL failure comes back as a code
  * with a reason. */
-#include "cli_dispatch.h"
+#include "cli.h"
 #include "sim_cmd.h"
 
 #include <gsl/gsl_errno.h>
@@ -15,9 +15,7 @@ static const cli_command commands[] = {
     {"continue", sim_cmd_continue, "bifurcation analysis: branches in Delta W, pitchfork / saddle-node, regime"},
     {"sweep", sim_cmd_sweep, "phase diagram over (phi, Gamma): regime per point, boundary Gamma*(phi)"},
     {"bench", sim_cmd_bench, "speed and memory on a scene, one machine-readable line"},
-#ifdef RIBBON_HAVE_TRUSS
     {"truss", sim_cmd_truss, "the reduced double-mass von Mises truss model (paper section 4)"},
-#endif
 };
 
 static const cli_program program = {

@@ -3,18 +3,15 @@
  * code is in its own ctl_<name>.c (see ctl.h for how to add one). */
 #include <gsl/gsl_errno.h>
 
-#include "cli_dispatch.h"
+#include "cli.h"
 #include "ctl.h"
 
 static const cli_command commands[] = {
     {"rail", ctl_rail_main, "drive one rail: status | home | move-abs MM | move-rel MM | jog MM_S | stop | estop | reset | bench"},
     {"ports", ctl_ports_main, "list serial ports (path, USB VID:PID, serial number)"},
-#ifdef RIBBON_HAVE_VISION
     {"track", ctl_track_main, "measure Delta Z and A in every frame of a video: CSV, overlay, --json summary"},
     {"vision-bench", ctl_vision_bench_main, "speed of the tracker, of decoding and of decode + track, one JSON line"},
     {"render", ctl_render_main, "simulate a scene's trial and film it: FFV1 video + ground truth CSV, JSON summary"},
-#endif
-#ifdef RIBBON_HAVE_TRIALS
     {"start", ctl_trials_main, "ask ribbond to run a trial (--set overrides, --note, --wait to follow it)"},
     {"abort", ctl_trials_main, "abort the running trial (rails stop where they are)"},
     {"status", ctl_trials_main, "the daemon's state and the running trial (JSON)"},
@@ -24,7 +21,6 @@ static const cli_command commands[] = {
     {"report", ctl_trials_main, "report ID --out FILE.png: Delta Z and A against Delta W, measured and predicted"},
     {"phase-report", ctl_trials_main, "every trial's measured regime on the predicted (Gamma, phi) phase diagram"},
     {"replay", ctl_trials_main, "replay ID: a recorded trial through tracking and snap detection again"},
-#endif
 };
 
 static const cli_program program = {

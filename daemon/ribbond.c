@@ -18,7 +18,7 @@
 
 #include "rig_daemon.h"
 #include "store.h"
-#include "trial_session.h"
+#include "trial.h"
 
 static void log_line(const char *line)
 {

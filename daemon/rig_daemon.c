@@ -1,6 +1,6 @@
 /* rig_daemon.c: ribbond's state and its control API operations (see rig_daemon.h). */
 #include "rig_daemon.h"
-#include "api_start_body.h"
+#include "api.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -8,7 +8,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "trial_replay.h"
+#include "rail_open.h"
+#include "trial.h"
 #include "trial_report.h"
 
 static void say(rig_daemon *d, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
@@ -47,12 +48,12 @@ int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *o
     if (store_trial_mark_interrupted(d->st, store_wall_now(), &interrupted, w, sizeof w) != STORE_OK)
         say(d, "could not mark interrupted trials: %s", w);
     else if (interrupted > 0)
-        say(d, "%d trial(s) found running at start-up marked interrupted (motion is never resumed)", interrupted);
+        say(d, "%d unfinished trial(s) found at start-up marked interrupted (motion is never resumed)", interrupted);
     if (d->cfg.mode == RIG_MODE_REPLAY) return 0;
     rail_clock clk = d->cfg.clock == RIG_CLOCK_VIRTUAL ? rail_clock_virtual(&d->vclock) : rail_clock_real();
     rail_err re = RAIL_OK;
     /* Both rails from the same (checked) config the loader produced. */
-    re = rail_config_open_pair(&d->cfg.compress, &d->cfg.shear, clk, &d->compress, &d->shear, why, why_len);
+    re = rail_open_pair(&d->cfg.compress, &d->cfg.shear, clk, &d->compress, &d->shear, why, why_len);
     if (re != RAIL_OK) {
         store_close(d->st);
         d->st = NULL;
@@ -268,11 +269,11 @@ static int op_start(void *user, const json_t *body, json_t **out, int *http_stat
         return -1;
     }
     int64_t id = 0;
-    int rc = trial_session_start(&cfg, d->compress, d->shear, req.note, d->log,
-                                 &d->session, &id, why, n);
+    trial_err te = trial_session_start(&cfg, d->compress, d->shear, req.note, d->log,
+                                       &d->session, &id, why, n);
     pthread_mutex_unlock(&d->lock);
-    if (rc) {
-        *http_status = 500;
+    if (te != TRIAL_OK) {
+        *http_status = te == TRIAL_E_REFUSED ? 400 : 500;
         return -1;
     }
     say(d, "trial %lld started (%s mode)", (long long)id, rig_mode_name(cfg.mode));
@@ -331,9 +332,9 @@ static int op_report(void *user, int64_t id, unsigned char **png, size_t *len, i
                      size_t n)
 {
     rig_daemon *d = user;
-    int notfound = 0;
-    if (trial_report_png_bytes(d->st, id, png, len, &notfound, why, n)) {
-        *http_status = notfound ? 404 : 500;
+    trial_err te = trial_report_png_bytes(d->st, id, png, len, why, n);
+    if (te != TRIAL_OK) {
+        *http_status = te == TRIAL_E_NOTFOUND ? 404 : 500;
         return -1;
     }
     return 0;

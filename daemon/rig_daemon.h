@@ -12,12 +12,11 @@
 #include <pthread.h>
 #include <stddef.h>
 
-#include "api_server.h"
+#include "api.h"
 #include "rail.h"
 #include "rig_config.h"
-#include "replay_job.h"
+#include "trial.h"
 #include "store.h"
-#include "trial_session.h"
 
 #define RIG_DAEMON_MAX_OVERRIDES 64
 

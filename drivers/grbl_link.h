@@ -1,5 +1,6 @@
-/* grbl_link.h: private header of the G-code driver: one GRBL controller on one serial port.
- * See grbl_link.c for the flow control. Shared by reference count between axis rails. */
+/* grbl_link.h: one GRBL controller on one serial port (grbl_link.c), the G-code driver's link.
+ * See grbl_link.c for the flow control. Shared by reference count between axis rails: open one
+ * here and pass it to rail_gcode_open for each axis of one controller. */
 #ifndef RIBBON_DRIVERS_GRBL_LINK_H
 #define RIBBON_DRIVERS_GRBL_LINK_H
 
@@ -7,8 +8,11 @@
 #include <stdbool.h>
 
 #include "grbl_proto.h"
-#include "rail_gcode.h"
+#include "rail.h"
+#include "rail_gcode_params.h"
 #include "rail_serial.h"
+
+typedef struct grbl_link grbl_link;
 
 struct grbl_link {
     rail_serial *ser;
@@ -28,6 +32,12 @@ struct grbl_link {
     int baud;
     char why[256];           /* reason of the last failure */
 };
+
+/* Open a controller link on g's port, baud and reply timeout (the rail_clock times replies). */
+rail_err grbl_link_open(grbl_link **out, const rail_gcode_params *g, rail_clock clock, char *why,
+                        size_t why_len);
+/* Drop one reference; the last closes the port. NULL is a no-op. */
+void grbl_link_release(grbl_link *l);
 
 rail_err grbl_link_drain(grbl_link *l);
 rail_err grbl_link_realtime(grbl_link *l, unsigned char c);

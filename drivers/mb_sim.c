@@ -28,7 +28,7 @@
 
 #include "rail_axis.h"
 #include "rail_clock.h"
-#include "rail_modbus.h"
+#include "rail_modbus_map.h"
 #include "rail_sim.h"
 
 #define MBS_CLIENTS 8

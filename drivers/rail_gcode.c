@@ -35,20 +35,6 @@ typedef struct gcode {
     double last_feed;     /* mm/min */
 } gcode;
 
-rail_gcode_params rail_gcode_params_default(void)
-{
-    rail_gcode_params g;
-    memset(&g, 0, sizeof g);
-    g.baud = 115200;
-    g.axis = 'X';
-    g.segment_s = 0.3;
-    g.segments_ahead = 2;
-    g.reply_timeout_s = 0.2;
-    g.stall_timeout_s = 1.0;
-    g.min_segment_mm = 0.05;
-    return g;
-}
-
 static rail_err link_error(rail *r, gcode *k, rail_err e)
 {
     return rail_set_error(r, e, "%s", k->l->why);

@@ -15,26 +15,10 @@
 #define RIBBON_DRIVERS_RAIL_GCODE_H
 
 #include "rail.h"
+#include "rail_gcode_params.h"
 
-typedef struct rail_gcode_params {
-    char port[256];          /* device path or usb:VID:PID[:SERIAL] */
-    int baud;                /* baud, GRBL default 115200 */
-    char axis;               /* 'X', 'Y' or 'Z': the controller axis this rail is */
-    double segment_s;        /* s of motion per jog segment */
-    int segments_ahead;      /* segments queued beyond the current position (1..4) */
-    double reply_timeout_s;  /* s to wait for "ok" or a status report */
-    double stall_timeout_s;  /* s without progress while moving before a stall fault */
-    double min_segment_mm;   /* mm, shortest segment (slow jogs): the dead-process bound is
-                                segments_ahead * max(segment_s * speed, min_segment_mm) */
-} rail_gcode_params;
+typedef struct grbl_link grbl_link; /* one controller (grbl_link.h opens and releases it) */
 
-typedef struct grbl_link grbl_link;
-
-rail_gcode_params rail_gcode_params_default(void);
-/* Open a controller link (the rail_clock times replies). */
-rail_err grbl_link_open(grbl_link **out, const rail_gcode_params *g, rail_clock clock, char *why,
-                        size_t why_len);
-void grbl_link_release(grbl_link *l);
 /* Open one axis as a rail; shared = NULL opens a link of its own, else the link is shared. */
 rail_err rail_gcode_open(rail **out, const rail_params *p, const rail_gcode_params *g, grbl_link *shared,
                          rail_clock clock, char *why, size_t why_len);

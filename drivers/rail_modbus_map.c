@@ -30,7 +30,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "rail_modbus.h"
+#include "rail_modbus_map.h"
 
 static rail_mb_reg R(int addr, int words)
 {

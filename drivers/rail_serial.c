@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "rail_serial_tty.h"
+
 rail_err rail_serial_resolve(const char *spec, char *path, size_t path_len, char *why, size_t why_len)
 {
     if (!spec || !spec[0]) {
@@ -76,25 +78,4 @@ rail_err rail_serial_open(rail_serial **out, const char *spec, int baud, char *w
     snprintf(why, why_len, "cannot open %.100s: libserialport: %.120s; termios: %.120s", path, why_sp,
              why_tty);
     return e;
-}
-
-rail_err rail_serial_write(rail_serial *s, const void *buf, size_t n, double timeout_s)
-{
-    return s->ops->write(s, buf, n, timeout_s);
-}
-
-rail_err rail_serial_read(rail_serial *s, void *buf, size_t n, size_t *got, double timeout_s)
-{
-    return s->ops->read(s, buf, n, got, timeout_s);
-}
-
-void rail_serial_close(rail_serial *s)
-{
-    if (s)
-        s->ops->close(s);
-}
-
-const char *rail_serial_kind(const rail_serial *s)
-{
-    return s->ops->name;
 }

@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rail_serial.h"
+#include "rail_serial_sp.h"
 
 typedef struct sp_serial {
     rail_serial base;

@@ -10,7 +10,7 @@
 #include <termios.h>
 #include <unistd.h>
 
-#include "rail_serial.h"
+#include "rail_serial_tty.h"
 
 typedef struct tty_serial {
     rail_serial base;

@@ -55,6 +55,142 @@ rod_predict_opts rod_predict_opts_fast(const rod_scene *sc)
     return o;
 }
 
+/* Where the shear phase stands between steps: time, Delta W, the step, the last observation,
+ * and the snap watch (onset, detection, peak |A|, end of the first swing). */
+typedef struct shear_state {
+    double t, dw;
+    double dt, dt_base, dt_max;
+    double dz_prev, a_prev;
+    double onset_dw, t_detect, peak;
+    double slow;     /* Delta Z speed below which the snap has not begun (0.1 snap_speed) */
+    int detected, swing_over;
+    double snap_dir; /* sign of d(Delta Z)/dt when the snap was detected */
+} shear_state;
+
+/* The route to the upper state at the scene's Delta L; records Delta Z and the elastic energy
+ * there. */
+static rod_status predict_upper_state(rod_dyn *dyn, const rod_scene *sc, double *k1, rod_obs *ob,
+                                      rod_prediction *out, char *err, size_t errlen)
+{
+    rod *r = dyn->r;
+    rod_route_report rr = {0};
+    rod_status st = rod_route_to_state(r, dyn->s, sc, +1, &rr);
+    out->stage_route = 1;
+    if (st != ROD_OK) {
+        if (err)
+            snprintf(err, errlen, "could not reach the upper state at Delta L = %g (%s, %.0f%% of the route done)",
+                     sc->compression, rod_status_message(st), 100.0 * rr.reached);
+        return st;
+    }
+    rod_observe(r, k1, ob);
+    out->dz_upper = ob->dz;
+    out->elastic_upper = rod_energy(r);
+    if (!(ob->dz > 0.0)) {
+        if (err) snprintf(err, errlen, "the route ended with Delta Z = %g, not in the upper state", ob->dz);
+        return ROD_ERR_BRANCH_LOST;
+    }
+    return ROD_OK;
+}
+
+/* Fast mode's quasi-static start: follows the equilibrium in Delta W until the dynamics must take
+ * over, and starts the shear phase there. */
+static rod_status predict_quasi_start(rod_dyn *dyn, const rod_scene *sc, double dl, double rate,
+                                      double *k1, rod_obs *ob, shear_state *ss, rod_prediction *out,
+                                      char *err, size_t errlen)
+{
+    rod_quasi_report qr;
+    rod_status st = rod_quasi_follow(dyn, sc, dl, rate, sc->shear_max, &qr);
+    if (st != ROD_OK) {
+        if (err) snprintf(err, errlen, "out of memory in the quasi-static start");
+        return st;
+    }
+    ss->dw = qr.dw_switch;
+    ss->t = ss->dw / rate;
+    out->quasi_solves = qr.solves;
+    out->dw_switch = qr.dw_switch;
+    rod_observe(dyn->r, k1, ob);
+    return ROD_OK;
+}
+
+/* Whether the step just taken (of length h) must be redone shorter: after detection, a long step
+ * in which Delta Z or A changed by more than 0.06; before it, a long step that overshot the step
+ * control's targets (predict_next_dt) twice over. Sets the shorter step. */
+static int predict_step_overshot(const rod_predict_opts *o, const rod_obs *ob, double h, shear_state *ss)
+{
+    if (o->adaptive && ss->detected && o->post_snap_dt_max > ss->dt_base) {
+        /* After detection only the peak |A| is still measured: a step may be long while
+         * Delta Z and A change by less than 0.06 in it. */
+        if (h > ss->dt_base && fmax(fabs(ob->dz - ss->dz_prev), fabs(ob->a - ss->a_prev)) > 0.06) {
+            ss->dt = fmax(0.5 * ss->dt, ss->dt_base);
+            return 1;
+        }
+    } else if (o->adaptive && h > ss->dt_base) {
+        /* A long step that overshot the step control's targets (below) twice over is
+         * redone shorter. */
+        double target = fabs(ob->dz - ss->dz_prev) / h >= ss->slow ? ADAPT_CHANGE_MOVING : ADAPT_CHANGE;
+        if (fmax(fabs(ob->dz - ss->dz_prev), fabs(ob->a - ss->a_prev)) > 2.0 * target ||
+            fabs(ob->a - ss->a_prev) > 2.0 * ADAPT_GROWTH * fabs(ss->a_prev) + 1e-12) {
+            ss->dt = fmax(0.25 * ss->dt, ss->dt_base);
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* The snap watch after an accepted step: the onset is the last Delta W where Delta Z moved slower
+ * than ss->slow, the snap is detected when it moves faster than the scene's snap_speed, the peak
+ * |A| is kept throughout, and the first swing ends where Delta Z turns round. */
+static void predict_snap_watch(const rod_scene *sc, const rod_predict_opts *o, const rod_obs *ob,
+                               double speed, shear_state *ss, rod_prediction *out)
+{
+    if (!ss->detected) {
+        if (speed < ss->slow) {
+            ss->onset_dw = ss->dw;
+            ss->peak = fabs(ob->a);
+        } else {
+            ss->peak = fmax(ss->peak, fabs(ob->a));
+        }
+        if (speed > sc->snap_speed) {
+            ss->detected = 1;
+            ss->t_detect = ss->t;
+            out->snapped = 1;
+            out->snap_dw = ss->onset_dw;
+            ss->snap_dir = ob->dz > ss->dz_prev ? 1.0 : -1.0;
+        }
+    } else {
+        ss->peak = fmax(ss->peak, fabs(ob->a));
+        /* The first swing ends where Delta Z turns round. */
+        if (o->end_after_swing && (ob->dz - ss->dz_prev) * ss->snap_dir < 0.0) ss->swing_over = 1;
+    }
+}
+
+/* The next step's length from how much the last one changed Delta Z and A. */
+static void predict_next_dt(const rod_predict_opts *o, double change, double growth, double speed,
+                            int iterations, shear_state *ss)
+{
+    if (o->adaptive && ss->detected && o->post_snap_dt_max > ss->dt_base) {
+        if (change < 0.03) ss->dt = fmin(1.5 * ss->dt, o->post_snap_dt_max);
+        else ss->dt = fmax(0.5 * ss->dt, ss->dt_base);
+    } else if (o->adaptive && !ss->detected) {
+        /* The next step aims at a change of ADAPT_CHANGE in Delta Z and in A, and at a
+         * relative growth of |A| of ADAPT_GROWTH: near an instability the asymmetry grows
+         * exponentially from the imperfection, and that growth sets the snap's delay. Once
+         * Delta Z moves faster than the onset speed the onset is behind (as long as it does
+         * not slow down again) and the steps need only find the detection, so the change
+         * aimed at is ADAPT_CHANGE_MOVING. The step changes by a factor within [0.5, 1.5],
+         * grows only while Newton needs at most 4 iterations, and stays within
+         * [dt, 100 dt]. */
+        double ratio = (speed >= ss->slow ? ADAPT_CHANGE_MOVING : ADAPT_CHANGE) / fmax(change, 1e-300);
+        ratio = fmin(ratio, ADAPT_GROWTH / fmax(growth, 1e-300));
+        ratio = fmin(fmax(ratio, 0.5), iterations <= 4 ? 1.5 : 1.0);
+        ss->dt = fmin(fmax(ss->dt * ratio, ss->dt_base), ss->dt_max);
+    } else if (o->adaptive) {
+        ss->dt = fmax(0.5 * ss->dt, ss->dt_base);
+    } else if (ss->dt < ss->dt_base) {
+        ss->dt = fmin(2.0 * ss->dt, ss->dt_base);
+    }
+}
+
 rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_prediction *out,
                        char *err, size_t errlen)
 {
@@ -73,169 +209,92 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
         goto done;
     }
 
-    rod_route_report rr = {0};
-    st = rod_route_to_state(r, dyn.s, sc, +1, &rr);
-    out->stage_route = 1;
-    if (st != ROD_OK) {
-        if (err)
-            snprintf(err, errlen, "could not reach the upper state at Delta L = %g (%s, %.0f%% of the route done)",
-                     sc->compression, rod_status_message(st), 100.0 * rr.reached);
-        goto done;
-    }
     rod_obs ob;
-    rod_observe(r, k1, &ob);
-    out->dz_upper = ob.dz;
-    out->elastic_upper = rod_energy(r);
-    if (!(ob.dz > 0.0)) {
-        st = ROD_ERR_BRANCH_LOST;
-        if (err) snprintf(err, errlen, "the route ended with Delta Z = %g, not in the upper state", ob.dz);
-        goto done;
-    }
+    st = predict_upper_state(&dyn, sc, k1, &ob, out, err, errlen);
+    if (st != ROD_OK) goto done;
     double l = r->length, dl = sc->compression, rate = sc->shear_rate / l;
     rod_dyn_start(&dyn, dl, 0.0);
 
-    double dt_base = sc->dt, dt = dt_base, dt_max = 100.0 * dt_base;
-    double t = 0.0, dw = 0.0;
+    shear_state ss;
+    memset(&ss, 0, sizeof ss);
+    ss.dt_base = sc->dt;
+    ss.dt = ss.dt_base;
+    ss.dt_max = 100.0 * ss.dt_base;
     if (o->adaptive && o->quasi_static && o->ramp_time <= 0.0 && rate > 0.0) {
-        rod_quasi_report qr;
-        st = rod_quasi_follow(&dyn, sc, dl, rate, sc->shear_max, &qr);
-        if (st != ROD_OK) {
-            if (err) snprintf(err, errlen, "out of memory in the quasi-static start");
-            goto done;
-        }
-        dw = qr.dw_switch;
-        t = dw / rate;
-        out->quasi_solves = qr.solves;
-        out->dw_switch = qr.dw_switch;
-        rod_observe(r, k1, &ob);
+        st = predict_quasi_start(&dyn, sc, dl, rate, k1, &ob, &ss, out, err, errlen);
+        if (st != ROD_OK) goto done;
     }
-    double dz_prev = ob.dz, a_prev = ob.a;
-    double onset_dw = 0.0, t_detect = 0.0, peak = 0.0;
-    double slow = 0.1 * sc->snap_speed;
-    int detected = 0, swing_over = 0;
-    double snap_dir = 0.0; /* sign of d(Delta Z)/dt when the snap was detected */
-    /* Counted in double and saturated: a huge count (dt = 1e-300 in a scene that skipped
-     * rod_scene_check) must not overflow the conversion to long (undefined behaviour). */
-    double cap_steps = ceil(sc->shear_max / rate / dt_base + o->post_snap_time / dt_base) + 1000.0;
+    ss.dz_prev = ob.dz;
+    ss.a_prev = ob.a;
+    ss.slow = 0.1 * sc->snap_speed;
+    /* Counted in double and saturated: a huge count (post_snap_time = 1e300, or a scene that
+     * skipped rod_scene_check) must not overflow the conversion to long (undefined behaviour). */
+    double cap_steps = ceil(sc->shear_max / rate / ss.dt_base + o->post_snap_time / ss.dt_base) + 1000.0;
     long cap = cap_steps < 9.0e18 ? (long)cap_steps : LONG_MAX;
     out->stage_shear = 1;
     out->stage_damping = sc->damping > 0.0;
 
     for (;;) {
-        if (!detected && dw >= sc->shear_max - 1e-12) break;
-        if (detected && (t - t_detect >= o->post_snap_time || swing_over)) break;
+        if (!ss.detected && ss.dw >= sc->shear_max - 1e-12) break;
+        if (ss.detected && (ss.t - ss.t_detect >= o->post_snap_time || ss.swing_over)) break;
         if (out->steps + out->rejected >= cap) {
             st = ROD_ERR_TIME_LIMIT;
-            if (err) snprintf(err, errlen, "step cap of %ld reached at Delta W = %g", cap, dw);
+            if (err) snprintf(err, errlen, "step cap of %ld reached at Delta W = %g", cap, ss.dw);
             goto done;
         }
-        double h = dt;
-        double dw_new = shear_at(t + h, rate, o->ramp_time);
-        if (!detected && dw_new > sc->shear_max) {
+        double h = ss.dt;
+        double dw_new = shear_at(ss.t + h, rate, o->ramp_time);
+        if (!ss.detected && dw_new > sc->shear_max) {
             /* Land exactly on the shear limit (the rate is constant once past the ramp). */
-            h = fmax(1e-12, (sc->shear_max - dw) / rate);
+            h = fmax(1e-12, (sc->shear_max - ss.dw) / rate);
             dw_new = sc->shear_max;
         }
         rod_newton_report nr;
-        rod_status ss = rod_dyn_try(&dyn, h, dl, dw_new, &nr);
-        if (ss != ROD_OK) {
+        rod_status ts = rod_dyn_try(&dyn, h, dl, dw_new, &nr);
+        if (ts != ROD_OK) {
             out->rejected++;
-            dt *= 0.5;
-            if (dt < dt_base / 1024.0) {
-                st = ss;
+            ss.dt *= 0.5;
+            if (ss.dt < ss.dt_base / 1024.0) {
+                st = ts;
                 if (err)
                     snprintf(err, errlen, "time step failed at Delta W = %.6f even at dt = %g s: %s (residual %.3g)",
-                             dw, dt, rod_status_message(ss), nr.residual_rel);
+                             ss.dw, ss.dt, rod_status_message(ts), nr.residual_rel);
                 goto done;
             }
             continue;
         }
         rod_observe(r, k1, &ob);
-        if (o->adaptive && detected && o->post_snap_dt_max > dt_base) {
-            /* After detection only the peak |A| is still measured: a step may be long while
-             * Delta Z and A change by less than 0.06 in it. */
-            if (h > dt_base && fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev)) > 0.06) {
-                rod_dyn_reject(&dyn);
-                out->rejected++;
-                dt = fmax(0.5 * dt, dt_base);
-                continue;
-            }
-        } else if (o->adaptive && h > dt_base) {
-            /* A long step that overshot the step control's targets (below) twice over is
-             * redone shorter. */
-            double target = fabs(ob.dz - dz_prev) / h >= slow ? ADAPT_CHANGE_MOVING : ADAPT_CHANGE;
-            if (fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev)) > 2.0 * target ||
-                fabs(ob.a - a_prev) > 2.0 * ADAPT_GROWTH * fabs(a_prev) + 1e-12) {
-                rod_dyn_reject(&dyn);
-                out->rejected++;
-                dt = fmax(0.25 * dt, dt_base);
-                continue;
-            }
+        if (predict_step_overshot(o, &ob, h, &ss)) {
+            rod_dyn_reject(&dyn);
+            out->rejected++;
+            continue;
         }
         rod_dyn_accept(&dyn);
-        t += h;
-        dw = dw_new;
+        ss.t += h;
+        ss.dw = dw_new;
         out->steps++;
         if (!isfinite(ob.dz) || !isfinite(ob.a) || !isfinite(ob.a_cam)) {
             st = ROD_ERR_NAN;
-            if (err) snprintf(err, errlen, "non-finite observation at Delta W = %g", dw);
+            if (err) snprintf(err, errlen, "non-finite observation at Delta W = %g", ss.dw);
             goto done;
         }
-        double speed = fabs(ob.dz - dz_prev) / h;
-        if (!detected) {
-            if (speed < slow) {
-                onset_dw = dw;
-                peak = fabs(ob.a);
-            } else {
-                peak = fmax(peak, fabs(ob.a));
-            }
-            if (speed > sc->snap_speed) {
-                detected = 1;
-                t_detect = t;
-                out->snapped = 1;
-                out->snap_dw = onset_dw;
-                snap_dir = ob.dz > dz_prev ? 1.0 : -1.0;
-            }
-        } else {
-            peak = fmax(peak, fabs(ob.a));
-            /* The first swing ends where Delta Z turns round. */
-            if (o->end_after_swing && (ob.dz - dz_prev) * snap_dir < 0.0) swing_over = 1;
-        }
+        double speed = fabs(ob.dz - ss.dz_prev) / h;
+        predict_snap_watch(sc, o, &ob, speed, &ss, out);
         if (o->on_sample) {
-            rod_sample smp = {t, dw, ob.dz, ob.a, ob.a_cam, ob.dz_cam, 0, dyn.kinetic, dyn.work, dyn.damped};
+            rod_sample smp = {ss.t, ss.dw, ob.dz, ob.a, ob.a_cam, ob.dz_cam, 0, dyn.kinetic, dyn.work, dyn.damped};
             smp.elastic = rod_energy(r);
             if (o->on_sample(o->user, &smp, r)) break;
         }
-        double change = fmax(fabs(ob.dz - dz_prev), fabs(ob.a - a_prev));
-        double growth = fabs(ob.a - a_prev) / (fabs(a_prev) + 1e-12);
-        dz_prev = ob.dz;
-        a_prev = ob.a;
-        if (o->adaptive && detected && o->post_snap_dt_max > dt_base) {
-            if (change < 0.03) dt = fmin(1.5 * dt, o->post_snap_dt_max);
-            else dt = fmax(0.5 * dt, dt_base);
-        } else if (o->adaptive && !detected) {
-            /* The next step aims at a change of ADAPT_CHANGE in Delta Z and in A, and at a
-             * relative growth of |A| of ADAPT_GROWTH: near an instability the asymmetry grows
-             * exponentially from the imperfection, and that growth sets the snap's delay. Once
-             * Delta Z moves faster than the onset speed the onset is behind (as long as it does
-             * not slow down again) and the steps need only find the detection, so the change
-             * aimed at is ADAPT_CHANGE_MOVING. The step changes by a factor within [0.5, 1.5],
-             * grows only while Newton needs at most 4 iterations, and stays within
-             * [dt, 100 dt]. */
-            double ratio = (speed >= slow ? ADAPT_CHANGE_MOVING : ADAPT_CHANGE) / fmax(change, 1e-300);
-            ratio = fmin(ratio, ADAPT_GROWTH / fmax(growth, 1e-300));
-            ratio = fmin(fmax(ratio, 0.5), nr.iterations <= 4 ? 1.5 : 1.0);
-            dt = fmin(fmax(dt * ratio, dt_base), dt_max);
-        } else if (o->adaptive) {
-            dt = fmax(0.5 * dt, dt_base);
-        } else if (dt < dt_base) {
-            dt = fmin(2.0 * dt, dt_base);
-        }
+        double change = fmax(fabs(ob.dz - ss.dz_prev), fabs(ob.a - ss.a_prev));
+        double growth = fabs(ob.a - ss.a_prev) / (fabs(ss.a_prev) + 1e-12);
+        ss.dz_prev = ob.dz;
+        ss.a_prev = ob.a;
+        predict_next_dt(o, change, growth, speed, nr.iterations, &ss);
     }
-    out->peak_abs_a = peak;
-    out->asymmetric = out->snapped && peak > sc->asym_threshold;
+    out->peak_abs_a = ss.peak;
+    out->asymmetric = out->snapped && ss.peak > sc->asym_threshold;
     out->dz_final = ob.dz;
-    out->sim_time = t;
+    out->sim_time = ss.t;
 
 done:
     out->count = r->count;

@@ -7,7 +7,6 @@
 // camera_tilt_rad,
 // camera_matrix (9 values, row-major), dist (5 values); the last two appear together or not at all.
 #include "vis_internal.hpp"
-#include "cfg_number.h"
 
 #include <cerrno>
 #include <cstdio>
@@ -139,11 +138,21 @@ static bool parse_numbers(const char *s, double *out, int n)
     for (int i = 0; i < n; i++) {
         while (*s == ' ' || *s == '\t' || (i > 0 && *s == ','))
             s++;
-        // The one number grammar of outside input (config/cfg_number.h): plain decimal only.
-        const char *end;
-        if (cfg_number_scan(s, &out[i], &end) != CFG_NUMBER_OK)
+        // Plain decimal only, as every number from outside (docs/hostile-input.md): strtod is
+        // given only the characters of a decimal number, so hex floats, inf and nan never reach
+        // it (vision/ is a floor below config/, whose cfg_number holds the grammar for the rest).
+        size_t span = std::strspn(s, "0123456789+-.eE");
+        if (span == 0 || span >= 64)
             return false;
-        s = end;
+        char num[64];
+        std::memcpy(num, s, span);
+        num[span] = '\0';
+        char *end;
+        errno = 0;
+        out[i] = std::strtod(num, &end);
+        if (end != num + span || !std::isfinite(out[i]) || (out[i] != 0 && std::fabs(out[i]) < 2.2250738585072014e-308))
+            return false;
+        s += span;
     }
     while (*s == ' ' || *s == '\t' || *s == '\r' || *s == '\n')
         s++;

@@ -155,18 +155,10 @@ static int take_reply(const char *url, long status, const char *ctype, reply_buf
     return 0;
 }
 
-int api_client_request(const api_client_config *c, const char *method, const char *path, const json_t *body,
-                       int *http_status, json_t **json_out, unsigned char **bytes_out, size_t *len_out, char *why,
-                       size_t n)
+/* The arguments a request needs, checked before anything is allocated. 0, or -1 with why. */
+static int request_check(const api_client_config *c, const char *method, const char *path, char *why,
+                         size_t n)
 {
-    if (json_out)
-        *json_out = NULL;
-    if (bytes_out)
-        *bytes_out = NULL;
-    if (len_out)
-        *len_out = 0;
-    if (http_status)
-        *http_status = 0;
     if (c == NULL || c->base_url == NULL || method == NULL || path == NULL || path[0] != '/') {
         snprintf(why, n, "api_client_request: need a config with base_url, a method and a path starting with '/'");
         return -1;
@@ -189,6 +181,118 @@ int api_client_request(const api_client_config *c, const char *method, const cha
             snprintf(why, n, "HTTP method '%.20s' must be upper-case letters", method);
             return -1;
         }
+    return 0;
+}
+
+/* The request's headers (and the Authorization line, in *auth, which the caller frees). NULL
+ * with why when memory runs out. */
+static struct curl_slist *request_headers(const api_client_config *c, bool has_body, size_t payload_len,
+                                          char **auth, char *why, size_t n)
+{
+    struct curl_slist *headers = NULL;
+    headers = curl_slist_append(headers, "Accept: application/json, image/png");
+    if (has_body)
+        headers = curl_slist_append(headers, "Content-Type: application/json");
+    if (payload_len > 1024)
+        headers = curl_slist_append(headers, "Expect: 100-continue");
+    else
+        headers = curl_slist_append(headers, "Expect:");
+    if (c->token != NULL && c->token[0] != '\0') {
+        size_t alen = strlen(c->token) + 32;
+        *auth = malloc(alen);
+        if (*auth == NULL) {
+            snprintf(why, n, "out of memory");
+            curl_slist_free_all(headers);
+            return NULL;
+        }
+        snprintf(*auth, alen, "Authorization: Bearer %s", c->token);
+        headers = curl_slist_append(headers, *auth);
+    }
+    if (headers == NULL)
+        snprintf(why, n, "out of memory");
+    return headers;
+}
+
+/* Timeouts, no proxy, no redirects, http(s) only, the reply into b, the method and the body. */
+static void request_options(CURL *h, const api_client_config *c, const char *url, const char *method,
+                            const char *payload, size_t payload_len, bool has_body,
+                            struct curl_slist *headers, reply_buf *b, char *errbuf)
+{
+    long timeout_ms = (long)(c->timeout_s * 1000.0);
+    if (timeout_ms < 1)
+        timeout_ms = 1;
+    long connect_ms = timeout_ms < 5000 ? timeout_ms : 5000;
+    curl_easy_setopt(h, CURLOPT_URL, url);
+    curl_easy_setopt(h, CURLOPT_PROTOCOLS_STR, "http,https");
+    curl_easy_setopt(h, CURLOPT_PROXY, "");
+    curl_easy_setopt(h, CURLOPT_NOSIGNAL, 1L);
+    curl_easy_setopt(h, CURLOPT_FOLLOWLOCATION, 0L);
+    curl_easy_setopt(h, CURLOPT_TIMEOUT_MS, timeout_ms);
+    curl_easy_setopt(h, CURLOPT_CONNECTTIMEOUT_MS, connect_ms);
+    curl_easy_setopt(h, CURLOPT_ERRORBUFFER, errbuf);
+    curl_easy_setopt(h, CURLOPT_HTTPHEADER, headers);
+    curl_easy_setopt(h, CURLOPT_WRITEFUNCTION, on_data);
+    curl_easy_setopt(h, CURLOPT_WRITEDATA, b);
+    curl_easy_setopt(h, CURLOPT_USERAGENT, "ribbonctl");
+    if (strcmp(method, "GET") == 0 && !has_body) {
+        curl_easy_setopt(h, CURLOPT_HTTPGET, 1L);
+    } else {
+        if (strcmp(method, "POST") != 0)
+            curl_easy_setopt(h, CURLOPT_CUSTOMREQUEST, method);
+        if (has_body || strcmp(method, "POST") == 0) {
+            curl_easy_setopt(h, CURLOPT_POSTFIELDS, payload ? payload : "");
+            curl_easy_setopt(h, CURLOPT_POSTFIELDSIZE_LARGE, (curl_off_t)payload_len);
+        }
+    }
+}
+
+/* Why curl_easy_perform failed, in the user's terms (is ribbond running, timed out, too big). */
+static void transfer_reason(CURL *h, CURLcode rc, const api_client_config *c, int blen, const char *method,
+                            const char *path, const char *url, const char *errbuf, const reply_buf *b,
+                            char *why, size_t n)
+{
+    char reason[256];
+    switch (rc) {
+    case CURLE_COULDNT_CONNECT:
+        connect_reason(h, rc, errbuf, reason, sizeof reason);
+        snprintf(why, n, "cannot reach ribbond at %.*s: %s; is it running? (ribbond --config FILE)", blen,
+                 c->base_url, reason);
+        break;
+    case CURLE_COULDNT_RESOLVE_HOST:
+        snprintf(why, n, "cannot reach ribbond at %.*s: unknown host (%s)", blen, c->base_url,
+                 errbuf[0] ? errbuf : curl_easy_strerror(rc));
+        break;
+    case CURLE_OPERATION_TIMEDOUT:
+        snprintf(why, n, "ribbond at %.*s did not answer %s %s within %g s", blen, c->base_url, method, path,
+                 c->timeout_s);
+        break;
+    case CURLE_WRITE_ERROR:
+        if (b->overflow) {
+            snprintf(why, n, "reply to %s %s is larger than %u bytes (or memory ran out)", method, path,
+                     API_CLIENT_MAX_REPLY);
+            break;
+        }
+        /* fall through */
+    default:
+        snprintf(why, n, "%s %s failed: %s", method, url, errbuf[0] ? errbuf : curl_easy_strerror(rc));
+        break;
+    }
+}
+
+int api_client_request(const api_client_config *c, const char *method, const char *path, const json_t *body,
+                       int *http_status, json_t **json_out, unsigned char **bytes_out, size_t *len_out, char *why,
+                       size_t n)
+{
+    if (json_out)
+        *json_out = NULL;
+    if (bytes_out)
+        *bytes_out = NULL;
+    if (len_out)
+        *len_out = 0;
+    if (http_status)
+        *http_status = 0;
+    if (request_check(c, method, path, why, n) != 0)
+        return -1;
 
     /* URL: base without trailing slashes, then path. */
     size_t blen = strlen(c->base_url);
@@ -223,84 +327,15 @@ int api_client_request(const api_client_config *c, const char *method, const cha
         snprintf(why, n, "cannot create a libcurl handle (was api_client_global_init called?)");
         goto done;
     }
-    headers = curl_slist_append(headers, "Accept: application/json, image/png");
-    if (body != NULL)
-        headers = curl_slist_append(headers, "Content-Type: application/json");
-    if (payload_len > 1024)
-        headers = curl_slist_append(headers, "Expect: 100-continue");
-    else
-        headers = curl_slist_append(headers, "Expect:");
-    if (has_token) {
-        size_t alen = strlen(c->token) + 32;
-        auth = malloc(alen);
-        if (auth == NULL) {
-            snprintf(why, n, "out of memory");
-            goto done;
-        }
-        snprintf(auth, alen, "Authorization: Bearer %s", c->token);
-        headers = curl_slist_append(headers, auth);
-    }
-    if (headers == NULL) {
-        snprintf(why, n, "out of memory");
+    headers = request_headers(c, body != NULL, payload_len, &auth, why, n);
+    if (headers == NULL)
         goto done;
-    }
 
     char errbuf[CURL_ERROR_SIZE] = "";
-    long timeout_ms = (long)(c->timeout_s * 1000.0);
-    if (timeout_ms < 1)
-        timeout_ms = 1;
-    long connect_ms = timeout_ms < 5000 ? timeout_ms : 5000;
-    curl_easy_setopt(h, CURLOPT_URL, url);
-    curl_easy_setopt(h, CURLOPT_PROTOCOLS_STR, "http,https");
-    curl_easy_setopt(h, CURLOPT_PROXY, "");
-    curl_easy_setopt(h, CURLOPT_NOSIGNAL, 1L);
-    curl_easy_setopt(h, CURLOPT_FOLLOWLOCATION, 0L);
-    curl_easy_setopt(h, CURLOPT_TIMEOUT_MS, timeout_ms);
-    curl_easy_setopt(h, CURLOPT_CONNECTTIMEOUT_MS, connect_ms);
-    curl_easy_setopt(h, CURLOPT_ERRORBUFFER, errbuf);
-    curl_easy_setopt(h, CURLOPT_HTTPHEADER, headers);
-    curl_easy_setopt(h, CURLOPT_WRITEFUNCTION, on_data);
-    curl_easy_setopt(h, CURLOPT_WRITEDATA, &b);
-    curl_easy_setopt(h, CURLOPT_USERAGENT, "ribbonctl");
-    if (strcmp(method, "GET") == 0 && body == NULL) {
-        curl_easy_setopt(h, CURLOPT_HTTPGET, 1L);
-    } else {
-        if (strcmp(method, "POST") != 0)
-            curl_easy_setopt(h, CURLOPT_CUSTOMREQUEST, method);
-        if (body != NULL || strcmp(method, "POST") == 0) {
-            curl_easy_setopt(h, CURLOPT_POSTFIELDS, payload ? payload : "");
-            curl_easy_setopt(h, CURLOPT_POSTFIELDSIZE_LARGE, (curl_off_t)payload_len);
-        }
-    }
-
+    request_options(h, c, url, method, payload, payload_len, body != NULL, headers, &b, errbuf);
     CURLcode rc = curl_easy_perform(h);
     if (rc != CURLE_OK) {
-        char reason[256];
-        switch (rc) {
-        case CURLE_COULDNT_CONNECT:
-            connect_reason(h, rc, errbuf, reason, sizeof reason);
-            snprintf(why, n, "cannot reach ribbond at %.*s: %s; is it running? (ribbond --config FILE)", (int)blen,
-                     c->base_url, reason);
-            break;
-        case CURLE_COULDNT_RESOLVE_HOST:
-            snprintf(why, n, "cannot reach ribbond at %.*s: unknown host (%s)", (int)blen, c->base_url,
-                     errbuf[0] ? errbuf : curl_easy_strerror(rc));
-            break;
-        case CURLE_OPERATION_TIMEDOUT:
-            snprintf(why, n, "ribbond at %.*s did not answer %s %s within %g s", (int)blen, c->base_url, method, path,
-                     c->timeout_s);
-            break;
-        case CURLE_WRITE_ERROR:
-            if (b.overflow) {
-                snprintf(why, n, "reply to %s %s is larger than %u bytes (or memory ran out)", method, path,
-                         API_CLIENT_MAX_REPLY);
-                break;
-            }
-            /* fall through */
-        default:
-            snprintf(why, n, "%s %s failed: %s", method, url, errbuf[0] ? errbuf : curl_easy_strerror(rc));
-            break;
-        }
+        transfer_reason(h, rc, c, (int)blen, method, path, url, errbuf, &b, why, n);
         goto done;
     }
 

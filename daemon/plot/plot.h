@@ -1,16 +1,18 @@
 /*
  * plot.h: the lab's figures as PNG files, drawn with PLplot (pngcairo device).
  *
- * Three pure functions: plain arrays in, one PNG file out. No database, no simulator: callers
- * (ribbonctl report / phase-report, the API's report.png, ribbon-sim continue --plot) gather the
- * numbers and pass them here.
+ * Pure functions: plain arrays in, one PNG file out. No database, no simulator: callers
+ * (ribbonctl report / phase-report, the API's report.png, ribbon-sim continue --plot and
+ * sweep --plot) gather the numbers and pass them here. The one PLplot stack of the project.
  *
  *   plot_trial_report   one trial: Delta Z and A against Delta W, measured and predicted, snaps marked
  *   plot_phase_report   the predicted (Gamma, phi) phase diagram with every trial's measured regime
  *   plot_branches       continuation branches: stable black, unstable grey, pitchfork circles,
- *                       saddle-node squares (the paper's figures 3a and 4a)
+ *                       saddle-node squares (the paper's figures 3a and 4a); plot_branches_panels
+ *                       puts several side by side (ribbon-sim continue --plot)
+ *   plot_sweep          a sweep's regime map: a marker per point, the located boundaries
  *
- * Conventions shared by all three:
+ * Conventions shared by all of them:
  *   - Quantities are the paper's normalised ones: Delta W = dw/l, Delta Z = dz/l (dimensionless),
  *     A in rad, Gamma as a fraction of the free length l, phi in degrees.
  *   - NaN in a data array is a gap: the point is skipped and a line is broken there, never drawn
@@ -131,7 +133,9 @@ typedef struct plot_branch {
 
 typedef enum plot_event_kind {
     PLOT_EVENT_PITCHFORK = 0, /* drawn as a circle */
-    PLOT_EVENT_SADDLE_NODE    /* drawn as a square */
+    PLOT_EVENT_SADDLE_NODE,   /* drawn as a square */
+    PLOT_EVENT_OTHER          /* any other located event (a bifurcation not classified as
+                                 either): drawn as a diamond */
 } plot_event_kind;
 
 typedef struct plot_event {
@@ -153,5 +157,45 @@ typedef struct plot_branch_data {
 
 void plot_branch_data_default(plot_branch_data *d);
 plot_status plot_branches(const char *png_path, const plot_branch_data *d, char *why, size_t why_len);
+
+/* Several continuation diagrams side by side on one width_px x height_px page (0 = default),
+ * panel k in the k-th vertical slice, each drawn as plot_branches draws one (the panels' own
+ * width_px / height_px are not used). ribbon-sim continue --plot: Delta Z and A against Delta W. */
+#define PLOT_PANELS_MAX 4
+plot_status plot_branches_panels(const char *png_path, const plot_branch_data *panels,
+                                 size_t n_panels, int width_px, int height_px, char *why,
+                                 size_t why_len);
+
+/* plot_sweep: the regime map of a parameter sweep (ribbon-sim sweep --plot). Each classified
+ * point is a marker: circle asymmetric (pitchfork first), square symmetric (saddle-node first),
+ * cross otherwise (no snap, failed). Located boundaries are lines (dark grey, solid or dashed),
+ * optionally with small diamonds at their points. Axes and their meaning are the caller's: phi
+ * and Gamma for a phase diagram, Gamma and the first instability's Delta W for one phi. */
+typedef struct plot_sweep_point {
+    double x, y;        /* NaN in either: the point is skipped */
+    plot_regime regime;
+} plot_sweep_point;
+
+typedef struct plot_sweep_line {
+    const double *x, *y; /* n points in order; NaN is a gap */
+    size_t n;
+    bool dashed;         /* dashed (a boundary between other regimes) or solid */
+    bool marked;         /* a small diamond at every point */
+} plot_sweep_line;
+
+typedef struct plot_sweep_data {
+    const char *title;               /* NULL ok */
+    const char *x_label, *y_label;   /* NULL = "" */
+    double x0, x1, y0, y1;           /* the swept span; the axes pad it by 6% (x) and 8% (y) */
+    const plot_sweep_point *points;
+    size_t n_points;
+    const plot_sweep_line *lines;
+    size_t n_lines;
+    int width_px, height_px;         /* 0 = default */
+} plot_sweep_data;
+
+/* Nothing to draw, span [0, 1] x [0, 1], default size. */
+void plot_sweep_data_default(plot_sweep_data *d);
+plot_status plot_sweep(const char *png_path, const plot_sweep_data *d, char *why, size_t why_len);
 
 #endif

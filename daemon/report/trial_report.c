@@ -11,23 +11,18 @@
 
 #include "plot.h"
 #include "rod_protocol.h"
-#include "trial_calib.h"
 
-int trial_report_png(store *st, int64_t id, const char *png_path, int *notfound, char *why, size_t why_len)
+trial_err trial_report_png(store *st, int64_t id, const char *png_path, char *why, size_t why_len)
 {
-    *notfound = 0;
     store_trial t;
     store_err e = store_trial_get(st, id, &t, why, why_len);
-    if (e != STORE_OK) {
-        *notfound = e == STORE_E_NOTFOUND;
-        return -1;
-    }
+    if (e != STORE_OK) return e == STORE_E_NOTFOUND ? TRIAL_E_NOTFOUND : TRIAL_E_FAILED;
     store_curve meas = {0}, pred = {0};
-    if (store_trial_curve(st, id, &meas, why, why_len) != STORE_OK) return -1;
+    if (store_trial_curve(st, id, &meas, why, why_len) != STORE_OK) return TRIAL_E_FAILED;
     /* Only the shear: frames from the start of shearing to the return (the compression's frames
      * are at Delta W = 0 and the return's retrace the lower branch). */
     double t_check, t_shear, t_return;
-    trial_state_times(st, id, &t_check, &t_shear, &t_return);
+    store_events_state_times(st, id, &t_check, &t_shear, &t_return);
     if (isfinite(t_shear)) {
         size_t m = 0;
         for (size_t k = 0; k < meas.n; k++) {
@@ -64,21 +59,20 @@ int trial_report_png(store *st, int64_t id, const char *png_path, int *notfound,
     plot_status ps = plot_trial_report(png_path, &d, why, why_len);
     store_curve_free(&meas);
     if (have_pred) store_prediction_free(&p);
-    return ps == PLOT_OK ? 0 : -1;
+    return ps == PLOT_OK ? TRIAL_OK : TRIAL_E_FAILED;
 }
 
-int trial_report_png_bytes(store *st, int64_t id, unsigned char **png, size_t *len, int *notfound, char *why,
-                           size_t why_len)
+trial_err trial_report_png_bytes(store *st, int64_t id, unsigned char **png, size_t *len, char *why, size_t why_len)
 {
     char path[] = "/tmp/ribbon-report-XXXXXX.png";
     int fd = mkstemps(path, 4);
     if (fd < 0) {
         snprintf(why, why_len, "report: no temporary file: %m");
-        return -1;
+        return TRIAL_E_FAILED;
     }
     close(fd);
-    int rc = trial_report_png(st, id, path, notfound, why, why_len);
-    if (rc == 0) {
+    trial_err rc = trial_report_png(st, id, path, why, why_len);
+    if (rc == TRIAL_OK) {
         FILE *f = fopen(path, "rb");
         long n = -1;
         if (f && fseek(f, 0, SEEK_END) == 0) n = ftell(f);
@@ -88,7 +82,7 @@ int trial_report_png_bytes(store *st, int64_t id, unsigned char **png, size_t *l
             free(*png);
             *png = NULL;
             snprintf(why, why_len, "report: could not read the image back");
-            rc = -1;
+            rc = TRIAL_E_FAILED;
         } else {
             *len = (size_t)n;
         }

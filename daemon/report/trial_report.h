@@ -1,21 +1,23 @@
 /* trial_report.h: the figures made from the store: a trial's report (Delta Z and A against
  * Delta W, measured and predicted, snaps marked) and the phase report (every trial's measured
  * regime on the predicted (Gamma, phi) phase diagram). Used by the API (report.png) and by
- * ribbonctl (report, phase-report), with or without a daemon. Plotting itself is plot.h's. */
-#ifndef RIBBON_DAEMON_TRIAL_REPORT_H
-#define RIBBON_DAEMON_TRIAL_REPORT_H
+ * ribbonctl (report, phase-report), with or without a daemon. Plotting itself is plot.h's. The
+ * report room's face. */
+#ifndef RIBBON_REPORT_TRIAL_REPORT_H
+#define RIBBON_REPORT_TRIAL_REPORT_H
 
 #include <stddef.h>
 #include <stdint.h>
 
 #include "scene.h"
 #include "store.h"
+#include "trial.h"
 
-/* Writes the report of trial id to png_path. *notfound = 1 when there is no such trial. */
-int trial_report_png(store *st, int64_t id, const char *png_path, int *notfound, char *why, size_t why_len);
+/* Writes the report of trial id to png_path: TRIAL_E_NOTFOUND when there is no such trial,
+ * TRIAL_E_FAILED when the store or the plot failed (why says which). */
+trial_err trial_report_png(store *st, int64_t id, const char *png_path, char *why, size_t why_len);
 /* The same as malloc'ed PNG bytes. */
-int trial_report_png_bytes(store *st, int64_t id, unsigned char **png, size_t *len, int *notfound, char *why,
-                           size_t why_len);
+trial_err trial_report_png_bytes(store *st, int64_t id, unsigned char **png, size_t *len, char *why, size_t why_len);
 
 /* The predicted phase diagram: regime codes ("asymmetric", ...) of scene `base` with its crease
  * angle and position replaced by each (phi_deg[i], gamma[j]); grid[i * n_gamma + j]. Each point is

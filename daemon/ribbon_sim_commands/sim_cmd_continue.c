@@ -7,9 +7,7 @@
 #include "rod_bifurcation.h"
 #include "sim_cmd.h"
 #include "sim_opts.h"
-#ifdef RIBBON_HAVE_PLPLOT
 #include "sim_plot_continue.h"
-#endif
 
 #include <errno.h>
 #include <jansson.h>
@@ -212,12 +210,6 @@ int sim_cmd_continue(int argc, char **argv)
     sim_opts o;
     int rc = sim_opts_parse(argc, argv, "json", usage, &o);
     if (rc) return rc == 1 ? 0 : 2;
-#ifndef RIBBON_HAVE_PLPLOT
-    if (x.plot) {
-        fprintf(stderr, "ribbon-sim continue: --plot needs PLplot, which this build does not have\n");
-        return 2;
-    }
-#endif
     rod_scene sc;
     if (!sim_opts_load_scene(&o, &sc)) return 2;
     rod_analysis_opts ao = rod_analysis_opts_default();
@@ -232,7 +224,6 @@ int sim_cmd_continue(int argc, char **argv)
     }
     int status = 0;
     if (x.csv && !write_csv(x.csv, &a)) status = 1;
-#ifdef RIBBON_HAVE_PLPLOT
     if (x.plot) {
         char title[256], perr[256];
         snprintf(title, sizeof title, "#gG %.3g, #gf %.3g#uo#d, #gDL %.3g, N %d", sc.fold_position, sc.fold_angle_deg,
@@ -242,7 +233,6 @@ int sim_cmd_continue(int argc, char **argv)
             status = 1;
         }
     }
-#endif
     if (o.json) print_json(o.scene, &sc, &a);
     else print_text(o.scene, &sc, &a);
     rod_analysis_free(&a);

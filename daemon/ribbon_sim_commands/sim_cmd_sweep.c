@@ -22,9 +22,7 @@
 #include "cfg_number.h"
 #include "sim_cmd.h"
 #include "sim_opts.h"
-#ifdef RIBBON_HAVE_PLPLOT
 #include "sim_plot_sweep.h"
-#endif
 #include "sim_sweep_row.h"
 
 #include <errno.h>
@@ -328,6 +326,98 @@ static int compare_boundary(const void *a, const void *b)
     return x->gamma < y->gamma ? -1 : x->gamma > y->gamma;
 }
 
+/* --jobs (default: the cores online, kept to 1..64). 0, or 2 (usage) after saying why. */
+static int parse_jobs(const char *jobs_s, long *out)
+{
+    long jobs = sysconf(_SC_NPROCESSORS_ONLN);
+    if (jobs_s) {
+        char *end;
+        jobs = strtol(jobs_s, &end, 10);
+        if (*end || jobs < 1 || jobs > 64) {
+            fprintf(stderr, "ribbon-sim sweep: --jobs needs 1..64, got '%s'\n", jobs_s);
+            return 2;
+        }
+    }
+    if (jobs < 1) jobs = 1;
+    if (jobs > 64) jobs = 64;
+    *out = jobs;
+    return 0;
+}
+
+/* --gamma-tol (default 1e-3). 0, or 2 (usage) after saying why. */
+static int parse_gamma_tol(const char *tol_s, double *out)
+{
+    *out = 1e-3;
+    if (tol_s) {
+        char *end;
+        *out = cfg_number_strtod(tol_s, &end);
+        if (*end || !(*out > 0.0) || !isfinite(*out)) {
+            fprintf(stderr, "ribbon-sim sweep: --gamma-tol needs a positive number, got '%s'\n", tol_s);
+            return 2;
+        }
+    }
+    return 0;
+}
+
+/* Phase 2 tasks from the grid's regimes: every pair of neighbouring Gammas of one phi whose
+ * regimes differ and whose boundary is not in the table yet. The number of tasks, or -1 when
+ * memory runs out. */
+static int boundary_tasks(sweep *sw)
+{
+    int np = sw->nphi, ng = sw->ngamma;
+    int cap = np * (ng > 1 ? ng - 1 : 1), nb = 0;
+    sw->btask_phi = malloc(sizeof(int) * (size_t)cap);
+    sw->btask_lo = malloc(sizeof(double) * (size_t)cap);
+    sw->btask_hi = malloc(sizeof(double) * (size_t)cap);
+    if (!sw->btask_phi || !sw->btask_lo || !sw->btask_hi) return -1;
+    for (int i = 0; i < np && !interrupted; i++)
+        for (int j = 0; j + 1 < ng; j++) {
+            const sweep_row *a = sweep_table_find(&sw->table, sw->phi[i], sw->gamma[j]);
+            const sweep_row *b = sweep_table_find(&sw->table, sw->phi[i], sw->gamma[j + 1]);
+            if (!a || !b || !is_regime(a) || !is_regime(b) || !strcmp(a->regime, b->regime)) continue;
+            if (sweep_table_find_boundary(&sw->table, sw->phi[i], sw->gamma[j], sw->gamma[j + 1])) continue;
+            sw->btask_phi[nb] = i;
+            sw->btask_lo[nb] = sw->gamma[j];
+            sw->btask_hi[nb] = sw->gamma[j + 1];
+            nb++;
+        }
+    return nb;
+}
+
+/* Summary: the boundaries inside the grid, by phi (text, or one JSON line). */
+static void print_summary(const sweep *sw, const sim_opts *o, long jobs, double ga, double gb)
+{
+    int np = sw->nphi, ng = sw->ngamma;
+    const sweep_row **bs = malloc(sizeof(*bs) * (sw->table.n ? sw->table.n : 1));
+    int nbs = 0;
+    for (size_t k = 0; bs && k < sw->table.n; k++) {
+        const sweep_row *r = &sw->table.rows[k];
+        if (r->kind != 'b') continue;
+        for (int i = 0; i < np; i++)
+            if (fabs(r->phi - sw->phi[i]) <= 1e-9 * fmax(1.0, fabs(r->phi)) && r->gamma >= fmin(ga, gb) &&
+                r->gamma <= fmax(ga, gb)) {
+                bs[nbs++] = r;
+                break;
+            }
+    }
+    if (bs) qsort(bs, (size_t)nbs, sizeof *bs, compare_boundary);
+    if (o->json) {
+        printf("{\"out\":\"%s\",\"points\":%d,\"jobs\":%ld,\"wall_s\":%.3f,\"boundaries\":[", o->out, np * ng, jobs,
+               now() - sw->t0);
+        for (int k = 0; k < nbs; k++)
+            printf("%s{\"phi_deg\":%.10g,\"gamma\":%.10g,\"gamma_lo\":%.10g,\"gamma_hi\":%.10g,\"note\":\"%s\"}",
+                   k ? "," : "", bs[k]->phi, bs[k]->gamma, bs[k]->gamma_lo, bs[k]->gamma_hi, bs[k]->note);
+        printf("]}\n");
+    } else {
+        printf("sweep        %s: %d x %d grid, %d jobs, %.1f s wall\n", o->out, np, ng, (int)jobs, now() - sw->t0);
+        if (nbs == 0) printf("boundary     none in the grid (one regime throughout, or failures)\n");
+        for (int k = 0; k < nbs; k++)
+            printf("boundary     phi %6.2f deg: Gamma* = %.4f (bracket %.4f .. %.4f; %s)\n", bs[k]->phi, bs[k]->gamma,
+                   bs[k]->gamma_lo, bs[k]->gamma_hi, bs[k]->note);
+    }
+    free(bs);
+}
+
 int sim_cmd_sweep(int argc, char **argv)
 {
     const char *phi_s = NULL, *gamma_s = NULL, *plot = NULL, *jobs_s = NULL, *tol_s = NULL;
@@ -343,35 +433,12 @@ int sim_cmd_sweep(int argc, char **argv)
         fprintf(stderr, "ribbon-sim sweep: --out FILE.csv is required\n");
         return 2;
     }
-#ifndef RIBBON_HAVE_PLPLOT
-    if (plot) {
-        fprintf(stderr, "ribbon-sim sweep: --plot needs PLplot, which this build does not have\n");
-        return 2;
-    }
-#endif
-    long jobs = sysconf(_SC_NPROCESSORS_ONLN);
-    if (jobs_s) {
-        char *end;
-        jobs = strtol(jobs_s, &end, 10);
-        if (*end || jobs < 1 || jobs > 64) {
-            fprintf(stderr, "ribbon-sim sweep: --jobs needs 1..64, got '%s'\n", jobs_s);
-            return 2;
-        }
-    }
-    if (jobs < 1) jobs = 1;
-    if (jobs > 64) jobs = 64;
+    long jobs;
+    if (parse_jobs(jobs_s, &jobs)) return 2;
     sweep sw;
     memset(&sw, 0, sizeof sw);
     interrupted = 0;
-    sw.gamma_tol = 1e-3;
-    if (tol_s) {
-        char *end;
-        sw.gamma_tol = cfg_number_strtod(tol_s, &end);
-        if (*end || !(sw.gamma_tol > 0.0) || !isfinite(sw.gamma_tol)) {
-            fprintf(stderr, "ribbon-sim sweep: --gamma-tol needs a positive number, got '%s'\n", tol_s);
-            return 2;
-        }
-    }
+    if (parse_gamma_tol(tol_s, &sw.gamma_tol)) return 2;
     if (!sim_opts_load_scene(&o, &sw.base)) return 2;
     sw.sign = sw.base.fold_angle_deg < 0.0 ? -1.0 : 1.0;
     sw.phi = grid(pa, pb, np);
@@ -405,23 +472,8 @@ int sim_cmd_sweep(int argc, char **argv)
 
     run_phase(&sw, (int)jobs, points_worker, np * ng);
 
-    /* Phase 2 tasks from the grid's regimes. */
-    int cap = np * (ng > 1 ? ng - 1 : 1), nb = 0;
-    sw.btask_phi = malloc(sizeof(int) * (size_t)cap);
-    sw.btask_lo = malloc(sizeof(double) * (size_t)cap);
-    sw.btask_hi = malloc(sizeof(double) * (size_t)cap);
-    if (!sw.btask_phi || !sw.btask_lo || !sw.btask_hi) goto done_sig;
-    for (int i = 0; i < np && !interrupted; i++)
-        for (int j = 0; j + 1 < ng; j++) {
-            const sweep_row *a = sweep_table_find(&sw.table, sw.phi[i], sw.gamma[j]);
-            const sweep_row *b = sweep_table_find(&sw.table, sw.phi[i], sw.gamma[j + 1]);
-            if (!a || !b || !is_regime(a) || !is_regime(b) || !strcmp(a->regime, b->regime)) continue;
-            if (sweep_table_find_boundary(&sw.table, sw.phi[i], sw.gamma[j], sw.gamma[j + 1])) continue;
-            sw.btask_phi[nb] = i;
-            sw.btask_lo[nb] = sw.gamma[j];
-            sw.btask_hi[nb] = sw.gamma[j + 1];
-            nb++;
-        }
+    int nb = boundary_tasks(&sw);
+    if (nb < 0) goto done_sig;
     if (!interrupted) run_phase(&sw, (int)jobs, boundary_worker, nb);
     if (interrupted) {
         fprintf(stderr, "ribbon-sim sweep: interrupted; finished rows are in %s, rerun to resume\n", o.out);
@@ -429,39 +481,8 @@ int sim_cmd_sweep(int argc, char **argv)
         goto done_sig;
     }
 
-    /* Summary: the boundaries, by phi. */
-    const sweep_row **bs = malloc(sizeof(*bs) * (sw.table.n ? sw.table.n : 1));
-    int nbs = 0;
-    for (size_t k = 0; bs && k < sw.table.n; k++) {
-        const sweep_row *r = &sw.table.rows[k];
-        if (r->kind != 'b') continue;
-        for (int i = 0; i < np; i++)
-            if (fabs(r->phi - sw.phi[i]) <= 1e-9 * fmax(1.0, fabs(r->phi)) && r->gamma >= fmin(ga, gb) &&
-                r->gamma <= fmax(ga, gb)) {
-                bs[nbs++] = r;
-                break;
-            }
-    }
-    if (bs) qsort(bs, (size_t)nbs, sizeof *bs, compare_boundary);
-    int npoints = 0;
-    for (size_t k = 0; k < sw.table.n; k++) npoints += sw.table.rows[k].kind == 'p';
-    if (o.json) {
-        printf("{\"out\":\"%s\",\"points\":%d,\"jobs\":%ld,\"wall_s\":%.3f,\"boundaries\":[", o.out, np * ng, jobs,
-               now() - sw.t0);
-        for (int k = 0; k < nbs; k++)
-            printf("%s{\"phi_deg\":%.10g,\"gamma\":%.10g,\"gamma_lo\":%.10g,\"gamma_hi\":%.10g,\"note\":\"%s\"}",
-                   k ? "," : "", bs[k]->phi, bs[k]->gamma, bs[k]->gamma_lo, bs[k]->gamma_hi, bs[k]->note);
-        printf("]}\n");
-    } else {
-        printf("sweep        %s: %d x %d grid, %d jobs, %.1f s wall\n", o.out, np, ng, (int)jobs, now() - sw.t0);
-        if (nbs == 0) printf("boundary     none in the grid (one regime throughout, or failures)\n");
-        for (int k = 0; k < nbs; k++)
-            printf("boundary     phi %6.2f deg: Gamma* = %.4f (bracket %.4f .. %.4f; %s)\n", bs[k]->phi, bs[k]->gamma,
-                   bs[k]->gamma_lo, bs[k]->gamma_hi, bs[k]->note);
-    }
-    free(bs);
+    print_summary(&sw, &o, jobs, ga, gb);
     status = 0;
-#ifdef RIBBON_HAVE_PLPLOT
     if (plot) {
         char perr[256];
         if (sim_plot_sweep(plot, &sw.table, pa, pb, ga, gb, perr, sizeof perr) != 0) {
@@ -469,8 +490,6 @@ int sim_cmd_sweep(int argc, char **argv)
             status = 1;
         }
     }
-#endif
-    (void)npoints;
 
 done_sig:
     sigaction(SIGINT, &old, NULL);

@@ -1,24 +1,20 @@
-/* sim_plot_sweep.c: the sweep figure with PLplot (see sim_plot_sweep.h). One PLplot stream is
- * created and ended per call (sim_plot_page.h); markers are drawn as outlined polygons in data
- * units scaled to stay round on the page. */
-#include "sim_plot_page.h"
+/* sim_plot_sweep.c: the figure of `ribbon-sim sweep --plot` (see sim_plot_sweep.h), drawn by the
+ * plot module (plot.h: plot_sweep, which also contains PLplot's fatal errors). This file only
+ * picks the sweep's rows inside the requested box and turns them into plain arrays: a marker per
+ * point, and the boundaries, as vertical lines at Gamma* for one phi, or for several phi one line
+ * per kind of boundary (the regimes either side, in the row's note) through its points in order
+ * of phi, asymmetric/symmetric solid, the others dashed. */
 #include "sim_plot_sweep.h"
 
+#include "plot.h"
+
 #include <math.h>
-#include <plplot.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #define PAGE_W 900
 #define PAGE_H 650
-
-static void cross(double x, double y, double rx, double ry)
-{
-    PLFLT a[2] = {x - rx, x + rx}, b[2] = {y - ry, y + ry}, c[2] = {y + ry, y - ry};
-    plline(2, a, b);
-    plline(2, a, c);
-}
 
 static int inside(double v, double a, double b) { return v >= fmin(a, b) - 1e-9 && v <= fmax(a, b) + 1e-9; }
 
@@ -28,12 +24,38 @@ static int by_phi(const void *a, const void *b)
     return x->phi < y->phi ? -1 : x->phi > y->phi;
 }
 
+static plot_regime regime_of(const char *s)
+{
+    return !strcmp(s, "asymmetric") ? PLOT_REGIME_ASYMMETRIC
+           : !strcmp(s, "symmetric") ? PLOT_REGIME_SYMMETRIC
+                                     : PLOT_REGIME_UNKNOWN;
+}
+
 int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double phi_b, double gamma_a,
                    double gamma_b, char *err, size_t errlen)
 {
     int line = phi_a == phi_b;
-    double x0 = fmin(gamma_a, gamma_b), x1 = fmax(gamma_a, gamma_b), y0 = INFINITY, y1 = -INFINITY;
+    size_t n = t->n ? t->n : 1;
+    plot_sweep_point *pts = malloc(n * sizeof *pts);
+    sweep_row *b = malloc(n * sizeof *b);
+    plot_sweep_line *lines = malloc(n * sizeof *lines);
+    double *lx = malloc(2 * n * sizeof *lx), *ly = malloc(2 * n * sizeof *ly);
+    char *done = calloc(n, 1);
+    int rc = -1;
+    if (!pts || !b || !lines || !lx || !ly || !done) {
+        snprintf(err, errlen, "out of memory drawing %s", path);
+        goto out;
+    }
+    plot_sweep_data d;
+    plot_sweep_data_default(&d);
+    d.width_px = PAGE_W;
+    d.height_px = PAGE_H;
+    char title[128];
     if (line) {
+        /* Gamma against the first instability's Delta W, over the Delta W the points reach. */
+        d.x0 = gamma_a;
+        d.x1 = gamma_b;
+        double y0 = INFINITY, y1 = -INFINITY;
         for (size_t k = 0; k < t->n; k++) {
             const sweep_row *r = &t->rows[k];
             if (r->kind == 'b' || !inside(r->phi, phi_a, phi_b) || !inside(r->gamma, gamma_a, gamma_b)) continue;
@@ -42,87 +64,74 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
             y1 = fmax(y1, r->first_dw);
         }
         if (!(y1 > y0)) { y0 = 0.0; y1 = 1.0; }
-    } else {
-        x0 = fmin(phi_a, phi_b);
-        x1 = fmax(phi_a, phi_b);
-        y0 = fmin(gamma_a, gamma_b);
-        y1 = fmax(gamma_a, gamma_b);
-    }
-    double mx = 0.06 * (x1 - x0 > 0 ? x1 - x0 : 1.0), my = 0.08 * (y1 - y0 > 0 ? y1 - y0 : 1.0);
-    x0 -= mx; x1 += mx; y0 -= my; y1 += my;
-    if (sim_plot_page_open(path, PAGE_W, PAGE_H, err, errlen) != 0)
-        return -1;
-    plscol0(0, 255, 255, 255);
-    plscol0(1, 0, 0, 0);
-    plscol0(2, 120, 120, 120);
-    plinit();
-    plcol0(1);
-    plenv(x0, x1, y0, y1, 0, 0);
-    char title[128];
-    if (line) {
+        d.y0 = y0;
+        d.y1 = y1;
         snprintf(title, sizeof title, "#gf = %g#uo#d: circle pitchfork first, square saddle-node first", phi_a);
-        pllab("#gG", "#gDW at the first instability", title);
+        d.title = title;
+        d.x_label = "#gG";
+        d.y_label = "#gDW at the first instability";
     } else {
-        pllab("#gf (deg)", "#gG", "circle: pitchfork first (asymmetric), square: saddle-node first");
+        d.x0 = phi_a;
+        d.x1 = phi_b;
+        d.y0 = gamma_a;
+        d.y1 = gamma_b;
+        d.title = "circle: pitchfork first (asymmetric), square: saddle-node first";
+        d.x_label = "#gf (deg)";
+        d.y_label = "#gG";
     }
-    double rx = 0.012 * (x1 - x0), ry = rx / (x1 - x0) * (y1 - y0) * PAGE_W / PAGE_H;
-    plwidth(1.5);
+    size_t np = 0;
     for (size_t k = 0; k < t->n; k++) {
         const sweep_row *r = &t->rows[k];
         if (r->kind != 'p' || !inside(r->phi, phi_a, phi_b) || !inside(r->gamma, gamma_a, gamma_b)) continue;
-        double x = line ? r->gamma : r->phi, y = line ? r->first_dw : r->gamma;
-        int fail = strcmp(r->regime, "asymmetric") && strcmp(r->regime, "symmetric");
-        if (line && fail) continue;
-        plcol0(1);
-        if (fail) cross(x, y, rx, ry);
-        else if (!strcmp(r->regime, "asymmetric")) sim_plot_polygon(x, y, rx, ry, 36, 0.0);
-        else sim_plot_polygon(x, y, rx * M_SQRT2, ry * M_SQRT2, 4, M_PI / 4);
+        plot_regime g = regime_of(r->regime);
+        if (line && g == PLOT_REGIME_UNKNOWN) continue;
+        pts[np++] = (plot_sweep_point){line ? r->gamma : r->phi, line ? r->first_dw : r->gamma, g};
     }
+    d.points = pts;
+    d.n_points = np;
     /* Boundaries. */
-    sweep_row *b = malloc(sizeof(sweep_row) * (t->n ? t->n : 1));
-    int nb = 0;
-    for (size_t k = 0; b && k < t->n; k++) {
+    size_t nb = 0, nl = 0, used = 0;
+    for (size_t k = 0; k < t->n; k++) {
         const sweep_row *r = &t->rows[k];
         if (r->kind == 'b' && inside(r->phi, phi_a, phi_b) && inside(r->gamma, gamma_a, gamma_b)) b[nb++] = *r;
     }
-    if (b) qsort(b, (size_t)nb, sizeof *b, by_phi);
-    plcol0(2);
-    plwidth(2.0);
+    qsort(b, nb, sizeof *b, by_phi);
     if (line) {
-        pllsty(2);
-        for (int k = 0; k < nb; k++) {
-            PLFLT x[2] = {b[k].gamma, b[k].gamma}, y[2] = {y0, y1};
-            plline(2, x, y);
+        double y0 = d.y0 - 0.08 * (d.y1 - d.y0 > 0 ? d.y1 - d.y0 : 1.0);
+        double y1 = d.y1 + 0.08 * (d.y1 - d.y0 > 0 ? d.y1 - d.y0 : 1.0);
+        for (size_t k = 0; k < nb; k++) {
+            lx[used] = lx[used + 1] = b[k].gamma;
+            ly[used] = y0;
+            ly[used + 1] = y1;
+            lines[nl++] = (plot_sweep_line){&lx[used], &ly[used], 2, true, false};
+            used += 2;
         }
-        pllsty(1);
-    } else if (nb > 0) {
-        /* One line per kind of boundary (the regimes either side, in the note), through its
-         * points in order of phi: asymmetric/symmetric solid, the others dashed. */
-        PLFLT *x = malloc(sizeof(PLFLT) * (size_t)nb), *y = malloc(sizeof(PLFLT) * (size_t)nb);
-        char *done = calloc((size_t)nb, 1);
-        for (int k = 0; x && y && done && k < nb; k++) {
+    } else {
+        for (size_t k = 0; k < nb; k++) {
             if (done[k]) continue;
-            int m = 0;
-            for (int q = k; q < nb; q++)
+            size_t m = 0;
+            for (size_t q = k; q < nb; q++)
                 if (!done[q] && !strcmp(b[q].note, b[k].note)) {
                     done[q] = 1;
-                    x[m] = b[q].phi;
-                    y[m] = b[q].gamma;
+                    lx[used + m] = b[q].phi;
+                    ly[used + m] = b[q].gamma;
                     m++;
                 }
-            pllsty(strstr(b[k].note, "asymmetric below; symmetric above") ? 1 : 2);
-            if (m > 1) plline(m, x, y);
-            for (int q = 0; q < m; q++) sim_plot_polygon(x[q], y[q], 0.4 * rx, 0.4 * ry, 4, 0.0);
+            bool dashed = !strstr(b[k].note, "asymmetric below; symmetric above");
+            lines[nl++] = (plot_sweep_line){&lx[used], &ly[used], m, dashed, true};
+            used += m;
         }
-        pllsty(1);
-        free(done);
-        free(x);
-        free(y);
     }
+    d.lines = lines;
+    d.n_lines = nl;
+    if (plot_sweep(path, &d, err, errlen) == PLOT_OK)
+        rc = 0;
+out:
+    free(pts);
     free(b);
-    if (!sim_plot_page_close(path)) {
-        snprintf(err, errlen, "PLplot wrote nothing to %s (is plplot-driver-cairo installed?)", path);
-        return -1;
-    }
-    return 0;
+    free(lines);
+    free(lx);
+    free(ly);
+    free(done);
+    return rc;
 }

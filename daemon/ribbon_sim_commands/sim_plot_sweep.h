@@ -1,4 +1,5 @@
-/* sim_plot_sweep.h: the figure of `ribbon-sim sweep --plot FILE.png` (PLplot, pngcairo).
+/* sim_plot_sweep.h: the figure of `ribbon-sim sweep --plot FILE.png`, drawn by the plot module
+ * (plot.h: plot_sweep).
  * With several phi: the (phi, Gamma) phase diagram, circles where the pitchfork comes first
  * (asymmetric snap), squares where the saddle-node does (symmetric), crosses where the analysis
  * failed or found no instability (no snap), and the located boundaries as lines, one per pair of
@@ -12,7 +13,8 @@
 
 #include "sim_sweep_row.h"
 
-/* Rows outside [phi_a, phi_b] x [gamma_a, gamma_b] are ignored. Returns 0, or -1 with err. */
+/* Rows outside [phi_a, phi_b] x [gamma_a, gamma_b] are ignored. Returns 0, or -1 with err
+ * (nothing at path then). */
 int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double phi_b, double gamma_a,
                    double gamma_b, char *err, size_t errlen);
 

@@ -8,10 +8,10 @@
 
 int ctl_rail_main(int argc, char **argv);
 int ctl_ports_main(int argc, char **argv);
-int ctl_track_main(int argc, char **argv); /* ctl_track.c, built when vision/ is (RIBBON_HAVE_VISION) */
-int ctl_vision_bench_main(int argc, char **argv); /* ctl_vision_bench.c, likewise */
-int ctl_render_main(int argc, char **argv); /* ctl_render.c, likewise (needs sim/ and vision/) */
+int ctl_track_main(int argc, char **argv);        /* ctl_track.c */
+int ctl_vision_bench_main(int argc, char **argv); /* ctl_vision_bench.c */
+int ctl_render_main(int argc, char **argv);       /* ctl_render.c (needs sim/ and vision/) */
 
 int ctl_trials_main(int argc, char **argv); /* ctl_trials.c: start abort status list show export report
-                                            phase-report replay (RIBBON_HAVE_TRIALS) */
+                                            phase-report replay */
 #endif

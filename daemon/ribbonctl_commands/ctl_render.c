@@ -35,8 +35,7 @@
 #include "cfg_number.h"
 #include "rod_protocol.h"
 #include "scene_file.h"
-#include "twin_camera.h"
-#include "twin_frames.h"
+#include "twin.h"
 #include "vision.h"
 
 #define RENDER_MAX_SETS 64
@@ -272,6 +271,151 @@ static void default_csv(const char *out, char *buf, size_t len)
     snprintf(buf, len, "%.*s.csv", (int)(strlen(out) - 4), out);
 }
 
+/* The scene, the truth CSV's name, and the frame cap the run can need. 0, or the exit status
+ * after saying why. */
+static int render_scene(const render_cli *c, rod_scene *sc, char *csv_buf, size_t csv_len,
+                        const char **csv, double *cap_d)
+{
+    cfg_error ce;
+    if (cfg_scene_load(c->scene, c->sets, c->nsets, sc, &ce) != CFG_OK) {
+        char buf[1200];
+        fprintf(stderr, "ribbonctl render: %s\n", cfg_error_format(&ce, buf, sizeof buf));
+        return 1;
+    }
+    *csv = c->csv;
+    if (!*csv) {
+        if (strlen(c->out) >= csv_len - 1) {
+            fprintf(stderr, "ribbonctl render: output name too long\n");
+            return 2;
+        }
+        default_csv(c->out, csv_buf, csv_len);
+        *csv = csv_buf;
+    }
+
+    /* Frames the run can last: the shear phase (at most shear_max l / rate), the post-snap time,
+     * and one longest fast-mode step (100 dt) of overshoot. */
+    const double t_max = sc->shear_max * sc->length / sc->shear_rate + c->post_snap + 100.0 * sc->dt;
+    *cap_d = ceil(t_max * c->fps) + 2.0;
+    if (!(*cap_d <= RENDER_MAX_FRAMES)) {
+        fprintf(stderr,
+                "ribbonctl render: the trial lasts up to %.0f s of simulated time, %.0f frames at %g fps "
+                "(limit %d): lower --fps, raise protocol.shear_rate or lower protocol.shear_max\n",
+                t_max, *cap_d, c->fps, RENDER_MAX_FRAMES);
+        return 1;
+    }
+    return 0;
+}
+
+/* The twin camera for the scene (size, distance, noise, blur from the options) and the
+ * calibration it implies. 0, or 1 after saying why. */
+static int render_camera(const render_cli *c, const rod_scene *sc, vis_render_params *rp, vis_calib *cal)
+{
+    twin_camera_params cp = twin_camera_params_default();
+    cp.width_px = c->width;
+    cp.height_px = c->height;
+    if (isfinite(c->distance_m)) cp.distance_m = c->distance_m;
+    char err[512];
+    if (twin_render_params_for_scene(sc, &cp, rp, err, sizeof err) != TWIN_OK ||
+        twin_calib_for_scene(sc, &rp->camera, cal, err, sizeof err) != TWIN_OK) {
+        fprintf(stderr, "ribbonctl render: %s\n", err);
+        return 1;
+    }
+    if (isfinite(c->noise)) rp->noise_sigma = c->noise;
+    if (isfinite(c->blur)) rp->blur_sigma_px = c->blur;
+    return 0;
+}
+
+/* The series, the frame clock and every output, opened before the simulation runs so that an
+ * unwritable path fails at once. 0, or 1 with rr->failure set; *clock_ok once the clock is up. */
+static int render_open(const render_cli *c, const rod_scene *sc, const char *csv,
+                       const vis_render_params *rp, const vis_calib *cal, render_run *rr, int *clock_ok)
+{
+    char err[512];
+    vis_error ve;
+    rr->dz_cam = malloc(sizeof *rr->dz_cam * (size_t)rr->cap);
+    rr->valid = calloc((size_t)rr->cap, 1);
+    if (!rr->dz_cam || !rr->valid) {
+        snprintf(rr->failure, sizeof rr->failure, "out of memory for %d frames", rr->cap);
+        return 1;
+    }
+    if (twin_frames_init(&rr->clock, sc, TWIN_Y_RIG, c->fps, on_frame, rr, err, sizeof err) != TWIN_OK) {
+        snprintf(rr->failure, sizeof rr->failure, "%s", err);
+        return 1;
+    }
+    *clock_ok = 1;
+    rr->writer = vis_synth_writer_open(c->out, csv, rp, c->fps, &ve);
+    if (!rr->writer) {
+        snprintf(rr->failure, sizeof rr->failure, "%s", ve.message);
+        return 1;
+    }
+    if (c->shear_csv) {
+        rr->shear = fopen(c->shear_csv, "w");
+        if (!rr->shear || fprintf(rr->shear, "frame,shear_mm\n") < 0) {
+            snprintf(rr->failure, sizeof rr->failure, "cannot write %s", c->shear_csv);
+            return 1;
+        }
+    }
+    if (c->calib_out && vis_calib_save(cal, c->calib_out, &ve) != VIS_OK) {
+        snprintf(rr->failure, sizeof rr->failure, "%s", ve.message);
+        return 1;
+    }
+    return 0;
+}
+
+/* The simulated trial, every sample rendered as it comes (on_sample). 0, or 1 with rr->failure. */
+static int render_simulate(const render_cli *c, const rod_scene *sc, render_run *rr, rod_prediction *pred)
+{
+    rod_predict_opts po = rod_predict_opts_default();
+    po.adaptive = c->fast;
+    po.post_snap_time = c->post_snap;
+    po.on_sample = on_sample;
+    po.user = rr;
+    char serr[512] = "";
+    const rod_status st = rod_predict(sc, &po, pred, serr, sizeof serr);
+    if (rr->show) progress(rr, 1);
+    if (rr->failure[0])
+        return 1;
+    if (st != ROD_OK) {
+        snprintf(rr->failure, sizeof rr->failure, "simulation: %s", serr[0] ? serr : rod_status_message(st));
+        return 1;
+    }
+    if (twin_frames_count(&rr->clock) == 0) {
+        snprintf(rr->failure, sizeof rr->failure, "the simulation produced no frame (shear time %.3g s)",
+                 pred->sim_time);
+        return 1;
+    }
+    return 0;
+}
+
+/* The summary line (JSON) of a successful render. */
+static void render_print(const render_cli *c, const char *csv, const render_run *rr,
+                         const rod_prediction *pred, int frames, double wall0)
+{
+    const int snap = vis_snap_find(rr->dz_cam, rr->valid, (size_t)frames, 0.02, 0.3);
+    const int detect = rr->detected ? (int)ceil(rr->t_detect * c->fps - 1e-9) : -1;
+    const char *regime = !pred->snapped ? "none" : pred->asymmetric ? "asymmetric" : "symmetric";
+    json_t *o = json_object();
+    json_object_set_new(o, "video", json_string(c->out));
+    json_object_set_new(o, "truth_csv", json_string(csv));
+    json_object_set_new(o, "frames", json_integer(frames));
+    json_object_set_new(o, "fps", json_real(c->fps));
+    json_object_set_new(o, "width", json_integer(c->width));
+    json_object_set_new(o, "height", json_integer(c->height));
+    json_object_set_new(o, "snapped", json_boolean(pred->snapped));
+    json_object_set_new(o, "snap_dw", pred->snapped ? json_real(pred->snap_dw) : json_null());
+    json_object_set_new(o, "regime", json_string(regime));
+    json_object_set_new(o, "snap_frame", snap >= 0 ? json_integer(snap) : json_null());
+    json_object_set_new(o, "snap_detect_frame",
+                        detect >= 0 && detect < frames ? json_integer(detect) : json_null());
+    json_object_set_new(o, "sim_time_s", json_real(pred->sim_time));
+    json_object_set_new(o, "render_ms_per_frame", json_real(frames ? 1e3 * rr->render_s / frames : 0.0));
+    json_object_set_new(o, "wall_s", json_real(wall_now() - wall0));
+    char *s = json_dumps(o, JSON_COMPACT | JSON_REAL_PRECISION(10));
+    printf("%s\n", s ? s : "{}");
+    free(s);
+    json_decref(o);
+}
+
 int ctl_render_main(int argc, char **argv)
 {
     render_cli c;
@@ -283,49 +427,14 @@ int ctl_render_main(int argc, char **argv)
     }
     const double wall0 = wall_now();
     rod_scene sc;
-    cfg_error ce;
-    if (cfg_scene_load(c.scene, c.sets, c.nsets, &sc, &ce) != CFG_OK) {
-        char buf[1200];
-        fprintf(stderr, "ribbonctl render: %s\n", cfg_error_format(&ce, buf, sizeof buf));
-        return 1;
-    }
     char csv_buf[4096];
-    const char *csv = c.csv;
-    if (!csv) {
-        if (strlen(c.out) >= sizeof csv_buf - 1) {
-            fprintf(stderr, "ribbonctl render: output name too long\n");
-            return 2;
-        }
-        default_csv(c.out, csv_buf, sizeof csv_buf);
-        csv = csv_buf;
-    }
-
-    /* Frames the run can last: the shear phase (at most shear_max l / rate), the post-snap time,
-     * and one longest fast-mode step (100 dt) of overshoot. */
-    const double t_max = sc.shear_max * sc.length / sc.shear_rate + c.post_snap + 100.0 * sc.dt;
-    const double cap_d = ceil(t_max * c.fps) + 2.0;
-    if (!(cap_d <= RENDER_MAX_FRAMES)) {
-        fprintf(stderr,
-                "ribbonctl render: the trial lasts up to %.0f s of simulated time, %.0f frames at %g fps "
-                "(limit %d): lower --fps, raise protocol.shear_rate or lower protocol.shear_max\n",
-                t_max, cap_d, c.fps, RENDER_MAX_FRAMES);
-        return 1;
-    }
-
-    twin_camera_params cp = twin_camera_params_default();
-    cp.width_px = c.width;
-    cp.height_px = c.height;
-    if (isfinite(c.distance_m)) cp.distance_m = c.distance_m;
+    const char *csv = NULL;
+    double cap_d = 0.0;
+    int rc = render_scene(&c, &sc, csv_buf, sizeof csv_buf, &csv, &cap_d);
+    if (rc) return rc;
     vis_render_params rp;
     vis_calib cal;
-    char err[512];
-    if (twin_render_params_for_scene(&sc, &cp, &rp, err, sizeof err) != TWIN_OK ||
-        twin_calib_for_scene(&sc, &rp.camera, &cal, err, sizeof err) != TWIN_OK) {
-        fprintf(stderr, "ribbonctl render: %s\n", err);
-        return 1;
-    }
-    if (isfinite(c.noise)) rp.noise_sigma = c.noise;
-    if (isfinite(c.blur)) rp.blur_sigma_px = c.blur;
+    if (render_camera(&c, &sc, &rp, &cal)) return 1;
 
     render_run rr;
     memset(&rr, 0, sizeof rr);
@@ -333,65 +442,12 @@ int ctl_render_main(int argc, char **argv)
     rr.snap_speed = sc.snap_speed;
     rr.show = !c.quiet;
     rr.shear_path = c.shear_csv;
-    int rc = 0, clock_ok = 0;
+    int clock_ok = 0;
     vis_error ve;
     rod_prediction pred;
     memset(&pred, 0, sizeof pred);
+    rc = render_open(&c, &sc, csv, &rp, &cal, &rr, &clock_ok) || render_simulate(&c, &sc, &rr, &pred);
 
-    rr.dz_cam = malloc(sizeof *rr.dz_cam * (size_t)rr.cap);
-    rr.valid = calloc((size_t)rr.cap, 1);
-    if (!rr.dz_cam || !rr.valid) {
-        snprintf(rr.failure, sizeof rr.failure, "out of memory for %d frames", rr.cap);
-        rc = 1;
-        goto done;
-    }
-    if (twin_frames_init(&rr.clock, &sc, TWIN_Y_RIG, c.fps, on_frame, &rr, err, sizeof err) != TWIN_OK) {
-        snprintf(rr.failure, sizeof rr.failure, "%s", err);
-        rc = 1;
-        goto done;
-    }
-    clock_ok = 1;
-    /* Outputs are opened before the simulation runs, so an unwritable path fails at once. */
-    rr.writer = vis_synth_writer_open(c.out, csv, &rp, c.fps, &ve);
-    if (!rr.writer) {
-        snprintf(rr.failure, sizeof rr.failure, "%s", ve.message);
-        rc = 1;
-        goto done;
-    }
-    if (c.shear_csv) {
-        rr.shear = fopen(c.shear_csv, "w");
-        if (!rr.shear || fprintf(rr.shear, "frame,shear_mm\n") < 0) {
-            snprintf(rr.failure, sizeof rr.failure, "cannot write %s", c.shear_csv);
-            rc = 1;
-            goto done;
-        }
-    }
-    if (c.calib_out && vis_calib_save(&cal, c.calib_out, &ve) != VIS_OK) {
-        snprintf(rr.failure, sizeof rr.failure, "%s", ve.message);
-        rc = 1;
-        goto done;
-    }
-
-    rod_predict_opts po = rod_predict_opts_default();
-    po.adaptive = c.fast;
-    po.post_snap_time = c.post_snap;
-    po.on_sample = on_sample;
-    po.user = &rr;
-    char serr[512] = "";
-    const rod_status st = rod_predict(&sc, &po, &pred, serr, sizeof serr);
-    if (rr.show) progress(&rr, 1);
-    if (rr.failure[0]) {
-        rc = 1;
-    } else if (st != ROD_OK) {
-        snprintf(rr.failure, sizeof rr.failure, "simulation: %s", serr[0] ? serr : rod_status_message(st));
-        rc = 1;
-    } else if (twin_frames_count(&rr.clock) == 0) {
-        snprintf(rr.failure, sizeof rr.failure, "the simulation produced no frame (shear time %.3g s)",
-                 pred.sim_time);
-        rc = 1;
-    }
-
-done:;
     const int frames = clock_ok ? twin_frames_count(&rr.clock) : 0;
     if (rr.writer && vis_synth_writer_close(rr.writer, &ve) != VIS_OK && !rc) {
         snprintf(rr.failure, sizeof rr.failure, "%s", ve.message);
@@ -403,31 +459,7 @@ done:;
     }
     if (clock_ok) twin_frames_release(&rr.clock);
     if (rr.failure[0]) fprintf(stderr, "ribbonctl render: %s\n", rr.failure);
-    if (!rc) {
-        const int snap = vis_snap_find(rr.dz_cam, rr.valid, (size_t)frames, 0.02, 0.3);
-        const int detect = rr.detected ? (int)ceil(rr.t_detect * c.fps - 1e-9) : -1;
-        const char *regime = !pred.snapped ? "none" : pred.asymmetric ? "asymmetric" : "symmetric";
-        json_t *o = json_object();
-        json_object_set_new(o, "video", json_string(c.out));
-        json_object_set_new(o, "truth_csv", json_string(csv));
-        json_object_set_new(o, "frames", json_integer(frames));
-        json_object_set_new(o, "fps", json_real(c.fps));
-        json_object_set_new(o, "width", json_integer(c.width));
-        json_object_set_new(o, "height", json_integer(c.height));
-        json_object_set_new(o, "snapped", json_boolean(pred.snapped));
-        json_object_set_new(o, "snap_dw", pred.snapped ? json_real(pred.snap_dw) : json_null());
-        json_object_set_new(o, "regime", json_string(regime));
-        json_object_set_new(o, "snap_frame", snap >= 0 ? json_integer(snap) : json_null());
-        json_object_set_new(o, "snap_detect_frame",
-                            detect >= 0 && detect < frames ? json_integer(detect) : json_null());
-        json_object_set_new(o, "sim_time_s", json_real(pred.sim_time));
-        json_object_set_new(o, "render_ms_per_frame", json_real(frames ? 1e3 * rr.render_s / frames : 0.0));
-        json_object_set_new(o, "wall_s", json_real(wall_now() - wall0));
-        char *s = json_dumps(o, JSON_COMPACT | JSON_REAL_PRECISION(10));
-        printf("%s\n", s ? s : "{}");
-        free(s);
-        json_decref(o);
-    }
+    if (!rc) render_print(&c, csv, &rr, &pred, frames, wall0);
     free(rr.dz_cam);
     free(rr.valid);
     return rc;

@@ -355,6 +355,304 @@ static json_t *json_point(const double p[2])
     return a;
 }
 
+/* Everything one run of the frame loop holds: outputs, the per-frame series, the first failure. */
+typedef struct track_run {
+    int rc;
+    FILE *csv;
+    vis_source *src;
+    vis_tracker *trk;
+    vis_frame *frame, *over;
+    vis_video_writer *ov;
+    double *dz;
+    unsigned char *valid;
+    size_t n, cap, tracked;
+    double qsum;
+    int damaged;
+    long clamps_frame; /* frame where the clamps were found, -1 when given */
+    char failure[400];
+} track_run;
+
+/* The calibration from --calib, or from the given parts (clamp points may still be found later);
+ * saved now when already complete. Returns 0, or the exit status after printing the reason. */
+static int track_calibration(const track_cli *c, track_cal *tc)
+{
+    vis_error err;
+    memset(tc, 0, sizeof *tc);
+    tc->cal = vis_calib_default();
+    if (c->calib_file) {
+        if (vis_calib_load(&tc->cal, c->calib_file, &err) != VIS_OK) {
+            fprintf(stderr, "ribbonctl track: %s\n", err.message);
+            return 1;
+        }
+        tc->have_clamps = 1;
+    } else if (c->have_left && cal_complete(c, tc, c->left, c->right, &err) != VIS_OK) {
+        fprintf(stderr, "ribbonctl track: %s\n", err.message);
+        return 2;
+    }
+    if (tc->have_clamps && !tc->scale_pending && c->save_calib &&
+        vis_calib_save(&tc->cal, c->save_calib, &err) != VIS_OK) {
+        fprintf(stderr, "ribbonctl track: %s\n", err.message);
+        return 1;
+    }
+    return 0;
+}
+
+/* The source, the tracker (when the clamps are known), the frames and the CSV. 0, or 1 with
+ * r->failure set. */
+static int track_open(const track_cli *c, const track_cal *tc, track_run *r)
+{
+    vis_error err;
+    /* A name with a printf conversion is an image sequence ("dir/frame_%04d.png", from 0). */
+    r->src = strchr(c->video, '%') ? vis_source_open_images(c->video, 0, &err)
+                                   : vis_source_open_video(c->video, &err);
+    if (!r->src) {
+        snprintf(r->failure, sizeof r->failure, "%s", err.message);
+        return 1;
+    }
+    if (tc->have_clamps)
+        r->trk = tracker_for(c, tc, NULL, &err);
+    r->frame = vis_frame_alloc(8, 8, 1, &err);
+    r->over = vis_frame_alloc(8, 8, 3, &err);
+    if ((tc->have_clamps && !r->trk) || !r->frame || !r->over) {
+        snprintf(r->failure, sizeof r->failure, "%s", err.message);
+        return 1;
+    }
+    if (c->csv) {
+        r->csv = fopen(c->csv, "w");
+        if (!r->csv) {
+            snprintf(r->failure, sizeof r->failure, "cannot write %s", c->csv);
+            return 1;
+        }
+        fprintf(r->csv, "frame,t,dz,a,quality,reason\n");
+    }
+    return 0;
+}
+
+/* Until the clamps are known: look for them in frame i (at zero shear only) and, once found,
+ * make the tracker. 0 (found or not yet), or 1 with r->failure set. */
+static int track_find_clamps(const track_cli *c, track_cal *tc, track_run *r, size_t i, double sh,
+                             int show)
+{
+    vis_error err;
+    double lp[2], rp[2], q = 0;
+    const vis_status fs = sh != 0.0 ? VIS_ERR_NOT_FOUND
+                                    : vis_find_clamps(r->frame, &c->tp, lp, rp, &q, &err);
+    if (sh != 0.0)
+        snprintf(tc->why, sizeof tc->why, "frame %zu: clamps are looked for at zero shear only", i);
+    else if (fs == VIS_ERR_NOT_FOUND)
+        snprintf(tc->why, sizeof tc->why, "frame %zu: %s", i, err.message);
+    else if (fs != VIS_OK || cal_complete(c, tc, lp, rp, &err) != VIS_OK ||
+             !(r->trk = tracker_for(c, tc, NULL, &err))) {
+        snprintf(r->failure, sizeof r->failure, "frame %zu: clamps: %s", i, err.message);
+        return 1;
+    } else {
+        r->clamps_frame = (long)i;
+        if (show)
+            fprintf(stderr, "\rtrack: clamps found in frame %zu at (%.2f, %.2f) and (%.2f, %.2f) "
+                            "px, quality %.2f\n", i, lp[0], lp[1], rp[0], rp[1], q);
+        if (!tc->scale_pending && c->save_calib &&
+            vis_calib_save(&tc->cal, c->save_calib, &err) != VIS_OK) {
+            snprintf(r->failure, sizeof r->failure, "%s", err.message);
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* First tracked frame in pixels: the scale is its length over l; measure it again. 0, or 1 with
+ * r->failure set. */
+static int track_scale_from_length(const track_cli *c, track_cal *tc, track_run *r, size_t i,
+                                   double sh, vis_measure *m, int show)
+{
+    vis_error err;
+    tc->cal.px_per_mm = m->length_mm / c->tp.length_mm;
+    tc->scale_pending = 0;
+    if (c->distance_mm > 0)
+        tc->cal.camera_distance_mm = c->distance_mm;
+    if (c->have_tilt)
+        tc->cal.camera_tilt_rad = c->tilt_rad;
+    if (vis_calib_check(&tc->cal, &err) != VIS_OK || !(r->trk = tracker_for(c, tc, r->trk, &err)) ||
+        vis_tracker_process(r->trk, r->frame, sh, m, &err) != VIS_OK) {
+        snprintf(r->failure, sizeof r->failure, "frame %zu: scale from the length: %s", i, err.message);
+        return 1;
+    }
+    if (show)
+        fprintf(stderr, "\rtrack: scale %.4f px/mm from the ribbon's length in frame %zu\n",
+                tc->cal.px_per_mm, i);
+    if (c->save_calib && vis_calib_save(&tc->cal, c->save_calib, &err) != VIS_OK) {
+        snprintf(r->failure, sizeof r->failure, "%s", err.message);
+        return 1;
+    }
+    return 0;
+}
+
+/* Keep frame i's measurement in the series (growing it) and write its CSV row. 0, or 1 with
+ * r->failure set. */
+static int track_record(track_run *r, size_t i, double t, const vis_measure *m)
+{
+    if (r->n == r->cap) {
+        const size_t nc = r->cap ? 2 * r->cap : 1024;
+        double *d2 = realloc(r->dz, nc * sizeof *d2);
+        if (d2)
+            r->dz = d2;
+        unsigned char *v2 = realloc(r->valid, nc);
+        if (v2)
+            r->valid = v2;
+        if (!d2 || !v2) {
+            snprintf(r->failure, sizeof r->failure, "out of memory at frame %zu", i);
+            return 1;
+        }
+        r->cap = nc;
+    }
+    const int ok = m->reason == VIS_REASON_NONE;
+    r->dz[r->n] = ok ? m->dz : 0.0;
+    r->valid[r->n] = (unsigned char)ok;
+    r->n++;
+    if (ok) {
+        r->tracked++;
+        r->qsum += m->quality;
+    }
+    if (r->csv) {
+        if (ok)
+            fprintf(r->csv, "%zu,%.6f,%.8f,%.8f,%.4f,%s\n", i, t, m->dz, m->a, m->quality,
+                    reason_id(m->reason));
+        else
+            fprintf(r->csv, "%zu,%.6f,,,%.4f,%s\n", i, t, m->quality, reason_id(m->reason));
+    }
+    return 0;
+}
+
+/* Frame i with its measurement drawn on it, appended to the overlay video (opened at the first
+ * frame). 0, or 1 with r->failure set. */
+static int track_overlay(const track_cli *c, track_run *r, size_t i, const vis_measure *m,
+                         double fps)
+{
+    vis_error err;
+    if (vis_overlay_draw(r->frame, r->trk, m, (int)i, r->over, &err) != VIS_OK) {
+        snprintf(r->failure, sizeof r->failure, "overlay: %s", err.message);
+        return 1;
+    }
+    if (!r->ov) {
+        r->ov = vis_video_writer_open(c->overlay, vis_frame_width(r->over), vis_frame_height(r->over),
+                                      3, fps > 0 ? fps : 25.0, &err);
+        if (!r->ov) {
+            snprintf(r->failure, sizeof r->failure, "%s", err.message);
+            return 1;
+        }
+    }
+    if (vis_video_writer_write(r->ov, r->over, &err) != VIS_OK) {
+        snprintf(r->failure, sizeof r->failure, "overlay: %s", err.message);
+        return 1;
+    }
+    return 0;
+}
+
+/* Every frame of the source, up to the end, the damage or the first failure. */
+static void track_frames(const track_cli *c, track_cal *tc, const shear_table *shear, track_run *r)
+{
+    vis_error err;
+    const int total = vis_source_frame_count(r->src);
+    const int show = !c->quiet;
+    const double fps = vis_source_fps(r->src);
+    for (size_t i = 0; i < TRACK_MAX_FRAMES; i++) {
+        double t = 0.0;
+        const vis_status st = vis_source_read(r->src, r->frame, &t, &err);
+        if (st == VIS_ERR_END)
+            break;
+        if (st != VIS_OK) {
+            snprintf(r->failure, sizeof r->failure, "%s", err.message);
+            r->damaged = 1;
+            r->rc = 1;
+            break;
+        }
+        vis_measure m;
+        memset(&m, 0, sizeof m);
+        m.reason = VIS_REASON_CLAMP_NOT_FOUND;
+        const double sh = shear_at(shear, i);
+        if (!tc->have_clamps && track_find_clamps(c, tc, r, i, sh, show)) {
+            r->rc = 1;
+            break;
+        }
+        if (r->trk && vis_tracker_process(r->trk, r->frame, sh, &m, &err) != VIS_OK) {
+            snprintf(r->failure, sizeof r->failure, "frame %zu: %s", i, err.message);
+            r->rc = 1;
+            break;
+        }
+        if (r->trk && tc->scale_pending && m.reason == VIS_REASON_NONE &&
+            track_scale_from_length(c, tc, r, i, sh, &m, show)) {
+            r->rc = 1;
+            break;
+        }
+        if (track_record(r, i, t, &m) || (c->overlay && track_overlay(c, r, i, &m, fps))) {
+            r->rc = 1;
+            break;
+        }
+        if (show && r->n % 10 == 0)
+            progress(r->n, total, 0);
+    }
+    if (show)
+        progress(r->n, total, 1);
+}
+
+/* The failures only the whole run shows, the CSV closed, and the summary (text or --json). */
+static void track_report(const track_cli *c, const track_cal *tc, track_run *r)
+{
+    if (!r->failure[0] && r->src && r->n > 0 && !tc->have_clamps) {
+        snprintf(r->failure, sizeof r->failure, "no clamp pair found in any frame (last: %s)", tc->why);
+        r->rc = 1;
+    } else if (!r->failure[0] && r->src && r->n > 0 && tc->scale_pending) {
+        snprintf(r->failure, sizeof r->failure, "no frame was tracked, so the scale from --length-mm is "
+                                                "unknown%s", c->save_calib ? " (no calibration saved)" : "");
+        r->rc = 1;
+    }
+    const int snap = r->n ? vis_snap_find(r->dz, r->valid, r->n, 0.02, 0.3) : -1;
+    if (r->csv && fclose(r->csv) != 0 && !r->rc) {
+        snprintf(r->failure, sizeof r->failure, "cannot write %s", c->csv);
+        r->rc = 1;
+    }
+    r->csv = NULL;
+    vis_video_writer_close(r->ov);
+    r->ov = NULL;
+    if (r->failure[0])
+        fprintf(stderr, "ribbonctl track: %s\n", r->failure);
+    const double mean_q = r->tracked ? r->qsum / (double)r->tracked : 0.0;
+    if (c->json) {
+        json_t *o = json_object();
+        json_object_set_new(o, "video", json_string(c->video));
+        json_object_set_new(o, "frames", json_integer((json_int_t)r->n));
+        json_object_set_new(o, "tracked", json_integer((json_int_t)r->tracked));
+        json_object_set_new(o, "mean_quality", json_real(mean_q));
+        json_object_set_new(o, "snap_frame", snap >= 0 ? json_integer(snap) : json_null());
+        const int cal_ok = tc->have_clamps && !tc->scale_pending;
+        json_object_set_new(o, "px_per_mm", cal_ok ? json_real(tc->cal.px_per_mm) : json_null());
+        json_object_set_new(o, "clamp_left", tc->have_clamps ? json_point(tc->cal.clamp_left_px) : json_null());
+        json_object_set_new(o, "clamp_right", tc->have_clamps ? json_point(tc->cal.clamp_right_px) : json_null());
+        json_object_set_new(o, "clamps_frame", r->clamps_frame >= 0 ? json_integer(r->clamps_frame) : json_null());
+        json_object_set_new(o, "damaged", json_boolean(r->damaged));
+        json_object_set_new(o, "error", r->failure[0] ? json_string(r->failure) : json_null());
+        char *s = json_dumps(o, JSON_COMPACT);
+        printf("%s\n", s ? s : "{}");
+        free(s);
+        json_decref(o);
+    } else if (r->src) {
+        printf("frames %zu, tracked %zu, mean quality %.3f, snap frame ", r->n, r->tracked, mean_q);
+        if (snap >= 0)
+            printf("%d\n", snap);
+        else
+            printf("none\n");
+    }
+}
+
+static void track_run_free(track_run *r)
+{
+    free(r->dz);
+    free(r->valid);
+    vis_frame_free(r->frame);
+    vis_frame_free(r->over);
+    vis_tracker_free(r->trk);
+    vis_source_close(r->src);
+}
+
 int ctl_track_main(int argc, char **argv)
 {
     track_cli c;
@@ -365,247 +663,24 @@ int ctl_track_main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    vis_error err;
     track_cal tc;
-    memset(&tc, 0, sizeof tc);
-    tc.cal = vis_calib_default();
-    if (c.calib_file) {
-        if (vis_calib_load(&tc.cal, c.calib_file, &err) != VIS_OK) {
-            fprintf(stderr, "ribbonctl track: %s\n", err.message);
-            return 1;
-        }
-        tc.have_clamps = 1;
-    } else if (c.have_left && cal_complete(&c, &tc, c.left, c.right, &err) != VIS_OK) {
-        fprintf(stderr, "ribbonctl track: %s\n", err.message);
-        return 2;
-    }
-    if (tc.have_clamps && !tc.scale_pending && c.save_calib &&
-        vis_calib_save(&tc.cal, c.save_calib, &err) != VIS_OK) {
-        fprintf(stderr, "ribbonctl track: %s\n", err.message);
-        return 1;
-    }
+    const int cal_rc = track_calibration(&c, &tc);
+    if (cal_rc)
+        return cal_rc;
     shear_table shear = {NULL, 0};
     if (c.shear_csv && shear_load(c.shear_csv, &shear)) {
         free(shear.mm);
         return 1;
     }
-
-    int rc = 0;
-    FILE *csv = NULL;
-    vis_source *src = NULL;
-    vis_tracker *trk = NULL;
-    vis_frame *frame = NULL, *over = NULL;
-    vis_video_writer *ov = NULL;
-    double *dz = NULL;
-    unsigned char *valid = NULL;
-    size_t n = 0, cap = 0, tracked = 0;
-    double qsum = 0.0;
-    int damaged = 0;
-    long clamps_frame = -1; /* frame where the clamps were found, -1 when given */
-    char failure[400] = "";
-
-    /* A name with a printf conversion is an image sequence ("dir/frame_%04d.png", from 0). */
-    src = strchr(c.video, '%') ? vis_source_open_images(c.video, 0, &err) : vis_source_open_video(c.video, &err);
-    if (!src) {
-        snprintf(failure, sizeof failure, "%s", err.message);
-        rc = 1;
-        goto done;
-    }
-    if (tc.have_clamps)
-        trk = tracker_for(&c, &tc, NULL, &err);
-    frame = vis_frame_alloc(8, 8, 1, &err);
-    over = vis_frame_alloc(8, 8, 3, &err);
-    if ((tc.have_clamps && !trk) || !frame || !over) {
-        snprintf(failure, sizeof failure, "%s", err.message);
-        rc = 1;
-        goto done;
-    }
-    if (c.csv) {
-        csv = fopen(c.csv, "w");
-        if (!csv) {
-            snprintf(failure, sizeof failure, "cannot write %s", c.csv);
-            rc = 1;
-            goto done;
-        }
-        fprintf(csv, "frame,t,dz,a,quality,reason\n");
-    }
-    const int total = vis_source_frame_count(src);
-    const int show = !c.quiet;
-    const double fps = vis_source_fps(src);
-    for (size_t i = 0; i < TRACK_MAX_FRAMES; i++) {
-        double t = 0.0;
-        const vis_status st = vis_source_read(src, frame, &t, &err);
-        if (st == VIS_ERR_END)
-            break;
-        if (st != VIS_OK) {
-            snprintf(failure, sizeof failure, "%s", err.message);
-            damaged = 1;
-            rc = 1;
-            break;
-        }
-        vis_measure m;
-        memset(&m, 0, sizeof m);
-        m.reason = VIS_REASON_CLAMP_NOT_FOUND;
-        const double sh = shear_at(&shear, i);
-        if (!tc.have_clamps) {
-            double lp[2], rp[2], q = 0;
-            const vis_status fs = sh != 0.0 ? VIS_ERR_NOT_FOUND
-                                            : vis_find_clamps(frame, &c.tp, lp, rp, &q, &err);
-            if (sh != 0.0)
-                snprintf(tc.why, sizeof tc.why, "frame %zu: clamps are looked for at zero shear only", i);
-            else if (fs == VIS_ERR_NOT_FOUND)
-                snprintf(tc.why, sizeof tc.why, "frame %zu: %s", i, err.message);
-            else if (fs != VIS_OK || cal_complete(&c, &tc, lp, rp, &err) != VIS_OK ||
-                     !(trk = tracker_for(&c, &tc, NULL, &err))) {
-                snprintf(failure, sizeof failure, "frame %zu: clamps: %s", i, err.message);
-                rc = 1;
-                break;
-            } else {
-                clamps_frame = (long)i;
-                if (show)
-                    fprintf(stderr, "\rtrack: clamps found in frame %zu at (%.2f, %.2f) and (%.2f, %.2f) "
-                                    "px, quality %.2f\n", i, lp[0], lp[1], rp[0], rp[1], q);
-                if (!tc.scale_pending && c.save_calib &&
-                    vis_calib_save(&tc.cal, c.save_calib, &err) != VIS_OK) {
-                    snprintf(failure, sizeof failure, "%s", err.message);
-                    rc = 1;
-                    break;
-                }
-            }
-        }
-        if (trk && vis_tracker_process(trk, frame, sh, &m, &err) != VIS_OK) {
-            snprintf(failure, sizeof failure, "frame %zu: %s", i, err.message);
-            rc = 1;
-            break;
-        }
-        if (trk && tc.scale_pending && m.reason == VIS_REASON_NONE) {
-            /* First tracked frame in pixels: the scale is its length over l; measure it again. */
-            tc.cal.px_per_mm = m.length_mm / c.tp.length_mm;
-            tc.scale_pending = 0;
-            if (c.distance_mm > 0)
-                tc.cal.camera_distance_mm = c.distance_mm;
-            if (c.have_tilt)
-                tc.cal.camera_tilt_rad = c.tilt_rad;
-            if (vis_calib_check(&tc.cal, &err) != VIS_OK || !(trk = tracker_for(&c, &tc, trk, &err)) ||
-                vis_tracker_process(trk, frame, sh, &m, &err) != VIS_OK) {
-                snprintf(failure, sizeof failure, "frame %zu: scale from the length: %s", i, err.message);
-                rc = 1;
-                break;
-            }
-            if (show)
-                fprintf(stderr, "\rtrack: scale %.4f px/mm from the ribbon's length in frame %zu\n",
-                        tc.cal.px_per_mm, i);
-            if (c.save_calib && vis_calib_save(&tc.cal, c.save_calib, &err) != VIS_OK) {
-                snprintf(failure, sizeof failure, "%s", err.message);
-                rc = 1;
-                break;
-            }
-        }
-        if (n == cap) {
-            const size_t nc = cap ? 2 * cap : 1024;
-            double *d2 = realloc(dz, nc * sizeof *d2);
-            if (d2)
-                dz = d2;
-            unsigned char *v2 = realloc(valid, nc);
-            if (v2)
-                valid = v2;
-            if (!d2 || !v2) {
-                snprintf(failure, sizeof failure, "out of memory at frame %zu", i);
-                rc = 1;
-                break;
-            }
-            cap = nc;
-        }
-        const int ok = m.reason == VIS_REASON_NONE;
-        dz[n] = ok ? m.dz : 0.0;
-        valid[n] = (unsigned char)ok;
-        n++;
-        if (ok) {
-            tracked++;
-            qsum += m.quality;
-        }
-        if (csv) {
-            if (ok)
-                fprintf(csv, "%zu,%.6f,%.8f,%.8f,%.4f,%s\n", i, t, m.dz, m.a, m.quality, reason_id(m.reason));
-            else
-                fprintf(csv, "%zu,%.6f,,,%.4f,%s\n", i, t, m.quality, reason_id(m.reason));
-        }
-        if (c.overlay) {
-            if (vis_overlay_draw(frame, trk, &m, (int)i, over, &err) != VIS_OK) {
-                snprintf(failure, sizeof failure, "overlay: %s", err.message);
-                rc = 1;
-                break;
-            }
-            if (!ov) {
-                ov = vis_video_writer_open(c.overlay, vis_frame_width(over), vis_frame_height(over), 3,
-                                           fps > 0 ? fps : 25.0, &err);
-                if (!ov) {
-                    snprintf(failure, sizeof failure, "%s", err.message);
-                    rc = 1;
-                    break;
-                }
-            }
-            if (vis_video_writer_write(ov, over, &err) != VIS_OK) {
-                snprintf(failure, sizeof failure, "overlay: %s", err.message);
-                rc = 1;
-                break;
-            }
-        }
-        if (show && n % 10 == 0)
-            progress(n, total, 0);
-    }
-    if (show)
-        progress(n, total, 1);
-
-done:;
-    if (!failure[0] && src && n > 0 && !tc.have_clamps) {
-        snprintf(failure, sizeof failure, "no clamp pair found in any frame (last: %s)", tc.why);
-        rc = 1;
-    } else if (!failure[0] && src && n > 0 && tc.scale_pending) {
-        snprintf(failure, sizeof failure, "no frame was tracked, so the scale from --length-mm is "
-                                          "unknown%s", c.save_calib ? " (no calibration saved)" : "");
-        rc = 1;
-    }
-    const int snap = n ? vis_snap_find(dz, valid, n, 0.02, 0.3) : -1;
-    if (csv && fclose(csv) != 0 && !rc) {
-        snprintf(failure, sizeof failure, "cannot write %s", c.csv);
-        rc = 1;
-    }
-    vis_video_writer_close(ov);
-    if (failure[0])
-        fprintf(stderr, "ribbonctl track: %s\n", failure);
-    const double mean_q = tracked ? qsum / (double)tracked : 0.0;
-    if (c.json) {
-        json_t *o = json_object();
-        json_object_set_new(o, "video", json_string(c.video));
-        json_object_set_new(o, "frames", json_integer((json_int_t)n));
-        json_object_set_new(o, "tracked", json_integer((json_int_t)tracked));
-        json_object_set_new(o, "mean_quality", json_real(mean_q));
-        json_object_set_new(o, "snap_frame", snap >= 0 ? json_integer(snap) : json_null());
-        const int cal_ok = tc.have_clamps && !tc.scale_pending;
-        json_object_set_new(o, "px_per_mm", cal_ok ? json_real(tc.cal.px_per_mm) : json_null());
-        json_object_set_new(o, "clamp_left", tc.have_clamps ? json_point(tc.cal.clamp_left_px) : json_null());
-        json_object_set_new(o, "clamp_right", tc.have_clamps ? json_point(tc.cal.clamp_right_px) : json_null());
-        json_object_set_new(o, "clamps_frame", clamps_frame >= 0 ? json_integer(clamps_frame) : json_null());
-        json_object_set_new(o, "damaged", json_boolean(damaged));
-        json_object_set_new(o, "error", failure[0] ? json_string(failure) : json_null());
-        char *s = json_dumps(o, JSON_COMPACT);
-        printf("%s\n", s ? s : "{}");
-        free(s);
-        json_decref(o);
-    } else if (src) {
-        printf("frames %zu, tracked %zu, mean quality %.3f, snap frame ", n, tracked, mean_q);
-        if (snap >= 0)
-            printf("%d\n", snap);
-        else
-            printf("none\n");
-    }
-    free(dz);
-    free(valid);
+    track_run r;
+    memset(&r, 0, sizeof r);
+    r.clamps_frame = -1;
+    if (track_open(&c, &tc, &r))
+        r.rc = 1;
+    else
+        track_frames(&c, &tc, &shear, &r);
+    track_report(&c, &tc, &r);
     free(shear.mm);
-    vis_frame_free(frame);
-    vis_frame_free(over);
-    vis_tracker_free(trk);
-    vis_source_close(src);
-    return rc;
+    track_run_free(&r);
+    return r.rc;
 }

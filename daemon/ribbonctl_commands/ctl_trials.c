@@ -15,13 +15,13 @@
 
 #include <jansson.h>
 
-#include "api_client.h"
+#include "api.h"
 #include "cfg_number.h"
 #include "ctl.h"
 #include "scene_file.h"
 #include "store.h"
 #include "rig_config.h"
-#include "trial_replay.h"
+#include "trial.h"
 #include "trial_report.h"
 
 #define MAX_SET 64
@@ -436,10 +436,9 @@ static int cmd_report(const ctl_opts *o)
     if (o->db) {
         store *st;
         if (open_db(o, &st, 1)) return 1;
-        int nf = 0;
-        int rc = trial_report_png(st, o->id, o->out, &nf, why, sizeof why);
+        trial_err rc = trial_report_png(st, o->id, o->out, why, sizeof why);
         store_close(st);
-        if (rc) {
+        if (rc != TRIAL_OK) {
             fprintf(stderr, "ribbonctl: report: %s\n", why);
             return 1;
         }

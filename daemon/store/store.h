@@ -2,7 +2,7 @@
  * simulator's predictions with their curves, and the cached error-against-run-time ladder.
  *
  * One file, WAL journal, a schema versioned by PRAGMA user_version and migrated by code at open
- * (store.c); a file written by a newer program is refused, never touched. Every statement is
+ * (store_schema.c); a file written by a newer program is refused, never touched. Every statement is
  * prepared and bound; no SQL text is ever built from data. Numbers follow one convention at this
  * interface: NaN means "missing" and is stored as SQL NULL (read back as NaN); a NaN where a value
  * is required, or an infinity anywhere, is refused with a reason and nothing is written.
@@ -90,7 +90,7 @@ typedef enum store_status {
     STORE_STATUS_DONE,        /* ran to its end (snap or shear limit) */
     STORE_STATUS_FAILED,      /* a fault ended it; reason says which */
     STORE_STATUS_ABORTED,     /* a user or a signal ended it */
-    STORE_STATUS_INTERRUPTED, /* the daemon died while it ran (found at start-up) */
+    STORE_STATUS_INTERRUPTED, /* the daemon died before it ended (found at start-up) */
     STORE_STATUS_COUNT
 } store_status;
 
@@ -202,8 +202,9 @@ store_err store_trial_set_state(store *st, int64_t id, const char *state, char *
 store_err store_trial_set_result(store *st, int64_t id, bool snapped, double snap_dw, store_regime regime,
                                  char *why, size_t why_len);
 store_err store_trial_set_video(store *st, int64_t id, const char *video_path, char *why, size_t why_len);
-/* At daemon start-up: every 'running' trial becomes 'interrupted' (ended at wall_s, a reason
- * and a fault event added). *count gets how many. One transaction. */
+/* At daemon start-up: every unfinished trial ('running', or 'created': killed before it started
+ * moving) becomes 'interrupted' (ended at wall_s, a reason and a fault event added). *count gets
+ * how many. One transaction. */
 store_err store_trial_mark_interrupted(store *st, double wall_s, int *count, char *why, size_t why_len);
 
 store_err store_trial_get(store *st, int64_t id, store_trial *out, char *why, size_t why_len);
@@ -230,6 +231,9 @@ typedef struct store_event {
 store_err store_event_append(store *st, const store_event *ev, char *why, size_t why_len);
 /* A trial's events in order. *out malloc'ed (free()). */
 store_err store_events_get(store *st, int64_t trial_id, store_event **out, size_t *n, char *why, size_t why_len);
+/* Trial times (s) at which a stored trial entered the checking, shearing and returning states,
+ * from its state events ("state NAME..."); NaN for a state it never entered (or unreadable events). */
+void store_events_state_times(store *st, int64_t trial_id, double *t_check, double *t_shear, double *t_return);
 
 /* ---- samples (store_samples.c) ---------------------------------------------------------- */
 

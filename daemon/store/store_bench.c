@@ -3,7 +3,7 @@
  * batch and age limits, the same PRAGMAs (WAL, synchronous=NORMAL) as the daemon. The target
  * (issue 6) is at least 50,000 samples/s; a trial needs a few hundred. The clock is
  * CLOCK_MONOTONIC around the writer only, so opening and creating the schema are not counted. */
-#include "store_int.h"
+#include "store_sql.h"
 
 #include <errno.h>
 #include <math.h>

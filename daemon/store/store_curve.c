@@ -1,7 +1,7 @@
 /* store_curve.c: curves as the store hands them out: four parallel arrays (t_s, dw, dz, a) in
  * one allocation, so a report takes a measured or predicted curve with one call and releases it
  * with one free. The query is counted first and the block sized once. */
-#include "store_int.h"
+#include "store_curve.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -1,6 +1,6 @@
 /* store_events.c: a trial's event log: state changes, information, warnings and faults, each
  * with the trial's monotonic time (when the clock runs) and the wall time. Append-only. */
-#include "store_int.h"
+#include "store_sql.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -91,4 +91,20 @@ store_err store_events_get(store *st, int64_t trial_id, store_event **out, size_
     *out = v;
     *n = len;
     return STORE_OK;
+}
+
+void store_events_state_times(store *st, int64_t id, double *t_check, double *t_shear, double *t_return)
+{
+    *t_check = *t_shear = *t_return = NAN;
+    store_event *ev = NULL;
+    size_t n = 0;
+    char why[256];
+    if (store_events_get(st, id, &ev, &n, why, sizeof why) != STORE_OK) return;
+    for (size_t k = 0; k < n; k++) {
+        if (ev[k].kind != STORE_EVENT_STATE) continue;
+        if (!strncmp(ev[k].message, "state checking", 14) && isnan(*t_check)) *t_check = ev[k].t_s;
+        if (!strncmp(ev[k].message, "state shearing", 14) && isnan(*t_shear)) *t_shear = ev[k].t_s;
+        if (!strncmp(ev[k].message, "state returning", 15) && isnan(*t_return)) *t_return = ev[k].t_s;
+    }
+    free(ev);
 }

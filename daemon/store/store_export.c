@@ -7,7 +7,7 @@
  * the keys of store_trials_json with the prediction's flattened as prediction_<key>, so the two
  * views cannot disagree. Files are written to NAME.tmp and renamed when complete: a reader never
  * sees half a file, and a failed export leaves the previous one in place. */
-#include "store_int.h"
+#include "store_sql.h"
 
 #include <errno.h>
 #include <math.h>

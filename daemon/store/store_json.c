@@ -3,7 +3,7 @@
  * number or text is JSON null, never NaN (jansson would refuse NaN anyway) and never "".
  * Text from the database that is not valid UTF-8 (a device's raw reply in a reason, say) is
  * passed with the offending bytes replaced by '?', so one bad byte cannot drop a key. */
-#include "store_int.h"
+#include "store_sql.h"
 
 #include <math.h>
 #include <stdlib.h>

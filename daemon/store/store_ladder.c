@@ -3,7 +3,7 @@
  * done once per scene and kept: before each trial the runner reads it and picks the cheapest
  * rung whose estimated error meets the target. A put replaces the whole ladder of its hash in
  * one transaction, so readers see the old ladder or the new one, never a mix. */
-#include "store_int.h"
+#include "store_sql.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -3,7 +3,7 @@
  * version) beside what it predicted (snap, regime, peak |A|, curve) and what it cost (wall_s,
  * estimated error). A row and its curve go in one transaction and are never changed afterwards;
  * a trial's prediction is its latest row. */
-#include "store_int.h"
+#include "store_curve.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -10,7 +10,7 @@
  * Sequence numbers are the writer's: 0, 1, 2... per trial, continuing after rows already stored.
  * Each commit also adds its rows to trials.samples_count, so the count a trial list shows is
  * exact after any crash without counting the samples. */
-#include "store_int.h"
+#include "store_curve.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,7 +1,7 @@
 /* store_specimens.c: the specimen records. A specimen is known by the name on its label: upsert
  * by name keeps one row per physical ribbon (re-measuring its creases updates the row), and
  * trials_count only ever grows, through store_specimen_count_trial. */
-#include "store_int.h"
+#include "store_sql.h"
 
 #include <math.h>
 #include <string.h>

@@ -1,8 +1,8 @@
-/* store_sql.c: the store's SQL plumbing (see store_int.h): failing with a reason, preparing,
+/* store_sql.c: the store's SQL plumbing (see store_sql.h): failing with a reason, preparing,
  * binding and reading columns under one NULL convention, one-value lookups by id, the readers'
  * growing row arrays, transactions, and the entry-point value checks. Nothing here knows a
  * table. */
-#include "store_int.h"
+#include "store_sql.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -255,4 +255,21 @@ store_err store_need_json(const char *t, const char *field, char *why, size_t wh
                           err.line, err.column, err.text);
     json_decref(j);
     return STORE_OK;
+}
+
+store_err store_pragma_int(store *st, const char *sql, int *out, char *why, size_t why_len)
+{
+    sqlite3_stmt *s;
+    store_err e = store_prepare(st, sql, &s, why, why_len);
+    if (e != STORE_OK)
+        return e;
+    int rc = sqlite3_step(s);
+    if (rc == SQLITE_ROW) {
+        *out = sqlite3_column_int(s, 0);
+        e = STORE_OK;
+    } else {
+        e = store_sql_fail(st->db, rc == SQLITE_DONE ? SQLITE_ERROR : rc, why, why_len, sql);
+    }
+    sqlite3_finalize(s);
+    return e;
 }

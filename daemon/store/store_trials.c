@@ -3,11 +3,12 @@
  * and reading trials back.
  *
  * The life cycle is enforced here, not left to callers: created -> running -> an end state
- * (done, failed, aborted, interrupted), or created -> failed / aborted. An end state is final,
+ * (done, failed, aborted, interrupted), or created -> failed / aborted / interrupted (a daemon
+ * killed while it predicted or computed the ladder). An end state is final,
  * so a late abort cannot overwrite "interrupted" and a restarted daemon cannot revive a trial.
  * Each transition is one UPDATE guarded by the allowed previous states, so it is atomic even
  * with several connections on the file. */
-#include "store_int.h"
+#include "store_sql.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -241,12 +242,15 @@ store_err store_trial_mark_interrupted(store *st, double wall_s, int *count, cha
         return store_fail(why, why_len, STORE_E_INVALID, "wall time %g is not a valid time", wall_s);
     static const char *const sql[2] = {
         "INSERT INTO events (trial_id, t_s, wall_time, state, kind, message)"
-        " SELECT id, NULL, ?1, state, 'fault',"
-        " 'interrupted: the daemon stopped while this trial was running (found at start-up)'"
-        " FROM trials WHERE status = 'running' ORDER BY id",
+        " SELECT id, NULL, ?1, state, 'fault', CASE status WHEN 'running' THEN"
+        " 'interrupted: the daemon stopped while this trial was running (found at start-up)' ELSE"
+        " 'interrupted: the daemon stopped before this trial started (found at start-up)' END"
+        " FROM trials WHERE status IN ('running', 'created') ORDER BY id",
         "UPDATE trials SET status = 'interrupted', ended_at = ?1,"
-        " reason = COALESCE(reason, 'the daemon stopped while the trial was running')"
-        " WHERE status = 'running'",
+        " reason = COALESCE(reason, CASE status WHEN 'running' THEN"
+        " 'the daemon stopped while the trial was running' ELSE"
+        " 'the daemon stopped before the trial started' END)"
+        " WHERE status IN ('running', 'created')",
     };
     if ((e = store_begin(st, why, why_len)))
         return e;
@@ -259,7 +263,7 @@ store_err store_trial_mark_interrupted(store *st, double wall_s, int *count, cha
         sqlite3_bind_text(s, 1, when, -1, SQLITE_TRANSIENT);
         int rc = sqlite3_step(s);
         if (rc != SQLITE_DONE)
-            e = store_sql_fail(st->db, rc, why, why_len, "marking running trials interrupted");
+            e = store_sql_fail(st->db, rc, why, why_len, "marking unfinished trials interrupted");
         changed = sqlite3_changes(st->db);
         sqlite3_finalize(s);
     }
@@ -280,7 +284,8 @@ store_err store_trial_mark_interrupted(store *st, double wall_s, int *count, cha
     " t.regime_measured, t.software_version, t.samples_count"                                               \
     " FROM trials t LEFT JOIN specimens s ON s.id = t.specimen_id "
 
-store_err store_trial_read_row(sqlite3_stmt *s, store_trial *out)
+/* The shared trial row behind store_trial_get/_list. */
+static store_err store_trial_read_row(sqlite3_stmt *s, store_trial *out)
 {
     memset(out, 0, sizeof *out);
     out->id = sqlite3_column_int64(s, 0);

@@ -2,6 +2,7 @@
 #include "predict_ladder.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
@@ -18,7 +19,7 @@ static uint64_t fnv(uint64_t h, const char *s)
     return h;
 }
 
-void scene_hash(const rod_scene *sc, char out[17])
+void predict_scene_hash(const rod_scene *sc, char out[17])
 {
     char buf[1024];
     /* Every field but the mesh size, printed exactly (%a), so equal scenes hash equal. */
@@ -33,7 +34,7 @@ void scene_hash(const rod_scene *sc, char out[17])
     snprintf(out, 17, "%016llx", (unsigned long long)h);
 }
 
-void ladder_estimate_errors(ladder_rung *r, int n)
+void predict_ladder_estimate_errors(predict_ladder_rung *r, int n)
 {
     for (int k = 0; k < n; k++) r[k].est_error = -1.0;
     if (n < 2) return;
@@ -54,12 +55,40 @@ void ladder_estimate_errors(ladder_rung *r, int n)
     for (int k = 0; k < n; k++) r[k].est_error = fabs(r[k].snap_dw - ref) / fabs(ref);
 }
 
-int ladder_compute(const rod_scene *sc, const int *nodes, int n, int adaptive, ladder_rung *out,
-                   void (*progress)(void *user, const ladder_rung *r, int k, int n), void *user, char *why,
-                   size_t why_len)
+/* rod_predict's per-step callback: stops the rung once the cancel flag is set. */
+static int stop_if_cancelled(void *user, const rod_sample *smp, const rod *r)
 {
-    if (n < 1 || n > LADDER_MAX_RUNGS) {
-        snprintf(why, why_len, "a ladder needs 1 to %d rungs, got %d", LADDER_MAX_RUNGS, n);
+    (void)smp;
+    (void)r;
+    const atomic_int *cancel = user;
+    return cancel && atomic_load(cancel);
+}
+
+double predict_estimate_s(const rod_scene *sc, int adaptive)
+{
+    if (!(sc->shear_rate > 0) || !(sc->dt > 0)) return INFINITY;
+    double steps = sc->shear_max * sc->length / (sc->shear_rate * sc->dt); /* shear time / dt */
+    if (adaptive) steps /= PREDICT_FAST_STEP_RATIO;
+    return steps * (double)sc->nodes * PREDICT_STEP_NODE_S;
+}
+
+double predict_ladder_estimate_s(const rod_scene *sc, const int *nodes, int n, int adaptive)
+{
+    double total = 0.0;
+    for (int k = 0; k < n; k++) {
+        rod_scene s = *sc;
+        s.nodes = nodes[k];
+        total += predict_estimate_s(&s, adaptive);
+    }
+    return total;
+}
+
+int predict_ladder_compute(const rod_scene *sc, const int *nodes, int n, int adaptive, predict_ladder_rung *out,
+                           void (*progress)(void *user, const predict_ladder_rung *r, int k, int n), void *user,
+                           const atomic_int *cancel, char *why, size_t why_len)
+{
+    if (n < 1 || n > PREDICT_LADDER_MAX_RUNGS) {
+        snprintf(why, why_len, "a ladder needs 1 to %d rungs, got %d", PREDICT_LADDER_MAX_RUNGS, n);
         return -1;
     }
     for (int k = 0; k < n; k++) {
@@ -71,9 +100,15 @@ int ladder_compute(const rod_scene *sc, const int *nodes, int n, int adaptive, l
         s.nodes = nodes[k];
         rod_predict_opts o = rod_predict_opts_default();
         o.adaptive = adaptive;
+        o.on_sample = stop_if_cancelled;
+        o.user = (void *)cancel;
         rod_prediction p;
         char err[256] = "";
         rod_status st = rod_predict(&s, &o, &p, err, sizeof err);
+        if (cancel && atomic_load(cancel)) {
+            snprintf(why, why_len, "cancelled at ladder rung N = %d", nodes[k]);
+            return -1;
+        }
         if (st != ROD_OK) {
             snprintf(why, why_len, "ladder rung N = %d: %s", nodes[k], err);
             return -1;
@@ -83,7 +118,7 @@ int ladder_compute(const rod_scene *sc, const int *nodes, int n, int adaptive, l
                      sc->shear_max);
             return -1;
         }
-        ladder_rung *r = &out[k];
+        predict_ladder_rung *r = &out[k];
         memset(r, 0, sizeof *r);
         r->nodes = nodes[k];
         r->dt = s.dt;
@@ -95,11 +130,11 @@ int ladder_compute(const rod_scene *sc, const int *nodes, int n, int adaptive, l
         r->est_error = -1.0;
         if (progress) progress(user, r, k, n);
     }
-    ladder_estimate_errors(out, n);
+    predict_ladder_estimate_errors(out, n);
     return 0;
 }
 
-int ladder_choose(const ladder_rung *r, int n, double target_error)
+int predict_ladder_choose(const predict_ladder_rung *r, int n, double target_error)
 {
     int best = -1, finest = n - 1;
     for (int k = 0; k < n; k++) {

@@ -13,7 +13,9 @@
 
 #include "replay_rails_csv.h"
 #include "snap_detect.h"
-#include "trial_calib.h"
+#include "trial_config_text.h"
+#include "trial_record.h"
+#include "trial_specimen.h"
 #include "vision.h"
 
 #define REPLAY_SHEAR_START_MM 0.05
@@ -103,7 +105,7 @@ int trial_replay_from_trial(store *st, int64_t source_id, const char *video, tri
     snprintf(r->config_text, tl, "%s# replay of trial %lld\n", config ? config : "", (long long)source_id);
     if (store_samples_get(st, source_id, &r->smp, &r->ns, why, why_len) != STORE_OK) goto fail;
     if (check_video_belongs(r, why, why_len)) goto fail;
-    trial_state_times(st, source_id, &r->t_check, &r->t_shear, &r->t_return);
+    store_events_state_times(st, source_id, &r->t_check, &r->t_shear, &r->t_return);
     free(config);
     *out = r;
     return 0;
@@ -224,7 +226,7 @@ int trial_replay_from_files(const rig_config *cfg, trial_replay **out, char *why
     }
     /* The record: the rig file's calibration and detection, the whole frame as the region. */
     trial_roi roi = {0, 0, vis_frame_width(frame), vis_frame_height(frame)};
-    char *rec = trial_calib_json(cfg, &cal, roi, why, why_len);
+    char *rec = trial_record_json(cfg, &cal, roi, why, why_len);
     json_error_t je;
     root = rec ? json_loads(rec, 0, &je) : NULL;
     free(rec);
@@ -439,9 +441,7 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
     res->asymmetric = snap_detect_asymmetric(&det);
     res->peak_abs_a = det.peak_abs_a;
     snprintf(res->regime, sizeof res->regime, "%s", snap_detect_regime(&det));
-    store_regime reg = !res->snapped ? STORE_REGIME_NO_SNAP
-                       : res->asymmetric ? STORE_REGIME_ASYMMETRIC
-                                         : STORE_REGIME_SYMMETRIC;
+    store_regime reg = trial_regime_of(res->snapped, res->snapped, res->asymmetric);
     store_trial_set_result(st, id, res->snapped, res->snapped ? res->snap_dw : NAN, reg, w2, sizeof w2);
     char msg[400];
     if (r->source_id)

@@ -7,36 +7,25 @@
 #include <stdlib.h>
 #include <string.h>
 #include <errno.h>
+#include <stdarg.h>
+#include <stdatomic.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 
-#include <jansson.h>
-
-#include "mock_camera.h"
 #include "predict_ladder.h"
 #include "rod_protocol.h"
 #include "store.h"
-#include "trial_calib.h"
+#include "trial_camera_setup.h"
+#include "trial_config_text.h"
+#include "trial_prediction.h"
+#include "trial_record.h"
+#include "trial_specimen.h"
 #include "trial_video.h"
+#include "twin.h"
 
 #ifndef RIBBON_VERSION
 #define RIBBON_VERSION "unknown"
 #endif
-
-/* The prediction that runs beside the trial. */
-typedef struct pred_job {
-    rod_scene scene;        /* at the chosen resolution */
-    int adaptive;
-    double est_error;       /* NaN when unknown */
-    char hash[72];
-    char store_path[RIG_PATH_MAX];
-    int64_t trial_id;
-    trial_session *s;
-    /* curve being recorded */
-    size_t n, cap;
-    double *t, *dw, *dz, *a;
-    double last_dw, last_dz;
-} pred_job;
 
 struct trial_session {
     rig_config cfg;
@@ -45,9 +34,9 @@ struct trial_session {
     store *st;              /* the trial thread's connection */
     store_samples *writer;
     int64_t trial_id;
-    pthread_t thread, pred_thread;
-    int pred_started;
-    pred_job pred;
+    pthread_t thread;
+    trial_prediction *prediction; /* the prediction beside the trial, once started */
+    atomic_int cancel;      /* set by abort: stops the ladder and the prediction at their next step */
     trial_runner runner;
     int runner_ready;
     trial_result result;
@@ -107,118 +96,21 @@ static void session_event(trial_session *s, double t_s, store_event_kind kind, c
     logf_(s, "%s", msg);
 }
 
-/* ---- the prediction thread ---------------------------------------------------------------- */
+/* ---- the prediction's report ------------------------------------------------------------- */
 
-static int pred_grow(pred_job *j)
+/* The prediction's one report (on its thread): the status the API shows, and the log. */
+static void prediction_done(void *user, const trial_prediction_report *r)
 {
-    size_t cap = j->cap ? 2 * j->cap : 1024;
-    double *t = realloc(j->t, cap * sizeof *t);
-    if (t) j->t = t;
-    double *dw = realloc(j->dw, cap * sizeof *dw);
-    if (dw) j->dw = dw;
-    double *dz = realloc(j->dz, cap * sizeof *dz);
-    if (dz) j->dz = dz;
-    double *a = realloc(j->a, cap * sizeof *a);
-    if (a) j->a = a;
-    if (!t || !dw || !dz || !a) return -1;
-    j->cap = cap;
-    return 0;
-}
-
-/* Keeps a sample each 1/2000 of the shear range, and every step where Delta Z moves fast. */
-static int pred_sample(void *user, const rod_sample *smp, const rod *r)
-{
-    (void)r;
-    pred_job *j = user;
-    double step = j->scene.shear_max / 2000.0;
-    if (j->n > 0 && smp->dw - j->last_dw < step && fabs(smp->dz - j->last_dz) < 2e-3) return 0;
-    if (j->n == j->cap && pred_grow(j)) return 0; /* a thinner curve, not a failure */
-    j->t[j->n] = smp->t;
-    j->dw[j->n] = smp->dw;
-    j->dz[j->n] = smp->dz;
-    j->a[j->n] = smp->a;
-    j->n++;
-    j->last_dw = smp->dw;
-    j->last_dz = smp->dz;
-    return 0;
-}
-
-static void *pred_main(void *arg)
-{
-    pred_job *j = arg;
-    trial_session *s = j->s;
-    rod_predict_opts o = rod_predict_opts_default();
-    o.adaptive = j->adaptive;
-    o.on_sample = pred_sample;
-    o.user = j;
-    rod_prediction p;
-    char err[256] = "", why[256] = "";
-    rod_status rs = rod_predict(&j->scene, &o, &p, err, sizeof err);
-    store *st = NULL;
-    if (store_open(j->store_path, &st, why, sizeof why) != STORE_OK) {
-        logf_(s, "prediction not stored: %s", why);
-        goto out;
-    }
-    if (rs != ROD_OK) {
-        char msg[400];
-        snprintf(msg, sizeof msg, "prediction failed: %s", err);
-        store_event ev;
-        memset(&ev, 0, sizeof ev);
-        ev.trial_id = j->trial_id;
-        ev.t_s = NAN;
-        ev.wall_s = store_wall_now();
-        ev.kind = STORE_EVENT_WARNING;
-        snprintf(ev.message, sizeof ev.message, "%s", msg);
-        store_event_append(st, &ev, why, sizeof why);
-        pthread_mutex_lock(&s->lock);
-        s->status.prediction_failed = 1;
-        pthread_mutex_unlock(&s->lock);
-        logf_(s, "%s", msg);
-        goto out;
-    }
-    store_prediction sp = store_prediction_default();
-    sp.trial_id = j->trial_id;
-    snprintf(sp.scene_hash, sizeof sp.scene_hash, "%s", j->hash);
-    sp.snapped = p.snapped;
-    sp.snap_dw = p.snapped ? p.snap_dw : NAN;
-    sp.regime = !p.snapped ? STORE_REGIME_NO_SNAP : p.asymmetric ? STORE_REGIME_ASYMMETRIC : STORE_REGIME_SYMMETRIC;
-    sp.peak_abs_a = p.peak_abs_a;
-    sp.nodes = j->scene.nodes;
-    sp.dt = j->scene.dt;
-    sp.adaptive = j->adaptive;
-    sp.imperfection = j->scene.fold_angle_rel;
-    sp.est_error = j->est_error;
-    sp.wall_s = p.wall_s;
-    char solver[512];
-    snprintf(solver, sizeof solver,
-             "{\"nodes\":%d,\"dt\":%.17g,\"adaptive\":%s,\"tolerance\":%.17g,\"max_iterations\":%d,"
-             "\"damping\":%.17g,\"route\":%d,\"fold_angle_rel\":%.17g,\"snap_speed\":%.17g,"
-             "\"asym_threshold\":%.17g,\"steps\":%ld,\"rejected\":%ld}",
-             j->scene.nodes, j->scene.dt, j->adaptive ? "true" : "false", j->scene.tolerance,
-             j->scene.max_iterations, j->scene.damping, (int)j->scene.route, j->scene.fold_angle_rel,
-             j->scene.snap_speed, j->scene.asym_threshold, p.steps, p.rejected);
-    sp.solver_json = solver;
-    sp.curve.n = j->n;
-    sp.curve.t_s = j->t;
-    sp.curve.dw = j->dw;
-    sp.curve.dz = j->dz;
-    sp.curve.a = j->a;
-    int64_t pid = 0;
-    if (store_prediction_insert(st, &sp, &pid, why, sizeof why) != STORE_OK) {
-        logf_(s, "prediction not stored: %s", why);
-        goto out;
-    }
+    trial_session *s = user;
     pthread_mutex_lock(&s->lock);
-    s->status.prediction_done = 1;
-    s->status.snap_dw_predicted = p.snapped ? p.snap_dw : NAN;
-    snprintf(s->status.regime_predicted, sizeof s->status.regime_predicted, "%s",
-             store_regime_name(sp.regime));
+    if (r->outcome == TRIAL_PREDICTION_FAILED) s->status.prediction_failed = 1;
+    if (r->outcome == TRIAL_PREDICTION_STORED) {
+        s->status.prediction_done = 1;
+        s->status.snap_dw_predicted = r->snap_dw;
+        snprintf(s->status.regime_predicted, sizeof s->status.regime_predicted, "%s", store_regime_name(r->regime));
+    }
     pthread_mutex_unlock(&s->lock);
-    logf_(s, "predicted: %s at Delta W = %.5f (N = %d, dt = %g s%s, %.2f s wall)", store_regime_name(sp.regime),
-          p.snap_dw, j->scene.nodes, j->scene.dt, j->adaptive ? ", fast" : "", p.wall_s);
-out:
-    store_close(st);
-    return NULL;
+    logf_(s, "%s", r->message);
 }
 
 /* ---- resolution ----------------------------------------------------------------------------- */
@@ -229,7 +121,7 @@ static int choose_resolution(trial_session *s, rod_scene *sc, double *est_error,
 {
     const rig_sim *sim = &s->cfg.sim;
     char h[17];
-    scene_hash(sc, h);
+    predict_scene_hash(sc, h);
     snprintf(hash, hash_len, "%s-v%s-%s", h, RIBBON_VERSION, sim->fast ? "fast" : "fixed");
     *est_error = NAN;
     if (sim->explicit_resolution) {
@@ -239,10 +131,10 @@ static int choose_resolution(trial_session *s, rod_scene *sc, double *est_error,
     }
     store_ladder_rung *cached = NULL;
     size_t n = 0;
-    ladder_rung r[LADDER_MAX_RUNGS];
+    predict_ladder_rung r[PREDICT_LADDER_MAX_RUNGS];
     int nr = 0;
     if (store_ladder_get(s->st, hash, &cached, &n, why, why_len) == STORE_OK && n > 0) {
-        for (size_t k = 0; k < n && nr < LADDER_MAX_RUNGS; k++) {
+        for (size_t k = 0; k < n && nr < PREDICT_LADDER_MAX_RUNGS; k++) {
             memset(&r[nr], 0, sizeof r[nr]);
             r[nr].nodes = cached[k].nodes;
             r[nr].dt = cached[k].dt;
@@ -259,9 +151,11 @@ static int choose_resolution(trial_session *s, rod_scene *sc, double *est_error,
         char msg[128];
         snprintf(msg, sizeof msg, "computing the resolution ladder (%d rungs), once for this scene", sim->n_ladder);
         session_event(s, NAN, STORE_EVENT_INFO, msg);
-        if (ladder_compute(sc, sim->ladder_nodes, sim->n_ladder, sim->fast, r, NULL, NULL, why, why_len)) return -1;
+        if (predict_ladder_compute(sc, sim->ladder_nodes, sim->n_ladder, sim->fast, r, NULL, NULL, &s->cancel, why,
+                                   why_len))
+            return -1;
         nr = sim->n_ladder;
-        store_ladder_rung sr[LADDER_MAX_RUNGS];
+        store_ladder_rung sr[PREDICT_LADDER_MAX_RUNGS];
         for (int k = 0; k < nr; k++) {
             sr[k].nodes = r[k].nodes;
             sr[k].dt = r[k].dt;
@@ -274,7 +168,7 @@ static int choose_resolution(trial_session *s, rod_scene *sc, double *est_error,
         if (store_ladder_put(s->st, hash, sr, (size_t)nr, w2, sizeof w2) != STORE_OK)
             session_event(s, NAN, STORE_EVENT_WARNING, w2);
     }
-    int k = ladder_choose(r, nr, sim->target_error);
+    int k = predict_ladder_choose(r, nr, sim->target_error);
     sc->nodes = r[k].nodes;
     *est_error = r[k].est_error >= 0 ? r[k].est_error : NAN;
     char msg[200];
@@ -371,7 +265,16 @@ static vis_status live_grab(void *ctx, double t_s, double dl, double dw, vis_fra
     return st;
 }
 
-/* ---- the trial thread ----------------------------------------------------------------------------- */
+/* ---- the trial thread's steps ------------------------------------------------------------------- */
+
+/* What the trial thread opens; session_release closes whatever is open. */
+typedef struct session_parts {
+    rod_scene sc;           /* the scene at the prediction's resolution (and the mock twin's) */
+    mock_camera *mock;
+    live_camera live;
+    trial_camera cam;
+    vis_tracker *trk;
+} session_parts;
 
 static void fail_early(trial_session *s, const char *why)
 {
@@ -387,132 +290,122 @@ static void fail_early(trial_session *s, const char *why)
     pthread_mutex_unlock(&s->lock);
 }
 
-static void *session_main(void *arg)
+/* Step 1: the video directory exists and has trial.min_free_disk_mb free. */
+static int session_check_disk(trial_session *s, char *why, size_t why_len)
 {
-    trial_session *s = arg;
     const rig_config *cfg = &s->cfg;
-    char why[512] = "";
-    mock_camera *mock = NULL;
-    live_camera live = {0};
-    vis_tracker *trk = NULL;
-    rod_scene sc = cfg->scene;
-    vis_error ve = {0};
-    trial_camera cam = {0};
-
-    /* 1. Disk space for the video. */
     struct statvfs fs;
     if (mkdir(cfg->camera.video_dir, 0775) != 0 && errno != EEXIST) {
-        snprintf(why, sizeof why, "video directory %.300s cannot be created: %m", cfg->camera.video_dir);
-        fail_early(s, why);
-        goto end;
+        snprintf(why, why_len, "video directory %.300s cannot be created: %m", cfg->camera.video_dir);
+        return -1;
     }
     if (statvfs(cfg->camera.video_dir, &fs) != 0) {
-        snprintf(why, sizeof why, "video directory %.300s cannot be read: %m", cfg->camera.video_dir);
-        fail_early(s, why);
-        goto end;
+        snprintf(why, why_len, "video directory %.300s cannot be read: %m", cfg->camera.video_dir);
+        return -1;
     }
     double free_mb = (double)fs.f_bavail * (double)fs.f_frsize / 1e6;
     if (free_mb < cfg->trial.min_free_disk_mb) {
-        snprintf(why, sizeof why, "only %.0f MB free in %.300s; a trial needs %.0f MB (trial.min_free_disk_mb)", free_mb,
+        snprintf(why, why_len, "only %.0f MB free in %.300s; a trial needs %.0f MB (trial.min_free_disk_mb)", free_mb,
                  cfg->camera.video_dir, cfg->trial.min_free_disk_mb);
-        fail_early(s, why);
-        goto end;
+        return -1;
     }
+    return 0;
+}
 
-    /* 2. Resolution and the prediction beside the trial. */
+/* Step 2: the prediction's resolution, then the prediction on its own thread beside the trial. */
+static int session_start_prediction(trial_session *s, session_parts *p, char *why, size_t why_len)
+{
     double est = NAN;
     char hash[72];
-    if (choose_resolution(s, &sc, &est, hash, sizeof hash, why, sizeof why)) {
-        char msg[600];
-        snprintf(msg, sizeof msg, "no prediction resolution: %s", why);
-        fail_early(s, msg);
-        goto end;
+    char w[400];
+    if (choose_resolution(s, &p->sc, &est, hash, sizeof hash, w, sizeof w)) {
+        if (atomic_load(&s->cancel))
+            aborted_early(s, why, why_len);
+        else
+            snprintf(why, why_len, "no prediction resolution: %s", w);
+        return -1;
     }
-    if (aborted_early(s, why, sizeof why)) {
-        fail_early(s, why);
-        goto end;
-    }
+    if (aborted_early(s, why, why_len)) return -1;
     pthread_mutex_lock(&s->lock);
-    s->status.nodes = sc.nodes;
-    s->status.dt = sc.dt;
+    s->status.nodes = p->sc.nodes;
+    s->status.dt = p->sc.dt;
     pthread_mutex_unlock(&s->lock);
-    s->pred.scene = sc;
-    s->pred.adaptive = cfg->sim.fast;
-    s->pred.est_error = est;
-    snprintf(s->pred.hash, sizeof s->pred.hash, "%s", hash);
-    snprintf(s->pred.store_path, sizeof s->pred.store_path, "%s", cfg->store_path);
-    s->pred.trial_id = s->trial_id;
-    s->pred.s = s;
-    if (pthread_create(&s->pred_thread, NULL, pred_main, &s->pred) == 0)
-        s->pred_started = 1;
-    else
+    trial_prediction_def def = {.scene = p->sc, .adaptive = s->cfg.sim.fast, .est_error = est,
+                                .trial_id = s->trial_id, .cancel = &s->cancel, .done = prediction_done, .user = s};
+    snprintf(def.hash, sizeof def.hash, "%s", hash);
+    snprintf(def.store_path, sizeof def.store_path, "%s", s->cfg.store_path);
+    if (trial_prediction_start(&def, &s->prediction, w, sizeof w))
         session_event(s, NAN, STORE_EVENT_WARNING, "prediction thread could not start: no prediction for this trial");
+    return 0;
+}
 
-    /* 3. Camera, tracker, video. */
+/* Step 3a: the camera: mock mode's twin at the prediction's resolution, mounted at the compression
+ * rail's current position; rig mode's live camera. */
+static int session_open_camera(trial_session *s, session_parts *p, char *why, size_t why_len)
+{
+    const rig_config *cfg = &s->cfg;
     rail_status rs;
     if (rail_status_poll(s->compress, &rs) != RAIL_OK) {
-        snprintf(why, sizeof why, "compression rail: %s", rail_last_error(s->compress));
-        fail_early(s, why);
-        goto end;
+        snprintf(why, why_len, "compression rail: %s", rail_last_error(s->compress));
+        return -1;
     }
-    int width = s->width, height = s->height;
     if (cfg->mode == RIG_MODE_MOCK) {
         twin_camera_params cp = twin_camera_params_default();
-        cp.width_px = width;
-        cp.height_px = height;
-        double dl0 = rig_calib_dl(&cfg->calib, sc.length, rs.position_mm);
-        if (mock_camera_open(&sc, dl0, &cp, cfg->camera.noise_sigma, cfg->camera.blur_sigma_px,
-                             (uint64_t)s->trial_id, &mock, why, sizeof why)) {
-            fail_early(s, why);
-            goto end;
-        }
-        cam.grab = mock_camera_grab;
-        cam.ctx = mock;
+        cp.width_px = s->width;
+        cp.height_px = s->height;
+        double dl0 = rig_calib_dl(&cfg->calib, p->sc.length, rs.position_mm);
+        if (mock_camera_open(&p->sc, dl0, &cp, cfg->camera.noise_sigma, cfg->camera.blur_sigma_px,
+                             (uint64_t)s->trial_id, &p->mock, why, why_len))
+            return -1;
+        p->cam.grab = mock_camera_grab;
+        p->cam.ctx = p->mock;
         /* The twin's shear force is the mock shear drive's load (its force sensor): the runner's
          * second witness when detect.torque_witness is on. */
-        if (cfg->detect.torque_witness && mock_camera_feed_load(mock, s->shear, why, sizeof why)) {
-            fail_early(s, why);
-            goto end;
-        }
-    } else {
-        vis_camera_settings cs = vis_camera_settings_default();
-        cs.index = cfg->camera.index;
-        cs.path = cfg->camera.source == RIG_SOURCE_DEVICE ? cfg->camera.device : NULL;
-        cs.width_px = cfg->camera.width_px;
-        cs.height_px = cfg->camera.height_px;
-        cs.fps = cfg->camera.fps;
-        live.src = vis_source_open_camera(&cs, &ve);
-        if (!live.src) {
-            snprintf(why, sizeof why, "camera: %s", ve.message);
-            fail_early(s, why);
-            goto end;
-        }
-        live.clock = rail_get_clock(s->compress);
-        cam.grab = live_grab;
-        cam.ctx = &live;
+        if (cfg->detect.torque_witness && mock_camera_feed_load(p->mock, s->shear, why, why_len)) return -1;
+        return 0;
     }
+    vis_error ve = {0};
+    vis_camera_settings cs = vis_camera_settings_default();
+    cs.index = cfg->camera.index;
+    cs.path = cfg->camera.source == RIG_SOURCE_DEVICE ? cfg->camera.device : NULL;
+    cs.width_px = cfg->camera.width_px;
+    cs.height_px = cfg->camera.height_px;
+    cs.fps = cfg->camera.fps;
+    p->live.src = vis_source_open_camera(&cs, &ve);
+    if (!p->live.src) {
+        snprintf(why, why_len, "camera: %s", ve.message);
+        return -1;
+    }
+    p->live.clock = rail_get_clock(s->compress);
+    p->cam.grab = live_grab;
+    p->cam.ctx = &p->live;
+    return 0;
+}
+
+/* Step 3b: the tracker (with the calibration stored with the trial) and the cropped video. */
+static int session_open_tracker_and_video(trial_session *s, session_parts *p, char *why, size_t why_len)
+{
+    const rig_config *cfg = &s->cfg;
+    vis_error ve = {0};
     vis_track_params tp = vis_track_params_default();
-    tp.length_mm = sc.length * 1000.0;
-    trk = vis_tracker_create(&tp, &s->cal, &ve); /* the calibration stored with the trial */
-    if (!trk) {
-        snprintf(why, sizeof why, "tracker: %s", ve.message);
-        fail_early(s, why);
-        goto end;
+    tp.length_mm = p->sc.length * 1000.0;
+    p->trk = vis_tracker_create(&tp, &s->cal, &ve);
+    if (!p->trk) {
+        snprintf(why, why_len, "tracker: %s", ve.message);
+        return -1;
     }
-    trial_roi roi = s->roi;
     char video_path[RIG_PATH_MAX + 64];
     snprintf(video_path, sizeof video_path, "%s/trial-%lld.mkv", cfg->camera.video_dir, (long long)s->trial_id);
-    s->video = trial_video_open(video_path, roi, cfg->camera.fps, why, sizeof why);
-    if (!s->video) {
-        fail_early(s, why);
-        goto end;
-    }
-    {
-        char w[256];
-        store_trial_set_video(s->st, s->trial_id, video_path, w, sizeof w);
-    }
+    s->video = trial_video_open(video_path, s->roi, cfg->camera.fps, why, why_len);
+    if (!s->video) return -1;
+    char w[256];
+    store_trial_set_video(s->st, s->trial_id, video_path, w, sizeof w);
+    return 0;
+}
 
-    /* 4. The runner. */
+/* The runner's plan: the rig file's trial, detection and camera settings. */
+static trial_plan session_plan(const rig_config *cfg)
+{
     trial_plan plan;
     memset(&plan, 0, sizeof plan);
     plan.scene = cfg->scene;
@@ -532,100 +425,138 @@ static void *session_main(void *arg)
     plan.torque_witness = cfg->detect.torque_witness;
     plan.load_jump = cfg->detect.load_jump;
     plan.paced_by_camera = cfg->mode == RIG_MODE_RIG;
-    if (store_samples_begin(s->st, s->trial_id, NULL, &s->writer, why, sizeof why) != STORE_OK) {
-        fail_early(s, why);
-        goto end;
-    }
+    return plan;
+}
+
+/* Step 4: the runner, storing every sample (batched), event and state; the trial is running (and
+ * counted for its specimen) from here. */
+static int session_run(trial_session *s, session_parts *p, char *why, size_t why_len)
+{
+    trial_plan plan = session_plan(&s->cfg);
+    if (store_samples_begin(s->st, s->trial_id, NULL, &s->writer, why, why_len) != STORE_OK) return -1;
     trial_sink sink = {sink_state, sink_event, sink_sample, sink_frame, s};
-    if (trial_runner_init(&s->runner, &plan, s->compress, s->shear, cam, trk, sink, why, sizeof why)) {
-        fail_early(s, why);
-        goto end;
-    }
+    if (trial_runner_init(&s->runner, &plan, s->compress, s->shear, p->cam, p->trk, sink, why, why_len)) return -1;
     pthread_mutex_lock(&s->lock);
     s->runner_ready = 1;
     if (s->abort_pending) trial_runner_abort(&s->runner, s->abort_reason);
     pthread_mutex_unlock(&s->lock);
-    {
-        char w[256];
-        if (store_trial_set_status(s->st, s->trial_id, STORE_STATUS_RUNNING, NULL, store_wall_now(), w, sizeof w) !=
-            STORE_OK) {
-            fail_early(s, w);
-            goto end;
-        }
-        int64_t spid = 0;
-        store_trial tr;
-        if (store_trial_get(s->st, s->trial_id, &tr, w, sizeof w) == STORE_OK && tr.specimen_id > 0) {
-            spid = tr.specimen_id;
-            store_specimen_count_trial(s->st, spid, w, sizeof w);
-        }
-    }
+    if (store_trial_set_status(s->st, s->trial_id, STORE_STATUS_RUNNING, NULL, store_wall_now(), why, why_len) !=
+        STORE_OK)
+        return -1;
+    char w[256];
+    store_trial tr;
+    if (store_trial_get(s->st, s->trial_id, &tr, w, sizeof w) == STORE_OK && tr.specimen_id > 0)
+        store_specimen_count_trial(s->st, tr.specimen_id, w, sizeof w);
     trial_runner_run(&s->runner, &s->result);
     pthread_mutex_lock(&s->lock);
     s->runner_ready = 0;
     pthread_mutex_unlock(&s->lock);
+    return 0;
+}
 
-    /* 5. Result. Samples first, so a stored result always has its samples. */
-    {
-        char w[256];
-        if (store_samples_end(s->writer, w, sizeof w) != STORE_OK) session_event(s, NAN, STORE_EVENT_FAULT, w);
-        s->writer = NULL;
-        long frames = trial_video_close(s->video, w, sizeof w);
-        s->video = NULL;
-        if (frames < 0) { /* the video lost frames: a fault, and the trial is not done */
-            session_event(s, NAN, STORE_EVENT_FAULT, w);
-            if (s->result.final == TRIAL_DONE) s->result.final = TRIAL_FAILED;
-            if (!s->result.reason[0]) snprintf(s->result.reason, sizeof s->result.reason, "%s", w);
-        }
-        store_regime reg = !s->result.snapped          ? STORE_REGIME_NO_SNAP
-                           : !s->result.vision_snapped ? STORE_REGIME_UNKNOWN /* load witness only */
-                           : s->result.asymmetric      ? STORE_REGIME_ASYMMETRIC
-                                                  : STORE_REGIME_SYMMETRIC;
-        if (s->result.final == TRIAL_DONE || s->result.snapped)
-            store_trial_set_result(s->st, s->trial_id, s->result.snapped, s->result.snapped ? s->result.snap_dw : NAN,
-                                   reg, w, sizeof w);
-        store_status fin = s->result.final == TRIAL_DONE      ? STORE_STATUS_DONE
-                           : s->result.final == TRIAL_ABORTED ? STORE_STATUS_ABORTED
-                                                              : STORE_STATUS_FAILED;
-        store_trial_set_status(s->st, s->trial_id, fin, s->result.reason[0] ? s->result.reason : NULL,
-                               store_wall_now(), w, sizeof w);
-        logf_(s, "%s%s%s; measured %s at Delta W = %.5f", trial_state_name(s->result.final),
-              s->result.reason[0] ? ": " : "", s->result.reason, s->result.regime, s->result.snap_dw);
+/* Step 5: the measured result and the final status. Samples first, so a stored result always has
+ * its samples. */
+static void session_store_result(trial_session *s)
+{
+    char w[256];
+    if (store_samples_end(s->writer, w, sizeof w) != STORE_OK) session_event(s, NAN, STORE_EVENT_FAULT, w);
+    s->writer = NULL;
+    if (trial_video_close(s->video, w, sizeof w) < 0) { /* the video lost frames: a fault, not done */
+        session_event(s, NAN, STORE_EVENT_FAULT, w);
+        if (s->result.final == TRIAL_DONE) s->result.final = TRIAL_FAILED;
+        if (!s->result.reason[0]) snprintf(s->result.reason, sizeof s->result.reason, "%s", w);
     }
-end:
+    s->video = NULL;
+    store_regime reg = trial_regime_of(s->result.snapped, s->result.vision_snapped, s->result.asymmetric);
+    if (s->result.final == TRIAL_DONE || s->result.snapped)
+        store_trial_set_result(s->st, s->trial_id, s->result.snapped, s->result.snapped ? s->result.snap_dw : NAN, reg,
+                               w, sizeof w);
+    store_status fin = s->result.final == TRIAL_DONE      ? STORE_STATUS_DONE
+                       : s->result.final == TRIAL_ABORTED ? STORE_STATUS_ABORTED
+                                                          : STORE_STATUS_FAILED;
+    store_trial_set_status(s->st, s->trial_id, fin, s->result.reason[0] ? s->result.reason : NULL, store_wall_now(), w,
+                           sizeof w);
+    logf_(s, "%s%s%s; measured %s at Delta W = %.5f", trial_state_name(s->result.final),
+          s->result.reason[0] ? ": " : "", s->result.reason, s->result.regime, s->result.snap_dw);
+}
+
+/* Whatever the steps opened, closed; the prediction waited for (it stops at once when the trial
+ * was aborted); the status final. */
+static void session_release(trial_session *s, session_parts *p)
+{
+    char w[256];
     if (s->writer) {
-        char w[256];
         store_samples_end(s->writer, w, sizeof w);
         s->writer = NULL;
     }
     if (s->video) {
-        char w[256];
         trial_video_close(s->video, w, sizeof w);
         s->video = NULL;
     }
-    if (s->pred_started) {
-        pthread_join(s->pred_thread, NULL);
-        s->pred_started = 0;
-    }
+    trial_prediction_join(s->prediction);
+    s->prediction = NULL;
     trial_runner_free(&s->runner);
-    vis_tracker_free(trk);
-    mock_camera_close(mock);
-    if (live.src) vis_source_close(live.src);
+    vis_tracker_free(p->trk);
+    mock_camera_close(p->mock);
+    if (p->live.src) vis_source_close(p->live.src);
     pthread_mutex_lock(&s->lock);
     s->status.finished = 1;
     if (!trial_state_final(s->status.state)) s->status.state = s->result.final;
     pthread_mutex_unlock(&s->lock);
+}
+
+static void *session_main(void *arg)
+{
+    trial_session *s = arg;
+    session_parts p = {.sc = s->cfg.scene};
+    char why[512] = "";
+    if (session_check_disk(s, why, sizeof why) || session_start_prediction(s, &p, why, sizeof why) ||
+        session_open_camera(s, &p, why, sizeof why) || session_open_tracker_and_video(s, &p, why, sizeof why) ||
+        session_run(s, &p, why, sizeof why))
+        fail_early(s, why);
+    else
+        session_store_result(s);
+    session_release(s, &p);
     return NULL;
 }
 
-int trial_session_start(const rig_config *cfg, rail *compress, rail *shear, const char *note,
-                        void (*log)(const char *line), trial_session **out, int64_t *trial_id, char *why,
-                        size_t why_len)
+/* The longest computation a start may ask for before its trial moves: the ladder when the store
+ * has none cached for the scene, or the prediction at an explicit resolution. A start whose
+ * estimate exceeds TRIAL_PREDICTION_MAX_S is refused with the estimate (nothing is recorded). */
+static trial_err check_prediction_cost(const rig_config *cfg, char *why, size_t why_len)
+{
+    const rig_sim *sim = &cfg->sim;
+    rod_scene sc = cfg->scene;
+    double est;
+    const char *what;
+    if (sim->explicit_resolution) {
+        if (sim->nodes > 0) sc.nodes = sim->nodes;
+        if (sim->dt > 0) sc.dt = sim->dt;
+        est = predict_estimate_s(&sc, sim->fast);
+        what = "the prediction";
+    } else {
+        est = predict_ladder_estimate_s(&sc, sim->ladder_nodes, sim->n_ladder, sim->fast);
+        what = "the resolution ladder (if not cached)";
+    }
+    if (est <= TRIAL_PREDICTION_MAX_S) return TRIAL_OK;
+    snprintf(why, why_len,
+             "%s would take about %.3g s (estimated: N = %d, dt = %g s, shear to Delta W = %g at %g m/s); a start "
+             "may ask for at most %g s: use a smaller sim.nodes or a larger solver.dt", what, est, sc.nodes, sc.dt,
+             sc.shear_max, sc.shear_rate, TRIAL_PREDICTION_MAX_S);
+    return TRIAL_E_REFUSED;
+}
+
+trial_err trial_session_start(const rig_config *cfg, rail *compress, rail *shear, const char *note,
+                              void (*log)(const char *line), trial_session **out, int64_t *trial_id, char *why,
+                              size_t why_len)
 {
     *out = NULL;
+    trial_err te = check_prediction_cost(cfg, why, why_len);
+    if (te != TRIAL_OK) return te;
     trial_session *s = calloc(1, sizeof *s);
     if (!s) {
         snprintf(why, why_len, "out of memory");
-        return -1;
+        return TRIAL_E_FAILED;
     }
     s->cfg = *cfg;
     s->compress = compress;
@@ -643,7 +574,7 @@ int trial_session_start(const rig_config *cfg, rail *compress, rail *shear, cons
     if (store_specimen_upsert(s->st, &sp, &spid, why, why_len) != STORE_OK) goto fail;
     if (trial_camera_setup(cfg, &s->cal, &s->width, &s->height, &s->roi, why, why_len)) goto fail;
     char *config_text = trial_config_text(cfg, s->note);
-    char *calib = trial_calib_json(cfg, &s->cal, s->roi, why, why_len);
+    char *calib = trial_record_json(cfg, &s->cal, s->roi, why, why_len);
     if (!calib) {
         free(config_text);
         goto fail;
@@ -668,16 +599,17 @@ int trial_session_start(const rig_config *cfg, rail *compress, rail *shear, cons
     }
     *trial_id = s->trial_id;
     *out = s;
-    return 0;
+    return TRIAL_OK;
 fail:
     store_close(s->st);
     pthread_mutex_destroy(&s->lock);
     free(s);
-    return -1;
+    return TRIAL_E_FAILED;
 }
 
 void trial_session_abort(trial_session *s, const char *reason)
 {
+    atomic_store(&s->cancel, 1); /* the ladder or the prediction, if computing, stop at their next step */
     pthread_mutex_lock(&s->lock);
     if (s->runner_ready)
         trial_runner_abort(&s->runner, reason);
@@ -701,10 +633,6 @@ void trial_session_join(trial_session *s, trial_result *result)
     pthread_join(s->thread, NULL);
     if (result) *result = s->result;
     store_close(s->st);
-    free(s->pred.t);
-    free(s->pred.dw);
-    free(s->pred.dz);
-    free(s->pred.a);
     pthread_mutex_destroy(&s->lock);
     free(s);
 }

@@ -1,27 +1,38 @@
 /* trial_session.h: one trial from request to stored result, on its own thread.
  *
- * trial_session_start (called from the API thread while no trial runs) records the trial in the
- * store (status created, the rig and scene texts, the calibration record, the specimen) and
- * starts the trial's thread, which:
- *   1. checks the free disk space for the video;
- *   2. picks the prediction's resolution: explicit in [sim], or the cheapest rung of the scene's
- *      error-against-run-time ladder meeting [sim] target_error (computed once per scene and
- *      cached in the store), and starts the prediction on a thread of its own, beside the trial,
- *      with its own store connection (it never blocks the rails);
- *   3. opens the camera (mock mode: the digital twin at the prediction's resolution, mounted at the
- *      compression rail's current position), the tracker and the cropped video;
- *   4. runs the trial runner, storing every sample (batched), event and state;
- *   5. stores the measured result and the final status, and waits for the prediction.
- * Every failure ends in the store as a failed trial with the reason, and in the log. */
-#ifndef RIBBON_DAEMON_TRIAL_SESSION_H
-#define RIBBON_DAEMON_TRIAL_SESSION_H
+ * trial_session_start (called from the API thread while no trial runs) refuses a start whose
+ * prediction would take longer than TRIAL_PREDICTION_MAX_S (estimated, with the estimate in the
+ * reason), records the trial in the store (status created, the rig and scene texts, the
+ * calibration record, the specimen) and starts the trial's thread, whose steps are functions of
+ * trial_session.c:
+ *   session_check_disk             the free disk space for the video;
+ *   session_start_prediction       the prediction's resolution: explicit in [sim], or the cheapest
+ *                                  rung of the scene's error-against-run-time ladder meeting [sim]
+ *                                  target_error (computed once per scene and cached in the store);
+ *                                  then the prediction on a thread of its own beside the trial
+ *                                  (trial_prediction.h), which never blocks the rails;
+ *   session_open_camera            mock mode: the digital twin at the prediction's resolution,
+ *                                  mounted at the compression rail's current position; rig: the camera;
+ *   session_open_tracker_and_video the tracker and the cropped video;
+ *   session_run                    the trial runner, storing every sample (batched), event and state;
+ *   session_store_result           the measured result and the final status;
+ *   session_release                closes what was opened and waits for the prediction.
+ * Every failure ends in the store as a failed trial with the reason, and in the log. An abort
+ * (or SIGTERM through it) also cancels the ladder and the prediction at their next time step, so
+ * it takes effect within a step whatever the trial is computing. */
+#ifndef RIBBON_TRIAL_SESSION_H
+#define RIBBON_TRIAL_SESSION_H
 
 #include <stddef.h>
 #include <stdint.h>
 
 #include "rail.h"
 #include "rig_config.h"
+#include "trial_err.h"
 #include "trial_runner.h"
+
+/* s: the longest estimated prediction (or ladder) a start may ask for (predict_ladder.h). */
+#define TRIAL_PREDICTION_MAX_S 300.0
 
 typedef struct trial_session trial_session;
 
@@ -42,10 +53,12 @@ typedef struct session_status {
 } session_status;
 
 /* cfg is copied. The rails stay the caller's and must not be used by anyone else until the
- * session has finished. log (may be NULL) receives one line per event. */
-int trial_session_start(const rig_config *cfg, rail *compress, rail *shear, const char *note,
-                        void (*log)(const char *line), trial_session **out, int64_t *trial_id, char *why,
-                        size_t why_len);
+ * session has finished. log (may be NULL) receives one line per event. TRIAL_E_REFUSED: the
+ * prediction's estimate exceeds the bound (nothing recorded); TRIAL_E_FAILED: the store or the
+ * thread failed. */
+trial_err trial_session_start(const rig_config *cfg, rail *compress, rail *shear, const char *note,
+                              void (*log)(const char *line), trial_session **out, int64_t *trial_id, char *why,
+                              size_t why_len);
 void trial_session_abort(trial_session *s, const char *reason);
 void trial_session_status(trial_session *s, session_status *out);
 /* Waits for the thread and frees. The result is in the store. */

@@ -19,7 +19,7 @@ static void expect_fail(const char *text, const char *rail, const char *needle)
 {
     rail_config rc;
     char why[400] = "";
-    assert_int_equal(rail_config_load_string(text, "rig.ini", rail, &rc, why, sizeof why), -1);
+    assert_int_not_equal(rail_config_load_string(text, "rig.ini", rail, &rc, why, sizeof why), CFG_OK);
     if (!strstr(why, needle)) {
         print_error("reason '%s' lacks '%s'\n", why, needle);
         fail();
@@ -70,12 +70,40 @@ static void test_errors_named(void **s)
     expect_fail("[rail.shear]\n", "sideways", "not compress or shear");
 }
 
+/* Switches are spelled on | off, as in the rest of a rig file; every key has a unit and a doc. */
+static void test_switches_and_key_table(void **s)
+{
+    (void)s;
+    rail_config rc;
+    char why[400] = "";
+    assert_int_equal(rail_config_load_string("[rail.shear]\ndriver = modbus\nrtu = on\n"
+                                             "watchdog_external = off\nallow_unverified = on\n",
+                                             "rig.ini", "shear", &rc, why, sizeof why),
+                     CFG_OK);
+    assert_true(rc.modbus.rtu && rc.modbus.allow_unverified && !rc.modbus.watchdog_external);
+    assert_int_equal(rail_config_load_string("[rail.shear]\nrtu = true\n", "rig.ini", "shear", &rc,
+                                             why, sizeof why),
+                     CFG_ERR_VALUE);
+    assert_non_null(strstr(why, "rig.ini:2: [rail.shear] rtu: 'true' is not on or off"));
+    assert_int_equal(rail_config_load_string("[rail.shear]\nmax_speed_mm_s = 5000\n", "rig.ini",
+                                             "shear", &rc, why, sizeof why),
+                     CFG_ERR_RANGE);
+    size_t n = 0;
+    const rail_key *k = rail_config_keys(&n);
+    assert_true(n > 50);
+    for (size_t i = 0; i < n; i++) {
+        assert_string_equal(k[i].name, rail_config_key_name(i));
+        assert_true(k[i].unit && k[i].unit[0] && k[i].doc && k[i].doc[0]);
+    }
+    assert_null(rail_config_key_name(n));
+}
+
 static void test_missing_file(void **s)
 {
     (void)s;
     rail_config rc;
     char why[400];
-    assert_int_equal(rail_config_load("/nonexistent/rig.ini", "shear", &rc, why, sizeof why), -1);
+    assert_int_equal(rail_config_load("/nonexistent/rig.ini", "shear", &rc, why, sizeof why), CFG_ERR_IO);
     assert_non_null(strstr(why, "/nonexistent/rig.ini: cannot read"));
 }
 
@@ -136,6 +164,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_load_gcode_and_modbus),
         cmocka_unit_test(test_errors_named),
+        cmocka_unit_test(test_switches_and_key_table),
         cmocka_unit_test(test_missing_file),
         cmocka_unit_test(test_open_rig_shared_controller),
     };

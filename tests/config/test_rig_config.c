@@ -6,7 +6,7 @@
  * rules (virtual clock only in mock, mock rails only in mock, token off loopback, replay sources);
  * the cross-checks against the scene (minimum clamp gap, soft limits, speeds, crease orientation);
  * scene errors passed up unchanged; overrides of rig, rail and scene keys; the rail <-> Delta L,
- * Delta W conversions round-trip with the right signs; the calibration JSON; the README documents
+ * Delta W conversions round-trip with the right signs; the calibration JSON; docs/config.md lists
  * every key; and a deterministic fuzz run over mutated shipped files never crashes.
  * Most cases edit one line of a small complete mock file (BASE) so the expected line is known. */
 #include <setjmp.h>
@@ -273,7 +273,7 @@ static char *slurp(const char *path)
 {
     FILE *f = fopen(path, "rb");
     if (!f) return NULL;
-    static char buf[1 << 20]; /* the README is larger than 64 KiB */
+    static char buf[1 << 20]; /* the docs page may be larger than 64 KiB */
     size_t n = fread(buf, 1, sizeof buf - 1, f);
     fclose(f);
     buf[n] = '\0';
@@ -708,7 +708,7 @@ static void test_calibration_json(void **state)
 static void test_readme_documents_every_key(void **state)
 {
     (void)state;
-    const char *readme = slurp(RIBBON_SOURCE_DIR "/README.md");
+    const char *readme = slurp(RIBBON_SOURCE_DIR "/docs/config.md");
     assert_non_null(readme);
     const char *sec = strstr(readme, "\n## Rig files\n");
     assert_non_null(sec);
@@ -725,11 +725,11 @@ static void test_readme_documents_every_key(void **state)
         char row[128];
         snprintf(row, sizeof row, "| %s | %s |", k[i].section, k[i].name);
         if (!strstr(part, row)) {
-            print_error("README \"Rig files\" has no row '%s'\n", row);
+            print_error("docs/config.md \"Rig files\" has no row '%s'\n", row);
             missing++;
         }
     }
-    /* Every rail key appears, in backquotes, somewhere in the README. */
+    /* Every rail key appears, in backquotes, somewhere in docs/config.md. */
     for (size_t i = 0; rail_config_key_name(i); i++) {
         const char *name = rail_config_key_name(i);
         char word[64];
@@ -747,7 +747,7 @@ static void test_readme_documents_every_key(void **state)
         }
         snprintf(word, sizeof word, "%s", name);
         if (!found) {
-            print_error("README does not mention the rail key %s\n", word);
+            print_error("docs/config.md does not mention the rail key %s\n", word);
             missing++;
         }
     }
@@ -756,7 +756,7 @@ static void test_readme_documents_every_key(void **state)
                            "ribbond.service"};
     for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
         if (!strstr(part, files[i])) {
-            print_error("README \"Rig files\" does not list %s\n", files[i]);
+            print_error("docs/config.md \"Rig files\" does not list %s\n", files[i]);
             missing++;
         }
     }

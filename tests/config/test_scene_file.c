@@ -1,9 +1,9 @@
 /* test_scene_file.c: the scene file loader (config/scene_file.c).
  *
- * Covers: the shipped scenes load with the paper's and the lab's values; every refusal the README
- * lists names the right file, line (or override, or "default") and "section.key"; overrides
+ * Covers: the shipped scenes load with the paper's and the lab's values; every refusal the docs
+ * list names the right file, line (or override, or "default") and "section.key"; overrides
  * apply and bad ones are refused; the physics checks (fold inside a clamp, phi = 180, stiff
- * creases at tiny Delta L) fire at load; the README documents every key of the table; and a
+ * creases at tiny Delta L) fire at load; docs/config.md documents every key of the table; and a
  * deterministic fuzz run over mutated shipped scenes never crashes and always ends in either a
  * finite, checked scene or an error with a message. Most cases mutate one line of a small complete
  * scene (BASE below) so the expected line number is known. */
@@ -574,12 +574,12 @@ static void test_only_regular_files(void **state)
     rmdir(dir);
 }
 
-/* The README's "Scene files" table documents every key of the table. */
+/* The "Scene files" table of docs/config.md (the reference the README points to) documents every key of the table. */
 static void test_readme_documents_every_key(void **state)
 {
     (void)state;
     size_t len;
-    char *readme = file_read(RIBBON_SOURCE_DIR "/README.md", &len);
+    char *readme = file_read(RIBBON_SOURCE_DIR "/docs/config.md", &len);
     assert_non_null(readme);
     const char *sec = strstr(readme, "## Scene files");
     assert_non_null(sec);
@@ -588,7 +588,7 @@ static void test_readme_documents_every_key(void **state)
     for (size_t i = 0; i < n; i++) {
         char row[128];
         snprintf(row, sizeof row, "| %s | %s |", keys[i].section, keys[i].name);
-        if (!strstr(sec, row)) print_error("README lacks the row '%s'\n", row);
+        if (!strstr(sec, row)) print_error("docs/config.md lacks the row '%s'\n", row);
         assert_non_null(strstr(sec, row));
     }
     free(readme);

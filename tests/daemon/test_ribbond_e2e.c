@@ -8,7 +8,11 @@
  *      an outside recording by ribbond in replay mode (on the replay thread; an abort ends it).
  *   3. API error cases: unknown trial 404, bad fields 400 (naming the key), abort when idle 409.
  *   4. kill -9 in the middle of a trial, then a restart: integrity_check ok, the trial is marked
- *      interrupted, and the committed samples are all there (contiguous sequence numbers). */
+ *      interrupted, and the committed samples are all there (contiguous sequence numbers).
+ *   5. Long computations before the rails move (issue 17, defects 4 and 5): a start whose
+ *      prediction is estimated beyond the bound is refused (400, with the estimate); an abort
+ *      while the resolution ladder computes ends the trial aborted within a few seconds; a daemon
+ *      killed during the ladder leaves a trial that the restart marks interrupted. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -27,11 +31,10 @@
 
 #include <gsl/gsl_errno.h>
 
-#include "api_client.h"
+#include "api.h"
 #include "rig_daemon.h"
 #include "store.h"
-#include "trial_calib.h"
-#include "trial_replay.h"
+#include "trial.h"
 #include "vision.h"
 
 static char dir[64];
@@ -477,11 +480,129 @@ static void kill9_then_restart(void **state)
     rig_daemon_close(&d, "test done");
 }
 
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Overrides for a trial whose ladder is slow (fixed steps at 0.5 ms: tens of seconds uncancelled,
+ * estimated well inside the bound), on a store of its own. */
+static void slow_ladder_overrides(const char *db, char *set_db, size_t len, const char **ov, int *n)
+{
+    snprintf(set_db, len, "store.path=%s", db);
+    ov[0] = set_db;
+    ov[1] = set_video;
+    ov[2] = "api.port=0";
+    ov[3] = "sim.fast=off";
+    ov[4] = "solver.dt=5e-4";
+    *n = 5;
+}
+
+static void long_computations_cancel(void **state)
+{
+    (void)state;
+    char db[128], set_db[200], why[512] = "";
+    snprintf(db, sizeof db, "%s/ladder.db", dir);
+    const char *ov[8];
+    int nov;
+    slow_ladder_overrides(db, set_db, sizeof set_db, ov, &nov);
+    rig_daemon d;
+    int rc = rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, nov, NULL, why, sizeof why);
+    if (rc) fprintf(stderr, "open: %s\n", why);
+    assert_int_equal(rc, 0);
+    unsigned port = 0;
+    assert_int_equal(rig_daemon_serve(&d, &port, why, sizeof why), 0);
+
+    /* Refused up front, with the estimate; nothing recorded. */
+    json_t *t = NULL;
+    assert_int_equal(http(port, "POST", "/trials", "{\"set\": [\"solver.dt=1e-6\"]}", &t, why, sizeof why), 400);
+    printf("refused: %s\n", why);
+    assert_non_null(strstr(why, "would take about"));
+    json_decref(t);
+
+    /* An abort while the ladder computes. */
+    t = NULL;
+    assert_int_equal(http(port, "POST", "/trials", "{\"note\": \"abort in the ladder\"}", &t, why, sizeof why), 201);
+    json_int_t id = json_integer_value(json_object_get(t, "id"));
+    json_decref(t);
+    sleep_s(0.5);
+    t = NULL;
+    double t0 = now_s();
+    assert_int_equal(http(port, "POST", "/trials/current/abort", NULL, &t, why, sizeof why), 200);
+    json_decref(t);
+    int idle = wait_idle(port, 30.0);
+    double took = now_s() - t0;
+    printf("abort during the ladder: idle after %.2f s\n", took);
+    assert_true(idle);
+    assert_true(took < 5.0); /* uncancelled, this ladder takes tens of seconds */
+    store_trial tr;
+    assert_int_equal(store_trial_get(d.st, id, &tr, why, sizeof why), STORE_OK);
+    assert_int_equal(tr.status, STORE_STATUS_ABORTED);
+    rig_daemon_close(&d, "test done");
+}
+
+static void kill9_during_ladder(void **state)
+{
+    (void)state;
+    char db[128], set_db[200];
+    snprintf(db, sizeof db, "%s/killed-ladder.db", dir);
+    const char *ov[8];
+    int nov;
+    slow_ladder_overrides(db, set_db, sizeof set_db, ov, &nov);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        rig_daemon d;
+        char why[512];
+        if (rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, nov, NULL, why, sizeof why)) _exit(3);
+        trial_session *s;
+        int64_t id;
+        if (trial_session_start(&d.cfg, d.compress, d.shear, "to be killed", NULL, &s, &id, why, sizeof why)) _exit(4);
+        for (;;) pause();
+    }
+    /* Wait for the trial row, then kill while the ladder computes. */
+    int have = 0;
+    for (int k = 0; k < 300 && !have; k++) {
+        sleep_s(0.1);
+        sqlite3 *h = NULL;
+        if (sqlite3_open_v2(db, &h, SQLITE_OPEN_READONLY, NULL) == SQLITE_OK) {
+            sqlite3_busy_timeout(h, 1000);
+            sqlite3_stmt *q = NULL;
+            if (sqlite3_prepare_v2(h, "SELECT count(*) FROM trials WHERE status = 'created'", -1, &q, NULL) ==
+                    SQLITE_OK &&
+                sqlite3_step(q) == SQLITE_ROW)
+                have = sqlite3_column_int(q, 0) > 0;
+            sqlite3_finalize(q);
+        }
+        sqlite3_close(h);
+    }
+    sleep_s(0.3);
+    kill(pid, SIGKILL);
+    int ws;
+    waitpid(pid, &ws, 0);
+    assert_true(have);
+    rig_daemon d;
+    char why[512];
+    assert_int_equal(rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, nov, NULL, why, sizeof why), 0);
+    store_trial *list = NULL;
+    size_t n = 0;
+    assert_int_equal(store_trial_list(d.st, &list, &n, why, sizeof why), STORE_OK);
+    assert_int_equal(n, 1);
+    printf("trial killed during the ladder: %s (%s)\n", store_status_name(list[0].status), list[0].reason);
+    assert_int_equal(list[0].status, STORE_STATUS_INTERRUPTED);
+    free(list);
+    rig_daemon_close(&d, "test done");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(mock_trial_then_replay),
         cmocka_unit_test(kill9_then_restart),
+        cmocka_unit_test(long_computations_cancel),
+        cmocka_unit_test(kill9_during_ladder),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

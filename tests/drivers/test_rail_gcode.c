@@ -13,6 +13,7 @@
 #include <cmocka.h>
 
 #include "grblsim_spawn.h"
+#include "grbl_link.h"
 #include "rail_gcode.h"
 
 #define NEAR(a, b, tol) assert_true(fabs((a) - (b)) <= (tol))

@@ -11,6 +11,7 @@
 
 #include "grblsim_spawn.h"
 #include "rail_serial.h"
+#include "rail_serial_tty.h"
 
 static void test_pty_transport(void **s)
 {

@@ -10,9 +10,8 @@
 
 #include <cmocka.h>
 
-#include "api_client.h"
-#include "api_route.h"
-#include "api_server.h"
+#include "api.h"
+#include "api_route.h" /* the room's own routes' grammar, tested here */
 
 #include <arpa/inet.h>
 #include <errno.h>

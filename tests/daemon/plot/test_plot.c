@@ -576,6 +576,65 @@ static void test_branches_stable_black_unstable_grey(void **state)
     assert_non_null(strstr(why, "events[1]"));
 }
 
+/* Two panels on one page (ribbon-sim continue --plot): each slice has its own branches; a panel
+ * with only unstable branches has grey but no stable black line in its slice; other events are
+ * accepted; too many panels are refused. */
+static void test_branch_panels_side_by_side(void **state)
+{
+    (void)state;
+    plot_branch_data panels[2];
+    fill_branches(&panels[0]);
+    fill_branches(&panels[1]);
+    panels[1].n_events = 0;
+    panels[1].n_branches = 1; /* the asymmetric branch only */
+    g_events[0].kind = PLOT_EVENT_OTHER;
+    char why[256];
+    const char *p = out_path("panels.png");
+    assert_int_equal(plot_branches_panels(p, panels, 2, 1400, 600, why, sizeof why), PLOT_OK);
+    assert_png(p, 1400, 600);
+    region left = {0.10, 0.40, 0.15, 0.89}, right = {0.51, 0.81, 0.15, 0.89};
+    assert_true(count_color(p, PLOT_COL_INK, left) > 500);
+    assert_true(count_color(p, PLOT_COL_UNSTABLE, right) > 200);
+    assert_true(count_color(p, PLOT_COL_UNSTABLE, left) > 200);
+    assert_int_equal(plot_branches_panels(p, panels, PLOT_PANELS_MAX + 1, 0, 0, why, sizeof why),
+                     PLOT_ERR_ARG);
+    assert_int_equal(plot_branches_panels(p, NULL, 1, 0, 0, why, sizeof why), PLOT_ERR_ARG);
+    g_events[0].kind = PLOT_EVENT_PITCHFORK;
+}
+
+/* A sweep's regime map: markers and a boundary line are drawn; bad input is refused. */
+static void test_sweep_map(void **state)
+{
+    (void)state;
+    plot_sweep_point pts[6];
+    for (int i = 0; i < 6; i++)
+        pts[i] = (plot_sweep_point){60.0 + 10.0 * (i % 3), i < 3 ? 0.1 : 0.3,
+                                    i < 3 ? PLOT_REGIME_ASYMMETRIC : PLOT_REGIME_SYMMETRIC};
+    double bx[3] = {60, 70, 80}, by[3] = {0.2, 0.21, 0.22};
+    plot_sweep_line line = {bx, by, 3, false, true};
+    plot_sweep_data d;
+    plot_sweep_data_default(&d);
+    d.x0 = 60;
+    d.x1 = 80;
+    d.y0 = 0.1;
+    d.y1 = 0.3;
+    d.points = pts;
+    d.n_points = 6;
+    d.lines = &line;
+    d.n_lines = 1;
+    d.width_px = 900;
+    d.height_px = 650;
+    char why[256];
+    const char *p = out_path("sweep.png");
+    assert_int_equal(plot_sweep(p, &d, why, sizeof why), PLOT_OK);
+    assert_png(p, 900, 650);
+    assert_true(count_color(p, COUNT_DARK, (region){0.15, 0.9, 0.15, 0.85}) > 300);
+    assert_true(count_color(p, PLOT_COL_MARK_OTHER, (region){0.15, 0.9, 0.15, 0.85}) > 100);
+    pts[2].y = INFINITY;
+    assert_int_equal(plot_sweep(p, &d, why, sizeof why), PLOT_ERR_ARG);
+    assert_non_null(strstr(why, "points[2]"));
+}
+
 /* ---- PLplot containment -------------------------------------------------------------------- */
 
 static plot_status draw_nothing(void *ctx, char *why, size_t why_len)
@@ -789,6 +848,8 @@ int main(void)
         cmocka_unit_test(test_phase_report_trials_only_and_bad_input),
         cmocka_unit_test(test_regime_names),
         cmocka_unit_test(test_branches_stable_black_unstable_grey),
+        cmocka_unit_test(test_branch_panels_side_by_side),
+        cmocka_unit_test(test_sweep_map),
         cmocka_unit_test(test_missing_driver_is_an_error),
         cmocka_unit_test(test_fatal_error_does_not_exit),
         cmocka_unit_test(test_abort_and_draw_errors_are_reported),

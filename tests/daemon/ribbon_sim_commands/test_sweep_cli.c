@@ -64,6 +64,32 @@ static void test_sweep_and_resume(void **state)
     unlink(csv_path);
 }
 
+/* --plot writes the figure through the plot module: a PNG file, not empty. */
+static void test_sweep_plot(void **state)
+{
+    (void)state;
+    char png[256], scene[512];
+    snprintf(csv_path, sizeof csv_path, "/tmp/test_sweep_cli_plot_%d.csv", (int)getpid());
+    snprintf(png, sizeof png, "/tmp/test_sweep_cli_plot_%d.png", (int)getpid());
+    snprintf(scene, sizeof scene, "%s/config/scenes/paper-gamma013.ini", RIBBON_SOURCE_DIR);
+    unlink(csv_path);
+    unlink(png);
+    char *argv[] = {"sweep", "--scene", scene, "--set", "mesh.nodes=41", "--phi", "90:90:1", "--gamma",
+                    "0.12:0.22:2", "--out", csv_path, "--plot", png, "--jobs", "2", NULL};
+    fflush(stdout);
+    assert_int_equal(sim_cmd_sweep((int)(sizeof argv / sizeof argv[0]) - 1, argv), 0);
+    FILE *f = fopen(png, "rb");
+    assert_non_null(f);
+    unsigned char sig[8] = {0};
+    assert_int_equal(fread(sig, 1, 8, f), 8);
+    fseek(f, 0, SEEK_END);
+    assert_true(ftell(f) > 1000);
+    fclose(f);
+    assert_memory_equal(sig, "\x89PNG\r\n\x1a\n", 8);
+    unlink(csv_path);
+    unlink(png);
+}
+
 static void test_refuses_foreign_file_and_bad_ranges(void **state)
 {
     (void)state;
@@ -91,6 +117,7 @@ int main(void)
     gsl_set_error_handler_off();
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sweep_and_resume),
+        cmocka_unit_test(test_sweep_plot),
         cmocka_unit_test(test_refuses_foreign_file_and_bad_ranges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -615,6 +615,34 @@ static void test_mark_interrupted(void **state)
     store_close(st);
 }
 
+/* A daemon killed before its trial reached running (during the ladder or the prediction) left it
+ * 'created': the start-up pass ends it too, with its own reason (issue 17, defect 5). */
+static void test_mark_interrupted_created(void **state)
+{
+    fixture *f = *state;
+    store *st;
+    OK(store_open(f->db, &st, why, sizeof why));
+    int64_t a = new_trial(st, STORE_MODE_MOCK), b = new_trial(st, STORE_MODE_RIG);
+    OK(store_trial_set_status(st, b, STORE_STATUS_ABORTED, "abort", T0, why, sizeof why));
+    int count = -1;
+    OK(store_trial_mark_interrupted(st, T0 + 5, &count, why, sizeof why));
+    assert_int_equal(count, 1);
+    store_trial t;
+    OK(store_trial_get(st, a, &t, why, sizeof why));
+    assert_int_equal(t.status, STORE_STATUS_INTERRUPTED);
+    assert_non_null(strstr(t.reason, "before the trial started"));
+    OK(store_trial_get(st, b, &t, why, sizeof why));
+    assert_int_equal(t.status, STORE_STATUS_ABORTED);
+    store_event *ev;
+    size_t n;
+    OK(store_events_get(st, a, &ev, &n, why, sizeof why));
+    assert_int_equal(n, 1);
+    assert_int_equal(ev[0].kind, STORE_EVENT_FAULT);
+    assert_non_null(strstr(ev[0].message, "before this trial started"));
+    free(ev);
+    store_close(st);
+}
+
 static void test_events_round_trip(void **state)
 {
     fixture *f = *state;
@@ -1249,6 +1277,7 @@ int main(void)
         cmocka_unit_test(test_names_round_trip),
         cmocka_unit_test_setup_teardown(test_specimen_round_trip, setup, teardown),
         cmocka_unit_test_setup_teardown(test_trial_round_trip_and_life_cycle, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_mark_interrupted_created, setup, teardown),
         cmocka_unit_test_setup_teardown(test_mark_interrupted, setup, teardown),
         cmocka_unit_test_setup_teardown(test_events_round_trip, setup, teardown),
         cmocka_unit_test_setup_teardown(test_prediction_round_trip, setup, teardown),

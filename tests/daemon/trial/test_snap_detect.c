@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "snap_detect.h"
+#include "trial.h"
 
 #define FPS 20.0
 #define RATE 0.01 /* Delta W per second */

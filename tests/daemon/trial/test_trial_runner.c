@@ -16,7 +16,7 @@
 #include <string.h>
 
 #include "rail_mock.h"
-#include "trial_runner.h"
+#include "trial.h"
 #include "vis_test_shapes.h"
 
 #define L 0.2 /* m, free length */

@@ -30,9 +30,7 @@
 #include "rod_observe.h"
 #include "rod_protocol.h"
 #include "scene_file.h"
-#include "twin_camera.h"
-#include "twin_frames.h"
-#include "twin_shape.h"
+#include "twin.h"
 #include "vision.h"
 
 #define SCENES RIBBON_SOURCE_DIR "/config/scenes/"

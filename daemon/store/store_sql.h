@@ -1,14 +1,14 @@
-/* store_int.h: what the store's files share and nobody else sees: the handle's layout and the
- * small SQL helpers (store_sql.c) every record file uses to prepare, bind, read and fail the
- * same way. The public face is store.h.
+/* store_sql.h: the store's SQL helpers (store_sql.c), which every record file of the room uses to
+ * prepare, bind, read and fail the same way, and the handle's layout they work on. Nobody outside
+ * daemon/store/ sees it: the room's face is store.h.
  *
  * Conventions the helpers carry:
  *   - a double NaN binds as SQL NULL and a NULL column reads back as NaN;
  *   - an id 0 binds as NULL and a NULL id reads back as 0;
  *   - a NULL or empty optional text binds as NULL and reads back as "";
  *   - every SQLite failure becomes a store_err plus "what: SQLite's message" in why. */
-#ifndef RIBBON_DAEMON_STORE_INT_H
-#define RIBBON_DAEMON_STORE_INT_H
+#ifndef RIBBON_STORE_SQL_H
+#define RIBBON_STORE_SQL_H
 
 #include <sqlite3.h>
 
@@ -33,6 +33,8 @@ store_err store_err_of_rc(int rc);
 store_err store_sql_fail(sqlite3 *db, int rc, char *why, size_t why_len, const char *what);
 
 store_err store_prepare(store *st, const char *sql, sqlite3_stmt **stmt, char *why, size_t why_len);
+/* The first column of the first row of sql (a PRAGMA or a count) as an int. */
+store_err store_pragma_int(store *st, const char *sql, int *out, char *why, size_t why_len);
 /* One value looked up by one id: runs sql (one statement, ?1 = id). A row puts its first column in
  * *out (skipped when out is NULL: an existence check); no row is STORE_E_NOTFOUND "<noun> <id>
  * does not exist"; an SQLite failure is "<what>: <SQLite's message>". */
@@ -73,13 +75,5 @@ store_err store_need_not_inf(double v, const char *field, char *why, size_t why_
 store_err store_need_fits(const char *t, size_t cap, const char *field, char *why, size_t why_len);
 /* A JSON text that must parse (NULL allowed). */
 store_err store_need_json(const char *t, const char *field, char *why, size_t why_len);
-
-/* Read a curve (store_curve.c): count_sql gives the number of rows and rows_sql the rows as
- * (t_s, dw, dz, a), both with ?1 = id. out gets one block; rows beyond the count are dropped. */
-store_err store_curve_query(store *st, const char *count_sql, const char *rows_sql, int64_t id, store_curve *out,
-                            char *why, size_t why_len);
-
-/* The shared trial row behind store_trial_get/_list (store_trials.c). */
-store_err store_trial_read_row(sqlite3_stmt *s, store_trial *out);
 
 #endif

@@ -1,5 +1,7 @@
-/* trial_calib.c: the calibration record kept with each trial (see trial_calib.h). */
-#include "trial_calib.h"
+/* trial_record.c: the record kept with each trial so that it can be understood and replayed
+ * without the rig file (see trial_record.h): written as JSON at the trial's creation, parsed back
+ * by replay, and the camera calibration moved into the saved video's pixels. */
+#include "trial_record.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -8,46 +10,6 @@
 
 #include <jansson.h>
 
-#include "twin_camera.h"
-
-int trial_camera_setup(const rig_config *cfg, vis_calib *cal, int *width, int *height, trial_roi *roi,
-                       char *why, size_t why_len)
-{
-    *width = cfg->camera.width_px > 0 ? cfg->camera.width_px : 640;
-    *height = cfg->camera.height_px > 0 ? cfg->camera.height_px : 480;
-    vis_error ve = {0};
-    if (cfg->mode == RIG_MODE_MOCK) {
-        twin_camera_params cp = twin_camera_params_default();
-        cp.width_px = *width;
-        cp.height_px = *height;
-        vis_render_params rp;
-        char err[256] = "";
-        if (twin_render_params_for_scene(&cfg->scene, &cp, &rp, err, sizeof err) != TWIN_OK ||
-            twin_calib_for_scene(&cfg->scene, &rp.camera, cal, err, sizeof err) != TWIN_OK) {
-            snprintf(why, why_len, "synthetic camera: %s", err);
-            return -1;
-        }
-    } else if (cfg->mode == RIG_MODE_RIG) {
-        if (vis_calib_load(cal, cfg->camera.calibration, &ve) != VIS_OK) {
-            snprintf(why, why_len, "camera calibration %s: %s", cfg->camera.calibration, ve.message);
-            return -1;
-        }
-    } else {
-        snprintf(why, why_len, "replay mode records no camera of its own");
-        return -1;
-    }
-    trial_roi full = {0, 0, *width & ~1, *height & ~1};
-    *roi = full;
-    if (cfg->camera.roi == RIG_ROI_AUTO)
-        *roi = trial_roi_auto(cal, *width, *height, cfg->scene.length * 1000.0, cfg->scene.compression,
-                              cfg->camera.margin_px);
-    else if (cfg->camera.roi == RIG_ROI_RECT) {
-        trial_roi r = {cfg->camera.roi_x, cfg->camera.roi_y, cfg->camera.roi_w, cfg->camera.roi_h};
-        *roi = trial_roi_clip(r, *width, *height);
-    }
-    return 0;
-}
-
 static json_t *darray(const double *v, size_t n)
 {
     json_t *a = json_array();
@@ -55,7 +17,7 @@ static json_t *darray(const double *v, size_t n)
     return a;
 }
 
-char *trial_calib_json(const rig_config *cfg, const vis_calib *cal, trial_roi roi, char *why, size_t why_len)
+char *trial_record_json(const rig_config *cfg, const vis_calib *cal, trial_roi roi, char *why, size_t why_len)
 {
     char *rig = rig_calibration_json(cfg);
     json_error_t je;
@@ -184,98 +146,6 @@ done:
     return rc;
 }
 
-/* Appends the file's text (or a note that it could not be read) to a growing buffer. */
-static int append_file(char **buf, size_t *len, size_t *cap, const char *label, const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    char head[1200];
-    int hn = snprintf(head, sizeof head, "# %s %s\n", label, path);
-    size_t need = (size_t)hn + 1;
-    long size = 0;
-    if (f && fseek(f, 0, SEEK_END) == 0) size = ftell(f);
-    if (size < 0 || size > (1 << 20)) size = 0;
-    if (f) rewind(f);
-    need += (size_t)size + 64;
-    if (*len + need > *cap) {
-        size_t nc = (*len + need) * 2;
-        char *nb = realloc(*buf, nc);
-        if (!nb) {
-            if (f) fclose(f);
-            return -1;
-        }
-        *buf = nb;
-        *cap = nc;
-    }
-    memcpy(*buf + *len, head, (size_t)hn);
-    *len += (size_t)hn;
-    if (!f) {
-        *len += (size_t)snprintf(*buf + *len, 64, "# (could not be read)\n");
-    } else {
-        *len += fread(*buf + *len, 1, (size_t)size, f);
-        fclose(f);
-        if (*len > 0 && (*buf)[*len - 1] != '\n') (*buf)[(*len)++] = '\n';
-    }
-    (*buf)[*len] = '\0';
-    return 0;
-}
-
-char *trial_config_text(const rig_config *cfg, const char *note)
-{
-    char *buf = NULL;
-    size_t len = 0, cap = 0;
-    if (append_file(&buf, &len, &cap, "rig file", cfg->path) ||
-        append_file(&buf, &len, &cap, "scene file", cfg->scene_path)) {
-        free(buf);
-        return NULL;
-    }
-    if (note && *note) {
-        size_t n = strlen(note) + 16;
-        char *nb = realloc(buf, len + n + 1);
-        if (!nb) {
-            free(buf);
-            return NULL;
-        }
-        buf = nb;
-        snprintf(buf + len, n + 1, "# note: %s\n", note);
-    }
-    return buf;
-}
-
-void trial_state_times(store *st, int64_t id, double *t_check, double *t_shear, double *t_return)
-{
-    *t_check = *t_shear = *t_return = NAN;
-    store_event *ev = NULL;
-    size_t n = 0;
-    char why[256];
-    if (store_events_get(st, id, &ev, &n, why, sizeof why) != STORE_OK) return;
-    for (size_t k = 0; k < n; k++) {
-        if (ev[k].kind != STORE_EVENT_STATE) continue;
-        if (!strncmp(ev[k].message, "state checking", 14) && isnan(*t_check)) *t_check = ev[k].t_s;
-        if (!strncmp(ev[k].message, "state shearing", 14) && isnan(*t_shear)) *t_shear = ev[k].t_s;
-        if (!strncmp(ev[k].message, "state returning", 15) && isnan(*t_return)) *t_return = ev[k].t_s;
-    }
-    free(ev);
-}
-
-void trial_specimen_from_config(const rig_config *cfg, store_specimen *sp)
-{
-    *sp = store_specimen_default();
-    snprintf(sp->name, sizeof sp->name, "%s", cfg->specimen.name[0] ? cfg->specimen.name : "unnamed");
-    sp->length_m = cfg->scene.length;
-    sp->width_m = cfg->scene.width;
-    sp->thickness_m = cfg->scene.thickness;
-    sp->youngs_modulus_pa = cfg->scene.youngs_modulus;
-    sp->density_kg_m3 = cfg->scene.density;
-    snprintf(sp->material, sizeof sp->material, "%.31s", cfg->specimen.material);
-    sp->crease_angle_left_deg = cfg->specimen.crease_angle_left_deg;
-    sp->crease_angle_right_deg = cfg->specimen.crease_angle_right_deg;
-    sp->fold_position = cfg->scene.fold_position;
-    snprintf(sp->crease_orientation, sizeof sp->crease_orientation, "%s",
-             cfg->specimen.crease_orientation == RIG_CREASE_UP     ? "up"
-             : cfg->specimen.crease_orientation == RIG_CREASE_DOWN ? "down"
-                                                                   : "");
-}
-
 void trial_record_video_calib(const trial_record *rec, vis_calib *out)
 {
     *out = rec->camera;
@@ -291,4 +161,12 @@ void trial_record_video_calib(const trial_record *rec, vis_calib *out)
         out->camera_matrix[2] -= rec->roi.x;
         out->camera_matrix[5] -= rec->roi.y;
     }
+}
+
+store_regime trial_regime_of(int snapped, int seen_by_camera, int asymmetric)
+{
+    return !snapped          ? STORE_REGIME_NO_SNAP
+           : !seen_by_camera ? STORE_REGIME_UNKNOWN
+           : asymmetric      ? STORE_REGIME_ASYMMETRIC
+                             : STORE_REGIME_SYMMETRIC;
 }

@@ -1,0 +1,120 @@
+/*
+ * plot_sweep.c: the regime map of a parameter sweep (`ribbon-sim sweep --plot`): one marker per
+ * classified point, circle where the pitchfork comes first (asymmetric snap), square where the
+ * saddle-node does (symmetric), cross where the analysis failed or found no instability, and the
+ * located boundaries as lines, solid or dashed, optionally with small diamonds at their points.
+ * The caller decides what the axes are (phi and Gamma for a phase diagram, Gamma and the first
+ * instability's Delta W for one phi) and passes plain arrays. Markers are outlined polygons in
+ * data units (plot_marker.h), scaled by the page's aspect so they stay round.
+ */
+#include "plot.h"
+
+#include "plot_marker.h"
+#include "plot_series.h"
+#include "plot_session.h"
+#include "plot_style.h"
+
+#include <math.h>
+#include <plplot.h>
+#include <stdio.h>
+
+void plot_sweep_data_default(plot_sweep_data *d)
+{
+    *d = (plot_sweep_data){0};
+    d->x0 = d->y0 = 0.0;
+    d->x1 = d->y1 = 1.0;
+}
+
+typedef struct sweep_ctx {
+    const plot_sweep_data *d;
+    double x0, x1, y0, y1; /* padded axis ranges */
+    int w, h;              /* page, px */
+} sweep_ctx;
+
+static plot_status sweep_draw(void *vctx, char *why, size_t why_len)
+{
+    (void)why;
+    (void)why_len;
+    const sweep_ctx *c = vctx;
+    const plot_sweep_data *d = c->d;
+    plcol0(PLOT_COL_INK);
+    plwidth(PLOT_WIDTH_THIN);
+    plenv(c->x0, c->x1, c->y0, c->y1, 0, 0);
+    pllab(d->x_label ? d->x_label : "", d->y_label ? d->y_label : "", d->title ? d->title : "");
+    double rx = 0.012 * (c->x1 - c->x0);
+    double ry = rx / (c->x1 - c->x0) * (c->y1 - c->y0) * c->w / c->h;
+    plwidth(1.5);
+    plcol0(PLOT_COL_INK);
+    for (size_t k = 0; k < d->n_points; k++) {
+        const plot_sweep_point *p = &d->points[k];
+        if (!isfinite(p->x) || !isfinite(p->y))
+            continue;
+        if (p->regime == PLOT_REGIME_ASYMMETRIC)
+            plot_marker_polygon(p->x, p->y, rx, ry, 36, 0.0);
+        else if (p->regime == PLOT_REGIME_SYMMETRIC)
+            plot_marker_polygon(p->x, p->y, rx * M_SQRT2, ry * M_SQRT2, 4, M_PI / 4);
+        else
+            plot_marker_cross(p->x, p->y, rx, ry);
+    }
+    plcol0(PLOT_COL_MARK_OTHER);
+    plwidth(2.0);
+    for (size_t k = 0; k < d->n_lines; k++) {
+        const plot_sweep_line *l = &d->lines[k];
+        pllsty(l->dashed ? PLOT_LSTY_DOTTED : PLOT_LSTY_SOLID);
+        if (l->n > 1)
+            plot_series_line(l->x, l->y, l->n);
+        for (size_t i = 0; l->marked && i < l->n; i++)
+            if (isfinite(l->x[i]) && isfinite(l->y[i]))
+                plot_marker_polygon(l->x[i], l->y[i], 0.4 * rx, 0.4 * ry, 4, 0.0);
+    }
+    pllsty(PLOT_LSTY_SOLID);
+    plwidth(PLOT_WIDTH_THIN);
+    return PLOT_OK;
+}
+
+static plot_status check_sweep(const plot_sweep_data *d, char *why, size_t why_len)
+{
+    if (!isfinite(d->x0) || !isfinite(d->x1) || !isfinite(d->y0) || !isfinite(d->y1))
+        return plot_fail(PLOT_ERR_ARG, why, why_len, "the swept span is not finite");
+    if (d->n_points > 0 && !d->points)
+        return plot_fail(PLOT_ERR_ARG, why, why_len, "points is NULL but n_points = %zu", d->n_points);
+    for (size_t k = 0; k < d->n_points; k++)
+        if (isinf(d->points[k].x) || isinf(d->points[k].y))
+            return plot_fail(PLOT_ERR_ARG, why, why_len, "points[%zu] has an infinite coordinate", k);
+    if (d->n_lines > 0 && !d->lines)
+        return plot_fail(PLOT_ERR_ARG, why, why_len, "lines is NULL but n_lines = %zu", d->n_lines);
+    for (size_t k = 0; k < d->n_lines; k++) {
+        char field[48];
+        plot_status st;
+        snprintf(field, sizeof field, "lines[%zu].x", k);
+        if ((st = plot_series_check(field, d->lines[k].x, d->lines[k].n, why, why_len)) != PLOT_OK)
+            return st;
+        snprintf(field, sizeof field, "lines[%zu].y", k);
+        if ((st = plot_series_check(field, d->lines[k].y, d->lines[k].n, why, why_len)) != PLOT_OK)
+            return st;
+    }
+    return PLOT_OK;
+}
+
+plot_status plot_sweep(const char *png_path, const plot_sweep_data *d, char *why, size_t why_len)
+{
+    if (why && why_len)
+        why[0] = '\0';
+    if (!d)
+        return plot_fail(PLOT_ERR_ARG, why, why_len, "plot_sweep: no data");
+    plot_status st;
+    sweep_ctx c = {.d = d};
+    if ((st = plot_size_resolve(d->width_px, PLOT_WIDTH_DEFAULT, "width", &c.w, why, why_len)) != PLOT_OK ||
+        (st = plot_size_resolve(d->height_px, PLOT_HEIGHT_DEFAULT, "height", &c.h, why, why_len)) != PLOT_OK ||
+        (st = check_sweep(d, why, why_len)) != PLOT_OK)
+        return st;
+    /* The swept span, padded by 6% in x and 8% in y (of 1 when the span is empty). */
+    double x0 = fmin(d->x0, d->x1), x1 = fmax(d->x0, d->x1);
+    double y0 = fmin(d->y0, d->y1), y1 = fmax(d->y0, d->y1);
+    double mx = 0.06 * (x1 - x0 > 0 ? x1 - x0 : 1.0), my = 0.08 * (y1 - y0 > 0 ? y1 - y0 : 1.0);
+    c.x0 = x0 - mx;
+    c.x1 = x1 + mx;
+    c.y0 = y0 - my;
+    c.y1 = y1 + my;
+    return plot_session_run(PLOT_DEVICE, png_path, c.w, c.h, sweep_draw, &c, why, why_len);
+}

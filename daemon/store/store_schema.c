@@ -1,0 +1,198 @@
+/* store_schema.c: the store's schema and its migrations (store_schema.h).
+ *
+ * The schema is an ordered list of migration steps, each a constant script that ends by setting
+ * PRAGMA user_version to its own number. Opening runs, in order and each in its own
+ * transaction, every step above the file's version; a failing step rolls back and leaves the
+ * file at the version before it. A file whose version is above STORE_SCHEMA_VERSION was written
+ * by a newer program and is refused before anything is written to it. The file carries
+ * application_id 'RIBB' so that an unrelated SQLite database is refused, not "migrated".
+ *
+ * Step 1 is the base schema as first shipped; it must never change (files in the field are at
+ * version 1). Change the schema by appending a step. tests/daemon/store/test_store.c keeps its own
+ * copy of the v1 script to check that migrating a real version 1 file preserves its data.
+ *
+ * Layout (units in the column names; NULL = missing, never NaN; times ISO-8601 UTC text):
+ *   specimens        id | name UNIQUE | length_m width_m thickness_m | youngs_modulus_pa
+ *                    density_kg_m3 material | crease_angle_left_deg crease_angle_right_deg
+ *                    fold_position crease_orientation | trials_count
+ *   trials           id | mode status state reason | config_text calibration_json |
+ *                    specimen_id -> specimens | source_trial_id -> trials | video_path |
+ *                    created_at started_at ended_at | snapped snap_dw_measured regime_measured |
+ *                    software_version | samples_count (v3, kept by the sample writer)
+ *   samples          (trial_id -> trials, seq) | t_s kind frame | compress_mm shear_mm |
+ *                    dl dw dz a quality reason                              (WITHOUT ROWID)
+ *   events           id | trial_id -> trials | t_s wall_time state kind message
+ *   predictions      id | trial_id -> trials | scene_hash | snapped snap_dw regime peak_abs_a |
+ *                    nodes dt adaptive imperfection | est_error wall_s | software_version
+ *                    solver_json created_at
+ *   prediction_curve (prediction_id -> predictions, seq) | t_s dw dz a       (WITHOUT ROWID)
+ *   ladder (v2)      (scene_hash, nodes, dt, adaptive) | snap_dw est_error wall_s */
+#include "store_schema.h"
+
+#include <stdio.h>
+
+#define STORE_APPLICATION_ID 0x52494242 /* "RIBB" */
+
+static const char schema_v1[] =
+    "CREATE TABLE specimens ("
+    " id INTEGER PRIMARY KEY,"
+    " name TEXT NOT NULL UNIQUE CHECK (length(name) > 0),"
+    " length_m REAL NOT NULL, width_m REAL NOT NULL, thickness_m REAL NOT NULL,"
+    " youngs_modulus_pa REAL, density_kg_m3 REAL, material TEXT,"
+    " crease_angle_left_deg REAL, crease_angle_right_deg REAL,"
+    " fold_position REAL, crease_orientation TEXT,"
+    " trials_count INTEGER NOT NULL DEFAULT 0);"
+    "CREATE TABLE trials ("
+    " id INTEGER PRIMARY KEY,"
+    " mode TEXT NOT NULL CHECK (mode IN ('rig','mock','replay')),"
+    " status TEXT NOT NULL DEFAULT 'created'"
+    "  CHECK (status IN ('created','running','done','failed','aborted','interrupted')),"
+    " state TEXT, reason TEXT,"
+    " config_text TEXT NOT NULL, calibration_json TEXT,"
+    " specimen_id INTEGER REFERENCES specimens(id),"
+    " source_trial_id INTEGER REFERENCES trials(id),"
+    " video_path TEXT,"
+    " created_at TEXT NOT NULL, started_at TEXT, ended_at TEXT,"
+    " snapped INTEGER CHECK (snapped IN (0,1)),"
+    " snap_dw_measured REAL,"
+    " regime_measured TEXT CHECK (regime_measured IN ('symmetric','asymmetric','no snap')),"
+    " software_version TEXT NOT NULL);"
+    "CREATE TABLE samples ("
+    " trial_id INTEGER NOT NULL REFERENCES trials(id) ON DELETE CASCADE,"
+    " seq INTEGER NOT NULL,"
+    " t_s REAL NOT NULL,"
+    " kind INTEGER NOT NULL CHECK (kind IN (0,1)),"
+    " frame INTEGER,"
+    " compress_mm REAL, shear_mm REAL, dl REAL, dw REAL, dz REAL, a REAL, quality REAL,"
+    " reason TEXT,"
+    " PRIMARY KEY (trial_id, seq)) WITHOUT ROWID;"
+    "CREATE TABLE events ("
+    " id INTEGER PRIMARY KEY,"
+    " trial_id INTEGER NOT NULL REFERENCES trials(id) ON DELETE CASCADE,"
+    " t_s REAL, wall_time TEXT NOT NULL, state TEXT,"
+    " kind TEXT NOT NULL CHECK (kind IN ('state','info','warning','fault')),"
+    " message TEXT NOT NULL);"
+    "CREATE INDEX events_trial ON events(trial_id);"
+    "CREATE TABLE predictions ("
+    " id INTEGER PRIMARY KEY,"
+    " trial_id INTEGER REFERENCES trials(id) ON DELETE SET NULL,"
+    " scene_hash TEXT NOT NULL,"
+    " snapped INTEGER NOT NULL CHECK (snapped IN (0,1)),"
+    " snap_dw REAL,"
+    " regime TEXT CHECK (regime IN ('symmetric','asymmetric','no snap')),"
+    " peak_abs_a REAL,"
+    " nodes INTEGER NOT NULL, dt REAL NOT NULL, adaptive INTEGER NOT NULL CHECK (adaptive IN (0,1)),"
+    " imperfection REAL NOT NULL, est_error REAL, wall_s REAL NOT NULL,"
+    " software_version TEXT NOT NULL, solver_json TEXT,"
+    " created_at TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ','now')));"
+    "CREATE TABLE prediction_curve ("
+    " prediction_id INTEGER NOT NULL REFERENCES predictions(id) ON DELETE CASCADE,"
+    " seq INTEGER NOT NULL,"
+    " t_s REAL NOT NULL, dw REAL NOT NULL, dz REAL, a REAL,"
+    " PRIMARY KEY (prediction_id, seq)) WITHOUT ROWID;"
+    "PRAGMA application_id = 1380532802;" /* STORE_APPLICATION_ID */
+    "PRAGMA user_version = 1;";
+
+/* v2: the error-against-run-time ladder cached per scene hash, and the indexes the JSON views
+ * and the start-up scan use (latest prediction of a trial, trials by status). */
+static const char schema_v2[] =
+    "CREATE TABLE ladder ("
+    " scene_hash TEXT NOT NULL,"
+    " nodes INTEGER NOT NULL, dt REAL NOT NULL, adaptive INTEGER NOT NULL CHECK (adaptive IN (0,1)),"
+    " snap_dw REAL, est_error REAL, wall_s REAL NOT NULL,"
+    " PRIMARY KEY (scene_hash, nodes, dt, adaptive)) WITHOUT ROWID;"
+    "CREATE INDEX predictions_trial ON predictions(trial_id);"
+    "CREATE INDEX trials_status ON trials(status);"
+    "PRAGMA user_version = 2;";
+
+/* v3: each trial's sample count kept in the trial row, updated in the writer's own commit, so
+ * listing trials does not count every sample of every trial (GET /trials on a year of trials).
+ * Existing files get it back-filled from their samples. */
+static const char schema_v3[] =
+    "ALTER TABLE trials ADD COLUMN samples_count INTEGER NOT NULL DEFAULT 0;"
+    "UPDATE trials SET samples_count = (SELECT count(*) FROM samples WHERE samples.trial_id = trials.id);"
+    "PRAGMA user_version = 3;";
+
+typedef struct store_migration {
+    int version;      /* user_version after the step */
+    const char *what; /* for reasons */
+    const char *sql;
+} store_migration;
+
+static const store_migration migrations[] = {
+    {1, "base schema", schema_v1},
+    {2, "ladder cache and indexes", schema_v2},
+    {3, "sample count per trial", schema_v3},
+};
+#define N_MIGRATIONS (sizeof migrations / sizeof migrations[0])
+_Static_assert(sizeof migrations / sizeof migrations[0] == STORE_SCHEMA_VERSION,
+               "one migration step per schema version");
+
+store_err store_schema_migrate(store *st, const char *path, char *why, size_t why_len)
+{
+    char sub[384];
+    for (size_t i = 0; i < N_MIGRATIONS; i++) {
+        const store_migration *m = &migrations[i];
+        if (m->version <= st->version)
+            continue;
+        store_err e = store_begin(st, sub, sizeof sub);
+        if (e != STORE_OK)
+            return store_fail(why, why_len, e, "%s: migrating to schema version %d: %s", path, m->version, sub);
+        /* Another process may have migrated while we waited for the lock. */
+        int now = 0;
+        e = store_pragma_int(st, "PRAGMA user_version", &now, sub, sizeof sub);
+        if (e == STORE_OK && now >= m->version) {
+            st->version = now;
+            e = store_commit(st, sub, sizeof sub);
+            if (e != STORE_OK)
+                return store_fail(why, why_len, e, "%s: %s", path, sub);
+            continue;
+        }
+        if (e == STORE_OK)
+            e = store_exec_script(st->db, m->sql, sub, sizeof sub);
+        if (e == STORE_OK) {
+            e = store_pragma_int(st, "PRAGMA user_version", &now, sub, sizeof sub);
+            if (e == STORE_OK && now != m->version)
+                e = store_fail(sub, sizeof sub, STORE_E_VERSION, "the step left user_version at %d", now);
+        }
+        if (e == STORE_OK)
+            e = store_commit(st, sub, sizeof sub);
+        if (e != STORE_OK) {
+            store_rollback(st);
+            return store_fail(why, why_len, STORE_E_VERSION,
+                              "%s: migrating from schema version %d to %d (%s) failed, the file is left at "
+                              "version %d: %s",
+                              path, st->version, m->version, m->what, st->version, sub);
+        }
+        st->version = m->version;
+    }
+    return STORE_OK;
+}
+
+/* Is this a file we may migrate? A fresh file has version 0 and no tables. */
+store_err store_schema_check_identity(store *st, const char *path, char *why, size_t why_len)
+{
+    char sub[256];
+    int version = 0, app = 0, tables = 0;
+    store_err e = store_pragma_int(st, "PRAGMA user_version", &version, sub, sizeof sub);
+    if (e == STORE_OK)
+        e = store_pragma_int(st, "PRAGMA application_id", &app, sub, sizeof sub);
+    if (e == STORE_OK)
+        e = store_pragma_int(st, "SELECT count(*) FROM sqlite_master", &tables, sub, sizeof sub);
+    if (e == STORE_E_CORRUPT)
+        return store_fail(why, why_len, e, "%s is not an SQLite database (or it is corrupt): %s", path, sub);
+    if (e != STORE_OK)
+        return store_fail(why, why_len, e, "%s: reading the schema version: %s", path, sub);
+    if (version > STORE_SCHEMA_VERSION)
+        return store_fail(why, why_len, STORE_E_VERSION,
+                          "%s has schema version %d, newer than this program (ribbon rig %s) knows (%d): "
+                          "use a newer program; the file was not changed",
+                          path, version, RIBBON_VERSION, STORE_SCHEMA_VERSION);
+    if ((version > 0 || tables > 0 || app != 0) && app != STORE_APPLICATION_ID)
+        return store_fail(why, why_len, STORE_E_CORRUPT,
+                          "%s is an SQLite database but not a ribbon rig store (application_id %d, %d "
+                          "tables); refusing to touch it",
+                          path, app, tables);
+    st->version = version;
+    return STORE_OK;
+}

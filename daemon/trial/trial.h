@@ -1,0 +1,30 @@
+/* trial.h: the trial room's face: what the rest of the program uses of daemon/trial/. Everything
+ * outside this folder includes this header only; the other headers here are named after the file
+ * that implements them and are the room's own.
+ *
+ *   snap_detect.h        the snap in a stream of measured frames (the simulator's definition)
+ *   predict_ladder.h     the resolution ladder of a trial's prediction, its run-time estimate
+ *   trial_runner.h       one trial on the rails as a state machine (rails, camera, tracker, sink)
+ *   trial_video.h        the lossless, cropped video every trial keeps
+ *   trial_record.h       the record stored with each trial (calibration, ROI, snap settings) and
+ *                        the one mapping of a snap's outcome to a stored regime
+ *   trial_err.h          the room's typed status (refused, not found, failed)
+ *   trial_session.h      one trial from request to stored result, on its own thread
+ *   trial_replay.h       a recording through the same pipeline again
+ *   replay_job.h         a replay on a thread of its own inside ribbond
+ * Used inside the room only: trial_prediction.h (the prediction beside a trial),
+ * trial_camera_setup.h, trial_specimen.h, trial_config_text.h. */
+#ifndef RIBBON_TRIAL_H
+#define RIBBON_TRIAL_H
+
+#include "trial_err.h"
+#include "snap_detect.h"
+#include "predict_ladder.h"
+#include "trial_runner.h"
+#include "trial_video.h"
+#include "trial_record.h"
+#include "trial_session.h"
+#include "trial_replay.h"
+#include "replay_job.h"
+
+#endif
