@@ -10,6 +10,7 @@ DEB_PACKAGES := cmake make gcc g++ pkg-config \
 	libgsl-dev libinih-dev libsqlite3-dev libserialport-dev libmodbus-dev \
 	libopencv-dev libmicrohttpd-dev libjansson-dev libcmocka-dev libcairo2-dev \
 	libcurl4-openssl-dev libplplot-dev plplot-driver-cairo libsystemd-dev \
+	libaravis-dev libusb-1.0-0-dev \
 	clang libclang-rt-14-dev
 # clang with libclang-rt-14-dev: libFuzzer (libclang_rt.fuzzer-x86_64.a) and clang's sanitizer
 # runtimes for the fuzz build (clang-14 only recommends them, and deps skips recommends).
@@ -22,7 +23,7 @@ FUZZ_BUILD ?= build-fuzz
 FUZZ_SECONDS ?= 20
 FUZZ_INPUT_SECONDS ?= 8
 
-.PHONY: all deps build build-asan build-fuzz demo test test-normal test-asan test-fuzz package clean
+.PHONY: all deps build build-asan build-fuzz demo rehearsal test test-normal test-asan test-fuzz package clean
 
 all: build
 
@@ -72,6 +73,36 @@ demo: build
 	echo "ribbond on $$url (log: $$log)"; \
 	./$(BUILD)/bin/ribbonctl start --url $$url --note "make demo" --wait --out $(DEMO_REPORT); rc=$$?; \
 	kill -TERM $$pid; wait $$pid; exit $$rc
+
+# Rig mode rehearsed on loopback (docs/rig-realtime.md): ribbon-rigsim is the rig (GRBL controller
+# on a pty, the twin filmed by a GigE Vision camera on 127.0.0.1), ribbond runs one trial on
+# config/rig-rehearsal.ini in real time (about 80 s), then the pipeline's counts and the
+# snap-to-stop latency are printed from the trial's events. The store and videos go to the working
+# directory (ribbon-rehearsal.db, ribbon-rehearsal-videos/); the pty, calibration and truth log to
+# a temporary directory.
+REHEARSAL_RIG ?= config/rig-rehearsal.ini
+# The rehearsal is real time: as root both programs run at nice -10, ahead of compilers sharing the
+# machine (a lab PC would run ribbond alone). Empty it to run at the default priority.
+REHEARSAL_NICE ?= $(shell [ "$$(id -u)" = 0 ] && echo "nice -n -10")
+rehearsal: build
+	@dir=$$(mktemp -d /tmp/ribbon-rehearsal.XXXXXX); \
+	sets="--set rail.compress.port=$$dir/grbl --set rail.shear.port=$$dir/grbl --set camera.calibration=$$dir/camera.calib"; \
+	$(REHEARSAL_NICE) ./$(BUILD)/bin/ribbon-rigsim $(REHEARSAL_RIG) $$sets --truth $$dir/truth.csv >$$dir/rigsim.log 2>&1 & sim=$$!; \
+	for i in $$(seq 100); do grep -q '^ready' $$dir/rigsim.log && break; kill -0 $$sim 2>/dev/null || break; sleep 0.1; done; \
+	if ! grep -q '^ready' $$dir/rigsim.log; then cat $$dir/rigsim.log; echo "ribbon-rigsim did not start"; kill $$sim 2>/dev/null; exit 1; fi; \
+	echo "rig simulator ready ($$dir)"; \
+	$(REHEARSAL_NICE) ./$(BUILD)/bin/ribbond --config $(REHEARSAL_RIG) $$sets 2>$$dir/ribbond.log & pid=$$!; \
+	url=""; for i in $$(seq 300); do \
+	  url=$$(sed -n 's/.*listening on \(http[^ ]*\).*/\1/p' $$dir/ribbond.log); [ -n "$$url" ] && break; \
+	  kill -0 $$pid 2>/dev/null || break; sleep 0.1; done; \
+	if [ -z "$$url" ]; then cat $$dir/ribbond.log; echo "ribbond did not start"; kill $$pid $$sim 2>/dev/null; exit 1; fi; \
+	(./$(BUILD)/bin/ribbonctl start --url $$url --note "make rehearsal" --wait 2>&1; echo "exit $$?") | tee $$dir/trial.txt | grep -v '^exit '; \
+	rc=$$(sed -n 's/^exit //p' $$dir/trial.txt); \
+	id=$$(sed -n 's/^trial \([0-9]*\) started.*/\1/p' $$dir/trial.txt); \
+	db=$$(sed -n 's/^database: //p' $$dir/trial.txt); \
+	if [ -n "$$id" ] && [ -n "$$db" ]; then \
+	  ./$(BUILD)/bin/ribbonctl show $$id --db $$db | sed -n 's/.*info *\(pipeline: .*\)/  \1/p; s/.*warning *\(pipeline: .*\)/  \1/p; s/.*info *\(snap-to-stop latency: .*\)/  \1/p'; fi; \
+	kill -TERM $$pid; wait $$pid; kill -TERM $$sim; wait $$sim; tail -1 $$dir/rigsim.log; exit $$rc
 
 test-normal: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

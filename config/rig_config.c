@@ -128,8 +128,9 @@ static const rig_key rig_keys[] = {
 
     {"camera", "source", RIG_KEY_SOURCE, OFF(camera), 0, 0, 0, 0, RIG, NULL, "-",
      "synthetic (mock)",
-     "rig: a V4L2 index (0) or device path (/dev/video0); mock: synthetic; replay: not used "
-     "(replay.video)"},
+     "rig: a V4L2 index (0), a device path (/dev/video0), or aravis:DEVICE-ID for a GigE Vision / "
+     "USB3 Vision camera (aravis: = the first one; ribbonctl cameras lists them); mock: synthetic; "
+     "replay: not used (replay.video)"},
     {"camera", "fps", RIG_KEY_DOUBLE, OFF(camera.fps), 0, 0.0, 1000.0, MINO, 0, NULL, "1/s", "30",
      "frame rate asked of the camera, or of the synthetic renderer"},
     {"camera", "width_px", RIG_KEY_INT, OFF(camera.width_px), 0, 0, 16384, 0, 0, NULL, "px",
@@ -147,6 +148,20 @@ static const rig_key rig_keys[] = {
      "20", "margin around ribbon and clamps for roi = auto"},
     {"camera", "video_dir", RIG_KEY_PATH, OFF(camera.video_dir), SZ(camera.video_dir), 0, 0, OUT,
      0, NULL, "-", "videos", "directory of the trial videos (FFV1), relative to rig.outputs"},
+    {"camera", "offset_x_px", RIG_KEY_INT, OFF(camera.offset_x_px), 0, -1, 16384, 0, 0, NULL, "px",
+     "-1 (the camera's own)", "aravis cameras: OffsetX of the region on the sensor"},
+    {"camera", "offset_y_px", RIG_KEY_INT, OFF(camera.offset_y_px), 0, -1, 16384, 0, 0, NULL, "px",
+     "-1 (the camera's own)", "aravis cameras: OffsetY of the region on the sensor"},
+    {"camera", "exposure_us", RIG_KEY_DOUBLE, OFF(camera.exposure_us), 0, 0.0, 1e7, 0, 0, NULL, "us",
+     "0 (the camera's own)", "aravis cameras: ExposureTime"},
+    {"camera", "gain_db", RIG_KEY_DOUBLE, OFF(camera.gain_db), 0, -1.0, 100.0, 0, 0, NULL, "dB",
+     "-1 (the camera's own)", "aravis cameras: Gain"},
+    {"camera", "ring_frames", RIG_KEY_INT, OFF(camera.ring_frames), 0, 4, 4096, 0, 0, NULL, "frames",
+     "64", "rig mode: frames the capture ring holds; the video drops frames (counted) only when its "
+           "writer is this far behind"},
+    {"camera", "track_max_lag", RIG_KEY_INT, OFF(camera.track_max_lag), 0, 1, 4095, 0, 0, NULL,
+     "frames", "16", "rig mode: when the trial loop is more than this many frames behind the camera, "
+                      "frames are stored untracked (counted) until it catches up; below ring_frames"},
     {"camera", "noise_sigma", RIG_KEY_DOUBLE, OFF(camera.noise_sigma), 0, 0.0, 255.0, 0, 0, NULL,
      "grey", "2", "mock: additive Gaussian noise of the rendered frames"},
     {"camera", "blur_sigma_px", RIG_KEY_DOUBLE, OFF(camera.blur_sigma_px), 0, 0.0, 100.0, 0, 0,
@@ -623,8 +638,18 @@ static cfg_status apply_source(unsigned char *field, const char *value, const ch
         snprintf(cam->device, sizeof cam->device, "%s", value);
         return CFG_OK;
     }
+    if (strncmp(value, "aravis:", 7) == 0) {
+        if (value[7]) {
+            cfg_status st = printable_text(value + 7, 1, sizeof cam->device - 1, msg, len);
+            if (st) return st;
+        }
+        cam->source = RIG_SOURCE_ARAVIS;
+        snprintf(cam->device, sizeof cam->device, "%s", value + 7);
+        return CFG_OK;
+    }
     snprintf(msg, len,
-             "'%s' is not a device index (0), a device path (/dev/video0) or synthetic",
+             "'%s' is not a device index (0), a device path (/dev/video0), aravis:DEVICE-ID "
+             "(aravis: for the first GenICam camera) or synthetic",
              shown);
     return CFG_ERR_VALUE;
 }
@@ -1026,7 +1051,11 @@ static cfg_status check_mode(load_ctx *c)
     rig_camera *cam = &cfg->camera;
     if (m == RIG_MODE_RIG && cam->source == RIG_SOURCE_SYNTHETIC)
         return fail_key(c, CFG_ERR_CHECK, "camera.source",
-                        "rig mode needs a camera: a device index (0) or path (/dev/video0)");
+                        "rig mode needs a camera: a device index (0), a path (/dev/video0) or "
+                        "aravis:DEVICE-ID");
+    if (cam->track_max_lag >= cam->ring_frames)
+        return fail_key(c, CFG_ERR_CHECK, "camera.track_max_lag",
+                        "%d must be below camera.ring_frames (%d)", cam->track_max_lag, cam->ring_frames);
     if (m == RIG_MODE_MOCK) {
         if (key_set(c, "camera.source") && cam->source != RIG_SOURCE_SYNTHETIC)
             return fail_key(c, CFG_ERR_CHECK, "camera.source",
@@ -1244,6 +1273,11 @@ static void config_defaults(rig_config *cfg)
     snprintf(cfg->camera.video_dir, sizeof cfg->camera.video_dir, "videos");
     cfg->camera.noise_sigma = 2.0;
     cfg->camera.blur_sigma_px = 0.8;
+    cfg->camera.offset_x_px = -1;
+    cfg->camera.offset_y_px = -1;
+    cfg->camera.gain_db = -1.0;
+    cfg->camera.ring_frames = 64;
+    cfg->camera.track_max_lag = 16;
     cfg->detect.dz_jump = 0.02;
     cfg->detect.jump_fraction = 0.3;
     cfg->detect.min_quality = 0.3;

@@ -62,7 +62,9 @@ typedef enum rig_source_kind {
     RIG_SOURCE_NONE = 0,   /* no live source (replay mode reads replay.video) */
     RIG_SOURCE_INDEX,      /* V4L2 device index (camera.source = 0, 1, ...) */
     RIG_SOURCE_DEVICE,     /* a device path (camera.source = /dev/video0) */
-    RIG_SOURCE_SYNTHETIC   /* frames rendered from the simulated ribbon (mock) */
+    RIG_SOURCE_SYNTHETIC,  /* frames rendered from the simulated ribbon (mock) */
+    RIG_SOURCE_ARAVIS      /* a GenICam camera through Aravis (camera.source = aravis:ID, device =
+                              ID, "" = the first camera) */
 } rig_source_kind;
 
 typedef enum rig_roi_kind {
@@ -108,6 +110,13 @@ typedef struct rig_camera {
     char video_dir[RIG_PATH_MAX]; /* where trial videos are written */
     double noise_sigma;         /* grey levels, mock renderer's additive noise */
     double blur_sigma_px;       /* px, mock renderer's optical blur */
+    /* GenICam (aravis:) cameras: the sensor ROI origin, exposure and gain asked of the camera. */
+    int offset_x_px, offset_y_px; /* px, -1 = the camera's own */
+    double exposure_us;         /* us, 0 = the camera's own */
+    double gain_db;             /* dB, -1 = the camera's own */
+    /* The live pipeline (rig mode, trial_capture.h). */
+    int ring_frames;            /* frames the capture ring holds before the video drops */
+    int track_max_lag;          /* frames behind the camera after which tracking skips frames */
 } rig_camera;
 
 typedef struct rig_detect {

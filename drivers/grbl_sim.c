@@ -679,6 +679,12 @@ const char *grbl_sim_path(const grbl_sim *s)
     return s->path;
 }
 
+void grbl_sim_positions(const grbl_sim *s, double mm[GRBL_SIM_AXES], double *t_s)
+{
+    for (int i = 0; i < GRBL_SIM_AXES; i++) mm[i] = i < s->p.n_axes ? s->ax[i].pos_mm : 0.0;
+    if (t_s) *t_s = s->t_last;
+}
+
 void grbl_sim_close(grbl_sim *s)
 {
     if (!s)

@@ -45,6 +45,9 @@ typedef struct grbl_sim grbl_sim;
 grbl_sim_params grbl_sim_params_default(void);
 rail_err grbl_sim_open(grbl_sim **out, const grbl_sim_params *p, char *why, size_t why_len);
 const char *grbl_sim_path(const grbl_sim *s);   /* the slave pty path clients open */
+/* The axes' actual positions (mm; a stalled axis where it stalled) as of the last step, and the
+ * controller's time (its clock, s) of that step. Not thread-safe against grbl_sim_step. */
+void grbl_sim_positions(const grbl_sim *s, double mm[GRBL_SIM_AXES], double *t_s);
 /* One iteration: wait up to max_wait_s for input, handle it, advance the axes. */
 rail_err grbl_sim_step(grbl_sim *s, double max_wait_s);
 /* Iterate until *stop becomes non-zero (signal flag) or duration_s passes (negative: forever). */

@@ -42,6 +42,11 @@ rail_err rail_pair_poll(rail *a, rail *b, rail_status *sa, rail_status *sb, char
     return !ha ? fault_of(a, ea, sa, why, n) : fault_of(b, eb, sb, why, n);
 }
 
+rail_err rail_pair_judge(rail *r, rail_err e, const rail_status *st, char *why, size_t n)
+{
+    return healthy(e, st) ? RAIL_OK : fault_of(r, e, st, why, n);
+}
+
 rail_err rail_pair_estop(rail *a, rail *b)
 {
     rail_err ea = rail_estop(a);

@@ -42,6 +42,17 @@ extern "C" int vis_frame_channels(const vis_frame *f) { return f ? f->mat.channe
 extern "C" size_t vis_frame_stride(const vis_frame *f) { return f ? f->mat.step[0] : 0; }
 extern "C" uint8_t *vis_frame_data(vis_frame *f) { return f ? f->mat.data : nullptr; }
 
+extern "C" vis_status vis_frame_copy(const vis_frame *src, vis_frame *dst, vis_error *err)
+{
+    if (!src || !dst)
+        return vis::fail(err, VIS_ERR_ARG, "vis_frame_copy: NULL frame");
+    VIS_GUARD(err, VIS_ERR_INTERNAL, {
+        src->mat.copyTo(dst->mat);  // reallocates only when the size or type differs
+        vis::ok(err);
+        return VIS_OK;
+    })
+}
+
 extern "C" vis_status vis_frame_save(const vis_frame *f, const char *path, vis_error *err)
 {
     if (!f || !path || f->mat.empty())

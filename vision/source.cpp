@@ -5,6 +5,8 @@
 // Every source hands out 8-bit grey frames.
 #include "source.hpp"
 
+#include <time.h>
+
 struct vis_source {
     vis::Source *impl;
 };
@@ -31,6 +33,12 @@ extern "C" vis_camera_settings vis_camera_settings_default(void)
     s.height_px = 0;
     s.fps = 0;
     s.fourcc[0] = '\0';
+    s.aravis = 0;
+    s.offset_x_px = -1;
+    s.offset_y_px = -1;
+    s.exposure_us = 0;
+    s.gain_db = -1;
+    s.n_buffers = 0;
     return s;
 }
 
@@ -40,7 +48,9 @@ extern "C" vis_source *vis_source_open_camera(const vis_camera_settings *s, vis_
         vis::fail(err, VIS_ERR_ARG, "vis_source_open_camera: NULL settings");
         return nullptr;
     }
-    VIS_GUARD(err, nullptr, { return wrap(vis::source_camera_open(*s, err)); })
+    VIS_GUARD(err, nullptr, {
+        return wrap(s->aravis ? vis::source_aravis_open(*s, err) : vis::source_camera_open(*s, err));
+    })
 }
 
 extern "C" vis_source *vis_source_open_video(const char *path, vis_error *err)
@@ -80,6 +90,26 @@ extern "C" vis_status vis_source_read(vis_source *src, vis_frame *out, double *t
         vis_status s = src->impl->read(out->mat, t, err);
         if (t_s)
             *t_s = t;
+        if (s == VIS_OK)
+            vis::ok(err);
+        return s;
+    })
+}
+
+double vis::Source::monotonic_s()
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+extern "C" vis_status vis_source_read_meta(vis_source *src, vis_frame *out, vis_frame_meta *meta,
+                                           vis_error *err)
+{
+    if (!src || !out || !meta)
+        return vis::fail(err, VIS_ERR_ARG, "vis_source_read_meta: NULL source, frame or meta");
+    VIS_GUARD(err, VIS_ERR_INTERNAL, {
+        vis_status s = src->impl->read_meta(out->mat, *meta, err);
         if (s == VIS_OK)
             vis::ok(err);
         return s;

@@ -58,6 +58,24 @@ public:
         index++;
         return VIS_OK;
     }
+    // A live V4L2 camera: OpenCV's V4L2 backend answers CAP_PROP_POS_MSEC with the dequeued
+    // buffer's timestamp (struct v4l2_buffer.timestamp, in ms), which UVC drivers take from
+    // CLOCK_MONOTONIC at the frame's start of capture. OpenCV hides the buffer's sequence number, so
+    // ids are counted here and V4L2 drops are not visible as id gaps (said in docs/rig-realtime.md).
+    vis_status read_meta(cv::Mat &grey, vis_frame_meta &m, vis_error *err) override
+    {
+        if (!live)
+            return Source::read_meta(grey, m, err);
+        double t = 0;
+        vis_status s = read(grey, t, err);
+        m.host_t_s = monotonic_s();
+        const double ms = cap.get(cv::CAP_PROP_POS_MSEC);
+        m.camera_t_s = ms > 0 && std::isfinite(ms) ? ms * 1e-3 : NAN;
+        m.frame_id = counted++;
+        m.lost_before = 0;
+        m.incomplete = 0;
+        return s;
+    }
     int frame_count() const override { return count; }
     double fps() const override { return rate; }
 };

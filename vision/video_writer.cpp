@@ -1,4 +1,11 @@
-// video_writer.cpp: lossless video output (FFV1 in Matroska) through OpenCV's ffmpeg backend.
+// video_writer.cpp: lossless video output through OpenCV's ffmpeg backend: FFV1 in Matroska
+// (.mkv), or raw Y800 in AVI (.avi) for live trials.
+//
+// Why two: FFV1 is compact (about a third of the raw size on the ribbon's frames) but costs 16.7 ms
+// of one core per 1280x720 grey frame in Debian's OpenCV 4.6, a whole frame period at 60 fps. Raw
+// Y800 is a copy (about 0.3 ms per frame, 0.9 MB per frame at 1280x720; bench_video_write measures
+// both), so a live trial records every frame on time and a transcode to FFV1 can follow offline.
+// OpenCV's HuffYUV, FFVHuff and UT Video writers were not bit-exact on grey frames; Y800 is.
 //
 // FFV1 is the codec chosen because Debian's OpenCV writes it and reads it back bit-exact (checked by
 // test_vision_video); lossy codecs would bias sub-pixel tracking. Grey frames are written as grey;
@@ -25,9 +32,16 @@ extern "C" vis_video_writer *vis_video_writer_open(const char *path, int width_p
         return nullptr;
     }
     const size_t len = std::strlen(path);
-    if (len < 4 || std::strcmp(path + len - 4, ".mkv") != 0) {
-        vis::fail(err, VIS_ERR_ARG, "video %s: lossless output needs a .mkv name (FFV1 in Matroska)",
+    const bool mkv = len >= 4 && std::strcmp(path + len - 4, ".mkv") == 0;
+    const bool avi = len >= 4 && std::strcmp(path + len - 4, ".avi") == 0;
+    if (!mkv && !avi) {
+        vis::fail(err, VIS_ERR_ARG,
+                  "video %s: lossless output needs a .mkv (FFV1 in Matroska) or .avi (raw Y800) name",
                   path);
+        return nullptr;
+    }
+    if (avi && channels != 1) {
+        vis::fail(err, VIS_ERR_ARG, "video %s: raw Y800 AVI holds grey frames only", path);
         return nullptr;
     }
     VIS_GUARD(err, nullptr, {
@@ -36,11 +50,13 @@ extern "C" vis_video_writer *vis_video_writer_open(const char *path, int width_p
         v->height = height_px;
         v->channels = channels;
         v->path = path;
-        v->w.open(path, cv::CAP_FFMPEG, cv::VideoWriter::fourcc('F', 'F', 'V', '1'), fps,
-                  cv::Size(width_px, height_px), channels == 3);
+        const int fourcc = avi ? cv::VideoWriter::fourcc('Y', '8', '0', '0')
+                               : cv::VideoWriter::fourcc('F', 'F', 'V', '1');
+        v->w.open(path, cv::CAP_FFMPEG, fourcc, fps, cv::Size(width_px, height_px), channels == 3);
         if (!v->w.isOpened()) {
             delete v;
-            vis::fail(err, VIS_ERR_IO, "cannot open video %s for writing (FFV1)", path);
+            vis::fail(err, VIS_ERR_IO, "cannot open video %s for writing (%s)", path,
+                      avi ? "raw Y800 AVI" : "FFV1");
             return nullptr;
         }
         vis::ok(err);

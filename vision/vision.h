@@ -74,6 +74,8 @@ int vis_frame_height(const vis_frame *f);
 int vis_frame_channels(const vis_frame *f);
 size_t vis_frame_stride(const vis_frame *f);   /* bytes between rows */
 uint8_t *vis_frame_data(vis_frame *f);         /* row-major pixels, `stride` bytes per row */
+/* Copies src into dst (reallocated when its size or channels differ; no allocation otherwise). */
+vis_status vis_frame_copy(const vis_frame *src, vis_frame *dst, vis_error *err);
 /* Write/read an image file (format from the extension; PNG is lossless). Read resizes `f`. */
 vis_status vis_frame_save(const vis_frame *f, const char *path, vis_error *err);
 vis_status vis_frame_load(vis_frame *f, const char *path, vis_error *err);
@@ -161,7 +163,9 @@ vis_status vis_renderer_draw(vis_renderer *r, const vis_shape *shape, vis_frame 
 
 /* ---------------------------------------------------------------- video writing */
 
-/* Lossless FFV1 in Matroska (.mkv): grey frames read back bit-exact. */
+/* Lossless video. By the name's ending: .mkv = FFV1 in Matroska (compressed, 16.7 ms per 1280x720
+ * grey frame on one core); .avi = raw Y800 (uncompressed 8-bit grey, 1 byte per pixel) in AVI, about
+ * 0.3 ms per frame, what live trials record. Both read back bit-exact. */
 typedef struct vis_video_writer vis_video_writer;
 vis_video_writer *vis_video_writer_open(const char *path, int width_px, int height_px, int channels,
                                         double fps, vis_error *err);
@@ -188,6 +192,13 @@ typedef struct vis_camera_settings {
     int height_px;            /* requested height, pixels (0 = driver default) */
     double fps;               /* requested frame rate, 1/s (0 = driver default) */
     char fourcc[5];           /* requested pixel format such as "MJPG" ("" = driver default) */
+    /* GenICam (Aravis) cameras only: aravis = 1 opens `path` as an Aravis device id ("" or NULL =
+     * the first camera found). Mono8 always; 0 / negative = leave the camera's own setting. */
+    int aravis;
+    int offset_x_px, offset_y_px; /* ROI origin on the sensor, pixels (-1 = leave) */
+    double exposure_us;           /* ExposureTime, microseconds (0 = leave) */
+    double gain_db;               /* Gain, dB (< 0 = leave) */
+    int n_buffers;                /* stream buffers (0 = 32) */
 } vis_camera_settings;
 vis_camera_settings vis_camera_settings_default(void);
 
@@ -206,6 +217,30 @@ vis_source *vis_source_open_synthetic(const vis_render_params *p, double fps, vi
  * Returns VIS_ERR_END at a clean end; VIS_ERR_FORMAT when the stream is damaged (a video that stops
  * before its announced length, an unreadable image): the message says after which frame. */
 vis_status vis_source_read(vis_source *src, vis_frame *out, double *t_s, vis_error *err);
+/* What a live camera says about one frame (vis_source_read_meta).
+ * camera_t_s: the camera's own timestamp of the frame, seconds on the camera's clock (GenICam buffer
+ *   timestamp; V4L2 buffer timestamp, CLOCK_MONOTONIC for UVC); NaN when the source has none.
+ * host_t_s: CLOCK_MONOTONIC when the frame was handed to the program (seconds).
+ * frame_id: the camera's frame counter (GenICam block id); sources without one count frames.
+ * lost_before: frames that never arrived just before this one (a gap in the camera's ids).
+ * incomplete: buffers the transport delivered damaged (missing packets, timeout) just before this
+ *   one; they are dropped unread (their pixels are not an image). */
+typedef struct vis_frame_meta {
+    double camera_t_s;
+    double host_t_s;
+    uint64_t frame_id;
+    long lost_before;
+    int incomplete;
+} vis_frame_meta;
+/* Like vis_source_read, with the frame's metadata. A source that is not a live camera gives
+ * camera_t_s = its own time (t_s) and counts frames. */
+vis_status vis_source_read_meta(vis_source *src, vis_frame *out, vis_frame_meta *meta, vis_error *err);
+/* Lists the GenICam cameras Aravis sees: calls fn once per camera with its device id, vendor, model,
+ * and transport ("GigEVision", "USB3Vision"); returns how many, or -1 with err when Aravis cannot
+ * enumerate. */
+int vis_aravis_list(void (*fn)(void *user, const char *id, const char *vendor, const char *model,
+                               const char *protocol),
+                    void *user, vis_error *err);
 int vis_source_frame_count(const vis_source *src);  /* announced count, or -1 if unknown */
 double vis_source_fps(const vis_source *src);       /* frames per second, or 0 if unknown */
 void vis_source_close(vis_source *src);

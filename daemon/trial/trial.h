@@ -21,6 +21,7 @@
 #include "snap_detect.h"
 #include "predict_ladder.h"
 #include "trial_runner.h"
+#include "trial_capture.h"
 #include "trial_video.h"
 #include "trial_record.h"
 #include "trial_session.h"

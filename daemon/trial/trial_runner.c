@@ -8,6 +8,42 @@
 
 #include "rail_pair.h"
 
+/* Rail calls in a live trial go under the poller's lock (the rails are not thread-safe). */
+static void rails_lock(trial_runner *tr)
+{
+    if (tr->poller) trial_rail_poller_lock(tr->poller);
+}
+static void rails_unlock(trial_runner *tr)
+{
+    if (tr->poller) trial_rail_poller_unlock(tr->poller);
+}
+static rail_err r_move(trial_runner *tr, rail *r, double target, double speed)
+{
+    rails_lock(tr);
+    rail_err e = rail_move_abs(r, target, speed);
+    rails_unlock(tr);
+    return e;
+}
+static rail_err r_stop(trial_runner *tr, rail *r)
+{
+    rails_lock(tr);
+    rail_err e = rail_stop(r);
+    rails_unlock(tr);
+    return e;
+}
+static void r_estop_pair(trial_runner *tr)
+{
+    rails_lock(tr);
+    rail_pair_estop(tr->compress, tr->shear);
+    rails_unlock(tr);
+}
+
+void trial_runner_set_live(trial_runner *tr, trial_capture *capture, trial_rail_poller *poller)
+{
+    tr->capture = capture;
+    tr->poller = poller;
+}
+
 static const char *const state_names[TRIAL_STATE_COUNT] = {
     "idle", "compressing", "holding", "checking", "shearing", "snapped", "returning", "done", "aborted",
     "failed",
@@ -93,6 +129,10 @@ typedef struct run_ctx {
     double w_dw;          /* Delta W of the reading before the jump */
     double w_until;       /* rail-clock time (trial time) after which a late witness no longer counts */
     int vision_noted;     /* the camera's snap has been handled */
+    double t_poll;        /* rail-clock time of the poll that gave sc, ss */
+    double t_det_frame;   /* trial time of the frame in which the camera saw the snap (NaN: none) */
+    double t_stop_cmd;    /* trial time the shear stop command returned (NaN: none) */
+    int stand_noted;      /* the snap-to-stop latency has been reported */
     int w_warned;         /* "no load" warning given */
 } run_ctx;
 
@@ -128,7 +168,11 @@ static int wait_rails_standing(run_ctx *c)
     for (int k = 0; k < 100000; k++) {
         rail_status sc, ss;
         char why[128];
-        if (rail_pair_poll(c->tr->compress, c->tr->shear, &sc, &ss, why, sizeof why) != RAIL_OK) return -1;
+        double tp;
+        if (c->tr->poller) {
+            if (trial_rail_poller_latest(c->tr->poller, &sc, &ss, &tp, why, sizeof why) != RAIL_OK) return -1;
+        } else if (rail_pair_poll(c->tr->compress, c->tr->shear, &sc, &ss, why, sizeof why) != RAIL_OK)
+            return -1;
         int moving = sc.state == RAIL_STATE_MOVING || sc.state == RAIL_STATE_HOMING ||
                      ss.state == RAIL_STATE_MOVING || ss.state == RAIL_STATE_HOMING;
         if (!moving) return 0;
@@ -144,11 +188,25 @@ static void finish(run_ctx *c, trial_state s, const char *fmt, ...) __attribute_
 static void finish(run_ctx *c, trial_state s, const char *fmt, ...)
 {
     int still_moving = 0;
-    if (s == TRIAL_FAILED)
-        rail_pair_estop(c->tr->compress, c->tr->shear);
-    else if (s == TRIAL_ABORTED) {
-        rail_stop(c->tr->compress);
-        rail_stop(c->tr->shear);
+    if (s == TRIAL_FAILED) {
+        /* The fault is recorded when it is known, before the stops (over a dead link each stop
+         * waits out its write timeout). */
+        char reason[sizeof c->res->reason] = "";
+        if (fmt) {
+            va_list ap;
+            va_start(ap, fmt);
+            vsnprintf(reason, sizeof reason, fmt, ap);
+            va_end(ap);
+        }
+        emit_event(c, "fault", "%s", reason);
+        r_estop_pair(c->tr);
+        snprintf(c->res->reason, sizeof c->res->reason, "%s", reason);
+        c->res->final = s;
+        enter(c, s, 0.0, c->res->reason);
+        return;
+    } else if (s == TRIAL_ABORTED) {
+        r_stop(c->tr, c->tr->compress);
+        r_stop(c->tr, c->tr->shear);
         still_moving = wait_rails_standing(c) != 0;
     }
     c->res->reason[0] = '\0';
@@ -192,8 +250,9 @@ static int command(run_ctx *c, rail *r, rail_err e, const char *what)
 /* Enters snapped: stop the shear. Returns 1 when the stop was refused (trial failed). */
 static int stop_for_snap(run_ctx *c)
 {
-    if (command(c, c->tr->shear, rail_stop(c->tr->shear), "shear stop")) return 1;
+    if (command(c, c->tr->shear, r_stop(c->tr, c->tr->shear), "shear stop")) return 1;
     c->t_snap = c->t;
+    c->t_stop_cmd = rail_clock_now(c->clock) - c->t0;
     enter(c, TRIAL_SNAPPED, c->tr->plan.post_snap_s + 30.0, NULL);
     return 0;
 }
@@ -282,7 +341,7 @@ static int step(run_ctx *c, const trial_sample *smp)
             c->target_shear_mm = rig_calib_shear_mm(&p->calib, l, p->scene.shear_max);
             double v = p->scene.shear_rate * 1000.0;
             snap_detect_init(&tr->det, &p->snap);
-            if (command(c, tr->shear, rail_move_abs(tr->shear, c->target_shear_mm, v), "shear move")) return 1;
+            if (command(c, tr->shear, r_move(tr, tr->shear, c->target_shear_mm, v), "shear move")) return 1;
             enter(c, TRIAL_SHEARING, p->scene.shear_max / (p->scene.shear_rate / l) * 1.5 + 30.0, NULL);
         }
         return 0;
@@ -298,6 +357,7 @@ static int step(run_ctx *c, const trial_sample *smp)
             c->w_until = c->t + TRIAL_WITNESS_LATE_POLLS / rail_get_params(tr->shear)->poll_hz + 2.0 / p->fps;
             emit_event(c, "info", "snap detected at frame %ld; onset Delta W = %.5f", tr->det.detect_frame,
                        snap_detect_dw(&tr->det));
+            c->t_det_frame = smp->t_s;
             if (stop_for_snap(c)) return 1;
             return 0;
         }
@@ -326,18 +386,55 @@ static int step(run_ctx *c, const trial_sample *smp)
         return 0;
     }
 start_return : {
+    if (!c->stand_noted && isfinite(c->t_stop_cmd) && isfinite(c->t_det_frame)) {
+        /* The return starts before a fresh shear reading showed the rail standing: the command
+         * latency is known, the standing one is not (it would be the end of the return). */
+        c->stand_noted = 1;
+        c->res->stop_cmd_latency_s = c->t_stop_cmd - c->t_det_frame;
+        emit_event(c, "info",
+                   "snap-to-stop latency: detection frame -> stop command %.1f ms; the shear rail was not read "
+                   "standing before the return (rail poll period %.1f ms)",
+                   1e3 * c->res->stop_cmd_latency_s, 1e3 / rail_get_params(tr->shear)->poll_hz);
+    }
     double dist = fmax(fabs(c->ss.position_mm - p->calib.shear_zero_mm),
                        fabs(c->sc.position_mm - c->start_compress_mm));
     /* Shear back first in the same command batch; both move at the return speed. */
-    if (command(c, tr->shear, rail_move_abs(tr->shear, p->calib.shear_zero_mm, p->return_speed_mm_s),
+    if (command(c, tr->shear, r_move(tr, tr->shear, p->calib.shear_zero_mm, p->return_speed_mm_s),
                 "return of the shear rail"))
         return 1;
-    if (command(c, tr->compress, rail_move_abs(tr->compress, c->start_compress_mm, p->return_speed_mm_s),
+    if (command(c, tr->compress, r_move(tr, tr->compress, c->start_compress_mm, p->return_speed_mm_s),
                 "return of the compression rail"))
         return 1;
     enter(c, TRIAL_RETURNING, dist / p->return_speed_mm_s * 2.0 + 30.0, NULL);
     return 0;
 }
+}
+
+/* The rails' statuses of this iteration: the poller's latest in a live trial, else a poll. */
+static rail_err poll_rails(run_ctx *c, char *why, size_t why_len)
+{
+    if (c->tr->poller) return trial_rail_poller_latest(c->tr->poller, &c->sc, &c->ss, &c->t_poll, why, why_len);
+    rail_err e = rail_pair_poll(c->tr->compress, c->tr->shear, &c->sc, &c->ss, why, why_len);
+    c->t_poll = rail_clock_now(c->clock);
+    return e;
+}
+
+/* After a snap stop: the first fresh shear reading that is not moving ends the snap-to-stop
+ * latency (measured from the detection frame's own time). */
+static void note_standing(run_ctx *c)
+{
+    if (c->stand_noted || !isfinite(c->t_stop_cmd) || !isfinite(c->t_det_frame)) return;
+    if (c->ss.extrapolated || c->ss.state == RAIL_STATE_MOVING || c->ss.state == RAIL_STATE_HOMING) return;
+    double t_stand = c->ss.t_s - c->t0;
+    if (t_stand < c->t_stop_cmd) return;
+    c->stand_noted = 1;
+    c->res->stop_cmd_latency_s = c->t_stop_cmd - c->t_det_frame;
+    c->res->stop_stand_latency_s = t_stand - c->t_det_frame;
+    emit_event(c, "info",
+               "snap-to-stop latency: detection frame -> stop command %.1f ms, -> shear rail standing %.1f ms "
+               "(rail poll period %.1f ms, frame period %.1f ms)",
+               1e3 * c->res->stop_cmd_latency_s, 1e3 * c->res->stop_stand_latency_s,
+               1e3 / rail_get_params(c->tr->shear)->poll_hz, 1e3 / c->tr->plan.fps);
 }
 
 void trial_runner_run(trial_runner *tr, trial_result *out)
@@ -356,8 +453,10 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
     snap_detect_init(&tr->det, &p->snap);
     char why[256] = "";
 
+    c.t_det_frame = c.t_stop_cmd = NAN;
+    out->stop_cmd_latency_s = out->stop_stand_latency_s = NAN;
     /* Where the rails are, and the preconditions. */
-    if (rail_pair_poll(tr->compress, tr->shear, &c.sc, &c.ss, why, sizeof why) != RAIL_OK) {
+    if (poll_rails(&c, why, sizeof why) != RAIL_OK) {
         finish(&c, TRIAL_FAILED, "rails not ready: %s", why);
         goto end;
     }
@@ -376,7 +475,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
     emit_event(&c, "info", "start: compression rail at %.3f mm (Delta L = %.4f), target %.3f mm (Delta L = %.4f)",
                c.sc.position_mm, rig_calib_dl(&p->calib, l, c.sc.position_mm), c.target_compress_mm,
                p->scene.compression);
-    if (rail_move_abs(tr->compress, c.target_compress_mm, p->compress_speed_mm_s) != RAIL_OK) {
+    if (r_move(tr, tr->compress, c.target_compress_mm, p->compress_speed_mm_s) != RAIL_OK) {
         finish(&c, TRIAL_FAILED, "compression move refused: %s", rail_last_error(tr->compress));
         goto end;
     }
@@ -385,7 +484,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
 
     double frame_dt = 1.0 / p->fps, t_next = c.t0;
     for (long frame = 0;; frame++) {
-        if (!p->paced_by_camera) {
+        if (!p->paced_by_camera && !tr->capture) {
             t_next += frame_dt;
             double now = rail_clock_now(c.clock);
             if (t_next > now) rail_clock_sleep(c.clock, t_next - now);
@@ -394,11 +493,11 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             finish(&c, TRIAL_ABORTED, "aborted in %s: %s", trial_state_name(c.st), tr->abort_reason);
             break;
         }
-        if (rail_pair_poll(tr->compress, tr->shear, &c.sc, &c.ss, why, sizeof why) != RAIL_OK) {
+        if (poll_rails(&c, why, sizeof why) != RAIL_OK) {
             finish(&c, TRIAL_FAILED, "rail fault in %s: %s", trial_state_name(c.st), why);
             break;
         }
-        double now = rail_clock_now(c.clock);
+        double now = rail_clock_now(c.clock), t_poll = tr->poller ? c.t_poll : now;
         c.t = now - c.t0;
         trial_sample smp;
         /* Fresh rail readings (not extrapolations) are stored as they come. */
@@ -411,8 +510,8 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             smp.kind = 0;
             smp.frame = -1;
             smp.t_s = st->t_s - c.t0;
-            smp.compress_mm = position_at(&c.sc, now, st->t_s);
-            smp.shear_mm = position_at(&c.ss, now, st->t_s);
+            smp.compress_mm = position_at(&c.sc, t_poll, st->t_s);
+            smp.shear_mm = position_at(&c.ss, t_poll, st->t_s);
             smp.dl = rig_calib_dl(&p->calib, l, smp.compress_mm);
             smp.dw = rig_calib_dw(&p->calib, l, smp.shear_mm);
             smp.reason = VIS_REASON_NONE;
@@ -425,27 +524,57 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
                 witness_add(&c, st->load, smp.dw, smp.t_s))
                 goto end;
         }
+        note_standing(&c);
         /* The frame of this instant, with the rails where they are at its time. */
-        double pos_c = position_at(&c.sc, now, now), pos_s = position_at(&c.ss, now, now);
+        double pos_c = position_at(&c.sc, t_poll, now), pos_s = position_at(&c.ss, t_poll, now);
         double dl = rig_calib_dl(&p->calib, l, pos_c), dw = rig_calib_dw(&p->calib, l, pos_s);
         double t_frame = now;
         vis_error ve = {0};
-        vis_status vs = tr->cam.grab(tr->cam.ctx, now, dl, dw, tr->frame, &t_frame, &ve);
-        if (vs != VIS_OK) {
-            finish(&c, TRIAL_FAILED, "camera: %s", ve.message[0] ? ve.message : vis_status_str(vs));
-            break;
+        trial_frame_info fi;
+        memset(&fi, 0, sizeof fi);
+        fi.index = frame;
+        if (tr->capture) {
+            if (trial_capture_next(tr->capture, tr->frame, &fi, why, sizeof why)) {
+                finish(&c, TRIAL_FAILED, "%s", why);
+                break;
+            }
+            t_frame = fi.t_s;
+        } else {
+            vis_status vs = tr->cam.grab(tr->cam.ctx, now, dl, dw, tr->frame, &t_frame, &ve);
+            if (vs != VIS_OK) {
+                finish(&c, TRIAL_FAILED, "camera: %s", ve.message[0] ? ve.message : vis_status_str(vs));
+                break;
+            }
         }
         double t_rail = t_frame + p->calib.camera_time_offset_s;
-        pos_c = position_at(&c.sc, now, t_rail);
-        pos_s = position_at(&c.ss, now, t_rail);
+        pos_c = position_at(&c.sc, t_poll, t_rail);
+        pos_s = position_at(&c.ss, t_poll, t_rail);
         memset(&smp, 0, sizeof smp);
         smp.kind = 1;
-        smp.frame = frame;
+        smp.frame = tr->capture ? fi.index : frame;
         smp.t_s = t_rail - c.t0;
         smp.compress_mm = pos_c;
         smp.shear_mm = pos_s;
         smp.dl = rig_calib_dl(&p->calib, l, pos_c);
         smp.dw = rig_calib_dw(&p->calib, l, pos_s);
+        if (fi.dropped || fi.skip) {
+            /* Stored with its time and positions, not tracked: the pipeline's give-way (trial_capture.h). */
+            smp.not_tracked = fi.dropped ? 2 : 1;
+            smp.reason = VIS_REASON_UNREADABLE;
+            if (fi.dropped)
+                out->dropped_frames++;
+            else
+                out->skipped_frames++;
+            out->frames++;
+            if (tr->sink.sample && tr->sink.sample(tr->sink.user, &smp, why, sizeof why)) {
+                finish(&c, TRIAL_FAILED, "sample not stored: %s", why);
+                break;
+            }
+            if (c.st == TRIAL_SHEARING || c.st == TRIAL_SNAPPED)
+                snap_detect_add(&tr->det, smp.frame, smp.t_s, smp.dw, 0.0, 0.0, 0);
+            if (step(&c, &smp)) break;
+            continue;
+        }
         vis_measure m;
         if (vis_tracker_process(tr->tracker, tr->frame, smp.dw * l * 1000.0, &m, &ve) != VIS_OK) {
             finish(&c, TRIAL_FAILED, "tracker: %s", ve.message);
@@ -465,7 +594,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             finish(&c, TRIAL_FAILED, "sample not stored: %s", why);
             break;
         }
-        if (tr->sink.frame && tr->sink.frame(tr->sink.user, tr->frame, frame, why, sizeof why)) {
+        if (!tr->capture && tr->sink.frame && tr->sink.frame(tr->sink.user, tr->frame, frame, why, sizeof why)) {
             finish(&c, TRIAL_FAILED, "video: %s", why);
             break;
         }

@@ -15,6 +15,10 @@
  * a time limit; a time limit or a refused command ends the trial as failed with the reason.
  * One thread owns a trial (the rails are not thread-safe); trial_runner_abort may be called from
  * any thread. The runner allocates nothing per frame.
+ * Live trials (trial_runner_set_live, rig mode): the same loop, but each iteration takes the next
+ * captured frame (trial_capture.h) with its camera time mapped onto the rail clock, and the rails'
+ * latest statuses from their polling thread (trial_rail_poller.h), so neither a slow poll nor a
+ * slow stage delays a frame's stamp. Frames the loop is too far behind for are stored untracked.
  *
  * Second witness (plan.torque_witness): position-controlled rails do not feel the snap, but a drive
  * that reports a load (torque, following error; mock mode: the twin's shear force) does. From the
@@ -33,6 +37,8 @@
 
 #include "rail.h"
 #include "rig_calib.h"
+#include "trial_capture.h"
+#include "trial_rail_poller.h"
 #include "scene.h"
 #include "snap_detect.h"
 #include "vision.h"
@@ -89,6 +95,8 @@ typedef struct trial_camera {
  * positions at its time. Measurements are valid only when reason is VIS_REASON_NONE. */
 typedef struct trial_sample {
     int kind;
+    int not_tracked;             /* kind 1 in a live trial: 1 = skipped (the loop was behind), 2 =
+                                    dropped by the pipeline (not in the video); no measurement */
     long frame;
     double t_s;
     double compress_mm, shear_mm, dl, dw;
@@ -123,6 +131,11 @@ typedef struct trial_result {
     double upper_dz;             /* Delta Z seen by the check */
     long frames, measured_frames, rail_readings;
     double duration_s;           /* rail-clock time of the trial */
+    /* Live trials (trial_runner_set_live): snap-to-stop latency, from the detection frame's own
+     * time to the shear stop command's return and to the first shear reading standing still; NaN
+     * when not measured (no camera snap, or the rail was not seen standing). */
+    double stop_cmd_latency_s, stop_stand_latency_s;
+    long skipped_frames, dropped_frames;
 } trial_result;
 
 typedef struct trial_runner {
@@ -138,7 +151,15 @@ typedef struct trial_runner {
     double t0;
     vis_frame *frame;
     snap_detect det;
+    /* Live pipeline (rig mode): frames from the capture ring, rails from the poller (borrowed). */
+    trial_capture *capture;
+    trial_rail_poller *poller;
 } trial_runner;
+
+/* Rig mode: frames come from the capture pipeline (camera timestamps, in order, never paced by the
+ * loop) instead of cam.grab, and the rails' statuses from the poller thread; every rail command is
+ * made under the poller's lock. Call after init, before run. */
+void trial_runner_set_live(trial_runner *tr, trial_capture *capture, trial_rail_poller *poller);
 
 /* Prepares a runner (allocates its frame). The rails, camera and tracker stay the caller's. */
 int trial_runner_init(trial_runner *tr, const trial_plan *plan, rail *compress, rail *shear,

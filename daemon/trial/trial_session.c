@@ -18,6 +18,7 @@
 #include "trial_camera_setup.h"
 #include "trial_config_text.h"
 #include "trial_prediction.h"
+#include "trial_live.h"
 #include "trial_record.h"
 #include "trial_specimen.h"
 #include "trial_video.h"
@@ -41,6 +42,7 @@ struct trial_session {
     int runner_ready;
     trial_result result;
     trial_video *video;
+    trial_live *live;       /* rig mode: camera, capture pipeline, rail poller (trial_live.h) */
     pthread_mutex_t lock;
     session_status status;  /* under lock */
     int abort_pending;      /* under lock: an abort that came before the runner existed */
@@ -219,6 +221,10 @@ static int sink_sample(void *user, const trial_sample *smp, char *why, size_t wh
         if (smp->measured) {
             x.dz = smp->dz;
             x.a = smp->a;
+        } else if (smp->not_tracked) {
+            snprintf(x.reason, sizeof x.reason, "%s",
+                     smp->not_tracked == 2 ? "dropped (pipeline full, not in the video)"
+                                           : "not tracked (the trial loop was behind)");
         } else {
             snprintf(x.reason, sizeof x.reason, "%s",
                      smp->reason == VIS_REASON_NONE ? "low quality" : vis_reason_str(smp->reason));
@@ -275,6 +281,17 @@ typedef struct session_parts {
     trial_camera cam;
     vis_tracker *trk;
 } session_parts;
+
+/* Rig mode: stops the live pipeline and stores its counts (and a failure of the video) as events. */
+static void session_live_close(trial_session *s)
+{
+    char summary[512], w[256] = "";
+    trial_capture_counts k;
+    int rc = trial_live_close(s->live, &k, summary, sizeof summary, w, sizeof w);
+    s->live = NULL;
+    session_event(s, NAN, k.lost || k.incomplete || k.dropped ? STORE_EVENT_WARNING : STORE_EVENT_INFO, summary);
+    if (rc) session_event(s, NAN, STORE_EVENT_FAULT, w);
+}
 
 static void fail_early(trial_session *s, const char *why)
 {
@@ -364,18 +381,14 @@ static int session_open_camera(trial_session *s, session_parts *p, char *why, si
         if (cfg->detect.torque_witness && mock_camera_feed_load(p->mock, s->shear, why, why_len)) return -1;
         return 0;
     }
-    vis_error ve = {0};
-    vis_camera_settings cs = vis_camera_settings_default();
-    cs.index = cfg->camera.index;
-    cs.path = cfg->camera.source == RIG_SOURCE_DEVICE ? cfg->camera.device : NULL;
-    cs.width_px = cfg->camera.width_px;
-    cs.height_px = cfg->camera.height_px;
-    cs.fps = cfg->camera.fps;
-    p->live.src = vis_source_open_camera(&cs, &ve);
-    if (!p->live.src) {
-        snprintf(why, why_len, "camera: %s", ve.message);
+    /* Rig mode: the live pipeline (trial_live.h) opens the camera and records the video (raw Y800
+     * AVI); the runner takes its frames, so cam.grab is never called. */
+    char vpath[RIG_PATH_MAX + 64];
+    snprintf(vpath, sizeof vpath, "%s/trial-%lld.avi", cfg->camera.video_dir, (long long)s->trial_id);
+    if (trial_live_open(cfg, s->compress, s->shear, vpath, s->roi, s->width, s->height, &s->live, why, why_len))
         return -1;
-    }
+    char w[256];
+    store_trial_set_video(s->st, s->trial_id, vpath, w, sizeof w);
     p->live.clock = rail_get_clock(s->compress);
     p->cam.grab = live_grab;
     p->cam.ctx = &p->live;
@@ -394,6 +407,7 @@ static int session_open_tracker_and_video(trial_session *s, session_parts *p, ch
         snprintf(why, why_len, "tracker: %s", ve.message);
         return -1;
     }
+    if (s->live) return 0; /* the live pipeline records */
     char video_path[RIG_PATH_MAX + 64];
     snprintf(video_path, sizeof video_path, "%s/trial-%lld.mkv", cfg->camera.video_dir, (long long)s->trial_id);
     s->video = trial_video_open(video_path, s->roi, cfg->camera.fps, why, why_len);
@@ -436,6 +450,7 @@ static int session_run(trial_session *s, session_parts *p, char *why, size_t why
     if (store_samples_begin(s->st, s->trial_id, NULL, &s->writer, why, why_len) != STORE_OK) return -1;
     trial_sink sink = {sink_state, sink_event, sink_sample, sink_frame, s};
     if (trial_runner_init(&s->runner, &plan, s->compress, s->shear, p->cam, p->trk, sink, why, why_len)) return -1;
+    if (s->live) trial_live_attach(s->live, &s->runner);
     pthread_mutex_lock(&s->lock);
     s->runner_ready = 1;
     if (s->abort_pending) trial_runner_abort(&s->runner, s->abort_reason);
@@ -467,6 +482,7 @@ static void session_store_result(trial_session *s)
         if (!s->result.reason[0]) snprintf(s->result.reason, sizeof s->result.reason, "%s", w);
     }
     s->video = NULL;
+    if (s->live) session_live_close(s);
     store_regime reg = trial_regime_of(s->result.snapped, s->result.vision_snapped, s->result.asymmetric);
     if (s->result.final == TRIAL_DONE || s->result.snapped)
         store_trial_set_result(s->st, s->trial_id, s->result.snapped, s->result.snapped ? s->result.snap_dw : NAN, reg,
@@ -493,6 +509,7 @@ static void session_release(trial_session *s, session_parts *p)
         trial_video_close(s->video, w, sizeof w);
         s->video = NULL;
     }
+    if (s->live) session_live_close(s);
     trial_prediction_join(s->prediction);
     s->prediction = NULL;
     trial_runner_free(&s->runner);

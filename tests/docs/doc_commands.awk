@@ -2,9 +2,10 @@
 # code (fenced blocks, blocks indented by 4 spaces, `code spans`) and prints one line per command
 # of ours found there: FILE, LINE, PROGRAM, FIRST WORD and OPTIONS, separated by the unit separator
 # (\037, so an empty field stays a field); OPTIONS is every --name in the command (bracketed or
-# not, =VALUE dropped), space-separated. A command runs from its program's name to the end of the span or line, a `;`, `&&`, ` #` comment or the next program's name; a
-# code line ending in `\`, or indented deeper than its command's first line (a usage text wrapped
-# over lines), continues the command above. A block that shows a session marks its commands with a
+# not, =VALUE dropped), space-separated. A command runs from its program's name to the end of the
+# span or line, a `;`, `&&`, ` #` comment or the next program's name; a code line ending in `\`,
+# or indented deeper than its command's first line (a usage text wrapped over lines), continues
+# the command above. A block that shows a session marks its commands with a
 # `$ ` prompt, and its other lines are output. POSIX awk (Debian's mawk runs it).
 
 BEGIN {

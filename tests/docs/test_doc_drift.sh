@@ -2,8 +2,8 @@
 # test_doc_drift.sh: the docs check fails on docs that drift from the programs. Runs
 # check_doc_commands.sh on fixtures: the control page passes; each drifted page (an unknown option
 # in a code span, on a usage text's wrapped line, in a fenced block after a `\` line, in a table
-# cell, on the continued line of a prompted command; an unknown subcommand; an unknown make target; an unknown ribbond form) fails, naming the
-# line and what drifted.
+# cell, on the continued line of a prompted command; an unknown subcommand; an unknown make
+# target; an unknown ribbond form) fails, naming the line and what drifted.
 # usage: test_doc_drift.sh BIN_DIR MAKEFILE
 set -u
 here=$(dirname "$0")

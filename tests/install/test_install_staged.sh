@@ -3,10 +3,10 @@
 # from the installed programs and files only. Checks the layout (programs in bin/, rig files and
 # scenes in share/ribbon/, the unit in lib/systemd/system/ naming the prefix, nothing in etc/ or
 # var/, the unit not enabled), that no installed file names a path into the source or build tree
-# (other than the names of source files, in assertion messages), then runs ribbond on the installed
-# mock.ini from an empty working directory and `ribbonctl start --wait` against it. Where a mount
-# namespace is available (unshare, as root), the trial runs with the source and build trees hidden
-# under empty tmpfs mounts, so a read from either fails.
+# (other than the names of source files, .c .cpp .h .hpp, in assertion messages), then runs
+# ribbond on the installed mock.ini from an empty working directory and `ribbonctl start --wait`
+# against it. Where a mount namespace is available (unshare, as root), the trial runs with the
+# source and build trees hidden under empty tmpfs mounts, so a read from either fails.
 #
 # usage: test_install_staged.sh BUILD_DIR SOURCE_DIR [LSAN_SUPPRESSIONS]
 # The trial is cut short to stay quick in both builds: N = 31 (the twin and the prediction), 10
@@ -89,7 +89,7 @@ done
 # --- no path into the source or build tree, except source file names (__FILE__ in assertions)
 for f in $(find "$stage" -type f ! -name '*.png'); do
   for tree in "$src" "$build"; do
-    tr -c '[:print:]' '\n' < "$f" | grep -F "$tree" | grep -Ev "^[^ ]*$tree/[^ ]*\.(c|cpp|h)$" |
+    tr -c '[:print:]' '\n' < "$f" | grep -F "$tree" | grep -Ev "^[^ ]*$tree/[^ ]*\.(c|cpp|h|hpp)$" |
       head -3 > "$tmp/paths"
     [ -s "$tmp/paths" ] && fail "${f#"$stage"} names the tree: $(cat "$tmp/paths")"
   done

@@ -58,6 +58,7 @@ static const room rooms[] = {
     {"daemon/api", 5, {"api.h", NULL}},
     {"daemon/twin", 6, {"twin.h", NULL}},
     {"daemon/trial", 7, {"trial.h", NULL}},
+    {"daemon/rigsim", 7, {"rigsim.h", NULL}},
     {"daemon/report", 8, {"trial_report.h", NULL}},
     {"daemon/ribbonctl_commands", 9, {"ctl.h", NULL}},
     {"daemon/ribbon_sim_commands", 9, {"sim_cmd.h", NULL}},

@@ -92,8 +92,12 @@ static void test_writer_refuses_lossy_name(void **state)
     (void)state;
     vis_error err;
     char path[600];
-    snprintf(path, sizeof path, "%s/x.avi", vt_tmpdir());
+    snprintf(path, sizeof path, "%s/x.mp4", vt_tmpdir());
     assert_null(vis_video_writer_open(path, 320, 240, 1, 25.0, &err));
+    assert_int_equal(err.code, VIS_ERR_ARG);
+    /* .avi is raw Y800: grey frames only */
+    snprintf(path, sizeof path, "%s/x.avi", vt_tmpdir());
+    assert_null(vis_video_writer_open(path, 320, 240, 3, 25.0, &err));
     assert_int_equal(err.code, VIS_ERR_ARG);
     assert_null(vis_video_writer_open(NULL, 320, 240, 1, 25.0, &err));
     snprintf(path, sizeof path, "%s/x.mkv", vt_tmpdir());

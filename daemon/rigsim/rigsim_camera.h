@@ -1,0 +1,49 @@
+/* rigsim_camera.h: the rig simulator's camera: a GigE Vision device on 127.0.0.1 (Aravis's fake
+ * GigE Vision camera) whose every image is the digital twin rendered at that instant.
+ *
+ * The twin has its own thread: it reads the controller's ACTUAL axis positions (rigsim_rails.h),
+ * turns them into (Delta L, Delta W) with the rig file's calibration, advances the twin (the
+ * simulated rod, daemon/twin/mock_camera.h) to the expected time of the next image (now + the
+ * running mean of a step and render, positions extrapolated at the axes' velocity) and renders it
+ * through the synthetic side camera at the rig file's camera size, noise and blur. So the ribbon
+ * follows what the rails really did, not what ribbond commanded. The camera's fill (Aravis's
+ * thread, at the frame rate ribbond sets through GenICam) copies the latest image and sets the
+ * buffer's timestamp as it leaves (host real-time clock, ns): a slow twin step (the snap needs
+ * more Newton iterations) never delays an image; the image is then older than its stamp, which
+ * the truth log records. While nobody streams, the twin's clock pauses.
+ * Truth log (CSV, one line per image sent): index, host monotonic time of the send, real-time clock
+ * time (the camera's timestamp), the axes' actual positions at the send (mm), Delta L, Delta W,
+ * the twin's Delta Z in the image, frozen, the twin time the image shows (s), and the image's age
+ * at the send (s: send time - the time the twin was stepped to; negative when rendered ahead). Faults: the camera stops (the device goes away) or the image freezes (the last
+ * image is sent again) from a time on. */
+#ifndef RIBBON_RIGSIM_CAMERA_H
+#define RIBBON_RIGSIM_CAMERA_H
+
+#include <stddef.h>
+
+#include "rig_config.h"
+#include "rigsim_rails.h"
+
+typedef struct rigsim_camera rigsim_camera;
+
+typedef struct rigsim_camera_faults {
+    double stop_after_s;   /* s after start, < 0 = off: the camera stops sending */
+    double freeze_after_s; /* s after start, < 0 = off: the same image from then on */
+} rigsim_camera_faults;
+
+/* Serves the camera on 127.0.0.1 with serial number `serial`; sc is the scene at the twin's
+ * resolution; dl_start the compression the specimen is mounted at. Writes the calibration that
+ * matches it to calib_path (when not NULL). truth_path: the truth log (NULL = none). */
+int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_start, rigsim_rails *rails,
+                        const char *serial, const char *calib_path, const char *truth_path,
+                        const rigsim_camera_faults *f, rigsim_camera **out, char *why, size_t why_len);
+/* Call now and then from the main loop: applies the scheduled stop. 1 once stopped. */
+int rigsim_camera_tick(rigsim_camera *c);
+long rigsim_camera_frames(rigsim_camera *c);
+/* Fault on command: the camera stops sending at the next tick. */
+void rigsim_camera_stop_sending(rigsim_camera *c);
+/* Longest twin step + render, s. */
+double rigsim_camera_max_fill_s(rigsim_camera *c);
+void rigsim_camera_stop(rigsim_camera *c);
+
+#endif

@@ -1,0 +1,172 @@
+/* rigsim_main.c: `ribbon-rigsim`, the rig's hardware in one process, in real time (daemon/rigsim/):
+ * the GRBL controller of the rig file's two rails on a pseudo-terminal linked at their port, the
+ * ribbon as the digital twin stepped with the axes' actual positions, and a GigE Vision camera on
+ * 127.0.0.1 filming it. Writes the camera calibration file the rig file names, and a truth log of
+ * every image sent (time, axis positions). Prints "ready" once ribbond may start, then serves
+ * until SIGINT/SIGTERM or --duration. Faults on a schedule (seconds after start). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <signal.h>
+
+#include "cli.h"
+#include "rig_config.h"
+#include "rigsim.h"
+
+#define PROG "ribbon-rigsim"
+
+/* Faults on command: SIGUSR1 cuts the controller's link, SIGUSR2 stops the camera (the handler
+ * only sets a flag; the main loop applies it). */
+static volatile sig_atomic_t cut_link, stop_camera;
+static void on_usr(int sig)
+{
+    if (sig == SIGUSR1) cut_link = 1;
+    if (sig == SIGUSR2) stop_camera = 1;
+}
+#define MAX_SETS 32
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: ribbon-rigsim RIG.INI [options]\n"
+            "  --set SECTION.KEY=VALUE  override a rig file key (as ribbond --set)\n"
+            "  --start-dl DL         compression the specimen is mounted at (default 0.2)\n"
+            "  --serial S            the camera's serial number (default RIBBONSIM)\n"
+            "  --truth PATH          truth log of every image sent (CSV)\n"
+            "  --duration S          exit after S seconds (default: until signalled)\n"
+            "  --alarm-after S       the controller raises ALARM:1 S seconds after start\n"
+            "  --link-lost-after S   the controller stops answering S seconds after start\n"
+            "  --stall AXIS:MM       axis X|Y stalls at MM\n"
+            "  --camera-stop-after S the camera stops sending S seconds after start\n"
+            "  --freeze-after S      the image freezes S seconds after start\n"
+            "signals: SIGUSR1 cuts the controller's link now, SIGUSR2 stops the camera now\n");
+}
+
+static int num(const char *opt, const char *v, double lo, double hi, double *out)
+{
+    return railsim_cli_num(PROG, opt, v, lo, hi, out);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
+        usage(argc < 2 ? stderr : stdout);
+        return argc < 2 ? 2 : 0;
+    }
+    const char *rig_path = argv[1], *serial = "RIBBONSIM", *truth = NULL;
+    const char *sets[MAX_SETS];
+    int n_sets = 0;
+    double start_dl = 0.2, duration = -1.0;
+    rigsim_rail_faults rf = {-1.0, -1.0, 0, 0.0};
+    rigsim_camera_faults cf = {-1.0, -1.0};
+    for (int i = 2; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int bad = 0;
+        if (!v) {
+            fprintf(stderr, PROG ": %s needs a value\n", a);
+            return 2;
+        }
+        if (!strcmp(a, "--set")) {
+            if (n_sets == MAX_SETS) {
+                fprintf(stderr, PROG ": at most %d --set\n", MAX_SETS);
+                return 2;
+            }
+            sets[n_sets++] = v;
+        } else if (!strcmp(a, "--start-dl"))
+            bad = num(a, v, 0.0, 0.99, &start_dl);
+        else if (!strcmp(a, "--serial"))
+            serial = v;
+        else if (!strcmp(a, "--truth"))
+            truth = v;
+        else if (!strcmp(a, "--duration"))
+            bad = num(a, v, 0.0, 1e7, &duration);
+        else if (!strcmp(a, "--alarm-after"))
+            bad = num(a, v, 0.0, 1e7, &rf.alarm_after_s);
+        else if (!strcmp(a, "--link-lost-after"))
+            bad = num(a, v, 0.0, 1e7, &rf.link_lost_after_s);
+        else if (!strcmp(a, "--camera-stop-after"))
+            bad = num(a, v, 0.0, 1e7, &cf.stop_after_s);
+        else if (!strcmp(a, "--freeze-after"))
+            bad = num(a, v, 0.0, 1e7, &cf.freeze_after_s);
+        else if (!strcmp(a, "--stall")) {
+            if ((v[0] != 'X' && v[0] != 'Y' && v[0] != 'Z') || v[1] != ':') {
+                fprintf(stderr, PROG ": --stall needs AXIS:MM, e.g. Y:60\n");
+                return 2;
+            }
+            rf.stall_axis = v[0];
+            bad = num(a, v + 2, 0.0, 1e5, &rf.stall_at_mm);
+        } else {
+            fprintf(stderr, PROG ": unknown option '%s'\n", a);
+            usage(stderr);
+            return 2;
+        }
+        if (bad) return 2;
+        i++;
+    }
+    static rig_config cfg;
+    char why[512] = "";
+    cfg_error ce;
+    if (rig_config_load(rig_path, sets, n_sets, &cfg, &ce) != CFG_OK) {
+        fprintf(stderr, PROG ": %s\n", cfg_error_format(&ce, why, sizeof why));
+        return 1;
+    }
+    if (cfg.mode != RIG_MODE_RIG) {
+        fprintf(stderr, PROG ": %s is not a rig-mode file (rig.mode = rig)\n", rig_path);
+        return 1;
+    }
+    rod_scene sc = cfg.scene;
+    if (cfg.sim.explicit_resolution) {
+        if (cfg.sim.nodes > 0) sc.nodes = cfg.sim.nodes;
+        if (cfg.sim.dt > 0) sc.dt = cfg.sim.dt;
+    }
+    double c0 = rig_calib_compress_mm(&cfg.calib, sc.length, start_dl);
+    rigsim_rails *rails = NULL;
+    if (rigsim_rails_start(&cfg, c0, &rf, &rails, why, sizeof why)) {
+        fprintf(stderr, PROG ": rails: %s\n", why);
+        return 1;
+    }
+    rigsim_camera *cam = NULL;
+    if (rigsim_camera_start(&cfg, &sc, start_dl, rails, serial, cfg.camera.calibration[0] ? cfg.camera.calibration : NULL,
+                            truth, &cf, &cam, why, sizeof why)) {
+        fprintf(stderr, PROG ": camera: %s\n", why);
+        rigsim_rails_stop(rails);
+        return 1;
+    }
+    printf("port: %s\ncamera: aravis:127.0.0.1 (serial %s)\ncalibration: %s\ntwin: N = %d, dt = %g s\nready\n",
+           rigsim_rails_port(rails), serial, cfg.camera.calibration, sc.nodes, sc.dt);
+    fflush(stdout);
+    volatile sig_atomic_t *stop = railsim_cli_catch_stop();
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_usr;
+    sigaction(SIGUSR1, &sa, NULL);
+    sigaction(SIGUSR2, &sa, NULL);
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    while (!*stop) {
+        struct timespec ts = {0, 10000000};
+        nanosleep(&ts, NULL);
+        if (cut_link) {
+            cut_link = 0;
+            rigsim_rails_cut_link(rails);
+        }
+        if (stop_camera) {
+            stop_camera = 0;
+            rigsim_camera_stop_sending(cam);
+        }
+        rigsim_camera_tick(cam);
+        struct timespec t;
+        clock_gettime(CLOCK_MONOTONIC, &t);
+        double el = (double)(t.tv_sec - t0.tv_sec) + 1e-9 * (double)(t.tv_nsec - t0.tv_nsec);
+        if (duration >= 0.0 && el >= duration) break;
+    }
+    printf("images sent: %ld, slowest twin step + render %.1f ms\n", rigsim_camera_frames(cam),
+           1e3 * rigsim_camera_max_fill_s(cam));
+    rigsim_camera_stop(cam);
+    rigsim_rails_stop(rails);
+    return 0;
+}

@@ -1,0 +1,156 @@
+/* trial_rail_poller.c: the rails' own polling thread in a live trial (see trial_rail_poller.h). */
+#include "trial_rail_poller.h"
+
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rail_pair.h"
+
+struct trial_rail_poller {
+    rail *compress, *shear;
+    rail_clock clock;
+    double period_s;
+    pthread_t thread;
+    pthread_mutex_t rails;   /* held during every call on the rails */
+    pthread_mutex_t lock;    /* guards what follows */
+    pthread_cond_t first;    /* the first poll is in */
+    int have, stop;
+    rail_status sc, ss;
+    double t_poll;
+    rail_err err;
+    char why[256];
+    double max_poll_s;
+    long polls;
+};
+
+static void *poll_main(void *arg)
+{
+    trial_rail_poller *p = arg;
+    for (;;) {
+        pthread_mutex_lock(&p->lock);
+        int stop = p->stop;
+        pthread_mutex_unlock(&p->lock);
+        if (stop) break;
+        rail_status sc, ss;
+        char why[256] = "";
+        /* The rails one at a time (rail_pair_judge), so a fault is published after its own round
+         * trip, before the other rail is read over what may be the same dead link; the other is
+         * then stopped at once (rail_pair_poll's rule). */
+        pthread_mutex_lock(&p->rails);
+        double t0 = rail_clock_now(p->clock);
+        memset(&sc, 0, sizeof sc);
+        memset(&ss, 0, sizeof ss);
+        rail *other = NULL;
+        rail_err e = rail_pair_judge(p->compress, rail_status_get(p->compress, &sc), &sc, why, sizeof why);
+        if (e != RAIL_OK) {
+            other = p->shear;
+            ss = p->ss;
+        } else {
+            e = rail_pair_judge(p->shear, rail_status_get(p->shear, &ss), &ss, why, sizeof why);
+            if (e != RAIL_OK) other = p->compress;
+        }
+        double t1 = rail_clock_now(p->clock);
+        pthread_mutex_unlock(&p->rails);
+        if (e != RAIL_OK) {
+            pthread_mutex_lock(&p->lock);
+            p->sc = sc;
+            p->ss = ss;
+            p->t_poll = t1;
+            p->err = e;
+            snprintf(p->why, sizeof p->why, "%s", why);
+            p->have = 1;
+            pthread_cond_broadcast(&p->first);
+            pthread_mutex_unlock(&p->lock);
+            pthread_mutex_lock(&p->rails);
+            rail_estop(other);
+            pthread_mutex_unlock(&p->rails);
+        }
+        pthread_mutex_lock(&p->lock);
+        p->sc = sc;
+        p->ss = ss;
+        p->t_poll = t1;
+        p->err = e;
+        if (e != RAIL_OK) snprintf(p->why, sizeof p->why, "%s", why);
+        if (t1 - t0 > p->max_poll_s) p->max_poll_s = t1 - t0;
+        p->polls++;
+        p->have = 1;
+        pthread_cond_broadcast(&p->first);
+        pthread_mutex_unlock(&p->lock);
+        if (e != RAIL_OK) break;
+        rail_clock_sleep(p->clock, p->period_s);
+    }
+    pthread_mutex_lock(&p->lock);
+    p->have = 1;
+    pthread_cond_broadcast(&p->first);
+    pthread_mutex_unlock(&p->lock);
+    return NULL;
+}
+
+trial_rail_poller *trial_rail_poller_start(rail *compress, rail *shear, double period_s, char *why, size_t why_len)
+{
+    if (!compress || !shear || !(period_s > 0.0)) {
+        snprintf(why, why_len, "rail poller: need two rails and a positive period");
+        return NULL;
+    }
+    trial_rail_poller *p = calloc(1, sizeof *p);
+    if (!p) {
+        snprintf(why, why_len, "rail poller: out of memory");
+        return NULL;
+    }
+    p->compress = compress;
+    p->shear = shear;
+    p->clock = rail_get_clock(compress);
+    p->period_s = period_s;
+    pthread_mutex_init(&p->rails, NULL);
+    pthread_mutex_init(&p->lock, NULL);
+    pthread_cond_init(&p->first, NULL);
+    if (pthread_create(&p->thread, NULL, poll_main, p) != 0) {
+        snprintf(why, why_len, "rail poller: the thread could not start");
+        pthread_cond_destroy(&p->first);
+        pthread_mutex_destroy(&p->lock);
+        pthread_mutex_destroy(&p->rails);
+        free(p);
+        return NULL;
+    }
+    return p;
+}
+
+rail_err trial_rail_poller_latest(trial_rail_poller *p, rail_status *sc, rail_status *ss, double *t_poll, char *why,
+                                  size_t why_len)
+{
+    pthread_mutex_lock(&p->lock);
+    while (!p->have) pthread_cond_wait(&p->first, &p->lock);
+    *sc = p->sc;
+    *ss = p->ss;
+    *t_poll = p->t_poll;
+    rail_err e = p->err;
+    if (e != RAIL_OK) snprintf(why, why_len, "%s", p->why);
+    pthread_mutex_unlock(&p->lock);
+    return e;
+}
+
+void trial_rail_poller_lock(trial_rail_poller *p) { pthread_mutex_lock(&p->rails); }
+void trial_rail_poller_unlock(trial_rail_poller *p) { pthread_mutex_unlock(&p->rails); }
+
+void trial_rail_poller_stats(trial_rail_poller *p, double *max_poll_s, long *polls)
+{
+    pthread_mutex_lock(&p->lock);
+    *max_poll_s = p->max_poll_s;
+    *polls = p->polls;
+    pthread_mutex_unlock(&p->lock);
+}
+
+void trial_rail_poller_stop(trial_rail_poller *p)
+{
+    if (!p) return;
+    pthread_mutex_lock(&p->lock);
+    p->stop = 1;
+    pthread_mutex_unlock(&p->lock);
+    pthread_join(p->thread, NULL);
+    pthread_cond_destroy(&p->first);
+    pthread_mutex_destroy(&p->lock);
+    pthread_mutex_destroy(&p->rails);
+    free(p);
+}

@@ -1,0 +1,35 @@
+/* trial_rail_poller.h: the rails polled on their own thread during a live trial.
+ *
+ * A real poll is a blocking round trip (Modbus RTU at 19200 baud: 15-25 ms per read; GRBL: a status
+ * report), so in rig mode the runner does not poll: this thread calls rail_pair_poll (both rails,
+ * rate-limited to each driver's poll_hz, a fault of either stops both) every `period_s` and
+ * publishes the latest pair of statuses with the time of the poll (a fault of the first rail is
+ * published before the second is read, and the other rail is then emergency-stopped). The runner reads them at once
+ * and reconstructs each frame's positions from them at the frame's own time (as before).
+ * The rails are not thread-safe: every other call on them (moves, stops) goes through
+ * trial_rail_poller_lock/unlock, which waits at most for one poll in flight.
+ * After a fault the thread stops polling (rail_pair_poll has already stopped the other rail) and
+ * the fault is what every later read returns. */
+#ifndef RIBBON_DAEMON_TRIAL_RAIL_POLLER_H
+#define RIBBON_DAEMON_TRIAL_RAIL_POLLER_H
+
+#include <stddef.h>
+
+#include "rail.h"
+
+typedef struct trial_rail_poller trial_rail_poller;
+
+/* Starts polling (the rails stay the caller's; nothing else may call them unlocked). */
+trial_rail_poller *trial_rail_poller_start(rail *compress, rail *shear, double period_s, char *why, size_t why_len);
+/* The latest statuses and the rail-clock time of the poll that gave them; RAIL_OK, or the fault
+ * (why names the rail). Waits for the first poll. */
+rail_err trial_rail_poller_latest(trial_rail_poller *p, rail_status *sc, rail_status *ss, double *t_poll, char *why,
+                                  size_t why_len);
+void trial_rail_poller_lock(trial_rail_poller *p);
+void trial_rail_poller_unlock(trial_rail_poller *p);
+/* Longest time one poll took (s) and polls made. */
+void trial_rail_poller_stats(trial_rail_poller *p, double *max_poll_s, long *polls);
+/* Stops the thread (the rails are left as they are: the runner stops them). NULL is a no-op. */
+void trial_rail_poller_stop(trial_rail_poller *p);
+
+#endif
