@@ -11,7 +11,8 @@ DEB_PACKAGES := cmake make gcc g++ pkg-config \
 	libopencv-dev libmicrohttpd-dev libjansson-dev libcmocka-dev libcairo2-dev \
 	libcurl4-openssl-dev libplplot-dev plplot-driver-cairo libsystemd-dev \
 	libaravis-dev libusb-1.0-0-dev \
-	clang libclang-rt-14-dev
+	clang libclang-rt-14-dev \
+	libopenmpi-dev openmpi-bin
 # clang with libclang-rt-14-dev: libFuzzer (libclang_rt.fuzzer-x86_64.a) and clang's sanitizer
 # runtimes for the fuzz build (clang-14 only recommends them, and deps skips recommends).
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)

@@ -19,12 +19,12 @@ int fuzz_sweep_csv_one(const uint8_t *data, size_t size)
         for (size_t k = 0; k < t.n; k++) {
             const sweep_row *r = &t.rows[k];
             if (r->kind != 'p' && r->kind != 'q' && r->kind != 'b') fuzz_fail("sweep_csv", "a row of no kind");
-            const double v[] = {r->phi, r->gamma, r->gamma_lo, r->gamma_hi, r->first_dw, r->first_dz, r->wall_s};
+            const double v[] = {r->phi, r->gamma, r->gamma_lo, r->gamma_hi, r->dl, r->first_dw, r->first_dz, r->wall_s};
             for (size_t i = 0; i < sizeof v / sizeof v[0]; i++)
                 if (!isfinite(v[i])) fuzz_fail("sweep_csv", "a non-finite number kept");
             if (!memchr(r->regime, '\0', sizeof r->regime) || !memchr(r->note, '\0', sizeof r->note))
                 fuzz_fail("sweep_csv", "unterminated text kept");
-            (void)sweep_table_find(&t, r->phi, r->gamma);
+            (void)sweep_table_find(&t, r->phi, r->gamma, r->dl);
         }
         sweep_table_free(&t);
     } else if (err[0] == '\0' || t.n != 0) {

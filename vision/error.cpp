@@ -57,6 +57,8 @@ extern "C" const char *vis_reason_str(vis_reason r)
     case VIS_REASON_CLAMP_NOT_FOUND: return "clamp not found";
     case VIS_REASON_LOST: return "ribbon lost";
     case VIS_REASON_OCCLUDED: return "ribbon occluded";
+    case VIS_REASON_NOISE: return "frame is noise";
+    case VIS_REASON_NO_RIBBON: return "no ribbon in the frame";
     }
     return "unknown reason";
 }

@@ -13,26 +13,34 @@
 
 namespace vis {
 
+double signal_reference(const cv::Mat &sig)
+{
+    // Ridge pixels are a small share of the frame: a high percentile is the ridge's level.
+    std::vector<float> vals;
+    vals.reserve((size_t)sig.cols * sig.rows / 4 + 1);
+    for (int y = 0; y < sig.rows; y += 2) {
+        const float *r = sig.ptr<float>(y);
+        for (int x = 0; x < sig.cols; x += 2)
+            if (r[x] > 0)
+                vals.push_back(r[x]);
+    }
+    if (vals.empty())
+        return 0.0;
+    const size_t q = std::min(vals.size() - 1, (size_t)(0.995 * vals.size()));
+    std::nth_element(vals.begin(), vals.begin() + (long)q, vals.end());
+    return vals[q];
+}
+
 bool path_init(const cv::Mat &sig, Pt a, Pt b, std::vector<Pt> &path)
 {
     const int W = sig.cols, H = sig.rows;
     auto inside = [&](Pt p) { return p.x >= 0 && p.y >= 0 && p.x <= W - 1 && p.y <= H - 1; };
     if (!inside(a) || !inside(b))
         return false;
-    // Reference level: the 99.5th percentile of positive signal (ridge pixels are a small share).
-    std::vector<float> vals;
-    vals.reserve((size_t)W * H / 16 + 1);
-    for (int y = 0; y < H; y += 2) {
-        const float *r = sig.ptr<float>(y);
-        for (int x = 0; x < W; x += 2)
-            if (r[x] > 0)
-                vals.push_back(r[x]);
-    }
-    if (vals.empty())
+    const double sref0 = signal_reference(sig);
+    if (!(sref0 > 0))
         return false;
-    const size_t q = std::min(vals.size() - 1, (size_t)(0.995 * vals.size()));
-    std::nth_element(vals.begin(), vals.begin() + (long)q, vals.end());
-    const double sref = std::max(1e-3, (double)vals[q]);
+    const double sref = std::max(1e-3, sref0);
     const double eps = 0.03;
 
     const size_t P = (size_t)W * H;

@@ -54,6 +54,28 @@ Exposure exposure_check(const cv::Mat &grey, double min_contrast)
     return Exposure::ok;
 }
 
+bool noise_check(const cv::Mat &grey, double min_contrast)
+{
+    // For independent pixels E|I(x+1) - I(x)| = 2 sigma / sqrt(pi) (Gaussian) or sqrt(2/3) sigma
+    // (uniform): about 0.8 sqrt(2) sigma. A frame with structure (backdrop, ribbon, jaws, blur)
+    // has neighbours far more alike than that. Every eighth row, every second pair.
+    double sd = 0, s1 = 0, s2 = 0, n = 0;
+    for (int y = 0; y < grey.rows; y += 8) {
+        const uint8_t *r = grey.ptr<uint8_t>(y);
+        for (int x = 0; x + 1 < grey.cols; x += 2) {
+            sd += std::abs((int)r[x + 1] - (int)r[x]);
+            s1 += r[x];
+            s2 += (double)r[x] * r[x];
+            n += 1;
+        }
+    }
+    if (n < 16)
+        return false;
+    const double var = s2 / n - (s1 / n) * (s1 / n);
+    const double sigma = var > 0 ? std::sqrt(var) : 0.0;
+    return sigma > 2.0 * std::max(min_contrast, 1.0) && sd / n > 0.6 * std::sqrt(2.0) * sigma;
+}
+
 bool polarity_is_dark(const cv::Mat &grey)
 {
     double h[256], total;

@@ -62,6 +62,18 @@ extern "C" vis_source *vis_source_open_video(const char *path, vis_error *err)
     VIS_GUARD(err, nullptr, { return wrap(vis::source_video_open(path, err)); })
 }
 
+extern "C" vis_source *vis_source_open_video_prefetch(const char *path, vis_error *err)
+{
+    if (!path) {
+        vis::fail(err, VIS_ERR_ARG, "vis_source_open_video_prefetch: NULL path");
+        return nullptr;
+    }
+    VIS_GUARD(err, nullptr, {
+        vis::Source *inner = vis::source_video_open(path, err);
+        return inner ? wrap(vis::source_prefetch_wrap(inner, 16)) : nullptr;
+    })
+}
+
 extern "C" vis_source *vis_source_open_images(const char *pattern, int first, vis_error *err)
 {
     if (!pattern) {

@@ -31,6 +31,8 @@ Source *source_video_open(const char *path, vis_error *err);
 Source *source_camera_open(const vis_camera_settings &s, vis_error *err);
 Source *source_aravis_open(const vis_camera_settings &s, vis_error *err);
 Source *source_images_open(const char *pattern, int first, vis_error *err);
+// Takes `inner` over and decodes it ahead on a thread into `depth` frames (source_prefetch.cpp).
+Source *source_prefetch_wrap(Source *inner, size_t depth);
 Source *source_synth_open(const vis_render_params &p, double fps, vis_shape_fn fn, void *user,
                           vis_error *err);
 }  // namespace vis

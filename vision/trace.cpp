@@ -128,10 +128,21 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
         const size_t q = nt / 4;
         std::nth_element(tmp.begin(), tmp.begin() + (long)q, tmp.begin() + (long)nt);
         const double base = tmp[q];
-        int kp = 0;
+        int kmax = 0;
         for (int k = 1; k < 2 * K + 1; k++)
-            if (prof[(size_t)k] > prof[(size_t)kp])
+            if (prof[(size_t)k] > prof[(size_t)kmax])
+                kmax = k;
+        // The ridge followed is the local maximum nearest the guide among those at least 60% as
+        // high as the strongest: where another branch of the ribbon (a loop, a crossing) enters the
+        // band, the strongest peak may be the other branch.
+        const double hmax = prof[(size_t)kmax] - base;
+        int kp = kmax;
+        for (int k = 1; k < 2 * K; k++) {
+            const float v = prof[(size_t)k];
+            if (v - base >= 0.6 * hmax && v >= prof[(size_t)k - 1] && v > prof[(size_t)k + 1] &&
+                std::abs(k - K) < std::abs(kp - K))
                 kp = k;
+        }
         const double peak = prof[(size_t)kp] - base;
         TraceSample ts{guide[i], s, peak, false};
         const double thr = base + 0.3 * peak;
@@ -140,11 +151,26 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
             lo--;
         while (hi < 2 * K && prof[(size_t)(hi + 1)] > thr)
             hi++;
+        // The other branch's extent, left out of the noise estimate below.
+        int lo2 = kmax, hi2 = kmax;
+        if (kmax != kp) {
+            const double thr2 = base + 0.3 * hmax;
+            while (lo2 > 0 && prof[(size_t)(lo2 - 1)] > thr2)
+                lo2--;
+            while (hi2 < 2 * K && prof[(size_t)(hi2 + 1)] > thr2)
+                hi2++;
+            if (lo2 <= hi && hi2 >= lo) {
+                // The two peaks are one blob (a shoulder of one ridge): keep the one peak.
+                lo2 = hi2 = -100;
+            }
+        } else {
+            lo2 = hi2 = -100;
+        }
         // Noise: spread of the profile outside the peak (1 px clear of it on each side).
         double ss = 0;
         int cnt = 0;
         for (int k = 0; k < 2 * K + 1; k++)
-            if (k < lo - 4 || k > hi + 4) {
+            if ((k < lo - 4 || k > hi + 4) && (k < lo2 - 4 || k > hi2 + 4)) {
                 const double dv = prof[(size_t)k] - base;
                 ss += dv * dv;
                 cnt++;

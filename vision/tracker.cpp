@@ -1,22 +1,29 @@
 // tracker.cpp: the tracker object and its per-frame pipeline (vis_tracker_process).
 //
 // Stages, in order (each in its own file, see tracker_impl.hpp):
-//   1. frame checks: unreadable, too dark, saturated -> a reason, not an error;
+//   1. frame checks: unreadable, too dark, saturated, noise (no structure) -> a reason, not an error;
 //   2. clamp points: from the calibration; the right one moves toward the principal point as the
 //      shear carries it away from the camera (magnification D / (D + shear));
 //   3. polarity fixed, or decided once and then kept;
 //   4. guide: the previous frame's smooth curve, traced on the raw (polarity-folded) grey levels in
 //      its bounding box, since each profile brings its own background level; or, when there is no
-//      previous curve or following it fails (first frame, snap-through, recovery after a lost
-//      frame), a geodesic path between the clamps on the black-hat/top-hat ridge signal of the whole
-//      frame, which removes lighting, clamps and large clutter before the path search;
+//      previous curve or following it fails or its length jumps (first frame, snap-through,
+//      recovery after a lost frame, a loop forming), a fresh acquisition on the black-hat/top-hat
+//      ridge signal of the whole frame (which removes lighting, clamps and large clutter): walks
+//      along the ridge from either clamp (path_walk.cpp: loops, crossings, tangents past
+//      vertical) and, if neither measures, the geodesic path between the clamps; every candidate
+//      is refined and measured and the best kept (pick_better: measured, then quality, then the
+//      longer of two comparable ones, since every wrong path is a shortcut);
 //   5. tracer passes (wide band, then narrow; three from a fresh path, two from the previous curve)
 //      refining the centreline to sub-pixel;
 //   6. metric curve: undistortion (if the calibration has intrinsics), then depth correction: the
 //      point at arc fraction xi is assumed at depth y = shear (3 xi^2 - 2 xi^3) (clamped ends keep
 //      their tangent along x, so the shear profile is flat at both clamps), and its pixel's ray is
 //      intersected with the plane at that depth, camera tilt included (view_model.cpp);
-//   7. local smooth fit, Delta Z, A, quality, reason.
+//   7. local smooth fit, Delta Z, A, quality, reason. With the length known, the measured
+//      (projected) length must lie within the bounds the shear allows (projected_length_bounds);
+//      quality falls outside them and beyond 8% the frame is lost, never a confident shortcut.
+//      Nothing ribbon-like along any path is NO_RIBBON.
 // All buffers live in the tracker and are reused from frame to frame.
 #include "tracker_impl.hpp"
 
@@ -30,6 +37,8 @@ namespace {
 struct Attempt {
     vis_reason reason = VIS_REASON_LOST;
     double quality = 0;
+    double valid_frac = 0;          // share of the arc with a clear ridge
+    double length_rel = 0;          // measured length / known length - 1 (0 when unknown)
     vis_measure m{};
     std::vector<vis::Pt> curve_px;  // smooth centreline, pixels
 };
@@ -40,10 +49,11 @@ struct vis_tracker {
     vis_calib c;
     int polarity = 0;                // 0 undecided, 1 dark, 2 light
     std::vector<vis::Pt> prev;       // previous smooth centreline, pixels (empty: none)
+    double prev_length = 0;          // its measured length, mm
     std::vector<vis::Pt> curve;      // last smooth centreline, pixels (for overlays)
     cv::Mat work, sig;
     vis::Workspace ws;               // per-frame buffers, reused
-    Attempt att[2];                  // following, fresh acquisition
+    Attempt att[4];                  // following; walks from the left, from the right; geodesic
     std::vector<vis::Pt> path;       // geodesic path scratch
     std::vector<cv::Point3d> obj3;   // redistortion scratch
     std::vector<cv::Point2d> img2;
@@ -155,6 +165,12 @@ namespace {
 
 using vis::Pt;
 
+// Relative distance of the measured length outside the bounds the known length allows: up to
+// LENGTH_SLACK costs nothing (the fit rounds the ends and creases: -1.6% on the unsheared DER ribbon
+// at 640 x 480), quality halves at twice that, and beyond LENGTH_TOL the frame is not measured.
+const double LENGTH_SLACK = 0.03;
+const double LENGTH_TOL = 0.08;
+
 struct Geometry {
     vis::ViewModel vm;  // image <-> plane model (principal point, scale, distance, tilt)
     Pt left, right;     // clamp points in the image at this frame's shear, pixels
@@ -167,6 +183,19 @@ double depth_at(const Geometry &g, double xi)
 {
     xi = std::min(1.0, std::max(0.0, xi));
     return g.shear * (3 * xi * xi - 2 * xi * xi * xi);
+}
+
+// Bounds on the length of the centreline's x-z projection (what the tracker measures) for a ribbon
+// of length l whose depth goes from 0 at the left clamp to `shear` at the right one, monotonically:
+// with y' = dy/ds, the projection is the integral of sqrt(1 - y'^2) with the integral of |y'| equal
+// to |shear|. The function is concave, so the projection is longest for a uniform slope,
+// l sqrt(1 - (shear/l)^2), and shortest with all the depth change in one straight stretch,
+// l - |shear|. (The rendered DER ribbon at 67 mm of shear on 200 mm: 153 mm, in [133, 189].)
+void projected_length_bounds(double l, double shear, double *lo, double *hi)
+{
+    const double sr = std::min(1.0, std::fabs(shear) / l);
+    *lo = l * (1.0 - sr);
+    *hi = l * std::sqrt(1.0 - sr * sr);
 }
 
 // Occlusion: the ribbon is seen leaving both clamps (most samples valid in the first and last tenth)
@@ -194,6 +223,8 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
 {
     at.reason = VIS_REASON_LOST;
     at.quality = 0;
+    at.valid_frac = 0;
+    at.length_rel = 0;
     at.m = vis_measure{};
     const vis_track_params &p = t->p;
     vis::Workspace &ws = t->ws;
@@ -205,7 +236,9 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
     for (int pass = 0; pass < passes; pass++) {
         guide.front() = g.left;
         guide.back() = g.right;
-        vis::resample(guide, p.step_px, &len_px, ws.cum, ws.rs);
+        // Following, the first pass only refines the guide: every second sample is plenty there.
+        const double step = pass + 1 < passes && passes == 2 ? 2.0 * p.step_px : p.step_px;
+        vis::resample(guide, step, &len_px, ws.cum, ws.rs);
         if (len_px < 4 * p.end_margin_px + 8 || ws.rs.size() < 8) {
             at.reason = VIS_REASON_LOST;
             return;
@@ -218,6 +251,7 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
         if (samples.size() < 8 || nv < samples.size() / 2) {
             at.reason = occluded(samples) ? VIS_REASON_OCCLUDED : VIS_REASON_LOST;
             at.quality = samples.empty() ? 0 : (double)nv / samples.size();
+            at.valid_frac = at.quality;
             return;
         }
         // Next guide: the clamp points and the valid samples, lightly smoothed.
@@ -236,6 +270,7 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
     for (const auto &s : samples)
         nv += s.valid;
     const double valid_frac = (double)nv / samples.size();
+    at.valid_frac = valid_frac;
 
     // Metric points: clamp, valid samples, clamp.
     std::vector<Pt> &px = ws.px, &und = ws.und;
@@ -321,14 +356,47 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
             at.reason = VIS_REASON_LOST;  // a point the camera model cannot place
             return;
         }
-    // A curve much longer or shorter than the ribbon is not the ribbon (a path through clutter).
-    const bool bad_length = p.length_mm > 0 && (fr.length > 1.3 * p.length_mm || fr.length < 0.3 * p.length_mm);
+    // A curve longer or shorter than the ribbon is not the ribbon: a shortcut across a loop or a
+    // crossing, a path through clutter or along a clamp edge. With the length known, quality falls
+    // with the mismatch (half at 4%) and beyond LENGTH_TOL the frame is not measured.
+    at.length_rel = 0.0;
+    if (p.length_mm > 0) {
+        double lo, hi;
+        projected_length_bounds(p.length_mm, g.shear, &lo, &hi);
+        at.length_rel = fr.length < lo ? fr.length / lo - 1.0 : fr.length > hi ? fr.length / hi - 1.0 : 0.0;
+        const double r = std::max(0.0, std::fabs(at.length_rel) - LENGTH_SLACK) / LENGTH_SLACK;
+        at.quality /= 1.0 + r * r;
+        at.m.quality = at.quality;
+    }
+    const bool bad_length = p.length_mm > 0 && std::fabs(at.length_rel) > LENGTH_TOL;
     if (bad_length || !std::isfinite(at.m.dz) || !std::isfinite(at.m.a))
         at.reason = VIS_REASON_LOST;
     else if (occluded(samples))
         at.reason = VIS_REASON_OCCLUDED;
     else if (at.quality < p.min_quality)
         at.reason = VIS_REASON_LOST;
+}
+
+// The better of two attempts: a measured one over one that is not; between two of the same kind,
+// the higher quality (which already holds the length check and the residual).
+// Between two measured ones of comparable quality (within 20%), the longer: a shortcut (across a
+// loop, through a crossing, the wrong branch) is always shorter than the ribbon, and a longer path
+// that is ridge all along (the quality says so) is ribbon.
+Attempt *pick_better(Attempt *a, Attempt *b)
+{
+    if (!a)
+        return b;
+    const bool ma = a->reason == VIS_REASON_NONE, mb = b->reason == VIS_REASON_NONE;
+    if (ma != mb)
+        return ma ? a : b;
+    if (ma) {
+        const double la = a->m.length_mm, lb = b->m.length_mm;
+        if (b->quality >= 0.8 * a->quality && lb > 1.02 * la)
+            return b;
+        if (a->quality >= 0.8 * b->quality && la > 1.02 * lb)
+            return a;
+    }
+    return b->quality > a->quality ? b : a;
 }
 
 }  // namespace
@@ -354,6 +422,11 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
         const vis::Exposure ex = vis::exposure_check(grey, t->p.min_contrast);
         if (ex != vis::Exposure::ok) {
             measure_clear(out, ex == vis::Exposure::dark ? VIS_REASON_DARK : VIS_REASON_SATURATED);
+            vis::ok(err);
+            return VIS_OK;
+        }
+        if (vis::noise_check(grey, t->p.min_contrast)) {
+            measure_clear(out, VIS_REASON_NOISE);
             vis::ok(err);
             return VIS_OK;
         }
@@ -394,21 +467,54 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
             track_from(t, g, t->prev, 2, t->att[0]);  // the previous curve is close: two passes
             best = &t->att[0];
         }
-        if (!best || best->reason != VIS_REASON_NONE) {
+        bool any_path = best != nullptr;
+        // A followed curve whose length changed from the last frame's may have slid onto a
+        // shortcut (a loop forming below a crossing): look from scratch as well.
+        const bool length_jump = best && best->reason == VIS_REASON_NONE && t->prev_length > 0 &&
+                                 std::fabs(best->m.length_mm / t->prev_length - 1.0) > 0.02;
+        if (!best || best->reason != VIS_REASON_NONE || length_jump) {
+            // Fresh acquisition: the ridge signal of the whole frame, then candidate paths (walks
+            // from either clamp, the geodesic), each refined and measured; the best measured one
+            // wins (see pick_better). The previous curve never limits where the ribbon can be.
             vis::ridge_signal(grey, dark, r, full, t->work, t->sig);
             t->trace_img = t->sig;
             t->trace_invert = false;
-            if (vis::path_init(t->sig, g.left, g.right, t->path)) {
+            const double sref = vis::signal_reference(t->sig);
+            vis::WalkParams wp;
+            wp.step = 2.0;
+            wp.half_band = 0.5 * t->p.ribbon_max_px + 2.0;
+            wp.threshold = std::max(0.5 * t->p.min_contrast, 0.25 * sref);
+            const double len_px = t->p.length_mm > 0 ? t->p.length_mm * g.vm.ppmm : 0.0;
+            wp.max_len = len_px > 0 ? 1.6 * len_px : 3.0 * (grey.cols + grey.rows);
+            wp.max_gap = std::max(12.0, len_px > 0 ? 0.06 * len_px : 0.03 * (grey.cols + grey.rows));
+            wp.arrive = 2.0 * wp.step + 1.0;
+            bool walked = false;
+            for (int dir = 0; dir < 2 && sref > 0; dir++) {
+                const bool okw = dir == 0 ? vis::path_walk(t->sig, g.left, g.right, wp, t->path)
+                                          : vis::path_walk(t->sig, g.right, g.left, wp, t->path);
+                if (!okw)
+                    continue;
+                if (dir == 1)
+                    std::reverse(t->path.begin(), t->path.end());
+                any_path = true;
+                vis::smooth(t->path, 2, t->ws.smooth_tmp);
+                Attempt &w = t->att[1 + dir];
+                track_from(t, g, t->ws.smooth_tmp, 3, w);
+                best = pick_better(best, &w);
+                walked = walked || w.reason == VIS_REASON_NONE;
+            }
+            if (!walked && vis::path_init(t->sig, g.left, g.right, t->path)) {
+                any_path = true;
                 vis::smooth(t->path, 3, t->ws.smooth_tmp);
-                Attempt &fresh = t->att[1];
+                Attempt &fresh = t->att[3];
                 track_from(t, g, t->ws.smooth_tmp, 3, fresh);
-                if (!best || fresh.reason == VIS_REASON_NONE ||
-                    (best->reason != VIS_REASON_NONE && fresh.quality > best->quality))
-                    best = &fresh;
+                best = pick_better(best, &fresh);
             }
         }
-        if (!best) {
-            measure_clear(out, VIS_REASON_LOST);
+        if (best && best->reason == VIS_REASON_LOST && best->valid_frac < 0.25)
+            any_path = false;  // nothing ribbon-like along any path
+        if (!best || !any_path) {
+            measure_clear(out, VIS_REASON_NO_RIBBON);
             t->curve.clear();
             vis::ok(err);
             return VIS_OK;
@@ -417,6 +523,7 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
             *out = best->m;
             out->reason = VIS_REASON_NONE;
             t->prev = best->curve_px;
+            t->prev_length = best->m.length_mm;
             t->curve = best->curve_px;
             if (t->polarity == 0)
                 t->polarity = dark ? 1 : 2;  // keep the polarity once the ribbon is found

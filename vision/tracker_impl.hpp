@@ -1,6 +1,7 @@
 // tracker_impl.hpp: private stages of the tracker (one file each), in pipeline order:
 //   signal.cpp     frame -> ridge signal image (background removed, polarity folded in)
 //   path_init.cpp  ridge signal -> a first pixel path between the clamps (no previous curve)
+//   path_walk.cpp  ridge signal -> the same by walking the ridge (loops, crossings)
 //   trace.cpp      image + guide curve -> sub-pixel centreline samples along the arc
 //   view_model.cpp pixels <-> millimetres in the ribbon's plane (depth from the shear, camera pitch)
 //   curve_fit.cpp  samples -> smooth metric curve -> Delta Z, A, midpoint
@@ -19,6 +20,9 @@ using Pt = cv::Point2d;
 enum class Exposure { ok, dark, saturated };
 // Global exposure check on an 8-bit grey frame.
 Exposure exposure_check(const cv::Mat &grey, double min_contrast);
+// True when the frame is noise: neighbouring pixels as different as any two (no structure) and
+// the spread well above the weakest contrast followed.
+bool noise_check(const cv::Mat &grey, double min_contrast);
 // Decide the polarity from the histogram: true when the ribbon is darker than the background.
 bool polarity_is_dark(const cv::Mat &grey);
 // Ridge signal in `roi` of `grey` (black-hat or top-hat with a square of side 2 r + 1), CV_32F.
@@ -29,6 +33,21 @@ void ridge_signal(const cv::Mat &grey, bool dark, int r, cv::Rect roi, cv::Mat &
 // Cheapest 8-connected path from a to b where a step costs length / (eps + S / s_ref). Pixels of the
 // full image (sig covers it). Returns false when either end is outside or no path exists.
 bool path_init(const cv::Mat &sig, Pt a, Pt b, std::vector<Pt> &path);
+// The 99.5th percentile of the positive signal (every second pixel of every second row), 0 if none.
+double signal_reference(const cv::Mat &sig);
+
+// --- path_walk.cpp
+struct WalkParams {
+    double step;       // px between walk points (2)
+    double half_band;  // px either side of the predicted point searched for the ridge
+    double threshold;  // weakest ridge signal followed
+    double max_gap;    // px of arc bridged without a ridge
+    double max_len;    // px: longer walks fail
+    double arrive;     // px: within this of the other clamp point the walk is done
+};
+// Walk the ridge of `sig` from clamp point a to clamp point b (see path_walk.cpp). False when the
+// walk does not arrive.
+bool path_walk(const cv::Mat &sig, Pt a, Pt b, const WalkParams &wp, std::vector<Pt> &path);
 
 // --- trace.cpp
 struct TraceSample {

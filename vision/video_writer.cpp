@@ -64,6 +64,18 @@ extern "C" vis_video_writer *vis_video_writer_open(const char *path, int width_p
     })
 }
 
+/* The raw writer asked for by name (the vision replays' benchmark and tests): an .avi path, grey. */
+extern "C" vis_video_writer *vis_video_writer_open_y800(const char *path, int width_px, int height_px,
+                                                        double fps, vis_error *err)
+{
+    const size_t len = path ? std::strlen(path) : 0;
+    if (len < 4 || std::strcmp(path + len - 4, ".avi") != 0) {
+        vis::fail(err, VIS_ERR_ARG, "video %s: raw Y800 output needs an .avi name", path ? path : "(null)");
+        return nullptr;
+    }
+    return vis_video_writer_open(path, width_px, height_px, 1, fps, err);
+}
+
 extern "C" vis_status vis_video_writer_write(vis_video_writer *v, const vis_frame *f, vis_error *err)
 {
     if (!v || !f)

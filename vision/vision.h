@@ -169,6 +169,10 @@ vis_status vis_renderer_draw(vis_renderer *r, const vis_shape *shape, vis_frame 
 typedef struct vis_video_writer vis_video_writer;
 vis_video_writer *vis_video_writer_open(const char *path, int width_px, int height_px, int channels,
                                         double fps, vis_error *err);
+/* Raw 8-bit grey Y800 in AVI (.avi): bit-exact too, and no CPU to encode or decode (what a rig
+ * recording in real time would write). Same write and close calls. */
+vis_video_writer *vis_video_writer_open_y800(const char *path, int width_px, int height_px, double fps,
+                                             vis_error *err);
 vis_status vis_video_writer_write(vis_video_writer *w, const vis_frame *f, vis_error *err);
 void vis_video_writer_close(vis_video_writer *w);
 
@@ -209,6 +213,10 @@ typedef int (*vis_shape_fn)(void *user, int index, vis_shape *shape);
 typedef struct vis_source vis_source;
 vis_source *vis_source_open_camera(const vis_camera_settings *s, vis_error *err);
 vis_source *vis_source_open_video(const char *path, vis_error *err);
+/* The same video decoded ahead on a thread of its own (up to 16 frames), so decoding runs while the
+ * caller tracks: the frames, their order, times and errors are exactly vis_source_open_video's
+ * (vision/source_prefetch.cpp). For replays and `ribbonctl track`, which use every core this way. */
+vis_source *vis_source_open_video_prefetch(const char *path, vis_error *err);
 /* printf-style pattern with one integer conversion, e.g. "dir/frame_%04d.png", starting at `first`. */
 vis_source *vis_source_open_images(const char *pattern, int first, vis_error *err);
 vis_source *vis_source_open_synthetic(const vis_render_params *p, double fps, vis_shape_fn fn,
@@ -294,7 +302,9 @@ typedef enum vis_reason {
     VIS_REASON_SATURATED,      /* the frame is (nearly) saturated: no contrast */
     VIS_REASON_CLAMP_NOT_FOUND,/* the clamp points are unknown or outside the image */
     VIS_REASON_LOST,           /* no ribbon-like ridge joins the clamps */
-    VIS_REASON_OCCLUDED        /* the ridge is broken over part of its length */
+    VIS_REASON_OCCLUDED,       /* the ridge is broken over part of its length */
+    VIS_REASON_NOISE,          /* the frame is noise: neighbouring pixels unrelated, no structure */
+    VIS_REASON_NO_RIBBON       /* no ribbon-like ridge leaves the clamps anywhere in the frame */
 } vis_reason;
 const char *vis_reason_str(vis_reason r);
 
@@ -351,6 +361,15 @@ void vis_tracker_skip(vis_tracker *t, vis_measure *out);
 size_t vis_tracker_curve(const vis_tracker *t, double *uv, size_t max);
 /* Forget the previous curve (the next frame is searched from scratch). */
 void vis_tracker_reset(vis_tracker *t);
+
+/* Track every frame of the video at `path` (up to max_frames) with `t`, in order, into out[0..]:
+ * decoding ahead on another thread while this one tracks (vis_source_open_video_prefetch;
+ * `threads` 1 = the plain serial loop, any other value the prefetching one). out[i] is exactly what vis_tracker_process would give on frame i in a serial loop.
+ * shear_mm[i] (NULL or i >= n_shear: 0) is frame i's shear. *n_frames gets the frames done; a
+ * damaged video returns its error after the frames before the damage (vision/track_video.cpp). */
+vis_status vis_track_video(const char *path, vis_tracker *t, const double *shear_mm, size_t n_shear,
+                           int threads, vis_measure *out, size_t max_frames, size_t *n_frames,
+                           vis_error *err);
 
 /* Draw the tracked centreline, midpoint and values over `in` into `out` (3-channel). */
 vis_status vis_overlay_draw(const vis_frame *in, const vis_tracker *t, const vis_measure *m, int frame,

@@ -168,12 +168,17 @@ plot_status plot_branches_panels(const char *png_path, const plot_branch_data *p
 
 /* plot_sweep: the regime map of a parameter sweep (ribbon-sim sweep --plot). Each classified
  * point is a marker: circle asymmetric (pitchfork first), square symmetric (saddle-node first),
- * cross otherwise (no snap, failed). Located boundaries are lines (dark grey, solid or dashed),
- * optionally with small diamonds at their points. Axes and their meaning are the caller's: phi
- * and Gamma for a phase diagram, Gamma and the first instability's Delta W for one phi. */
+ * triangle no snap, cross failed (PLOT_REGIME_UNKNOWN); a point where no stable state was found
+ * is a grey diamond, with a grey bar up to where the state was last found. Located boundaries
+ * are lines (dark grey, solid or dashed), optionally with small diamonds at their points. With
+ * legend, a legend on the right names every kind of marker drawn and each line's text. Axes and
+ * their meaning are the caller's: phi and Gamma for a phase diagram, Gamma and the first
+ * instability's Delta W for one phi. */
 typedef struct plot_sweep_point {
     double x, y;        /* NaN in either: the point is skipped */
     plot_regime regime;
+    bool no_state;      /* no stable state found here: a grey diamond (regime ignored) */
+    double bar_to;      /* with no_state: a grey bar from y to bar_to (NaN or y: none) */
 } plot_sweep_point;
 
 typedef struct plot_sweep_line {
@@ -181,6 +186,7 @@ typedef struct plot_sweep_line {
     size_t n;
     bool dashed;         /* dashed (a boundary between other regimes) or solid */
     bool marked;         /* a small diamond at every point */
+    const char *legend;  /* the legend's text for this kind of line (NULL: not in the legend) */
 } plot_sweep_line;
 
 typedef struct plot_sweep_data {
@@ -192,6 +198,7 @@ typedef struct plot_sweep_data {
     const plot_sweep_line *lines;
     size_t n_lines;
     int width_px, height_px;         /* 0 = default */
+    bool legend;                     /* a legend on the right of the axes */
 } plot_sweep_data;
 
 /* Nothing to draw, span [0, 1] x [0, 1], default size. */

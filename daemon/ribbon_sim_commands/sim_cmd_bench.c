@@ -21,6 +21,7 @@
 #include "rod_protocol.h"
 #include "rod_route.h"
 #include "rod_solver.h"
+#include "sim_bench_sweep.h"
 #include "sim_cmd.h"
 #include "sim_opts.h"
 
@@ -34,11 +35,13 @@
 #include <time.h>
 
 static const char usage[] =
-    "usage: ribbon-sim bench --scene FILE [--set section.key=value ...] [--json]\n"
+    "usage: ribbon-sim bench --scene FILE [--set section.key=value ...] [--sweep] [--json]\n"
     "  Measures the scene (the paper's Gamma = 0.13 scene is the reference:\n"
     "  config/scenes/paper-gamma013.ini): banded vs dense Newton iteration, the fixed-step and\n"
     "  fast predictions, the continuation (continue_wall_s), peak memory. Prints one line (one JSON object with --json). Takes about\n"
-    "  a minute.\n";
+    "  a minute. --sweep instead: the 10 x 10 sweep in one process against `mpirun -np 2`\n"
+    "  (sweep_mpi_efficiency) and with a route per point against continued upper states\n"
+    "  (sweep_seed_saving); several minutes (--set mesh.nodes=61 for the README's mesh).\n";
 
 static double now(void)
 {
@@ -122,11 +125,18 @@ static int predict(const rod_scene *sc, int fast, rod_prediction *p)
 
 int sim_cmd_bench(int argc, char **argv)
 {
+    int sweep = 0, out = 1;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--sweep")) sweep = 1;
+        else argv[out++] = argv[i];
+    }
+    argc = out;
     sim_opts o;
     int rc = sim_opts_parse(argc, argv, "json", usage, &o);
     if (rc) return rc == 1 ? 0 : 2;
     rod_scene sc;
     if (!sim_opts_load_scene(&o, &sc)) return 2;
+    if (sweep) return sim_bench_sweep(o.scene, o.sets, o.nsets, o.json);
     double banded = 0, dense = 0, dense_ldlt = 0;
     rod_prediction fixed, fast;
     if (!time_newton(&sc, &banded, &dense, &dense_ldlt)) return 1;

@@ -292,6 +292,8 @@ static const char *reason_id(vis_reason r)
     case VIS_REASON_CLAMP_NOT_FOUND: return "clamp_not_found";
     case VIS_REASON_LOST: return "lost";
     case VIS_REASON_OCCLUDED: return "occluded";
+    case VIS_REASON_NOISE: return "noise";
+    case VIS_REASON_NO_RIBBON: return "no_ribbon";
     }
     return "unknown";
 }
@@ -404,7 +406,7 @@ static int track_open(const track_cli *c, const track_cal *tc, track_run *r)
     vis_error err;
     /* A name with a printf conversion is an image sequence ("dir/frame_%04d.png", from 0). */
     r->src = strchr(c->video, '%') ? vis_source_open_images(c->video, 0, &err)
-                                   : vis_source_open_video(c->video, &err);
+                                   : vis_source_open_video_prefetch(c->video, &err);
     if (!r->src) {
         snprintf(r->failure, sizeof r->failure, "%s", err.message);
         return 1;

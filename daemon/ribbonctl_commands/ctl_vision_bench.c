@@ -15,8 +15,16 @@
  * what one thread could do at best. decode_threads counts the threads that took at least a tenth
  * of the CPU time while decoding (from /proc/self/task; -1 where that cannot be read).
  * Issue 5's targets (one thread): track_fps >= 500, decode_track_fps >= 150. Rendering is not
- * timed. */
+ * timed. Then (issue 14) one line per recording format ("bench":"vision_video", FFV1 .mkv and raw
+ * Y800 .avi of the same frames): decode + track through vis_track_video serially on one pinned
+ * CPU and with decoding ahead on its own thread, the speed-up, whether every frame's result is
+ * identical, the CPU ms of decoding and of tracking apart and the bound overlapping them gives on
+ * two free cores (the machine is shared, so wall clock alone says little), the load average; and
+ * one line for the tracker alone on a 1280 x 256 ROI on one pinned CPU ("bench":"vision_roi",
+ * target 1000 fps). docs/vision-acquisition-and-replay-speed.md has the measured figures. */
+#define _GNU_SOURCE /* sched_setaffinity: the one-core figures run pinned to one CPU */
 #include <math.h>
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -124,6 +132,170 @@ static void bench_shape(double *pos, double *nrm, double asym)
         nrm[3 * i + 1] = 0.0;
         nrm[3 * i + 2] = 1.0 / l;
     }
+}
+
+/* Pin the calling thread (and the threads it creates from now on) to its first allowed CPU;
+ * `saved` gets the old mask for unpin. Returns 0 when pinned. */
+static int pin_one_core(cpu_set_t *saved)
+{
+    if (sched_getaffinity(0, sizeof *saved, saved) != 0)
+        return -1;
+    for (int c = 0; c < CPU_SETSIZE; c++)
+        if (CPU_ISSET(c, saved)) {
+            cpu_set_t one;
+            CPU_ZERO(&one);
+            CPU_SET(c, &one);
+            return sched_setaffinity(0, sizeof one, &one);
+        }
+    return -1;
+}
+
+static void unpin(const cpu_set_t *saved) { sched_setaffinity(0, sizeof *saved, saved); }
+
+/* Decode + track of one recording (issue 14): the serial loop on one pinned core, then
+ * vis_track_video on every core; one JSON line with both rates, the speed-up and whether every
+ * frame's result is identical. */
+static int bench_video_format(const char *path, const char *format, vis_frame **mem, int frames, int w, int h,
+                              const vis_calib *cal, const vis_track_params *tp, vis_error *err)
+{
+    vis_video_writer *vw = strcmp(format, "y800") == 0 ? vis_video_writer_open_y800(path, w, h, 30.0, err)
+                                                        : vis_video_writer_open(path, w, h, 1, 30.0, err);
+    if (!vw)
+        return 1;
+    for (int i = 0; i < frames; i++)
+        if (vis_video_writer_write(vw, mem[i], err) != VIS_OK) {
+            vis_video_writer_close(vw);
+            return 1;
+        }
+    vis_video_writer_close(vw);
+    vis_measure *a = calloc((size_t)frames, sizeof *a), *b = calloc((size_t)frames, sizeof *b);
+    vis_tracker *t1 = vis_tracker_create(tp, cal, err), *t2 = vis_tracker_create(tp, cal, err);
+    int rc = 1;
+    size_t na = 0, nb = 0;
+    cpu_set_t saved;
+    if (!a || !b || !t1 || !t2)
+        goto out;
+    const int pinned = pin_one_core(&saved) == 0;
+    /* The serial loop by hand, pinned, with the process CPU time of decoding (libavcodec's threads
+     * included) and of tracking apart: on a loaded machine the wall clock says little, and
+     * max(decode, track) / (decode + track) is what overlapping them can give at best. */
+    double dec_cpu = 0, trk_cpu = 0;
+    double t0 = now_s();
+    vis_source *src = vis_source_open_video(path, err);
+    vis_frame *f = vis_frame_alloc(8, 8, 1, err);
+    vis_status sa = src && f ? VIS_OK : VIS_ERR_IO;
+    for (size_t i = 0; sa == VIS_OK && i < (size_t)frames; i++) {
+        const double c0 = cpu_s();
+        sa = vis_source_read(src, f, NULL, err);
+        const double c1 = cpu_s();
+        dec_cpu += c1 - c0;
+        if (sa == VIS_ERR_END) {
+            sa = VIS_OK;
+            break;
+        }
+        if (sa == VIS_OK)
+            sa = vis_tracker_process(t1, f, 0.0, &a[i], err);
+        trk_cpu += cpu_s() - c1;
+        if (sa == VIS_OK)
+            na = i + 1;
+    }
+    vis_source_close(src);
+    vis_frame_free(f);
+    const double serial_s = now_s() - t0;
+    if (pinned)
+        unpin(&saved);
+    if (sa != VIS_OK)
+        goto out;
+    t0 = now_s();
+    if (vis_track_video(path, t2, NULL, 0, 0, b, (size_t)frames, &nb, err) != VIS_OK)
+        goto out;
+    const double par_s = now_s() - t0;
+    int identical = na == nb;
+    for (size_t i = 0; identical && i < na; i++)
+        identical = a[i].reason == b[i].reason && a[i].dz == b[i].dz && a[i].a == b[i].a &&
+                    a[i].quality == b[i].quality && a[i].length_mm == b[i].length_mm &&
+                    a[i].mid_px[0] == b[i].mid_px[0] && a[i].mid_px[1] == b[i].mid_px[1];
+    const long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    double la[3] = {-1, -1, -1};
+    if (getloadavg(la, 3) < 1)
+        la[0] = -1;
+    const double dms = na ? 1e3 * dec_cpu / (double)na : 0, tms = na ? 1e3 * trk_cpu / (double)na : 0;
+    const double mx = dms > tms ? dms : tms;
+    printf("{\"bench\":\"vision_video\",\"format\":\"%s\",\"width\":%d,\"height\":%d,\"frames\":%zu,"
+           "\"one_core_pinned\":%s,\"fps_one_core\":%.1f,\"fps_all_cores\":%.1f,\"cores\":%ld,"
+           "\"speedup\":%.2f,\"identical\":%s,\"decode_cpu_ms\":%.2f,\"track_cpu_ms\":%.2f,"
+           "\"fps_one_core_cpu\":%.1f,\"fps_overlap_bound_cpu\":%.1f,\"speedup_bound_cpu\":%.2f,"
+           "\"load_avg\":%.1f,\"target_speedup\":1.8,\"target_fps\":150}\n",
+           format, w, h, nb, pinned ? "true" : "false", (double)na / serial_s, (double)nb / par_s, cores,
+           serial_s / par_s * (double)nb / (double)(na ? na : 1), identical ? "true" : "false", dms, tms,
+           dms + tms > 0 ? 1e3 / (dms + tms) : 0.0, mx > 0 ? 1e3 / mx : 0.0, mx > 0 ? (dms + tms) / mx : 0.0,
+           la[0]);
+    rc = 0;
+out:
+    free(a);
+    free(b);
+    vis_tracker_free(t1);
+    vis_tracker_free(t2);
+    remove(path);
+    return rc;
+}
+
+/* The tracker alone on a 1280 x 256 region of interest (a high-speed camera's), one pinned core. */
+static int bench_roi(const vis_render_params *rp0, vis_error *err)
+{
+    enum { RW = 1280, RH = 256, RN = 300 };
+    static double pos[3 * BENCH_PTS], nrm[3 * BENCH_PTS];
+    vis_shape sh = {BENCH_PTS, pos, nrm, 0.005, 0.001};
+    vis_render_params rp = *rp0;
+    rp.camera.width_px = RW;
+    rp.camera.height_px = RH;
+    if (vis_camera_fit(&rp.camera, -0.02, 0.18, -0.01, 0.03, 0.95, err) != VIS_OK)
+        return 1;
+    vis_renderer *r = vis_renderer_create(&rp, err);
+    vis_frame *fr[8] = {0};
+    vis_tracker *t = NULL;
+    int rc = 1, tracked = 0;
+    if (!r)
+        return 1;
+    for (int i = 0; i < 8; i++) {
+        bench_shape(pos, nrm, 0.3 * i / 8.0);
+        for (int k = 0; k < 3 * BENCH_PTS; k += 3)
+            pos[k + 2] *= 0.3; /* a flat arch: 1280 x 256 frames a low ribbon */
+        if (!(fr[i] = vis_frame_alloc(RW, RH, 1, err)) || vis_renderer_draw(r, &sh, fr[i], NULL, err) != VIS_OK)
+            goto out;
+    }
+    vis_calib cal = vis_calib_default();
+    const double l0[3] = {0, 0, 0}, r0[3] = {0.16, 0, 0};
+    vis_camera_project(&rp.camera, l0, cal.clamp_left_px, NULL);
+    vis_camera_project(&rp.camera, r0, cal.clamp_right_px, NULL);
+    cal.px_per_mm = rp.camera.focal_px / rp.camera.distance_m / 1000.0;
+    vis_track_params tp = vis_track_params_default();
+    if (!(t = vis_tracker_create(&tp, &cal, err)))
+        goto out;
+    cpu_set_t saved;
+    const int pinned = pin_one_core(&saved) == 0;
+    vis_measure m;
+    /* Frames cycle up and back through the 8 shapes: consecutive frames differ as in a video. */
+    const double t0 = now_s(), c0 = cpu_s();
+    for (int i = 0; i < RN; i++) {
+        const int j = i % 14 < 8 ? i % 14 : 14 - i % 14;
+        if (vis_tracker_process(t, fr[j], 0.0, &m, err) != VIS_OK)
+            goto out;
+        tracked += m.reason == VIS_REASON_NONE;
+    }
+    const double dt = now_s() - t0, dc = cpu_s() - c0;
+    if (pinned)
+        unpin(&saved);
+    printf("{\"bench\":\"vision_roi\",\"width\":%d,\"height\":%d,\"frames\":%d,\"tracked\":%d,"
+           "\"one_core_pinned\":%s,\"track_fps\":%.1f,\"track_cpu_fps\":%.1f,\"target_track_fps\":1000}\n",
+           RW, RH, RN, tracked, pinned ? "true" : "false", RN / dt, dc > 0 ? RN / dc : 0.0);
+    rc = 0;
+out:
+    for (int i = 0; i < 8; i++)
+        vis_frame_free(fr[i]);
+    vis_tracker_free(t);
+    vis_renderer_free(r);
+    return rc;
 }
 
 int ctl_vision_bench_main(int argc, char **argv)
@@ -249,6 +421,16 @@ int ctl_vision_bench_main(int argc, char **argv)
            w, h, frames, tracked, frames / track_s, track_cpu > 0 ? frames / track_cpu : 0.0,
            frames / dec_s, dec_cpu > 0 ? frames / dec_cpu : 0.0, dec_threads, decoded / dt_s,
            dt_cpu > 0 ? decoded / dt_cpu : 0.0);
+    /* Issue 14: decode + track per format on one core and on every core, and the ROI tracker. */
+    char vpath[1100];
+    snprintf(vpath, sizeof vpath, "%s/ribbon-vision-bench-%ld-p.mkv", dir && dir[0] ? dir : "/tmp", (long)getpid());
+    if (bench_video_format(vpath, "ffv1", mem, frames, w, h, &cal, &tp, &err))
+        goto out;
+    snprintf(vpath, sizeof vpath, "%s/ribbon-vision-bench-%ld-p.avi", dir && dir[0] ? dir : "/tmp", (long)getpid());
+    if (bench_video_format(vpath, "y800", mem, frames, w, h, &cal, &tp, &err))
+        goto out;
+    if (bench_roi(&rp, &err))
+        goto out;
     rc = 0;
 out:
     if (rc)

@@ -207,7 +207,7 @@ int trial_replay_from_files(const rig_config *cfg, trial_replay **out, char *why
         goto fail;
     }
     snprintf(r->video, sizeof r->video, "%s", cfg->replay.video);
-    vs = vis_source_open_video(r->video, &ve);
+    vs = vis_source_open_video_prefetch(r->video, &ve);
     frame = vis_frame_alloc(16, 16, 1, &ve);
     if (!vs || !frame) {
         snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
@@ -356,7 +356,7 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
         goto done;
     }
     vis_error ve = {0};
-    vs = vis_source_open_video(r->video, &ve);
+    vs = vis_source_open_video_prefetch(r->video, &ve);
     if (!vs) {
         snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
         goto fail;

@@ -3,7 +3,8 @@
  * Black, saturated, noise-only and missing frames are reported with a reason (never measured, never
  * a crash) and the tracker recovers on the next good frame; a light ribbon on a dark background,
  * uneven lighting and background clutter are still measured within the accuracy bar; an occluded
- * ribbon is reported as occluded; clamp points outside the image are reported; the overlay draws the
+ * ribbon is reported as occluded; black, saturated, noise-only frames and frames without a ribbon
+ * get their own named reason and quality zero (issue 14); clamp points outside the image are reported; the overlay draws the
  * tracked centreline; invalid arguments are
  * refused with VIS_ERR_ARG and a message at every entry point.
  */
@@ -14,6 +15,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "vis_test_run.h"
@@ -128,6 +130,77 @@ static void test_bad_frames_are_reported(void **state)
     vis_frame_free(bad);
     vis_frame_free(s.f);
     vis_tracker_free(t);
+}
+
+/* Issue 14: every kind of bad frame gets its own named reason and quality zero, from a fresh
+ * tracker and from one that was following the ribbon. */
+static void test_bad_input_named_reasons(void **state)
+{
+    (void)state;
+    scene s;
+    scene_make(&s, 0.2);
+    scene_draw(&s);
+    vis_frame *good = s.f;
+    /* Jaws but no ribbon: the ribbon drawn in the backdrop's grey. */
+    scene s2;
+    scene_make(&s2, 0.2);
+    s2.p.ribbon = s2.p.background;
+    scene_draw(&s2);
+    vis_frame *bad = vis_frame_alloc(320, 240, 1, NULL);
+    vis_error err;
+    for (int following = 0; following < 2; following++) {
+        vis_tracker *t = vis_tracker_create(&s.tp, &s.c, &err);
+        assert_non_null(t);
+        vis_measure m;
+        const struct {
+            int kind;
+            vis_reason want;
+        } cases[] = {{0, VIS_REASON_DARK}, {1, VIS_REASON_SATURATED}, {2, VIS_REASON_NOISE},
+                     {3, VIS_REASON_NOISE}, {4, VIS_REASON_NO_RIBBON}};
+        for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+            if (following) {
+                assert_int_equal(vis_tracker_process(t, good, 0.0, &m, &err), VIS_OK);
+                assert_int_equal(m.reason, VIS_REASON_NONE);
+            }
+            unsigned x = 777u + (unsigned)c;
+            for (int y = 0; y < 240; y++)
+                for (int i = 0; i < 320; i++) {
+                    uint8_t *px = vis_frame_data(bad) + y * vis_frame_stride(bad) + (size_t)i;
+                    x = x * 1103515245u + 12345u;
+                    const double u = (double)(x >> 8) / (1u << 24);
+                    switch (cases[c].kind) {
+                    case 0: *px = (uint8_t)(u < 0.5 ? 0 : 1); break;            /* black, a little noise */
+                    case 1: *px = (uint8_t)(u < 0.5 ? 255 : 254); break;        /* saturated */
+                    case 2: *px = (uint8_t)(x >> 24); break;                    /* uniform noise */
+                    case 3: {                                                   /* Gaussian-ish, sigma 50 */
+                        double g = 0;
+                        for (int k = 0; k < 4; k++) {
+                            x = x * 1103515245u + 12345u;
+                            g += (double)(x >> 8) / (1u << 24) - 0.5;
+                        }
+                        const double v = 128 + 50 * g * 1.732;
+                        *px = (uint8_t)(v < 0 ? 0 : v > 255 ? 255 : v);
+                        break;
+                    }
+                    default: *px = vis_frame_data(s2.f)[y * vis_frame_stride(s2.f) + (size_t)i]; break;
+                    }
+                }
+            assert_int_equal(vis_tracker_process(t, bad, 0.0, &m, &err), VIS_OK);
+            printf("bad input %d (%s): %s, quality %.3f\n", cases[c].kind, following ? "following" : "fresh",
+                   vis_reason_str(m.reason), m.quality);
+            assert_int_equal(m.reason, cases[c].want);
+            assert_true(m.quality == 0.0);
+        }
+        /* And the next good frame is measured again. */
+        assert_int_equal(vis_tracker_process(t, good, 0.0, &m, &err), VIS_OK);
+        assert_int_equal(m.reason, VIS_REASON_NONE);
+        vis_tracker_free(t);
+    }
+    assert_string_equal(vis_reason_str(VIS_REASON_NOISE), "frame is noise");
+    assert_string_equal(vis_reason_str(VIS_REASON_NO_RIBBON), "no ribbon in the frame");
+    vis_frame_free(bad);
+    vis_frame_free(s2.f);
+    vis_frame_free(good);
 }
 
 static void test_light_ribbon_on_dark_background(void **state)
@@ -315,6 +388,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bad_frames_are_reported),
+        cmocka_unit_test(test_bad_input_named_reasons),
         cmocka_unit_test(test_light_ribbon_on_dark_background),
         cmocka_unit_test(test_uneven_lighting),
         cmocka_unit_test(test_background_clutter),

@@ -609,9 +609,9 @@ static void test_sweep_map(void **state)
     plot_sweep_point pts[6];
     for (int i = 0; i < 6; i++)
         pts[i] = (plot_sweep_point){60.0 + 10.0 * (i % 3), i < 3 ? 0.1 : 0.3,
-                                    i < 3 ? PLOT_REGIME_ASYMMETRIC : PLOT_REGIME_SYMMETRIC};
+                                    i < 3 ? PLOT_REGIME_ASYMMETRIC : PLOT_REGIME_SYMMETRIC, false, NAN};
     double bx[3] = {60, 70, 80}, by[3] = {0.2, 0.21, 0.22};
-    plot_sweep_line line = {bx, by, 3, false, true};
+    plot_sweep_line line = {bx, by, 3, false, true, NULL};
     plot_sweep_data d;
     plot_sweep_data_default(&d);
     d.x0 = 60;
@@ -630,6 +630,19 @@ static void test_sweep_map(void **state)
     assert_png(p, 900, 650);
     assert_true(count_color(p, COUNT_DARK, (region){0.15, 0.9, 0.15, 0.85}) > 300);
     assert_true(count_color(p, PLOT_COL_MARK_OTHER, (region){0.15, 0.9, 0.15, 0.85}) > 100);
+    /* No stable state at one point: a grey diamond and a grey bar up to bar_to; and the legend on
+     * the right, which a map without it does not have. */
+    long right_dark = count_color(p, COUNT_DARK, (region){0.93, 1.0, 0.1, 0.9});
+    pts[0].no_state = true;
+    pts[0].bar_to = 0.2;
+    line.legend = "boundary";
+    d.legend = true;
+    assert_int_equal(plot_sweep(p, &d, why, sizeof why), PLOT_OK);
+    assert_true(count_color(p, PLOT_COL_CELL_NOSNAP, (region){0.0, 0.65, 0.0, 1.0}) > 50);
+    assert_true(count_color(p, PLOT_COL_UNSTABLE, (region){0.0, 0.65, 0.0, 1.0}) > 20);
+    print_message("dark pixels right of the axes: %ld without the legend, %ld with it\n", right_dark,
+                  count_color(p, COUNT_DARK, (region){0.93, 1.0, 0.1, 0.9}));
+    assert_true(count_color(p, COUNT_DARK, (region){0.93, 1.0, 0.1, 0.9}) > right_dark + 100);
     pts[2].y = INFINITY;
     assert_int_equal(plot_sweep(p, &d, why, sizeof why), PLOT_ERR_ARG);
     assert_non_null(strstr(why, "points[2]"));

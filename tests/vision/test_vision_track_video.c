@@ -1,0 +1,219 @@
+/* test_vision_track_video.c: vis_track_video, the whole-video engine (issue 14 part C).
+ *
+ * A rendered asymmetric sequence is written as FFV1 (.mkv) and as raw Y800 (.avi,
+ * vis_video_writer_open_y800); the Y800 file
+ * reads back bit-exact; tracking it with the engine on every core gives, frame by frame, exactly
+ * what the serial loop (threads = 1) and a hand-written vis_source_read + vis_tracker_process
+ * loop give, bit for bit; max_frames stops early; the prefetching source
+ * (vis_source_open_video_prefetch) hands out the plain source's frames, times, count, rate and,
+ * on a cut file, the same damage after the same frames; a missing file and bad arguments fail
+ * with a reason. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <string.h>
+
+#include "vis_test_run.h"
+
+#define NF 24
+
+static vt_shape shape;
+
+/* Field by field (memcmp would also compare padding): identical bits in every number. */
+static int same(const vis_measure *a, const vis_measure *b)
+{
+    return a->reason == b->reason && !memcmp(&a->dz, &b->dz, sizeof a->dz) && !memcmp(&a->a, &b->a, sizeof a->a) &&
+           !memcmp(&a->quality, &b->quality, sizeof a->quality) &&
+           !memcmp(&a->length_mm, &b->length_mm, sizeof a->length_mm) &&
+           !memcmp(a->mid_px, b->mid_px, sizeof a->mid_px) &&
+           !memcmp(&a->residual_px, &b->residual_px, sizeof a->residual_px);
+}
+
+static void write_video(const char *path, vis_frame **mem, const vis_render_params *p)
+{
+    vis_error err;
+    const size_t len = strlen(path);
+    vis_video_writer *w = strcmp(path + len - 4, ".avi") == 0
+                              ? vis_video_writer_open_y800(path, p->camera.width_px, p->camera.height_px, 30.0, &err)
+                              : vis_video_writer_open(path, p->camera.width_px, p->camera.height_px, 1, 30.0, &err);
+    assert_non_null(w);
+    for (int i = 0; i < NF; i++)
+        assert_int_equal(vis_video_writer_write(w, mem[i], &err), VIS_OK);
+    vis_video_writer_close(w);
+}
+
+static void check_format(const char *ext, vis_frame **mem, const vis_render_params *p, const vis_calib *c,
+                         const vis_track_params *tp)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/engine.%s", vt_tmpdir(), ext);
+    write_video(path, mem, p);
+    vis_error err;
+    /* Reference: the plain loop. */
+    static vis_measure ref[NF], ser[NF], par[NF];
+    vis_source *src = vis_source_open_video(path, &err);
+    assert_non_null(src);
+    vis_tracker *t = vis_tracker_create(tp, c, &err);
+    vis_frame *f = vis_frame_alloc(8, 8, 1, &err);
+    int measured = 0;
+    for (int i = 0; i < NF; i++) {
+        assert_int_equal(vis_source_read(src, f, NULL, &err), VIS_OK);
+        assert_int_equal(memcmp(vis_frame_data(f), vis_frame_data(mem[i]),
+                                vis_frame_stride(f) * (size_t)vis_frame_height(f)), 0); /* bit-exact */
+        assert_int_equal(vis_tracker_process(t, f, 0.0, &ref[i], &err), VIS_OK);
+        measured += ref[i].reason == VIS_REASON_NONE;
+    }
+    vis_source_close(src);
+    vis_frame_free(f);
+    vis_tracker_free(t);
+    assert_int_equal(measured, NF);
+    size_t n = 0;
+    t = vis_tracker_create(tp, c, &err);
+    assert_int_equal(vis_track_video(path, t, NULL, 0, 1, ser, NF, &n, &err), VIS_OK);
+    assert_int_equal(n, NF);
+    vis_tracker_free(t);
+    t = vis_tracker_create(tp, c, &err);
+    assert_int_equal(vis_track_video(path, t, NULL, 0, 0, par, NF, &n, &err), VIS_OK);
+    assert_int_equal(n, NF);
+    vis_tracker_free(t);
+    for (int i = 0; i < NF; i++) {
+        assert_true(same(&ref[i], &ser[i]));
+        assert_true(same(&ref[i], &par[i]));
+    }
+    /* max_frames stops early; four threads on two cores are fine too. */
+    t = vis_tracker_create(tp, c, &err);
+    assert_int_equal(vis_track_video(path, t, NULL, 0, 4, par, 5, &n, &err), VIS_OK);
+    assert_int_equal(n, 5);
+    vis_tracker_free(t);
+    printf("%s: %d frames, engine identical to the serial loop\n", ext, NF);
+}
+
+static void test_engine_identical(void **state)
+{
+    (void)state;
+    vt_arch(&shape, 301, 0.2, 0.16, 0.0, 0.0);
+    vis_render_params p = vt_render_params(&shape, 320, 240);
+    vis_calib c = vt_calib(&p, &shape);
+    vis_track_params tp = vis_track_params_default();
+    tp.length_mm = 200.0;
+    vis_renderer *r = vis_renderer_create(&p, NULL);
+    assert_non_null(r);
+    vis_frame *mem[NF];
+    for (int i = 0; i < NF; i++) {
+        vt_arch(&shape, 301, 0.2, 0.16, 0.05 * i, 0.0);
+        mem[i] = vis_frame_alloc(8, 8, 1, NULL);
+        assert_int_equal(vis_renderer_draw(r, &shape.view, mem[i], NULL, NULL), VIS_OK);
+    }
+    check_format("mkv", mem, &p, &c, &tp);
+    check_format("avi", mem, &p, &c, &tp);
+    for (int i = 0; i < NF; i++)
+        vis_frame_free(mem[i]);
+    vis_renderer_free(r);
+}
+
+/* The prefetching source hands out what the plain one does, damage included. */
+static void test_prefetch_same_as_plain(void **state)
+{
+    (void)state;
+    vt_arch(&shape, 301, 0.2, 0.16, 0.3, 0.0);
+    vis_render_params p = vt_render_params(&shape, 320, 240);
+    p.noise_sigma = 20; /* big FFV1 frames, so the cut falls inside the sequence */
+    vis_renderer *r = vis_renderer_create(&p, NULL);
+    vis_frame *mem[NF];
+    for (int i = 0; i < NF; i++) {
+        mem[i] = vis_frame_alloc(8, 8, 1, NULL);
+        assert_int_equal(vis_renderer_draw(r, &shape.view, mem[i], NULL, NULL), VIS_OK);
+    }
+    char path[600], cut[600];
+    snprintf(path, sizeof path, "%s/pf.mkv", vt_tmpdir());
+    snprintf(cut, sizeof cut, "%s/pf_cut.mkv", vt_tmpdir());
+    write_video(path, mem, &p);
+    FILE *in = fopen(path, "rb"), *out = fopen(cut, "wb");
+    assert_non_null(in);
+    assert_non_null(out);
+    fseek(in, 0, SEEK_END);
+    const long size = ftell(in);
+    fseek(in, 0, SEEK_SET);
+    for (long k = 0; k < size * 6 / 10; k++)
+        fputc(fgetc(in), out);
+    fclose(in);
+    fclose(out);
+    const char *files[2] = {path, cut};
+    for (int w = 0; w < 2; w++) {
+        vis_error e1, e2;
+        vis_source *a = vis_source_open_video(files[w], &e1), *b = vis_source_open_video_prefetch(files[w], &e2);
+        assert_non_null(a);
+        assert_non_null(b);
+        assert_int_equal(vis_source_frame_count(a), vis_source_frame_count(b));
+        assert_true(vis_source_fps(a) == vis_source_fps(b));
+        vis_frame *fa = vis_frame_alloc(8, 8, 1, NULL), *fb = vis_frame_alloc(8, 8, 1, NULL);
+        int n = 0;
+        for (;; n++) {
+            double ta = -1, tb = -2;
+            const vis_status sa = vis_source_read(a, fa, &ta, &e1), sb = vis_source_read(b, fb, &tb, &e2);
+            assert_int_equal(sa, sb);
+            if (sa != VIS_OK) {
+                assert_string_equal(e1.message, e2.message);
+                printf("%s: %d frames, then %s: %s\n", w ? "cut" : "whole", n, vis_status_str(sa), e1.message);
+                break;
+            }
+            assert_true(ta == tb);
+            assert_int_equal(memcmp(vis_frame_data(fa), vis_frame_data(fb),
+                                    vis_frame_stride(fa) * (size_t)vis_frame_height(fa)), 0);
+        }
+        assert_int_equal(n > 0, 1);
+        if (w == 0)
+            assert_int_equal(n, NF);
+        else
+            assert_true(n < NF);
+        vis_frame_free(fa);
+        vis_frame_free(fb);
+        vis_source_close(a);
+        vis_source_close(b);
+    }
+    /* Closed early, with frames still queued: no hang, no leak. */
+    vis_source *b = vis_source_open_video_prefetch(path, NULL);
+    assert_non_null(b);
+    vis_source_close(b);
+    for (int i = 0; i < NF; i++)
+        vis_frame_free(mem[i]);
+    vis_renderer_free(r);
+}
+
+static void test_engine_errors(void **state)
+{
+    (void)state;
+    vt_arch(&shape, 301, 0.2, 0.16, 0.0, 0.0);
+    vis_render_params p = vt_render_params(&shape, 320, 240);
+    vis_calib c = vt_calib(&p, &shape);
+    vis_track_params tp = vis_track_params_default();
+    vis_tracker *t = vis_tracker_create(&tp, &c, NULL);
+    vis_measure m[4];
+    size_t n = 7;
+    vis_error err;
+    char path[600];
+    snprintf(path, sizeof path, "%s/missing.mkv", vt_tmpdir());
+    assert_int_not_equal(vis_track_video(path, t, NULL, 0, 0, m, 4, &n, &err), VIS_OK);
+    assert_int_equal(n, 0);
+    assert_true(strlen(err.message) > 0);
+    assert_int_equal(vis_track_video(NULL, t, NULL, 0, 0, m, 4, &n, &err), VIS_ERR_ARG);
+    assert_int_equal(vis_track_video(path, t, NULL, 0, -1, m, 4, &n, &err), VIS_ERR_ARG);
+    /* The raw writer wants an .avi name. */
+    snprintf(path, sizeof path, "%s/raw.mkv", vt_tmpdir());
+    assert_null(vis_video_writer_open_y800(path, 64, 48, 30.0, &err));
+    assert_int_equal(err.code, VIS_ERR_ARG);
+    vis_tracker_free(t);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_engine_identical),
+        cmocka_unit_test(test_prefetch_same_as_plain),
+        cmocka_unit_test(test_engine_errors),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
