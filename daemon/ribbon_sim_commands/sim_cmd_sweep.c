@@ -14,6 +14,7 @@
  *
  * Angles: --phi takes the crease angle magnitude in degrees (the paper's phi); the sign is the
  * scene's (the paper scenes use -90, README "Crease orientation"). */
+#include "cfg_number.h"
 #include "sim_cmd.h"
 #include "sim_opts.h"
 #include "sim_plot_sweep.h"
@@ -84,9 +85,7 @@ static double now(void)
 
 static int parse_range(const char *flag, const char *v, double *a, double *b, int *n)
 {
-    char extra;
-    if (!v || sscanf(v, "%lf:%lf:%d%c", a, b, n, &extra) != 3 || !isfinite(*a) || !isfinite(*b) || *n < 1 ||
-        *n > 1000) {
+    if (cfg_number_range(v, a, b, n, 1000) != 0) {
         fprintf(stderr, "ribbon-sim sweep: %s needs A:B:n with finite A, B and 1 <= n <= 1000, got '%s'\n", flag,
                 v ? v : "");
         return 0;
@@ -272,7 +271,7 @@ static int parse_gamma_tol(const char *tol_s, double *out)
     *out = 1e-3;
     if (tol_s) {
         char *end;
-        *out = strtod(tol_s, &end);
+        *out = cfg_number_strtod(tol_s, &end);
         if (*end || !(*out > 0.0) || !isfinite(*out)) {
             fprintf(stderr, "ribbon-sim sweep: --gamma-tol needs a positive number, got '%s'\n", tol_s);
             return 2;
@@ -346,7 +345,7 @@ int sim_cmd_sweep(int argc, char **argv)
     fo.heartbeat_timeout_s = 30.0;
     if (x.heartbeat) {
         char *end;
-        fo.heartbeat_timeout_s = strtod(x.heartbeat, &end);
+        fo.heartbeat_timeout_s = cfg_number_strtod(x.heartbeat, &end);
         if (*end || !(fo.heartbeat_timeout_s >= 2.0) || !isfinite(fo.heartbeat_timeout_s)) {
             fprintf(stderr, "ribbon-sim sweep: --heartbeat needs seconds >= 2, got '%s'\n", x.heartbeat);
             return 2;

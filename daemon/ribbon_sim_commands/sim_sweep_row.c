@@ -1,5 +1,7 @@
 /* sim_sweep_row.c: reading and writing sweep rows (see sim_sweep_row.h). */
 #include "sim_sweep_row.h"
+#include "cfg_ini.h"
+#include "cfg_number.h"
 
 #include <errno.h>
 #include <math.h>
@@ -47,7 +49,7 @@ static int parse_double(const char *s, double *out)
 {
     char *end;
     errno = 0;
-    double v = strtod(s, &end);
+    double v = cfg_number_strtod(s, &end);
     if (errno || end == s || *end || !isfinite(v)) return 0;
     *out = v;
     return 1;
@@ -91,18 +93,32 @@ static int parse_row(char *line, sweep_row *r)
 int sweep_table_load(const char *path, sweep_table *t, char *err, size_t errlen)
 {
     memset(t, 0, sizeof *t);
-    FILE *f = fopen(path, "r");
+    char why[160];
+    errno = 0;
+    FILE *f = cfg_open_regular(path, why, sizeof why);
     if (!f) {
         if (errno == ENOENT) return 0;
-        snprintf(err, errlen, "cannot read %s: %s", path, strerror(errno));
+        snprintf(err, errlen, "cannot read %s: %s", path, why);
         return -1;
     }
+    int rc = sweep_table_read(f, path, t, err, errlen);
+    fclose(f);
+    return rc;
+}
+
+int sweep_table_read(FILE *f, const char *path, sweep_table *t, char *err, size_t errlen)
+{
+    memset(t, 0, sizeof *t);
     char line[1024];
-    int lineno = 0, rc = 0;
+    int lineno = 0, rc = 0, continued = 0;
     while (fgets(line, sizeof line, f)) {
-        lineno++;
         size_t len = strlen(line);
         int complete = len > 0 && line[len - 1] == '\n';
+        /* The rest of a line longer than the buffer is not a row of its own. */
+        int tail = continued;
+        continued = !complete;
+        if (tail) continue;
+        lineno++;
         while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r')) line[--len] = '\0';
         if (lineno == 1) {
             if (strcmp(line, header) != 0) {
@@ -126,7 +142,6 @@ int sweep_table_load(const char *path, sweep_table *t, char *err, size_t errlen)
         snprintf(err, errlen, "%s is empty; remove it or name another file", path);
         rc = -1;
     }
-    fclose(f);
     if (rc != 0) sweep_table_free(t);
     return rc;
 }
