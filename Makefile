@@ -1,7 +1,7 @@
 # Thin wrapper giving the README's two commands:
 #   make demo     the main job: one mock trial through ribbond, measured beside predicted, report written
 #   make test     the whole test suite: normal build, then ASan+UBSan build without the heavy tests,
-#                 then short libFuzzer runs of the drivers' fuzz targets (clang, build-fuzz)
+#                 then short libFuzzer runs of the fuzz targets (clang, build-fuzz: fuzz/)
 # and, for the rig computer (docs/install.md):
 #   make package  the Debian package (CPack's DEB generator): $(BUILD)/ribbon-rig_VERSION_ARCH.deb
 # All first install missing Debian packages (as root) or print the exact command to run.
@@ -12,6 +12,7 @@ DEB_PACKAGES := cmake make gcc g++ pkg-config \
 	libcurl4-openssl-dev libplplot-dev plplot-driver-cairo libsystemd-dev \
 	libaravis-dev libusb-1.0-0-dev \
 	clang libclang-rt-14-dev \
+	libopenmpi-dev openmpi-bin \
 	libjpeg62-turbo-dev libjs-chart.js chromium chromium-driver
 # clang with libclang-rt-14-dev: libFuzzer (libclang_rt.fuzzer-x86_64.a) and clang's sanitizer
 # runtimes for the fuzz build (clang-14 only recommends them, and deps skips recommends).
@@ -21,8 +22,10 @@ JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 BUILD ?= build
 ASAN_BUILD ?= build-asan
 FUZZ_BUILD ?= build-fuzz
-# Seconds of each libFuzzer run in `make test` (the two run side by side).
+# Seconds of each libFuzzer run in `make test`, two side by side: the drivers' two targets
+# (FUZZ_SECONDS) and the seven input parsers' targets (FUZZ_INPUT_SECONDS), about a minute in all.
 FUZZ_SECONDS ?= 20
+FUZZ_INPUT_SECONDS ?= 8
 
 .PHONY: all deps build build-asan build-fuzz demo rehearsal test test-normal test-asan test-fuzz package clean
 
@@ -57,9 +60,11 @@ build-asan: deps
 # by side, the report PNG, the store's path; then ribbond is stopped with SIGTERM. The store and the
 # videos go to the working directory (ribbon-mock.db, ribbon-mock-videos/).
 DEMO_REPORT ?= ribbon-mock-report.png
-# Only the drivers library and its fuzz targets, with clang (drivers/fuzz/CMakeLists.txt).
+# The libFuzzer targets, with clang (fuzz/CMakeLists.txt): the drivers' (drivers/fuzz/) and the
+# input parsers' (fuzz/), with only the libraries they need.
 build-fuzz: deps
-	cmake -S drivers/fuzz -B $(FUZZ_BUILD) -DCMAKE_C_COMPILER=clang -DRIBBON_FUZZ_SECONDS=$(FUZZ_SECONDS)
+	cmake -S fuzz -B $(FUZZ_BUILD) -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+	  -DRIBBON_FUZZ_SECONDS=$(FUZZ_SECONDS) -DRIBBON_FUZZ_INPUT_SECONDS=$(FUZZ_INPUT_SECONDS)
 	cmake --build $(FUZZ_BUILD) -j $(JOBS)
 
 demo: build
@@ -112,7 +117,7 @@ test-asan: build-asan
 	  ctest --output-on-failure -j $(JOBS) -LE heavy
 
 test-fuzz: build-fuzz
-	cd $(FUZZ_BUILD) && ctest --output-on-failure -j $(JOBS) -L fuzz
+	cd $(FUZZ_BUILD) && ctest --output-on-failure -j 2 -L fuzz
 
 test: test-normal test-asan test-fuzz
 

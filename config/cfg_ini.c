@@ -7,6 +7,10 @@
  * later lines are still handed to inih (it has no way to stop from the reader) but ignored. */
 #include "cfg_ini.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <ctype.h>
 #include <errno.h>
 #include <ini.h>
@@ -225,6 +229,46 @@ cfg_status cfg_ini_parse(const char *name, const char *text, size_t len, const c
     return c.failed ? (err->status ? err->status : CFG_ERR_SYNTAX) : CFG_OK;
 }
 
+const char *cfg_file_kind(unsigned mode)
+{
+    if (S_ISDIR(mode)) return "a directory";
+    if (S_ISFIFO(mode)) return "a FIFO";
+    if (S_ISCHR(mode)) return "a character device";
+    if (S_ISBLK(mode)) return "a block device";
+    if (S_ISSOCK(mode)) return "a socket";
+    if (S_ISREG(mode)) return "a regular file";
+    return "not a regular file";
+}
+
+FILE *cfg_open_regular(const char *path, char *why, size_t why_len)
+{
+    /* O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer, for ever. */
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    if (fd < 0) {
+        snprintf(why, why_len, "cannot open: %s", strerror(errno));
+        return NULL;
+    }
+    struct stat st;
+    if (fstat(fd, &st) != 0) {
+        snprintf(why, why_len, "cannot stat: %s", strerror(errno));
+        close(fd);
+        return NULL;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        snprintf(why, why_len, "not a regular file (%s)", cfg_file_kind((unsigned)st.st_mode));
+        close(fd);
+        return NULL;
+    }
+    int fl = fcntl(fd, F_GETFL);
+    if (fl >= 0) (void)fcntl(fd, F_SETFL, fl & ~O_NONBLOCK);
+    FILE *f = fdopen(fd, "rb");
+    if (!f) {
+        snprintf(why, why_len, "cannot open: %s", strerror(errno));
+        close(fd);
+    }
+    return f;
+}
+
 cfg_status cfg_ini_read_file(const char *path, size_t max_bytes, char **text, size_t *len,
                              cfg_error *err)
 {
@@ -235,10 +279,10 @@ cfg_status cfg_ini_read_file(const char *path, size_t max_bytes, char **text, si
     if (!path)
         return cfg_error_set(err, CFG_ERR_IO, CFG_ORIGIN_FILE, "(null)", 0, NULL, NULL,
                              "no file given");
-    FILE *f = fopen(path, "rb");
+    char why[160];
+    FILE *f = cfg_open_regular(path, why, sizeof why);
     if (!f)
-        return cfg_error_set(err, CFG_ERR_IO, CFG_ORIGIN_FILE, path, 0, NULL, NULL,
-                             "cannot open: %s", strerror(errno));
+        return cfg_error_set(err, CFG_ERR_IO, CFG_ORIGIN_FILE, path, 0, NULL, NULL, "%s", why);
     char *buf = malloc(max_bytes + 1);
     if (!buf) {
         fclose(f);

@@ -13,6 +13,7 @@
 #define RIBBON_CONFIG_CFG_INI_H
 
 #include <stddef.h>
+#include <stdio.h>
 
 #include "cfg_error.h"
 
@@ -43,6 +44,15 @@ cfg_status cfg_ini_parse(const char *name, const char *text, size_t len, const c
 /* Lines in `len` bytes of text as cfg_ini_parse counts them: a last line without a newline counts.
  * The line a loader names for a key missing from an absent section. */
 int cfg_ini_count_lines(const char *text, size_t len);
+
+/* Open path for reading only if it is a regular file: a FIFO, a device (/dev/zero), a directory
+ * or a socket is refused without blocking (the open is non-blocking, so a FIFO with no writer
+ * cannot hang the caller), with the reason in why ("not a regular file (a FIFO)"). NULL on
+ * failure. Every config and scene file is opened through here. */
+FILE *cfg_open_regular(const char *path, char *why, size_t why_len);
+
+/* What kind of file st_mode is, for messages: "a directory", "a FIFO", "a character device"... */
+const char *cfg_file_kind(unsigned mode);
 
 /* Read a whole file of at most max_bytes into a malloc'd, NUL-terminated buffer (*text, *len).
  * On failure nothing is allocated and *err names the file (CFG_ERR_IO). */

@@ -7,6 +7,7 @@
  * left to the drivers' own checks (rail_params_check, rail_modbus_map_check), which name the
  * field, and are run here too so a bad file fails at load, not at the first motion. */
 #include "rail_config.h"
+#include "cfg_number.h"
 
 #include <math.h>
 #include <stdbool.h>
@@ -120,13 +121,7 @@ const rail_key *rail_config_keys(size_t *n)
 
 static bool parse_num(const char *v, double *x)
 {
-    char *end = NULL;
-    *x = strtod(v, &end);
-    if (end == v)
-        return false;
-    while (*end == ' ' || *end == '\t')
-        end++;
-    return *end == 0 && isfinite(*x);
+    return cfg_number_parse(v, x) == CFG_NUMBER_OK; /* plain decimal only (cfg_number.h) */
 }
 
 static cfg_status set_register(rail_mb_reg *r, const char *value, char *why, size_t why_len)

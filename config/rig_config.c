@@ -29,6 +29,7 @@
 
 #include "cfg_ini.h"
 #include "cfg_keys.h"
+#include "cfg_number.h"
 #include "scene_file.h"
 
 _Static_assert(sizeof(rig_mode) == sizeof(int), "enums are stored as ints");
@@ -379,15 +380,12 @@ static int in_range(const rig_key *k, double v)
 static cfg_status parse_double(const char *value, double *out, char *msg, size_t len)
 {
     char shown[64];
-    char *end;
+    const char *end;
+    double v;
     cfg_text_printable(shown, sizeof shown, value, strlen(value));
-    double v = strtod(value, &end);
-    if (end == value) {
-        snprintf(msg, len, "'%s' is not a number", shown);
-        return CFG_ERR_VALUE;
-    }
-    if (!isfinite(v)) {
-        snprintf(msg, len, "'%s' is not a finite number", shown);
+    cfg_number_status ns = cfg_number_scan(value, &v, &end);
+    if (ns) {
+        snprintf(msg, len, "'%s' %s", shown, cfg_number_why(ns));
         return CFG_ERR_VALUE;
     }
     if (*skip_space(end)) {

@@ -24,6 +24,7 @@
 
 #include "cfg_ini.h"
 #include "cfg_keys.h"
+#include "cfg_number.h"
 
 _Static_assert(sizeof(rod_route) == sizeof(int), "rod_route is stored as an int");
 
@@ -140,17 +141,15 @@ static int in_range(const cfg_scene_key *k, double v)
 static cfg_status parse_number(const char **p, double *out, char *msg, size_t msglen)
 {
     char shown[64];
-    char *end;
-    errno = 0;
-    double v = strtod(*p, &end);
-    if (end == *p) {
-        cfg_text_printable(shown, sizeof shown, *p, strlen(*p));
-        snprintf(msg, msglen, "'%s' is not a number", shown);
-        return CFG_ERR_VALUE;
-    }
-    if (!isfinite(v)) {
-        cfg_text_printable(shown, sizeof shown, *p, (size_t)(end - *p));
-        snprintf(msg, msglen, "'%s' is not a finite number", shown);
+    const char *end;
+    double v;
+    cfg_number_status ns = cfg_number_scan(*p, &v, &end);
+    if (ns) {
+        const char *q = *p;
+        size_t n = 0;
+        while (q[n] && q[n] != ' ' && q[n] != '\t') n++;
+        cfg_text_printable(shown, sizeof shown, q, n ? n : strlen(q));
+        snprintf(msg, msglen, "'%s' %s", shown, cfg_number_why(ns));
         return CFG_ERR_VALUE;
     }
     *out = v;
@@ -482,10 +481,9 @@ cfg_status cfg_scene_load(const char *path, const char *const *overrides, int n_
         snprintf(err->message, sizeof err->message, "no scene file given");
         return err->status;
     }
-    FILE *f = fopen(path, "rb");
+    FILE *f = cfg_open_regular(path, err->message, sizeof err->message);
     if (!f) {
         err->status = CFG_ERR_IO;
-        snprintf(err->message, sizeof err->message, "cannot open: %s", strerror(errno));
         return err->status;
     }
     char *buf = malloc(CFG_SCENE_MAX_FILE_BYTES + 1);

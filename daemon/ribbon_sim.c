@@ -14,6 +14,8 @@ static const cli_command commands[] = {
     {"convergence", sim_cmd_convergence, "snap Delta W and its error against run time over a ladder of N and dt"},
     {"continue", sim_cmd_continue, "bifurcation analysis: branches in Delta W, pitchfork / saddle-node, regime"},
     {"sweep", sim_cmd_sweep, "phase diagram over (phi, Gamma): regime per point, boundary Gamma*(phi)"},
+    {"sweep-merge", sim_cmd_sweep_merge, "join the shard files of `sweep --shard i/N` into one sweep file"},
+    {"boundary", sim_cmd_boundary, "regime boundary Gamma*(phi) traced directly (pitchfork meets saddle-node)"},
     {"bench", sim_cmd_bench, "speed and memory on a scene, one machine-readable line"},
     {"truss", sim_cmd_truss, "the reduced double-mass von Mises truss model (paper section 4)"},
 };

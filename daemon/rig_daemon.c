@@ -1,5 +1,6 @@
 /* rig_daemon.c: ribbond's state and its control API operations (see rig_daemon.h). */
 #include "rig_daemon.h"
+#include "api.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -204,28 +205,12 @@ static int op_status(void *user, json_t **out, char *why, size_t n)
  * runs on a thread of its own; the answer (201) is the new trial, status running. */
 static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *http_status, char *why, size_t n)
 {
-    json_t *src = json_object_get(body, "source_trial"), *note = json_object_get(body, "note");
-    const char *key;
-    json_t *val;
-    json_object_foreach((json_t *)body, key, val)
-    {
-        if (strcmp(key, "source_trial") != 0 && strcmp(key, "note") != 0) {
-            *http_status = 400;
-            snprintf(why, n, "unknown field \"%s\" in replay mode (allowed: source_trial, note)", key);
-            return -1;
-        }
-    }
-    if (note && !json_is_string(note)) {
+    api_start_body req;
+    if (api_start_body_parse(body, 1, &req, why, n)) {
         *http_status = 400;
-        snprintf(why, n, "\"note\" must be a string");
         return -1;
     }
-    int64_t id = src ? (int64_t)json_integer_value(src) : 0;
-    if (src && (!json_is_integer(src) || id < 1)) {
-        *http_status = 400;
-        snprintf(why, n, "\"source_trial\" must be a trial id (an integer >= 1)");
-        return -1;
-    }
+    int64_t id = req.source_trial;
     pthread_mutex_lock(&d->lock);
     replay_job *rj = running_replay(d);
     if (rj) {
@@ -245,7 +230,7 @@ static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *ht
     char what[320]; /* r belongs to the job once it starts */
     snprintf(what, sizeof what, "%.300s", trial_replay_video(r));
     int64_t nid = 0;
-    int rc = replay_job_start(r, d->st, d->cfg.store_path, note ? json_string_value(note) : NULL, &d->replay, &nid,
+    int rc = replay_job_start(r, d->st, d->cfg.store_path, req.note, &d->replay, &nid,
                               why, n);
     pthread_mutex_unlock(&d->lock);
     if (rc) {
@@ -260,42 +245,18 @@ static int op_start(void *user, const json_t *body, json_t **out, int *http_stat
 {
     rig_daemon *d = user;
     if (d->cfg.mode == RIG_MODE_REPLAY) return replay_start(d, body, out, http_status, why, n);
-    /* Body: {"set": ["section.key=value", ...], "note": "..."}; unknown fields are refused. */
-    const char *key;
-    json_t *val;
-    json_object_foreach((json_t *)body, key, val)
-    {
-        if (strcmp(key, "set") != 0 && strcmp(key, "note") != 0) {
-            *http_status = 400;
-            snprintf(why, n, "unknown field \"%s\" (allowed: set, note)", key);
-            return -1;
-        }
-    }
-    json_t *set = json_object_get(body, "set"), *note = json_object_get(body, "note");
-    if (set && !json_is_array(set)) {
+    /* Body: {"set": ["section.key=value", ...], "note": "..."} (api_start_body.h). */
+    api_start_body req;
+    if (api_start_body_parse(body, 0, &req, why, n)) {
         *http_status = 400;
-        snprintf(why, n, "\"set\" must be an array of \"section.key=value\" strings");
         return -1;
     }
-    if (note && !json_is_string(note)) {
-        *http_status = 400;
-        snprintf(why, n, "\"note\" must be a string");
-        return -1;
-    }
-    const char *ov[2 * RIG_DAEMON_MAX_OVERRIDES];
+    const char *ov[RIG_DAEMON_MAX_OVERRIDES + API_START_MAX_SET];
     int nov = 0;
     for (int k = 0; k < d->n_overrides; k++) ov[nov++] = d->overrides[k];
-    for (size_t k = 0; set && k < json_array_size(set); k++) {
-        const char *t = json_string_value(json_array_get(set, k));
-        if (!t || nov >= 2 * RIG_DAEMON_MAX_OVERRIDES) {
-            *http_status = 400;
-            snprintf(why, n, "\"set\"[%zu] must be a string (at most %d overrides)", k, RIG_DAEMON_MAX_OVERRIDES);
-            return -1;
-        }
-        ov[nov++] = t;
-    }
+    for (int k = 0; k < req.n_set; k++) ov[nov++] = req.set[k];
     rig_config cfg;
-    if (set && json_array_size(set) > 0) {
+    if (req.n_set > 0) {
         cfg_error ce;
         if (rig_config_load(d->config_path, ov, nov, &cfg, &ce) != CFG_OK) {
             *http_status = 400;
@@ -322,7 +283,7 @@ static int op_start(void *user, const json_t *body, json_t **out, int *http_stat
         return -1;
     }
     int64_t id = 0;
-    trial_err te = trial_session_start(&cfg, d->compress, d->shear, note ? json_string_value(note) : NULL, d->log,
+    trial_err te = trial_session_start(&cfg, d->compress, d->shear, req.note, d->log,
                                        d->bus, &d->session, &id, why, n);
     pthread_mutex_unlock(&d->lock);
     if (te != TRIAL_OK) {

@@ -665,7 +665,7 @@ rail_err grbl_sim_open(grbl_sim **out, const grbl_sim_params *p, char *why, size
     for (int i = 0; i < p->n_axes; i++)
         s->ax[i] = rail_axis_make(p->start_mm[i], p->accel_mm_s2, p->travel_mm[i]);
     s->absolute = true;
-    s->rng = p->seed ? p->seed : 1u;
+    s->rng = rail_sim_seed(p->seed);
     s->mode = p->start_in_alarm ? M_ALARM : M_IDLE;
     reply(s, "Grbl 1.1h ['$' for help]");
     if (p->start_in_alarm)

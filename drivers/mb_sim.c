@@ -395,7 +395,7 @@ rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t n)
     s->clock = rail_clock_real();
     s->t_start = s->t_last = s->t_request = rail_clock_now(s->clock);
     s->ax = rail_axis_make(p->start_mm, 100.0, p->travel_mm);
-    s->rng = p->seed ? p->seed : 1u;
+    s->rng = rail_sim_seed(p->seed);
     refresh(s);
     *out = s;
     return RAIL_OK;

@@ -21,6 +21,19 @@ double rail_sim_rand(unsigned *state)
     return (double)(x >> 8) / 16777216.0;
 }
 
+unsigned rail_sim_seed(unsigned seed)
+{
+    /* splitmix64's finaliser: neighbouring small seeds (1, 2, 3...) land far apart, so the first
+       draws of their streams are spread over [0, 1) instead of all tiny (xorshift32 from a state
+       of a few bits needs many steps to fill its high bits). */
+    unsigned long long z = (unsigned long long)seed + 0x9e3779b97f4a7c15ull;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    unsigned x = (unsigned)(z ^ (z >> 32));
+    return x ? x : 0x6a09e667u; /* xorshift's state must not be 0 */
+}
+
 bool rail_sim_crossed(double before_mm, double after_mm, double at_mm)
 {
     return (before_mm < at_mm && after_mm >= at_mm) || (before_mm > at_mm && after_mm <= at_mm);

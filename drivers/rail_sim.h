@@ -18,6 +18,10 @@
  * simulator keeps its own state, seeded from its params, so a fault run replays with its seed. */
 double rail_sim_rand(unsigned *state);
 
+/* The fault stream's starting state for a user's seed: the seed mixed (splitmix64), never 0, so
+ * every seed, small ones included, starts a well-spread stream. */
+unsigned rail_sim_seed(unsigned seed);
+
 /* Whether a step from before_mm to after_mm reached or passed at_mm, from either side (a stall
  * position; false when at_mm is NaN). */
 bool rail_sim_crossed(double before_mm, double after_mm, double at_mm);

@@ -73,15 +73,62 @@ rod_status rod_alloc(const rod_scene *s, rod **out, char *err, size_t errlen)
         return ROD_ERR_ALLOC;
     }
 
-    /* Arc-length positions of nodes 1..N-2 (over l). */
-    int ne_free = n - 3;
     int has_folds = s->fold_angle_deg != 0.0;
+    double w = s->width, b = s->thickness, E = s->youngs_modulus;
+    double A = w * b, I1 = w * b * b * b / 12.0, I2 = b * w * w * w / 12.0;
+    r->rho_area = s->density * A;
+    r->rho_polar = s->density * (I1 + I2);
+    rod_mesh_set(r, s->fold_position, has_folds ? rod_mesh_outer_edges(n, s->fold_position) : 0);
+    /* Straight rest configuration along +x, normal +z; th = 0. */
+    for (int i = 0; i < n; i++) {
+        double *x = rod_x(r, i);
+        x[0] = s->length * r->s_node[i];
+        x[1] = 0.0;
+        x[2] = 0.0;
+    }
+    for (int i = 0; i < n - 1; i++) {
+        double t[3] = {1, 0, 0}, d1[3] = {0, 0, 1}, d2[3] = {0, -1, 0};
+        memcpy(r->tref[i], t, sizeof t);
+        memcpy(r->d1[i], d1, sizeof d1);
+        memcpy(r->d2[i], d2, sizeof d2);
+    }
+
+    r->EA = E * A;
+    r->EI2 = E * I2;
+    r->GJ = s->shear_modulus * w * b * b * b / 3.0;
+    for (int i = 0; i < n; i++) r->EI1[i] = E * I1;
+    r->force_scale = E * I1 / (s->length * s->length);
+
+    for (int k = 0; k < 3; k++) r->gravity[k] = s->gravity[k];
+    r->terms.stretch = 1;
+    r->terms.bend = 1;
+    r->terms.twist = 1;
+    r->terms.fold = has_folds;
+    r->terms.gravity = (s->gravity[0] != 0.0 || s->gravity[1] != 0.0 || s->gravity[2] != 0.0);
     if (has_folds) {
-        int n_out = (int)lround(s->fold_position * ne_free);
-        if (n_out < 1) n_out = 1;
-        if (ne_free - 2 * n_out < 1) n_out = (ne_free - 1) / 2;
+        r->fold_factor = s->fold_stiffness_factor;
+        rod_set_fold_angle(r, s->fold_angle_deg * M_PI / 180.0, s->fold_angle_rel);
+    }
+    *out = r;
+    return ROD_OK;
+}
+
+int rod_mesh_outer_edges(int nodes, double gamma)
+{
+    int ne_free = nodes - 3;
+    int n_out = (int)lround(gamma * ne_free);
+    if (n_out < 1) n_out = 1;
+    if (ne_free - 2 * n_out < 1) n_out = (ne_free - 1) / 2;
+    return n_out;
+}
+
+void rod_mesh_set(rod *r, double gamma, int n_out)
+{
+    int n = r->n, ne_free = n - 3;
+    /* Arc-length positions of nodes 1..N-2 (over l). */
+    if (n_out > 0) {
         int n_mid = ne_free - 2 * n_out;
-        double g = s->fold_position;
+        double g = gamma;
         for (int k = 0; k <= n_out; k++) r->s_node[1 + k] = g * k / n_out;
         for (int k = 1; k <= n_mid; k++) r->s_node[1 + n_out + k] = g + (1.0 - 2.0 * g) * k / n_mid;
         for (int k = 1; k <= n_out; k++) r->s_node[1 + n_out + n_mid + k] = 1.0 - g + g * k / n_out;
@@ -91,6 +138,8 @@ rod_status rod_alloc(const rod_scene *s, rod **out, char *err, size_t errlen)
         for (int k = 0; k <= ne_free; k++) r->s_node[1 + k] = (double)k / ne_free;
         r->fold_node[0] = r->fold_node[1] = -1;
     }
+    r->fold_position = gamma;
+    r->fold_outer_edges = n_out;
     r->s_node[n - 2] = 1.0;
     /* Exact symmetry of the mesh: s_k + s_{N-1-k} = 1. */
     for (int k = 1; k < n / 2; k++) {
@@ -110,63 +159,31 @@ rod_status rod_alloc(const rod_scene *s, rod **out, char *err, size_t errlen)
     double h0 = r->s_node[2] - r->s_node[1];
     r->s_node[0] = -h0;
     r->s_node[n - 1] = 1.0 + h0;
-    r->h_clamp = h0 * s->length;
-
-    /* Straight rest configuration along +x, normal +z; th = 0. */
-    for (int i = 0; i < n; i++) {
-        double *x = rod_x(r, i);
-        x[0] = s->length * r->s_node[i];
-        x[1] = 0.0;
-        x[2] = 0.0;
-    }
-    for (int i = 0; i < n - 1; i++) {
-        r->len0[i] = s->length * (r->s_node[i + 1] - r->s_node[i]);
-        double t[3] = {1, 0, 0}, d1[3] = {0, 0, 1}, d2[3] = {0, -1, 0};
-        memcpy(r->tref[i], t, sizeof t);
-        memcpy(r->d1[i], d1, sizeof d1);
-        memcpy(r->d2[i], d2, sizeof d2);
-    }
+    r->h_clamp = h0 * r->length;
+    for (int i = 0; i < n - 1; i++) r->len0[i] = r->length * (r->s_node[i + 1] - r->s_node[i]);
     for (int i = 1; i < n - 1; i++) r->vor0[i] = 0.5 * (r->len0[i - 1] + r->len0[i]);
     /* At the clamp points only the free half of the Voronoi cell bends: counting half of the
      * clamped edge would hold the tangent half an edge outside the clamp and make the rod act as
      * if it were l + h long (measured: buckling load 2% low, elastica heights 0.5% high). */
     r->vor0[1] = 0.5 * r->len0[1];
     r->vor0[n - 2] = 0.5 * r->len0[n - 3];
-
-    double w = s->width, b = s->thickness, E = s->youngs_modulus;
-    double A = w * b, I1 = w * b * b * b / 12.0, I2 = b * w * w * w / 12.0;
-    r->EA = E * A;
-    r->EI2 = E * I2;
-    r->GJ = s->shear_modulus * w * b * b * b / 3.0;
-    for (int i = 0; i < n; i++) r->EI1[i] = E * I1;
-    r->force_scale = E * I1 / (s->length * s->length);
-
-    double rho = s->density;
+    memset(r->mass, 0, sizeof(double) * (size_t)r->ndof);
     for (int i = 0; i < n - 1; i++) {
-        double m = rho * A * r->len0[i];
+        double m = r->rho_area * r->len0[i];
         for (int k = 0; k < 3; k++) {
             r->mass[4 * i + k] += 0.5 * m;
             r->mass[4 * (i + 1) + k] += 0.5 * m;
         }
-        r->mass[4 * i + 3] = rho * (I1 + I2) * r->len0[i];
+        r->mass[4 * i + 3] = r->rho_polar * r->len0[i];
     }
+}
 
-    for (int k = 0; k < 3; k++) r->gravity[k] = s->gravity[k];
-    r->terms.stretch = 1;
-    r->terms.bend = 1;
-    r->terms.twist = 1;
-    r->terms.fold = has_folds;
-    r->terms.gravity = (s->gravity[0] != 0.0 || s->gravity[1] != 0.0 || s->gravity[2] != 0.0);
-    if (has_folds) {
-        double phi = s->fold_angle_deg * M_PI / 180.0;
-        double rel = s->fold_angle_rel;
-        r->fold_kappa[0] = 2.0 * tan(0.5 * phi * (1.0 + 0.5 * rel));
-        r->fold_kappa[1] = 2.0 * tan(0.5 * phi * (1.0 - 0.5 * rel));
-        r->fold_factor = s->fold_stiffness_factor;
-        rod_set_folds(r, 1.0, 1.0);
-    }
-    *out = r;
-    return ROD_OK;
+void rod_set_fold_angle(rod *r, double phi, double rel)
+{
+    if (!r->terms.fold) return;
+    r->fold_kappa[0] = 2.0 * tan(0.5 * phi * (1.0 + 0.5 * rel));
+    r->fold_kappa[1] = 2.0 * tan(0.5 * phi * (1.0 - 0.5 * rel));
+    rod_set_folds(r, 1.0, 1.0);
 }
 
 void rod_set_folds(rod *r, double frac_angle, double frac_stiff)

@@ -83,6 +83,10 @@ typedef struct rod {
     int fold_node[2];    /* node indices of the creases at Gamma and 1 - Gamma (-1 if none) */
     double fold_kappa[2];/* their full natural curvatures 2 tan(phi_k / 2) */
     double fold_factor;  /* stiffness factor at the creases */
+    double fold_position;/* Gamma the mesh was built for (rod_mesh_set) */
+    int fold_outer_edges;/* edges between a clamp point and its crease, 0 without creases */
+    double rho_area;     /* kg/m, rho A: lumped node masses per unit rest length */
+    double rho_polar;    /* kg m, rho (I1 + I2): twist inertia per unit rest length */
     int mid_node;        /* node at arc length 1/2, or -1 when the midpoint is mid-edge */
     int mid_edge;        /* edge containing arc length 1/2 at its centre when mid_node < 0 */
     /* frames */
@@ -100,6 +104,21 @@ typedef struct rod {
  * in the natural curvature (the route ramps them with rod_set_folds). */
 rod_status rod_alloc(const rod_scene *s, rod **out, char *err, size_t errlen);
 void rod_free(rod *r);
+
+/* Edges between a clamp point and its crease in the mesh rod_alloc builds for N nodes and crease
+ * position gamma: round(gamma (N - 3)), at least 1, leaving at least one middle edge. */
+int rod_mesh_outer_edges(int nodes, double gamma);
+
+/* Re-meshes for crease position gamma with n_out edges outside each crease (0: no creases,
+ * uniform): arc-length positions, rest and Voronoi lengths, masses, clamped-edge length and the
+ * crease nodes. q and the frames are not touched; call rod_set_clamps after it (the clamped
+ * edges take the length of their neighbour). With n_out held, every rest quantity is a smooth
+ * function of gamma: what continuation in Gamma differentiates (rod_critical.h). */
+void rod_mesh_set(rod *r, double gamma, int n_out);
+
+/* Sets both crease angles to phi (rad) split by the relative imperfection rel as rod_alloc does,
+ * at full angle and stiffness. No effect on a rod without creases. */
+void rod_set_fold_angle(rod *r, double phi, double rel);
 
 /* Sets the natural curvature of the two creases to frac_angle times their scene angle and their
  * stiffness factor to 1 + frac_stiff (factor - 1). */

@@ -43,8 +43,24 @@ void rod_analysis_free(rod_analysis *a)
     a->nbranches = 0;
 }
 
+/* Copies a solved state (same scene, so the same mesh) into r: q and frames. */
+static void copy_state(const rod *from, rod *r)
+{
+    memcpy(r->q, from->q, sizeof(double) * (size_t)r->ndof);
+    memcpy(r->d1, from->d1, sizeof(double[3]) * (size_t)(r->n - 1));
+    memcpy(r->d2, from->d2, sizeof(double[3]) * (size_t)(r->n - 1));
+    memcpy(r->tref, from->tref, sizeof(double[3]) * (size_t)(r->n - 1));
+    memcpy(r->mref, from->mref, sizeof(double) * (size_t)r->n);
+}
+
 rod_status rod_bifurcation_analyse(const rod_scene *scene, const rod_analysis_opts *o, rod_analysis *out, char *err,
                                    size_t errlen)
+{
+    return rod_bifurcation_analyse_from(scene, o, NULL, out, err, errlen);
+}
+
+rod_status rod_bifurcation_analyse_from(const rod_scene *scene, const rod_analysis_opts *o, const rod *start,
+                                        rod_analysis *out, char *err, size_t errlen)
 {
     double t0 = wall_now();
     rod_analysis_opts def = rod_analysis_opts_default();
@@ -67,8 +83,27 @@ rod_status rod_bifurcation_analyse(const rod_scene *scene, const rod_analysis_op
         goto done;
     }
     rod_route_report rr = {0};
-    st = rod_route_to_state(r, s, &sc, +1, &rr);
+    if (start) {
+        if (start->n != r->n || start->length != r->length) {
+            st = ROD_ERR_SCENE;
+            if (err) snprintf(err, errlen, "the start state is not of this scene's mesh (%d nodes, not %d)", start->n, r->n);
+            goto done;
+        }
+        copy_state(start, r);
+        rod_newton_opts no = rod_newton_opts_static(&sc);
+        no.positive_definite = 1;
+        rod_newton_report nr;
+        st = rod_newton_solve(r, s, &no, &nr);
+        rr.reached = st == ROD_OK ? 1.0 : 0.0;
+    } else {
+        st = rod_route_to_state(r, s, &sc, +1, &rr);
+    }
     out->route_wall_s = wall_now() - t0;
+    if (st != ROD_OK && start) {
+        if (err) snprintf(err, errlen, "the given start state does not solve at Delta L = %g (%s)", sc.compression,
+                          rod_status_message(st));
+        goto done;
+    }
     if (st != ROD_OK) {
         if (err)
             snprintf(err, errlen, "could not reach the upper state at Delta L = %g (%s, %.0f%% of the route done)",

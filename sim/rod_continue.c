@@ -177,6 +177,15 @@ const rod_event *rod_tracer_events(const rod_tracer *t, int *n)
     return t->events;
 }
 
+double rod_tracer_event_state(rod_tracer *t, int e)
+{
+    if (e < 0 || e >= t->nevents || !t->modes[e]) return NAN;
+    rod_snapshot_load(t->r, &t->estate[e].snap);
+    rod_load_apply(t->r, &t->load, t->estate[e].lambda);
+    rod_frames_update(t->r);
+    return t->estate[e].lambda;
+}
+
 const double *rod_tracer_mode(const rod_tracer *t, int e)
 {
     return (e >= 0 && e < t->nevents) ? t->modes[e] : NULL;
@@ -590,6 +599,13 @@ static int locate_event(rod_tracer *t, rod_branch *b, const cpoint *q, double h,
     e->load_projection = fn > 0.0 ? fabs(vf) / sqrt(fn) : 0.0;
     e->fold = (t->lo.tl > 0.0) != (t->hi.tl > 0.0);
     e->kind = classify(e->parity, e->fold);
+    /* On a C2-symmetric branch a turning point's critical mode is even: the load path of a
+     * symmetric state cannot turn on an odd mode. An odd mode nearest zero at a symmetric fold
+     * means a pitchfork lies just past it on the unstable side (within about 2e-3 in Gamma of the
+     * codim-2 point, measured at N = 61): the eigenvalue that crossed is the even one, and the
+     * event is the saddle-node. (An imperfect pitchfork, the limit point of an asymmetric state,
+     * keeps its classification.) */
+    if (e->fold && e->kind == ROD_EVENT_PITCHFORK && rod_state_asymmetry(t->r) < 1e-9) e->kind = ROD_EVENT_SADDLE_NODE;
     rod_snapshot_load(t->r, &t->lo.snap);
     rod_load_apply(t->r, &t->load, t->lo.lambda);
     rod_frames_update(t->r);

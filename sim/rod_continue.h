@@ -160,6 +160,10 @@ double rod_tracer_worst_residual(const rod_tracer *t);
 /* The events found so far, in the order found. */
 const rod_event *rod_tracer_events(const rod_tracer *t, int *n);
 
+/* Loads the state kept with event e (the start of its final bracket) into the tracer's rod and
+ * returns its load; NAN when e has no stored state. */
+double rod_tracer_event_state(rod_tracer *t, int e);
+
 /* The critical mode of event e (rod_nfree values, unit norm) or NULL. */
 const double *rod_tracer_mode(const rod_tracer *t, int e);
 

@@ -10,6 +10,7 @@
 #include "rod_quasi.h"
 #include "rod_route.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -226,7 +227,10 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
     ss.dz_prev = ob.dz;
     ss.a_prev = ob.a;
     ss.slow = 0.1 * sc->snap_speed;
-    long cap = (long)ceil(sc->shear_max / rate / ss.dt_base + o->post_snap_time / ss.dt_base) + 1000;
+    /* Counted in double and saturated: a huge count (post_snap_time = 1e300, or a scene that
+     * skipped rod_scene_check) must not overflow the conversion to long (undefined behaviour). */
+    double cap_steps = ceil(sc->shear_max / rate / ss.dt_base + o->post_snap_time / ss.dt_base) + 1000.0;
+    long cap = cap_steps < 9.0e18 ? (long)cap_steps : LONG_MAX;
     out->stage_shear = 1;
     out->stage_damping = sc->damping > 0.0;
 

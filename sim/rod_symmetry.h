@@ -20,6 +20,25 @@
  * components. */
 double rod_mode_parity(const rod *r, const double *v);
 
+/* The C2 map on perturbations (free-DOF vectors): out = S v. Node i's displacement comes from
+ * node N-1-i with signs (-1, -1, +1) on (x, y, z); the twist angle of edge j from edge N-2-j,
+ * negated (the mirrored edge runs the other way, so its angle about its tangent changes sign:
+ * with frames d1' = R d1, d2' = -R d2, t' = -R t, the material normal R m1 has angle -theta).
+ * On a symmetric state of the perfect scene the free Hessian commutes with S (tested). out must
+ * not alias v. */
+void rod_mode_mirror(const rod *r, const double *v, double *out);
+
+/* Projects v in place onto the even (sign > 0: S v = v) or odd (sign < 0: S v = -v) subspace,
+ * (v + sign S v) / 2; scratch holds rod_nfree(r) values. */
+void rod_mode_project(const rod *r, int sign, double *v, double *scratch);
+
+/* Replaces the state by its C2-symmetric part: each free node's position by the mean of itself and
+ * the rotated image of its mirror node, each free twist angle by the mean of itself and minus its
+ * mirror edge's (frames that arrived symmetric, as the route's do, keep that relation). Near a
+ * pitchfork an odd displacement costs almost no residual, so solvers accumulate one along the odd
+ * critical mode; it must be removed before the parameters move. Frames are not updated. */
+void rod_state_symmetrize(rod *r);
+
 /* How far the current state is from C2-symmetric: max over nodes of |x_i - S x_{N-1-i}| / l. */
 double rod_state_asymmetry(const rod *r);
 

@@ -86,5 +86,18 @@ int rod_scene_check(const rod_scene *s, char *msg, size_t msglen, char *key, siz
     }
     if (!(s->compression >= 0.0 && s->compression < 1.0))
         return fail(msg, msglen, key, keylen, "protocol.compression", "Delta L must lie in [0, 1)");
+    /* The shear ramp at the base step: Delta W_max l / v / dt steps. Counted in double, so a
+     * dt of 1e-300 gives a huge count, never an overflow; the key named is the one whose value
+     * is further below the paper's (dt = 1 ms, v = 0.01 m/s). */
+    double steps = s->shear_max * s->length / s->shear_rate / s->dt;
+    if (!(steps <= ROD_SCENE_MAX_STEPS)) {
+        int blame_dt = (s->dt / 1e-3) <= (s->shear_rate / 0.01);
+        snprintf(buf, sizeof buf,
+                 "the shear ramp would take %.3g time steps at %s = %g (more than %.0e; "
+                 "Delta W_max l / v / dt)",
+                 steps, blame_dt ? "solver.dt" : "protocol.shear_rate",
+                 blame_dt ? s->dt : s->shear_rate, ROD_SCENE_MAX_STEPS);
+        return fail(msg, msglen, key, keylen, blame_dt ? "solver.dt" : "protocol.shear_rate", buf);
+    }
     return 0;
 }

@@ -64,6 +64,11 @@ typedef struct rod_scene {
  * rho = 1000 kg/m^3, N = 201, dt = 1 ms, 0.01 m/s, Delta L = 0.5, phi = 90 deg, Gamma = 0.13). */
 rod_scene rod_scene_default(void);
 
+/* Most time steps a scene's shear ramp may need (shear_max * length / shear_rate / dt):
+ * rod_scene_check refuses more, naming solver.dt or protocol.shear_rate and the count. 10^12 steps
+ * would already take weeks; the point is that no count reaches the range of a long. */
+#define ROD_SCENE_MAX_STEPS 1e12
+
 /* Cross-field checks. Returns 0 when the scene is usable; otherwise non-zero, writes a message
  * to msg and the "section.key" most to blame to key (both may be NULL). */
 int rod_scene_check(const rod_scene *s, char *msg, size_t msglen, char *key, size_t keylen);

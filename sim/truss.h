@@ -209,6 +209,24 @@ void truss_branch_free(truss_branch *b);
 truss_error truss_switch_find(const truss_params *p, const truss_cont_opts *opts, double l2_lo,
                               double l2_hi, double l2_tol, double *l2_switch);
 
+/* ---- the switch as a codimension-2 point (truss_codim2.c) ---- */
+
+typedef struct truss_codim2 {
+    double l2;             /* L2 where the saddle-node and the pitchfork coincide */
+    double mu;             /* the load there */
+    double q[4];           /* the symmetric configuration there */
+    double psi_s;          /* its symmetric angle coordinate */
+    double eig_sym, eig_anti; /* lowest symmetric and antisymmetric Hessian eigenvalues (both ~0) */
+    int iterations;        /* Newton iterations */
+} truss_codim2;
+
+/* The same codimension-2 location as the rod's (rod_boundary.h) on the perfect truss: unknowns the
+ * symmetric configuration (x1, y1; x2 = D - x1, y2 = y1), mu and L2; equations the gradient's two
+ * symmetric components and the lowest eigenvalue of the symmetric and of the antisymmetric block
+ * of the Hessian (truss_stability_eval). Newton with a central-difference Jacobian, from the
+ * saddle-node of the symmetric branch at p->l2 (truss_continue), capped at 50 iterations. */
+truss_error truss_codim2_find(const truss_params *p, const truss_cont_opts *opts, truss_codim2 *out);
+
 /* ---- dynamics (truss_dynamics.c) ---- */
 
 typedef struct truss_dyn_opts {

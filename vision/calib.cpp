@@ -12,6 +12,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 extern "C" vis_calib vis_calib_default(void)
 {
@@ -135,12 +138,21 @@ static bool parse_numbers(const char *s, double *out, int n)
     for (int i = 0; i < n; i++) {
         while (*s == ' ' || *s == '\t' || (i > 0 && *s == ','))
             s++;
+        // Plain decimal only, as every number from outside (docs/hostile-input.md): strtod is
+        // given only the characters of a decimal number, so hex floats, inf and nan never reach
+        // it (vision/ is a floor below config/, whose cfg_number holds the grammar for the rest).
+        size_t span = std::strspn(s, "0123456789+-.eE");
+        if (span == 0 || span >= 64)
+            return false;
+        char num[64];
+        std::memcpy(num, s, span);
+        num[span] = '\0';
         char *end;
         errno = 0;
-        out[i] = std::strtod(s, &end);
-        if (end == s || errno || !std::isfinite(out[i]))
+        out[i] = std::strtod(num, &end);
+        if (end != num + span || !std::isfinite(out[i]) || (out[i] != 0 && std::fabs(out[i]) < 2.2250738585072014e-308))
             return false;
-        s = end;
+        s += span;
     }
     while (*s == ' ' || *s == '\t' || *s == '\r' || *s == '\n')
         s++;
@@ -151,9 +163,21 @@ extern "C" vis_status vis_calib_load(vis_calib *c, const char *path, vis_error *
 {
     if (!c || !path)
         return vis::fail(err, VIS_ERR_ARG, "vis_calib_load: NULL argument");
-    FILE *f = std::fopen(path, "r");
-    if (!f)
+    // Only a regular file: opened without blocking (a FIFO would wait for a writer for ever).
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    if (fd < 0)
         return vis::fail(err, VIS_ERR_IO, "cannot read calibration %s: %s", path, std::strerror(errno));
+    struct stat fst;
+    if (fstat(fd, &fst) != 0 || !S_ISREG(fst.st_mode)) {
+        close(fd);
+        return vis::fail(err, VIS_ERR_IO, "cannot read calibration %s: not a regular file", path);
+    }
+    fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+    FILE *f = fdopen(fd, "r");
+    if (!f) {
+        close(fd);
+        return vis::fail(err, VIS_ERR_IO, "cannot read calibration %s: %s", path, std::strerror(errno));
+    }
     vis_calib r = vis_calib_default();
     char line[1024];
     int lineno = 0, have_k = 0, have_d = 0;

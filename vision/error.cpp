@@ -42,6 +42,7 @@ extern "C" const char *vis_status_str(vis_status s)
     case VIS_ERR_END: return "end of stream";
     case VIS_ERR_NOT_FOUND: return "pattern not found";
     case VIS_ERR_INTERNAL: return "internal error";
+    case VIS_ERR_TOO_LARGE: return "image too large";
     }
     return "unknown status";
 }

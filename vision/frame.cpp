@@ -4,6 +4,7 @@
 // pointer. Frames are reallocated by the calls that fill them, so a caller can allocate one frame
 // before a loop and reuse it for every read (no allocation per frame once sizes settle).
 #include "vis_internal.hpp"
+#include "image_header.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -69,6 +70,8 @@ extern "C" vis_status vis_frame_load(vis_frame *f, const char *path, vis_error *
     if (!f || !path)
         return vis::fail(err, VIS_ERR_ARG, "vis_frame_load: no frame or path");
     VIS_GUARD(err, VIS_ERR_INTERNAL, {
+        if (vis::image_size_check(path, err) != VIS_OK)
+            return VIS_ERR_TOO_LARGE;
         cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
         if (m.empty())
             return vis::fail(err, VIS_ERR_FORMAT, "cannot read image %s (missing or damaged)", path);

@@ -4,6 +4,7 @@
 // reported as damage (VIS_ERR_FORMAT naming the file), not as the end. Time stamps are the index
 // over an assumed 1 fps since still images carry none (callers with a real rate rescale).
 #include "source.hpp"
+#include "image_header.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -53,6 +54,8 @@ public:
         struct stat st;
         if (stat(f.c_str(), &st) != 0)
             return fail(err, VIS_ERR_END, "image sequence ends before %s", f.c_str());
+        if (image_size_check(f.c_str(), err) != VIS_OK)
+            return err ? err->code : VIS_ERR_TOO_LARGE;
         cv::Mat m = cv::imread(f, cv::IMREAD_GRAYSCALE);
         if (m.empty())
             return fail(err, VIS_ERR_FORMAT, "image %s is damaged or not an image", f.c_str());

@@ -3,12 +3,18 @@
 // Damage detection: the container announces a frame count; a file that stops delivering frames
 // before that count is damaged (truncated or corrupt), and the read says so, naming the last good
 // frame, instead of looking like a clean end. Frames already read stay valid: the caller keeps
-// everything up to the damage. Cameras have no count: a failed grab is an I/O error.
+// everything up to the damage. A file whose container announces no count at all has lost its index
+// (Matroska's duration and cues are written last, so a writer killed by a signal or a full disk
+// leaves none): its end is damage too, never a clean end. Cameras have no count: a failed grab is
+// an I/O error.
 #include "source.hpp"
+#include "image_header.hpp"
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <cerrno>
+#include <cstring>
 #include <sys/stat.h>
 
 namespace vis {
@@ -35,6 +41,11 @@ public:
                             "video %s is damaged: %d of %d announced frames readable (last good "
                             "frame %d)",
                             name.c_str(), index, count, index - 1);
+            if (count <= 0)
+                return fail(err, VIS_ERR_FORMAT,
+                            "video %s is damaged: its container announces no frame count (index "
+                            "missing: the writer was killed or its disk filled?); %d frames readable",
+                            name.c_str(), index);
             return fail(err, VIS_ERR_END, "end of video %s after %d frames", name.c_str(), index);
         }
         if (raw.depth() != CV_8U)
@@ -74,15 +85,35 @@ public:
 Source *source_video_open(const char *path, vis_error *err)
 {
     struct stat st;
-    if (stat(path, &st) != 0 || !S_ISREG(st.st_mode)) {
-        fail(err, VIS_ERR_IO, "video %s: no such file", path);
+    if (stat(path, &st) != 0) {
+        fail(err, VIS_ERR_IO, "video %s: %s", path, std::strerror(errno));
         return nullptr;
     }
+    if (!S_ISREG(st.st_mode)) {
+        fail(err, VIS_ERR_IO, "video %s: not a regular file (%s)", path,
+             S_ISDIR(st.st_mode)    ? "a directory"
+             : S_ISCHR(st.st_mode)  ? "a character device"
+             : S_ISBLK(st.st_mode)  ? "a block device"
+             : S_ISFIFO(st.st_mode) ? "a FIFO"
+                                    : "a socket or other special file");
+        return nullptr;
+    }
+    // A still image opened as a one-frame video: its size from the header, before decoding.
+    if (image_size_check(path, err) != VIS_OK)
+        return nullptr;
     VideoSource *s = new VideoSource;
     s->name = path;
     if (!s->cap.open(path, cv::CAP_FFMPEG) || !s->cap.isOpened()) {
         delete s;
         fail(err, VIS_ERR_FORMAT, "video %s cannot be decoded (not a video or damaged header)", path);
+        return nullptr;
+    }
+    // The stream's frame size from the container, before any frame is decoded.
+    const double fw = s->cap.get(cv::CAP_PROP_FRAME_WIDTH), fh = s->cap.get(cv::CAP_PROP_FRAME_HEIGHT);
+    if (fw > VIS_MAX_IMAGE_SIDE || fh > VIS_MAX_IMAGE_SIDE || fw * fh > VIS_MAX_IMAGE_PIXELS) {
+        delete s;
+        fail(err, VIS_ERR_TOO_LARGE, "image too large: video %s has %.0f x %.0f px frames, above the limit of %d px a side and "
+             "%.0f Mpx", path, fw, fh, VIS_MAX_IMAGE_SIDE, VIS_MAX_IMAGE_PIXELS / 1e6);
         return nullptr;
     }
     const double n = s->cap.get(cv::CAP_PROP_FRAME_COUNT);

@@ -44,8 +44,16 @@ typedef enum vis_status {
     VIS_ERR_FORMAT,      /* content is damaged or not what was expected (video, image, calib file) */
     VIS_ERR_END,         /* end of a frame stream: not a failure, the normal way a loop stops */
     VIS_ERR_NOT_FOUND,   /* a pattern (checkerboard, clamp) was not found in the image */
-    VIS_ERR_INTERNAL     /* an unexpected exception inside OpenCV or the C++ runtime */
+    VIS_ERR_INTERNAL,    /* an unexpected exception inside OpenCV or the C++ runtime */
+    VIS_ERR_TOO_LARGE    /* an image or video frame above VIS_MAX_IMAGE_SIDE / _PIXELS, refused
+                            from its header before decoding */
 } vis_status;
+
+/* Largest image or video frame any reader decodes: a side, and the pixel count (64 Mpx: 8192 x
+ * 8192). Larger ones are refused from their header (PNG, JPEG, BMP, PNM; a video's stream) with
+ * VIS_ERR_TOO_LARGE before a decoder allocates for them. */
+#define VIS_MAX_IMAGE_SIDE 16384
+#define VIS_MAX_IMAGE_PIXELS 67108864.0
 
 typedef struct vis_error {
     vis_status code;     /* same as the returned status */

@@ -2,6 +2,7 @@
  * flag is the only state, file-scope because a signal handler can reach nothing else; it is
  * handed out by railsim_cli_catch_stop() rather than read by name elsewhere. */
 #include "railsim_cli.h"
+#include "cfg_number.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -19,7 +20,7 @@ static void on_signal(int sig)
 int railsim_cli_num(const char *prog, const char *opt, const char *v, double lo, double hi, double *out)
 {
     char *end = NULL;
-    double x = v ? strtod(v, &end) : NAN;
+    double x = v ? cfg_number_strtod(v, &end) : NAN;
     if (!v || end == v || *end || !(x >= lo && x <= hi)) {
         fprintf(stderr, "%s: %s needs a number in [%g, %g], got '%s'\n", prog, opt, lo, hi, v ? v : "");
         return -1;

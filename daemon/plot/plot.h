@@ -11,6 +11,8 @@
  *                       saddle-node squares (the paper's figures 3a and 4a); plot_branches_panels
  *                       puts several side by side (ribbon-sim continue --plot)
  *   plot_sweep          a sweep's regime map: a marker per point, the located boundaries
+ *   plot_boundary       named coloured curves over a sweep's points, an optional special point:
+ *                       the traced regime boundary, fold and pitchfork curves (ribbon-sim boundary)
  *
  * Conventions shared by all of them:
  *   - Quantities are the paper's normalised ones: Delta W = dw/l, Delta Z = dz/l (dimensionless),
@@ -168,12 +170,17 @@ plot_status plot_branches_panels(const char *png_path, const plot_branch_data *p
 
 /* plot_sweep: the regime map of a parameter sweep (ribbon-sim sweep --plot). Each classified
  * point is a marker: circle asymmetric (pitchfork first), square symmetric (saddle-node first),
- * cross otherwise (no snap, failed). Located boundaries are lines (dark grey, solid or dashed),
- * optionally with small diamonds at their points. Axes and their meaning are the caller's: phi
- * and Gamma for a phase diagram, Gamma and the first instability's Delta W for one phi. */
+ * triangle no snap, cross failed (PLOT_REGIME_UNKNOWN); a point where no stable state was found
+ * is a grey diamond, with a grey bar up to where the state was last found. Located boundaries
+ * are lines (dark grey, solid or dashed), optionally with small diamonds at their points. With
+ * legend, a legend on the right names every kind of marker drawn and each line's text. Axes and
+ * their meaning are the caller's: phi and Gamma for a phase diagram, Gamma and the first
+ * instability's Delta W for one phi. */
 typedef struct plot_sweep_point {
     double x, y;        /* NaN in either: the point is skipped */
     plot_regime regime;
+    bool no_state;      /* no stable state found here: a grey diamond (regime ignored) */
+    double bar_to;      /* with no_state: a grey bar from y to bar_to (NaN or y: none) */
 } plot_sweep_point;
 
 typedef struct plot_sweep_line {
@@ -181,6 +188,7 @@ typedef struct plot_sweep_line {
     size_t n;
     bool dashed;         /* dashed (a boundary between other regimes) or solid */
     bool marked;         /* a small diamond at every point */
+    const char *legend;  /* the legend's text for this kind of line (NULL: not in the legend) */
 } plot_sweep_line;
 
 typedef struct plot_sweep_data {
@@ -192,10 +200,51 @@ typedef struct plot_sweep_data {
     const plot_sweep_line *lines;
     size_t n_lines;
     int width_px, height_px;         /* 0 = default */
+    bool legend;                     /* a legend on the right of the axes */
 } plot_sweep_data;
 
 /* Nothing to draw, span [0, 1] x [0, 1], default size. */
 void plot_sweep_data_default(plot_sweep_data *d);
 plot_status plot_sweep(const char *png_path, const plot_sweep_data *d, char *why, size_t why_len);
+
+/* plot_boundary: curves of a two-parameter continuation (ribbon-sim boundary --plot): up to
+ * PLOT_BOUNDARY_CURVES_MAX solid lines, one colour each and each named in the legend, optionally
+ * with an open marker at each of its points (circle: a pitchfork curve, square: a saddle-node
+ * curve); under them a sweep's classified points in grey with plot_sweep's markers (circle
+ * asymmetric, square symmetric, cross otherwise); optionally one special point (a codimension-2
+ * point) as a star on a dashed vertical line through it. The legend, inside at the upper left,
+ * names every curve, each kind of point present, the special point, and a note line of text; the
+ * y axis gets room for it above the data. Axes fit the finite data, padded by 6% (x), 8% (y). */
+#define PLOT_BOUNDARY_CURVES_MAX 6
+
+typedef enum plot_curve_mark {
+    PLOT_CURVE_MARK_NONE = 0, /* a line only */
+    PLOT_CURVE_MARK_CIRCLE,   /* an open circle at every point (pitchforks) */
+    PLOT_CURVE_MARK_SQUARE    /* an open square at every point (saddle-nodes) */
+} plot_curve_mark;
+
+typedef struct plot_boundary_curve {
+    const double *x, *y; /* n points in order; NaN is a gap */
+    size_t n;
+    plot_curve_mark mark;
+    const char *label;   /* the legend's text; NULL = "" */
+} plot_boundary_curve;
+
+typedef struct plot_boundary_data {
+    const char *title;             /* NULL ok */
+    const char *x_label, *y_label; /* NULL = "" */
+    const plot_boundary_curve *curves;
+    size_t n_curves;               /* at most PLOT_BOUNDARY_CURVES_MAX */
+    const plot_sweep_point *points; /* grey markers under the curves */
+    size_t n_points;
+    double star_x, star_y;         /* the special point; NaN = none */
+    const char *star_label;        /* its legend text (the star and the dashed line); NULL = "" */
+    const char *note;              /* a last legend line, text only; NULL = none */
+    int width_px, height_px;       /* 0 = default */
+} plot_boundary_data;
+
+/* Nothing to draw, no special point (NaN), default size. */
+void plot_boundary_data_default(plot_boundary_data *d);
+plot_status plot_boundary(const char *png_path, const plot_boundary_data *d, char *why, size_t why_len);
 
 #endif

@@ -23,6 +23,13 @@ static const unsigned char plot_palette[PLOT_COL_COUNT][3] = {
     [PLOT_COL_MARK_SYM] = {170, 20, 20},
     [PLOT_COL_MARK_OTHER] = {60, 60, 60},
     [PLOT_COL_GRID] = {225, 225, 225},
+    /* Named curves, one colour each: the Okabe-Ito set, apart for colour-blind readers. */
+    [PLOT_COL_SERIES_1] = {0, 114, 178},
+    [PLOT_COL_SERIES_2] = {230, 159, 0},
+    [PLOT_COL_SERIES_3] = {0, 158, 115},
+    [PLOT_COL_SERIES_4] = {204, 121, 167},
+    [PLOT_COL_SERIES_5] = {86, 180, 233},
+    [PLOT_COL_SERIES_6] = {213, 94, 1}, /* one blue step off PLOT_COL_PREDICTED, so tests tell them apart */
 };
 
 void plot_style_rgb(enum plot_color c, int *r, int *g, int *b)

@@ -22,6 +22,12 @@ enum plot_color {
     PLOT_COL_MARK_SYM,       /* dark red: measured symmetric trials */
     PLOT_COL_MARK_OTHER,     /* dark grey: no-snap and unknown trials */
     PLOT_COL_GRID,           /* light grey: grid lines */
+    PLOT_COL_SERIES_1,       /* blue: first of the named curves (plot_boundary) */
+    PLOT_COL_SERIES_2,       /* orange */
+    PLOT_COL_SERIES_3,       /* bluish green */
+    PLOT_COL_SERIES_4,       /* reddish purple */
+    PLOT_COL_SERIES_5,       /* sky blue */
+    PLOT_COL_SERIES_6,       /* vermilion */
     PLOT_COL_COUNT
 };
 
@@ -52,5 +58,6 @@ void plot_style_defaults(void);
 #define PLOT_GLYPH_CROSS "×"
 #define PLOT_GLYPH_DIAMOND_OPEN "◇"
 #define PLOT_GLYPH_TRIANGLE_DOWN "▼"
+#define PLOT_GLYPH_STAR "★"
 
 #endif

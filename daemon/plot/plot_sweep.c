@@ -9,6 +9,7 @@
  */
 #include "plot.h"
 
+#include "plot_legend.h"
 #include "plot_marker.h"
 #include "plot_series.h"
 #include "plot_session.h"
@@ -17,6 +18,7 @@
 #include <math.h>
 #include <plplot.h>
 #include <stdio.h>
+#include <string.h>
 
 void plot_sweep_data_default(plot_sweep_data *d)
 {
@@ -39,22 +41,58 @@ static plot_status sweep_draw(void *vctx, char *why, size_t why_len)
     const plot_sweep_data *d = c->d;
     plcol0(PLOT_COL_INK);
     plwidth(PLOT_WIDTH_THIN);
-    plenv(c->x0, c->x1, c->y0, c->y1, 0, 0);
-    pllab(d->x_label ? d->x_label : "", d->y_label ? d->y_label : "", d->title ? d->title : "");
     double rx = 0.012 * (c->x1 - c->x0);
     double ry = rx / (c->x1 - c->x0) * (c->y1 - c->y0) * c->w / c->h;
+    if (d->legend) {
+        /* Axes on the left half of the page, the legend right of them; markers stay round in
+         * this viewport (0.45 of the width, 0.78 of the height). */
+        pladv(0);
+        plvpor(0.10, 0.55, 0.12, 0.90);
+        plwind(c->x0, c->x1, c->y0, c->y1);
+        plbox("bcnst", 0.0, 0, "bcnstv", 0.0, 0);
+        rx = 0.016 * (c->x1 - c->x0);
+        ry = rx / (c->x1 - c->x0) * (c->y1 - c->y0) * (0.45 * c->w) / (0.78 * c->h);
+    } else {
+        plenv(c->x0, c->x1, c->y0, c->y1, 0, 0);
+    }
+    pllab(d->x_label ? d->x_label : "", d->y_label ? d->y_label : "", d->title ? d->title : "");
+    bool seen[5] = {false, false, false, false, false}, bars = false;
+    /* Grey bars first, under the markers. */
+    for (size_t k = 0; k < d->n_points; k++) {
+        const plot_sweep_point *p = &d->points[k];
+        if (!p->no_state || !isfinite(p->x) || !isfinite(p->y) || !isfinite(p->bar_to) || p->bar_to == p->y)
+            continue;
+        PLFLT bx[4] = {p->x - 0.6 * rx, p->x + 0.6 * rx, p->x + 0.6 * rx, p->x - 0.6 * rx};
+        PLFLT by[4] = {p->y, p->y, p->bar_to, p->bar_to};
+        plcol0(PLOT_COL_CELL_NOSNAP);
+        plpsty(0);
+        plfill(4, bx, by);
+        bars = true;
+    }
     plwidth(1.5);
     plcol0(PLOT_COL_INK);
     for (size_t k = 0; k < d->n_points; k++) {
         const plot_sweep_point *p = &d->points[k];
         if (!isfinite(p->x) || !isfinite(p->y))
             continue;
-        if (p->regime == PLOT_REGIME_ASYMMETRIC)
+        plcol0(PLOT_COL_INK);
+        if (p->no_state) {
+            PLFLT px[4] = {p->x - rx, p->x, p->x + rx, p->x}, py[4] = {p->y, p->y + ry, p->y, p->y - ry};
+            plcol0(PLOT_COL_UNSTABLE);
+            plpsty(0);
+            plfill(4, px, py);
+            plcol0(PLOT_COL_INK);
+            plot_marker_polygon(p->x, p->y, rx, ry, 4, 0.0);
+            seen[4] = true;
+        } else if (p->regime == PLOT_REGIME_ASYMMETRIC)
             plot_marker_polygon(p->x, p->y, rx, ry, 36, 0.0);
         else if (p->regime == PLOT_REGIME_SYMMETRIC)
             plot_marker_polygon(p->x, p->y, rx * M_SQRT2, ry * M_SQRT2, 4, M_PI / 4);
+        else if (p->regime == PLOT_REGIME_NO_SNAP)
+            plot_marker_polygon(p->x, p->y, rx * 1.2, ry * 1.2, 3, M_PI / 2);
         else
             plot_marker_cross(p->x, p->y, rx, ry);
+        if (!p->no_state) seen[p->regime] = true;
     }
     plcol0(PLOT_COL_MARK_OTHER);
     plwidth(2.0);
@@ -69,6 +107,44 @@ static plot_status sweep_draw(void *vctx, char *why, size_t why_len)
     }
     pllsty(PLOT_LSTY_SOLID);
     plwidth(PLOT_WIDTH_THIN);
+    if (d->legend) {
+        plot_legend_entry e[PLOT_LEGEND_MAX];
+        int n = 0;
+        static const char *const mark_text[4] = {"analysis failed (reason in the CSV)",
+                                                 "pitchfork first: asymmetric snap",
+                                                 "saddle-node first: symmetric snap",
+                                                 "no instability up to #gDW = 1: no snap"};
+        static const char *const glyph[4] = {PLOT_GLYPH_CROSS, PLOT_GLYPH_CIRCLE_OPEN, PLOT_GLYPH_SQUARE_OPEN, "△"};
+        static const plot_regime order[4] = {PLOT_REGIME_ASYMMETRIC, PLOT_REGIME_SYMMETRIC, PLOT_REGIME_NO_SNAP,
+                                             PLOT_REGIME_UNKNOWN};
+        for (int k = 0; k < 4; k++)
+            if (seen[order[k]])
+                e[n++] = (plot_legend_entry){mark_text[order[k]], PLOT_LEGEND_KIND_SYMBOL, PLOT_COL_INK, 0, 0,
+                                             glyph[order[k]], 1.2};
+        if (seen[4])
+            e[n++] = (plot_legend_entry){"no stable upper state found", PLOT_LEGEND_KIND_SYMBOL, PLOT_COL_UNSTABLE, 0,
+                                         0, "◆", 1.2};
+        if (bars)
+            e[n++] = (plot_legend_entry){"grey bar: up to where continuation lost it", PLOT_LEGEND_KIND_BOX,
+                                         PLOT_COL_CELL_NOSNAP, 0, 0, NULL, 0};
+        bool marked = false;
+        for (size_t k = 0; k < d->n_lines && n < PLOT_LEGEND_MAX - 1; k++) {
+            const plot_sweep_line *l = &d->lines[k];
+            marked = marked || l->marked;
+            bool dup = !l->legend;
+            for (size_t q = 0; !dup && q < k; q++)
+                dup = d->lines[q].legend && !strcmp(d->lines[q].legend, l->legend);
+            if (!dup)
+                e[n++] = (plot_legend_entry){l->legend, PLOT_LEGEND_KIND_LINE, PLOT_COL_MARK_OTHER,
+                                             l->dashed ? PLOT_LSTY_DOTTED : PLOT_LSTY_SOLID, 2.0, NULL, 0};
+        }
+        if (marked && n < PLOT_LEGEND_MAX)
+            e[n++] = (plot_legend_entry){"boundary located by bisection", PLOT_LEGEND_KIND_SYMBOL, PLOT_COL_MARK_OTHER,
+                                         0, 0, PLOT_GLYPH_DIAMOND_OPEN, 0.6};
+        plschr(0.0, 0.6 * PLOT_CHAR_SCALE);
+        plot_legend_draw(e, n, PL_POSITION_RIGHT | PL_POSITION_OUTSIDE | PL_POSITION_VIEWPORT, 0.03, 0.0);
+        plschr(0.0, PLOT_CHAR_SCALE);
+    }
     return PLOT_OK;
 }
 

@@ -13,5 +13,7 @@ int sim_cmd_bench(int argc, char **argv);
 int sim_cmd_truss(int argc, char **argv);
 int sim_cmd_continue(int argc, char **argv);
 int sim_cmd_sweep(int argc, char **argv);
+int sim_cmd_sweep_merge(int argc, char **argv);
+int sim_cmd_boundary(int argc, char **argv);
 
 #endif

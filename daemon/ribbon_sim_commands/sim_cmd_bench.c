@@ -21,8 +21,10 @@
 #include "rod_protocol.h"
 #include "rod_route.h"
 #include "rod_solver.h"
+#include "sim_bench_sweep.h"
 #include "sim_cmd.h"
 #include "sim_opts.h"
+#include "sim_bench_boundary.h"
 
 #include <gsl/gsl_linalg.h>
 #include <jansson.h>
@@ -34,11 +36,13 @@
 #include <time.h>
 
 static const char usage[] =
-    "usage: ribbon-sim bench --scene FILE [--set section.key=value ...] [--json]\n"
+    "usage: ribbon-sim bench --scene FILE [--set section.key=value ...] [--sweep] [--json]\n"
     "  Measures the scene (the paper's Gamma = 0.13 scene is the reference:\n"
     "  config/scenes/paper-gamma013.ini): banded vs dense Newton iteration, the fixed-step and\n"
     "  fast predictions, the continuation (continue_wall_s), peak memory. Prints one line (one JSON object with --json). Takes about\n"
-    "  a minute.\n";
+    "  a minute. --sweep instead: the 10 x 10 sweep in one process against `mpirun -np 2`\n"
+    "  (sweep_mpi_efficiency) and with a route per point against continued upper states\n"
+    "  (sweep_seed_saving); several minutes (--set mesh.nodes=61 for the README's mesh).\n";
 
 static double now(void)
 {
@@ -122,11 +126,18 @@ static int predict(const rod_scene *sc, int fast, rod_prediction *p)
 
 int sim_cmd_bench(int argc, char **argv)
 {
+    int sweep = 0, out = 1;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--sweep")) sweep = 1;
+        else argv[out++] = argv[i];
+    }
+    argc = out;
     sim_opts o;
     int rc = sim_opts_parse(argc, argv, "json", usage, &o);
     if (rc) return rc == 1 ? 0 : 2;
     rod_scene sc;
     if (!sim_opts_load_scene(&o, &sc)) return 2;
+    if (sweep) return sim_bench_sweep(o.scene, o.sets, o.nsets, o.json);
     double banded = 0, dense = 0, dense_ldlt = 0;
     rod_prediction fixed, fast;
     if (!time_newton(&sc, &banded, &dense, &dense_ldlt)) return 1;
@@ -156,6 +167,11 @@ int sim_cmd_bench(int argc, char **argv)
         sweep_pt += 0.5 * an.wall_s;
         rod_analysis_free(&an);
     }
+    sim_bench_boundary_result bb;
+    if (sim_bench_boundary(&sc, &bb, cerr, sizeof cerr) != 0) {
+        fprintf(stderr, "ribbon-sim bench: boundary: %s\n", cerr);
+        return 1;
+    }
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     double rss_mb = (double)ru.ru_maxrss / 1024.0;
@@ -168,13 +184,18 @@ int sim_cmd_bench(int argc, char **argv)
                           "fast_predict_rel_diff", rel, "peak_rss_mb", rss_mb, "snap_dw_fixed", fixed.snap_dw,
                           "snap_dw_fast", fast.snap_dw, "continue_wall_s", cont_wall, "continue_route_wall_s",
                           cont_route, "continue_first_dw", cont_first, "sweep_point_wall_s", sweep_pt);
+    json_object_set_new(j, "boundary_wall_s", json_real(bb.boundary_wall_s));
+    json_object_set_new(j, "boundary_vs_sweep", json_real(bb.boundary_vs_sweep));
+    json_object_set_new(j, "boundary_sweep_wall_s", json_real(bb.sweep_wall_s));
+    json_object_set_new(j, "boundary_cpu_s", json_real(bb.boundary_cpu_s));
+    json_object_set_new(j, "boundary_sweep_cpu_s", json_real(bb.sweep_cpu_s));
     char *txt = json_dumps(j, JSON_COMPACT | JSON_REAL_PRECISION(6));
     if (o.json) puts(txt);
     else
         printf("bench nodes=%d banded=%.3gs dense=%.3gs ratio=%.0f paper_wall=%.2fs realtime=%.2f fast_wall=%.2fs "
-               "fast_rel_diff=%.2e continue_wall=%.2fs rss=%.1fMB\n",
+               "fast_rel_diff=%.2e continue_wall=%.2fs boundary_wall=%.2fs boundary_vs_sweep=%.1f rss=%.1fMB\n",
                sc.nodes, banded, dense, dense / banded, fixed.wall_s, fixed.sim_time / fixed.wall_s, fast.wall_s, rel,
-               cont_wall, rss_mb);
+               cont_wall, bb.boundary_wall_s, bb.boundary_vs_sweep, rss_mb);
     free(txt);
     json_decref(j);
     return 0;

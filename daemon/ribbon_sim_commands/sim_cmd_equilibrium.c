@@ -9,6 +9,7 @@
 
 #include <gsl/gsl_errno.h>
 #include <jansson.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -66,6 +67,15 @@ int sim_cmd_equilibrium(int argc, char **argv)
     double f[3] = {0, 0, 0};
     for (int node = r->n - 2; node < r->n; node++)
         for (int k = 0; k < 3; k++) f[k] += g[4 * node + k];
+    /* Every number printed is finite: json_real(NaN) is NULL and the key would silently vanish
+       from the JSON (a residual omitted with exit 0, issue 17 item 12). */
+    const double shown[] = {ob.dz, ob.a, ob.a_cam, energy, rep.residual_rel, f[0], f[1], f[2]};
+    for (size_t k = 0; k < sizeof shown / sizeof shown[0]; k++)
+        if (!isfinite(shown[k])) {
+            fprintf(stderr, "ribbon-sim equilibrium: the equilibrium has non-finite values (residual %g): the "
+                            "scene is out of the solver's numeric range\n", rep.residual_rel);
+            goto done;
+        }
     if (o.json) {
         json_t *j = json_object();
         json_object_set_new(j, "dl", json_real(o.dl));

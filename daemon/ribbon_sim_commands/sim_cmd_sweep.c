@@ -1,28 +1,26 @@
-/* sim_cmd_sweep.c: `ribbon-sim sweep`: the phase diagram of the regime over (phi, Gamma).
+/* sim_cmd_sweep.c: `ribbon-sim sweep`: the phase diagram of the regime over (phi, Gamma, Delta L).
  *
- * Design (DESIGN.md section 7: "a list of tasks, each writing one result row"):
- *   phase 1  every grid point (phi_i, Gamma_j) is an independent task: the scene with the fold
- *            angle and position replaced is classified by continuation
- *            (rod_analysis_opts_classify: the primary branch up to its first instability) and
- *            one `point` row is appended to the CSV;
- *   phase 2  for each phi, every pair of neighbouring Gammas with different regimes (asymmetric,
- *            symmetric, or none: no instability on the traced branch) is a task:
- *            bisection in Gamma (each probe a classification, appended as a `probe` row) until
- *            the bracket is narrower than --gamma-tol, then one `boundary` row (the mesh puts
- *            nodes on each Gamma, rod.c, so the boundary is not tied to the grid spacing).
- * Tasks run on --jobs threads (default: every online core); the simulator has no global state.
- * Rows are appended whole under a mutex and flushed, so an interrupted sweep (Ctrl-C stops
- * taking tasks; a kill loses at most the rows being computed) keeps every finished row; rerun
- * the same command and classifications already in the file (points and probes) are reused and
- * finished boundaries skipped. A later MPI launcher can split the same task list.
+ * Design (DESIGN.md section 7: "a list of tasks, each writing one result row"; issue 16): a task
+ * is one row of the diagram, every grid Gamma at one (phi, Delta L) (sim_sweep_task.h: the upper
+ * states by continuation in Gamma from one route, the points classified by continuation in
+ * Delta W, the boundaries bisected in Gamma). A task depends on nothing but the scene and the
+ * grid, so its rows are the same bit for bit whoever runs it: threads of one process (--jobs,
+ * default every online core), the ranks of `mpirun -np K` (sim_sweep_farm.h, a task farm with
+ * rank 0 writing), or the shards of --shard i/N (task t belongs to shard t mod N), joined by
+ * `ribbon-sim sweep-merge`. Rows are appended whole under a mutex and flushed, so an interrupted
+ * sweep (Ctrl-C stops between classifications; a kill loses at most the rows being computed)
+ * keeps every finished row; rerun the same command and classifications already in the file are
+ * reused and finished rows of the diagram skipped.
  *
  * Angles: --phi takes the crease angle magnitude in degrees (the paper's phi); the sign is the
  * scene's (the paper scenes use -90, README "Crease orientation"). */
-#include "rod_bifurcation.h"
+#include "cfg_number.h"
 #include "sim_cmd.h"
 #include "sim_opts.h"
 #include "sim_plot_sweep.h"
+#include "sim_sweep_farm.h"
 #include "sim_sweep_row.h"
+#include "sim_sweep_task.h"
 
 #include <errno.h>
 #include <math.h>
@@ -35,15 +33,21 @@
 #include <unistd.h>
 
 static const char usage[] =
-    "usage: ribbon-sim sweep --scene FILE --phi A:B:n --gamma C:D:m --out FILE.csv [--set k=v ...]\n"
-    "                        [--plot FILE.png] [--jobs K] [--gamma-tol T] [--json]\n"
-    "  Classifies every (phi, Gamma) of the grid by continuation (pitchfork first: asymmetric,\n"
-    "  saddle-node first: symmetric), then locates the boundary Gamma*(phi) by bisection between\n"
-    "  neighbours of different regime, to T in Gamma (default 1e-3). phi is the crease angle\n"
-    "  magnitude in degrees (the scene's sign is kept). Rows go to FILE.csv as they finish\n"
-    "  (kind,phi_deg,gamma,gamma_lo,gamma_hi,regime,first_type,first_dw,first_dz,wall_s,note);\n"
-    "  rerunning an interrupted sweep reuses them. Progress on stderr; --jobs defaults to every\n"
-    "  core. Prints Gamma* per phi (--json: one object). Tip: --set mesh.nodes=61 for speed.\n";
+    "usage: [mpirun -np K] ribbon-sim sweep --scene FILE --phi A:B:n --gamma C:D:m --out FILE.csv\n"
+    "                        [--dl E:F:k] [--set k=v ...] [--plot FILE.png] [--jobs K] [--gamma-tol T]\n"
+    "                        [--shard i/N] [--seed continue|route] [--heartbeat S] [--json]\n"
+    "  Classifies every (phi, Gamma, Delta L) of the grid by continuation (pitchfork first:\n"
+    "  asymmetric, saddle-node first: symmetric), then locates the boundary Gamma*(phi) by\n"
+    "  bisection between neighbours of different regime, to T in Gamma (default 1e-3). phi is the\n"
+    "  crease angle magnitude in degrees (the scene's sign is kept); --dl defaults to the scene's\n"
+    "  Delta L. The upper state of each point is continued from its neighbour in Gamma\n"
+    "  (--seed route: a fresh route per point). Rows go to FILE.csv as they finish (kind,phi_deg,\n"
+    "  gamma,gamma_lo,gamma_hi,dl,regime,first_type,first_dw,first_dz,upper,wall_s,note); rerunning\n"
+    "  an interrupted sweep reuses them. Under mpirun the ranks share the rows of the diagram\n"
+    "  (rank 0 writes; --heartbeat: seconds of silence before a rank is taken for dead, default\n"
+    "  30); --shard i/N (0 <= i < N) runs every N-th row into FILE.csv alone, for\n"
+    "  `ribbon-sim sweep-merge`. Progress on stderr; --jobs defaults to every core. Prints Gamma*\n"
+    "  per phi (--json: one object). Tip: --set mesh.nodes=61 for speed. docs/sweeps.md.\n";
 
 static volatile sig_atomic_t interrupted;
 
@@ -53,21 +57,23 @@ static void on_sigint(int sig)
     interrupted = 1;
 }
 
+typedef struct task {
+    int iphi, idl;
+} task;
+
 typedef struct sweep {
-    rod_scene base;
-    double sign;             /* sign of the scene's crease angle */
-    double *phi, *gamma;
-    int nphi, ngamma;
-    double gamma_tol;
+    sweep_spec spec;
+    double *phi, *gamma, *dl;
+    int nphi, ngamma, ndl;
+    sweep_table known;       /* the rows read at the start (read-only while tasks run) */
     sweep_table table;       /* every row known: read from the file, then appended */
     FILE *out;
     pthread_mutex_t mu;
-    int next, ntasks, done;  /* task counter of the running phase */
+    task *tasks;             /* the row tasks this process (or this farm) runs */
+    int ntasks, next;
+    int points_total, points_done;
     int tty;
     double t0;
-    /* phase 2 tasks */
-    int *btask_phi;
-    double *btask_lo, *btask_hi;
 } sweep;
 
 static double now(void)
@@ -79,9 +85,7 @@ static double now(void)
 
 static int parse_range(const char *flag, const char *v, double *a, double *b, int *n)
 {
-    char extra;
-    if (!v || sscanf(v, "%lf:%lf:%d%c", a, b, n, &extra) != 3 || !isfinite(*a) || !isfinite(*b) || *n < 1 ||
-        *n > 1000) {
+    if (cfg_number_range(v, a, b, n, 1000) != 0) {
         fprintf(stderr, "ribbon-sim sweep: %s needs A:B:n with finite A, B and 1 <= n <= 1000, got '%s'\n", flag,
                 v ? v : "");
         return 0;
@@ -97,215 +101,86 @@ static double *grid(double a, double b, int n)
     return g;
 }
 
-/* Classifies (phi, gamma) into row (kind set by the caller). */
-static void classify(const sweep *sw, double phi, double gamma, sweep_row *row)
-{
-    double t0 = now();
-    memset(row, 0, sizeof *row);
-    row->phi = phi;
-    row->gamma = row->gamma_lo = row->gamma_hi = gamma;
-    rod_scene sc = sw->base;
-    sc.fold_angle_deg = sw->sign * phi;
-    sc.fold_position = gamma;
-    rod_analysis_opts o = rod_analysis_opts_classify();
-    rod_analysis a;
-    char err[256] = "";
-    rod_status st = rod_bifurcation_analyse(&sc, &o, &a, err, sizeof err);
-    if (st != ROD_OK) {
-        snprintf(row->regime, sizeof row->regime, "failed");
-        snprintf(row->first_type, sizeof row->first_type, "none");
-        snprintf(row->note, sizeof row->note, "%.150s", err[0] ? err : rod_status_message(st));
-    } else {
-        snprintf(row->regime, sizeof row->regime, "%s", a.regime);
-        if (a.first >= 0) {
-            const rod_event *e = &a.events[a.first];
-            snprintf(row->first_type, sizeof row->first_type, "%s", rod_event_name(e->kind));
-            row->first_dw = e->at.dw;
-            row->first_dz = e->at.dz;
-        } else {
-            snprintf(row->first_type, sizeof row->first_type, "none");
-            snprintf(row->note, sizeof row->note, "%.150s", a.branches[0].end_reason);
-        }
-        rod_analysis_free(&a);
-    }
-    row->wall_s = now() - t0;
-}
-
-static void progress(sweep *sw, const char *phase)
+static void progress(sweep *sw)
 {
     if (!sw->tty) return;
-    int width = 40, filled = sw->ntasks ? width * sw->done / sw->ntasks : width;
+    /* A task retried after a lost worker passes its points again: never past the total. */
+    int done = sw->points_done < sw->points_total ? sw->points_done : sw->points_total;
+    int width = 40, filled = sw->points_total ? width * done / sw->points_total : width;
     char bar[64];
     for (int i = 0; i < width; i++) bar[i] = i < filled ? '#' : '.';
     bar[width] = '\0';
-    fprintf(stderr, "\r  %s [%s] %d/%d  %.0f s ", phase, bar, sw->done, sw->ntasks, now() - sw->t0);
+    fprintf(stderr, "\r  points [%s] %d/%d  %.0f s ", bar, done, sw->points_total, now() - sw->t0);
 }
 
-/* Appends a row to the table and the file (caller holds the mutex). */
-static int record(sweep *sw, const sweep_row *row)
+/* Every row of every task comes here (any thread): a new one is appended to the table and the
+ * file unless the table has it already (a task retried after a lost worker), whole and flushed. */
+static void write_row(void *ctx, const sweep_row *row, int is_new)
 {
-    if (!sweep_table_add(&sw->table, row)) return 0;
-    sweep_row_write(sw->out, row);
-    fflush(sw->out);
-    return 1;
-}
-
-/* A classification through the cache: the table first, else computed and recorded as a probe. */
-static void lookup_or_classify(sweep *sw, double phi, double gamma, sweep_row *row)
-{
+    sweep *sw = ctx;
     pthread_mutex_lock(&sw->mu);
-    const sweep_row *hit = sweep_table_find(&sw->table, phi, gamma);
-    if (hit) *row = *hit;
-    pthread_mutex_unlock(&sw->mu);
-    if (hit) return;
-    classify(sw, phi, gamma, row);
-    row->kind = 'q';
-    pthread_mutex_lock(&sw->mu);
-    record(sw, row);
+    if (is_new && !sweep_table_find_same(&sw->table, row) && sweep_table_add(&sw->table, row)) {
+        sweep_row_write(sw->out, row);
+        fflush(sw->out);
+    }
+    if (row->kind == 'p') {
+        sw->points_done++;
+        progress(sw);
+    }
     pthread_mutex_unlock(&sw->mu);
 }
 
-static int take_task(sweep *sw)
+static void run_task(void *ctx, int t, sweep_emit_fn emit, void *emit_ctx)
 {
-    pthread_mutex_lock(&sw->mu);
-    int i = (interrupted || sw->next >= sw->ntasks) ? -1 : sw->next++;
-    pthread_mutex_unlock(&sw->mu);
-    return i;
+    sweep *sw = ctx;
+    sweep_run_row(&sw->spec, sw->phi[sw->tasks[t].iphi], sw->dl[sw->tasks[t].idl], &sw->known, emit, emit_ctx,
+                  &interrupted);
 }
 
-static void *points_worker(void *arg)
+static void *thread_main(void *arg)
 {
     sweep *sw = arg;
-    int i;
-    while ((i = take_task(sw)) >= 0) {
-        double phi = sw->phi[i / sw->ngamma], gamma = sw->gamma[i % sw->ngamma];
+    for (;;) {
         pthread_mutex_lock(&sw->mu);
-        int known = sweep_table_find(&sw->table, phi, gamma) != NULL;
+        int t = (interrupted || sw->next >= sw->ntasks) ? -1 : sw->next++;
         pthread_mutex_unlock(&sw->mu);
-        if (!known) {
-            sweep_row row;
-            classify(sw, phi, gamma, &row);
-            row.kind = 'p';
-            pthread_mutex_lock(&sw->mu);
-            record(sw, &row);
-            pthread_mutex_unlock(&sw->mu);
-        }
-        pthread_mutex_lock(&sw->mu);
-        sw->done++;
-        progress(sw, "points    ");
-        pthread_mutex_unlock(&sw->mu);
-    }
-    return NULL;
-}
-
-/* Regimes a boundary may separate: the two snaps and "none" (the upper branch reaches the end of
- * the load range without an instability: no snap). Failed points separate nothing. */
-static int is_regime(const sweep_row *r)
-{
-    return !strcmp(r->regime, "asymmetric") || !strcmp(r->regime, "symmetric") || !strcmp(r->regime, "none");
-}
-
-/* Bisects one grid cell of one phi. A midpoint of a third regime (a narrow band inside the
- * cell, such as "none" between the two snaps) splits the cell: the upper part is pushed and
- * bisected after the lower one, so each boundary gets its own row (at most 8 parts per cell). */
-static void bisect_cell(sweep *sw, double phi, double lo0, double hi0)
-{
-    struct part {
-        double lo, hi;
-        char rlo[16], rhi[16];
-    } stack[8];
-    int top = 0;
-    sweep_row rlo, rhi;
-    lookup_or_classify(sw, phi, lo0, &rlo);
-    lookup_or_classify(sw, phi, hi0, &rhi);
-    if (!is_regime(&rlo) || !is_regime(&rhi) || !strcmp(rlo.regime, rhi.regime)) return;
-    stack[top].lo = lo0;
-    stack[top].hi = hi0;
-    snprintf(stack[top].rlo, sizeof stack[top].rlo, "%s", rlo.regime);
-    snprintf(stack[top].rhi, sizeof stack[top].rhi, "%s", rhi.regime);
-    top++;
-    while (top > 0 && !interrupted) {
-        struct part p = stack[--top];
-        char note[160] = "";
-        for (int it = 0; p.hi - p.lo > sw->gamma_tol && it < 60 && !interrupted; it++) {
-            double mid = 0.5 * (p.lo + p.hi);
-            sweep_row rm;
-            lookup_or_classify(sw, phi, mid, &rm);
-            if (!strcmp(rm.regime, p.rlo)) {
-                p.lo = mid;
-            } else if (!strcmp(rm.regime, p.rhi)) {
-                p.hi = mid;
-            } else if (is_regime(&rm) && top < 8) {
-                stack[top].lo = mid;
-                stack[top].hi = p.hi;
-                snprintf(stack[top].rlo, sizeof stack[top].rlo, "%s", rm.regime);
-                snprintf(stack[top].rhi, sizeof stack[top].rhi, "%s", p.rhi);
-                top++;
-                p.hi = mid;
-                snprintf(p.rhi, sizeof p.rhi, "%s", rm.regime);
-            } else {
-                snprintf(note, sizeof note, "bisection stopped: Gamma %.6g is %s", mid, rm.regime);
-                break;
-            }
-        }
-        if (interrupted) break;
-        sweep_row b;
-        memset(&b, 0, sizeof b);
-        b.kind = 'b';
-        b.phi = phi;
-        b.gamma = 0.5 * (p.lo + p.hi);
-        b.gamma_lo = p.lo;
-        b.gamma_hi = p.hi;
-        snprintf(b.regime, sizeof b.regime, "boundary");
-        snprintf(b.first_type, sizeof b.first_type, "none");
-        if (!note[0]) snprintf(note, sizeof note, "%s below; %s above", p.rlo, p.rhi);
-        snprintf(b.note, sizeof b.note, "%s", note);
-        pthread_mutex_lock(&sw->mu);
-        record(sw, &b);
-        pthread_mutex_unlock(&sw->mu);
+        if (t < 0) return NULL;
+        run_task(sw, t, write_row, sw);
     }
 }
 
-static void *boundary_worker(void *arg)
+/* One process: the tasks on `jobs` threads. */
+static void run_threads(sweep *sw, int jobs)
 {
-    sweep *sw = arg;
-    int i;
-    while ((i = take_task(sw)) >= 0) {
-        bisect_cell(sw, sw->phi[sw->btask_phi[i]], sw->btask_lo[i], sw->btask_hi[i]);
-        pthread_mutex_lock(&sw->mu);
-        sw->done++;
-        progress(sw, "boundaries");
-        pthread_mutex_unlock(&sw->mu);
-    }
-    return NULL;
-}
-
-static void run_phase(sweep *sw, int jobs, void *(*fn)(void *), int ntasks)
-{
-    sw->next = 0;
-    sw->done = 0;
-    sw->ntasks = ntasks;
     pthread_t th[64];
     int started = 0;
-    for (int k = 0; k < jobs && k < 64; k++)
-        if (pthread_create(&th[started], NULL, fn, sw) == 0) started++;
-    if (started == 0) fn(sw); /* no threads available: run in this one */
+    sw->next = 0;
+    for (int k = 0; k < jobs && k < 64 && k < sw->ntasks; k++)
+        if (pthread_create(&th[started], NULL, thread_main, sw) == 0) started++;
+    if (started == 0) thread_main(sw); /* no threads available: run in this one */
     for (int k = 0; k < started; k++) pthread_join(th[k], NULL);
-    if (sw->tty) fputs("\n", stderr);
 }
 
+/* This command's own options, pulled out of argv before the shared ones. */
+typedef struct extra {
+    const char *phi, *gamma, *dl, *plot, *jobs, *tol, *shard, *seed, *heartbeat;
+} extra;
+
 /* Pulls this command's own options out of argv; returns the new argc or -1. */
-static int take_extra(int argc, char **argv, const char **phi, const char **gamma, const char **plot,
-                      const char **jobs, const char **tol)
+static int take_extra(int argc, char **argv, extra *x)
 {
     int out = 1;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
-        const char **dst = !strcmp(a, "--phi")         ? phi
-                           : !strcmp(a, "--gamma")     ? gamma
-                           : !strcmp(a, "--plot")      ? plot
-                           : !strcmp(a, "--jobs")      ? jobs
-                           : !strcmp(a, "--gamma-tol") ? tol
+        const char **dst = !strcmp(a, "--phi")         ? &x->phi
+                           : !strcmp(a, "--gamma")     ? &x->gamma
+                           : !strcmp(a, "--dl")        ? &x->dl
+                           : !strcmp(a, "--plot")      ? &x->plot
+                           : !strcmp(a, "--jobs")      ? &x->jobs
+                           : !strcmp(a, "--gamma-tol") ? &x->tol
+                           : !strcmp(a, "--shard")     ? &x->shard
+                           : !strcmp(a, "--seed")      ? &x->seed
+                           : !strcmp(a, "--heartbeat") ? &x->heartbeat
                                                        : NULL;
         if (!dst) {
             argv[out++] = argv[i];
@@ -323,11 +198,56 @@ static int take_extra(int argc, char **argv, const char **phi, const char **gamm
 static int compare_boundary(const void *a, const void *b)
 {
     const sweep_row *x = *(const sweep_row *const *)a, *y = *(const sweep_row *const *)b;
+    if (x->dl != y->dl) return x->dl < y->dl ? -1 : 1;
     if (x->phi != y->phi) return x->phi < y->phi ? -1 : 1;
     return x->gamma < y->gamma ? -1 : x->gamma > y->gamma;
 }
 
-/* --jobs (default: the cores online, kept to 1..64). 0, or 2 (usage) after saying why. */
+static int on_grid(const double *g, int n, double v)
+{
+    for (int i = 0; i < n; i++)
+        if (fabs(v - g[i]) <= 1e-9 * fmax(1.0, fabs(v))) return 1;
+    return 0;
+}
+
+/* The summary on stdout: the boundaries by Delta L and phi. */
+static void print_summary(const sweep *sw, const char *out, int json, int jobs, int ranks, double ga, double gb)
+{
+    const sweep_row **bs = malloc(sizeof(*bs) * (sw->table.n ? sw->table.n : 1));
+    int nbs = 0, nopoint = 0;
+    for (size_t k = 0; bs && k < sw->table.n; k++) {
+        const sweep_row *r = &sw->table.rows[k];
+        if (r->kind == 'p' && on_grid(sw->phi, sw->nphi, r->phi) && on_grid(sw->dl, sw->ndl, r->dl) &&
+            !strcmp(r->regime, "no-upper"))
+            nopoint++;
+        if (r->kind != 'b' || !on_grid(sw->phi, sw->nphi, r->phi) || !on_grid(sw->dl, sw->ndl, r->dl) ||
+            r->gamma < fmin(ga, gb) || r->gamma > fmax(ga, gb))
+            continue;
+        bs[nbs++] = r;
+    }
+    if (bs) qsort(bs, (size_t)nbs, sizeof *bs, compare_boundary);
+    int npoints = sw->nphi * sw->ngamma * sw->ndl;
+    if (json) {
+        printf("{\"out\":\"%s\",\"points\":%d,\"jobs\":%d,\"ranks\":%d,\"no_upper\":%d,\"wall_s\":%.3f,\"boundaries\":[",
+               out, npoints, jobs, ranks, nopoint, now() - sw->t0);
+        for (int k = 0; k < nbs; k++)
+            printf("%s{\"phi_deg\":%.10g,\"dl\":%.10g,\"gamma\":%.10g,\"gamma_lo\":%.10g,\"gamma_hi\":%.10g,"
+                   "\"note\":\"%s\"}",
+                   k ? "," : "", bs[k]->phi, bs[k]->dl, bs[k]->gamma, bs[k]->gamma_lo, bs[k]->gamma_hi, bs[k]->note);
+        printf("]}\n");
+    } else {
+        printf("sweep        %s: %d x %d x %d grid, %d jobs x %d ranks, %.1f s wall\n", out, sw->nphi, sw->ngamma,
+               sw->ndl, jobs, ranks, now() - sw->t0);
+        if (nopoint) printf("no upper     %d grid points (no stable upper state reached; evidence in the notes)\n", nopoint);
+        if (nbs == 0) printf("boundary     none in the grid (one regime throughout, or failures)\n");
+        for (int k = 0; k < nbs; k++)
+            printf("boundary     phi %6.2f deg, Delta L %.3g: Gamma* = %.4f (bracket %.4f .. %.4f; %s)\n", bs[k]->phi,
+                   bs[k]->dl, bs[k]->gamma, bs[k]->gamma_lo, bs[k]->gamma_hi, bs[k]->note);
+    }
+    free(bs);
+}
+
+/* --jobs (default every online core, at most 64). 0, or 2 (usage) after saying why. */
 static int parse_jobs(const char *jobs_s, long *out)
 {
     long jobs = sysconf(_SC_NPROCESSORS_ONLN);
@@ -351,7 +271,7 @@ static int parse_gamma_tol(const char *tol_s, double *out)
     *out = 1e-3;
     if (tol_s) {
         char *end;
-        *out = strtod(tol_s, &end);
+        *out = cfg_number_strtod(tol_s, &end);
         if (*end || !(*out > 0.0) || !isfinite(*out)) {
             fprintf(stderr, "ribbon-sim sweep: --gamma-tol needs a positive number, got '%s'\n", tol_s);
             return 2;
@@ -360,151 +280,190 @@ static int parse_gamma_tol(const char *tol_s, double *out)
     return 0;
 }
 
-/* Phase 2 tasks from the grid's regimes: every pair of neighbouring Gammas of one phi whose
- * regimes differ and whose boundary is not in the table yet. The number of tasks, or -1 when
- * memory runs out. */
-static int boundary_tasks(sweep *sw)
+/* "--shard i/N": 0 <= i < N. */
+static int parse_shard(const char *v, int *i, int *n)
 {
-    int np = sw->nphi, ng = sw->ngamma;
-    int cap = np * (ng > 1 ? ng - 1 : 1), nb = 0;
-    sw->btask_phi = malloc(sizeof(int) * (size_t)cap);
-    sw->btask_lo = malloc(sizeof(double) * (size_t)cap);
-    sw->btask_hi = malloc(sizeof(double) * (size_t)cap);
-    if (!sw->btask_phi || !sw->btask_lo || !sw->btask_hi) return -1;
-    for (int i = 0; i < np && !interrupted; i++)
-        for (int j = 0; j + 1 < ng; j++) {
-            const sweep_row *a = sweep_table_find(&sw->table, sw->phi[i], sw->gamma[j]);
-            const sweep_row *b = sweep_table_find(&sw->table, sw->phi[i], sw->gamma[j + 1]);
-            if (!a || !b || !is_regime(a) || !is_regime(b) || !strcmp(a->regime, b->regime)) continue;
-            if (sweep_table_find_boundary(&sw->table, sw->phi[i], sw->gamma[j], sw->gamma[j + 1])) continue;
-            sw->btask_phi[nb] = i;
-            sw->btask_lo[nb] = sw->gamma[j];
-            sw->btask_hi[nb] = sw->gamma[j + 1];
-            nb++;
-        }
-    return nb;
+    char extra;
+    if (!v) {
+        *i = 0;
+        *n = 1;
+        return 1;
+    }
+    if (sscanf(v, "%d/%d%c", i, n, &extra) != 2 || *n < 1 || *n > 100000 || *i < 0 || *i >= *n) {
+        fprintf(stderr, "ribbon-sim sweep: --shard needs i/N with 0 <= i < N, got '%s'\n", v);
+        return 0;
+    }
+    return 1;
 }
 
-/* Summary: the boundaries inside the grid, by phi (text, or one JSON line). */
-static void print_summary(const sweep *sw, const sim_opts *o, long jobs, double ga, double gb)
+/* RIBBON_SWEEP_TEST_DIE=rank:n (tests only, sim_sweep_farm.h). */
+static void test_hook(sweep_farm_opts *fo)
 {
-    int np = sw->nphi, ng = sw->ngamma;
-    const sweep_row **bs = malloc(sizeof(*bs) * (sw->table.n ? sw->table.n : 1));
-    int nbs = 0;
-    for (size_t k = 0; bs && k < sw->table.n; k++) {
-        const sweep_row *r = &sw->table.rows[k];
-        if (r->kind != 'b') continue;
-        for (int i = 0; i < np; i++)
-            if (fabs(r->phi - sw->phi[i]) <= 1e-9 * fmax(1.0, fabs(r->phi)) && r->gamma >= fmin(ga, gb) &&
-                r->gamma <= fmax(ga, gb)) {
-                bs[nbs++] = r;
-                break;
-            }
-    }
-    if (bs) qsort(bs, (size_t)nbs, sizeof *bs, compare_boundary);
-    if (o->json) {
-        printf("{\"out\":\"%s\",\"points\":%d,\"jobs\":%ld,\"wall_s\":%.3f,\"boundaries\":[", o->out, np * ng, jobs,
-               now() - sw->t0);
-        for (int k = 0; k < nbs; k++)
-            printf("%s{\"phi_deg\":%.10g,\"gamma\":%.10g,\"gamma_lo\":%.10g,\"gamma_hi\":%.10g,\"note\":\"%s\"}",
-                   k ? "," : "", bs[k]->phi, bs[k]->gamma, bs[k]->gamma_lo, bs[k]->gamma_hi, bs[k]->note);
-        printf("]}\n");
-    } else {
-        printf("sweep        %s: %d x %d grid, %d jobs, %.1f s wall\n", o->out, np, ng, (int)jobs, now() - sw->t0);
-        if (nbs == 0) printf("boundary     none in the grid (one regime throughout, or failures)\n");
-        for (int k = 0; k < nbs; k++)
-            printf("boundary     phi %6.2f deg: Gamma* = %.4f (bracket %.4f .. %.4f; %s)\n", bs[k]->phi, bs[k]->gamma,
-                   bs[k]->gamma_lo, bs[k]->gamma_hi, bs[k]->note);
-    }
-    free(bs);
+    fo->die_rank = fo->die_task = -1;
+    const char *v = getenv("RIBBON_SWEEP_TEST_DIE");
+    if (v && sscanf(v, "%d:%d", &fo->die_rank, &fo->die_task) != 2) fo->die_rank = fo->die_task = -1;
 }
 
 int sim_cmd_sweep(int argc, char **argv)
 {
-    const char *phi_s = NULL, *gamma_s = NULL, *plot = NULL, *jobs_s = NULL, *tol_s = NULL;
-    argc = take_extra(argc, argv, &phi_s, &gamma_s, &plot, &jobs_s, &tol_s);
+    extra x;
+    memset(&x, 0, sizeof x);
+    argc = take_extra(argc, argv, &x);
     if (argc < 0) return 2;
     sim_opts o;
     int rc = sim_opts_parse(argc, argv, "json out", usage, &o);
     if (rc) return rc == 1 ? 0 : 2;
-    double pa, pb, ga, gb;
-    int np, ng;
-    if (!parse_range("--phi", phi_s, &pa, &pb, &np) || !parse_range("--gamma", gamma_s, &ga, &gb, &ng)) return 2;
+    double pa, pb, ga, gb, da = 0.0, db = 0.0;
+    int np, ng, nd = 1, shard_i, shard_n;
+    if (!parse_range("--phi", x.phi, &pa, &pb, &np) || !parse_range("--gamma", x.gamma, &ga, &gb, &ng)) return 2;
+    if (x.dl && !parse_range("--dl", x.dl, &da, &db, &nd)) return 2;
+    if (!parse_shard(x.shard, &shard_i, &shard_n)) return 2;
     if (!o.out) {
         fprintf(stderr, "ribbon-sim sweep: --out FILE.csv is required\n");
         return 2;
     }
+    if (x.seed && strcmp(x.seed, "continue") && strcmp(x.seed, "route")) {
+        fprintf(stderr, "ribbon-sim sweep: --seed is continue or route, got '%s'\n", x.seed);
+        return 2;
+    }
+    if (pa <= 0.0 || pb <= 0.0 || pa >= 180.0 || pb >= 180.0) {
+        fprintf(stderr, "ribbon-sim sweep: --phi needs crease angles in (0, 180) deg\n");
+        return 2;
+    }
+    if (fmin(ga, gb) <= 0.0 || fmax(ga, gb) >= 0.5) {
+        fprintf(stderr, "ribbon-sim sweep: --gamma needs crease positions in (0, 0.5)\n");
+        return 2;
+    }
+    if (x.dl && (fmin(da, db) <= 0.0 || fmax(da, db) >= 1.0)) {
+        fprintf(stderr, "ribbon-sim sweep: --dl needs compressions in (0, 1)\n");
+        return 2;
+    }
     long jobs;
-    if (parse_jobs(jobs_s, &jobs)) return 2;
+    if (parse_jobs(x.jobs, &jobs)) return 2;
+    sweep_farm_opts fo;
+    memset(&fo, 0, sizeof fo);
+    fo.heartbeat_timeout_s = 30.0;
+    if (x.heartbeat) {
+        char *end;
+        fo.heartbeat_timeout_s = cfg_number_strtod(x.heartbeat, &end);
+        if (*end || !(fo.heartbeat_timeout_s >= 2.0) || !isfinite(fo.heartbeat_timeout_s)) {
+            fprintf(stderr, "ribbon-sim sweep: --heartbeat needs seconds >= 2, got '%s'\n", x.heartbeat);
+            return 2;
+        }
+    }
+    test_hook(&fo);
     sweep sw;
     memset(&sw, 0, sizeof sw);
     interrupted = 0;
-    if (parse_gamma_tol(tol_s, &sw.gamma_tol)) return 2;
-    if (!sim_opts_load_scene(&o, &sw.base)) return 2;
-    sw.sign = sw.base.fold_angle_deg < 0.0 ? -1.0 : 1.0;
+    sw.spec.seed_route = x.seed && !strcmp(x.seed, "route");
+    if (parse_gamma_tol(x.tol, &sw.spec.gamma_tol)) return 2;
+    if (!sim_opts_load_scene(&o, &sw.spec.base)) return 2;
+    if (!x.dl) da = db = sw.spec.base.compression;
+    sw.spec.sign = sw.spec.base.fold_angle_deg < 0.0 ? -1.0 : 1.0;
     sw.phi = grid(pa, pb, np);
     sw.gamma = grid(ga, gb, ng);
+    sw.dl = grid(da, db, nd);
     sw.nphi = np;
     sw.ngamma = ng;
-    int status = 1;
+    sw.ndl = nd;
+    sw.spec.gamma = sw.gamma;
+    sw.spec.ngamma = ng;
+    int status = 1, rank = 0, ranks = 1, mu_init = 0, sig_set = 0;
     char err[256] = "";
-    if (!sw.phi || !sw.gamma) goto done;
-    if (sweep_table_load(o.out, &sw.table, err, sizeof err) != 0) {
-        fprintf(stderr, "ribbon-sim sweep: %s\n", err);
-        goto done;
-    }
-    size_t resumed = sw.table.n;
-    int fresh = access(o.out, F_OK) != 0;
-    sw.out = fopen(o.out, "a");
-    if (!sw.out) {
-        fprintf(stderr, "ribbon-sim sweep: cannot open %s: %s\n", o.out, strerror(errno));
-        goto done;
-    }
-    if (fresh) sweep_row_write_header(sw.out);
-    else sweep_table_fix_tail(o.out, sw.out);
-    pthread_mutex_init(&sw.mu, NULL);
-    sw.tty = isatty(2);
-    sw.t0 = now();
     struct sigaction sa, old;
+    sweep_farm_start(&argc, &argv, &rank, &ranks);
+    if (!sw.phi || !sw.gamma || !sw.dl) goto done;
+    /* Every rank reads the file before rank 0 appends to it. */
+    int loaded = sweep_table_load(o.out, &sw.table, err, sizeof err);
+    sweep_farm_barrier();
+    if (loaded != 0) {
+        if (rank == 0) fprintf(stderr, "ribbon-sim sweep: %s\n", err);
+        goto done;
+    }
+    for (size_t k = 0; k < sw.table.n; k++)
+        if (!sweep_table_add(&sw.known, &sw.table.rows[k])) goto done;
+    /* The row tasks: every (phi, Delta L) of this shard not finished in the file. */
+    sw.tasks = malloc(sizeof(task) * (size_t)(np * nd));
+    if (!sw.tasks) goto done;
+    for (int k = 0; k < nd; k++)
+        for (int i = 0; i < np; i++) {
+            int t = k * np + i;
+            if (t % shard_n != shard_i) continue;
+            sw.points_total += ng;
+            if (sweep_row_complete(&sw.spec, sw.phi[i], sw.dl[k], &sw.table)) {
+                sw.points_done += ng;
+                continue;
+            }
+            sw.tasks[sw.ntasks].iphi = i;
+            sw.tasks[sw.ntasks].idl = k;
+            sw.ntasks++;
+        }
+    pthread_mutex_init(&sw.mu, NULL);
+    mu_init = 1;
+    if (rank == 0) {
+        int fresh = access(o.out, F_OK) != 0;
+        sw.out = fopen(o.out, "a");
+        if (!sw.out) {
+            fprintf(stderr, "ribbon-sim sweep: cannot open %s: %s\n", o.out, strerror(errno));
+            goto done;
+        }
+        if (fresh) sweep_row_write_header(sw.out);
+        else sweep_table_fix_tail(o.out, sw.out);
+        fflush(sw.out); /* a job killed before its first row still leaves a sweep file to resume */
+        sw.tty = isatty(2);
+        if (sw.table.n) fprintf(stderr, "ribbon-sim sweep: resuming %s (%zu rows kept)\n", o.out, sw.table.n);
+    }
+    sw.t0 = now();
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_sigint;
     sigaction(SIGINT, &sa, &old);
-    if (resumed) fprintf(stderr, "ribbon-sim sweep: resuming %s (%zu rows kept)\n", o.out, resumed);
+    sig_set = 1;
+    progress(&sw);
 
-    run_phase(&sw, (int)jobs, points_worker, np * ng);
-
-    int nb = boundary_tasks(&sw);
-    if (nb < 0) goto done_sig;
-    if (!interrupted) run_phase(&sw, (int)jobs, boundary_worker, nb);
+    int left = 0;
+    if (ranks > 1) {
+        left = sweep_farm_run(rank, ranks, sw.ntasks, run_task, &sw, write_row, &sw, &interrupted, &fo, err,
+                              sizeof err);
+        if (rank != 0) {
+            status = 0;
+            goto done;
+        }
+    } else {
+        run_threads(&sw, (int)jobs);
+    }
+    if (sw.tty) fputs("\n", stderr);
     if (interrupted) {
         fprintf(stderr, "ribbon-sim sweep: interrupted; finished rows are in %s, rerun to resume\n", o.out);
         status = 130;
-        goto done_sig;
+        goto done;
     }
-
-    print_summary(&sw, &o, jobs, ga, gb);
+    if (left) {
+        fprintf(stderr, "ribbon-sim sweep: %s; finished rows are in %s, rerun to resume\n", err, o.out);
+        goto done;
+    }
+    print_summary(&sw, o.out, o.json, ranks > 1 ? 1 : (int)jobs, ranks, ga, gb);
     status = 0;
-    if (plot) {
+    if (x.plot) {
         char perr[256];
-        if (sim_plot_sweep(plot, &sw.table, pa, pb, ga, gb, perr, sizeof perr) != 0) {
+        if (sim_plot_sweep(x.plot, &sw.table, pa, pb, ga, gb, sw.dl[0], perr, sizeof perr) != 0) {
             fprintf(stderr, "ribbon-sim sweep: %s\n", perr);
             status = 1;
         }
     }
 
-done_sig:
-    sigaction(SIGINT, &old, NULL);
-    pthread_mutex_destroy(&sw.mu);
 done:
+    if (sig_set) sigaction(SIGINT, &old, NULL);
+    if (mu_init) pthread_mutex_destroy(&sw.mu);
     if (sw.out && fclose(sw.out) != 0) {
         fprintf(stderr, "ribbon-sim sweep: error writing %s\n", o.out);
         status = 1;
     }
-    free(sw.btask_phi);
-    free(sw.btask_lo);
-    free(sw.btask_hi);
+    sweep_farm_stop();
+    free(sw.tasks);
     sweep_table_free(&sw.table);
+    sweep_table_free(&sw.known);
     free(sw.phi);
     free(sw.gamma);
+    free(sw.dl);
     return status;
 }

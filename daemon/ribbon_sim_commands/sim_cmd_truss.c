@@ -7,6 +7,7 @@
  * (2: bad command line, 1: the computation failed, with the reason). The program main owns
  * gsl_set_error_handler_off(); this file never aborts. */
 #include "sim_cmd.h"
+#include "cfg_number.h"
 
 #include "truss.h"
 
@@ -71,7 +72,7 @@ static int parse_double(const char *opt, const char *s, double *out)
     }
     char *end = NULL;
     errno = 0;
-    double v = strtod(s, &end);
+    double v = cfg_number_strtod(s, &end);
     if (end == s || *end != '\0' || errno == ERANGE || !isfinite(v)) {
         fprintf(stderr, "ribbon-sim truss: %s: '%s' is not a finite number\n", opt, s);
         return -1;

@@ -1,5 +1,6 @@
 /* sim_opts.c: shared option parsing for ribbon-sim subcommands (see sim_opts.h). */
 #include "sim_opts.h"
+#include "cfg_number.h"
 #include "scene_file.h"
 
 #include <errno.h>
@@ -20,7 +21,7 @@ static int parse_double(const char *flag, const char *v, double *out)
 {
     char *end;
     errno = 0;
-    double x = strtod(v, &end);
+    double x = cfg_number_strtod(v, &end);
     if (errno || end == v || *end != '\0' || !isfinite(x)) {
         fprintf(stderr, "ribbon-sim: %s needs a finite number, got '%s'\n", flag, v);
         return 0;

@@ -1,7 +1,8 @@
 /* sim_plot_sweep.c: the figure of `ribbon-sim sweep --plot` (see sim_plot_sweep.h), drawn by the
  * plot module (plot.h: plot_sweep, which also contains PLplot's fatal errors). This file only
- * picks the sweep's rows inside the requested box and turns them into plain arrays: a marker per
- * point, and the boundaries, as vertical lines at Gamma* for one phi, or for several phi one line
+ * picks the sweep's rows inside the requested box (and of one Delta L) and turns them into plain
+ * arrays: a marker per point (no-upper points with a bar up to the Gamma where continuation lost
+ * the upper state, read from the row's note), and the boundaries, as vertical lines at Gamma* for one phi, or for several phi one line
  * per kind of boundary (the regimes either side, in the row's note) through its points in order
  * of phi, asymmetric/symmetric solid, the others dashed. */
 #include "sim_plot_sweep.h"
@@ -13,7 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define PAGE_W 900
+#define PAGE_W 1250
 #define PAGE_H 650
 
 static int inside(double v, double a, double b) { return v >= fmin(a, b) - 1e-9 && v <= fmax(a, b) + 1e-9; }
@@ -21,18 +22,20 @@ static int inside(double v, double a, double b) { return v >= fmin(a, b) - 1e-9 
 static int by_phi(const void *a, const void *b)
 {
     const sweep_row *x = a, *y = b;
-    return x->phi < y->phi ? -1 : x->phi > y->phi;
+    if (x->phi != y->phi) return x->phi < y->phi ? -1 : 1;
+    return x->gamma < y->gamma ? -1 : x->gamma > y->gamma;
 }
 
-static plot_regime regime_of(const char *s)
+/* A regime as the legend names it, short enough for its width. */
+static const char *short_regime(const char *r)
 {
-    return !strcmp(s, "asymmetric") ? PLOT_REGIME_ASYMMETRIC
-           : !strcmp(s, "symmetric") ? PLOT_REGIME_SYMMETRIC
-                                     : PLOT_REGIME_UNKNOWN;
+    return !strcmp(r, "none") ? "no snap" : !strcmp(r, "asymmetric") ? "asym." : !strcmp(r, "symmetric") ? "sym." : r;
 }
+
+static int same_dl(double a, double b) { return fabs(a - b) <= 1e-9 * fmax(1.0, fabs(a)); }
 
 int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double phi_b, double gamma_a,
-                   double gamma_b, char *err, size_t errlen)
+                   double gamma_b, double dl, char *err, size_t errlen)
 {
     int line = phi_a == phi_b;
     size_t n = t->n ? t->n : 1;
@@ -41,8 +44,9 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
     plot_sweep_line *lines = malloc(n * sizeof *lines);
     double *lx = malloc(2 * n * sizeof *lx), *ly = malloc(2 * n * sizeof *ly);
     char *done = calloc(n, 1);
+    char (*texts)[96] = malloc(n * sizeof *texts); /* the legend's text of each line */
     int rc = -1;
-    if (!pts || !b || !lines || !lx || !ly || !done) {
+    if (!pts || !b || !lines || !lx || !ly || !done || !texts) {
         snprintf(err, errlen, "out of memory drawing %s", path);
         goto out;
     }
@@ -58,7 +62,9 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
         double y0 = INFINITY, y1 = -INFINITY;
         for (size_t k = 0; k < t->n; k++) {
             const sweep_row *r = &t->rows[k];
-            if (r->kind == 'b' || !inside(r->phi, phi_a, phi_b) || !inside(r->gamma, gamma_a, gamma_b)) continue;
+            if (r->kind == 'b' || !inside(r->phi, phi_a, phi_b) || !inside(r->gamma, gamma_a, gamma_b) ||
+                !same_dl(r->dl, dl))
+                continue;
             if (strcmp(r->first_type, "none") == 0) continue;
             y0 = fmin(y0, r->first_dw);
             y1 = fmax(y1, r->first_dw);
@@ -66,7 +72,7 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
         if (!(y1 > y0)) { y0 = 0.0; y1 = 1.0; }
         d.y0 = y0;
         d.y1 = y1;
-        snprintf(title, sizeof title, "#gf = %g#uo#d: circle pitchfork first, square saddle-node first", phi_a);
+        snprintf(title, sizeof title, "#gf = %g#uo#d, #gDL = %g: the first instability along #gG", phi_a, dl);
         d.title = title;
         d.x_label = "#gG";
         d.y_label = "#gDW at the first instability";
@@ -75,17 +81,24 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
         d.x1 = phi_b;
         d.y0 = gamma_a;
         d.y1 = gamma_b;
-        d.title = "circle: pitchfork first (asymmetric), square: saddle-node first";
+        snprintf(title, sizeof title, "regime of the snap over (#gf, #gG) at #gDL = %g", dl);
+        d.title = title;
         d.x_label = "#gf (deg)";
         d.y_label = "#gG";
     }
     size_t np = 0;
     for (size_t k = 0; k < t->n; k++) {
         const sweep_row *r = &t->rows[k];
-        if (r->kind != 'p' || !inside(r->phi, phi_a, phi_b) || !inside(r->gamma, gamma_a, gamma_b)) continue;
-        plot_regime g = regime_of(r->regime);
-        if (line && g == PLOT_REGIME_UNKNOWN) continue;
-        pts[np++] = (plot_sweep_point){line ? r->gamma : r->phi, line ? r->first_dw : r->gamma, g};
+        if (r->kind != 'p' || !inside(r->phi, phi_a, phi_b) || !inside(r->gamma, gamma_a, gamma_b) ||
+            !same_dl(r->dl, dl))
+            continue;
+        plot_regime g = plot_regime_parse(r->regime);
+        bool no_state = !strcmp(r->regime, "no-upper");
+        /* Only snaps have a Delta W at their first instability. */
+        if (line && (no_state || (g != PLOT_REGIME_ASYMMETRIC && g != PLOT_REGIME_SYMMETRIC))) continue;
+        const char *at = strstr(r->note, "lost at Gamma ");
+        double bar = no_state && at ? strtod(at + 14, NULL) : NAN;
+        pts[np++] = (plot_sweep_point){line ? r->gamma : r->phi, line ? r->first_dw : r->gamma, g, no_state, bar};
     }
     d.points = pts;
     d.n_points = np;
@@ -93,7 +106,8 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
     size_t nb = 0, nl = 0, used = 0;
     for (size_t k = 0; k < t->n; k++) {
         const sweep_row *r = &t->rows[k];
-        if (r->kind == 'b' && inside(r->phi, phi_a, phi_b) && inside(r->gamma, gamma_a, gamma_b)) b[nb++] = *r;
+        if (r->kind == 'b' && inside(r->phi, phi_a, phi_b) && inside(r->gamma, gamma_a, gamma_b) && same_dl(r->dl, dl))
+            b[nb++] = *r;
     }
     qsort(b, nb, sizeof *b, by_phi);
     if (line) {
@@ -103,7 +117,15 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
             lx[used] = lx[used + 1] = b[k].gamma;
             ly[used] = y0;
             ly[used + 1] = y1;
-            lines[nl++] = (plot_sweep_line){&lx[used], &ly[used], 2, true, false};
+            /* Named in the legend by where it is and what it separates ("none": no snap). */
+            char lo[16], hi[16];
+            if (sscanf(b[k].note, "%15s below; %15s above", lo, hi) == 2)
+                snprintf(texts[nl], sizeof texts[nl], "#gG = %.4f: %s below, %s above", b[k].gamma,
+                         short_regime(lo), short_regime(hi));
+            else
+                snprintf(texts[nl], sizeof texts[nl], "#gG = %.4f (bisected)", b[k].gamma);
+            lines[nl] = (plot_sweep_line){&lx[used], &ly[used], 2, true, false, texts[nl]};
+            nl++;
             used += 2;
         }
     } else {
@@ -118,12 +140,15 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
                     m++;
                 }
             bool dashed = !strstr(b[k].note, "asymmetric below; symmetric above");
-            lines[nl++] = (plot_sweep_line){&lx[used], &ly[used], m, dashed, true};
+            lines[nl++] = (plot_sweep_line){&lx[used], &ly[used], m, dashed, true,
+                                            dashed ? "other: no-snap band edges, pitchfork again"
+                                                   : "#gG*: asymmetric below, symmetric above"};
             used += m;
         }
     }
     d.lines = lines;
     d.n_lines = nl;
+    d.legend = true;
     if (plot_sweep(path, &d, err, errlen) == PLOT_OK)
         rc = 0;
 out:
@@ -133,5 +158,6 @@ out:
     free(lx);
     free(ly);
     free(done);
+    free(texts);
     return rc;
 }

@@ -1,12 +1,14 @@
 /* sim_sweep_row.c: reading and writing sweep rows (see sim_sweep_row.h). */
 #include "sim_sweep_row.h"
+#include "cfg_ini.h"
+#include "cfg_number.h"
 
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-static const char header[] = "kind,phi_deg,gamma,gamma_lo,gamma_hi,regime,first_type,first_dw,first_dz,wall_s,note";
+static const char header[] = "kind,phi_deg,gamma,gamma_lo,gamma_hi,dl,regime,first_type,first_dw,first_dz,upper,wall_s,note";
 
 static const char *kind_name(char k) { return k == 'p' ? "point" : k == 'q' ? "probe" : "boundary"; }
 
@@ -18,8 +20,9 @@ void sweep_row_write(FILE *f, const sweep_row *r)
     snprintf(note, sizeof note, "%s", r->note);
     for (char *p = note; *p; p++)
         if (*p == ',' || *p == '\n' || *p == '\r') *p = ';';
-    fprintf(f, "%s,%.17g,%.17g,%.17g,%.17g,%s,%s,%.10g,%.10g,%.4g,%s\n", kind_name(r->kind), r->phi, r->gamma,
-            r->gamma_lo, r->gamma_hi, r->regime, r->first_type, r->first_dw, r->first_dz, r->wall_s, note);
+    fprintf(f, "%s,%.17g,%.17g,%.17g,%.17g,%.17g,%s,%s,%.10g,%.10g,%s,%.4g,%s\n", kind_name(r->kind), r->phi,
+            r->gamma, r->gamma_lo, r->gamma_hi, r->dl, r->regime, r->first_type, r->first_dw, r->first_dz,
+            r->upper[0] ? r->upper : "-", r->wall_s, note);
 }
 
 int sweep_table_add(sweep_table *t, const sweep_row *r)
@@ -46,58 +49,76 @@ static int parse_double(const char *s, double *out)
 {
     char *end;
     errno = 0;
-    double v = strtod(s, &end);
+    double v = cfg_number_strtod(s, &end);
     if (errno || end == s || *end || !isfinite(v)) return 0;
     *out = v;
     return 1;
 }
 
-/* Splits line in place into at most 11 fields (the last takes the rest). */
+#define NFIELDS 13
+
+/* Splits line in place into at most NFIELDS fields (the last takes the rest). */
 static int parse_row(char *line, sweep_row *r)
 {
-    char *f[11];
+    char *f[NFIELDS];
     int n = 0;
     char *p = line;
-    while (n < 11) {
+    while (n < NFIELDS) {
         f[n++] = p;
-        if (n == 11) break;
+        if (n == NFIELDS) break;
         char *c = strchr(p, ',');
         if (!c) break;
         *c = '\0';
         p = c + 1;
     }
-    if (n != 11) return 0;
+    if (n != NFIELDS) return 0;
     memset(r, 0, sizeof *r);
     if (!strcmp(f[0], "point")) r->kind = 'p';
     else if (!strcmp(f[0], "probe")) r->kind = 'q';
     else if (!strcmp(f[0], "boundary")) r->kind = 'b';
     else return 0;
     if (!parse_double(f[1], &r->phi) || !parse_double(f[2], &r->gamma) || !parse_double(f[3], &r->gamma_lo) ||
-        !parse_double(f[4], &r->gamma_hi) || !parse_double(f[7], &r->first_dw) ||
-        !parse_double(f[8], &r->first_dz) || !parse_double(f[9], &r->wall_s))
+        !parse_double(f[4], &r->gamma_hi) || !parse_double(f[5], &r->dl) || !parse_double(f[8], &r->first_dw) ||
+        !parse_double(f[9], &r->first_dz) || !parse_double(f[11], &r->wall_s))
         return 0;
-    if (strlen(f[5]) >= sizeof r->regime || strlen(f[6]) >= sizeof r->first_type) return 0;
-    strcpy(r->regime, f[5]);
-    strcpy(r->first_type, f[6]);
-    snprintf(r->note, sizeof r->note, "%s", f[10]);
+    if (strlen(f[6]) >= sizeof r->regime || strlen(f[7]) >= sizeof r->first_type || strlen(f[10]) >= sizeof r->upper)
+        return 0;
+    strcpy(r->regime, f[6]);
+    strcpy(r->first_type, f[7]);
+    strcpy(r->upper, f[10]);
+    snprintf(r->note, sizeof r->note, "%s", f[12]);
     return 1;
 }
 
 int sweep_table_load(const char *path, sweep_table *t, char *err, size_t errlen)
 {
     memset(t, 0, sizeof *t);
-    FILE *f = fopen(path, "r");
+    char why[160];
+    errno = 0;
+    FILE *f = cfg_open_regular(path, why, sizeof why);
     if (!f) {
         if (errno == ENOENT) return 0;
-        snprintf(err, errlen, "cannot read %s: %s", path, strerror(errno));
+        snprintf(err, errlen, "cannot read %s: %s", path, why);
         return -1;
     }
+    int rc = sweep_table_read(f, path, t, err, errlen);
+    fclose(f);
+    return rc;
+}
+
+int sweep_table_read(FILE *f, const char *path, sweep_table *t, char *err, size_t errlen)
+{
+    memset(t, 0, sizeof *t);
     char line[1024];
-    int lineno = 0, rc = 0;
+    int lineno = 0, rc = 0, continued = 0;
     while (fgets(line, sizeof line, f)) {
-        lineno++;
         size_t len = strlen(line);
         int complete = len > 0 && line[len - 1] == '\n';
+        /* The rest of a line longer than the buffer is not a row of its own. */
+        int tail = continued;
+        continued = !complete;
+        if (tail) continue;
+        lineno++;
         while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r')) line[--len] = '\0';
         if (lineno == 1) {
             if (strcmp(line, header) != 0) {
@@ -121,31 +142,58 @@ int sweep_table_load(const char *path, sweep_table *t, char *err, size_t errlen)
         snprintf(err, errlen, "%s is empty; remove it or name another file", path);
         rc = -1;
     }
-    fclose(f);
     if (rc != 0) sweep_table_free(t);
     return rc;
 }
 
 static int same(double a, double b) { return fabs(a - b) <= 1e-9 * fmax(1.0, fabs(a)); }
 
-const sweep_row *sweep_table_find(const sweep_table *t, double phi, double gamma)
+const sweep_row *sweep_table_find(const sweep_table *t, double phi, double gamma, double dl)
 {
     for (size_t k = 0; k < t->n; k++) {
         const sweep_row *r = &t->rows[k];
         if ((r->kind == 'p' || r->kind == 'q') && strcmp(r->regime, "failed") != 0 && same(r->phi, phi) &&
-            same(r->gamma, gamma))
+            same(r->gamma, gamma) && same(r->dl, dl))
             return r;
     }
     return NULL;
 }
 
-const sweep_row *sweep_table_find_boundary(const sweep_table *t, double phi, double lo, double hi)
+const sweep_row *sweep_table_find_boundary(const sweep_table *t, double phi, double dl, double lo, double hi)
 {
     for (size_t k = 0; k < t->n; k++) {
         const sweep_row *r = &t->rows[k];
-        if (r->kind == 'b' && same(r->phi, phi) && r->gamma >= fmin(lo, hi) && r->gamma <= fmax(lo, hi)) return r;
+        if (r->kind == 'b' && same(r->phi, phi) && same(r->dl, dl) && r->gamma >= fmin(lo, hi) &&
+            r->gamma <= fmax(lo, hi))
+            return r;
     }
     return NULL;
+}
+
+const sweep_row *sweep_table_find_same(const sweep_table *t, const sweep_row *x)
+{
+    for (size_t k = 0; k < t->n; k++) {
+        const sweep_row *r = &t->rows[k];
+        if (r->kind == x->kind && same(r->phi, x->phi) && same(r->gamma, x->gamma) &&
+            same(r->gamma_lo, x->gamma_lo) && same(r->gamma_hi, x->gamma_hi) && same(r->dl, x->dl))
+            return r;
+    }
+    return NULL;
+}
+
+static int kind_rank(char k) { return k == 'p' ? 0 : k == 'q' ? 1 : 2; }
+
+static int cmp(double a, double b) { return a < b ? -1 : a > b; }
+
+int sweep_row_compare(const void *a, const void *b)
+{
+    const sweep_row *x = a, *y = b;
+    int c = cmp(x->dl, y->dl);
+    if (!c) c = cmp(x->phi, y->phi);
+    if (!c) c = kind_rank(x->kind) - kind_rank(y->kind);
+    if (!c) c = cmp(x->gamma, y->gamma);
+    if (!c) c = cmp(x->gamma_lo, y->gamma_lo);
+    return c;
 }
 
 void sweep_table_fix_tail(const char *path, FILE *f)

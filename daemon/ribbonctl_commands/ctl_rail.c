@@ -20,6 +20,7 @@
 #include <string.h>
 
 #include "ctl.h"
+#include "cfg_number.h"
 #include "rail_config.h"
 #include "rig_config.h"
 #include "rail_gcode.h"
@@ -73,7 +74,7 @@ static void usage(FILE *f)
 static int num(const char *opt, const char *v, double *out)
 {
     char *end = NULL;
-    double x = v ? strtod(v, &end) : NAN;
+    double x = v ? cfg_number_strtod(v, &end) : NAN;
     if (!v || end == v || *end || !isfinite(x)) {
         fprintf(stderr, "ribbonctl rail: %s needs a number, got '%s'\n", opt, v ? v : "");
         return -1;
@@ -224,34 +225,89 @@ static void print_status(const rail_cli *c, const rail *r, const rail_status *st
         fprintf(stderr, "ribbonctl rail: %s\n", why);
 }
 
-/* Poll until at rest; Ctrl-C stops the rail. */
+/* Consecutive read errors a wait rides out (a drive's "busy" exception, a garbled reply) before it
+ * gives up on the rail's word and stops it. */
+#define WAIT_READ_RETRIES 5
+
+/* One good reading: up to `tries` polls, a poll period apart. */
+static rail_err poll_retry(rail *r, rail_status *st, int tries)
+{
+    rail_err e = RAIL_E_IO;
+    for (int i = 0; i < tries; i++) {
+        e = rail_status_poll(r, st);
+        if (e == RAIL_OK) return e;
+        rail_clock_sleep(rail_get_clock(r), 1.0 / rail_get_params(r)->poll_hz);
+    }
+    return e;
+}
+
+/* After a command that moved the rail failed: send stop (retried), then poll (each read retried)
+ * until the rail is at rest or timeout_s passes, so the command never exits with the rail moving
+ * and *st is what the rail did. Returns RAIL_OK once a reading shows it at rest. */
+static rail_err stop_and_settle(rail *r, double timeout_s, rail_status *st)
+{
+    rail_clock ck = rail_get_clock(r);
+    double period = 1.0 / rail_get_params(r)->poll_hz;
+    rail_err e = RAIL_E_IO;
+    for (int i = 0; i < WAIT_READ_RETRIES && e != RAIL_OK; i++) {
+        e = rail_stop(r);
+        if (e != RAIL_OK) rail_clock_sleep(ck, period);
+    }
+    double t0 = rail_clock_now(ck);
+    long cap = (long)(timeout_s / period) + 3;
+    for (long i = 0; i < cap; i++) {
+        rail_err ep = poll_retry(r, st, WAIT_READ_RETRIES);
+        if (ep == RAIL_OK && st->state != RAIL_STATE_MOVING && st->state != RAIL_STATE_HOMING) return RAIL_OK;
+        if (ep == RAIL_OK && e != RAIL_OK) e = rail_stop(r); /* the stop did not get through yet */
+        if (rail_clock_now(ck) - t0 > timeout_s) break;
+        rail_clock_sleep(ck, period);
+    }
+    return RAIL_E_TIMEOUT;
+}
+
+/* Poll until at rest; Ctrl-C stops the rail. A read error is retried WAIT_READ_RETRIES times in a
+ * row; after that, and on any other way out but arrival, the rail is stopped before returning. */
 static rail_err wait_rest(rail *r, double timeout_s, rail_status *st)
 {
     double period = 1.0 / rail_get_params(r)->poll_hz;
     rail_clock ck = rail_get_clock(r);
     double t0 = rail_clock_now(ck);
     long cap = (long)(timeout_s / period) + 3;
+    int read_errors = 0;
     for (long i = 0; i < cap; i++) {
         if (g_interrupted) {
-            rail_stop(r);
+            stop_and_settle(r, 5.0, st);
             g_interrupted = 0;
-            rail_wait_idle(r, 5.0, st);
             return rail_set_error(r, RAIL_E_STATE, "interrupted: rail stopped at %.4f mm", st->position_mm);
         }
         rail_err e = rail_status_poll(r, st);
-        if (e != RAIL_OK)
-            return e;
+        if (e != RAIL_OK) {
+            if (++read_errors < WAIT_READ_RETRIES && rail_clock_now(ck) - t0 <= timeout_s) {
+                rail_clock_sleep(ck, period);
+                continue;
+            }
+            char first[256];
+            rail_text_copy(first, sizeof first, rail_last_error(r));
+            rail_err es = stop_and_settle(r, 5.0, st);
+            return rail_set_error(r, e, "%s (%d reads in a row failed); %s at %.4f mm", first, read_errors,
+                                  es == RAIL_OK ? "rail stopped" : "stop sent, rest not confirmed", st->position_mm);
+        }
+        read_errors = 0;
         if (st->state == RAIL_STATE_IDLE)
             return RAIL_OK;
-        if (st->state != RAIL_STATE_MOVING && st->state != RAIL_STATE_HOMING)
-            return rail_set_error(r, st->state == RAIL_STATE_ALARM ? RAIL_E_DEVICE : RAIL_E_STATE,
-                                  "rail in state %s: %s", rail_state_name(st->state), st->message);
+        if (st->state != RAIL_STATE_MOVING && st->state != RAIL_STATE_HOMING) {
+            rail_status bad = *st;
+            stop_and_settle(r, 5.0, st);
+            return rail_set_error(r, bad.state == RAIL_STATE_ALARM ? RAIL_E_DEVICE : RAIL_E_STATE,
+                                  "rail in state %s: %s", rail_state_name(bad.state), bad.message);
+        }
         if (rail_clock_now(ck) - t0 > timeout_s)
             break;
         rail_clock_sleep(ck, period);
     }
-    rail_stop(r);
-    return rail_set_error(r, RAIL_E_TIMEOUT, "not at rest after %.1f s; stop sent", timeout_s);
+    stop_and_settle(r, 5.0, st);
+    return rail_set_error(r, RAIL_E_TIMEOUT, "not at rest after %.1f s; stopped at %.4f mm", timeout_s,
+                          st->position_mm);
 }
 
 static rail_err open_rail(rail_cli *c, rail **r, char *why, size_t n)
@@ -483,12 +539,26 @@ int ctl_rail_main(int argc, char **argv)
         if (e == RAIL_OK)
             e = wait_rest(r, timeout, &st);
     }
+    /* Every way out of a command that may have set the rail moving stops it first, and what is
+       reported is a reading taken after that (issue 17, defect 3). */
+    int moved = needs_value || !strcmp(A, "home") || !strcmp(A, "stop");
     if (e != RAIL_OK) {
         rail_text_copy(why, sizeof why, rail_last_error(r));
-        rail_status_poll(r, &st);
+        if (moved) {
+            if (stop_and_settle(r, 5.0 + timeout, &st) != RAIL_OK) {
+                size_t used = strlen(why);
+                snprintf(why + used, sizeof why - used, "; stop sent, but no reading confirmed the rail at rest");
+            }
+        } else {
+            poll_retry(r, &st, WAIT_READ_RETRIES);
+        }
         rc = 1;
     } else if (strcmp(A, "status")) {
-        rail_status_poll(r, &st);
+        if (poll_retry(r, &st, WAIT_READ_RETRIES) != RAIL_OK) {
+            rail_text_copy(why, sizeof why, rail_last_error(r));
+            e = RAIL_E_IO;
+            rc = 1;
+        }
     }
     print_status(&c, r, &st, e, why);
     rail_close(r);

@@ -32,6 +32,7 @@
 #include <time.h>
 
 #include "ctl.h"
+#include "cfg_number.h"
 #include "rod_protocol.h"
 #include "scene_file.h"
 #include "twin.h"
@@ -77,7 +78,7 @@ static void usage(FILE *f)
 static int parse_num(const char *opt, const char *v, double lo, double hi, double *out)
 {
     char *end = NULL;
-    const double x = v ? strtod(v, &end) : NAN;
+    const double x = v ? cfg_number_strtod(v, &end) : NAN;
     if (!v || end == v || *end || !isfinite(x) || x < lo || x > hi) {
         fprintf(stderr, "ribbonctl render: %s needs a number in [%g, %g], got '%s'\n", opt, lo, hi,
                 v ? v : "");

@@ -29,6 +29,7 @@
 #include <string.h>
 
 #include "ctl.h"
+#include "cfg_number.h"
 #include "vision.h"
 
 #define TRACK_MAX_FRAMES 50000000 /* loop cap: about 19 days at 30 fps */
@@ -81,7 +82,7 @@ static void usage(FILE *f)
 static int parse_num(const char *opt, const char *v, double *out)
 {
     char *end = NULL;
-    const double x = v ? strtod(v, &end) : NAN;
+    const double x = v ? cfg_number_strtod(v, &end) : NAN;
     if (!v || end == v || *end || !isfinite(x)) {
         fprintf(stderr, "ribbonctl track: %s needs a number, got '%s'\n", opt, v ? v : "");
         return -1;
@@ -97,13 +98,13 @@ static int parse_point(const char *opt, const char *v, double out[2])
         fprintf(stderr, "ribbonctl track: %s needs X,Y\n", opt);
         return -1;
     }
-    out[0] = strtod(v, &end);
+    out[0] = cfg_number_strtod(v, &end);
     if (end == v || *end != ',') {
         fprintf(stderr, "ribbonctl track: %s needs X,Y (pixels), got '%s'\n", opt, v);
         return -1;
     }
     const char *w = end + 1;
-    out[1] = strtod(w, &end);
+    out[1] = cfg_number_strtod(w, &end);
     if (end == w || *end || !isfinite(out[0]) || !isfinite(out[1])) {
         fprintf(stderr, "ribbonctl track: %s needs X,Y (pixels), got '%s'\n", opt, v);
         return -1;
@@ -244,7 +245,7 @@ static int shear_load(const char *path, shear_table *t)
             return -1;
         }
         char *w = end + (*end == ',');
-        const double mm = strtod(w, &end);
+        const double mm = cfg_number_strtod(w, &end);
         if (end == w || fr < 0 || fr >= TRACK_MAX_FRAMES || !isfinite(mm)) {
             fprintf(stderr, "ribbonctl track: %s:%d: expected frame,shear_mm\n", path, lineno);
             fclose(f);

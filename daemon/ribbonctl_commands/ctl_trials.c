@@ -16,6 +16,7 @@
 #include <jansson.h>
 
 #include "api.h"
+#include "cfg_number.h"
 #include "ctl.h"
 #include "scene_file.h"
 #include "store.h"
@@ -452,7 +453,7 @@ static int parse_range(const char *s, double *a, double *b, size_t *n)
     double x, y;
     int k;
     if (!s) return 0;
-    if (sscanf(s, "%lf:%lf:%d", &x, &y, &k) != 3 || k < 1 || k > 64 || !isfinite(x) || !isfinite(y)) return -1;
+    if (cfg_number_range(s, &x, &y, &k, 64) != 0) return -1;
     *a = x;
     *b = y;
     *n = (size_t)k;

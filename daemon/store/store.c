@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 store_open_params store_open_params_default(void)
@@ -55,6 +56,16 @@ store_err store_open_ex(const char *path, const store_open_params *p, store **ou
     if (p->busy_timeout_ms < 0)
         return store_fail(why, why_len, STORE_E_INVALID, "busy_timeout_ms must be >= 0 (got %d)",
                           p->busy_timeout_ms);
+    /* Only a regular file is a store: /dev/full or a FIFO would be "opened", and SQLite would
+       leave its -journal and -wal files beside it (issue 17, item 12). */
+    struct stat sb;
+    if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))
+        return store_fail(why, why_len, STORE_E_INVALID, "store %s is not a regular file (%s)", path,
+                          S_ISDIR(sb.st_mode)    ? "a directory"
+                          : S_ISCHR(sb.st_mode)  ? "a character device"
+                          : S_ISBLK(sb.st_mode)  ? "a block device"
+                          : S_ISFIFO(sb.st_mode) ? "a FIFO"
+                                                 : "a socket or other special file");
     store *st = calloc(1, sizeof *st);
     if (!st)
         return store_fail(why, why_len, STORE_E_NOMEM, "out of memory opening %s", path);
@@ -70,6 +81,16 @@ store_err store_open_ex(const char *path, const store_open_params *p, store **ou
     }
     sqlite3_extended_result_codes(st->db, 1);
     sqlite3_busy_timeout(st->db, p->busy_timeout_ms);
+    /* SQLite opens a file it may not write read-only without a word; every write would then fail
+       (ribbond started and answered each trial with 500). Refused here, at start-up. */
+    if (!p->read_only && sqlite3_db_readonly(st->db, "main") == 1) {
+        e = store_fail(why, why_len, STORE_E_IO,
+                       "store %s can only be opened read-only (file or directory permissions, or a "
+                       "read-only file system); a store must be writable",
+                       path);
+        store_close(st);
+        return e;
+    }
     e = store_schema_check_identity(st, path, why, why_len);
     if (e == STORE_OK && p->read_only) {
         if (st->version != STORE_SCHEMA_VERSION)

@@ -1,5 +1,7 @@
 /* trial_replay.c: replay of a recording, stored or outside (see trial_replay.h). */
 #include "trial_replay.h"
+#include "cfg_ini.h"
+#include "cfg_number.h"
 
 #include <errno.h>
 #include <math.h>
@@ -9,18 +11,14 @@
 
 #include <jansson.h>
 
+#include "replay_rails_csv.h"
 #include "snap_detect.h"
 #include "trial_config_text.h"
 #include "trial_record.h"
 #include "trial_specimen.h"
 #include "vision.h"
 
-#define REPLAY_RAILS_MAX 10000000 /* readings in a rails CSV */
 #define REPLAY_SHEAR_START_MM 0.05
-
-typedef struct rail_reading {
-    double t, compress_mm, shear_mm;
-} rail_reading;
 
 struct trial_replay {
     char video[RIG_PATH_MAX];
@@ -71,6 +69,8 @@ static trial_replay *replay_new(char *why, size_t why_len)
     return r;
 }
 
+static int check_video_belongs(trial_replay *r, char *why, size_t why_len);
+
 int trial_replay_from_trial(store *st, int64_t source_id, const char *video, trial_replay **out, char *why,
                             size_t why_len)
 {
@@ -104,6 +104,7 @@ int trial_replay_from_trial(store *st, int64_t source_id, const char *video, tri
     }
     snprintf(r->config_text, tl, "%s# replay of trial %lld\n", config ? config : "", (long long)source_id);
     if (store_samples_get(st, source_id, &r->smp, &r->ns, why, why_len) != STORE_OK) goto fail;
+    if (check_video_belongs(r, why, why_len)) goto fail;
     store_events_state_times(st, source_id, &r->t_check, &r->t_shear, &r->t_return);
     free(config);
     *out = r;
@@ -114,77 +115,54 @@ fail:
     return -1;
 }
 
-/* Reads the rails CSV: t_s,compress_mm,shear_mm per line; an optional header line, '#' comments
- * and blank lines; t strictly increasing; at least two readings. */
+/* The video must be the trial's (issue 17, item 12: any video was accepted): its frames the size
+ * of the recorded region of interest, and, when its container gives a count, as many frames as the
+ * trial stored frame samples. A video shorter than the store says (cut by a kill or a full disk)
+ * is refused here too, never replayed as if whole. */
+static int check_video_belongs(trial_replay *r, char *why, size_t why_len)
+{
+    long recorded = 0, last = -1;
+    for (size_t k = 0; k < r->ns; k++)
+        if (r->smp[k].kind == STORE_SAMPLE_FRAME && r->smp[k].frame > last) {
+            recorded++;
+            last = r->smp[k].frame;
+        }
+    vis_error ve = {0};
+    vis_source *vs = vis_source_open_video(r->video, &ve);
+    vis_frame *frame = vs ? vis_frame_alloc(16, 16, 1, &ve) : NULL;
+    int rc = -1;
+    if (!vs || !frame) {
+        snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
+    } else if (vis_source_read(vs, frame, NULL, &ve) != VIS_OK) {
+        snprintf(why, why_len, "video %.300s: no first frame: %s", r->video, ve.message);
+    } else if (r->rec.roi.w > 0 && r->rec.roi.h > 0 &&
+               (vis_frame_width(frame) != r->rec.roi.w || vis_frame_height(frame) != r->rec.roi.h)) {
+        snprintf(why, why_len, "video %.300s has %dx%d frames; trial %lld recorded %dx%d: not this trial's video",
+                 r->video, vis_frame_width(frame), vis_frame_height(frame), (long long)r->source_id,
+                 r->rec.roi.w, r->rec.roi.h);
+    } else if (vis_source_frame_count(vs) > 0 && recorded > 0 && vis_source_frame_count(vs) != last + 1) {
+        snprintf(why, why_len, "video %.300s has %d frames; trial %lld recorded %ld (frames 0..%ld): %s",
+                 r->video, vis_source_frame_count(vs), (long long)r->source_id, recorded, last,
+                 vis_source_frame_count(vs) < last + 1 ? "the video is incomplete" : "not this trial's video");
+    } else {
+        r->frames_total = vis_source_frame_count(vs);
+        rc = 0;
+    }
+    vis_frame_free(frame);
+    vis_source_close(vs);
+    return rc;
+}
+
+/* Reads the rails CSV (replay_rails_csv.h) into r->rails. */
 static int read_rails(trial_replay *r, const char *path, char *why, size_t why_len)
 {
-    FILE *f = fopen(path, "r");
+    char open_why[160];
+    FILE *f = cfg_open_regular(path, open_why, sizeof open_why);
     if (!f) {
-        snprintf(why, why_len, "rails CSV %.300s: %s", path, strerror(errno));
+        snprintf(why, why_len, "rails CSV %.300s: %s", path, open_why);
         return -1;
     }
-    size_t cap = 0;
-    char line[512];
-    long lineno = 0;
-    int rc = -1, seen_header = 0;
-    while (fgets(line, sizeof line, f)) {
-        lineno++;
-        char *p = line;
-        while (*p == ' ' || *p == '\t') p++;
-        if (*p == '#' || *p == '\n' || *p == '\r' || !*p) continue;
-        double v[3];
-        char *q = p;
-        int k = 0, bad = 0;
-        for (; k < 3 && !bad; k++) {
-            char *e;
-            errno = 0;
-            v[k] = strtod(q, &e);
-            if (e == q || errno || !isfinite(v[k])) {
-                bad = 1;
-                break;
-            }
-            q = e;
-            while (*q == ' ' || *q == '\t') q++;
-            if (k < 2 && *q++ != ',') bad = 1;
-        }
-        if (bad && k == 0 && r->nr == 0 && !seen_header) { /* a header line */
-            seen_header = 1;
-            continue;
-        }
-        while (*q == ' ' || *q == '\t' || *q == '\r' || *q == '\n') q++;
-        if (bad || *q) {
-            snprintf(why, why_len, "rails CSV %.300s line %ld: expected t_s,compress_mm,shear_mm (three finite numbers)",
-                     path, lineno);
-            goto out;
-        }
-        if (r->nr > 0 && !(v[0] > r->rails[r->nr - 1].t)) {
-            snprintf(why, why_len, "rails CSV %.300s line %ld: t_s must increase (%.9g after %.9g)", path, lineno, v[0],
-                     r->rails[r->nr - 1].t);
-            goto out;
-        }
-        if (r->nr == cap) {
-            size_t nc = cap ? 2 * cap : 1024;
-            rail_reading *a = nc <= REPLAY_RAILS_MAX ? realloc(r->rails, nc * sizeof *a) : NULL;
-            if (!a) {
-                snprintf(why, why_len, "rails CSV %.300s: %s", path,
-                         nc > REPLAY_RAILS_MAX ? "too many readings" : "out of memory");
-                goto out;
-            }
-            r->rails = a;
-            cap = nc;
-        }
-        r->rails[r->nr++] = (rail_reading){v[0], v[1], v[2]};
-    }
-    if (ferror(f)) {
-        snprintf(why, why_len, "rails CSV %.300s: read error", path);
-        goto out;
-    }
-    if (r->nr < 2) {
-        snprintf(why, why_len, "rails CSV %.300s: needs at least two readings (t_s,compress_mm,shear_mm)", path);
-        goto out;
-    }
-    rc = 0;
-out:
+    int rc = replay_rails_csv_read(f, path, &r->rails, &r->nr, why, why_len);
     fclose(f);
     return rc;
 }

@@ -487,7 +487,11 @@ static void session_store_result(trial_session *s)
     char w[256];
     if (store_samples_end(s->writer, w, sizeof w) != STORE_OK) session_event(s, NAN, STORE_EVENT_FAULT, w);
     s->writer = NULL;
-    trial_video_close(s->video, w, sizeof w);
+    if (trial_video_close(s->video, w, sizeof w) < 0) { /* the video lost frames: a fault, not done */
+        session_event(s, NAN, STORE_EVENT_FAULT, w);
+        if (s->result.final == TRIAL_DONE) s->result.final = TRIAL_FAILED;
+        if (!s->result.reason[0]) snprintf(s->result.reason, sizeof s->result.reason, "%s", w);
+    }
     s->video = NULL;
     if (s->live) session_live_close(s);
     store_regime reg = trial_regime_of(s->result.snapped, s->result.vision_snapped, s->result.asymmetric);

@@ -25,9 +25,16 @@ trial_roi trial_roi_clip(trial_roi r, int width, int height);
 typedef struct trial_video trial_video;
 /* Opens path for frames of the region's size. */
 trial_video *trial_video_open(const char *path, trial_roi roi, double fps, char *why, size_t why_len);
-/* Crops f to the region and appends it. */
+/* Bytes that must stay free on the video's file system beyond what the next frame may need (0 by
+ * default). The tests' way to make a disk "full" without a small file system (no mount needed). */
+void trial_video_set_min_free(trial_video *v, double bytes);
+/* Crops f to the region and appends it. Fails (-1, why says "video disk full") before writing when
+ * the video's file system has less room than the frame may need plus the reserve: OpenCV's writer
+ * reports no write error, so a full disk must be seen before the frame is lost. */
 int trial_video_add(trial_video *v, const vis_frame *f, char *why, size_t why_len);
-/* Flushes and closes; returns the frames written, or -1 (why says) when closing failed. */
+/* Flushes and closes, then reads the container back; returns the frames written, or -1 (why says
+ * "video incomplete") when the file holds fewer frames than were written or no count (a write the
+ * encoder lost: full disk, file size limit, I/O error). */
 long trial_video_close(trial_video *v, char *why, size_t why_len);
 
 #endif

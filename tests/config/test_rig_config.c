@@ -368,6 +368,10 @@ static void test_bad_values(void **state)
     expect_line(make1(22, "compress_speed_mm_s = 0"), CFG_ERR_RANGE, 22,
                 "trial.compress_speed_mm_s", "(0, 1000] mm/s");
     expect_line(make1(22, "hold_s = inf"), CFG_ERR_VALUE, 22, "trial.hold_s", "not a finite");
+    /* One number grammar (cfg_number.h): plain decimal, no hex floats (issue 17, defect 11). */
+    expect_line(make1(22, "hold_s = 0x1p1"), CFG_ERR_VALUE, 22, "trial.hold_s", "plain decimal");
+    expect_line(make1(22, "hold_s = 0X2"), CFG_ERR_VALUE, 22, "trial.hold_s", "plain decimal");
+    expect_line(make1(22, "hold_s = infinity"), CFG_ERR_VALUE, 22, "trial.hold_s", "not a finite");
     expect_line(make1(24, "fps = "), CFG_ERR_VALUE, 24, "camera.fps", "empty value");
     expect_line(make1(24, "width_px = 640.5"), CFG_ERR_VALUE, 24, "camera.width_px",
                 "not an integer");

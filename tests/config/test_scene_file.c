@@ -18,6 +18,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+#include <sys/stat.h>
 
 #include "scene_file.h"
 
@@ -515,6 +517,13 @@ static void test_overrides_refused(void **state)
     expect_override_error("mesh.nodes=4", CFG_ERR_RANGE, "mesh.nodes", "out of range");
     expect_override_error("ribbon.length=nan", CFG_ERR_VALUE, "ribbon.length", "finite");
     expect_override_error("ribbon.length=2m", CFG_ERR_VALUE, "ribbon.length", "'m'");
+    /* One number grammar (cfg_number.h): plain decimal, no hex floats (issue 17, defect 11). */
+    expect_override_error("protocol.compression=0x1p-1", CFG_ERR_VALUE, "protocol.compression",
+                          "plain decimal");
+    expect_override_error("ribbon.length=0x1", CFG_ERR_VALUE, "ribbon.length", "plain decimal");
+    expect_override_error("ribbon.length=-inf", CFG_ERR_VALUE, "ribbon.length", "finite");
+    /* A subnormal thickness (issue 17, item 12: `equilibrium` exited 0 and omitted residual). */
+    expect_override_error("ribbon.thickness=1e-310", CFG_ERR_VALUE, "ribbon.thickness", "subnormal");
     expect_override_error("protocol.route=back", CFG_ERR_VALUE, "protocol.route", "together");
     /* A failed load leaves the caller's scene untouched. */
     rod_scene s;
@@ -539,6 +548,30 @@ static void test_io_errors(void **state)
     assert_int_equal(cfg_scene_load(NULL, NULL, 0, &s, &err), CFG_ERR_IO);
     /* A NULL error pointer is allowed. */
     assert_int_equal(cfg_scene_load("/nonexistent/scene.ini", NULL, 0, &s, NULL), CFG_ERR_IO);
+}
+
+/* Only regular files are read (issue 17, defect 9): a FIFO with no writer used to block the
+ * open for ever; a directory and a device are named as what they are. alarm() turns a hang into
+ * a failure. */
+static void test_only_regular_files(void **state)
+{
+    (void)state;
+    rod_scene s;
+    cfg_error err;
+    char dir[] = "/tmp/ribbon-scene-fifo-XXXXXX", fifo[64];
+    assert_non_null(mkdtemp(dir));
+    snprintf(fifo, sizeof fifo, "%s/scene.ini", dir);
+    assert_int_equal(mkfifo(fifo, 0600), 0);
+    alarm(10);
+    assert_int_equal(cfg_scene_load(fifo, NULL, 0, &s, &err), CFG_ERR_IO);
+    alarm(0);
+    assert_non_null(strstr(err.message, "not a regular file (a FIFO)"));
+    assert_int_equal(cfg_scene_load(dir, NULL, 0, &s, &err), CFG_ERR_IO);
+    assert_non_null(strstr(err.message, "not a regular file (a directory)"));
+    assert_int_equal(cfg_scene_load("/dev/zero", NULL, 0, &s, &err), CFG_ERR_IO);
+    assert_non_null(strstr(err.message, "not a regular file (a character device)"));
+    unlink(fifo);
+    rmdir(dir);
 }
 
 /* The "Scene files" table of docs/config.md (the reference the README points to) documents every key of the table. */
@@ -724,6 +757,7 @@ int main(void)
         cmocka_unit_test(test_overrides_apply),
         cmocka_unit_test(test_overrides_refused),
         cmocka_unit_test(test_io_errors),
+        cmocka_unit_test(test_only_regular_files),
         cmocka_unit_test(test_readme_documents_every_key),
         cmocka_unit_test(test_fuzz_mutated_scenes),
     };

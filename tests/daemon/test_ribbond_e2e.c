@@ -207,6 +207,59 @@ static void replay_outside_recording(store *st, int64_t id, double meas, double 
     rig_daemon_close(&d, "test done");
 }
 
+/* Issue 17: a replay of another video (item 12) is refused up front; a replay of the trial's own
+ * video cut short (defects 2 and 7: a full disk, a kill) fails saying so, and stores no result as
+ * if the video were whole. */
+static void replay_refuses_wrong_or_cut_video(store *st, int64_t id, const char *dir)
+{
+    char why[512], other[600], cut[600];
+    store_trial src;
+    assert_int_equal(store_trial_get(st, id, &src, why, sizeof why), STORE_OK);
+    /* Another video: 64 x 48 frames. */
+    snprintf(other, sizeof other, "%s/other.mkv", dir);
+    vis_error ve;
+    vis_video_writer *w = vis_video_writer_open(other, 64, 48, 1, 30.0, &ve);
+    assert_non_null(w);
+    vis_frame *f = vis_frame_alloc(64, 48, 1, &ve);
+    for (int i = 0; i < 10; i++) assert_int_equal(vis_video_writer_write(w, f, &ve), VIS_OK);
+    vis_frame_free(f);
+    vis_video_writer_close(w);
+    trial_replay *rep = NULL;
+    assert_int_not_equal(trial_replay_prepare(st, NULL, id, other, &rep, why, sizeof why), 0);
+    printf("replay of another video: %s\n", why);
+    assert_non_null(strstr(why, "not this trial's video"));
+    /* The trial's own video, its second half cut off. */
+    snprintf(cut, sizeof cut, "%s/cut.mkv", dir);
+    FILE *in = fopen(src.video_path, "rb"), *out = fopen(cut, "wb");
+    assert_true(in && out);
+    fseek(in, 0, SEEK_END);
+    long n = ftell(in);
+    fseek(in, 0, SEEK_SET);
+    char *buf = malloc((size_t)n);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)n, in), (size_t)n);
+    assert_int_equal(fwrite(buf, 1, (size_t)(n / 2), out), (size_t)(n / 2));
+    free(buf);
+    fclose(in);
+    fclose(out);
+    int64_t rid = 0;
+    trial_result r;
+    int rc = trial_replay_prepare(st, NULL, id, cut, &rep, why, sizeof why);
+    if (rc == 0) {
+        rc = trial_replay_run(rep, st, NULL, NULL, NULL, &rid, &r, why, sizeof why);
+        trial_replay_free(rep);
+    }
+    printf("replay of the cut video: %s\n", why);
+    assert_int_not_equal(rc, 0);
+    assert_true(strstr(why, "damaged") || strstr(why, "incomplete"));
+    if (rid > 0) {
+        store_trial t;
+        assert_int_equal(store_trial_get(st, rid, &t, why, sizeof why), STORE_OK);
+        assert_int_not_equal(t.status, STORE_STATUS_DONE);
+        assert_int_equal(t.snapped, -1); /* no result stored */
+    }
+}
+
 static void mock_trial_then_replay(void **state)
 {
     (void)state;
@@ -345,6 +398,7 @@ static void mock_trial_then_replay(void **state)
     assert_int_equal(rt.source_trial_id, id);
     assert_int_equal(rt.mode, STORE_MODE_REPLAY);
     replay_outside_recording(st, id, meas, frame_dw);
+    replay_refuses_wrong_or_cut_video(st, id, dir);
     store_close(st);
 }
 

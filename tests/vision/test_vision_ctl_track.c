@@ -19,6 +19,7 @@
 
 #include <jansson.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -368,6 +369,65 @@ static void test_video_without_clamps(void **state)
     assert_int_equal(run(cmd, out, sizeof out), 2);
 }
 
+/* A PNG of only its signature and IHDR chunk (CRC included) claiming w x h pixels. */
+static void write_png_header(const char *path, uint32_t w, uint32_t h)
+{
+    unsigned char b[33] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R'};
+    for (int k = 0; k < 4; k++) {
+        b[16 + k] = (unsigned char)(w >> (24 - 8 * k));
+        b[20 + k] = (unsigned char)(h >> (24 - 8 * k));
+    }
+    b[24] = 8; /* depth 8, grey, no interlace */
+    uint32_t crc = 0xFFFFFFFFu;
+    for (int i = 12; i < 29; i++) {
+        crc ^= b[i];
+        for (int k = 0; k < 8; k++) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+    }
+    crc ^= 0xFFFFFFFFu;
+    for (int k = 0; k < 4; k++) b[29 + k] = (unsigned char)(crc >> (24 - 8 * k));
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(b, 1, sizeof b, f), sizeof b);
+    fclose(f);
+}
+
+/* Issue 17: defect 8 (a 100000 x 100000 PNG read as 0 frames with error null; a 16000 x 16000
+ * one was decoded to 2 GB first) and item 12 (`track /dev/zero` and `track DIR` said "no such
+ * file"). Now: refused from the header with the named error, and the real reason. */
+static void test_hostile_inputs_named(void **state)
+{
+    (void)state;
+    static const struct {
+        uint32_t w, h;
+    } sizes[] = {{100000, 100000}, {2147483647u, 2147483647u}, {16000, 16000}, {16385, 8}};
+    char path[600], cmd[1400], out[8192];
+    for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) {
+        snprintf(path, sizeof path, "%s/huge%zu.png", vt_tmpdir(), i);
+        write_png_header(path, sizes[i].w, sizes[i].h);
+        snprintf(cmd, sizeof cmd, "%s track %s --px-per-mm 2 --json --quiet 2>/dev/null", RIBBONCTL_PATH, path);
+        assert_int_equal(run(cmd, out, sizeof out), 1);
+        printf("%u x %u: %s", sizes[i].w, sizes[i].h, out);
+        assert_non_null(strstr(out, "image too large"));
+        assert_non_null(strstr(out, "refused before decoding"));
+    }
+    snprintf(cmd, sizeof cmd, "%s track /dev/zero --px-per-mm 2 --json --quiet 2>/dev/null", RIBBONCTL_PATH);
+    assert_int_equal(run(cmd, out, sizeof out), 1);
+    assert_non_null(strstr(out, "not a regular file (a character device)"));
+    snprintf(cmd, sizeof cmd, "%s track %s --px-per-mm 2 --json --quiet 2>/dev/null", RIBBONCTL_PATH, vt_tmpdir());
+    assert_int_equal(run(cmd, out, sizeof out), 1);
+    assert_non_null(strstr(out, "not a regular file (a directory)"));
+    snprintf(cmd, sizeof cmd, "%s track %s/none.mkv --px-per-mm 2 --json --quiet 2>/dev/null", RIBBONCTL_PATH,
+             vt_tmpdir());
+    assert_int_equal(run(cmd, out, sizeof out), 1);
+    assert_non_null(strstr(out, "No such file"));
+    /* The image reader of a frame sequence checks each header too. */
+    vis_frame *f = vis_frame_alloc(8, 8, 1, NULL);
+    vis_error err;
+    snprintf(path, sizeof path, "%s/huge0.png", vt_tmpdir());
+    assert_int_equal(vis_frame_load(f, path, &err), VIS_ERR_TOO_LARGE);
+    vis_frame_free(f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -377,6 +437,7 @@ int main(void)
         cmocka_unit_test(test_shear_csv_depth_correction),
         cmocka_unit_test(test_track_with_found_clamps),
         cmocka_unit_test(test_video_without_clamps),
+        cmocka_unit_test(test_hostile_inputs_named),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }

@@ -14,6 +14,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+#include <sys/wait.h>
+#include <signal.h>
 
 #include "vis_test_run.h"
 
@@ -186,6 +189,44 @@ static void test_truncated_video_read_up_to_damage(void **state)
         vis_frame_free(frames[i]);
 }
 
+/* Issue 17, defect 7: a video whose writer was killed (kill -9, a full disk) has no trailer:
+ * Matroska's duration and cues are missing, so the container announces no frame count and every
+ * frame written before the kill reads back, after which the read used to look like a clean end.
+ * Now the end of a file that announced no count is reported as damage (index missing). */
+static void test_killed_writer_video_is_damaged(void **state)
+{
+    (void)state;
+    vis_frame *frames[NF];
+    vis_render_params p;
+    render_frames(frames, &p);
+    char path[600];
+    snprintf(path, sizeof path, "%s/killed.mkv", vt_tmpdir());
+    fflush(NULL);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        vis_error e;
+        vis_video_writer *w = vis_video_writer_open(path, 320, 240, 1, 25.0, &e);
+        if (!w) _exit(3);
+        for (int i = 0; i < 10 * NF; i++) /* enough for ffmpeg to flush most of them to the file */
+            if (vis_video_writer_write(w, frames[i % NF], &e) != VIS_OK) _exit(4);
+        raise(SIGKILL); /* never closed: no trailer */
+        _exit(5);
+    }
+    int status = 0;
+    assert_int_equal(waitpid(pid, &status, 0), pid);
+    assert_true(WIFSIGNALED(status));
+    vis_error err;
+    vis_status last;
+    const int n = read_all(path, &last, &err);
+    printf("killed writer: %d of %d frames, then: %s\n", n, 10 * NF, err.message);
+    assert_true(n > 0 && n <= 10 * NF);
+    assert_int_equal(last, VIS_ERR_FORMAT);
+    assert_non_null(strstr(err.message, "damaged"));
+    for (int i = 0; i < NF; i++)
+        vis_frame_free(frames[i]);
+}
+
 static void test_not_a_video_is_refused(void **state)
 {
     (void)state;
@@ -303,6 +344,7 @@ int main(void)
         cmocka_unit_test(test_ffv1_round_trip_is_bit_exact),
         cmocka_unit_test(test_writer_refuses_lossy_name),
         cmocka_unit_test(test_truncated_video_read_up_to_damage),
+        cmocka_unit_test(test_killed_writer_video_is_damaged),
         cmocka_unit_test(test_not_a_video_is_refused),
         cmocka_unit_test(test_image_sequence),
         cmocka_unit_test(test_synthetic_source),

@@ -609,9 +609,9 @@ static void test_sweep_map(void **state)
     plot_sweep_point pts[6];
     for (int i = 0; i < 6; i++)
         pts[i] = (plot_sweep_point){60.0 + 10.0 * (i % 3), i < 3 ? 0.1 : 0.3,
-                                    i < 3 ? PLOT_REGIME_ASYMMETRIC : PLOT_REGIME_SYMMETRIC};
+                                    i < 3 ? PLOT_REGIME_ASYMMETRIC : PLOT_REGIME_SYMMETRIC, false, NAN};
     double bx[3] = {60, 70, 80}, by[3] = {0.2, 0.21, 0.22};
-    plot_sweep_line line = {bx, by, 3, false, true};
+    plot_sweep_line line = {bx, by, 3, false, true, NULL};
     plot_sweep_data d;
     plot_sweep_data_default(&d);
     d.x0 = 60;
@@ -630,9 +630,87 @@ static void test_sweep_map(void **state)
     assert_png(p, 900, 650);
     assert_true(count_color(p, COUNT_DARK, (region){0.15, 0.9, 0.15, 0.85}) > 300);
     assert_true(count_color(p, PLOT_COL_MARK_OTHER, (region){0.15, 0.9, 0.15, 0.85}) > 100);
+    /* No stable state at one point: a grey diamond and a grey bar up to bar_to; and the legend on
+     * the right, which a map without it does not have. */
+    long right_dark = count_color(p, COUNT_DARK, (region){0.93, 1.0, 0.1, 0.9});
+    pts[0].no_state = true;
+    pts[0].bar_to = 0.2;
+    line.legend = "boundary";
+    d.legend = true;
+    assert_int_equal(plot_sweep(p, &d, why, sizeof why), PLOT_OK);
+    assert_true(count_color(p, PLOT_COL_CELL_NOSNAP, (region){0.0, 0.65, 0.0, 1.0}) > 50);
+    assert_true(count_color(p, PLOT_COL_UNSTABLE, (region){0.0, 0.65, 0.0, 1.0}) > 20);
+    print_message("dark pixels right of the axes: %ld without the legend, %ld with it\n", right_dark,
+                  count_color(p, COUNT_DARK, (region){0.93, 1.0, 0.1, 0.9}));
+    assert_true(count_color(p, COUNT_DARK, (region){0.93, 1.0, 0.1, 0.9}) > right_dark + 100);
     pts[2].y = INFINITY;
     assert_int_equal(plot_sweep(p, &d, why, sizeof why), PLOT_ERR_ARG);
     assert_non_null(strstr(why, "points[2]"));
+}
+
+/* A two-parameter continuation's curves: each in its own colour (none in a colour no curve has),
+ * the special point's dashed line and star add dark pixels in a strip around it, grey sweep
+ * points under the curves; too many curves, Inf and a NULL array are refused with a reason. */
+static void test_boundary_curves(void **state)
+{
+    (void)state;
+    double x[2][20], y[2][20];
+    for (int i = 0; i < 20; i++) {
+        x[0][i] = x[1][i] = 0.1 + 0.01 * i;
+        y[0][i] = 0.5 - 0.002 * i;
+        y[1][i] = 0.3 + 0.004 * i;
+    }
+    y[1][10] = NAN; /* a gap */
+    plot_boundary_curve cv[2] = {{x[0], y[0], 20, PLOT_CURVE_MARK_SQUARE, "fold"},
+                                 {x[1], y[1], 20, PLOT_CURVE_MARK_CIRCLE, "pitchfork"}};
+    plot_sweep_point pts[2] = {{0.12, 0.35, PLOT_REGIME_ASYMMETRIC, false, NAN}, {0.27, 0.45, PLOT_REGIME_SYMMETRIC, false, NAN}};
+    plot_boundary_data d;
+    plot_boundary_data_default(&d);
+    assert_true(isnan(d.star_x) && isnan(d.star_y));
+    d.curves = cv;
+    d.n_curves = 2;
+    d.points = pts;
+    d.n_points = 2;
+    d.width_px = 1000;
+    d.height_px = 700;
+    char why[256];
+    const char *p = out_path("boundary.png"), *q = out_path("boundary-star.png");
+    assert_int_equal(plot_boundary(p, &d, why, sizeof why), PLOT_OK);
+    assert_png(p, 1000, 700);
+    region plot_area = {0.12, 0.9, 0.12, 0.88};
+    assert_true(count_color(p, PLOT_COL_SERIES_1, plot_area) > 500);
+    assert_true(count_color(p, PLOT_COL_SERIES_2, plot_area) > 500);
+    assert_int_equal(count_color(p, PLOT_COL_SERIES_3, WHOLE), 0);
+    assert_true(count_color(p, PLOT_COL_UNSTABLE, plot_area) > 50);
+    d.star_x = 0.2;
+    d.star_y = 0.4;
+    d.star_label = "codim-2 point";
+    d.note = "a note";
+    assert_int_equal(plot_boundary(q, &d, why, sizeof why), PLOT_OK);
+    /* the star sits at x = 0.2, halfway along the data's x span: a strip around the page's middle */
+    region strip = {0.45, 0.6, 0.3, 0.95};
+    assert_true(count_color(q, COUNT_DARK, strip) > count_color(p, COUNT_DARK, strip) + 100);
+    plot_boundary_curve many[PLOT_BOUNDARY_CURVES_MAX + 1];
+    for (int k = 0; k <= PLOT_BOUNDARY_CURVES_MAX; k++) many[k] = cv[0];
+    d.curves = many;
+    d.n_curves = PLOT_BOUNDARY_CURVES_MAX + 1;
+    assert_int_equal(plot_boundary(p, &d, why, sizeof why), PLOT_ERR_ARG);
+    assert_non_null(strstr(why, "curves"));
+    d.curves = cv;
+    d.n_curves = 2;
+    y[0][3] = INFINITY;
+    assert_int_equal(plot_boundary(p, &d, why, sizeof why), PLOT_ERR_ARG);
+    assert_non_null(strstr(why, "curves[0].y"));
+    y[0][3] = 0.4;
+    d.star_y = -INFINITY;
+    assert_int_equal(plot_boundary(p, &d, why, sizeof why), PLOT_ERR_ARG);
+    assert_non_null(strstr(why, "star_y"));
+    d.star_y = 0.4;
+    d.points = NULL;
+    assert_int_equal(plot_boundary(p, &d, why, sizeof why), PLOT_ERR_ARG);
+    assert_int_equal(plot_boundary(p, NULL, why, sizeof why), PLOT_ERR_ARG);
+    unlink(p);
+    unlink(q);
 }
 
 /* ---- PLplot containment -------------------------------------------------------------------- */
@@ -850,6 +928,7 @@ int main(void)
         cmocka_unit_test(test_branches_stable_black_unstable_grey),
         cmocka_unit_test(test_branch_panels_side_by_side),
         cmocka_unit_test(test_sweep_map),
+        cmocka_unit_test(test_boundary_curves),
         cmocka_unit_test(test_missing_driver_is_an_error),
         cmocka_unit_test(test_fatal_error_does_not_exit),
         cmocka_unit_test(test_abort_and_draw_errors_are_reported),

@@ -1,19 +1,23 @@
 /* test_sweep_cli: `ribbon-sim sweep` (daemon/sim_cmd_sweep.c) called in-process on a small
  * grid: the CSV has one point row per grid point and a boundary between the asymmetric and the
  * symmetric regime inside the bracketing grid cell; a rerun resumes (adds no row); a file that is
- * not a sweep file is refused; bad ranges are usage errors. N = 41 keeps it to seconds. */
+ * not a sweep file is refused; bad ranges are usage errors; two shards joined by sweep-merge hold
+ * the same rows as one run; the upper states continued in Gamma classify like a route per point.
+ * N = 41 keeps it to seconds. (The MPI runs: test_sweep_mpi.sh.) */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <cmocka.h>
 
 #include <gsl/gsl_errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
 #include "sim_cmd.h"
+#include "sim_sweep_row.h"
 
 static char csv_path[256];
 
@@ -26,6 +30,27 @@ static int run(const char *gamma_range, const char *out)
     int argc = (int)(sizeof argv / sizeof argv[0]) - 1;
     fflush(stdout);
     return sim_cmd_sweep(argc, argv);
+}
+
+/* sweep with the given grid and extra options (NULL-terminated) into out. */
+static int run_grid(const char *phi, const char *gamma, const char *out, const char *x1, const char *x2)
+{
+    char scene[512];
+    snprintf(scene, sizeof scene, "%s/config/scenes/paper-gamma013.ini", RIBBON_SOURCE_DIR);
+    char *argv[] = {"sweep", "--scene", scene, "--set", "mesh.nodes=41", "--phi", (char *)phi, "--gamma",
+                    (char *)gamma, "--out", (char *)out, "--jobs", "2", (char *)x1, (char *)x2, NULL};
+    int argc = 13 + (x1 != NULL) + (x1 && x2);
+    fflush(stdout);
+    return sim_cmd_sweep(argc, argv);
+}
+
+static sweep_table load_sorted(const char *path)
+{
+    sweep_table t;
+    char err[256];
+    assert_int_equal(sweep_table_load(path, &t, err, sizeof err), 0);
+    qsort(t.rows, t.n, sizeof *t.rows, sweep_row_compare);
+    return t;
 }
 
 static int count_rows(const char *kind, double *gamma)
@@ -112,6 +137,95 @@ static void test_refuses_foreign_file_and_bad_ranges(void **state)
     assert_int_equal(run("0.12:0.2:0", path), 2);
 }
 
+static void test_shards_merge_to_the_same_rows(void **state)
+{
+    (void)state;
+    char one[256], s0[256], s1[256], merged[256];
+    int pid = (int)getpid();
+    snprintf(one, sizeof one, "/tmp/test_sweep_one_%d.csv", pid);
+    snprintf(s0, sizeof s0, "/tmp/test_sweep_s0_%d.csv", pid);
+    snprintf(s1, sizeof s1, "/tmp/test_sweep_s1_%d.csv", pid);
+    snprintf(merged, sizeof merged, "/tmp/test_sweep_merged_%d.csv", pid);
+    unlink(one);
+    unlink(s0);
+    unlink(s1);
+    unlink(merged);
+    assert_int_equal(run_grid("80:100:2", "0.12:0.22:2", one, NULL, NULL), 0);
+    assert_int_equal(run_grid("80:100:2", "0.12:0.22:2", s0, "--shard", "0/2"), 0);
+    assert_int_equal(run_grid("80:100:2", "0.12:0.22:2", s1, "--shard", "1/2"), 0);
+    char *margv[] = {"sweep-merge", "--out", merged, s0, s1, NULL};
+    assert_int_equal(sim_cmd_sweep_merge(5, margv), 0);
+    assert_int_equal(sim_cmd_sweep_merge(5, margv), 1); /* refuses to overwrite */
+    sweep_table a = load_sorted(one), b = load_sorted(merged), c0 = load_sorted(s0), c1 = load_sorted(s1);
+    assert_true(c0.n > 0 && c1.n > 0);      /* each shard did a part ... */
+    assert_int_equal(c0.n + c1.n, a.n);     /* ... and no row twice */
+    assert_int_equal(a.n, b.n);
+    for (size_t k = 0; k < a.n; k++) {
+        sweep_row x = a.rows[k], y = b.rows[k];
+        assert_int_equal(x.kind, y.kind);
+        assert_true(x.phi == y.phi && x.gamma == y.gamma && x.gamma_lo == y.gamma_lo && x.gamma_hi == y.gamma_hi);
+        assert_true(x.dl == y.dl && x.first_dw == y.first_dw && x.first_dz == y.first_dz);
+        assert_string_equal(x.regime, y.regime);
+        assert_string_equal(x.note, y.note);
+    }
+    sweep_table_free(&a);
+    sweep_table_free(&b);
+    sweep_table_free(&c0);
+    sweep_table_free(&c1);
+    unlink(one);
+    unlink(s0);
+    unlink(s1);
+    unlink(merged);
+}
+
+/* Continued upper states are the route's equilibria: the same regime and the first
+ * instability's Delta W to the continuation's location accuracy (1e-5), at every grid point. */
+static void test_continued_upper_states_classify_like_routes(void **state)
+{
+    (void)state;
+    char cont[256], route[256];
+    snprintf(cont, sizeof cont, "/tmp/test_sweep_cont_%d.csv", (int)getpid());
+    snprintf(route, sizeof route, "/tmp/test_sweep_route_%d.csv", (int)getpid());
+    unlink(cont);
+    unlink(route);
+    assert_int_equal(run_grid("100:100:1", "0.08:0.26:4", cont, "--gamma-tol", "0.05"), 0);
+    assert_int_equal(run_grid("100:100:1", "0.08:0.26:4", route, "--seed", "route"), 0);
+    sweep_table a = load_sorted(cont), b = load_sorted(route);
+    int continued = 0, compared = 0;
+    for (size_t k = 0; k < a.n; k++) {
+        if (a.rows[k].kind != 'p') continue;
+        continued += !strcmp(a.rows[k].upper, "continued");
+        for (size_t m = 0; m < b.n; m++) {
+            if (b.rows[m].kind != 'p' || b.rows[m].gamma != a.rows[k].gamma) continue;
+            assert_string_equal(b.rows[m].upper, "route");
+            assert_string_equal(a.rows[k].regime, b.rows[m].regime);
+            assert_true(fabs(a.rows[k].first_dw - b.rows[m].first_dw) < 1e-5);
+            compared++;
+        }
+    }
+    assert_int_equal(compared, 4);
+    assert_int_equal(continued, 3); /* all but the anchor */
+    sweep_table_free(&a);
+    sweep_table_free(&b);
+    unlink(cont);
+    unlink(route);
+}
+
+static void test_bad_axes_and_shards(void **state)
+{
+    (void)state;
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/test_sweep_bad_%d.csv", (int)getpid());
+    unlink(path);
+    assert_int_equal(run_grid("90:90:1", "0.12:0.22:2", path, "--shard", "2/2"), 2);
+    assert_int_equal(run_grid("90:90:1", "0.12:0.22:2", path, "--shard", "1"), 2);
+    assert_int_equal(run_grid("90:90:1", "0.12:0.22:2", path, "--dl", "0:0.5:2"), 2);
+    assert_int_equal(run_grid("90:90:1", "0.12:0.22:2", path, "--seed", "guess"), 2);
+    assert_int_equal(run_grid("170:190:3", "0.12:0.22:2", path, NULL, NULL), 2);
+    assert_int_equal(run_grid("90:90:1", "0.3:0.6:2", path, NULL, NULL), 2);
+    assert_int_equal(access(path, F_OK), -1); /* nothing written */
+}
+
 int main(void)
 {
     gsl_set_error_handler_off();
@@ -119,6 +233,9 @@ int main(void)
         cmocka_unit_test(test_sweep_and_resume),
         cmocka_unit_test(test_sweep_plot),
         cmocka_unit_test(test_refuses_foreign_file_and_bad_ranges),
+        cmocka_unit_test(test_shards_merge_to_the_same_rows),
+        cmocka_unit_test(test_continued_upper_states_classify_like_routes),
+        cmocka_unit_test(test_bad_axes_and_shards),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -137,6 +137,10 @@ static void test_refusals_and_usage(void **s)
     json_decref(o);
     assert_int_equal(run("rail --driver mock wiggle", out, sizeof out), 2);
     assert_int_equal(run("rail --driver mock move-abs", out, sizeof out), 2);
+    /* Plain decimal only (issue 17, defect 11): a hex float was read as 4 mm. */
+    assert_int_equal(run("rail --driver mock move-abs 0x1p2", out, sizeof out), 2);
+    assert_non_null(strstr(out, "needs a number"));
+    assert_int_equal(run("rail --driver mock move-abs 4 --speed 0x8", out, sizeof out), 2);
     assert_int_equal(run("rail --driver warp status", out, sizeof out), 1);
     assert_non_null(strstr(out, "unknown driver"));
     assert_int_equal(run("nosuchcommand", out, sizeof out), 2);
@@ -190,6 +194,75 @@ static void test_gcode_and_modbus(void **s)
     mbsim_kill(m);
 }
 
+/* A reading of the rail through ribbonctl that succeeded (the simulators inject faults into every
+ * request, status reads included): its JSON, or NULL after 20 tries. */
+static json_t *status_ok(const char *common)
+{
+    char args[512], out[4096];
+    snprintf(args, sizeof args, "%s --json status", common);
+    for (int i = 0; i < 20; i++) {
+        if (run(args, out, sizeof out) == 0) return parse_json_line(out);
+        usleep(50000);
+    }
+    return NULL;
+}
+
+/* Issue 17, defect 3: a move that fails on the way (a "busy" exception, a garbled reply) used to
+ * leave the CLI exiting with the rail still moving and reporting a position the rail then left
+ * ("idle at 17.342 mm" while it ended at 21.0). Now every exit path stops the rail first and
+ * reports a reading taken after that: whatever the exit status, the rail is at rest where the
+ * command said, and stays there. */
+static void check_moves_end_at_rest(const char *common, int moves, int *failures)
+{
+    char args[512], out[4096];
+    for (int m = 0; m < moves; m++) {
+        snprintf(args, sizeof args, "%s --json move-rel 3 --speed 10", common);
+        int rc = run(args, out, sizeof out);
+        if (rc != 0) (*failures)++;
+        json_t *o = parse_json_line(out);
+        double said = json_real_value(json_object_get(o, "position_mm"));
+        const char *state = json_string_value(json_object_get(o, "state"));
+        print_message("  move %d: exit %d, %s at %.4f mm\n", m, rc, state, said);
+        assert_string_not_equal(state, "moving");
+        int opened = strcmp(state, "disconnected") != 0; /* else the open failed: nothing was sent */
+        json_decref(o);
+        if (!opened) continue;
+        usleep(300000); /* a rail left moving at 10 mm/s would go on 3 mm in this time */
+        json_t *a = status_ok(common);
+        assert_non_null(a);
+        double at = json_real_value(json_object_get(a, "position_mm"));
+        assert_string_equal(json_string_value(json_object_get(a, "state")), "idle");
+        json_decref(a);
+        print_message("           then idle at %.4f mm\n", at);
+        assert_true(fabs(at - said) <= 2e-3);
+    }
+}
+
+static void test_faults_mid_move_stop_the_rail(void **s)
+{
+    (void)s;
+    char common[256];
+    int failures = 0;
+    mb_sim_params mp = mb_sim_params_default();
+    mp.exception_prob = 0.1;
+    mp.seed = 123456789u;
+    int port = 0;
+    pid_t m = mbsim_spawn(mp, &port);
+    snprintf(common, sizeof common, "rail --driver modbus --address 127.0.0.1:%d", port);
+    check_moves_end_at_rest(common, 4, &failures);
+    mbsim_kill(m);
+
+    char path[128];
+    grbl_sim_params gp = grbl_sim_params_default();
+    gp.garble_prob = 0.08;
+    gp.seed = 123456789u;
+    pid_t g = grblsim_spawn(&gp, path, sizeof path);
+    snprintf(common, sizeof common, "rail --driver gcode --port %s --axis X", path);
+    check_moves_end_at_rest(common, 3, &failures);
+    grblsim_kill(g);
+    print_message("  %d of 7 moves failed on the way\n", failures);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -198,6 +271,7 @@ int main(void)
         cmocka_unit_test(test_rig_file_rail),
         cmocka_unit_test(test_refusals_and_usage),
         cmocka_unit_test(test_gcode_and_modbus),
+        cmocka_unit_test(test_faults_mid_move_stop_the_rail),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

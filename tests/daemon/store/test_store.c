@@ -15,6 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 #include <cmocka.h>
@@ -1217,10 +1218,57 @@ static void test_bench_small(void **state)
     assert_non_null(strstr(why, "exists"));
 }
 
+/* Issue 17, item 12: a store path that is not a regular file (/dev/full left -journal files in
+ * /dev) and a store file that may not be written (ribbond started, then answered 500) are refused
+ * at open. Root may write any file, so the read-only case runs in a child as nobody when the test
+ * runs as root. */
+static void test_store_path_must_be_a_writable_regular_file(void **state)
+{
+    (void)state;
+    char why[512];
+    store *st = NULL;
+    assert_int_equal(store_open("/dev/null", &st, why, sizeof why), STORE_E_INVALID);
+    assert_non_null(strstr(why, "not a regular file (a character device)"));
+    assert_null(st);
+    assert_int_equal(store_open("/tmp", &st, why, sizeof why), STORE_E_INVALID);
+    assert_non_null(strstr(why, "a directory"));
+    assert_int_equal(access("/dev/null-journal", F_OK), -1);
+
+    char dir[] = "/tmp/ribbon-store-ro-XXXXXX", path[128];
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/trials.db", dir);
+    assert_int_equal(store_open(path, &st, why, sizeof why), STORE_OK); /* a valid store */
+    store_close(st);
+    assert_int_equal(chmod(path, 0444), 0);
+    assert_int_equal(chmod(dir, 0555), 0);
+    fflush(NULL);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        if (getuid() == 0 && (setgid(65534) != 0 || setuid(65534) != 0)) _exit(20);
+        store *s2 = NULL;
+        char w[512];
+        store_err e = store_open(path, &s2, w, sizeof w);
+        printf("read-only store: %s\n", w);
+        fflush(stdout);
+        _exit(e == STORE_E_IO && strstr(w, "read-only") ? 0 : 21);
+    }
+    int status = 0;
+    assert_int_equal(waitpid(pid, &status, 0), pid);
+    chmod(dir, 0755);
+    chmod(path, 0644);
+    assert_true(WIFEXITED(status));
+    assert_int_equal(WEXITSTATUS(status), 0);
+    char cmd[160];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    assert_int_equal(system(cmd), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_create_schema_wal, setup, teardown),
+        cmocka_unit_test(test_store_path_must_be_a_writable_regular_file),
         cmocka_unit_test_setup_teardown(test_migrate_v1_to_current, setup, teardown),
         cmocka_unit_test_setup_teardown(test_newer_version_refused, setup, teardown),
         cmocka_unit_test_setup_teardown(test_foreign_files_refused, setup, teardown),
