@@ -148,10 +148,10 @@ static replay_job *running_replay(rig_daemon *d)
 
 static json_t *num_or_null(double v) { return isfinite(v) ? json_real(v) : json_null(); }
 
-static int op_status(void *user, json_t **out, char *why, size_t n)
+static int op_status(void *user, json_t **out, char *why, size_t why_len)
 {
     (void)why;
-    (void)n;
+    (void)why_len;
     rig_daemon *d = user;
     json_t *o = json_object();
     json_object_set_new(o, "mode", json_string(rig_mode_name(d->cfg.mode)));
@@ -203,10 +203,10 @@ static int op_status(void *user, json_t **out, char *why, size_t n)
 /* Replay mode: POST /trials {"source_trial": ID} replays a stored trial; {} replays [replay]
  * source_trial, or the outside files the rig file names (replay.video, replay.rails). The replay
  * runs on a thread of its own; the answer (201) is the new trial, status running. */
-static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *http_status, char *why, size_t n)
+static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *http_status, char *why, size_t why_len)
 {
     api_start_body req;
-    if (api_start_body_parse(body, 1, &req, why, n)) {
+    if (api_start_body_parse(body, 1, &req, why, why_len)) {
         *http_status = 400;
         return -1;
     }
@@ -218,11 +218,11 @@ static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *ht
         replay_job_status_get(rj, &rs);
         pthread_mutex_unlock(&d->lock);
         *http_status = 409;
-        snprintf(why, n, "replay trial %lld is running (frame %ld); abort it first", (long long)rs.trial_id, rs.frame);
+        snprintf(why, why_len, "replay trial %lld is running (frame %ld); abort it first", (long long)rs.trial_id, rs.frame);
         return -1;
     }
     trial_replay *r = NULL;
-    if (trial_replay_prepare(d->st, &d->cfg, id, NULL, &r, why, n)) {
+    if (trial_replay_prepare(d->st, &d->cfg, id, NULL, &r, why, why_len)) {
         pthread_mutex_unlock(&d->lock);
         *http_status = 400; /* the recording named cannot be replayed */
         return -1;
@@ -231,23 +231,23 @@ static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *ht
     snprintf(what, sizeof what, "%.300s", trial_replay_video(r));
     int64_t nid = 0;
     int rc = replay_job_start(r, d->st, d->cfg.store_path, req.note, &d->replay, &nid,
-                              why, n);
+                              why, why_len);
     pthread_mutex_unlock(&d->lock);
     if (rc) {
         *http_status = 500;
         return -1;
     }
     say(d, "replay of %s started as trial %lld", what, (long long)nid);
-    return store_trial_json(d->st, nid, out, why, n) == STORE_OK ? 0 : -1;
+    return store_trial_json(d->st, nid, out, why, why_len) == STORE_OK ? 0 : -1;
 }
 
-static int op_start(void *user, const json_t *body, json_t **out, int *http_status, char *why, size_t n)
+static int op_start(void *user, const json_t *body, json_t **out, int *http_status, char *why, size_t why_len)
 {
     rig_daemon *d = user;
-    if (d->cfg.mode == RIG_MODE_REPLAY) return replay_start(d, body, out, http_status, why, n);
+    if (d->cfg.mode == RIG_MODE_REPLAY) return replay_start(d, body, out, http_status, why, why_len);
     /* Body: {"set": ["section.key=value", ...], "note": "..."} (api_start_body.h). */
     api_start_body req;
-    if (api_start_body_parse(body, 0, &req, why, n)) {
+    if (api_start_body_parse(body, 0, &req, why, why_len)) {
         *http_status = 400;
         return -1;
     }
@@ -260,12 +260,12 @@ static int op_start(void *user, const json_t *body, json_t **out, int *http_stat
         cfg_error ce;
         if (rig_config_load(d->config_path, ov, nov, &cfg, &ce) != CFG_OK) {
             *http_status = 400;
-            cfg_error_format(&ce, why, n);
+            cfg_error_format(&ce, why, why_len);
             return -1;
         }
         if (cfg.mode != d->cfg.mode || strcmp(cfg.store_path, d->cfg.store_path) != 0) {
             *http_status = 400;
-            snprintf(why, n, "a trial may not change rig.mode or store.path");
+            snprintf(why, why_len, "a trial may not change rig.mode or store.path");
             return -1;
         }
     } else {
@@ -278,27 +278,27 @@ static int op_start(void *user, const json_t *body, json_t **out, int *http_stat
         trial_session_status(s, &ss);
         pthread_mutex_unlock(&d->lock);
         *http_status = 409;
-        snprintf(why, n, "trial %lld is running (%s); abort it first", (long long)ss.trial_id,
+        snprintf(why, why_len, "trial %lld is running (%s); abort it first", (long long)ss.trial_id,
                  trial_state_name(ss.state));
         return -1;
     }
     int64_t id = 0;
     trial_err te = trial_session_start(&cfg, d->compress, d->shear, req.note, d->log,
-                                       d->bus, &d->session, &id, why, n);
+                                       d->bus, &d->session, &id, why, why_len);
     pthread_mutex_unlock(&d->lock);
     if (te != TRIAL_OK) {
         *http_status = te == TRIAL_E_REFUSED ? 400 : 500;
         return -1;
     }
     say(d, "trial %lld started (%s mode)", (long long)id, rig_mode_name(cfg.mode));
-    store_err se = store_trial_json(d->st, id, out, why, n);
+    store_err se = store_trial_json(d->st, id, out, why, why_len);
     if (se != STORE_OK) {
         *out = json_pack("{s:I, s:s}", "id", (json_int_t)id, "status", "created");
     }
     return 0;
 }
 
-static int op_abort(void *user, json_t **out, int *http_status, char *why, size_t n)
+static int op_abort(void *user, json_t **out, int *http_status, char *why, size_t why_len)
 {
     rig_daemon *d = user;
     pthread_mutex_lock(&d->lock);
@@ -315,7 +315,7 @@ static int op_abort(void *user, json_t **out, int *http_status, char *why, size_
     if (!s) {
         pthread_mutex_unlock(&d->lock);
         *http_status = 409;
-        snprintf(why, n, "no trial is running");
+        snprintf(why, why_len, "no trial is running");
         return -1;
     }
     session_status ss;
@@ -327,26 +327,26 @@ static int op_abort(void *user, json_t **out, int *http_status, char *why, size_
     return 0;
 }
 
-static int op_list(void *user, json_t **out, char *why, size_t n)
+static int op_list(void *user, json_t **out, char *why, size_t why_len)
 {
     rig_daemon *d = user;
-    return store_trials_json(d->st, out, why, n) == STORE_OK ? 0 : -1;
+    return store_trials_json(d->st, out, why, why_len) == STORE_OK ? 0 : -1;
 }
 
-static int op_show(void *user, int64_t id, json_t **out, int *http_status, char *why, size_t n)
+static int op_show(void *user, int64_t id, json_t **out, int *http_status, char *why, size_t why_len)
 {
     rig_daemon *d = user;
-    store_err e = store_trial_json(d->st, id, out, why, n);
+    store_err e = store_trial_json(d->st, id, out, why, why_len);
     if (e == STORE_OK) return 0;
     *http_status = e == STORE_E_NOTFOUND ? 404 : 500;
     return -1;
 }
 
 static int op_report(void *user, int64_t id, unsigned char **png, size_t *len, int *http_status, char *why,
-                     size_t n)
+                     size_t why_len)
 {
     rig_daemon *d = user;
-    trial_err te = trial_report_png_bytes(d->st, id, png, len, why, n);
+    trial_err te = trial_report_png_bytes(d->st, id, png, len, why, why_len);
     if (te != TRIAL_OK) {
         *http_status = te == TRIAL_E_NOTFOUND ? 404 : 500;
         return -1;
@@ -354,22 +354,22 @@ static int op_report(void *user, int64_t id, unsigned char **png, size_t *len, i
     return 0;
 }
 
-static int op_events(void *user, api_stream *out, char *why, size_t n)
+static int op_events(void *user, api_stream *out, char *why, size_t why_len)
 {
     rig_daemon *d = user; /* d->bus is set before the server starts and freed after it stops */
-    return live_route_events(d->bus, out, why, n);
+    return live_route_events(d->bus, out, why, why_len);
 }
 
-static int op_camera(void *user, unsigned char **jpg, size_t *len, int *http_status, char *why, size_t n)
+static int op_camera(void *user, unsigned char **jpg, size_t *len, int *http_status, char *why, size_t why_len)
 {
     rig_daemon *d = user;
-    return live_route_camera(d->bus, jpg, len, http_status, why, n);
+    return live_route_camera(d->bus, jpg, len, http_status, why, why_len);
 }
 
-static int op_prediction(void *user, json_t **out, int *http_status, char *why, size_t n)
+static int op_prediction(void *user, json_t **out, int *http_status, char *why, size_t why_len)
 {
     rig_daemon *d = user;
-    return live_route_prediction(d->bus, out, http_status, why, n);
+    return live_route_prediction(d->bus, out, http_status, why, why_len);
 }
 
 api_ops rig_daemon_ops(void)

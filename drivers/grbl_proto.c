@@ -124,10 +124,10 @@ grbl_line_kind grbl_line_classify(const char *line, size_t len, int *code)
     return GRBL_LINE_OTHER;
 }
 
-static bool say(char *why, size_t n, const char *fmt, size_t at, const char *what)
+static bool say(char *why, size_t why_len, const char *fmt, size_t at, const char *what)
 {
-    if (why && n)
-        snprintf(why, n, fmt, at, what);
+    if (why && why_len)
+        snprintf(why, why_len, fmt, at, what);
     return false;
 }
 
@@ -168,7 +168,7 @@ static int parse_numbers(const char *s, size_t len, double *v, int max, size_t *
     return k;
 }
 
-bool grbl_status_parse(const char *line, size_t len, grbl_report *out, char *why, size_t n)
+bool grbl_status_parse(const char *line, size_t len, grbl_report *out, char *why, size_t why_len)
 {
     memset(out, 0, sizeof *out);
     out->substate = -1;
@@ -176,9 +176,9 @@ bool grbl_status_parse(const char *line, size_t len, grbl_report *out, char *why
     while (len > 0 && (line[len - 1] == '\r' || line[len - 1] == '\n'))
         len--;
     if (len < 2 || line[0] != '<')
-        return say(why, n, "status report: expected '<' at byte %zu%s", 0, "");
+        return say(why, why_len, "status report: expected '<' at byte %zu%s", 0, "");
     if (line[len - 1] != '>')
-        return say(why, n, "status report truncated: no closing '>' (length %zu)%s", len, "");
+        return say(why, why_len, "status report truncated: no closing '>' (length %zu)%s", len, "");
     const char *s = line + 1;
     size_t L = len - 2;
     /* State field. */
@@ -191,7 +191,7 @@ bool grbl_status_parse(const char *line, size_t len, grbl_report *out, char *why
         if (strlen(names[k]) == i && memcmp(s, names[k], i) == 0)
             st = k;
     if (st < 0)
-        return say(why, n, "status report: unknown state at byte %zu%s", 1, "");
+        return say(why, why_len, "status report: unknown state at byte %zu%s", 1, "");
     out->state = (grbl_state)st;
     if (i < L && s[i] == ':') {
         size_t j = i + 1;
@@ -199,7 +199,7 @@ bool grbl_status_parse(const char *line, size_t len, grbl_report *out, char *why
             j++;
         out->substate = small_int(s + i + 1, j - i - 1);
         if (out->substate < 0)
-            return say(why, n, "status report: bad substate at byte %zu%s", i + 2, "");
+            return say(why, why_len, "status report: bad substate at byte %zu%s", i + 2, "");
         i = j;
     }
     double wpos[GRBL_MAX_AXES] = {0}, wco[GRBL_MAX_AXES] = {0};
@@ -208,7 +208,7 @@ bool grbl_status_parse(const char *line, size_t len, grbl_report *out, char *why
     /* Fields, each "Name:values", separated by '|'. Capped by the line length. */
     for (int guard = 0; i < L && guard < 64; guard++) {
         if (s[i] != '|')
-            return say(why, n, "status report: expected '|' at byte %zu%s", i + 1, "");
+            return say(why, why_len, "status report: expected '|' at byte %zu%s", i + 1, "");
         size_t a = i + 1, b = a;
         while (b < L && s[b] != '|')
             b++;
@@ -224,10 +224,10 @@ bool grbl_status_parse(const char *line, size_t len, grbl_report *out, char *why
         if ((nl == 4 && memcmp(name, "MPos", 4) == 0) || (nl == 4 && memcmp(name, "WPos", 4) == 0) ||
             (nl == 3 && memcmp(name, "WCO", 3) == 0)) {
             if (c >= b)
-                return say(why, n, "status report: field without ':' at byte %zu%s", a + 1, "");
+                return say(why, why_len, "status report: field without ':' at byte %zu%s", a + 1, "");
             int k = parse_numbers(val, vl, v, GRBL_MAX_AXES, &bad);
             if (k < 1)
-                return say(why, n, "status report: bad position number at byte %zu%s", c + 2 + bad, "");
+                return say(why, why_len, "status report: bad position number at byte %zu%s", c + 2 + bad, "");
             double *dst = name[0] == 'M' ? out->pos : name[0] == 'W' && nl == 4 ? wpos : wco;
             for (int q = 0; q < k; q++)
                 dst[q] = v[q];
@@ -242,15 +242,15 @@ bool grbl_status_parse(const char *line, size_t len, grbl_report *out, char *why
         } else if ((nl == 2 && memcmp(name, "FS", 2) == 0) || (nl == 1 && name[0] == 'F')) {
             int k = parse_numbers(val, vl, v, 2, &bad);
             if (k < 1 || v[0] < 0.0)
-                return say(why, n, "status report: bad feed number at byte %zu%s", c + 2 + bad, "");
+                return say(why, why_len, "status report: bad feed number at byte %zu%s", c + 2 + bad, "");
             out->feed_mm_min = v[0];
         } else if (nl == 2 && memcmp(name, "Bf", 2) == 0) {
             int k = parse_numbers(val, vl, v, 2, &bad);
             if (k < 1)
-                return say(why, n, "status report: bad buffer field at byte %zu%s", c + 2 + bad, "");
+                return say(why, why_len, "status report: bad buffer field at byte %zu%s", c + 2 + bad, "");
             out->buffer_blocks = (int)v[0];
         } else if (nl == 0) {
-            return say(why, n, "status report: empty field at byte %zu%s", a + 1, "");
+            return say(why, why_len, "status report: empty field at byte %zu%s", a + 1, "");
         }
         /* Other fields (Ln, Pn, Ov, A) are not needed here and skipped. */
         i = b;
@@ -266,7 +266,7 @@ bool grbl_status_parse(const char *line, size_t len, grbl_report *out, char *why
         out->have_pos = true;
         out->work_pos = true;
     } else {
-        return say(why, n, "status report without MPos or WPos (length %zu)%s", len, "");
+        return say(why, why_len, "status report without MPos or WPos (length %zu)%s", len, "");
     }
     out->n_axes = nax;
     return true;

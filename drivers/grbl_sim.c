@@ -629,22 +629,22 @@ rail_err grbl_sim_run(grbl_sim *s, double duration_s, volatile sig_atomic_t *sto
     return rail_sim_run(step_any, s, s->clock, duration_s, stop);
 }
 
-rail_err grbl_sim_open(grbl_sim **out, const grbl_sim_params *p, char *why, size_t n)
+rail_err grbl_sim_open(grbl_sim **out, const grbl_sim_params *p, char *why, size_t why_len)
 {
     *out = NULL;
     if (!p || p->n_axes < 1 || p->n_axes > GRBL_SIM_AXES || !(p->accel_mm_s2 > 0.0) ||
         !(p->max_feed_mm_min > 0.0) || !(p->home_feed_mm_min > 0.0)) {
-        snprintf(why, n, "grblsim: n_axes must be 1..3 and accel, max feed, home feed positive");
+        snprintf(why, why_len, "grblsim: n_axes must be 1..3 and accel, max feed, home feed positive");
         return RAIL_E_INVALID;
     }
     for (int i = 0; i < p->n_axes; i++)
         if (!(p->travel_mm[i] > 0.0) || !(p->start_mm[i] >= 0.0) || p->start_mm[i] > p->travel_mm[i]) {
-            snprintf(why, n, "grblsim: axis %c start must lie in [0, travel]", 'X' + i);
+            snprintf(why, why_len, "grblsim: axis %c start must lie in [0, travel]", 'X' + i);
             return RAIL_E_INVALID;
         }
     grbl_sim *s = calloc(1, sizeof *s);
     if (!s) {
-        snprintf(why, n, "grblsim: out of memory");
+        snprintf(why, why_len, "grblsim: out of memory");
         return RAIL_E_NOMEM;
     }
     s->p = *p;
@@ -652,9 +652,9 @@ rail_err grbl_sim_open(grbl_sim **out, const grbl_sim_params *p, char *why, size
     rail_sim_pty_err pe = rail_sim_pty_open(&s->master, &s->slave, s->path, sizeof s->path);
     if (pe != RAIL_SIM_PTY_OK) {
         if (pe == RAIL_SIM_PTY_MASTER)
-            snprintf(why, n, "grblsim: cannot create a pseudo-terminal: %s", strerror(errno));
+            snprintf(why, why_len, "grblsim: cannot create a pseudo-terminal: %s", strerror(errno));
         else
-            snprintf(why, n, "grblsim: cannot open %s: %s", s->path, strerror(errno));
+            snprintf(why, why_len, "grblsim: cannot open %s: %s", s->path, strerror(errno));
         grbl_sim_close(s);
         return RAIL_E_IO;
     }

@@ -336,23 +336,23 @@ rail_err mb_sim_run(mb_sim *s, double duration_s, volatile sig_atomic_t *stop)
     return rail_sim_run(step_any, s, s->clock, duration_s, stop);
 }
 
-rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t n)
+rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t why_len)
 {
     *out = NULL;
     if (!p || p->slave < 1 || p->slave > 247 || !(p->counts_per_mm > 0.0) || !(p->travel_mm > 0.0) ||
         !(p->start_mm >= 0.0 && p->start_mm <= p->travel_mm) || p->port < 0 || p->port > 65535 ||
         !(p->home_speed_mm_s > 0.0)) {
-        snprintf(why, n, "mbsim: slave must be 1..247, port 0..65535, counts_per_mm, travel and "
+        snprintf(why, why_len, "mbsim: slave must be 1..247, port 0..65535, counts_per_mm, travel and "
                          "home speed positive, start inside the travel");
         return RAIL_E_INVALID;
     }
     if (p->load_counts < -32768 || p->load_counts > 32767) {
-        snprintf(why, n, "mbsim: load_counts %d outside the signed 16-bit range", p->load_counts);
+        snprintf(why, why_len, "mbsim: load_counts %d outside the signed 16-bit range", p->load_counts);
         return RAIL_E_INVALID;
     }
     mb_sim *s = calloc(1, sizeof *s);
     if (!s) {
-        snprintf(why, n, "mbsim: out of memory");
+        snprintf(why, why_len, "mbsim: out of memory");
         return RAIL_E_NOMEM;
     }
     s->p = *p;
@@ -363,7 +363,7 @@ rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t n)
     s->ctx = p->rtu ? modbus_new_rtu("/dev/null", 19200, 'E', 8, 1) : modbus_new_tcp(p->host, p->port);
     s->map = modbus_mapping_new(0, 0, MBS_REGS, 0);
     if (!s->ctx || !s->map) {
-        snprintf(why, n, "mbsim: cannot create the libmodbus server: %s", modbus_strerror(errno));
+        snprintf(why, why_len, "mbsim: cannot create the libmodbus server: %s", modbus_strerror(errno));
         mb_sim_close(s);
         return RAIL_E_NOMEM;
     }
@@ -374,7 +374,7 @@ rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t n)
         /* The server never opens a device: it reads and writes a socketpair, relayed to a pty. */
         if (rail_sim_pty_open(&s->master, &s->slave, s->path, sizeof s->path) != RAIL_SIM_PTY_OK ||
             socketpair(AF_UNIX, SOCK_STREAM, 0, s->sv) != 0) {
-            snprintf(why, n, "mbsim: cannot set up the RTU pseudo-terminal: %s", strerror(errno));
+            snprintf(why, why_len, "mbsim: cannot set up the RTU pseudo-terminal: %s", strerror(errno));
             mb_sim_close(s);
             return RAIL_E_IO;
         }
@@ -382,7 +382,7 @@ rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t n)
     } else {
         s->listen_fd = modbus_tcp_listen(s->ctx, 4);
         if (s->listen_fd < 0) {
-            snprintf(why, n, "mbsim: cannot listen on %s:%d: %s", p->host, p->port, modbus_strerror(errno));
+            snprintf(why, why_len, "mbsim: cannot listen on %s:%d: %s", p->host, p->port, modbus_strerror(errno));
             mb_sim_close(s);
             return RAIL_E_IO;
         }

@@ -97,38 +97,38 @@ rail_params rail_params_default(void)
     return p;
 }
 
-static rail_err fail(char *why, size_t n, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
-static rail_err fail(char *why, size_t n, const char *fmt, ...)
+static rail_err fail(char *why, size_t why_len, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static rail_err fail(char *why, size_t why_len, const char *fmt, ...)
 {
-    if (why && n) {
+    if (why && why_len) {
         va_list ap;
         va_start(ap, fmt);
-        vsnprintf(why, n, fmt, ap);
+        vsnprintf(why, why_len, fmt, ap);
         va_end(ap);
     }
     return RAIL_E_INVALID;
 }
 
-rail_err rail_params_check(const rail_params *p, char *why, size_t n)
+rail_err rail_params_check(const rail_params *p, char *why, size_t why_len)
 {
     if (!p)
-        return fail(why, n, "rail parameters missing");
+        return fail(why, why_len, "rail parameters missing");
     if (!isfinite(p->soft_min_mm) || !isfinite(p->soft_max_mm) || p->soft_min_mm >= p->soft_max_mm)
-        return fail(why, n, "rail %s: soft_min_mm (%g) must be finite and below soft_max_mm (%g)",
+        return fail(why, why_len, "rail %s: soft_min_mm (%g) must be finite and below soft_max_mm (%g)",
                     p->name, p->soft_min_mm, p->soft_max_mm);
     if (!isfinite(p->max_speed_mm_s) || p->max_speed_mm_s <= 0.0 || p->max_speed_mm_s > 1000.0)
-        return fail(why, n, "rail %s: max_speed_mm_s (%g) must be in (0, 1000]", p->name,
+        return fail(why, why_len, "rail %s: max_speed_mm_s (%g) must be in (0, 1000]", p->name,
                     p->max_speed_mm_s);
     if (!isfinite(p->accel_mm_s2) || p->accel_mm_s2 <= 0.0 || p->accel_mm_s2 > 1e5)
-        return fail(why, n, "rail %s: accel_mm_s2 (%g) must be in (0, 1e5]", p->name, p->accel_mm_s2);
+        return fail(why, why_len, "rail %s: accel_mm_s2 (%g) must be in (0, 1e5]", p->name, p->accel_mm_s2);
     if (!isfinite(p->poll_hz) || p->poll_hz <= 0.0 || p->poll_hz > 1000.0)
-        return fail(why, n, "rail %s: poll_hz (%g) must be in (0, 1000]", p->name, p->poll_hz);
+        return fail(why, why_len, "rail %s: poll_hz (%g) must be in (0, 1000]", p->name, p->poll_hz);
     if (!isfinite(p->min_gap_mm) || p->min_gap_mm < 0.0)
-        return fail(why, n, "rail %s: min_gap_mm (%g) must be >= 0", p->name, p->min_gap_mm);
+        return fail(why, why_len, "rail %s: min_gap_mm (%g) must be >= 0", p->name, p->min_gap_mm);
     if (!isfinite(p->gap_at_zero_mm))
-        return fail(why, n, "rail %s: gap_at_zero_mm must be finite", p->name);
+        return fail(why, why_len, "rail %s: gap_at_zero_mm must be finite", p->name);
     if (p->gap_per_mm != 1.0 && p->gap_per_mm != -1.0)
-        return fail(why, n, "rail %s: gap_per_mm (%g) must be +1 or -1", p->name, p->gap_per_mm);
+        return fail(why, why_len, "rail %s: gap_per_mm (%g) must be +1 or -1", p->name, p->gap_per_mm);
     return RAIL_OK;
 }
 

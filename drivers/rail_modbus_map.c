@@ -137,7 +137,7 @@ static bool reg_ok(rail_mb_reg r)
     return r.addr < 0 || (r.addr <= 65534 && (r.words == 1 || r.words == 2) && r.addr + r.words <= 65536);
 }
 
-rail_err rail_modbus_map_check(const rail_modbus_map *m, char *why, size_t n)
+rail_err rail_modbus_map_check(const rail_modbus_map *m, char *why, size_t why_len)
 {
     struct {
         const char *name;
@@ -154,36 +154,36 @@ rail_err rail_modbus_map_check(const rail_modbus_map *m, char *why, size_t n)
     };
     for (size_t i = 0; i < sizeof regs / sizeof regs[0]; i++) {
         if (!reg_ok(regs[i].r)) {
-            snprintf(why, n, "modbus map %s: register %s: address %d / width %d words invalid", m->name,
+            snprintf(why, why_len, "modbus map %s: register %s: address %d / width %d words invalid", m->name,
                      regs[i].name, regs[i].r.addr, regs[i].r.words);
             return RAIL_E_INVALID;
         }
         if (regs[i].required && regs[i].r.addr < 0) {
-            snprintf(why, n, "modbus map %s: register %s is required", m->name, regs[i].name);
+            snprintf(why, why_len, "modbus map %s: register %s is required", m->name, regs[i].name);
             return RAIL_E_INVALID;
         }
     }
     if (!(m->counts_per_mm > 0.0) || !isfinite(m->counts_per_mm)) {
-        snprintf(why, n, "modbus map %s: counts_per_mm must be set (> 0) for this rail's mechanics",
+        snprintf(why, why_len, "modbus map %s: counts_per_mm must be set (> 0) for this rail's mechanics",
                  m->name);
         return RAIL_E_INVALID;
     }
     if (m->speed_per_mm_s < 0.0 || m->accel_per_mm_s2 < 0.0 || !isfinite(m->speed_per_mm_s) ||
         !isfinite(m->accel_per_mm_s2)) {
-        snprintf(why, n, "modbus map %s: speed_per_mm_s and accel_per_mm_s2 must be >= 0", m->name);
+        snprintf(why, why_len, "modbus map %s: speed_per_mm_s and accel_per_mm_s2 must be >= 0", m->name);
         return RAIL_E_INVALID;
     }
     if (!isfinite(m->load_scale) || m->load_scale == 0.0) {
-        snprintf(why, n, "modbus map %s: load_scale must be finite and non-zero", m->name);
+        snprintf(why, why_len, "modbus map %s: load_scale must be finite and non-zero", m->name);
         return RAIL_E_INVALID;
     }
     if (m->ctl_stop == 0 || m->st_moving == 0) {
-        snprintf(why, n, "modbus map %s: a stop command (ctl_stop) and a moving status bit "
+        snprintf(why, why_len, "modbus map %s: a stop command (ctl_stop) and a moving status bit "
                          "(st_moving) are required", m->name);
         return RAIL_E_INVALID;
     }
     if (m->word_order != RAIL_MB_HIGH_FIRST && m->word_order != RAIL_MB_LOW_FIRST) {
-        snprintf(why, n, "modbus map %s: word_order must be high_first or low_first", m->name);
+        snprintf(why, why_len, "modbus map %s: word_order must be high_first or low_first", m->name);
         return RAIL_E_INVALID;
     }
     return RAIL_OK;

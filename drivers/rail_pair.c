@@ -12,13 +12,13 @@ static bool healthy(rail_err e, const rail_status *st)
                             st->state == RAIL_STATE_HOMING);
 }
 
-static rail_err fault_of(rail *r, rail_err e, const rail_status *st, char *why, size_t n)
+static rail_err fault_of(rail *r, rail_err e, const rail_status *st, char *why, size_t why_len)
 {
     const char *name = rail_get_params(r)->name;
     if (e != RAIL_OK)
-        snprintf(why, n, "%s", rail_last_error(r));
+        snprintf(why, why_len, "%s", rail_last_error(r));
     else
-        snprintf(why, n, "rail %s: %s%s%s", name, rail_state_name(st->state), st->message[0] ? ": " : "",
+        snprintf(why, why_len, "rail %s: %s%s%s", name, rail_state_name(st->state), st->message[0] ? ": " : "",
                  st->message);
     if (e != RAIL_OK)
         return e;
@@ -27,7 +27,7 @@ static rail_err fault_of(rail *r, rail_err e, const rail_status *st, char *why, 
                                                 : RAIL_E_STATE;
 }
 
-rail_err rail_pair_poll(rail *a, rail *b, rail_status *sa, rail_status *sb, char *why, size_t n)
+rail_err rail_pair_poll(rail *a, rail *b, rail_status *sa, rail_status *sb, char *why, size_t why_len)
 {
     rail_err ea = rail_status_get(a, sa);
     rail_err eb = rail_status_get(b, sb);
@@ -39,12 +39,12 @@ rail_err rail_pair_poll(rail *a, rail *b, rail_status *sa, rail_status *sb, char
         rail_estop(a);
     if (hb)
         rail_estop(b);
-    return !ha ? fault_of(a, ea, sa, why, n) : fault_of(b, eb, sb, why, n);
+    return !ha ? fault_of(a, ea, sa, why, why_len) : fault_of(b, eb, sb, why, why_len);
 }
 
-rail_err rail_pair_judge(rail *r, rail_err e, const rail_status *st, char *why, size_t n)
+rail_err rail_pair_judge(rail *r, rail_err e, const rail_status *st, char *why, size_t why_len)
 {
-    return healthy(e, st) ? RAIL_OK : fault_of(r, e, st, why, n);
+    return healthy(e, st) ? RAIL_OK : fault_of(r, e, st, why, why_len);
 }
 
 rail_err rail_pair_estop(rail *a, rail *b)

@@ -22,10 +22,10 @@ static unsigned to_ms(double s)
     return (unsigned)ceil(s * 1000.0);
 }
 
-static void sp_reason(char *why, size_t n, const char *what)
+static void sp_reason(char *why, size_t why_len, const char *what)
 {
     char *m = sp_last_error_message();
-    snprintf(why, n, "%s: %s", what, m ? m : "unknown error");
+    snprintf(why, why_len, "%s: %s", what, m ? m : "unknown error");
     if (m)
         sp_free_error_message(m);
 }
@@ -68,23 +68,23 @@ static void sp_close_fn(rail_serial *s)
 
 static const rail_serial_ops sp_ops = {"libserialport", sp_write_fn, sp_read_fn, sp_close_fn};
 
-rail_err rail_serial_open_sp(rail_serial **out, const char *path, int baud, char *why, size_t n)
+rail_err rail_serial_open_sp(rail_serial **out, const char *path, int baud, char *why, size_t why_len)
 {
     *out = NULL;
     struct sp_port *port = NULL;
     if (sp_get_port_by_name(path, &port) != SP_OK) {
-        sp_reason(why, n, "port lookup failed");
+        sp_reason(why, why_len, "port lookup failed");
         return RAIL_E_IO;
     }
     if (sp_open(port, SP_MODE_READ_WRITE) != SP_OK) {
-        sp_reason(why, n, "open failed");
+        sp_reason(why, why_len, "open failed");
         sp_free_port(port);
         return RAIL_E_IO;
     }
     if (sp_set_baudrate(port, baud) != SP_OK || sp_set_bits(port, 8) != SP_OK ||
         sp_set_parity(port, SP_PARITY_NONE) != SP_OK || sp_set_stopbits(port, 1) != SP_OK ||
         sp_set_flowcontrol(port, SP_FLOWCONTROL_NONE) != SP_OK) {
-        sp_reason(why, n, "configuring 8N1 failed");
+        sp_reason(why, why_len, "configuring 8N1 failed");
         sp_close(port);
         sp_free_port(port);
         return RAIL_E_IO;
@@ -93,7 +93,7 @@ rail_err rail_serial_open_sp(rail_serial **out, const char *path, int baud, char
     if (!p) {
         sp_close(port);
         sp_free_port(port);
-        snprintf(why, n, "out of memory");
+        snprintf(why, why_len, "out of memory");
         return RAIL_E_NOMEM;
     }
     p->base.ops = &sp_ops;

@@ -8,7 +8,7 @@
 #include "rail_serial_stream.h"
 
 /* Open path (already resolved) at baud, 8N1, no flow control. */
-rail_err rail_serial_open_sp(rail_serial **out, const char *path, int baud, char *why, size_t n);
+rail_err rail_serial_open_sp(rail_serial **out, const char *path, int baud, char *why, size_t why_len);
 
 /* One port as libserialport lists it. */
 typedef struct rail_serial_port_info {

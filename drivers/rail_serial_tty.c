@@ -109,22 +109,22 @@ static speed_t baud_code(int baud)
     }
 }
 
-rail_err rail_serial_open_tty(rail_serial **out, const char *path, int baud, char *why, size_t n)
+rail_err rail_serial_open_tty(rail_serial **out, const char *path, int baud, char *why, size_t why_len)
 {
     *out = NULL;
     speed_t sp = baud_code(baud);
     if (!sp) {
-        snprintf(why, n, "baud rate %d not supported (9600..230400)", baud);
+        snprintf(why, why_len, "baud rate %d not supported (9600..230400)", baud);
         return RAIL_E_INVALID;
     }
     int fd = open(path, O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
-        snprintf(why, n, "open %.100s: %s", path, strerror(errno));
+        snprintf(why, why_len, "open %.100s: %s", path, strerror(errno));
         return RAIL_E_IO;
     }
     struct termios tio;
     if (!isatty(fd) || tcgetattr(fd, &tio) != 0) {
-        snprintf(why, n, "%.100s is not a terminal device", path);
+        snprintf(why, why_len, "%.100s is not a terminal device", path);
         close(fd);
         return RAIL_E_IO;
     }
@@ -136,14 +136,14 @@ rail_err rail_serial_open_tty(rail_serial **out, const char *path, int baud, cha
     tio.c_cc[VMIN] = 0;
     tio.c_cc[VTIME] = 0;
     if (tcsetattr(fd, TCSANOW, &tio) != 0) {
-        snprintf(why, n, "configuring %.100s: %s", path, strerror(errno));
+        snprintf(why, why_len, "configuring %.100s: %s", path, strerror(errno));
         close(fd);
         return RAIL_E_IO;
     }
     tty_serial *t = calloc(1, sizeof *t);
     if (!t) {
         close(fd);
-        snprintf(why, n, "out of memory");
+        snprintf(why, why_len, "out of memory");
         return RAIL_E_NOMEM;
     }
     t->base.ops = &tty_ops;

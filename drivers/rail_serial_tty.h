@@ -8,6 +8,6 @@
 #include "rail_serial_stream.h"
 
 /* Open path (a terminal device) at baud, 8N1, raw. */
-rail_err rail_serial_open_tty(rail_serial **out, const char *path, int baud, char *why, size_t n);
+rail_err rail_serial_open_tty(rail_serial **out, const char *path, int baud, char *why, size_t why_len);
 
 #endif

@@ -41,12 +41,12 @@ void rod_free(rod *r)
     free(r);
 }
 
-rod_status rod_alloc(const rod_scene *s, rod **out, char *err, size_t errlen)
+rod_status rod_alloc(const rod_scene *s, rod **out, char *why, size_t why_len)
 {
     char key[64], msg[256];
     *out = NULL;
     if (rod_scene_check(s, msg, sizeof msg, key, sizeof key)) {
-        if (err) snprintf(err, errlen, "%s: %s", key, msg);
+        if (why) snprintf(why, why_len, "%s: %s", key, msg);
         return ROD_ERR_SCENE;
     }
     rod *r = calloc(1, sizeof *r);

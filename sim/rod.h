@@ -102,7 +102,7 @@ typedef struct rod {
 /* Builds the rod for a scene: mesh with nodes at Gamma and 1 - Gamma, straight along x with the
  * surface normal along +z, clamps at Delta L = 0, Delta W = 0, creases present at full angle
  * in the natural curvature (the route ramps them with rod_set_folds). */
-rod_status rod_alloc(const rod_scene *s, rod **out, char *err, size_t errlen);
+rod_status rod_alloc(const rod_scene *s, rod **out, char *why, size_t why_len);
 void rod_free(rod *r);
 
 /* Edges between a clamp point and its crease in the mesh rod_alloc builds for N nodes and crease

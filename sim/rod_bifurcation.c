@@ -53,14 +53,14 @@ static void copy_state(const rod *from, rod *r)
     memcpy(r->mref, from->mref, sizeof(double) * (size_t)r->n);
 }
 
-rod_status rod_bifurcation_analyse(const rod_scene *scene, const rod_analysis_opts *o, rod_analysis *out, char *err,
-                                   size_t errlen)
+rod_status rod_bifurcation_analyse(const rod_scene *scene, const rod_analysis_opts *o, rod_analysis *out, char *why,
+                                   size_t why_len)
 {
-    return rod_bifurcation_analyse_from(scene, o, NULL, out, err, errlen);
+    return rod_bifurcation_analyse_from(scene, o, NULL, out, why, why_len);
 }
 
 rod_status rod_bifurcation_analyse_from(const rod_scene *scene, const rod_analysis_opts *o, const rod *start,
-                                        rod_analysis *out, char *err, size_t errlen)
+                                        rod_analysis *out, char *why, size_t why_len)
 {
     double t0 = wall_now();
     rod_analysis_opts def = rod_analysis_opts_default();
@@ -72,21 +72,21 @@ rod_status rod_bifurcation_analyse_from(const rod_scene *scene, const rod_analys
     if (!o->keep_imperfection) sc.fold_angle_rel = 0.0;
     out->fold_angle_rel = sc.fold_angle_rel;
     rod *r = NULL;
-    rod_status st = rod_alloc(&sc, &r, err, errlen);
+    rod_status st = rod_alloc(&sc, &r, why, why_len);
     if (st != ROD_OK) return st;
     rod_solver *s = rod_solver_alloc(r);
     rod_tracer *t = NULL;
     double *k1 = malloc(sizeof(double) * (size_t)r->n);
     if (!s || !k1) {
         st = ROD_ERR_ALLOC;
-        if (err) snprintf(err, errlen, "out of memory allocating the simulator workspace");
+        if (why) snprintf(why, why_len, "out of memory allocating the simulator workspace");
         goto done;
     }
     rod_route_report rr = {0};
     if (start) {
         if (start->n != r->n || start->length != r->length) {
             st = ROD_ERR_SCENE;
-            if (err) snprintf(err, errlen, "the start state is not of this scene's mesh (%d nodes, not %d)", start->n, r->n);
+            if (why) snprintf(why, why_len, "the start state is not of this scene's mesh (%d nodes, not %d)", start->n, r->n);
             goto done;
         }
         copy_state(start, r);
@@ -100,13 +100,13 @@ rod_status rod_bifurcation_analyse_from(const rod_scene *scene, const rod_analys
     }
     out->route_wall_s = wall_now() - t0;
     if (st != ROD_OK && start) {
-        if (err) snprintf(err, errlen, "the given start state does not solve at Delta L = %g (%s)", sc.compression,
+        if (why) snprintf(why, why_len, "the given start state does not solve at Delta L = %g (%s)", sc.compression,
                           rod_status_message(st));
         goto done;
     }
     if (st != ROD_OK) {
-        if (err)
-            snprintf(err, errlen, "could not reach the upper state at Delta L = %g (%s, %.0f%% of the route done)",
+        if (why)
+            snprintf(why, why_len, "could not reach the upper state at Delta L = %g (%s, %.0f%% of the route done)",
                      sc.compression, rod_status_message(st), 100.0 * rr.reached);
         goto done;
     }
@@ -115,7 +115,7 @@ rod_status rod_bifurcation_analyse_from(const rod_scene *scene, const rod_analys
     out->dz_upper = ob.dz;
     if (!(ob.dz > 0.0)) {
         st = ROD_ERR_BRANCH_LOST;
-        if (err) snprintf(err, errlen, "the route ended with Delta Z = %g, not in the upper state", ob.dz);
+        if (why) snprintf(why, why_len, "the route ended with Delta Z = %g, not in the upper state", ob.dz);
         goto done;
     }
     rod_cont_opts co = o->cont;
@@ -124,7 +124,7 @@ rod_status rod_bifurcation_analyse_from(const rod_scene *scene, const rod_analys
     t = rod_tracer_alloc(r, &load, &co);
     if (!t) {
         st = ROD_ERR_ALLOC;
-        if (err) snprintf(err, errlen, "out of memory allocating the continuation workspace");
+        if (why) snprintf(why, why_len, "out of memory allocating the continuation workspace");
         goto done;
     }
     rod_branch *b0 = &out->branches[out->nbranches++];

@@ -59,14 +59,14 @@ typedef struct rod_analysis {
 
 /* Runs the analysis. Fails (with err) when the scene is invalid or the upper state cannot be
  * reached; a branch that ends early is not a failure (its end_status and end_reason say why). */
-rod_status rod_bifurcation_analyse(const rod_scene *sc, const rod_analysis_opts *o, rod_analysis *out, char *err,
-                                   size_t errlen);
+rod_status rod_bifurcation_analyse(const rod_scene *sc, const rod_analysis_opts *o, rod_analysis *out, char *why,
+                                   size_t why_len);
 /* The same from a given upper state instead of the route: start is an equilibrium of this
  * scene's rod (the perfect one unless keep_imperfection; the same mesh), e.g. one reached by
  * continuation from a neighbouring scene (rod_seed.h). It is re-solved to the scene's tolerance
  * first; route_wall_s is then that solve's time. start NULL: the route, as above. */
 rod_status rod_bifurcation_analyse_from(const rod_scene *sc, const rod_analysis_opts *o, const rod *start,
-                                        rod_analysis *out, char *err, size_t errlen);
+                                        rod_analysis *out, char *why, size_t why_len);
 void rod_analysis_free(rod_analysis *a);
 
 #endif

@@ -190,7 +190,7 @@ static const rod_par dw_free[1] = {ROD_PAR_DW};
  * Gamma*, so the start brackets its sign change before the secant takes over). */
 #define SCAN_STEP 0.005
 
-static rod_status search(rod_boundary *b, rod_crit_kind kind, int scan, double *p, char *why, size_t whylen);
+static rod_status search(rod_boundary *b, rod_crit_kind kind, int scan, double *p, char *why, size_t why_len);
 
 /* The codim-2 point from the rod's state at p: the fold curve's point (free Delta W) followed in
  * Gamma by the secant on g_odd (search) to a step below 1e-8; with match_mesh re-located on the
@@ -214,13 +214,13 @@ static int codim2_ok(const rod_crit_report *rep) { return rep->parity_even > 0.5
 
 /* Follows the curve of kind (free Delta W) in Gamma by secant steps on the other block's test
  * function toward its zero; returns with the rod near the codim-2 point. */
-static rod_status search(rod_boundary *b, rod_crit_kind kind, int scan, double *p, char *why, size_t whylen)
+static rod_status search(rod_boundary *b, rod_crit_kind kind, int scan, double *p, char *why, size_t why_len)
 {
     rod_crit_report rep;
     int other = kind == ROD_CRIT_PITCHFORK ? 0 : 1;
     rod_status st = rod_crit_solve(b->c, kind, dw_free, p, &rep, b->why, sizeof b->why);
     if (st != ROD_OK) {
-        snprintf(why, whylen, "the start's %s did not converge as a critical point: %.150s",
+        snprintf(why, why_len, "the start's %s did not converge as a critical point: %.150s",
                  kind == ROD_CRIT_FOLD ? "saddle-node" : "pitchfork", b->why);
         return st;
     }
@@ -238,7 +238,7 @@ static rod_status search(rod_boundary *b, rod_crit_kind kind, int scan, double *
         }
         double gn = gam + step;
         if (gn < b->o.gamma_min || gn > b->o.gamma_max) {
-            snprintf(why, whylen, "codim-2 point not found: the search left the Gamma range [%g, %g] at Gamma %.4f "
+            snprintf(why, why_len, "codim-2 point not found: the search left the Gamma range [%g, %g] at Gamma %.4f "
                      "(the %s test function is %.3g there)", b->o.gamma_min, b->o.gamma_max, gam,
                      other == 0 ? "even" : "odd", G);
             return ROD_ERR_BRANCH_LOST;
@@ -268,7 +268,7 @@ static rod_status search(rod_boundary *b, rod_crit_kind kind, int scan, double *
             return ROD_OK;
         }
         if (!ok) {
-            snprintf(why, whylen, "codim-2 point not found: the %s curve could not be followed past Gamma %.4f: %.120s",
+            snprintf(why, why_len, "codim-2 point not found: the %s curve could not be followed past Gamma %.4f: %.120s",
                      kind == ROD_CRIT_FOLD ? "saddle-node" : "pitchfork", gam, b->why);
             return ROD_ERR_BRANCH_LOST;
         }
@@ -277,7 +277,7 @@ static rod_status search(rod_boundary *b, rod_crit_kind kind, int scan, double *
         away = (fabs(Gn) > fabs(G) && (Gn > 0) == (G > 0)) ? away + 1 : 0;
         if (scanning && (Gn > 0) != (G > 0)) scanning = 0; /* bracketed: secant from here */
         if (!scanning && away >= 3) {
-            snprintf(why, whylen, "codim-2 point not found: along the %s curve the %s test function moves away from "
+            snprintf(why, why_len, "codim-2 point not found: along the %s curve the %s test function moves away from "
                      "zero (%.3g at Gamma %.4f): the two bifurcations do not meet from this start",
                      kind == ROD_CRIT_FOLD ? "saddle-node" : "pitchfork", other == 0 ? "even" : "odd", Gn, gn);
             return ROD_ERR_BRANCH_LOST;
@@ -289,18 +289,18 @@ static rod_status search(rod_boundary *b, rod_crit_kind kind, int scan, double *
         gam = gn;
         memcpy(p, pn, sizeof pn);
     }
-    snprintf(why, whylen, "codim-2 point not found: search cap of %d steps reached at Gamma %.4f", b->o.max_search, gam);
+    snprintf(why, why_len, "codim-2 point not found: search cap of %d steps reached at Gamma %.4f", b->o.max_search, gam);
     return ROD_ERR_MAXITER;
 }
 
 rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o, rod_boundary **out_b,
-                              rod_codim2_point *out, char *why, size_t whylen)
+                              rod_codim2_point *out, char *why, size_t why_len)
 {
     *out_b = NULL;
     memset(out, 0, sizeof *out);
     rod_boundary *b = calloc(1, sizeof *b);
     if (!b) {
-        snprintf(why, whylen, "out of memory");
+        snprintf(why, why_len, "out of memory");
         return ROD_ERR_ALLOC;
     }
     b->o = o ? *o : rod_boundary_opts_default();
@@ -308,11 +308,11 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
     b->sc.fold_angle_rel = 0.0;
     if (b->sc.fold_angle_deg == 0.0) {
         free(b);
-        snprintf(why, whylen, "the scene has no creases (folds.angle_deg = 0): there is no fold/pitchfork boundary");
+        snprintf(why, why_len, "the scene has no creases (folds.angle_deg = 0): there is no fold/pitchfork boundary");
         return ROD_ERR_SCENE;
     }
     b->sign = b->sc.fold_angle_deg < 0 ? -1.0 : 1.0;
-    rod_status st = rod_alloc(&b->sc, &b->r, why, whylen);
+    rod_status st = rod_alloc(&b->sc, &b->r, why, why_len);
     if (st != ROD_OK) {
         free(b);
         return st;
@@ -326,13 +326,13 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
         !bpoint_alloc(r, &b->trial) || !bpoint_alloc(r, &b->scur) || !bpoint_alloc(r, &b->sprev) ||
         !bpoint_alloc(r, &b->mark)) {
         rod_boundary_free(b);
-        snprintf(why, whylen, "out of memory");
+        snprintf(why, why_len, "out of memory");
         return ROD_ERR_ALLOC;
     }
     rod_route_report rr = {0};
     st = rod_route_to_state(r, s, &b->sc, +1, &rr);
     if (st != ROD_OK) {
-        snprintf(why, whylen, "could not reach the upper state at Delta L = %g (%s, %.0f%% of the route done)",
+        snprintf(why, why_len, "could not reach the upper state at Delta L = %g (%s, %.0f%% of the route done)",
                  b->sc.compression, rod_status_message(st), 100.0 * rr.reached);
         rod_boundary_free(b);
         return st;
@@ -344,7 +344,7 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
     rod_tracer *t = rod_tracer_alloc(r, &load, &co);
     if (!t) {
         rod_boundary_free(b);
-        snprintf(why, whylen, "out of memory");
+        snprintf(why, why_len, "out of memory");
         return ROD_ERR_ALLOC;
     }
     rod_branch br = {0};
@@ -357,7 +357,7 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
             break;
         }
     if (first < 0 || (ev[first].kind != ROD_EVENT_PITCHFORK && ev[first].kind != ROD_EVENT_SADDLE_NODE)) {
-        snprintf(why, whylen, "codim-2 point not found: the primary branch has no pitchfork or saddle-node "
+        snprintf(why, why_len, "codim-2 point not found: the primary branch has no pitchfork or saddle-node "
                  "instability from the start (%s; branch: %.120s)", first < 0 ? "none" : rod_event_name(ev[first].kind),
                  br.end_reason);
         rod_branch_free(&br);
@@ -380,7 +380,7 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
                 break;
             }
         if (first < 0) {
-            snprintf(why, whylen, "codim-2 point not found: no saddle-node on the primary branch after its pitchfork "
+            snprintf(why, why_len, "codim-2 point not found: no saddle-node on the primary branch after its pitchfork "
                      "(branch: %.150s)", br.end_reason);
             rod_branch_free(&br);
             rod_tracer_free(t);
@@ -414,7 +414,7 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
     rod_tracer_free(t);
     *out_b = b;
     if (st != ROD_OK) {
-        snprintf(why, whylen, "critical modes at the first event: %.150s", b->why);
+        snprintf(why, why_len, "critical modes at the first event: %.150s", b->why);
         return st;
     }
     b->slope = NAN;
@@ -424,24 +424,24 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
     if (st != ROD_OK) {
         load_point(b, &b->trial);
         memcpy(p, b->trial.p, sizeof b->trial.p);
-        st = search(b, kind, pf >= 0 ? -1 : +1, p, why, whylen);
+        st = search(b, kind, pf >= 0 ? -1 : +1, p, why, why_len);
         if (st != ROD_OK) {
             size_t k = strlen(why);
-            snprintf(why + k, whylen - k, "; the other way: %.150s", msg1);
+            snprintf(why + k, why_len - k, "; the other way: %.150s", msg1);
             return st;
         }
     }
     st = rod_crit_eval(b->c, p, &rep, b->msg, sizeof b->msg);
     if (st != ROD_OK || !codim2_ok(&rep)) {
         if (st == ROD_OK)
-            snprintf(why, whylen, "codim-2 point not found: the critical modes at Gamma %.4f have parities %.2f and %.2f, "
+            snprintf(why, why_len, "codim-2 point not found: the critical modes at Gamma %.4f have parities %.2f and %.2f, "
                      "not one even and one odd", p[ROD_PAR_GAMMA], rep.parity_even, rep.parity_odd);
         else
-            snprintf(why, whylen, "%.300s", b->msg);
+            snprintf(why, why_len, "%.300s", b->msg);
         return st != ROD_OK ? st : ROD_ERR_BRANCH_LOST;
     }
     if (p[ROD_PAR_GAMMA] < b->o.gamma_min || p[ROD_PAR_GAMMA] > b->o.gamma_max) {
-        snprintf(why, whylen, "the codim-2 point Gamma* = %.4f lies outside the Gamma range [%g, %g]", p[ROD_PAR_GAMMA],
+        snprintf(why, why_len, "the codim-2 point Gamma* = %.4f lies outside the Gamma range [%g, %g]", p[ROD_PAR_GAMMA],
                  b->o.gamma_min, b->o.gamma_max);
         return ROD_ERR_BRANCH_LOST;
     }

@@ -116,7 +116,7 @@ typedef struct rod_boundary rod_boundary;
  * On failure *b is still returned when the start got far enough to have a state (NULL
  * otherwise) and why says what stopped; the scene's imperfection is ignored. */
 rod_status rod_boundary_start(const rod_scene *sc, const rod_boundary_opts *o, rod_boundary **b,
-                              rod_codim2_point *out, char *why, size_t whylen);
+                              rod_codim2_point *out, char *why, size_t why_len);
 void rod_boundary_free(rod_boundary *b);
 
 /* Continues the current codimension-2 point in phi (par ROD_PAR_PHI, target in degrees of

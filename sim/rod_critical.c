@@ -313,19 +313,19 @@ static void param_diff(rod_crit *c, const double *p, rod_par k, double *Rp, doub
 }
 
 /* Applies p at the rod's q, assembles and factorises, both test functions; saves the base. */
-static rod_status eval_here(rod_crit *c, const double *p, char *why, size_t whylen)
+static rod_status eval_here(rod_crit *c, const double *p, char *why, size_t why_len)
 {
     rod_state_symmetrize(c->r);
     rod_params_apply(c->r, p);
     rod_snapshot_save(c->r, &c->base);
     rod_status st = assemble_factor(c);
     if (st != ROD_OK) {
-        if (why) snprintf(why, whylen, "the Hessian %s", st == ROD_ERR_NAN ? "is not finite" : "cannot be factorised");
+        if (why) snprintf(why, why_len, "the Hessian %s", st == ROD_ERR_NAN ? "is not finite" : "cannot be factorised");
         return st;
     }
     for (int b = 0; b < 2; b++)
         if ((st = testfn(c, b)) != ROD_OK) {
-            if (why) snprintf(why, whylen, "the %s bordered system is singular", b == 0 ? "even" : "odd");
+            if (why) snprintf(why, why_len, "the %s bordered system is singular", b == 0 ? "even" : "odd");
             return st;
         }
     return ROD_OK;
@@ -379,13 +379,13 @@ void rod_crit_set_mode(rod_crit *c, int sign, const double *v)
         for (int k = 0; k < c->nf; k++) c->v[b][k] /= n;
 }
 
-rod_status rod_crit_modes(rod_crit *c, const double *p, rod_crit_report *rep, char *why, size_t whylen)
+rod_status rod_crit_modes(rod_crit *c, const double *p, rod_crit_report *rep, char *why, size_t why_len)
 {
     int nf = c->nf;
     rod_params_apply(c->r, p);
     rod_status st = assemble_factor(c);
     if (st != ROD_OK) {
-        if (why) snprintf(why, whylen, "the Hessian cannot be factorised for the critical modes");
+        if (why) snprintf(why, why_len, "the Hessian cannot be factorised for the critical modes");
         return st;
     }
     for (int b = 0; b < 2; b++) {
@@ -408,20 +408,20 @@ rod_status rod_crit_modes(rod_crit *c, const double *p, rod_crit_report *rep, ch
             if (fabs(mu - prev) <= 1e-12 * fabs(mu) + 1e-15 * c->scale) break;
             prev = mu;
             if ((st = solve_proj(c, sign, v)) != ROD_OK) {
-                if (why) snprintf(why, whylen, "inverse iteration failed in the %s block", b ? "odd" : "even");
+                if (why) snprintf(why, why_len, "inverse iteration failed in the %s block", b ? "odd" : "even");
                 return st;
             }
         }
         double n = norm(v, nf);
         if (!(n > 0.0) || !isfinite(n)) {
-            if (why) snprintf(why, whylen, "no %s critical mode (zero vector)", b ? "odd" : "even");
+            if (why) snprintf(why, why_len, "no %s critical mode (zero vector)", b ? "odd" : "even");
             return ROD_ERR_SINGULAR;
         }
         for (int k = 0; k < nf; k++) v[k] /= n;
     }
     for (int b = 0; b < 2; b++)
         if ((st = testfn(c, b)) != ROD_OK) {
-            if (why) snprintf(why, whylen, "the %s bordered system is singular", b ? "odd" : "even");
+            if (why) snprintf(why, why_len, "the %s bordered system is singular", b ? "odd" : "even");
             return st;
         }
     if (rep) {
@@ -464,9 +464,9 @@ rod_status rod_crit_update_borders(rod_crit *c, const double *p)
     return ROD_OK;
 }
 
-rod_status rod_crit_eval(rod_crit *c, const double *p, rod_crit_report *rep, char *why, size_t whylen)
+rod_status rod_crit_eval(rod_crit *c, const double *p, rod_crit_report *rep, char *why, size_t why_len)
 {
-    rod_status st = eval_here(c, p, why, whylen);
+    rod_status st = eval_here(c, p, why, why_len);
     if (st == ROD_OK && rep) {
         memset(rep, 0, sizeof *rep);
         fill_report(c, rep);
@@ -500,7 +500,7 @@ rod_status rod_crit_gradient(rod_crit *c, const double *p, int sign, rod_par k, 
 }
 
 rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, double *p, rod_crit_report *rep,
-                          char *why, size_t whylen)
+                          char *why, size_t why_len)
 {
     rod *r = c->r;
     int nf = c->nf, m = kind == ROD_CRIT_CODIM2 ? 2 : 1;
@@ -673,7 +673,7 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
         rod_snapshot_load(r, &c->base);
         if (rep) fill_report(c, rep);
     } else if (why) {
-        snprintf(why, whylen, "%s", buf[0] ? buf : rod_status_message(st));
+        snprintf(why, why_len, "%s", buf[0] ? buf : rod_status_message(st));
     }
     return st;
 }

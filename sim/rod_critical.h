@@ -102,7 +102,7 @@ typedef struct rod_crit_report {
 /* Critical modes at the rod's state under p: the eigenvector of the even and of the odd block
  * nearest zero, by inverse iteration projected onto each block (the bordering vectors' start);
  * fills the eig and parity fields of rep (may be NULL). */
-rod_status rod_crit_modes(rod_crit *c, const double *p, rod_crit_report *rep, char *why, size_t whylen);
+rod_status rod_crit_modes(rod_crit *c, const double *p, rod_crit_report *rep, char *why, size_t why_len);
 
 /* Sets a bordering vector (sign > 0 even, < 0 odd) from v (projected and normalised), e.g. an
  * event's critical mode from the tracer. */
@@ -120,13 +120,13 @@ rod_status rod_crit_refine_mode(rod_crit *c, const double *p, int sign, const do
 rod_status rod_crit_update_borders(rod_crit *c, const double *p);
 
 /* Evaluates R and both test functions at the rod's state under p, without moving anything. */
-rod_status rod_crit_eval(rod_crit *c, const double *p, rod_crit_report *rep, char *why, size_t whylen);
+rod_status rod_crit_eval(rod_crit *c, const double *p, rod_crit_report *rep, char *why, size_t why_len);
 
 /* Newton on the augmented system of kind from the rod's state and p (in/out): free lists the
  * free parameters (1 for fold and pitchfork, 2 for codim-2). The rod holds the solution on
  * success, and on failure the last iterate (callers keep a snapshot). */
 rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, double *p, rod_crit_report *rep,
-                          char *why, size_t whylen);
+                          char *why, size_t why_len);
 
 /* For tests: grad_q g (even sign > 0 or odd) at the rod's state under p by the directional
  * difference, into out (rod_nfree values), and dg/dp_k by central differences into *gp (may be

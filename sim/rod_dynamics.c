@@ -8,10 +8,10 @@
 /* Slot of the solver's state storage that holds the state before a pending step. */
 #define DYN_SLOT 1
 
-rod_status rod_dyn_open(rod_dyn *d, const rod_scene *sc, char *err, size_t errlen)
+rod_status rod_dyn_open(rod_dyn *d, const rod_scene *sc, char *why, size_t why_len)
 {
     memset(d, 0, sizeof *d);
-    rod_status st = rod_alloc(sc, &d->r, err, errlen);
+    rod_status st = rod_alloc(sc, &d->r, why, why_len);
     if (st != ROD_OK) return st;
     size_t nd = (size_t)d->r->ndof;
     d->s = rod_solver_alloc(d->r);
@@ -21,7 +21,7 @@ rod_status rod_dyn_open(rod_dyn *d, const rod_scene *sc, char *err, size_t errle
     d->g_old = calloc(nd, sizeof(double));
     if (!d->s || !d->q_n || !d->v || !d->v_prev || !d->g_old) {
         rod_dyn_close(d);
-        if (err) snprintf(err, errlen, "out of memory allocating the dynamics workspace");
+        if (why) snprintf(why, why_len, "out of memory allocating the dynamics workspace");
         return ROD_ERR_ALLOC;
     }
     d->mu = sc->damping;

@@ -35,7 +35,7 @@ typedef struct rod_dyn {
 } rod_dyn;
 
 /* Allocates the rod of scene sc (clamps at Delta L = sc->compression, Delta W = 0, flat). */
-rod_status rod_dyn_open(rod_dyn *d, const rod_scene *sc, char *err, size_t errlen);
+rod_status rod_dyn_open(rod_dyn *d, const rod_scene *sc, char *why, size_t why_len);
 void rod_dyn_close(rod_dyn *d);
 
 /* Call once the rod sits in a static equilibrium (after a route) so the first step's clamp work

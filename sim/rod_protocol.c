@@ -70,15 +70,15 @@ typedef struct shear_state {
 /* The route to the upper state at the scene's Delta L; records Delta Z and the elastic energy
  * there. */
 static rod_status predict_upper_state(rod_dyn *dyn, const rod_scene *sc, double *k1, rod_obs *ob,
-                                      rod_prediction *out, char *err, size_t errlen)
+                                      rod_prediction *out, char *why, size_t why_len)
 {
     rod *r = dyn->r;
     rod_route_report rr = {0};
     rod_status st = rod_route_to_state(r, dyn->s, sc, +1, &rr);
     out->stage_route = 1;
     if (st != ROD_OK) {
-        if (err)
-            snprintf(err, errlen, "could not reach the upper state at Delta L = %g (%s, %.0f%% of the route done)",
+        if (why)
+            snprintf(why, why_len, "could not reach the upper state at Delta L = %g (%s, %.0f%% of the route done)",
                      sc->compression, rod_status_message(st), 100.0 * rr.reached);
         return st;
     }
@@ -86,7 +86,7 @@ static rod_status predict_upper_state(rod_dyn *dyn, const rod_scene *sc, double 
     out->dz_upper = ob->dz;
     out->elastic_upper = rod_energy(r);
     if (!(ob->dz > 0.0)) {
-        if (err) snprintf(err, errlen, "the route ended with Delta Z = %g, not in the upper state", ob->dz);
+        if (why) snprintf(why, why_len, "the route ended with Delta Z = %g, not in the upper state", ob->dz);
         return ROD_ERR_BRANCH_LOST;
     }
     return ROD_OK;
@@ -96,12 +96,12 @@ static rod_status predict_upper_state(rod_dyn *dyn, const rod_scene *sc, double 
  * over, and starts the shear phase there. */
 static rod_status predict_quasi_start(rod_dyn *dyn, const rod_scene *sc, double dl, double rate,
                                       double *k1, rod_obs *ob, shear_state *ss, rod_prediction *out,
-                                      char *err, size_t errlen)
+                                      char *why, size_t why_len)
 {
     rod_quasi_report qr;
     rod_status st = rod_quasi_follow(dyn, sc, dl, rate, sc->shear_max, &qr);
     if (st != ROD_OK) {
-        if (err) snprintf(err, errlen, "out of memory in the quasi-static start");
+        if (why) snprintf(why, why_len, "out of memory in the quasi-static start");
         return st;
     }
     ss->dw = qr.dw_switch;
@@ -192,25 +192,25 @@ static void predict_next_dt(const rod_predict_opts *o, double change, double gro
 }
 
 rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_prediction *out,
-                       char *err, size_t errlen)
+                       char *why, size_t why_len)
 {
     double t_start = wall_now();
     rod_predict_opts def = rod_predict_opts_default();
     if (!o) o = &def;
     memset(out, 0, sizeof *out);
     rod_dyn dyn;
-    rod_status st = rod_dyn_open(&dyn, sc, err, errlen);
+    rod_status st = rod_dyn_open(&dyn, sc, why, why_len);
     if (st != ROD_OK) return st;
     rod *r = dyn.r;
     double *k1 = malloc(sizeof(double) * (size_t)r->n);
     if (!k1) {
         st = ROD_ERR_ALLOC;
-        if (err) snprintf(err, errlen, "out of memory allocating the simulator workspace");
+        if (why) snprintf(why, why_len, "out of memory allocating the simulator workspace");
         goto done;
     }
 
     rod_obs ob;
-    st = predict_upper_state(&dyn, sc, k1, &ob, out, err, errlen);
+    st = predict_upper_state(&dyn, sc, k1, &ob, out, why, why_len);
     if (st != ROD_OK) goto done;
     double l = r->length, dl = sc->compression, rate = sc->shear_rate / l;
     rod_dyn_start(&dyn, dl, 0.0);
@@ -221,7 +221,7 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
     ss.dt = ss.dt_base;
     ss.dt_max = 100.0 * ss.dt_base;
     if (o->adaptive && o->quasi_static && o->ramp_time <= 0.0 && rate > 0.0) {
-        st = predict_quasi_start(&dyn, sc, dl, rate, k1, &ob, &ss, out, err, errlen);
+        st = predict_quasi_start(&dyn, sc, dl, rate, k1, &ob, &ss, out, why, why_len);
         if (st != ROD_OK) goto done;
     }
     ss.dz_prev = ob.dz;
@@ -239,7 +239,7 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
         if (ss.detected && (ss.t - ss.t_detect >= o->post_snap_time || ss.swing_over)) break;
         if (out->steps + out->rejected >= cap) {
             st = ROD_ERR_TIME_LIMIT;
-            if (err) snprintf(err, errlen, "step cap of %ld reached at Delta W = %g", cap, ss.dw);
+            if (why) snprintf(why, why_len, "step cap of %ld reached at Delta W = %g", cap, ss.dw);
             goto done;
         }
         double h = ss.dt;
@@ -256,8 +256,8 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
             ss.dt *= 0.5;
             if (ss.dt < ss.dt_base / 1024.0) {
                 st = ts;
-                if (err)
-                    snprintf(err, errlen, "time step failed at Delta W = %.6f even at dt = %g s: %s (residual %.3g)",
+                if (why)
+                    snprintf(why, why_len, "time step failed at Delta W = %.6f even at dt = %g s: %s (residual %.3g)",
                              ss.dw, ss.dt, rod_status_message(ts), nr.residual_rel);
                 goto done;
             }
@@ -275,7 +275,7 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
         out->steps++;
         if (!isfinite(ob.dz) || !isfinite(ob.a) || !isfinite(ob.a_cam)) {
             st = ROD_ERR_NAN;
-            if (err) snprintf(err, errlen, "non-finite observation at Delta W = %g", ss.dw);
+            if (why) snprintf(why, why_len, "non-finite observation at Delta W = %g", ss.dw);
             goto done;
         }
         double speed = fabs(ob.dz - ss.dz_prev) / h;

@@ -78,6 +78,6 @@ typedef struct rod_prediction {
 } rod_prediction;
 
 rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_prediction *out,
-                       char *err, size_t errlen);
+                       char *why, size_t why_len);
 
 #endif

@@ -81,12 +81,12 @@ int rod_band_negative_pivots(const double *A, int n, double shift, rod_stab_ws *
 }
 
 rod_status rod_inertia_eval(const double *A, int n, double shift_rel, rod_stab_ws *w, rod_inertia *out,
-                            char *why, size_t whylen)
+                            char *why, size_t why_len)
 {
     memset(out, 0, sizeof *out);
     for (int i = 0; i < n * (ROD_BAND + 1); i++)
         if (!isfinite(A[i])) {
-            if (why) snprintf(why, whylen, "non-finite Hessian entry at free DOF %d", i / (ROD_BAND + 1));
+            if (why) snprintf(why, why_len, "non-finite Hessian entry at free DOF %d", i / (ROD_BAND + 1));
             return ROD_ERR_NAN;
         }
     double scale = max_abs_diag(A, n);
@@ -95,7 +95,7 @@ rod_status rod_inertia_eval(const double *A, int n, double shift_rel, rod_stab_w
     out->below_plus = rod_band_negative_pivots(A, n, out->shift, w, NULL);
     out->below_minus = rod_band_negative_pivots(A, n, -out->shift, w, NULL);
     if (c0 < 0 && out->below_plus < 0 && out->below_minus < 0) {
-        if (why) snprintf(why, whylen, "every LDL^T factorisation met an exact zero pivot");
+        if (why) snprintf(why, why_len, "every LDL^T factorisation met an exact zero pivot");
         return ROD_ERR_SINGULAR;
     }
     if (out->below_plus >= 0 && out->below_plus == out->below_minus) {
@@ -149,7 +149,7 @@ static double normalise(double *v, int n)
 }
 
 rod_status rod_eig_nearest(const double *A, int n, double sigma, int max_iter, double rel_tol, rod_stab_ws *w,
-                           double *v, rod_eigpair *out, char *why, size_t whylen)
+                           double *v, rod_eigpair *out, char *why, size_t why_len)
 {
     memset(out, 0, sizeof *out);
     double scale = max_abs_diag(A, n);
@@ -161,7 +161,7 @@ rod_status rod_eig_nearest(const double *A, int n, double sigma, int max_iter, d
         if (!ok) sigma += (attempt + 1) * 1e-12 * (scale > 0.0 ? scale : 1.0);
     }
     if (!ok) {
-        if (why) snprintf(why, whylen, "A - sigma I could not be factorised (band LU failed)");
+        if (why) snprintf(why, why_len, "A - sigma I could not be factorised (band LU failed)");
         return ROD_ERR_SINGULAR;
     }
     if (normalise(v, n) == 0.0) {
@@ -175,12 +175,12 @@ rod_status rod_eig_nearest(const double *A, int n, double sigma, int max_iter, d
     for (int it = 1; it <= max_iter; it++) {
         memcpy(w->y, v, sizeof(double) * (size_t)n);
         if (gsl_linalg_LU_band_svx(ROD_BAND, ROD_BAND, w->lu, w->piv, &yv.vector) != GSL_SUCCESS) {
-            if (why) snprintf(why, whylen, "band LU solve failed in inverse iteration");
+            if (why) snprintf(why, why_len, "band LU solve failed in inverse iteration");
             return ROD_ERR_SINGULAR;
         }
         double s = normalise(w->y, n);
         if (!(s > 0.0) || !isfinite(s)) {
-            if (why) snprintf(why, whylen, "inverse iteration produced a non-finite vector (iteration %d)", it);
+            if (why) snprintf(why, why_len, "inverse iteration produced a non-finite vector (iteration %d)", it);
             return ROD_ERR_NAN;
         }
         /* Keep the sign of the vector steady from one iteration to the next. */
@@ -197,7 +197,7 @@ rod_status rod_eig_nearest(const double *A, int n, double sigma, int max_iter, d
         out->residual = res;
         out->iterations = it;
         if (!isfinite(mu) || !isfinite(res)) {
-            if (why) snprintf(why, whylen, "non-finite Rayleigh quotient (iteration %d)", it);
+            if (why) snprintf(why, why_len, "non-finite Rayleigh quotient (iteration %d)", it);
             return ROD_ERR_NAN;
         }
         if (res <= rel_tol * fabs(mu - sigma) + floor_r) return ROD_OK;
@@ -206,7 +206,7 @@ rod_status rod_eig_nearest(const double *A, int n, double sigma, int max_iter, d
         mu_prev = mu;
     }
     if (why)
-        snprintf(why, whylen, "inverse iteration did not converge in %d iterations (residual %.3g, eigenvalue %.6g)",
+        snprintf(why, why_len, "inverse iteration did not converge in %d iterations (residual %.3g, eigenvalue %.6g)",
                  max_iter, out->residual, mu);
     return ROD_ERR_MAXITER;
 }

@@ -57,7 +57,7 @@ typedef struct rod_inertia {
  * only when all three factorisations hit an exact zero pivot, and ROD_ERR_NAN on a non-finite
  * entry. */
 rod_status rod_inertia_eval(const double *A, int n, double shift_rel, rod_stab_ws *w, rod_inertia *out,
-                            char *why, size_t whylen);
+                            char *why, size_t why_len);
 
 /* y = A x for A in symmetric band storage. */
 void rod_band_symv(const double *A, int n, const double *x, double *y);
@@ -74,6 +74,6 @@ typedef struct rod_eigpair {
  * ROD_ERR_MAXITER after max_iter iterations, ROD_ERR_NAN on non-finite values; why (may be
  * NULL) receives the reason. */
 rod_status rod_eig_nearest(const double *A, int n, double sigma, int max_iter, double rel_tol, rod_stab_ws *w,
-                           double *v, rod_eigpair *out, char *why, size_t whylen);
+                           double *v, rod_eigpair *out, char *why, size_t why_len);
 
 #endif

@@ -16,21 +16,21 @@ struct rod_twin {
     long halvings;
 };
 
-rod_status rod_twin_open(const rod_scene *sc, double dl_start, rod_twin **out, char *err, size_t errlen)
+rod_status rod_twin_open(const rod_scene *sc, double dl_start, rod_twin **out, char *why, size_t why_len)
 {
     *out = NULL;
     if (!(dl_start >= 0.0 && dl_start < 1.0)) {
-        if (err) snprintf(err, errlen, "mounting compression Delta L = %g is outside [0, 1)", dl_start);
+        if (why) snprintf(why, why_len, "mounting compression Delta L = %g is outside [0, 1)", dl_start);
         return ROD_ERR_SCENE;
     }
     rod_scene s = *sc;
     s.compression = dl_start;
     rod_twin *tw = calloc(1, sizeof *tw);
     if (!tw) {
-        if (err) snprintf(err, errlen, "out of memory allocating the twin");
+        if (why) snprintf(why, why_len, "out of memory allocating the twin");
         return ROD_ERR_ALLOC;
     }
-    rod_status st = rod_dyn_open(&tw->dyn, &s, err, errlen);
+    rod_status st = rod_dyn_open(&tw->dyn, &s, why, why_len);
     if (st != ROD_OK) {
         free(tw);
         return st;
@@ -38,15 +38,15 @@ rod_status rod_twin_open(const rod_scene *sc, double dl_start, rod_twin **out, c
     tw->k1 = malloc(sizeof(double) * (size_t)tw->dyn.r->n);
     if (!tw->k1) {
         rod_twin_close(tw);
-        if (err) snprintf(err, errlen, "out of memory allocating the twin");
+        if (why) snprintf(why, why_len, "out of memory allocating the twin");
         return ROD_ERR_ALLOC;
     }
     tw->dt = sc->dt;
     rod_route_report rr = {0};
     st = rod_route_to_state(tw->dyn.r, tw->dyn.s, &s, +1, &rr);
     if (st != ROD_OK) {
-        if (err)
-            snprintf(err, errlen, "twin: could not reach the upper state at Delta L = %g (%s, %.0f%% of the route done)",
+        if (why)
+            snprintf(why, why_len, "twin: could not reach the upper state at Delta L = %g (%s, %.0f%% of the route done)",
                      dl_start, rod_status_message(st), 100.0 * rr.reached);
         rod_twin_close(tw);
         return st;
@@ -64,10 +64,10 @@ void rod_twin_close(rod_twin *tw)
     free(tw);
 }
 
-rod_status rod_twin_advance(rod_twin *tw, double t_to, double dl, double dw, char *err, size_t errlen)
+rod_status rod_twin_advance(rod_twin *tw, double t_to, double dl, double dw, char *why, size_t why_len)
 {
     if (!isfinite(t_to) || !isfinite(dl) || !isfinite(dw) || t_to < tw->t) {
-        if (err) snprintf(err, errlen, "twin: bad advance to t = %g s, Delta L = %g, Delta W = %g (now t = %g s)",
+        if (why) snprintf(why, why_len, "twin: bad advance to t = %g s, Delta L = %g, Delta W = %g (now t = %g s)",
                           t_to, dl, dw, tw->t);
         return ROD_ERR_SCENE;
     }
@@ -82,7 +82,7 @@ rod_status rod_twin_advance(rod_twin *tw, double t_to, double dl, double dw, cha
     long cap = 4 * n * 1024 + 16, iter = 0;
     while (done < span * (1.0 - 1e-12)) {
         if (++iter > cap) {
-            if (err) snprintf(err, errlen, "twin: step cap reached between t = %g and %g s", t0, t_to);
+            if (why) snprintf(why, why_len, "twin: step cap reached between t = %g and %g s", t0, t_to);
             return ROD_ERR_TIME_LIMIT;
         }
         if (h > span - done) h = span - done;
@@ -92,8 +92,8 @@ rod_status rod_twin_advance(rod_twin *tw, double t_to, double dl, double dw, cha
         if (st != ROD_OK) {
             tw->halvings++;
             if (++level > 10) {
-                if (err)
-                    snprintf(err, errlen, "twin: time step failed at t = %.4f s, Delta W = %.6f even at %g s: %s",
+                if (why)
+                    snprintf(why, why_len, "twin: time step failed at t = %.4f s, Delta W = %.6f even at %g s: %s",
                              t0 + done, dw0 + done / span * (dw - dw0), h, rod_status_message(st));
                 return st;
             }

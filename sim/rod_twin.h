@@ -16,12 +16,12 @@ typedef struct rod_twin rod_twin;
 
 /* Builds the rod of sc and brings it to the upper state at Delta L = dl_start (the documented
  * route, rod_route.h), Delta W = 0, at rest, at time 0. */
-rod_status rod_twin_open(const rod_scene *sc, double dl_start, rod_twin **out, char *err, size_t errlen);
+rod_status rod_twin_open(const rod_scene *sc, double dl_start, rod_twin **out, char *why, size_t why_len);
 void rod_twin_close(rod_twin *tw);
 
 /* Integrates to time t_to (> current time; equal is a no-op) with the clamps moving linearly to
  * (dl, dw). Failed steps are halved down to dt / 1024; then the status and err say where. */
-rod_status rod_twin_advance(rod_twin *tw, double t_to, double dl, double dw, char *err, size_t errlen);
+rod_status rod_twin_advance(rod_twin *tw, double t_to, double dl, double dw, char *why, size_t why_len);
 
 double rod_twin_time(const rod_twin *tw);
 /* Delta Z, A, ... of the current state (rod_observe.h). */

@@ -75,7 +75,7 @@ struct JawFit {
 };
 
 bool fit_jaw(const cv::Mat &F, const cv::Mat &grey, bool dark, const vis_track_params &p,
-             const std::vector<cv::Point> &pix, Pt c, Pt e, JawFit &out, char *why, size_t nwhy)
+             const std::vector<cv::Point> &pix, Pt c, Pt e, JawFit &out, char *why, size_t why_len)
 {
     const Pt n(-e.y, e.x);
     double amax = -1e9;
@@ -132,7 +132,7 @@ bool fit_jaw(const cv::Mat &F, const cv::Mat &grey, bool dark, const vis_track_p
                 faces.push_back(cross);
         }
         if (faces.size() < 2) {
-            snprintf(why, nwhy, "a clamp-like blob near (%.0f, %.0f) has no clear inner face beside "
+            snprintf(why, why_len, "a clamp-like blob near (%.0f, %.0f) has no clear inner face beside "
                      "the ribbon", c.x, c.y);
             return false;
         }
@@ -158,17 +158,17 @@ bool fit_jaw(const cv::Mat &F, const cv::Mat &grey, bool dark, const vis_track_p
             }
         out.valid = smp.empty() ? 0.0 : (double)A.rows / (double)smp.size();
         if (A.rows < 8 || out.valid < 0.5) {
-            snprintf(why, nwhy, "no ribbon leaves the clamp-like blob near (%.0f, %.0f)", c.x, c.y);
+            snprintf(why, why_len, "no ribbon leaves the clamp-like blob near (%.0f, %.0f)", c.x, c.y);
             return false;
         }
         cv::Mat coef;
         if (!cv::solve(A, y, coef, cv::DECOMP_SVD)) {
-            snprintf(why, nwhy, "ribbon fit failed beside the blob near (%.0f, %.0f)", c.x, c.y);
+            snprintf(why, why_len, "ribbon fit failed beside the blob near (%.0f, %.0f)", c.x, c.y);
             return false;
         }
         b_rib = coef.at<double>(0);
         if (!(b_rib > bmin && b_rib < bmax)) {
-            snprintf(why, nwhy, "the ribbon does not leave the blob near (%.0f, %.0f) across its face",
+            snprintf(why, why_len, "the ribbon does not leave the blob near (%.0f, %.0f) across its face",
                      c.x, c.y);
             return false;
         }

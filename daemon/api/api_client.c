@@ -27,11 +27,11 @@ api_client_config api_client_config_default(void)
     return c;
 }
 
-int api_client_global_init(char *why, size_t n)
+int api_client_global_init(char *why, size_t why_len)
 {
     CURLcode rc = curl_global_init(CURL_GLOBAL_DEFAULT);
     if (rc != CURLE_OK) {
-        snprintf(why, n, "cannot initialise libcurl: %s", curl_easy_strerror(rc));
+        snprintf(why, why_len, "cannot initialise libcurl: %s", curl_easy_strerror(rc));
         return -1;
     }
     return 0;
@@ -97,7 +97,7 @@ static bool valid_header_value(const char *s)
 
 /* Interpret a completed exchange. Takes ownership of b->data. */
 static int take_reply(const char *url, long status, const char *ctype, reply_buf *b, json_t **json_out,
-                      unsigned char **bytes_out, size_t *len_out, char *why, size_t n)
+                      unsigned char **bytes_out, size_t *len_out, char *why, size_t why_len)
 {
     bool is_json = ctype != NULL && strncasecmp(ctype, "application/json", 16) == 0;
     if (is_json) {
@@ -106,17 +106,17 @@ static int take_reply(const char *url, long status, const char *ctype, reply_buf
         free(b->data);
         b->data = NULL;
         if (j == NULL) {
-            snprintf(why, n, "reply from ribbond at %s (HTTP %ld) is not valid JSON: %s at line %d, column %d", url,
+            snprintf(why, why_len, "reply from ribbond at %s (HTTP %ld) is not valid JSON: %s at line %d, column %d", url,
                      status, err.text, err.line, err.column);
             return -1;
         }
         if (status >= 400) {
             const char *msg = json_string_value(json_object_get(j, "error"));
             if (msg)
-                snprintf(why, n, "%s", msg);
+                snprintf(why, why_len, "%s", msg);
             else
-                snprintf(why, n, "HTTP %ld", status);
-        } else if (n > 0) {
+                snprintf(why, why_len, "HTTP %ld", status);
+        } else if (why_len > 0) {
             why[0] = '\0';
         }
         if (json_out)
@@ -127,7 +127,7 @@ static int take_reply(const char *url, long status, const char *ctype, reply_buf
     }
     /* Not JSON. */
     if (bytes_out == NULL && json_out != NULL) {
-        snprintf(why, n, "reply from ribbond at %s (HTTP %ld) is not JSON (content type %s)", url, status,
+        snprintf(why, why_len, "reply from ribbond at %s (HTTP %ld) is not JSON (content type %s)", url, status,
                  ctype ? ctype : "none");
         free(b->data);
         b->data = NULL;
@@ -139,8 +139,8 @@ static int take_reply(const char *url, long status, const char *ctype, reply_buf
         const char *t = b->data ? (const char *)b->data : "";
         while (t[k] && t[k] != '\n' && t[k] != '\r' && k < 120)
             k++;
-        snprintf(why, n, "HTTP %ld%s%.*s", status, k ? ": " : "", (int)k, t);
-    } else if (n > 0) {
+        snprintf(why, why_len, "HTTP %ld%s%.*s", status, k ? ": " : "", (int)k, t);
+    } else if (why_len > 0) {
         why[0] = '\0';
     }
     if (bytes_out) {
@@ -157,28 +157,28 @@ static int take_reply(const char *url, long status, const char *ctype, reply_buf
 
 /* The arguments a request needs, checked before anything is allocated. 0, or -1 with why. */
 static int request_check(const api_client_config *c, const char *method, const char *path, char *why,
-                         size_t n)
+                         size_t why_len)
 {
     if (c == NULL || c->base_url == NULL || method == NULL || path == NULL || path[0] != '/') {
-        snprintf(why, n, "api_client_request: need a config with base_url, a method and a path starting with '/'");
+        snprintf(why, why_len, "api_client_request: need a config with base_url, a method and a path starting with '/'");
         return -1;
     }
     if (strncmp(c->base_url, "http://", 7) != 0 && strncmp(c->base_url, "https://", 8) != 0) {
-        snprintf(why, n, "daemon URL '%.200s' must start with http:// or https://", c->base_url);
+        snprintf(why, why_len, "daemon URL '%.200s' must start with http:// or https://", c->base_url);
         return -1;
     }
     if (!(c->timeout_s > 0.0) || c->timeout_s > 86400.0) {
-        snprintf(why, n, "client timeout %g s is out of range (0 .. 86400]", c->timeout_s);
+        snprintf(why, why_len, "client timeout %g s is out of range (0 .. 86400]", c->timeout_s);
         return -1;
     }
     bool has_token = c->token != NULL && c->token[0] != '\0';
     if (has_token && !valid_header_value(c->token)) {
-        snprintf(why, n, "the API token contains control characters");
+        snprintf(why, why_len, "the API token contains control characters");
         return -1;
     }
     for (const char *m = method; *m || m == method; m++)
         if (!isupper((unsigned char)*m)) {
-            snprintf(why, n, "HTTP method '%.20s' must be upper-case letters", method);
+            snprintf(why, why_len, "HTTP method '%.20s' must be upper-case letters", method);
             return -1;
         }
     return 0;
@@ -187,7 +187,7 @@ static int request_check(const api_client_config *c, const char *method, const c
 /* The request's headers (and the Authorization line, in *auth, which the caller frees). NULL
  * with why when memory runs out. */
 static struct curl_slist *request_headers(const api_client_config *c, bool has_body, size_t payload_len,
-                                          char **auth, char *why, size_t n)
+                                          char **auth, char *why, size_t why_len)
 {
     struct curl_slist *headers = NULL;
     headers = curl_slist_append(headers, "Accept: application/json, image/png");
@@ -201,7 +201,7 @@ static struct curl_slist *request_headers(const api_client_config *c, bool has_b
         size_t alen = strlen(c->token) + 32;
         *auth = malloc(alen);
         if (*auth == NULL) {
-            snprintf(why, n, "out of memory");
+            snprintf(why, why_len, "out of memory");
             curl_slist_free_all(headers);
             return NULL;
         }
@@ -209,7 +209,7 @@ static struct curl_slist *request_headers(const api_client_config *c, bool has_b
         headers = curl_slist_append(headers, *auth);
     }
     if (headers == NULL)
-        snprintf(why, n, "out of memory");
+        snprintf(why, why_len, "out of memory");
     return headers;
 }
 
@@ -249,39 +249,39 @@ static void request_options(CURL *h, const api_client_config *c, const char *url
 /* Why curl_easy_perform failed, in the user's terms (is ribbond running, timed out, too big). */
 static void transfer_reason(CURL *h, CURLcode rc, const api_client_config *c, int blen, const char *method,
                             const char *path, const char *url, const char *errbuf, const reply_buf *b,
-                            char *why, size_t n)
+                            char *why, size_t why_len)
 {
     char reason[256];
     switch (rc) {
     case CURLE_COULDNT_CONNECT:
         connect_reason(h, rc, errbuf, reason, sizeof reason);
-        snprintf(why, n, "cannot reach ribbond at %.*s: %s; is it running? (ribbond --config FILE)", blen,
+        snprintf(why, why_len, "cannot reach ribbond at %.*s: %s; is it running? (ribbond --config FILE)", blen,
                  c->base_url, reason);
         break;
     case CURLE_COULDNT_RESOLVE_HOST:
-        snprintf(why, n, "cannot reach ribbond at %.*s: unknown host (%s)", blen, c->base_url,
+        snprintf(why, why_len, "cannot reach ribbond at %.*s: unknown host (%s)", blen, c->base_url,
                  errbuf[0] ? errbuf : curl_easy_strerror(rc));
         break;
     case CURLE_OPERATION_TIMEDOUT:
-        snprintf(why, n, "ribbond at %.*s did not answer %s %s within %g s", blen, c->base_url, method, path,
+        snprintf(why, why_len, "ribbond at %.*s did not answer %s %s within %g s", blen, c->base_url, method, path,
                  c->timeout_s);
         break;
     case CURLE_WRITE_ERROR:
         if (b->overflow) {
-            snprintf(why, n, "reply to %s %s is larger than %u bytes (or memory ran out)", method, path,
+            snprintf(why, why_len, "reply to %s %s is larger than %u bytes (or memory ran out)", method, path,
                      API_CLIENT_MAX_REPLY);
             break;
         }
         /* fall through */
     default:
-        snprintf(why, n, "%s %s failed: %s", method, url, errbuf[0] ? errbuf : curl_easy_strerror(rc));
+        snprintf(why, why_len, "%s %s failed: %s", method, url, errbuf[0] ? errbuf : curl_easy_strerror(rc));
         break;
     }
 }
 
 int api_client_request(const api_client_config *c, const char *method, const char *path, const json_t *body,
                        int *http_status, json_t **json_out, unsigned char **bytes_out, size_t *len_out, char *why,
-                       size_t n)
+                       size_t why_len)
 {
     if (json_out)
         *json_out = NULL;
@@ -291,7 +291,7 @@ int api_client_request(const api_client_config *c, const char *method, const cha
         *len_out = 0;
     if (http_status)
         *http_status = 0;
-    if (request_check(c, method, path, why, n) != 0)
+    if (request_check(c, method, path, why, why_len) != 0)
         return -1;
 
     /* URL: base without trailing slashes, then path. */
@@ -307,7 +307,7 @@ int api_client_request(const api_client_config *c, const char *method, const cha
     reply_buf b = {0};
     int result = -1;
     if (url == NULL) {
-        snprintf(why, n, "out of memory");
+        snprintf(why, why_len, "out of memory");
         return -1;
     }
     snprintf(url, ulen, "%.*s%s", (int)blen, c->base_url, path);
@@ -316,7 +316,7 @@ int api_client_request(const api_client_config *c, const char *method, const cha
     if (body != NULL) {
         payload = json_dumps(body, JSON_COMPACT | JSON_ENCODE_ANY);
         if (payload == NULL) {
-            snprintf(why, n, "cannot encode the request body as JSON");
+            snprintf(why, why_len, "cannot encode the request body as JSON");
             goto done;
         }
         payload_len = strlen(payload);
@@ -324,10 +324,10 @@ int api_client_request(const api_client_config *c, const char *method, const cha
 
     h = curl_easy_init();
     if (h == NULL) {
-        snprintf(why, n, "cannot create a libcurl handle (was api_client_global_init called?)");
+        snprintf(why, why_len, "cannot create a libcurl handle (was api_client_global_init called?)");
         goto done;
     }
-    headers = request_headers(c, body != NULL, payload_len, &auth, why, n);
+    headers = request_headers(c, body != NULL, payload_len, &auth, why, why_len);
     if (headers == NULL)
         goto done;
 
@@ -335,7 +335,7 @@ int api_client_request(const api_client_config *c, const char *method, const cha
     request_options(h, c, url, method, payload, payload_len, body != NULL, headers, &b, errbuf);
     CURLcode rc = curl_easy_perform(h);
     if (rc != CURLE_OK) {
-        transfer_reason(h, rc, c, (int)blen, method, path, url, errbuf, &b, why, n);
+        transfer_reason(h, rc, c, (int)blen, method, path, url, errbuf, &b, why, why_len);
         goto done;
     }
 
@@ -345,7 +345,7 @@ int api_client_request(const api_client_config *c, const char *method, const cha
     curl_easy_getinfo(h, CURLINFO_CONTENT_TYPE, &ctype);
     if (http_status)
         *http_status = (int)status;
-    result = take_reply(url, status, ctype, &b, json_out, bytes_out, len_out, why, n);
+    result = take_reply(url, status, ctype, &b, json_out, bytes_out, len_out, why, why_len);
 
 done:
     if (h)

@@ -22,7 +22,7 @@ typedef struct api_client_config {
 api_client_config api_client_config_default(void);
 
 /* Call once from main() before any thread exists. 0, or -1 with a reason. */
-int api_client_global_init(char *why, size_t n);
+int api_client_global_init(char *why, size_t why_len);
 void api_client_global_cleanup(void);
 
 /* Send method ("GET", "POST", ...) to base_url + path (path starts with '/'), with body as JSON
@@ -41,6 +41,6 @@ void api_client_global_cleanup(void);
  * and bytes_out was not. On -1 nothing is returned through json_out / bytes_out. */
 int api_client_request(const api_client_config *c, const char *method, const char *path, const json_t *body,
                        int *http_status, json_t **json_out, unsigned char **bytes_out, size_t *len_out, char *why,
-                       size_t n);
+                       size_t why_len);
 
 #endif

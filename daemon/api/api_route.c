@@ -11,38 +11,38 @@
 #include <string.h>
 
 /* Parse seg[0..len) as a positive decimal int64. */
-static int parse_id(const char *seg, size_t len, int64_t *id, char *why, size_t n)
+static int parse_id(const char *seg, size_t len, int64_t *id, char *why, size_t why_len)
 {
     if (len == 0) {
-        snprintf(why, n, "trial id is empty: expected a positive integer");
+        snprintf(why, why_len, "trial id is empty: expected a positive integer");
         return -1;
     }
     int64_t v = 0;
     for (size_t i = 0; i < len; i++) {
         char c = seg[i];
         if (c < '0' || c > '9') {
-            snprintf(why, n, "trial id '%.*s' is not a positive integer", (int)(len > 40 ? 40 : len), seg);
+            snprintf(why, why_len, "trial id '%.*s' is not a positive integer", (int)(len > 40 ? 40 : len), seg);
             return -1;
         }
         int d = c - '0';
         if (v > (INT64_MAX - d) / 10) {
-            snprintf(why, n, "trial id '%.*s' is too large", (int)(len > 40 ? 40 : len), seg);
+            snprintf(why, why_len, "trial id '%.*s' is too large", (int)(len > 40 ? 40 : len), seg);
             return -1;
         }
         v = v * 10 + d;
     }
     if (v == 0) {
-        snprintf(why, n, "trial id must be at least 1, got '%.*s'", (int)(len > 40 ? 40 : len), seg);
+        snprintf(why, why_len, "trial id must be at least 1, got '%.*s'", (int)(len > 40 ? 40 : len), seg);
         return -1;
     }
     *id = v;
     return 0;
 }
 
-int api_path_grammar_ok(const char *path, char *why, size_t n)
+int api_path_grammar_ok(const char *path, char *why, size_t why_len)
 {
     if (path == NULL || path[0] != '/') {
-        snprintf(why, n, "request path must start with '/'");
+        snprintf(why, why_len, "request path must start with '/'");
         return 0;
     }
     for (size_t i = 0; path[i] != '\0'; i++) {
@@ -51,10 +51,10 @@ int api_path_grammar_ok(const char *path, char *why, size_t n)
                  c == '_' || c == '/' || c == '-';
         if (!ok) {
             if (c > 0x20 && c < 0x7f)
-                snprintf(why, n, "byte '%c' at offset %zu of the path is outside the API's path grammar "
+                snprintf(why, why_len, "byte '%c' at offset %zu of the path is outside the API's path grammar "
                                  "[A-Za-z0-9._/-] (percent-escapes are not decoded)", (char)c, i);
             else
-                snprintf(why, n, "byte 0x%02x at offset %zu of the path is outside the API's path grammar "
+                snprintf(why, why_len, "byte 0x%02x at offset %zu of the path is outside the API's path grammar "
                                  "[A-Za-z0-9._/-]", c, i);
             return 0;
         }
@@ -62,13 +62,13 @@ int api_path_grammar_ok(const char *path, char *why, size_t n)
     return 1;
 }
 
-api_route api_route_parse(const char *path, int64_t *id, char *why, size_t n)
+api_route api_route_parse(const char *path, int64_t *id, char *why, size_t why_len)
 {
     static const char prefix[] = "/trials/";
     static const char report[] = "/report.png";
     if (path == NULL)
         return API_ROUTE_NONE;
-    if (!api_path_grammar_ok(path, why, n))
+    if (!api_path_grammar_ok(path, why, why_len))
         return API_ROUTE_BAD_PATH;
     if (strcmp(path, "/live/events") == 0)
         return API_ROUTE_EVENTS;
@@ -99,7 +99,7 @@ api_route api_route_parse(const char *path, int64_t *id, char *why, size_t n)
         return API_ROUTE_NONE;
     }
     int64_t v = 0;
-    if (parse_id(seg, len, &v, why, n) != 0)
+    if (parse_id(seg, len, &v, why, why_len) != 0)
         return API_ROUTE_BAD_ID;
     if (id)
         *id = v;

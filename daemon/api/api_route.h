@@ -24,11 +24,11 @@ typedef enum api_route {
 /* 1 when path is made only of the bytes the routes use, [A-Za-z0-9._/-], and starts with '/';
  * else 0 with the offending byte and its offset in why. libmicrohttpd is told not to decode
  * percent-escapes, so "%00" or "%2F" arrive as they were sent and are refused here. */
-int api_path_grammar_ok(const char *path, char *why, size_t n);
+int api_path_grammar_ok(const char *path, char *why, size_t why_len);
 
 /* Parse a request path (API_ROUTE_BAD_PATH when api_path_grammar_ok refuses it). For {id} routes *id gets the id (1 .. INT64_MAX, decimal digits only);
  * a path of an {id} route whose id is not that gives API_ROUTE_BAD_ID and a reason in why. */
-api_route api_route_parse(const char *path, int64_t *id, char *why, size_t n);
+api_route api_route_parse(const char *path, int64_t *id, char *why, size_t why_len);
 
 /* Methods allowed on a route, as an Allow header value ("GET", "GET, POST", "POST"); NULL for
  * API_ROUTE_NONE and API_ROUTE_BAD_ID. */

@@ -257,18 +257,18 @@ bool api_token_equal(const char *given, size_t glen, const char *want, size_t wl
 }
 
 /* 0 when the request carries the right bearer token (or none is configured), else a reason. */
-static int check_token(const api_server *s, struct MHD_Connection *c, char *why, size_t n)
+static int check_token(const api_server *s, struct MHD_Connection *c, char *why, size_t why_len)
 {
     if (s->token_len == 0)
         return 0;
     const char *h = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_AUTHORIZATION);
     if (h == NULL) {
-        snprintf(why, n, "this daemon requires a token: send \"Authorization: Bearer TOKEN\" "
+        snprintf(why, why_len, "this daemon requires a token: send \"Authorization: Bearer TOKEN\" "
                          "(the token is [api] token in the rig file)");
         return -1;
     }
     if (strncasecmp(h, "Bearer ", 7) != 0) {
-        snprintf(why, n, "Authorization header must be \"Bearer TOKEN\"");
+        snprintf(why, why_len, "Authorization header must be \"Bearer TOKEN\"");
         return -1;
     }
     const char *t = h + 7;
@@ -278,7 +278,7 @@ static int check_token(const api_server *s, struct MHD_Connection *c, char *why,
     while (len > 0 && (t[len - 1] == ' ' || t[len - 1] == '\t'))
         len--;
     if (!api_token_equal(t, len, s->token, s->token_len)) {
-        snprintf(why, n, "wrong token");
+        snprintf(why, why_len, "wrong token");
         return -1;
     }
     return 0;
@@ -404,7 +404,7 @@ static void body_append(const api_server *s, api_request *req, const char *data,
 }
 
 /* The body as a JSON object: {} when empty or blank. NULL with a reason on error. */
-static json_t *body_object(const api_request *req, char *why, size_t n)
+static json_t *body_object(const api_request *req, char *why, size_t why_len)
 {
     size_t i = 0;
     while (i < req->len && (req->body[i] == ' ' || req->body[i] == '\t' || req->body[i] == '\r' || req->body[i] == '\n'))
@@ -414,14 +414,14 @@ static json_t *body_object(const api_request *req, char *why, size_t n)
     json_error_t err;
     json_t *j = json_loadb(req->body, req->len, JSON_REJECT_DUPLICATES, &err);
     if (j == NULL) {
-        snprintf(why, n, "malformed JSON body at line %d, column %d: %s", err.line, err.column, err.text);
+        snprintf(why, why_len, "malformed JSON body at line %d, column %d: %s", err.line, err.column, err.text);
         return NULL;
     }
     if (!json_is_object(j)) {
         static const char *const names[] = {"an object", "an array", "a string", "a number", "a number",
                                             "true", "false", "null"};
         int t = (int)json_typeof(j);
-        snprintf(why, n, "request body must be a JSON object, got %s",
+        snprintf(why, why_len, "request body must be a JSON object, got %s",
                  t >= 0 && t < (int)(sizeof names / sizeof names[0]) ? names[t] : "something else");
         json_decref(j);
         return NULL;
@@ -683,7 +683,7 @@ static bool has_header(const char *head, size_t len, const char *name)
 
 /* api_guard's take: sort a complete head into a pool, or refuse with 503. */
 static int take_connection(void *user, int fd, const struct sockaddr *peer, socklen_t peer_len, const char *head,
-                           size_t len, char *why, size_t n)
+                           size_t len, char *why, size_t why_len)
 {
     api_server *s = user;
     char method[16], path[64];
@@ -697,7 +697,7 @@ static int take_connection(void *user, int fd, const struct sockaddr *peer, sock
     if (control)
         limit += API_RESERVED_CONTROL;
     if (atomic_load(&pool->open) >= (int)limit) {
-        snprintf(why, n, stream ? "too many live streams open (%u); close a page and retry"
+        snprintf(why, why_len, stream ? "too many live streams open (%u); close a page and retry"
                                 : "the API is busy (%u connections in use); retry",
                  limit);
         return 503;
@@ -732,7 +732,7 @@ static int listen_on(int fd)
 }
 
 /* Parse a numeric listen address into sa; tell whether it is a loopback address. */
-static int parse_listen(const char *listen, struct sockaddr_storage *sa, bool *v6, bool *loopback, char *why, size_t n)
+static int parse_listen(const char *listen, struct sockaddr_storage *sa, bool *v6, bool *loopback, char *why, size_t why_len)
 {
     memset(sa, 0, sizeof *sa);
     if (strcmp(listen, "localhost") == 0)
@@ -752,51 +752,51 @@ static int parse_listen(const char *listen, struct sockaddr_storage *sa, bool *v
         *loopback = IN6_IS_ADDR_LOOPBACK(&a6->sin6_addr) || (IN6_IS_ADDR_V4MAPPED(&a6->sin6_addr) && b[12] == 127);
         return 0;
     }
-    snprintf(why, n, "listen address '%.100s' is not a numeric IPv4 or IPv6 address (e.g. 127.0.0.1, ::1, 0.0.0.0)",
+    snprintf(why, why_len, "listen address '%.100s' is not a numeric IPv4 or IPv6 address (e.g. 127.0.0.1, ::1, 0.0.0.0)",
              listen);
     return -1;
 }
 
-static int check_config(const api_server_config *cfg, char *why, size_t n)
+static int check_config(const api_server_config *cfg, char *why, size_t why_len)
 {
     if (cfg->port > 65535) {
-        snprintf(why, n, "api port %u is out of range (0 = any free port, or 1..65535)", cfg->port);
+        snprintf(why, why_len, "api port %u is out of range (0 = any free port, or 1..65535)", cfg->port);
         return -1;
     }
     if (cfg->max_body_bytes < 1024 || cfg->max_body_bytes > 16u * 1024 * 1024) {
-        snprintf(why, n, "api max_body_bytes %zu is out of range (1024 .. 16777216)", cfg->max_body_bytes);
+        snprintf(why, why_len, "api max_body_bytes %zu is out of range (1024 .. 16777216)", cfg->max_body_bytes);
         return -1;
     }
     if (cfg->connection_timeout_s < 1 || cfg->connection_timeout_s > 3600) {
-        snprintf(why, n, "api connection_timeout_s %u is out of range (1 .. 3600)", cfg->connection_timeout_s);
+        snprintf(why, why_len, "api connection_timeout_s %u is out of range (1 .. 3600)", cfg->connection_timeout_s);
         return -1;
     }
     if (cfg->max_connections < 1 || cfg->max_connections > 1000) {
-        snprintf(why, n, "api max_connections %u is out of range (1 .. 1000)", cfg->max_connections);
+        snprintf(why, why_len, "api max_connections %u is out of range (1 .. 1000)", cfg->max_connections);
         return -1;
     }
     if (cfg->max_streams < 1 || cfg->max_streams > 256) {
-        snprintf(why, n, "api max_streams %u is out of range (1 .. 256)", cfg->max_streams);
+        snprintf(why, why_len, "api max_streams %u is out of range (1 .. 256)", cfg->max_streams);
         return -1;
     }
     if (cfg->header_timeout_ms < 100 || cfg->header_timeout_ms > 60000) {
-        snprintf(why, n, "api header_timeout_ms %u is out of range (100 .. 60000)", cfg->header_timeout_ms);
+        snprintf(why, why_len, "api header_timeout_ms %u is out of range (100 .. 60000)", cfg->header_timeout_ms);
         return -1;
     }
     if (cfg->pending_max < 16 || cfg->pending_max > 4096) {
-        snprintf(why, n, "api pending_max %u is out of range (16 .. 4096)", cfg->pending_max);
+        snprintf(why, why_len, "api pending_max %u is out of range (16 .. 4096)", cfg->pending_max);
         return -1;
     }
     if (cfg->token != NULL) {
         size_t len = strlen(cfg->token);
         if (len > API_TOKEN_MAX) {
-            snprintf(why, n, "api token is %zu characters long; at most %d", len, API_TOKEN_MAX);
+            snprintf(why, why_len, "api token is %zu characters long; at most %d", len, API_TOKEN_MAX);
             return -1;
         }
         for (size_t i = 0; i < len; i++) {
             unsigned char b = (unsigned char)cfg->token[i];
             if (b <= 0x20 || b >= 0x7f) {
-                snprintf(why, n, "api token character %zu is not visible ASCII (no spaces or control characters)",
+                snprintf(why, why_len, "api token character %zu is not visible ASCII (no spaces or control characters)",
                          i + 1);
                 return -1;
             }
@@ -806,24 +806,24 @@ static int check_config(const api_server_config *cfg, char *why, size_t n)
 }
 
 int api_server_start(const api_server_config *cfg_in, const api_ops *ops, void *user, api_server **out, char *why,
-                     size_t n)
+                     size_t why_len)
 {
     api_server_config cfg = cfg_in ? *cfg_in : api_server_config_default();
     if (out == NULL || ops == NULL) {
-        snprintf(why, n, "api_server_start: ops and out must not be NULL");
+        snprintf(why, why_len, "api_server_start: ops and out must not be NULL");
         return -1;
     }
     *out = NULL;
     const char *listen = cfg.listen ? cfg.listen : "127.0.0.1";
-    if (check_config(&cfg, why, n) != 0)
+    if (check_config(&cfg, why, why_len) != 0)
         return -1;
     struct sockaddr_storage sa;
     bool v6 = false, loopback = false;
-    if (parse_listen(listen, &sa, &v6, &loopback, why, n) != 0)
+    if (parse_listen(listen, &sa, &v6, &loopback, why, why_len) != 0)
         return -1;
     bool has_token = cfg.token != NULL && cfg.token[0] != '\0';
     if (!loopback && !has_token) {
-        snprintf(why, n,
+        snprintf(why, why_len,
                  "refusing to listen on %s without a token: anyone who can reach this address could move the "
                  "rails; set [api] token, or listen on 127.0.0.1",
                  listen);
@@ -836,7 +836,7 @@ int api_server_start(const api_server_config *cfg_in, const api_ops *ops, void *
 
     api_server *s = calloc(1, sizeof *s);
     if (s == NULL) {
-        snprintf(why, n, "out of memory");
+        snprintf(why, why_len, "out of memory");
         return -1;
     }
     s->ops = *ops;
@@ -848,7 +848,7 @@ int api_server_start(const api_server_config *cfg_in, const api_ops *ops, void *
     s->max_body = cfg.max_body_bytes;
     if (pthread_mutex_init(&s->log_lock, NULL) != 0) {
         free(s);
-        snprintf(why, n, "could not create a mutex");
+        snprintf(why, why_len, "could not create a mutex");
         return -1;
     }
     s->log_capture = true;
@@ -860,7 +860,7 @@ int api_server_start(const api_server_config *cfg_in, const api_ops *ops, void *
     if (cfg.n_assets > 0) {
         s->assets = calloc(cfg.n_assets, sizeof *s->assets);
         if (s->assets == NULL) {
-            snprintf(why, n, "out of memory");
+            snprintf(why, why_len, "out of memory");
             goto fail;
         }
         memcpy(s->assets, cfg.assets, cfg.n_assets * sizeof *s->assets);
@@ -870,7 +870,7 @@ int api_server_start(const api_server_config *cfg_in, const api_ops *ops, void *
     /* The listening socket is ours (the guard's): bound here so a failure names its reason. */
     int lfd = socket(v6 ? AF_INET6 : AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
     if (lfd < 0) {
-        snprintf(why, n, "cannot serve the API on %s port %u: socket: %s", listen, cfg.port, strerror(errno));
+        snprintf(why, why_len, "cannot serve the API on %s port %u: socket: %s", listen, cfg.port, strerror(errno));
         goto fail;
     }
     int one = 1;
@@ -879,14 +879,14 @@ int api_server_start(const api_server_config *cfg_in, const api_ops *ops, void *
         setsockopt(lfd, IPPROTO_IPV6, IPV6_V6ONLY, &one, sizeof one);
     socklen_t salen = v6 ? sizeof(struct sockaddr_in6) : sizeof(struct sockaddr_in);
     if (bind(lfd, (struct sockaddr *)&sa, salen) != 0 || listen_on(lfd) != 0) {
-        snprintf(why, n, "cannot serve the API on %s port %u: %s", listen, cfg.port, strerror(errno));
+        snprintf(why, why_len, "cannot serve the API on %s port %u: %s", listen, cfg.port, strerror(errno));
         close(lfd);
         goto fail;
     }
     struct sockaddr_storage bound;
     socklen_t blen = sizeof bound;
     if (getsockname(lfd, (struct sockaddr *)&bound, &blen) != 0) {
-        snprintf(why, n, "cannot tell which port the API listens on: %s", strerror(errno));
+        snprintf(why, why_len, "cannot tell which port the API listens on: %s", strerror(errno));
         close(lfd);
         goto fail;
     }
@@ -922,7 +922,7 @@ int api_server_start(const api_server_config *cfg_in, const api_ops *ops, void *
     pthread_mutex_unlock(&s->log_lock);
     if (s->mhd == NULL || s->smhd == NULL) {
         const char *reason = s->log[0] ? s->log : err ? strerror(err) : "libmicrohttpd gave no reason";
-        snprintf(why, n, "cannot serve the API on %s port %u: %s", listen, cfg.port, reason);
+        snprintf(why, why_len, "cannot serve the API on %s port %u: %s", listen, cfg.port, reason);
         close(lfd);
         goto fail;
     }
@@ -935,7 +935,7 @@ int api_server_start(const api_server_config *cfg_in, const api_ops *ops, void *
         .take = take_connection,
         .user = s,
     };
-    if (api_guard_start(&gc, &s->guard, why, n) != 0) {
+    if (api_guard_start(&gc, &s->guard, why, why_len) != 0) {
         close(lfd);
         goto fail;
     }

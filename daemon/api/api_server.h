@@ -115,30 +115,30 @@ api_server_config api_server_config_default(void);
  * -1 on failure. */
 typedef struct api_ops {
     /* GET /status: the daemon's state (mode, runner state, current trial, rails, ...). */
-    int (*status)(void *user, json_t **out, char *why, size_t n);
+    int (*status)(void *user, json_t **out, char *why, size_t why_len);
     /* POST /trials: start a trial. body is always a JSON object ({} when the request had no
      * body), e.g. {"scene": "...", "set": ["protocol.compression=0.4"], "note": "..."}; the op
      * validates the fields (400 naming the field), refuses with 409 while a trial runs, and on
      * success returns the created trial (status preset to 201). */
-    int (*start)(void *user, const json_t *body, json_t **out, int *http_status, char *why, size_t n);
+    int (*start)(void *user, const json_t *body, json_t **out, int *http_status, char *why, size_t why_len);
     /* POST /trials/current/abort: abort the running trial; 409 when nothing runs. */
-    int (*abort_current)(void *user, json_t **out, int *http_status, char *why, size_t n);
+    int (*abort_current)(void *user, json_t **out, int *http_status, char *why, size_t why_len);
     /* GET /trials: a JSON array of trial summaries. */
-    int (*list)(void *user, json_t **out, char *why, size_t n);
+    int (*list)(void *user, json_t **out, char *why, size_t why_len);
     /* GET /trials/{id}: one trial (id >= 1, already checked); 404 when it does not exist. */
-    int (*show)(void *user, int64_t id, json_t **out, int *http_status, char *why, size_t n);
+    int (*show)(void *user, int64_t id, json_t **out, int *http_status, char *why, size_t why_len);
     /* GET /trials/{id}/report.png: the report image as PNG bytes, malloc'ed (the server calls
      * free()); *len > 0. 404 when the trial does not exist. */
     int (*report_png)(void *user, int64_t id, unsigned char **png, size_t *len, int *http_status,
-                      char *why, size_t n);
+                      char *why, size_t why_len);
     /* GET /live/events: a new event stream for one client (see api_stream). The exception to the
      * threading contract: it is called on the stream pool's thread for that client, so it may run
      * concurrently with the other ops (and with itself); it must only touch thread-safe state. */
-    int (*events)(void *user, api_stream *out, char *why, size_t n);
+    int (*events)(void *user, api_stream *out, char *why, size_t why_len);
     /* GET /live/camera.jpg: the latest camera frame as JPEG bytes, malloc'ed; 404 when none. */
-    int (*camera_jpeg)(void *user, unsigned char **jpg, size_t *len, int *http_status, char *why, size_t n);
+    int (*camera_jpeg)(void *user, unsigned char **jpg, size_t *len, int *http_status, char *why, size_t why_len);
     /* GET /live/prediction: the current trial's predicted curve; 404 when none yet. */
-    int (*prediction)(void *user, json_t **out, int *http_status, char *why, size_t n);
+    int (*prediction)(void *user, json_t **out, int *http_status, char *why, size_t why_len);
 } api_ops;
 
 typedef struct api_server api_server;
@@ -147,7 +147,7 @@ typedef struct api_server api_server;
  * outlive the server. Returns 0 and *out, or -1 with a reason in why (bad config, address in
  * use, non-loopback without a token, ...). */
 int api_server_start(const api_server_config *cfg, const api_ops *ops, void *user, api_server **out,
-                     char *why, size_t n);
+                     char *why, size_t why_len);
 
 /* The token comparison the server uses: 1 when given[0..glen) equals want[0..wlen). Its running
  * time depends on neither length nor content (always API_TOKEN_MAX + 1 bytes compared); exposed

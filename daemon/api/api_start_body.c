@@ -4,32 +4,32 @@
 #include <stdio.h>
 #include <string.h>
 
-static int check_note(const json_t *note, api_start_body *out, char *why, size_t n)
+static int check_note(const json_t *note, api_start_body *out, char *why, size_t why_len)
 {
     if (!note) return 0;
     if (!json_is_string(note)) {
-        snprintf(why, n, "\"note\" must be a string");
+        snprintf(why, why_len, "\"note\" must be a string");
         return -1;
     }
     size_t len = json_string_length(note);
     if (len > API_START_NOTE_MAX) {
-        snprintf(why, n, "\"note\" is %zu bytes; at most %d are kept, so it is refused rather than cut",
+        snprintf(why, why_len, "\"note\" is %zu bytes; at most %d are kept, so it is refused rather than cut",
                  len, API_START_NOTE_MAX);
         return -1;
     }
     if (strlen(json_string_value(note)) != len) {
-        snprintf(why, n, "\"note\" contains a NUL character");
+        snprintf(why, why_len, "\"note\" contains a NUL character");
         return -1;
     }
     out->note = json_string_value(note);
     return 0;
 }
 
-int api_start_body_parse(const json_t *body, int replay, api_start_body *out, char *why, size_t n)
+int api_start_body_parse(const json_t *body, int replay, api_start_body *out, char *why, size_t why_len)
 {
     memset(out, 0, sizeof *out);
     if (!json_is_object(body)) {
-        snprintf(why, n, "request body must be a JSON object");
+        snprintf(why, why_len, "request body must be a JSON object");
         return -1;
     }
     const char *key;
@@ -43,17 +43,17 @@ int api_start_body_parse(const json_t *body, int replay, api_start_body *out, ch
             for (; key[k] && k < sizeof shown - 1; k++)
                 shown[k] = (key[k] >= 0x20 && key[k] < 0x7f && key[k] != '"') ? key[k] : '?';
             shown[k] = '\0';
-            snprintf(why, n, replay ? "unknown field \"%s\" in replay mode (allowed: source_trial, note)"
+            snprintf(why, why_len, replay ? "unknown field \"%s\" in replay mode (allowed: source_trial, note)"
                                     : "unknown field \"%s\" (allowed: set, note)",
                      shown);
             return -1;
         }
     }
-    if (check_note(json_object_get(body, "note"), out, why, n)) return -1;
+    if (check_note(json_object_get(body, "note"), out, why, why_len)) return -1;
     if (replay) {
         json_t *src = json_object_get(body, "source_trial");
         if (src && (!json_is_integer(src) || json_integer_value(src) < 1)) {
-            snprintf(why, n, "\"source_trial\" must be a trial id (an integer >= 1)");
+            snprintf(why, why_len, "\"source_trial\" must be a trial id (an integer >= 1)");
             return -1;
         }
         out->source_trial = src ? (int64_t)json_integer_value(src) : 0;
@@ -62,22 +62,22 @@ int api_start_body_parse(const json_t *body, int replay, api_start_body *out, ch
     json_t *set = json_object_get(body, "set");
     if (!set) return 0;
     if (!json_is_array(set)) {
-        snprintf(why, n, "\"set\" must be an array of \"section.key=value\" strings");
+        snprintf(why, why_len, "\"set\" must be an array of \"section.key=value\" strings");
         return -1;
     }
     size_t count = json_array_size(set);
     if (count > API_START_MAX_SET) {
-        snprintf(why, n, "\"set\" has %zu overrides; at most %d", count, API_START_MAX_SET);
+        snprintf(why, why_len, "\"set\" has %zu overrides; at most %d", count, API_START_MAX_SET);
         return -1;
     }
     for (size_t k = 0; k < count; k++) {
         const json_t *s = json_array_get(set, k);
         if (!json_is_string(s)) {
-            snprintf(why, n, "\"set\"[%zu] must be a string \"section.key=value\"", k);
+            snprintf(why, why_len, "\"set\"[%zu] must be a string \"section.key=value\"", k);
             return -1;
         }
         if (strlen(json_string_value(s)) != json_string_length(s)) {
-            snprintf(why, n, "\"set\"[%zu] contains a NUL character", k);
+            snprintf(why, why_len, "\"set\"[%zu] contains a NUL character", k);
             return -1;
         }
         out->set[out->n_set++] = json_string_value(s);

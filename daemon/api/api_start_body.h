@@ -28,6 +28,6 @@ typedef struct api_start_body {
 
 /* Check body (a JSON object) for the mode (replay != 0: replay mode). 0 and *out on success;
  * -1 with the reason in why (the reply is a 400) otherwise. */
-int api_start_body_parse(const json_t *body, int replay, api_start_body *out, char *why, size_t n);
+int api_start_body_parse(const json_t *body, int replay, api_start_body *out, char *why, size_t why_len);
 
 #endif

@@ -40,18 +40,18 @@ static void segment(unsigned char *rgb, int w, int h, double u0, double v0, doub
     }
 }
 
-int live_jpeg_encode(const live_frame *f, int quality, unsigned char **jpg, size_t *len, char *why, size_t n)
+int live_jpeg_encode(const live_frame *f, int quality, unsigned char **jpg, size_t *len, char *why, size_t why_len)
 {
     *jpg = NULL;
     *len = 0;
     if (!f || !f->pixels || f->width <= 0 || f->height <= 0 || (f->channels != 1 && f->channels != 3)) {
-        snprintf(why, n, "no camera frame to encode");
+        snprintf(why, why_len, "no camera frame to encode");
         return -1;
     }
     int w = f->width, h = f->height;
     unsigned char *rgb = malloc((size_t)w * (size_t)h * 3);
     if (!rgb) {
-        snprintf(why, n, "out of memory for a %dx%d frame", w, h);
+        snprintf(why, why_len, "out of memory for a %dx%d frame", w, h);
         return -1;
     }
     for (size_t i = 0; i < (size_t)w * (size_t)h; i++) {
@@ -95,7 +95,7 @@ int live_jpeg_encode(const live_frame *f, int quality, unsigned char **jpg, size
     free(rgb);
     if (!out || out_len == 0) {
         free(out);
-        snprintf(why, n, "JPEG encoding produced nothing");
+        snprintf(why, why_len, "JPEG encoding produced nothing");
         return -1;
     }
     *jpg = out;

@@ -11,6 +11,6 @@
 
 /* Encodes f (1 or 3 channels; 3 is B, G, R as the camera delivers it) at quality 1..100 into a
  * malloc'ed buffer. Returns 0, or -1 with why. */
-int live_jpeg_encode(const live_frame *f, int quality, unsigned char **jpg, size_t *len, char *why, size_t n);
+int live_jpeg_encode(const live_frame *f, int quality, unsigned char **jpg, size_t *len, char *why, size_t why_len);
 
 #endif

@@ -36,11 +36,11 @@ static void reader_close(void *ctx)
     free(ctx);
 }
 
-int live_stream_open(live_bus *b, api_stream *out, char *why, size_t n)
+int live_stream_open(live_bus *b, api_stream *out, char *why, size_t why_len)
 {
     live_reader *r = calloc(1, sizeof *r);
     if (!r) {
-        snprintf(why, n, "out of memory");
+        snprintf(why, why_len, "out of memory");
         return -1;
     }
     r->bus = b;

@@ -10,6 +10,6 @@
 
 /* A stream starting at the current trial's first message (live_bus_first), with a
  * {"type":"hello"} message first. Returns 0 and *out, or -1 (out of memory) with why. */
-int live_stream_open(live_bus *b, api_stream *out, char *why, size_t n);
+int live_stream_open(live_bus *b, api_stream *out, char *why, size_t why_len);
 
 #endif

@@ -56,14 +56,14 @@ static int classify(const rod_scene *base, double phi, double gamma, int *count)
     return r;
 }
 
-int sim_bench_boundary(const rod_scene *sc, sim_bench_boundary_result *out, char *err, size_t errlen)
+int sim_bench_boundary(const rod_scene *sc, sim_bench_boundary_result *out, char *why, size_t why_len)
 {
     memset(out, 0, sizeof *out);
     double t0 = now(), c0 = cpu_now();
     rod_boundary_opts bo = rod_boundary_opts_default();
     rod_boundary *b = NULL;
     rod_codim2_point pt;
-    if (rod_boundary_start(sc, &bo, &b, &pt, err, errlen) != ROD_OK) {
+    if (rod_boundary_start(sc, &bo, &b, &pt, why, why_len) != ROD_OK) {
         rod_boundary_free(b);
         return -1;
     }
@@ -72,7 +72,7 @@ int sim_bench_boundary(const rod_scene *sc, sim_bench_boundary_result *out, char
         rod_boundary_curve c = {0};
         rod_status st = rod_boundary_move(b, ROD_PAR_PHI, phi, &c);
         if (st != ROD_OK) {
-            snprintf(err, errlen, "traced boundary at phi %g: %.200s", phi, c.end_reason);
+            snprintf(why, why_len, "traced boundary at phi %g: %.200s", phi, c.end_reason);
             rod_boundary_curve_free(&c);
             rod_boundary_free(b);
             return -1;
@@ -100,7 +100,7 @@ int sim_bench_boundary(const rod_scene *sc, sim_bench_boundary_result *out, char
             break;
         }
     if (cell < 0) {
-        snprintf(err, errlen, "the sweep's grid at phi 90 has no asymmetric/symmetric cell");
+        snprintf(why, why_len, "the sweep's grid at phi 90 has no asymmetric/symmetric cell");
         return -1;
     }
     double lo = g[cell], hi = g[cell + 1];

@@ -19,6 +19,6 @@ typedef struct sim_bench_boundary_result {
 } sim_bench_boundary_result;
 
 /* Runs both on scene sc (its N, Delta L; phi magnitudes 60..130 deg). 0, or -1 with err. */
-int sim_bench_boundary(const rod_scene *sc, sim_bench_boundary_result *out, char *err, size_t errlen);
+int sim_bench_boundary(const rod_scene *sc, sim_bench_boundary_result *out, char *why, size_t why_len);
 
 #endif

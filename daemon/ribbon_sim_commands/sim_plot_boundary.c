@@ -22,10 +22,10 @@ static plot_regime regime_of(const char *s)
 }
 
 int sim_plot_boundary(const char *path, const rod_boundary_curve *curves, const double *dl, int ncurves,
-                      const sweep_table *sweep, char *err, size_t errlen)
+                      const sweep_table *sweep, char *why, size_t why_len)
 {
     if (ncurves > PLOT_BOUNDARY_CURVES_MAX) {
-        snprintf(err, errlen, "--plot draws at most %d Delta L (%d given)", PLOT_BOUNDARY_CURVES_MAX, ncurves);
+        snprintf(why, why_len, "--plot draws at most %d Delta L (%d given)", PLOT_BOUNDARY_CURVES_MAX, ncurves);
         return -1;
     }
     size_t npts = 0, nsw = sweep ? sweep->n : 0;
@@ -34,7 +34,7 @@ int sim_plot_boundary(const char *path, const rod_boundary_curve *curves, const 
     plot_sweep_point *pts = malloc((nsw + 1) * sizeof *pts);
     int rc = -1;
     if (!xy || !pts) {
-        snprintf(err, errlen, "out of memory drawing %s", path);
+        snprintf(why, why_len, "out of memory drawing %s", path);
         goto out;
     }
     plot_boundary_curve cv[PLOT_BOUNDARY_CURVES_MAX];
@@ -66,7 +66,7 @@ int sim_plot_boundary(const char *path, const rod_boundary_curve *curves, const 
     d.n_points = np;
     d.width_px = PAGE_W;
     d.height_px = PAGE_H;
-    if (plot_boundary(path, &d, err, errlen) == PLOT_OK) rc = 0;
+    if (plot_boundary(path, &d, why, why_len) == PLOT_OK) rc = 0;
 out:
     free(xy);
     free(pts);
@@ -74,7 +74,7 @@ out:
 }
 
 int sim_plot_boundary_curves(const char *path, const rod_crit_curve *fold, const rod_crit_curve *pitchfork,
-                             const rod_codim2_point *star, char *err, size_t errlen)
+                             const rod_codim2_point *star, char *why, size_t why_len)
 {
     const rod_crit_curve *cs[2] = {fold, pitchfork};
     double *x[2] = {NULL, NULL}, *y[2] = {NULL, NULL};
@@ -83,7 +83,7 @@ int sim_plot_boundary_curves(const char *path, const rod_crit_curve *fold, const
         x[c] = malloc((cs[c]->n + 1) * sizeof *x[c]);
         y[c] = malloc((cs[c]->n + 1) * sizeof *y[c]);
         if (!x[c] || !y[c]) {
-            snprintf(err, errlen, "out of memory drawing %s", path);
+            snprintf(why, why_len, "out of memory drawing %s", path);
             goto out;
         }
         for (size_t k = 0; k < cs[c]->n; k++) {
@@ -113,7 +113,7 @@ int sim_plot_boundary_curves(const char *path, const rod_crit_curve *fold, const
     d.note = "left of #gG*: pitchfork first (asymmetric); right: saddle-node first";
     d.width_px = PAGE_W;
     d.height_px = PAGE_H;
-    if (plot_boundary(path, &d, err, errlen) == PLOT_OK) rc = 0;
+    if (plot_boundary(path, &d, why, why_len) == PLOT_OK) rc = 0;
 out:
     for (int c = 0; c < 2; c++) {
         free(x[c]);

@@ -13,10 +13,10 @@
 /* curves[k] are the boundaries at dl[k] (ncurves of them, at most PLOT_BOUNDARY_CURVES_MAX);
  * sweep may be NULL. 0, or -1 with err (nothing at path then). */
 int sim_plot_boundary(const char *path, const rod_boundary_curve *curves, const double *dl, int ncurves,
-                      const sweep_table *sweep, char *err, size_t errlen);
+                      const sweep_table *sweep, char *why, size_t why_len);
 
 /* The fold and pitchfork curves and the codim-2 point star. 0, or -1 with err. */
 int sim_plot_boundary_curves(const char *path, const rod_crit_curve *fold, const rod_crit_curve *pitchfork,
-                             const rod_codim2_point *star, char *err, size_t errlen);
+                             const rod_codim2_point *star, char *why, size_t why_len);
 
 #endif

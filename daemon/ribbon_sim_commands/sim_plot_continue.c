@@ -20,7 +20,7 @@ typedef struct branch_arrays {
     bool *stable;
 } branch_arrays;
 
-int sim_plot_continue(const char *path, const rod_analysis *a, const char *title, char *err, size_t errlen)
+int sim_plot_continue(const char *path, const rod_analysis *a, const char *title, char *why, size_t why_len)
 {
     int nb = a->nbranches > 0 ? a->nbranches : 0, ne = a->nevents > 0 ? a->nevents : 0;
     branch_arrays *arr = calloc((size_t)nb + 1, sizeof *arr);
@@ -55,7 +55,7 @@ int sim_plot_continue(const char *path, const rod_analysis *a, const char *title
     }
     int rc = -1;
     if (!ok) {
-        snprintf(err, errlen, "out of memory drawing %s", path);
+        snprintf(why, why_len, "out of memory drawing %s", path);
     } else {
         plot_branch_data panels[2];
         panels[0] = (plot_branch_data){.title = title ? title : "midpoint height",
@@ -72,7 +72,7 @@ int sim_plot_continue(const char *path, const rod_analysis *a, const char *title
                                        .n_branches = (size_t)nb,
                                        .events = ea,
                                        .n_events = (size_t)ne};
-        if (plot_branches_panels(path, panels, 2, PAGE_W, PAGE_H, err, errlen) == PLOT_OK)
+        if (plot_branches_panels(path, panels, 2, PAGE_W, PAGE_H, why, why_len) == PLOT_OK)
             rc = 0;
     }
     for (int b = 0; arr && b < nb; b++) {

@@ -10,6 +10,6 @@
 #include "rod_bifurcation.h"
 
 /* Writes the PNG (nothing at path on failure). Returns 0 on success, -1 with a message in err. */
-int sim_plot_continue(const char *path, const rod_analysis *a, const char *title, char *err, size_t errlen);
+int sim_plot_continue(const char *path, const rod_analysis *a, const char *title, char *why, size_t why_len);
 
 #endif

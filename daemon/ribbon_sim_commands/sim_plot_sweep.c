@@ -35,7 +35,7 @@ static const char *short_regime(const char *r)
 static int same_dl(double a, double b) { return fabs(a - b) <= 1e-9 * fmax(1.0, fabs(a)); }
 
 int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double phi_b, double gamma_a,
-                   double gamma_b, double dl, char *err, size_t errlen)
+                   double gamma_b, double dl, char *why, size_t why_len)
 {
     int line = phi_a == phi_b;
     size_t n = t->n ? t->n : 1;
@@ -47,7 +47,7 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
     char (*texts)[96] = malloc(n * sizeof *texts); /* the legend's text of each line */
     int rc = -1;
     if (!pts || !b || !lines || !lx || !ly || !done || !texts) {
-        snprintf(err, errlen, "out of memory drawing %s", path);
+        snprintf(why, why_len, "out of memory drawing %s", path);
         goto out;
     }
     plot_sweep_data d;
@@ -149,7 +149,7 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
     d.lines = lines;
     d.n_lines = nl;
     d.legend = true;
-    if (plot_sweep(path, &d, err, errlen) == PLOT_OK)
+    if (plot_sweep(path, &d, why, why_len) == PLOT_OK)
         rc = 0;
 out:
     free(pts);

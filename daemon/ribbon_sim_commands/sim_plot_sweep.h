@@ -18,6 +18,6 @@
 /* Rows outside [phi_a, phi_b] x [gamma_a, gamma_b] or of another Delta L than dl are ignored.
  * Returns 0, or -1 with err (nothing at path then). */
 int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double phi_b, double gamma_a,
-                   double gamma_b, double dl, char *err, size_t errlen);
+                   double gamma_b, double dl, char *why, size_t why_len);
 
 #endif

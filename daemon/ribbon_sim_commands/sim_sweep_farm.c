@@ -21,7 +21,7 @@ void sweep_farm_barrier(void) {}
 
 int sweep_farm_run(int rank, int size, int ntasks, sweep_task_fn run, void *run_ctx, sweep_emit_fn write,
                    void *write_ctx, const volatile sig_atomic_t *cancel, const sweep_farm_opts *o, char *why,
-                   size_t whylen)
+                   size_t why_len)
 {
     (void)rank;
     (void)size;
@@ -34,7 +34,7 @@ int sweep_farm_run(int rank, int size, int ntasks, sweep_task_fn run, void *run_
         }
         run(run_ctx, t, write, write_ctx);
     }
-    if (left) snprintf(why, whylen, "%d tasks not run (interrupted)", left);
+    if (left) snprintf(why, why_len, "%d tasks not run (interrupted)", left);
     return left;
 }
 
@@ -253,12 +253,12 @@ typedef struct wstate {
     double last_seen;
 } wstate;
 
-static int master(int size, farm *f, const sweep_farm_opts *o, char *why, size_t whylen)
+static int master(int size, farm *f, const sweep_farm_opts *o, char *why, size_t why_len)
 {
     double timeout = o && o->heartbeat_timeout_s > 0 ? o->heartbeat_timeout_s : 30.0;
     wstate *w = calloc((size_t)size, sizeof *w);
     if (!w) {
-        snprintf(why, whylen, "out of memory");
+        snprintf(why, why_len, "out of memory");
         return f->ntasks;
     }
     for (int k = 0; k < size; k++) {
@@ -349,7 +349,7 @@ static int master(int size, farm *f, const sweep_farm_opts *o, char *why, size_t
     int left = 0;
     for (int t = 0; t < f->ntasks; t++) left += f->state[t] != T_DONE;
     for (int t = 0; t < f->ntasks; t++) lost += f->state[t] == T_GIVEN_UP;
-    if (left) snprintf(why, whylen, "%d tasks not done (%d given up after %d lost ranks each, the others interrupted)",
+    if (left) snprintf(why, why_len, "%d tasks not done (%d given up after %d lost ranks each, the others interrupted)",
                        left, lost, MAX_ATTEMPTS);
     free(w);
     return left;
@@ -357,7 +357,7 @@ static int master(int size, farm *f, const sweep_farm_opts *o, char *why, size_t
 
 int sweep_farm_run(int rank, int size, int ntasks, sweep_task_fn run, void *run_ctx, sweep_emit_fn write,
                    void *write_ctx, const volatile sig_atomic_t *cancel, const sweep_farm_opts *o, char *why,
-                   size_t whylen)
+                   size_t why_len)
 {
     if (!mpi_started || size < 2) {
         int left = 0;
@@ -368,7 +368,7 @@ int sweep_farm_run(int rank, int size, int ntasks, sweep_task_fn run, void *run_
             }
             run(run_ctx, t, write, write_ctx);
         }
-        if (left) snprintf(why, whylen, "%d tasks not run (interrupted)", left);
+        if (left) snprintf(why, why_len, "%d tasks not run (interrupted)", left);
         return left;
     }
     if (rank != 0) return worker(rank, run, run_ctx, o);
@@ -385,8 +385,8 @@ int sweep_farm_run(int rank, int size, int ntasks, sweep_task_fn run, void *run_
     f.write_ctx = write_ctx;
     f.cancel = cancel;
     int left = ntasks;
-    if (f.state && f.owner && f.attempts) left = master(size, &f, o, why, whylen);
-    else snprintf(why, whylen, "out of memory");
+    if (f.state && f.owner && f.attempts) left = master(size, &f, o, why, why_len);
+    else snprintf(why, why_len, "out of memory");
     free(f.state);
     free(f.owner);
     free(f.attempts);

@@ -90,23 +90,23 @@ static int parse_row(char *line, sweep_row *r)
     return 1;
 }
 
-int sweep_table_load(const char *path, sweep_table *t, char *err, size_t errlen)
+int sweep_table_load(const char *path, sweep_table *t, char *why, size_t why_len)
 {
     memset(t, 0, sizeof *t);
-    char why[160];
+    char open_why[160];
     errno = 0;
-    FILE *f = cfg_open_regular(path, why, sizeof why);
+    FILE *f = cfg_open_regular(path, open_why, sizeof open_why);
     if (!f) {
         if (errno == ENOENT) return 0;
-        snprintf(err, errlen, "cannot read %s: %s", path, why);
+        snprintf(why, why_len, "cannot read %s: %s", path, open_why);
         return -1;
     }
-    int rc = sweep_table_read(f, path, t, err, errlen);
+    int rc = sweep_table_read(f, path, t, why, why_len);
     fclose(f);
     return rc;
 }
 
-int sweep_table_read(FILE *f, const char *path, sweep_table *t, char *err, size_t errlen)
+int sweep_table_read(FILE *f, const char *path, sweep_table *t, char *why, size_t why_len)
 {
     memset(t, 0, sizeof *t);
     char line[1024];
@@ -122,7 +122,7 @@ int sweep_table_read(FILE *f, const char *path, sweep_table *t, char *err, size_
         while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r')) line[--len] = '\0';
         if (lineno == 1) {
             if (strcmp(line, header) != 0) {
-                snprintf(err, errlen, "%s is not a sweep file (line 1 is not the sweep header); refusing to append", path);
+                snprintf(why, why_len, "%s is not a sweep file (line 1 is not the sweep header); refusing to append", path);
                 rc = -1;
                 break;
             }
@@ -131,7 +131,7 @@ int sweep_table_read(FILE *f, const char *path, sweep_table *t, char *err, size_
         sweep_row r;
         if (!complete || !parse_row(line, &r)) continue;
         if (!sweep_table_add(t, &r)) {
-            snprintf(err, errlen, "out of memory reading %s", path);
+            snprintf(why, why_len, "out of memory reading %s", path);
             rc = -1;
             break;
         }
@@ -139,7 +139,7 @@ int sweep_table_read(FILE *f, const char *path, sweep_table *t, char *err, size_
     if (rc == 0 && lineno == 0) {
         /* An empty file: treated as new (the header is written by the caller only for a new file,
          * so say so rather than append headerless rows). */
-        snprintf(err, errlen, "%s is empty; remove it or name another file", path);
+        snprintf(why, why_len, "%s is empty; remove it or name another file", path);
         rc = -1;
     }
     if (rc != 0) sweep_table_free(t);

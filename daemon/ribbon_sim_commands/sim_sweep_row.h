@@ -36,12 +36,12 @@ typedef struct sweep_table {
 /* Reads the rows of an existing sweep file into t (an absent file is an empty table). Lines that
  * do not parse (a row cut by a kill) are skipped. Fails (returns -1 with err) when the file is
  * not a sweep file (wrong header) or memory runs out. */
-int sweep_table_load(const char *path, sweep_table *t, char *err, size_t errlen);
+int sweep_table_load(const char *path, sweep_table *t, char *why, size_t why_len);
 
 /* The same on an open file (path names it in messages): the parser itself, fuzzed on its own
  * (fuzz/fuzz_sweep_csv.c). A line longer than 1023 bytes is skipped whole, never read as a row
  * from its middle. */
-int sweep_table_read(FILE *f, const char *path, sweep_table *t, char *err, size_t errlen);
+int sweep_table_read(FILE *f, const char *path, sweep_table *t, char *why, size_t why_len);
 int sweep_table_add(sweep_table *t, const sweep_row *r);
 void sweep_table_free(sweep_table *t);
 

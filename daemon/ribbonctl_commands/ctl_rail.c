@@ -310,25 +310,25 @@ static rail_err wait_rest(rail *r, double timeout_s, rail_status *st)
                           st->position_mm);
 }
 
-static rail_err open_rail(rail_cli *c, rail **r, char *why, size_t n)
+static rail_err open_rail(rail_cli *c, rail **r, char *why, size_t why_len)
 {
     rail_clock ck = rail_clock_real();
     if (!c->driver) {
-        snprintf(why, n, "no driver: give --driver mock|gcode|modbus or --config F --rail NAME");
+        snprintf(why, why_len, "no driver: give --driver mock|gcode|modbus or --config F --rail NAME");
         return RAIL_E_INVALID;
     }
     if (!strcmp(c->driver, "mock"))
-        return rail_mock_open(r, &c->p, &c->k, ck, why, n);
+        return rail_mock_open(r, &c->p, &c->k, ck, why, why_len);
     if (!strcmp(c->driver, "gcode")) {
         if (!c->g.port[0]) {
-            snprintf(why, n, "driver gcode needs --port PATH or usb:VID:PID[:SERIAL]");
+            snprintf(why, why_len, "driver gcode needs --port PATH or usb:VID:PID[:SERIAL]");
             return RAIL_E_INVALID;
         }
-        return rail_gcode_open(r, &c->p, &c->g, NULL, ck, why, n);
+        return rail_gcode_open(r, &c->p, &c->g, NULL, ck, why, why_len);
     }
     if (!strcmp(c->driver, "modbus"))
-        return rail_modbus_open(r, &c->p, &c->m, ck, why, n);
-    snprintf(why, n, "unknown driver '%s' (mock, gcode, modbus)", c->driver);
+        return rail_modbus_open(r, &c->p, &c->m, ck, why, why_len);
+    snprintf(why, why_len, "unknown driver '%s' (mock, gcode, modbus)", c->driver);
     return RAIL_E_INVALID;
 }
 

@@ -27,16 +27,16 @@ void twin_scene_box(const rod_scene *sc, double box[4])
     box[3] = h;
 }
 
-static twin_status scene_ok(const rod_scene *sc, char *err, size_t errlen)
+static twin_status scene_ok(const rod_scene *sc, char *why, size_t why_len)
 {
     if (!sc) {
-        if (err && errlen) snprintf(err, errlen, "twin camera: NULL scene");
+        if (why && why_len) snprintf(why, why_len, "twin camera: NULL scene");
         return TWIN_ERR_ARG;
     }
     if (!(isfinite(sc->length) && sc->length > 0 && isfinite(sc->width) && sc->width > 0 &&
           isfinite(sc->compression) && sc->compression >= 0 && sc->compression < 1)) {
-        if (err && errlen)
-            snprintf(err, errlen, "twin camera: the scene needs ribbon.length > 0, ribbon.width > 0 and "
+        if (why && why_len)
+            snprintf(why, why_len, "twin camera: the scene needs ribbon.length > 0, ribbon.width > 0 and "
                                   "protocol.compression in [0, 1)");
         return TWIN_ERR_ARG;
     }
@@ -44,18 +44,18 @@ static twin_status scene_ok(const rod_scene *sc, char *err, size_t errlen)
 }
 
 twin_status twin_camera_for_scene(const rod_scene *sc, const twin_camera_params *p, vis_camera *cam,
-                                  char *err, size_t errlen)
+                                  char *why, size_t why_len)
 {
-    twin_status st = scene_ok(sc, err, errlen);
+    twin_status st = scene_ok(sc, why, why_len);
     if (st != TWIN_OK) return st;
     if (!p || !cam) {
-        if (err && errlen) snprintf(err, errlen, "twin camera: NULL parameters or camera");
+        if (why && why_len) snprintf(why, why_len, "twin camera: NULL parameters or camera");
         return TWIN_ERR_ARG;
     }
     if (!(isfinite(p->distance_m) && p->distance_m >= 0 && isfinite(p->fill) && p->fill > 0 &&
           p->fill <= 1 && isfinite(p->tilt_rad) && fabs(p->tilt_rad) < 1.2)) {
-        if (err && errlen)
-            snprintf(err, errlen, "twin camera: distance_m must be >= 0, fill in (0, 1], |tilt_rad| < 1.2");
+        if (why && why_len)
+            snprintf(why, why_len, "twin camera: distance_m must be >= 0, fill in (0, 1], |tilt_rad| < 1.2");
         return TWIN_ERR_ARG;
     }
     vis_camera c = vis_camera_default();
@@ -67,7 +67,7 @@ twin_status twin_camera_for_scene(const rod_scene *sc, const twin_camera_params 
     twin_scene_box(sc, box);
     vis_error ve;
     if (vis_camera_fit(&c, box[0], box[1], box[2], box[3], p->fill, &ve) != VIS_OK) {
-        if (err && errlen) snprintf(err, errlen, "twin camera: %s", ve.message);
+        if (why && why_len) snprintf(why, why_len, "twin camera: %s", ve.message);
         return TWIN_ERR_VISION;
     }
     *cam = c;
@@ -75,14 +75,14 @@ twin_status twin_camera_for_scene(const rod_scene *sc, const twin_camera_params 
 }
 
 twin_status twin_render_params_for_scene(const rod_scene *sc, const twin_camera_params *p,
-                                         vis_render_params *rp, char *err, size_t errlen)
+                                         vis_render_params *rp, char *why, size_t why_len)
 {
     if (!rp) {
-        if (err && errlen) snprintf(err, errlen, "twin camera: NULL render parameters");
+        if (why && why_len) snprintf(why, why_len, "twin camera: NULL render parameters");
         return TWIN_ERR_ARG;
     }
     vis_render_params r = vis_render_params_default();
-    twin_status st = twin_camera_for_scene(sc, p, &r.camera, err, errlen);
+    twin_status st = twin_camera_for_scene(sc, p, &r.camera, why, why_len);
     if (st != TWIN_OK) return st;
     r.clamp_length_m = 0.08 * sc->length;
     r.clamp_height_m = 0.06 * sc->length;
@@ -90,13 +90,13 @@ twin_status twin_render_params_for_scene(const rod_scene *sc, const twin_camera_
     return TWIN_OK;
 }
 
-twin_status twin_calib_for_scene(const rod_scene *sc, const vis_camera *cam, vis_calib *c, char *err,
-                                 size_t errlen)
+twin_status twin_calib_for_scene(const rod_scene *sc, const vis_camera *cam, vis_calib *c, char *why,
+                                 size_t why_len)
 {
-    twin_status st = scene_ok(sc, err, errlen);
+    twin_status st = scene_ok(sc, why, why_len);
     if (st != TWIN_OK) return st;
     if (!cam || !c) {
-        if (err && errlen) snprintf(err, errlen, "twin camera: NULL camera or calibration");
+        if (why && why_len) snprintf(why, why_len, "twin camera: NULL camera or calibration");
         return TWIN_ERR_ARG;
     }
     const double left[3] = {0.0, 0.0, 0.0};
@@ -104,7 +104,7 @@ twin_status twin_calib_for_scene(const rod_scene *sc, const vis_camera *cam, vis
     vis_calib k = vis_calib_default();
     vis_error ve;
     if (vis_calib_from_camera(&k, cam, left, right, &ve) != VIS_OK) {
-        if (err && errlen) snprintf(err, errlen, "twin camera: %s", ve.message);
+        if (why && why_len) snprintf(why, why_len, "twin camera: %s", ve.message);
         return TWIN_ERR_VISION;
     }
     *c = k;

@@ -44,17 +44,17 @@ void twin_scene_box(const rod_scene *sc, double box[4]);
 
 /* A camera that frames twin_scene_box for the scene. */
 twin_status twin_camera_for_scene(const rod_scene *sc, const twin_camera_params *p, vis_camera *cam,
-                                  char *err, size_t errlen);
+                                  char *why, size_t why_len);
 
 /* Renderer parameters around that camera: vis_render_params_default() with the camera set and the
  * clamp jaws scaled to the scene (0.08 l long, 0.06 l high, as the 15 x 12 mm jaws at l = 0.2 m). */
 twin_status twin_render_params_for_scene(const rod_scene *sc, const twin_camera_params *p,
-                                         vis_render_params *rp, char *err, size_t errlen);
+                                         vis_render_params *rp, char *why, size_t why_len);
 
 /* The calibration that matches `cam` for this scene: clamp points at zero shear and the scene's
  * compression, (0, 0, 0) and (l (1 - Delta L), 0, 0), scale, distance and tilt from the camera.
  * Track the frames with shear_mm = the right clamp's y in mm (TWIN_Y_RIG shapes), i.e. dw l. */
-twin_status twin_calib_for_scene(const rod_scene *sc, const vis_camera *cam, vis_calib *c, char *err,
-                                 size_t errlen);
+twin_status twin_calib_for_scene(const rod_scene *sc, const vis_camera *cam, vis_calib *c, char *why,
+                                 size_t why_len);
 
 #endif

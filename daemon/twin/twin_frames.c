@@ -11,20 +11,20 @@
 #define TWIN_FRAME_EPS 1e-9
 
 twin_status twin_frames_init(twin_frames *f, const rod_scene *sc, twin_y_origin y, double fps,
-                             twin_frame_fn fn, void *user, char *err, size_t errlen)
+                             twin_frame_fn fn, void *user, char *why, size_t why_len)
 {
     if (!f || !sc || !fn) {
-        if (err && errlen) snprintf(err, errlen, "twin_frames_init: NULL clock, scene or callback");
+        if (why && why_len) snprintf(why, why_len, "twin_frames_init: NULL clock, scene or callback");
         return TWIN_ERR_ARG;
     }
     memset(f, 0, sizeof *f);
     if (!(isfinite(fps) && fps > 0 && fps <= 10000)) {
-        if (err && errlen) snprintf(err, errlen, "twin_frames_init: fps must be in (0, 10000], got %g", fps);
+        if (why && why_len) snprintf(why, why_len, "twin_frames_init: fps must be in (0, 10000], got %g", fps);
         return TWIN_ERR_ARG;
     }
-    twin_status st = twin_shape_init(&f->a, sc, y, err, errlen);
-    if (st == TWIN_OK) st = twin_shape_init(&f->b, sc, y, err, errlen);
-    if (st == TWIN_OK) st = twin_shape_init(&f->mix, sc, y, err, errlen);
+    twin_status st = twin_shape_init(&f->a, sc, y, why, why_len);
+    if (st == TWIN_OK) st = twin_shape_init(&f->b, sc, y, why, why_len);
+    if (st == TWIN_OK) st = twin_shape_init(&f->mix, sc, y, why, why_len);
     if (st != TWIN_OK) {
         twin_frames_release(f);
         return st;
@@ -43,17 +43,17 @@ void twin_frames_release(twin_frames *f)
     twin_shape_release(&f->mix);
 }
 
-twin_status twin_frames_push(twin_frames *f, double t_s, const rod *r, char *err, size_t errlen)
+twin_status twin_frames_push(twin_frames *f, double t_s, const rod *r, char *why, size_t why_len)
 {
     if (!f || !r || !f->fn || !f->a.pos) {
-        if (err && errlen) snprintf(err, errlen, "twin_frames_push: NULL or released clock");
+        if (why && why_len) snprintf(why, why_len, "twin_frames_push: NULL or released clock");
         return TWIN_ERR_ARG;
     }
     if (!isfinite(t_s) || (f->have_prev && t_s < f->t_prev)) {
-        if (err && errlen) snprintf(err, errlen, "twin_frames_push: time %g s is not finite or goes back", t_s);
+        if (why && why_len) snprintf(why, why_len, "twin_frames_push: time %g s is not finite or goes back", t_s);
         return TWIN_ERR_ARG;
     }
-    twin_status st = twin_shape_from_rod(&f->b, r, err, errlen);
+    twin_status st = twin_shape_from_rod(&f->b, r, why, why_len);
     if (st != TWIN_OK) return st;
     for (;;) {
         const double tk = f->next / f->fps;
@@ -61,13 +61,13 @@ twin_status twin_frames_push(twin_frames *f, double t_s, const rod *r, char *err
         const twin_shape *shape = &f->b;
         if (f->have_prev && t_s > f->t_prev) {
             const double w = fmin(1.0, fmax(0.0, (tk - f->t_prev) / (t_s - f->t_prev)));
-            st = twin_shape_lerp(&f->mix, &f->a, &f->b, w, err, errlen);
+            st = twin_shape_lerp(&f->mix, &f->a, &f->b, w, why, why_len);
             if (st != TWIN_OK) return st;
             shape = &f->mix;
         }
         const int idx = f->next++;
         if (f->fn(f->user, idx, tk, &shape->view)) {
-            if (err && errlen) snprintf(err, errlen, "stopped by the frame callback at frame %d", idx);
+            if (why && why_len) snprintf(why, why_len, "stopped by the frame callback at frame %d", idx);
             return TWIN_STOPPED;
         }
     }

@@ -34,12 +34,12 @@ typedef struct twin_frames {
 
 /* Sizes the clock's shapes for the scene; fps in (0, 10000]. On failure nothing needs releasing. */
 twin_status twin_frames_init(twin_frames *f, const rod_scene *sc, twin_y_origin y, double fps,
-                             twin_frame_fn fn, void *user, char *err, size_t errlen);
+                             twin_frame_fn fn, void *user, char *why, size_t why_len);
 void twin_frames_release(twin_frames *f);
 
 /* The rod's state at simulated time t_s (non-decreasing from push to push): hands out every frame
  * with t_k <= t_s not handed out yet. TWIN_STOPPED when the callback asked to stop. */
-twin_status twin_frames_push(twin_frames *f, double t_s, const rod *r, char *err, size_t errlen);
+twin_status twin_frames_push(twin_frames *f, double t_s, const rod *r, char *why, size_t why_len);
 
 /* Frames handed out so far. */
 static inline int twin_frames_count(const twin_frames *f) { return f->next; }

@@ -24,30 +24,30 @@ const char *twin_status_str(twin_status s)
     return "unknown twin status";
 }
 
-static twin_status fail(twin_status st, char *err, size_t errlen, const char *msg)
+static twin_status fail(twin_status st, char *why, size_t why_len, const char *msg)
 {
-    if (err && errlen) snprintf(err, errlen, "%s", msg);
+    if (why && why_len) snprintf(why, why_len, "%s", msg);
     return st;
 }
 
-twin_status twin_shape_init(twin_shape *ts, const rod_scene *sc, twin_y_origin y, char *err,
-                            size_t errlen)
+twin_status twin_shape_init(twin_shape *ts, const rod_scene *sc, twin_y_origin y, char *why,
+                            size_t why_len)
 {
-    if (!ts || !sc) return fail(TWIN_ERR_ARG, err, errlen, "twin_shape_init: NULL shape or scene");
+    if (!ts || !sc) return fail(TWIN_ERR_ARG, why, why_len, "twin_shape_init: NULL shape or scene");
     ts->pos = ts->normal = NULL;
     if (sc->nodes < 5 || sc->nodes > 1000000)
-        return fail(TWIN_ERR_ARG, err, errlen, "twin_shape_init: mesh.nodes must be 5..1000000");
+        return fail(TWIN_ERR_ARG, why, why_len, "twin_shape_init: mesh.nodes must be 5..1000000");
     if (!(isfinite(sc->width) && sc->width > 0 && isfinite(sc->thickness) && sc->thickness > 0))
-        return fail(TWIN_ERR_ARG, err, errlen,
+        return fail(TWIN_ERR_ARG, why, why_len,
                     "twin_shape_init: ribbon.width and ribbon.thickness must be finite and > 0");
     if (y != TWIN_Y_RIG && y != TWIN_Y_SIM)
-        return fail(TWIN_ERR_ARG, err, errlen, "twin_shape_init: unknown y origin");
+        return fail(TWIN_ERR_ARG, why, why_len, "twin_shape_init: unknown y origin");
     size_t n = (size_t)sc->nodes - 2;
     double *pos = calloc(3 * n, sizeof *pos), *nor = calloc(3 * n, sizeof *nor);
     if (!pos || !nor) {
         free(pos);
         free(nor);
-        return fail(TWIN_ERR_NOMEM, err, errlen, "twin_shape_init: out of memory");
+        return fail(TWIN_ERR_NOMEM, why, why_len, "twin_shape_init: out of memory");
     }
     ts->nodes = sc->nodes;
     ts->n = n;
@@ -89,12 +89,12 @@ static int normalise(double v[3])
     return 1;
 }
 
-twin_status twin_shape_from_rod(twin_shape *ts, const rod *r, char *err, size_t errlen)
+twin_status twin_shape_from_rod(twin_shape *ts, const rod *r, char *why, size_t why_len)
 {
-    if (!ts || !r || !ts->pos) return fail(TWIN_ERR_ARG, err, errlen, "twin_shape_from_rod: NULL or released shape");
+    if (!ts || !r || !ts->pos) return fail(TWIN_ERR_ARG, why, why_len, "twin_shape_from_rod: NULL or released shape");
     if (r->n != ts->nodes) {
-        if (err && errlen)
-            snprintf(err, errlen, "twin_shape_from_rod: the rod has %d nodes, the shape was sized for %d",
+        if (why && why_len)
+            snprintf(why, why_len, "twin_shape_from_rod: the rod has %d nodes, the shape was sized for %d",
                      r->n, ts->nodes);
         return TWIN_ERR_ARG;
     }
@@ -123,8 +123,8 @@ twin_status twin_shape_from_rod(twin_shape *ts, const rod *r, char *err, size_t 
         }
         for (int j = 0; j < 3; j++) nv[j] = m[j];
         if (!isfinite(p[0] + p[1] + p[2] + nv[0] + nv[1] + nv[2])) {
-            if (err && errlen)
-                snprintf(err, errlen, "twin_shape_from_rod: node %d has a non-finite position or frame", i);
+            if (why && why_len)
+                snprintf(why, why_len, "twin_shape_from_rod: node %d has a non-finite position or frame", i);
             return TWIN_ERR_ARG;
         }
     }
@@ -132,14 +132,14 @@ twin_status twin_shape_from_rod(twin_shape *ts, const rod *r, char *err, size_t 
 }
 
 twin_status twin_shape_lerp(twin_shape *out, const twin_shape *a, const twin_shape *b, double w,
-                            char *err, size_t errlen)
+                            char *why, size_t why_len)
 {
     if (!out || !a || !b || !out->pos || !a->pos || !b->pos)
-        return fail(TWIN_ERR_ARG, err, errlen, "twin_shape_lerp: NULL or released shape");
+        return fail(TWIN_ERR_ARG, why, why_len, "twin_shape_lerp: NULL or released shape");
     if (a->n != b->n || out->n != a->n)
-        return fail(TWIN_ERR_ARG, err, errlen, "twin_shape_lerp: shapes of different sizes");
+        return fail(TWIN_ERR_ARG, why, why_len, "twin_shape_lerp: shapes of different sizes");
     if (!(w >= 0.0 && w <= 1.0))
-        return fail(TWIN_ERR_ARG, err, errlen, "twin_shape_lerp: weight outside [0, 1]");
+        return fail(TWIN_ERR_ARG, why, why_len, "twin_shape_lerp: weight outside [0, 1]");
     for (size_t k = 0; k < 3 * a->n; k++) out->pos[k] = (1.0 - w) * a->pos[k] + w * b->pos[k];
     for (size_t i = 0; i < a->n; i++) {
         double m[3];

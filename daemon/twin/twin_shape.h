@@ -59,19 +59,19 @@ typedef struct twin_shape {
 
 /* Sizes `ts` for the scene's mesh (sc->nodes >= 5) and takes the ribbon's width and thickness.
  * The shape holds no state until twin_shape_from_rod. On failure `ts` needs no release. */
-twin_status twin_shape_init(twin_shape *ts, const rod_scene *sc, twin_y_origin y, char *err,
-                            size_t errlen);
+twin_status twin_shape_init(twin_shape *ts, const rod_scene *sc, twin_y_origin y, char *why,
+                            size_t why_len);
 /* Frees the arrays (safe on a zeroed or released shape). */
 void twin_shape_release(twin_shape *ts);
 
 /* Fills `ts` from the rod's current state. The rod's reference frames must be current (they are
  * after every accepted step of the solver, e.g. in rod_predict's on_sample callback). Refuses a
  * rod of another size and a non-finite state. No allocation. */
-twin_status twin_shape_from_rod(twin_shape *ts, const rod *r, char *err, size_t errlen);
+twin_status twin_shape_from_rod(twin_shape *ts, const rod *r, char *why, size_t why_len);
 
 /* out = (1 - w) a + w b point by point, normals renormalised (w in [0, 1]); the three shapes must
  * have the same size (out may be a or b). For frames between two solver steps. No allocation. */
 twin_status twin_shape_lerp(twin_shape *out, const twin_shape *a, const twin_shape *b, double w,
-                            char *err, size_t errlen);
+                            char *why, size_t why_len);
 
 #endif

@@ -72,7 +72,7 @@ static int teardown(void **state)
 }
 
 static int http(unsigned port, const char *method, const char *path, const char *body_text, json_t **out,
-                char *why, size_t n)
+                char *why, size_t why_len)
 {
     char url[64];
     snprintf(url, sizeof url, "http://127.0.0.1:%u", port);
@@ -87,7 +87,7 @@ static int http(unsigned port, const char *method, const char *path, const char 
     int status = 0;
     unsigned char *bytes = NULL;
     size_t len = 0;
-    int rc = api_client_request(&c, method, path, body, &status, out, &bytes, &len, why, n);
+    int rc = api_client_request(&c, method, path, body, &status, out, &bytes, &len, why, why_len);
     json_decref(body);
     free(bytes);
     assert_int_equal(rc, 0);

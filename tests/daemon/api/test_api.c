@@ -52,10 +52,10 @@ static json_t *trial_json(const fake_trial *t)
                      t->status);
 }
 
-static int fake_status(void *user, json_t **out, char *why, size_t n)
+static int fake_status(void *user, json_t **out, char *why, size_t why_len)
 {
     (void)why;
-    (void)n;
+    (void)why_len;
     fake_model *m = user;
     pthread_mutex_lock(&m->lock);
     m->ops_called++;
@@ -64,7 +64,7 @@ static int fake_status(void *user, json_t **out, char *why, size_t n)
     return 0;
 }
 
-static int fake_start(void *user, const json_t *body, json_t **out, int *http_status, char *why, size_t n)
+static int fake_start(void *user, const json_t *body, json_t **out, int *http_status, char *why, size_t why_len)
 {
     fake_model *m = user;
     const char *key;
@@ -73,18 +73,18 @@ static int fake_start(void *user, const json_t *body, json_t **out, int *http_st
     {
         if (strcmp(key, "scene") == 0 || strcmp(key, "note") == 0) {
             if (!json_is_string(v)) {
-                snprintf(why, n, "field '%s' must be a string", key);
+                snprintf(why, why_len, "field '%s' must be a string", key);
                 *http_status = 400;
                 return -1;
             }
         } else if (strcmp(key, "set") == 0) {
             if (!json_is_array(v)) {
-                snprintf(why, n, "field 'set' must be an array of strings");
+                snprintf(why, why_len, "field 'set' must be an array of strings");
                 *http_status = 400;
                 return -1;
             }
         } else {
-            snprintf(why, n, "unknown field '%s'", key);
+            snprintf(why, why_len, "unknown field '%s'", key);
             *http_status = 400;
             return -1;
         }
@@ -92,14 +92,14 @@ static int fake_start(void *user, const json_t *body, json_t **out, int *http_st
     pthread_mutex_lock(&m->lock);
     m->ops_called++;
     if (m->running >= 0) {
-        snprintf(why, n, "trial %lld is running; abort it first", (long long)m->trials[m->running].id);
+        snprintf(why, why_len, "trial %lld is running; abort it first", (long long)m->trials[m->running].id);
         pthread_mutex_unlock(&m->lock);
         *http_status = 409;
         return -1;
     }
     if (m->count == FAKE_MAX) {
         pthread_mutex_unlock(&m->lock);
-        snprintf(why, n, "fake model is full");
+        snprintf(why, why_len, "fake model is full");
         *http_status = 500;
         return -1;
     }
@@ -116,14 +116,14 @@ static int fake_start(void *user, const json_t *body, json_t **out, int *http_st
     return 0; /* *http_status stays 201 */
 }
 
-static int fake_abort(void *user, json_t **out, int *http_status, char *why, size_t n)
+static int fake_abort(void *user, json_t **out, int *http_status, char *why, size_t why_len)
 {
     fake_model *m = user;
     pthread_mutex_lock(&m->lock);
     m->ops_called++;
     if (m->running < 0) {
         pthread_mutex_unlock(&m->lock);
-        snprintf(why, n, "no trial is running");
+        snprintf(why, why_len, "no trial is running");
         *http_status = 409;
         return -1;
     }
@@ -135,10 +135,10 @@ static int fake_abort(void *user, json_t **out, int *http_status, char *why, siz
     return 0;
 }
 
-static int fake_list(void *user, json_t **out, char *why, size_t n)
+static int fake_list(void *user, json_t **out, char *why, size_t why_len)
 {
     (void)why;
-    (void)n;
+    (void)why_len;
     fake_model *m = user;
     pthread_mutex_lock(&m->lock);
     m->ops_called++;
@@ -150,14 +150,14 @@ static int fake_list(void *user, json_t **out, char *why, size_t n)
     return 0;
 }
 
-static int fake_show(void *user, int64_t id, json_t **out, int *http_status, char *why, size_t n)
+static int fake_show(void *user, int64_t id, json_t **out, int *http_status, char *why, size_t why_len)
 {
     fake_model *m = user;
     pthread_mutex_lock(&m->lock);
     m->ops_called++;
     if (id < 1 || id > m->count) {
         pthread_mutex_unlock(&m->lock);
-        snprintf(why, n, "no trial %lld", (long long)id);
+        snprintf(why, why_len, "no trial %lld", (long long)id);
         *http_status = 404;
         return -1;
     }
@@ -174,7 +174,7 @@ static unsigned char fake_png_byte(size_t i)
 }
 
 static int fake_report(void *user, int64_t id, unsigned char **png, size_t *len, int *http_status, char *why,
-                       size_t n)
+                       size_t why_len)
 {
     fake_model *m = user;
     pthread_mutex_lock(&m->lock);
@@ -182,13 +182,13 @@ static int fake_report(void *user, int64_t id, unsigned char **png, size_t *len,
     int count = m->count;
     pthread_mutex_unlock(&m->lock);
     if (id < 1 || id > count) {
-        snprintf(why, n, "no trial %lld", (long long)id);
+        snprintf(why, why_len, "no trial %lld", (long long)id);
         *http_status = 404;
         return -1;
     }
     unsigned char *p = malloc(FAKE_PNG_LEN);
     if (p == NULL) {
-        snprintf(why, n, "out of memory");
+        snprintf(why, why_len, "out of memory");
         return -1;
     }
     for (size_t i = 0; i < FAKE_PNG_LEN; i++)
@@ -256,11 +256,11 @@ static int teardown(void **state)
 /* One request through the client; fails the test when the exchange itself fails. Returns the
  * HTTP status; *out (if given) gets the JSON reply, why the error message. */
 static int req(const fixture *f, const char *method, const char *path, const json_t *body, json_t **out, char *why,
-               size_t n)
+               size_t why_len)
 {
     int status = 0;
     json_t *j = NULL;
-    int rc = api_client_request(&f->cc, method, path, body, &status, &j, NULL, NULL, why, n);
+    int rc = api_client_request(&f->cc, method, path, body, &status, &j, NULL, NULL, why, why_len);
     if (rc != 0)
         fail_msg("%s %s: %s", method, path, why);
     assert_non_null(j);
@@ -819,20 +819,20 @@ static void test_partial_writes(void **state)
 
 /* ---------------------------------------------------------------- op contract */
 
-static int broken_status(void *user, json_t **out, char *why, size_t n)
+static int broken_status(void *user, json_t **out, char *why, size_t why_len)
 {
     (void)user;
     (void)out;
     (void)why;
-    (void)n;
+    (void)why_len;
     return 0; /* success without a reply: a bug in the op */
 }
 
-static int failing_list(void *user, json_t **out, char *why, size_t n)
+static int failing_list(void *user, json_t **out, char *why, size_t why_len)
 {
     (void)user;
     (void)out;
-    snprintf(why, n, "store is locked");
+    snprintf(why, why_len, "store is locked");
     return -1;
 }
 

@@ -31,24 +31,24 @@ typedef struct fake {
     atomic_int aborts, starts;
 } fake;
 
-static int f_status(void *user, json_t **out, char *why, size_t n)
+static int f_status(void *user, json_t **out, char *why, size_t why_len)
 {
-    (void)user, (void)why, (void)n;
+    (void)user, (void)why, (void)why_len;
     *out = json_pack("{s:s}", "state", "running");
     return 0;
 }
 
-static int f_start(void *user, const json_t *body, json_t **out, int *st, char *why, size_t n)
+static int f_start(void *user, const json_t *body, json_t **out, int *st, char *why, size_t why_len)
 {
-    (void)body, (void)st, (void)why, (void)n;
+    (void)body, (void)st, (void)why, (void)why_len;
     atomic_fetch_add(&((fake *)user)->starts, 1);
     *out = json_pack("{s:i}", "id", 1);
     return 0;
 }
 
-static int f_abort(void *user, json_t **out, int *st, char *why, size_t n)
+static int f_abort(void *user, json_t **out, int *st, char *why, size_t why_len)
 {
-    (void)st, (void)why, (void)n;
+    (void)st, (void)why, (void)why_len;
     atomic_fetch_add(&((fake *)user)->aborts, 1);
     *out = json_pack("{s:s}", "abort", "requested");
     return 0;
@@ -63,9 +63,9 @@ static long beat_read(void *ctx, char *buf, size_t max)
     return snprintf(buf, max, "data: {\"type\":\"beat\"}\n\n");
 }
 
-static int f_events(void *user, api_stream *out, char *why, size_t n)
+static int f_events(void *user, api_stream *out, char *why, size_t why_len)
 {
-    (void)user, (void)why, (void)n;
+    (void)user, (void)why, (void)why_len;
     out->read = beat_read;
     out->close = NULL;
     out->ctx = NULL;

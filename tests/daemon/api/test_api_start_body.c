@@ -12,12 +12,12 @@
 
 #include "api_start_body.h"
 
-static int parse(const char *text, int replay, api_start_body *out, char *why, size_t n)
+static int parse(const char *text, int replay, api_start_body *out, char *why, size_t why_len)
 {
     json_error_t je;
     json_t *j = json_loads(text, JSON_ALLOW_NUL, &je); /* the server refuses NUL; the checks need not rely on it */
     assert_non_null(j);
-    int rc = api_start_body_parse(j, replay, out, why, n);
+    int rc = api_start_body_parse(j, replay, out, why, why_len);
     json_decref(j); /* the strings are not used after this */
     return rc;
 }

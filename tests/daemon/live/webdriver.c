@@ -43,7 +43,7 @@ static size_t on_data(char *d, size_t sz, size_t nm, void *u)
 
 /* One WebDriver command; returns the reply's "value" (new reference) or NULL with why. */
 static json_t *call(webdriver *wd, const char *method, const char *path, json_t *body, double timeout_s, char *why,
-                    size_t n)
+                    size_t why_len)
 {
     char url[512];
     snprintf(url, sizeof url, "%s%s", wd->base, path);
@@ -64,14 +64,14 @@ static json_t *call(webdriver *wd, const char *method, const char *path, json_t 
     curl_easy_cleanup(h);
     free(text);
     if (rc != CURLE_OK) {
-        snprintf(why, n, "%s %s: %s", method, path, curl_easy_strerror(rc));
+        snprintf(why, why_len, "%s %s: %s", method, path, curl_easy_strerror(rc));
         free(b.p);
         return NULL;
     }
     json_error_t e;
     json_t *j = b.p ? json_loads(b.p, 0, &e) : NULL;
     if (!j) {
-        snprintf(why, n, "%s %s: reply is not JSON: %.200s", method, path, b.p ? b.p : "");
+        snprintf(why, why_len, "%s %s: reply is not JSON: %.200s", method, path, b.p ? b.p : "");
         free(b.p);
         return NULL;
     }
@@ -79,7 +79,7 @@ static json_t *call(webdriver *wd, const char *method, const char *path, json_t 
     json_t *v = json_object_get(j, "value");
     json_t *err = json_is_object(v) ? json_object_get(v, "error") : NULL;
     if (err) {
-        snprintf(why, n, "%s %s: %s: %.300s", method, path, json_string_value(err),
+        snprintf(why, why_len, "%s %s: %s: %.300s", method, path, json_string_value(err),
                  json_string_value(json_object_get(v, "message")));
         json_decref(j);
         return NULL;
@@ -102,7 +102,7 @@ static unsigned free_port(void)
     return p;
 }
 
-int wd_open(webdriver *wd, const char *profile_dir, int w, int h, char *why, size_t n)
+int wd_open(webdriver *wd, const char *profile_dir, int w, int h, char *why, size_t why_len)
 {
     memset(wd, 0, sizeof *wd);
     snprintf(wd->profile, sizeof wd->profile, "%s", profile_dir);
@@ -112,7 +112,7 @@ int wd_open(webdriver *wd, const char *profile_dir, int w, int h, char *why, siz
     snprintf(portarg, sizeof portarg, "--port=%u", port);
     pid_t pid = fork();
     if (pid < 0) {
-        snprintf(why, n, "fork failed");
+        snprintf(why, why_len, "fork failed");
         return -1;
     }
     if (pid == 0) {
@@ -129,7 +129,7 @@ int wd_open(webdriver *wd, const char *profile_dir, int w, int h, char *why, siz
     for (int k = 0; k < 200 && !ready; k++) {
         struct timespec ts = {0, 50 * 1000000L};
         nanosleep(&ts, NULL);
-        ready = call(wd, "GET", "/status", NULL, 2, why, n);
+        ready = call(wd, "GET", "/status", NULL, 2, why, why_len);
     }
     if (!ready) {
         wd_close(wd);
@@ -145,7 +145,7 @@ int wd_open(webdriver *wd, const char *profile_dir, int w, int h, char *why, siz
     json_t *caps = json_pack("{s:{s:{s:s, s:{s:s, s:o}, s:{s:s}}}}", "capabilities", "alwaysMatch", "browserName",
                              "chrome", "goog:chromeOptions", "binary", CHROMIUM, "args", args, "goog:loggingPrefs",
                              "browser", "ALL");
-    json_t *v = call(wd, "POST", "/session", caps, 60, why, n);
+    json_t *v = call(wd, "POST", "/session", caps, 60, why, why_len);
     json_decref(caps);
     if (!v) {
         wd_close(wd);
@@ -155,31 +155,31 @@ int wd_open(webdriver *wd, const char *profile_dir, int w, int h, char *why, siz
     snprintf(wd->session, sizeof wd->session, "%s", sid ? sid : "");
     json_decref(v);
     if (!wd->session[0]) {
-        snprintf(why, n, "chromedriver gave no session id");
+        snprintf(why, why_len, "chromedriver gave no session id");
         wd_close(wd);
         return -1;
     }
     return 0;
 }
 
-int wd_navigate(webdriver *wd, const char *url, char *why, size_t n)
+int wd_navigate(webdriver *wd, const char *url, char *why, size_t why_len)
 {
     char path[200];
     snprintf(path, sizeof path, "/session/%s/url", wd->session);
     json_t *b = json_pack("{s:s}", "url", url);
-    json_t *v = call(wd, "POST", path, b, 60, why, n);
+    json_t *v = call(wd, "POST", path, b, 60, why, why_len);
     json_decref(b);
     if (!v) return -1;
     json_decref(v);
     return 0;
 }
 
-json_t *wd_exec(webdriver *wd, const char *script, char *why, size_t n)
+json_t *wd_exec(webdriver *wd, const char *script, char *why, size_t why_len)
 {
     char path[200];
     snprintf(path, sizeof path, "/session/%s/execute/sync", wd->session);
     json_t *b = json_pack("{s:s, s:[]}", "script", script, "args");
-    json_t *v = call(wd, "POST", path, b, 30, why, n);
+    json_t *v = call(wd, "POST", path, b, 30, why, why_len);
     json_decref(b);
     return v;
 }
@@ -194,11 +194,11 @@ static int b64(int c)
     return -1;
 }
 
-int wd_screenshot(webdriver *wd, const char *png_path, char *why, size_t n)
+int wd_screenshot(webdriver *wd, const char *png_path, char *why, size_t why_len)
 {
     char path[200];
     snprintf(path, sizeof path, "/session/%s/screenshot", wd->session);
-    json_t *v = call(wd, "GET", path, NULL, 60, why, n);
+    json_t *v = call(wd, "GET", path, NULL, 60, why, why_len);
     if (!v) return -1;
     const char *s = json_string_value(v);
     size_t len = s ? strlen(s) : 0;
@@ -221,16 +221,16 @@ int wd_screenshot(webdriver *wd, const char *png_path, char *why, size_t n)
     int rc = f && fwrite(out, 1, o, f) == o ? 0 : -1;
     if (f) fclose(f);
     free(out);
-    if (rc) snprintf(why, n, "cannot write %s", png_path);
+    if (rc) snprintf(why, why_len, "cannot write %s", png_path);
     return rc;
 }
 
-json_t *wd_console(webdriver *wd, char *why, size_t n)
+json_t *wd_console(webdriver *wd, char *why, size_t why_len)
 {
     char path[200];
     snprintf(path, sizeof path, "/session/%s/se/log", wd->session);
     json_t *b = json_pack("{s:s}", "type", "browser");
-    json_t *v = call(wd, "POST", path, b, 30, why, n);
+    json_t *v = call(wd, "POST", path, b, 30, why, why_len);
     json_decref(b);
     return v;
 }

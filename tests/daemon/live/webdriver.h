@@ -18,14 +18,14 @@ typedef struct webdriver {
 /* 1 when /usr/bin/chromium and /usr/bin/chromedriver exist. */
 int wd_available(void);
 /* Starts chromedriver and a headless chromium session (window w x h). Returns 0, or -1 with why. */
-int wd_open(webdriver *wd, const char *profile_dir, int w, int h, char *why, size_t n);
-int wd_navigate(webdriver *wd, const char *url, char *why, size_t n);
+int wd_open(webdriver *wd, const char *profile_dir, int w, int h, char *why, size_t why_len);
+int wd_navigate(webdriver *wd, const char *url, char *why, size_t why_len);
 /* Runs script (a function body; "return ..." gives the value) and returns the value (new
  * reference), or NULL with why. */
-json_t *wd_exec(webdriver *wd, const char *script, char *why, size_t n);
-int wd_screenshot(webdriver *wd, const char *png_path, char *why, size_t n);
+json_t *wd_exec(webdriver *wd, const char *script, char *why, size_t why_len);
+int wd_screenshot(webdriver *wd, const char *png_path, char *why, size_t why_len);
 /* The browser console entries since the last call: a JSON array of {level, message}. */
-json_t *wd_console(webdriver *wd, char *why, size_t n);
+json_t *wd_console(webdriver *wd, char *why, size_t why_len);
 void wd_close(webdriver *wd);
 
 #endif

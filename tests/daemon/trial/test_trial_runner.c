@@ -74,10 +74,10 @@ static int on_event(void *u, double t, const char *kind, const char *msg)
     if (strstr(msg, "load witness") || strstr(msg, "both witnesses")) lg->n_witness++;
     return 0;
 }
-static int on_sample(void *u, const trial_sample *s, char *why, size_t n)
+static int on_sample(void *u, const trial_sample *s, char *why, size_t why_len)
 {
     (void)why;
-    (void)n;
+    (void)why_len;
     log_t *lg = u;
     lg->samples++;
     if (s->kind == 1) lg->frames++;
