@@ -18,7 +18,8 @@ typedef enum api_route {
     API_ROUTE_EVENTS,   /* /live/events              GET (the stream pool) */
     API_ROUTE_CAMERA,   /* /live/camera.jpg          GET */
     API_ROUTE_PREDICTION, /* /live/prediction        GET */
-    API_ROUTE_BAD_PATH, /* a byte outside the grammar (or not starting with '/'): 400 */
+    API_ROUTE_BAD_PATH, /* a byte outside the grammar (or not starting with '/'): 400 (keep last:
+                           the fuzz target checks routes against it) */
 } api_route;
 
 /* 1 when path is made only of the bytes the routes use, [A-Za-z0-9._/-], and starts with '/';
