@@ -39,6 +39,7 @@ struct Attempt {
     double quality = 0;
     double valid_frac = 0;          // share of the arc with a clear ridge
     double length_rel = 0;          // measured length / known length - 1 (0 when unknown)
+    double bend_rel = 0;            // tightest radius of curvature / the ridge's median width
     vis_measure m{};
     std::vector<vis::Pt> curve_px;  // smooth centreline, pixels
 };
@@ -198,6 +199,39 @@ void projected_length_bounds(double l, double shear, double *lo, double *hi)
     *hi = l * std::sqrt(1.0 - sr * sr);
 }
 
+// A cross-section centroid is the centreline only where the ribbon bends gently against its
+// apparent width: where the radius of curvature comes within about twice the width of the ridge
+// (the twisted strip turns its face to the camera in a tight fold, or the two legs of a closing
+// loop merge into one wedge), the normal profile mixes in the neighbouring arc and the centroids
+// slide to the outside of the bend (Delta Z off 1-4 px, A off 0.1-2 rad at quality 0.99 on the
+// simulator family at Delta L 0.7, every one of them at a ratio below 1.95, every frame within
+// target above 2.1). Such a frame is not measured.
+const double BEND_MIN = 2.0;
+
+// Tightest radius of curvature of the smooth curve (mm, `ppmm` px per mm) over the valid samples'
+// median ridge width, both in pixels. Large when nothing bends. (The widest ridge near the tightest
+// point, tried instead, flags the creases of folded ribbons, which are tight but seen edge-on.)
+double bend_over_width(const std::vector<Pt> &curve, double ppmm, const std::vector<vis::TraceSample> &smp,
+                       std::vector<double> &w)
+{
+    w.clear();
+    for (const auto &s : smp)
+        if (s.valid)
+            w.push_back(s.width);
+    if (w.empty() || curve.size() < 3)
+        return 1e9;
+    std::nth_element(w.begin(), w.begin() + (long)(w.size() / 2), w.end());
+    const double wmed = std::max(1.0, w[w.size() / 2]);
+    double rmin = 1e9;
+    for (size_t j = 1; j + 1 < curve.size(); j++) {
+        const Pt a = curve[j] - curve[j - 1], b = curve[j + 1] - curve[j];
+        const double ang = std::fabs(std::atan2(a.x * b.y - a.y * b.x, a.dot(b)));
+        if (ang > 0)
+            rmin = std::min(rmin, 0.5 * (cv::norm(a) + cv::norm(b)) / ang * ppmm);
+    }
+    return rmin / wmed;
+}
+
 // Occlusion: the ribbon is seen leaving both clamps (most samples valid in the first and last tenth)
 // but a stretch longer than a fifth of the arc shows no ridge.
 bool occluded(const std::vector<vis::TraceSample> &smp)
@@ -225,6 +259,7 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
     at.quality = 0;
     at.valid_frac = 0;
     at.length_rel = 0;
+    at.bend_rel = 0;
     at.m = vis_measure{};
     const vis_track_params &p = t->p;
     vis::Workspace &ws = t->ws;
@@ -325,6 +360,9 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
     const double length = p.length_mm > 0 ? p.length_mm : fr.length;
     const double resid_px = fr.residual * g.vm.ppmm;
     at.quality = valid_frac / (1.0 + (resid_px / 0.5) * (resid_px / 0.5));
+    at.bend_rel = bend_over_width(fr.curve, g.vm.ppmm, samples, ws.widths);
+    if (at.bend_rel < BEND_MIN)
+        at.quality *= 0.1 * at.bend_rel / BEND_MIN;
     at.m.dz = fr.height / length;
     at.m.a = fr.a;
     at.m.quality = at.quality;
@@ -373,7 +411,7 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
         at.reason = VIS_REASON_LOST;
     else if (occluded(samples))
         at.reason = VIS_REASON_OCCLUDED;
-    else if (at.quality < p.min_quality)
+    else if (at.quality < p.min_quality || at.bend_rel < BEND_MIN)
         at.reason = VIS_REASON_LOST;
 }
 

@@ -55,6 +55,8 @@ struct TraceSample {
     double s;      // arc position along the guide, pixels from the left clamp
     double peak;   // ridge height above the profile's lower quartile, grey levels
     bool valid;    // a clear ridge was found
+    double width;  // px, the ridge's extent above 30% of its height (valid samples)
+    bool branch;   // another ridge (a second branch of the ribbon) shares the profile
 };
 // Resample `guide` (from left clamp to right clamp) every `step` px into `out`; polyline length in
 // *len; `cum` is scratch.
@@ -106,7 +108,7 @@ bool curve_fit(const FitInput &in, double hw, double he, int n_out, FitResult &o
 // allocates nothing (the geodesic search of a fresh acquisition excepted).
 struct Workspace {
     std::vector<Pt> guide, rs, smooth_tmp, px, und;
-    std::vector<double> cum, xi;
+    std::vector<double> cum, xi, widths;
     std::vector<TraceSample> samples;
     std::vector<float> prof, prof_tmp;
     std::vector<cv::Point2d> ud_in, ud_out;

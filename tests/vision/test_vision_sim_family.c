@@ -194,6 +194,15 @@ static int render_track(vis_renderer *r, vis_tracker *trk, const trial_states *s
                k, st->t[k], shear_mm, m.dz, g->dz_cam, edz, m.a, g->a_cam, ea, m.quality);
     if (fabs(edz) > WRONG_DZ_PX || fabs(ea) > WRONG_A_RAD) {
         s->wrong++;
+        const char *dump = getenv("FAM_DUMP"); /* a folder: the wrong frames with the tracked curve */
+        if (dump) {
+            char path[512];
+            snprintf(path, sizeof path, "%s/wrong_%03d_%d.png", dump, s->frames, k);
+            vis_frame *o = vis_frame_alloc(8, 8, 3, NULL);
+            if (o && vis_overlay_draw(f, trk, &m, k, o, &err) == VIS_OK)
+                (void)vis_frame_save(o, path, &err);
+            vis_frame_free(o);
+        }
         printf("  state %d (t %.3f s, shear %.1f mm): WRONG: Delta Z off %.2f px, A off %.3f rad, quality %.3f\n", k,
                st->t[k], shear_mm, edz, ea, m.quality);
     }
@@ -254,6 +263,8 @@ static void test_family_from_scratch(void **state)
     assert_non_null(f);
     for (int q = 0; q < nfam; q++) {
         const trial_spec *sp = &FAMILY[quick ? fam_idx_quick[q] : q];
+        if (getenv("FAM_ONLY") && atoi(getenv("FAM_ONLY")) != q)
+            continue; /* by hand: one trial of the family (its shapes then fall short of 200) */
         rod_prediction pred;
         run_trial(sp, &st, &pred);
         vis_render_params rp;
