@@ -541,7 +541,7 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
                 best = pick_better(best, &w);
                 walked = walked || w.reason == VIS_REASON_NONE;
             }
-            if (!walked && vis::path_init(t->sig, g.left, g.right, t->path)) {
+            if (!walked && vis::path_init(t->sig, sref, g.left, g.right, t->path)) {
                 any_path = true;
                 vis::smooth(t->path, 3, t->ws.smooth_tmp);
                 Attempt &fresh = t->att[3];

@@ -30,9 +30,10 @@ void ridge_signal(const cv::Mat &grey, bool dark, int r, cv::Rect roi, cv::Mat &
 
 
 // --- path_init.cpp
-// Cheapest 8-connected path from a to b where a step costs length / (eps + S / s_ref). Pixels of the
-// full image (sig covers it). Returns false when either end is outside or no path exists.
-bool path_init(const cv::Mat &sig, Pt a, Pt b, std::vector<Pt> &path);
+// Cheapest 8-connected path from a to b where a step costs length / (eps + S / s_ref), s_ref the
+// signal's reference level (signal_reference). Pixels of the full image (sig covers it); coarse to
+// fine on large frames. Returns false when either end is outside or no path exists.
+bool path_init(const cv::Mat &sig, double s_ref, Pt a, Pt b, std::vector<Pt> &path);
 // The 99.5th percentile of the positive signal (every second pixel of every second row), 0 if none.
 double signal_reference(const cv::Mat &sig);
 
