@@ -144,7 +144,7 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
                 kp = k;
         }
         const double peak = prof[(size_t)kp] - base;
-        TraceSample ts{guide[i], s, peak, false, 0.0, false};
+        TraceSample ts{guide[i], s, peak, false, 0.0};
         const double thr = base + 0.3 * peak;
         int lo = kp, hi = kp;
         while (lo > 0 && prof[(size_t)(lo - 1)] > thr)
@@ -177,11 +177,6 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
             }
         const double noise = cnt >= 8 ? std::sqrt(ss / cnt) : 0.0;
         const double width = (hi - lo) * d;
-        // Another ridge in the profile, clear of this one: a second branch of the ribbon nearby.
-        for (int k = 1; k < 2 * K && !ts.branch; k++)
-            if ((k < lo - 2 || k > hi + 2) && prof[(size_t)k] - base >= 0.5 * peak &&
-                prof[(size_t)k] >= prof[(size_t)k - 1] && prof[(size_t)k] > prof[(size_t)k + 1])
-                ts.branch = true;
         if (peak >= min_contrast && peak >= 5.0 * noise && width <= max_width + 2.0 && lo > 0 &&
             hi < 2 * K) {
             double sw = 0, so = 0;

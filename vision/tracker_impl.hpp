@@ -57,7 +57,6 @@ struct TraceSample {
     double peak;   // ridge height above the profile's lower quartile, grey levels
     bool valid;    // a clear ridge was found
     double width;  // px, the ridge's extent above 30% of its height (valid samples)
-    bool branch;   // another ridge (a second branch of the ribbon) shares the profile
 };
 // Resample `guide` (from left clamp to right clamp) every `step` px into `out`; polyline length in
 // *len; `cum` is scratch.
