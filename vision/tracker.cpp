@@ -76,6 +76,7 @@ extern "C" vis_track_params vis_track_params_default(void)
     p.end_window = 0.06;
     p.min_contrast = 12.0;
     p.min_quality = 0.3;
+    p.min_bend_ratio = 0.0;
     return p;
 }
 
@@ -89,12 +90,13 @@ static bool track_params_valid(const vis_track_params &p, vis_error *err)
         !vis::finite(p.end_window) || p.end_window <= 0 || p.end_window > 0.5 ||
         !vis::finite(p.min_contrast) || p.min_contrast < 0 || p.min_contrast > 255 ||
         !vis::finite(p.min_quality) || p.min_quality < 0 || p.min_quality > 1 ||
+        !vis::finite(p.min_bend_ratio) || p.min_bend_ratio < 0 || p.min_bend_ratio > 10 ||
         (p.polarity != VIS_POLARITY_AUTO && p.polarity != VIS_POLARITY_DARK &&
          p.polarity != VIS_POLARITY_LIGHT)) {
         vis::fail(err, VIS_ERR_ARG,
                   "track params: need length_mm >= 0, 1 <= band_px <= 100, 1 <= ribbon_max_px <= 100, "
                   "0.25 <= step_px <= 20, 0 <= end_margin_px <= 200, 0 < fit_window <= 0.25, 0 < end_window <= 0.5, "
-                  "0 <= min_contrast <= 255, 0 <= min_quality <= 1, a known polarity");
+                  "0 <= min_contrast <= 255, 0 <= min_quality <= 1, 0 <= min_bend_ratio <= 10, a known polarity");
         return false;
     }
     return true;
@@ -205,8 +207,9 @@ void projected_length_bounds(double l, double shear, double *lo, double *hi)
 // loop merge into one wedge), the normal profile mixes in the neighbouring arc and the centroids
 // slide to the outside of the bend (Delta Z off 1-4 px, A off 0.1-2 rad at quality 0.99 on the
 // simulator family at Delta L 0.7, every one of them at a ratio below 1.95, every frame within
-// target above 2.1). Such a frame is not measured.
-const double BEND_MIN = 2.0;
+// target above 2.06). With min_bend_ratio set (2 for that), such a frame is not measured. It is off
+// by default: on the mock trial's twin (N = 31) it loses the frames around the snap, and the
+// trial then sees no snap (test_install_staged, test_rig_rehearsal).
 
 // Tightest radius of curvature of the smooth curve (mm, `ppmm` px per mm) over the valid samples'
 // median ridge width, both in pixels. Large when nothing bends. (The widest ridge near the tightest
@@ -361,8 +364,9 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
     const double resid_px = fr.residual * g.vm.ppmm;
     at.quality = valid_frac / (1.0 + (resid_px / 0.5) * (resid_px / 0.5));
     at.bend_rel = bend_over_width(fr.curve, g.vm.ppmm, samples, ws.widths);
-    if (at.bend_rel < BEND_MIN)
-        at.quality *= 0.1 * at.bend_rel / BEND_MIN;
+    const double bend_min = p.min_bend_ratio;
+    if (at.bend_rel < bend_min)
+        at.quality *= 0.1 * at.bend_rel / bend_min;
     at.m.dz = fr.height / length;
     at.m.a = fr.a;
     at.m.quality = at.quality;
@@ -411,7 +415,7 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
         at.reason = VIS_REASON_LOST;
     else if (occluded(samples))
         at.reason = VIS_REASON_OCCLUDED;
-    else if (at.quality < p.min_quality || at.bend_rel < BEND_MIN)
+    else if (at.quality < p.min_quality || at.bend_rel < p.min_bend_ratio)
         at.reason = VIS_REASON_LOST;
 }
 

@@ -320,6 +320,10 @@ typedef struct vis_track_params {
     double end_window;         /* one-sided window of the end-tangent fits, fraction of length (0.06) */
     double min_contrast;       /* weakest ridge accepted, grey levels (12) */
     double min_quality;        /* below this quality (0..1) a frame is reported LOST (0.3) */
+    double min_bend_ratio;     /* a curve whose tightest radius of curvature is below this many
+                                  median ridge widths is reported LOST, not measured (0 = off, the
+                                  default; 2 makes the simulator family's confident wrong answers
+                                  lost: docs/vision-acquisition-and-replay-speed.md) */
 } vis_track_params;
 vis_track_params vis_track_params_default(void);
 
