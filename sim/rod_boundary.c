@@ -206,6 +206,10 @@ static rod_status search(rod_boundary *b, rod_crit_kind kind, int scan, double *
  * takes 5-10 iterations). */
 #define DIRECT_CAP 10
 
+/* A continuation that fails with the switch's Delta W below this and falling is named as the
+ * boundary reaching Delta W = 0 (rod_boundary_move). */
+#define DW_NEAR_ZERO 0.05
+
 static int codim2_ok(const rod_crit_report *rep) { return rep->parity_even > 0.5 && rep->parity_odd < -0.5; }
 
 static rod_status solve_codim2(rod_boundary *b, double *p, rod_crit_report *rep, int *direct)
@@ -575,6 +579,20 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
             h *= 0.5;
             if (h < b->o.min_step_frac * h0) {
                 double at = par == ROD_PAR_PHI ? fabs(cv) * 180.0 / M_PI : cv;
+                double dw1 = b->cur.p[ROD_PAR_DW], dw0 = have_prev ? b->prev.p[ROD_PAR_DW] : dw1;
+                double dpar = have_prev ? b->cur.p[par] - b->prev.p[par] : 0.0;
+                if (have_prev && dw1 < DW_NEAR_ZERO && dw1 < dw0 && dpar * (tv - cv) > 0.0) {
+                    /* The switch's Delta W runs to zero: past it the two bifurcations would meet
+                     * before any shear, and there is no codim-2 point of the sheared branch. */
+                    double z = b->cur.p[par] + dpar * dw1 / (dw0 - dw1);
+                    snprintf(reason, sizeof reason,
+                             "the codim-2 point's Delta W runs to 0 at %s = %.6g (extrapolated; %.4f at %s = %.6g, "
+                             "the last point): beyond it the switch would need a negative shear, so the boundary of "
+                             "the sheared branch ends there",
+                             pname, par == ROD_PAR_PHI ? fabs(z) * 180.0 / M_PI : z, dw1, pname, at);
+                    st = ROD_ERR_BRANCH_LOST;
+                    continue;
+                }
                 snprintf(reason, sizeof reason, "the codim-2 point could not be continued past %s = %.6g: %.150s", pname,
                          at, b->msg);
                 st = s2;

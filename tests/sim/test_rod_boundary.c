@@ -294,6 +294,33 @@ static void test_direct_codim2(void **state)
     assert_close(end[1], end[0], 1e-5);
 }
 
+/* Delta L 0.3: the codim-2 point's Delta W runs to 0 near phi 129.4 deg (N = 61); the move stops
+ * there by that name, the points before kept, their Delta W falling toward 0. */
+static void test_dw_runs_to_zero(void **state)
+{
+    (void)state;
+    rod_scene sc = scene(NODES, GAMMA0);
+    rod_boundary_opts o = rod_boundary_opts_default();
+    o.verify_every = 0.0;
+    rod_boundary *b = NULL;
+    rod_codim2_point pt;
+    char why[512] = "";
+    assert_int_equal(rod_boundary_start(&sc, &o, &b, &pt, why, sizeof why), ROD_OK);
+    rod_boundary_curve c = {0};
+    assert_int_equal(rod_boundary_move(b, ROD_PAR_DL, 0.3, &c), ROD_OK);
+    rod_boundary_curve_free(&c);
+    rod_status st = rod_boundary_move(b, ROD_PAR_PHI, 135.0, &c);
+    print_message("%s (%zu points)\n", c.end_reason, c.n);
+    assert_int_equal(st, ROD_ERR_BRANCH_LOST);
+    assert_non_null(strstr(c.end_reason, "Delta W runs to 0"));
+    assert_true(c.n >= 3);
+    assert_true(c.pts[c.n - 1].dw < 0.05 && c.pts[c.n - 1].dw > 0.0);
+    assert_true(c.pts[c.n - 1].phi_deg > 120.0 && c.pts[c.n - 1].phi_deg < 135.0);
+    for (size_t k = 0; k < c.n; k++) check_critical(&c.pts[k]);
+    rod_boundary_curve_free(&c);
+    rod_boundary_free(b);
+}
+
 /* rod_crit_set_phase1_cap: a solve from a badly strained state (the crease angle moved by 5 deg
  * at fixed q) fails after the cap, with its reason, instead of running to the Newton cap. */
 static void test_phase1_cap(void **state)
@@ -415,6 +442,7 @@ int main(void)
         cmocka_unit_test(test_codim2_and_phi),
         cmocka_unit_test(test_direct_codim2),
         cmocka_unit_test(test_phase1_cap),
+        cmocka_unit_test(test_dw_runs_to_zero),
         cmocka_unit_test(test_curves_through_continue_events),
         cmocka_unit_test(test_truss_codim2),
     };
