@@ -15,6 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "trial_clock_map.h"
 
@@ -45,6 +46,7 @@ struct trial_capture {
     long pix_head;                 /* pixel frames published */
     long rec_seq;                  /* next pixel frame for the recorder */
     int stop;                      /* capture asked to stop */
+    int warm_done;                 /* the clock map's warm-up is over: frames are published */
     int cap_ended;                 /* the capture thread has ended */
     char cap_why[256];             /* why it ended, "" = asked to */
     trial_capture_counts counts;
@@ -68,6 +70,7 @@ trial_capture_params trial_capture_params_default(void)
     p.track_max_age_s = 0.1;
     p.frame_timeout_s = 1.0;
     p.fps = 60.0;
+    p.warmup_s = 1.0;
     return p;
 }
 
@@ -82,6 +85,7 @@ static void *capture_main(void *arg)
 {
     trial_capture *c = arg;
     vis_error ve;
+    double warm_t0 = NAN;
     for (;;) {
         pthread_mutex_lock(&c->lock);
         if (c->stop) {
@@ -104,6 +108,20 @@ static void *capture_main(void *arg)
             break;
         }
         double t = trial_clock_map_add(&c->map, m.camera_t_s, m.host_t_s);
+        if (!c->warm_done) {
+            /* The clock map's warm-up: frames only teach the map, until they span warmup_s of the
+             * camera's time (a camera without times, or on the host's clock, needs none). */
+            if (!isfinite(warm_t0)) warm_t0 = m.camera_t_s;
+            int over = !isfinite(m.camera_t_s) || c->map.identity || m.camera_t_s - warm_t0 >= c->p.warmup_s;
+            pthread_mutex_lock(&c->lock);
+            c->counts.warmup++;
+            if (over) {
+                c->warm_done = 1;
+                pthread_cond_broadcast(&c->cond);
+            }
+            pthread_mutex_unlock(&c->lock);
+            continue;
+        }
         pthread_mutex_lock(&c->lock);
         if (c->info_head - c->trk_seq >= TRIAL_INFO_SLOTS) {
             snprintf(c->cap_why, sizeof c->cap_why,
@@ -203,9 +221,10 @@ static void free_storage(trial_capture *c)
 trial_capture *trial_capture_start(vis_source *src, const trial_capture_params *p, char *why, size_t why_len)
 {
     if (!src || !p || p->slots < 4 || p->track_max_lag < 1 || p->track_max_lag >= p->slots ||
-        !(p->frame_timeout_s > 0.0) || !(p->fps > 0.0) || !(p->track_delay_s >= 0.0) || !(p->track_max_age_s >= 0.0)) {
+        !(p->frame_timeout_s > 0.0) || !(p->fps > 0.0) || !(p->track_delay_s >= 0.0) || !(p->track_max_age_s >= 0.0) ||
+        !(p->warmup_s >= 0.0 && p->warmup_s <= 60.0)) {
         snprintf(why, why_len, "capture: need a source, slots >= 4, 1 <= track_max_lag < slots, positive timeout "
-                               "and fps");
+                               "and fps, a warm-up of 0-60 s");
         return NULL;
     }
     trial_capture *c = calloc(1, sizeof *c);
@@ -215,6 +234,7 @@ trial_capture *trial_capture_start(vis_source *src, const trial_capture_params *
     }
     c->p = *p;
     c->src = src;
+    c->warm_done = !(p->warmup_s > 0.0);
     pthread_mutex_init(&c->lock, NULL);
     pthread_cond_init(&c->cond, NULL);
     trial_clock_map_init(&c->map);
@@ -256,6 +276,23 @@ trial_capture *trial_capture_start(vis_source *src, const trial_capture_params *
         goto fail;
     }
     c->cap_started = 1;
+    /* Nothing is published (and the caller moves nothing) before the clock map has warmed up. */
+    pthread_mutex_lock(&c->lock);
+    while (!c->warm_done && !c->cap_ended) pthread_cond_wait(&c->cond, &c->lock);
+    int warm = c->warm_done;
+    if (!warm) snprintf(why, why_len, "camera: %s", c->cap_why[0] ? c->cap_why : "capture stopped");
+    pthread_mutex_unlock(&c->lock);
+    if (!warm) {
+        /* nothing recorded: no empty video left behind */
+        char w2[256], tpath[4200];
+        trial_capture_stop(c, NULL, w2, sizeof w2);
+        if (p->video_path) {
+            snprintf(tpath, sizeof tpath, "%s.frames.csv", p->video_path);
+            unlink(p->video_path);
+            unlink(tpath);
+        }
+        return NULL;
+    }
     return c;
 fail:
     if (c->times) fclose(c->times);

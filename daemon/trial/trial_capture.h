@@ -5,7 +5,9 @@
  *
  * Capture thread: reads the source (vis_source_read_meta: camera timestamp, frame id, ids lost,
  * buffers incomplete), maps the camera time onto the rails' monotonic clock (trial_clock_map.h)
- * and publishes the frame. It never waits for a consumer: when the ring is full (the recorder is
+ * and publishes the frame. The first `warmup_s` of frames only teach the map (a frame's time is
+ * mapped when it arrives, so the first frames would otherwise be mapped from a handful of
+ * arrivals: 10 ms off seen under load); trial_capture_start returns once it is over. It never waits for a consumer: when the ring is full (the recorder is
  * `slots` frames behind) the frame is read into a scratch frame and counted as dropped.
  * Recorder thread: writes every published frame, cropped, to the video, and one line per frame to
  * the frame-times file beside it (video index, capture index, camera id, camera time, host time,
@@ -38,6 +40,9 @@ typedef struct trial_capture_params {
     trial_roi roi;           /* the video's region */
     double fps;              /* for the video header */
     double track_delay_s;    /* test hook: trial_capture_next sleeps this long per tracked frame */
+    double warmup_s;         /* the clock map's warm-up (s of camera time, default 1): frames before it
+                                only teach the map and are not published; trial_capture_start
+                                returns after it */
 } trial_capture_params;
 trial_capture_params trial_capture_params_default(void);
 
@@ -54,7 +59,8 @@ typedef struct trial_frame_info {
 } trial_frame_info;
 
 typedef struct trial_capture_counts {
-    long captured;           /* frames read from the camera */
+    long warmup;             /* frames read for the clock map's warm-up (not published, not recorded) */
+    long captured;           /* frames read from the camera after the warm-up */
     long lost;               /* frames the camera's ids say never arrived */
     long incomplete;         /* buffers the transport delivered damaged */
     long dropped;            /* frames the pipeline dropped (ring full): not in the video */

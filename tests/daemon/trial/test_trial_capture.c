@@ -28,14 +28,16 @@
 #if defined(__SANITIZE_ADDRESS__)
 #define FPS 20.0
 /* Under the sanitizers on a loaded machine the transport floor itself wanders (2-13 ms seen at
- * load 18): the bounds are half a frame period and the stop's 0.4 s plus half a second; the
- * normal build checks the tight ones. */
+ * load 18): the bounds are half a frame period (median), a frame period (every frame) and 1 s for
+ * the stop; the normal build checks the tight ones. */
 #define MEDIAN_BOUND_S (0.5 / FPS)
-#define STOP_SLACK_S 0.5
+#define WORST_BOUND_S (1.0 / FPS)
+#define STOP_BOUND_S 1.0
 #else
 #define FPS 60.0
-#define MEDIAN_BOUND_S 2e-3
-#define STOP_SLACK_S 0.1
+#define MEDIAN_BOUND_S 0.5e-3
+#define WORST_BOUND_S 1e-3 /* issue 13: every frame's stored time within 1 ms of its true send time */
+#define STOP_BOUND_S 0.5
 #endif
 #define W 640
 #define H 480
@@ -68,9 +70,14 @@ static void fill(ArvBuffer *b, void *user, guint32 exposure_us, guint32 gain, Ar
     n = (size_t)arv_buffer_get_image_width(b) * (size_t)arv_buffer_get_image_height(b);
     if (n < 8) return;
     uint64_t k = f->counter++;
-    if (k < MAX_TRUTH) f->truth[k] = mono();
     for (size_t i = 8; i < n; i++) p[i] = pattern(k, i);
     memcpy(p, &k, 8);
+    /* Stamped as it leaves (the leader goes out right after this callback), like ribbon-rigsim's
+     * camera: the real-time clock is the camera's, the monotonic time the truth. */
+    struct timespec r;
+    clock_gettime(CLOCK_REALTIME, &r);
+    if (k < MAX_TRUTH) f->truth[k] = mono();
+    arv_buffer_set_timestamp(b, (guint64)r.tv_sec * 1000000000ull + (guint64)r.tv_nsec);
 }
 
 static fake *fake_start(void)
@@ -189,11 +196,11 @@ static long check_video(fake *f, const char *video, double *worst, double *media
     fclose(t);
     vis_frame_free(fr);
     vis_source_close(v);
-    /* The first block's frames are mapped before the envelope settles: judge from frame 32 on. */
+    /* Every frame (the clock map warmed up before the first was published). */
     double w = 0.0;
     int m = 0;
     static double sorted[MAX_TRUTH];
-    for (long k = 32; k < n; k++) {
+    for (long k = 0; k < n; k++) {
         w = fmax(w, err[k]);
         sorted[m++] = err[k];
     }
@@ -229,11 +236,11 @@ static void test_every_frame_recorded_bit_exact_and_stamped(void **state)
     assert_int_equal(k.recorded, k.captured);
     assert_int_equal(n, k.recorded);
     assert_int_equal(k.lost + k.incomplete, 0);
-    /* A frame's mapped time: the camera's stamp plus the fastest arrival's delay (the loopback
-     * transport of 300 kB, which the mapping keeps: the rig's camera_time_offset_s removes it);
-     * within one frame period of the truth always; the floor is 0.3-0.6 ms in Release. */
+    /* A frame's mapped time: the camera's stamp plus the fastest arrival's delay (the leader's
+     * trip over loopback, 0.1 ms, which the mapping keeps: the rig's camera_time_offset_s is for
+     * such a constant); every frame within 1 ms of the truth in the normal build. */
     assert_true(median < MEDIAN_BOUND_S);
-    assert_true(worst < 1.0 / FPS);
+    assert_true(worst < WORST_BOUND_S);
     free(f);
 }
 
@@ -284,7 +291,7 @@ static void test_camera_stops_is_an_error_soon(void **state)
         }
     printf("# camera stopped: error after %.3f s: %s\n", t_err - t_stop, why);
     assert_true(isfinite(t_err));
-    assert_true(t_err - t_stop < 0.5 + STOP_SLACK_S);
+    assert_true(t_err - t_stop < STOP_BOUND_S); /* issue 13: within 0.5 s (normal build) */
     assert_non_null(strstr(why, "camera"));
     trial_capture_counts k;
     trial_capture_stop(c, &k, why, sizeof why);
