@@ -98,8 +98,10 @@ public:
             if (arv_buffer_get_image_pixel_format(b) != ARV_PIXEL_FORMAT_MONO_8 || !data ||
                 size < (size_t)w * (size_t)h || w <= 0 || h <= 0) {
                 arv_stream_push_buffer(stream, b);
-                return fail(err, VIS_ERR_FORMAT, "camera %s: frame %llu is not a %dx%d Mono8 image",
-                            name.c_str(), (unsigned long long)id, w, h);
+                return fail(err, VIS_ERR_FORMAT,
+                            "camera %s: frame %llu is not a %dx%d Mono8 image (pixel format 0x%08x, %zu bytes)",
+                            name.c_str(), (unsigned long long)id, w, h,
+                            (unsigned)arv_buffer_get_image_pixel_format(b), size);
             }
             grey.create(h, w, CV_8UC1);
             cv::Mat(h, w, CV_8UC1, const_cast<void *>(data)).copyTo(grey);

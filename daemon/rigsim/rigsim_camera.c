@@ -165,7 +165,7 @@ int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_st
     c->rails = rails;
     c->calib = cfg->calib;
     c->length_m = sc->length;
-    c->f = f ? *f : (rigsim_camera_faults){-1.0, -1.0};
+    c->f = f ? *f : (rigsim_camera_faults){-1.0, -1.0, 0.0};
     pthread_mutex_init(&c->lock, NULL);
     twin_camera_params cp = twin_camera_params_default();
     cp.width_px = cfg->camera.width_px > 0 ? cfg->camera.width_px : 640;
@@ -222,6 +222,7 @@ int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_st
         snprintf(why, why_len, "the GigE Vision camera could not be served on 127.0.0.1 (GVCP port 3956 taken?)");
         goto fail;
     }
+    if (c->f.lost_packets > 0.0) g_object_set(c->gv, "gvsp-lost-ratio", c->f.lost_packets, NULL);
     arv_fake_camera_set_fill_pattern(arv_gv_fake_camera_get_fake_camera(c->gv), fill, c);
     *out = c;
     return 0;
@@ -257,6 +258,16 @@ int rigsim_camera_tick(rigsim_camera *c)
 }
 
 void rigsim_camera_stop_sending(rigsim_camera *c) { c->f.stop_after_s = 0.0; }
+
+void rigsim_camera_freeze(rigsim_camera *c)
+{
+    pthread_mutex_lock(&c->lock);
+    double now = clock_s(CLOCK_MONOTONIC);
+    c->f.freeze_after_s = now - c->t_start;
+    pthread_mutex_unlock(&c->lock);
+    printf("fault: image frozen at %.3f (unix time)\n", clock_s(CLOCK_REALTIME));
+    fflush(stdout);
+}
 
 long rigsim_camera_frames(rigsim_camera *c)
 {

@@ -29,6 +29,8 @@ typedef struct rigsim_camera rigsim_camera;
 typedef struct rigsim_camera_faults {
     double stop_after_s;   /* s after start, < 0 = off: the camera stops sending */
     double freeze_after_s; /* s after start, < 0 = off: the same image from then on */
+    double lost_packets;   /* GVSP packets dropped at random, 0..1 (Aravis's gvsp-lost-ratio; the
+                              fake camera does not resend): damaged or lost frames */
 } rigsim_camera_faults;
 
 /* Serves the camera on 127.0.0.1 with serial number `serial`; sc is the scene at the twin's
@@ -42,6 +44,8 @@ int rigsim_camera_tick(rigsim_camera *c);
 long rigsim_camera_frames(rigsim_camera *c);
 /* Fault on command: the camera stops sending at the next tick. */
 void rigsim_camera_stop_sending(rigsim_camera *c);
+/* Fault on command: the image freezes now (the same image is sent from now on). */
+void rigsim_camera_freeze(rigsim_camera *c);
 /* Longest twin step + render, s. */
 double rigsim_camera_max_fill_s(rigsim_camera *c);
 void rigsim_camera_stop(rigsim_camera *c);

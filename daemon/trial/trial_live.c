@@ -76,6 +76,7 @@ int trial_live_open(const rig_config *cfg, rail *compress, rail *shear, const ch
     cp.roi = roi;
     cp.fps = rc->fps > 0 ? rc->fps : 30.0;
     cp.frame_timeout_s = 0.5;
+    cp.loss_window = cp.fps >= 10.0 ? (int)lround(cp.fps) : 10; /* a second of frames */
     const char *delay = getenv("RIBBON_TEST_TRACK_DELAY_S"); /* test hook: a slow tracker */
     if (delay && *delay) cp.track_delay_s = atof(delay);
     l->cap = trial_capture_start(l->src, &cp, why, why_len);
