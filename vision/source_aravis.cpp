@@ -213,11 +213,22 @@ Source *source_aravis_open(const vis_camera_settings &cs, vis_error *err)
         arv_camera_set_exposure_time(s->cam, cs.exposure_us, &e);
         bad = refused(e, s->name, "ExposureTime", err);
         e = nullptr;
+        const double got = bad ? cs.exposure_us : arv_camera_get_exposure_time(s->cam, nullptr);
+        if (!bad && !(std::fabs(got - cs.exposure_us) <= 1e-3 * cs.exposure_us + 1.0)) {
+            fail(err, VIS_ERR_ARG, "camera %s: ExposureTime %g us refused (it is %g us)", s->name.c_str(),
+                 cs.exposure_us, got);
+            bad = true;
+        }
     }
     if (!bad && cs.gain_db >= 0) {
         arv_camera_set_gain(s->cam, cs.gain_db, &e);
         bad = refused(e, s->name, "Gain", err);
         e = nullptr;
+        const double got = bad ? cs.gain_db : arv_camera_get_gain(s->cam, nullptr);
+        if (!bad && !(std::fabs(got - cs.gain_db) <= 0.01 + 1e-3 * cs.gain_db)) {
+            fail(err, VIS_ERR_ARG, "camera %s: Gain %g dB refused (it is %g dB)", s->name.c_str(), cs.gain_db, got);
+            bad = true;
+        }
     }
     guint payload = 0;
     if (!bad) {

@@ -21,7 +21,8 @@ static double poll_period(rail *a, rail *b)
 }
 
 int trial_live_open(const rig_config *cfg, rail *compress, rail *shear, const char *video_path, trial_roi roi,
-                    int expect_w, int expect_h, trial_live **out, char *why, size_t why_len)
+                    int expect_w, int expect_h, const vis_calib *cal, trial_live **out, char *why,
+                    size_t why_len)
 {
     *out = NULL;
     trial_live *l = calloc(1, sizeof *l);
@@ -68,6 +69,33 @@ int trial_live_open(const rig_config *cfg, rail *compress, rail *shear, const ch
         vis_source_close(l->src);
         free(l);
         return -1;
+    }
+    if (cal) {
+        const char *bad = NULL;
+        double u = 0, v = 0;
+        const double pts[4][2] = {{cal->clamp_left_px[0], cal->clamp_left_px[1]},
+                                  {cal->clamp_right_px[0], cal->clamp_right_px[1]},
+                                  {cal->principal_px[0], cal->principal_px[1]},
+                                  {cal->camera_matrix[2], cal->camera_matrix[5]}};
+        const char *names[4] = {"left clamp point", "right clamp point", "principal point", "optical centre"};
+        for (int k = 0; k < 4 && !bad; k++) {
+            if (k == 2 && (pts[k][0] < 0 || pts[k][1] < 0)) continue; /* the image centre */
+            if (k == 3 && !cal->has_intrinsics) continue;
+            if (!(pts[k][0] >= 0 && pts[k][0] < w && pts[k][1] >= 0 && pts[k][1] < h)) {
+                bad = names[k];
+                u = pts[k][0];
+                v = pts[k][1];
+            }
+        }
+        if (bad) {
+            snprintf(why, why_len,
+                     "camera: the calibration (camera.calibration) does not match the camera's %d x %d frames: its "
+                     "%s (%.1f, %.1f) px is outside them: recalibrate for this size, or set camera.width_px/height_px",
+                     w, h, bad, u, v);
+            vis_source_close(l->src);
+            free(l);
+            return -1;
+        }
     }
     trial_capture_params cp = trial_capture_params_default();
     cp.slots = rc->ring_frames > 0 ? rc->ring_frames : 64;
