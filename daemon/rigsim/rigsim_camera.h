@@ -5,7 +5,8 @@
  * turns them into (Delta L, Delta W) with the rig file's calibration, advances the twin (the
  * simulated rod, daemon/twin/mock_camera.h) to the expected time of the next image (now + the
  * running mean of a step and render, positions extrapolated at the axes' velocity) and renders it
- * through the synthetic side camera at the rig file's camera size, noise and blur. So the ribbon
+ * through the synthetic side camera at the rig file's camera size and blur; the sensor's noise
+ * (camera.noise_sigma) is added to each image as it is sent, so no two images are the same. So the ribbon
  * follows what the rails really did, not what ribbond commanded. The camera's fill (Aravis's
  * thread, at the frame rate ribbond sets through GenICam) copies the latest image and sets the
  * buffer's timestamp as it leaves (host real-time clock, ns): a slow twin step (the snap needs
