@@ -21,11 +21,12 @@
 
 /* Faults on command: SIGUSR1 cuts the controller's link, SIGUSR2 stops the camera (the handler
  * only sets a flag; the main loop applies it). */
-static volatile sig_atomic_t cut_link, stop_camera;
+static volatile sig_atomic_t cut_link, stop_camera, freeze_image;
 static void on_usr(int sig)
 {
     if (sig == SIGUSR1) cut_link = 1;
     if (sig == SIGUSR2) stop_camera = 1;
+    if (sig == SIGRTMIN) freeze_image = 1;
 }
 #define MAX_SETS 32
 
@@ -43,7 +44,9 @@ static void usage(FILE *f)
             "  --stall AXIS:MM       axis X|Y stalls at MM\n"
             "  --camera-stop-after S the camera stops sending S seconds after start\n"
             "  --freeze-after S      the image freezes S seconds after start\n"
-            "signals: SIGUSR1 cuts the controller's link now, SIGUSR2 stops the camera now\n");
+            "  --lost-packets R      the camera drops each GVSP packet with probability R (0..1)\n"
+            "signals: SIGUSR1 cuts the controller's link now, SIGUSR2 stops the camera now,\n"
+            "         SIGRTMIN freezes the image now\n");
 }
 
 static int num(const char *opt, const char *v, double lo, double hi, double *out)
@@ -62,7 +65,7 @@ int main(int argc, char **argv)
     int n_sets = 0;
     double start_dl = 0.2, duration = -1.0;
     rigsim_rail_faults rf = {-1.0, -1.0, 0, 0.0};
-    rigsim_camera_faults cf = {-1.0, -1.0};
+    rigsim_camera_faults cf = {-1.0, -1.0, 0.0};
     for (int i = 2; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         int bad = 0;
@@ -92,6 +95,8 @@ int main(int argc, char **argv)
             bad = num(a, v, 0.0, 1e7, &cf.stop_after_s);
         else if (!strcmp(a, "--freeze-after"))
             bad = num(a, v, 0.0, 1e7, &cf.freeze_after_s);
+        else if (!strcmp(a, "--lost-packets"))
+            bad = num(a, v, 0.0, 1.0, &cf.lost_packets);
         else if (!strcmp(a, "--stall")) {
             if ((v[0] != 'X' && v[0] != 'Y' && v[0] != 'Z') || v[1] != ':') {
                 fprintf(stderr, PROG ": --stall needs AXIS:MM, e.g. Y:60\n");
@@ -145,6 +150,7 @@ int main(int argc, char **argv)
     sa.sa_handler = on_usr;
     sigaction(SIGUSR1, &sa, NULL);
     sigaction(SIGUSR2, &sa, NULL);
+    sigaction(SIGRTMIN, &sa, NULL);
     struct timespec t0;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     while (!*stop) {
@@ -157,6 +163,10 @@ int main(int argc, char **argv)
         if (stop_camera) {
             stop_camera = 0;
             rigsim_camera_stop_sending(cam);
+        }
+        if (freeze_image) {
+            freeze_image = 0;
+            rigsim_camera_freeze(cam);
         }
         rigsim_camera_tick(cam);
         struct timespec t;
