@@ -1,6 +1,7 @@
 /* fuzz_inputs.h: fuzz entry points for every parser that reads input from outside the program:
  * the scene and rig INI files (through their real loaders), `--set` overrides, the API's request
- * line and JSON bodies (router and body checks, no socket), the camera calibration file, the
+ * line and JSON bodies (router and body checks, no socket), whole API requests with headers (the
+ * guard's and the server's reading of a head, api_head.c), the camera calibration file, the
  * replay rails CSV and the sweep CSV a resumed sweep reads. Each takes arbitrary bytes and must
  * neither crash nor leak nor trip a sanitizer; each checks its parser's contract (a refusal has a
  * reason, an acceptance holds only finite, in-range values) and abort()s when it is broken.
@@ -25,6 +26,7 @@ int fuzz_scene_ini_one(const uint8_t *data, size_t size);
 int fuzz_rig_ini_one(const uint8_t *data, size_t size);
 int fuzz_set_override_one(const uint8_t *data, size_t size);
 int fuzz_api_request_one(const uint8_t *data, size_t size);
+int fuzz_api_headers_one(const uint8_t *data, size_t size);
 int fuzz_calib_file_one(const uint8_t *data, size_t size);
 int fuzz_replay_rails_one(const uint8_t *data, size_t size);
 int fuzz_sweep_csv_one(const uint8_t *data, size_t size);

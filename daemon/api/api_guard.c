@@ -6,6 +6,8 @@
 #define _GNU_SOURCE /* accept4 */
 #include "api_guard.h"
 
+#include "api_head.h"
+
 #include <errno.h>
 #include <pthread.h>
 #include <stdint.h>
@@ -124,17 +126,6 @@ static void refuse(api_guard *g, pending *p, int status, const char *msg)
     on_readable(g, p); /* discard what is already in; may close p */
 }
 
-/* Where the headers end in buf[0..len): index past the blank line, or 0. */
-static size_t head_end(const char *buf, size_t len)
-{
-    for (size_t i = 0; i + 1 < len; i++) {
-        if (buf[i] != '\n') continue;
-        if (buf[i + 1] == '\n') return i + 2;
-        if (buf[i + 1] == '\r' && i + 2 < len && buf[i + 2] == '\n') return i + 3;
-    }
-    return 0;
-}
-
 static void on_readable(api_guard *g, pending *p)
 {
     if (p->fd < 0) return; /* closed earlier in this batch */
@@ -154,24 +145,22 @@ static void on_readable(api_guard *g, pending *p)
         drop(g, p);
         return;
     }
-    size_t len = (size_t)r;
-    size_t end = head_end(g->peek, len);
-    const char *nl = memchr(g->peek, '\n', len < g->cfg.line_max + 2 ? len : g->cfg.line_max + 2);
-    if (nl && (size_t)(nl - g->peek) > g->cfg.line_max + 1) nl = NULL;
-    if (!nl && len > g->cfg.line_max + 1) {
+    size_t end = 0;
+    int scan = api_head_scan(g->peek, (size_t)r, g->cfg.line_max, g->cfg.head_max, &end);
+    if (scan == 414) {
         char msg[160];
         snprintf(msg, sizeof msg, "request line longer than %zu bytes (the API's paths are short)", g->cfg.line_max);
         refuse(g, p, 414, msg);
         return;
     }
-    if (!end) {
-        if (len > g->cfg.head_max) {
-            char msg[160];
-            snprintf(msg, sizeof msg, "request headers larger than %zu bytes", g->cfg.head_max);
-            refuse(g, p, 431, msg);
-        }
-        return; /* wait for more */
+    if (scan == 431) {
+        char msg[160];
+        snprintf(msg, sizeof msg, "request headers larger than %zu bytes", g->cfg.head_max);
+        refuse(g, p, 431, msg);
+        return;
     }
+    if (scan == 0)
+        return; /* wait for more */
     char why[400] = "";
     unlink_node(&g->head, &g->tail, p);
     g->n_waiting--;

@@ -29,6 +29,7 @@
 #include "api_server.h"
 
 #include "api_guard.h"
+#include "api_head.h"
 #include "api_route.h"
 
 #include <arpa/inet.h>
@@ -230,60 +231,6 @@ static enum MHD_Result finish_op(struct MHD_Connection *c, const char *op, int r
 
 /* ---------------------------------------------------------------- checks */
 
-/* Constant-time comparison: the loop always runs over API_TOKEN_MAX + 1 bytes, whatever either
- * length is, so the time taken tells neither how many leading bytes were right nor how long the
- * token is. Bytes past a string's end compare as 0 (read from a zeroed copy, never out of bounds);
- * the lengths are compared too, so a prefix of the token never matches. */
-bool api_token_equal(const char *given, size_t glen, const char *want, size_t wlen)
-{
-    unsigned char a[API_TOKEN_MAX + 1] = {0}, b[API_TOKEN_MAX + 1] = {0};
-    volatile unsigned char diff = 0;
-    if (glen > API_TOKEN_MAX) { /* longer than any token: still compared over the same bytes */
-        glen = API_TOKEN_MAX + 1;
-        diff = 1;
-    }
-    if (wlen > API_TOKEN_MAX) {
-        wlen = API_TOKEN_MAX + 1;
-        diff = 1;
-    }
-    memcpy(a, given, glen > API_TOKEN_MAX ? API_TOKEN_MAX : glen);
-    memcpy(b, want, wlen > API_TOKEN_MAX ? API_TOKEN_MAX : wlen);
-    size_t lx = glen ^ wlen;
-    for (size_t i = 0; i < API_TOKEN_MAX + 1; i++)
-        diff |= (unsigned char)(a[i] ^ b[i]);
-    for (size_t k = 0; k < sizeof lx; k++)
-        diff |= (unsigned char)(lx >> (8 * k));
-    return diff == 0;
-}
-
-/* 0 when the request carries the right bearer token (or none is configured), else a reason. */
-static int check_token(const api_server *s, struct MHD_Connection *c, char *why, size_t why_len)
-{
-    if (s->token_len == 0)
-        return 0;
-    const char *h = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_AUTHORIZATION);
-    if (h == NULL) {
-        snprintf(why, why_len, "this daemon requires a token: send \"Authorization: Bearer TOKEN\" "
-                         "(the token is [api] token in the rig file)");
-        return -1;
-    }
-    if (strncasecmp(h, "Bearer ", 7) != 0) {
-        snprintf(why, why_len, "Authorization header must be \"Bearer TOKEN\"");
-        return -1;
-    }
-    const char *t = h + 7;
-    while (*t == ' ')
-        t++;
-    size_t len = strlen(t);
-    while (len > 0 && (t[len - 1] == ' ' || t[len - 1] == '\t'))
-        len--;
-    if (!api_token_equal(t, len, s->token, s->token_len)) {
-        snprintf(why, why_len, "wrong token");
-        return -1;
-    }
-    return 0;
-}
-
 static uint64_t mono_ms(void)
 {
     struct timespec ts;
@@ -315,7 +262,33 @@ static enum MHD_Result reply_asset(struct MHD_Connection *c, const api_asset *a)
     return ok;
 }
 
-/* Headers are in: run every check that needs no body. Returns MHD_YES to go on reading. */
+/* Collects a request's headers into a growing array (api_header_list). */
+typedef struct api_header_list {
+    api_header *h;
+    size_t n, cap;
+    bool failed;
+} api_header_list;
+
+static enum MHD_Result collect_header(void *cls, enum MHD_ValueKind kind, const char *key, const char *value)
+{
+    (void)kind;
+    api_header_list *l = cls;
+    if (l->n == l->cap) {
+        size_t cap = l->cap ? 2 * l->cap : 16;
+        api_header *h = realloc(l->h, cap * sizeof *h);
+        if (h == NULL) {
+            l->failed = true;
+            return MHD_NO;
+        }
+        l->h = h;
+        l->cap = cap;
+    }
+    l->h[l->n++] = (api_header){.name = key, .value = value};
+    return MHD_YES;
+}
+
+/* Headers are in: serve a page asset, or run every check that needs no body (api_head_check, on
+ * the headers as libmicrohttpd parsed them). Returns MHD_YES to go on reading. */
 static enum MHD_Result on_headers(api_server *s, int stream_pool, struct MHD_Connection *c, const char *url,
                                   const char *method, api_request *req)
 {
@@ -326,48 +299,22 @@ static enum MHD_Result on_headers(api_server *s, int stream_pool, struct MHD_Con
         req->answered = true;
         return reply_asset(c, asset);
     }
-    if (check_token(s, c, why, sizeof why) != 0) {
-        req->answered = true;
-        return reply_error(c, MHD_HTTP_UNAUTHORIZED, why, NULL);
+    api_header_list headers = {0};
+    MHD_get_connection_values(c, MHD_HEADER_KIND, collect_header, &headers);
+    if (headers.failed) {
+        free(headers.h);
+        return MHD_NO; /* out of memory: libmicrohttpd closes the connection */
     }
-    req->route = api_route_parse(url, &req->id, why, sizeof why);
-    if (req->route == API_ROUTE_BAD_PATH) {
-        req->answered = true;
-        return reply_error(c, MHD_HTTP_BAD_REQUEST, why, NULL);
-    }
-    if (req->route == API_ROUTE_NONE) {
-        req->answered = true;
-        return reply_errorf(c, MHD_HTTP_NOT_FOUND, NULL,
-                            "no such path: %.200s (paths: /status, /trials, /trials/current/abort, /trials/ID, "
-                            "/trials/ID/report.png, /live/events, /live/camera.jpg, /live/prediction)",
-                            url);
-    }
-    if (req->route == API_ROUTE_BAD_ID) {
-        req->answered = true;
-        return reply_error(c, MHD_HTTP_BAD_REQUEST, why, NULL);
-    }
-    if (!api_route_method_ok(req->route, method)) {
-        const char *allow = api_route_allow(req->route);
-        req->answered = true;
-        return reply_errorf(c, MHD_HTTP_METHOD_NOT_ALLOWED, allow, "method %.20s not allowed on %.200s (allowed: %s)",
-                            method, url, allow);
-    }
-    if ((req->route == API_ROUTE_EVENTS) != (stream_pool != 0)) { /* take_connection sorts by the same path */
-        req->answered = true;
-        return reply_error(c, 500, "internal error: request reached the wrong connection pool", NULL);
-    }
-    const char *cl = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
-    if (cl != NULL) {
-        char *end = NULL;
-        errno = 0;
-        unsigned long long v = strtoull(cl, &end, 10);
-        if (end != cl && errno == 0 && v > s->max_body) {
-            req->answered = true;
-            return reply_errorf(c, MHD_HTTP_CONTENT_TOO_LARGE, NULL,
-                                "request body of %llu bytes is larger than the limit of %zu bytes", v, s->max_body);
-        }
-    }
-    return MHD_YES;
+    api_head_policy policy = {.token = s->token, .token_len = s->token_len, .max_body = s->max_body};
+    api_head_verdict v;
+    api_head_check(&policy, stream_pool != 0, method, url, headers.h, headers.n, &v, why, sizeof why);
+    free(headers.h);
+    req->route = v.route;
+    req->id = v.id;
+    if (v.status == 0)
+        return MHD_YES;
+    req->answered = true;
+    return reply_error(c, v.status, why, v.allow);
 }
 
 /* Append a chunk of body, or mark the request too big and drop the chunk. */
@@ -401,32 +348,6 @@ static void body_append(const api_server *s, api_request *req, const char *data,
     }
     memcpy(req->body + req->len, data, size);
     req->len += size;
-}
-
-/* The body as a JSON object: {} when empty or blank. NULL with a reason on error. */
-static json_t *body_object(const api_request *req, char *why, size_t why_len)
-{
-    size_t i = 0;
-    while (i < req->len && (req->body[i] == ' ' || req->body[i] == '\t' || req->body[i] == '\r' || req->body[i] == '\n'))
-        i++;
-    if (i == req->len)
-        return json_object();
-    json_error_t err;
-    json_t *j = json_loadb(req->body, req->len, JSON_REJECT_DUPLICATES, &err);
-    if (j == NULL) {
-        snprintf(why, why_len, "malformed JSON body at line %d, column %d: %s", err.line, err.column, err.text);
-        return NULL;
-    }
-    if (!json_is_object(j)) {
-        static const char *const names[] = {"an object", "an array", "a string", "a number", "a number",
-                                            "true", "false", "null"};
-        int t = (int)json_typeof(j);
-        snprintf(why, why_len, "request body must be a JSON object, got %s",
-                 t >= 0 && t < (int)(sizeof names / sizeof names[0]) ? names[t] : "something else");
-        json_decref(j);
-        return NULL;
-    }
-    return j;
 }
 
 /* ---------------------------------------------------------------- streams */
@@ -499,7 +420,7 @@ static enum MHD_Result dispatch(api_server *s, struct MHD_Connection *c, const c
         } else {
             if (ops->start == NULL)
                 break;
-            json_t *body = body_object(req, why, sizeof why);
+            json_t *body = api_body_object(req->body, req->len, why, sizeof why);
             if (body == NULL)
                 return reply_error(c, MHD_HTTP_BAD_REQUEST, why, NULL);
             status = MHD_HTTP_CREATED;
@@ -638,63 +559,17 @@ static size_t keep_escapes(void *cls, struct MHD_Connection *c, char *s)
     return strlen(s);
 }
 
-/* The path of a request line "METHOD SP target SP version" in head: method and path (up to '?')
- * copied, bounded. */
-static void request_line(const char *head, size_t len, char *method, size_t mcap, char *path, size_t pcap)
-{
-    size_t i = 0, k = 0;
-    while (i < len && head[i] != ' ' && head[i] != '\r' && head[i] != '\n') {
-        if (k + 1 < mcap)
-            method[k++] = head[i];
-        i++;
-    }
-    method[k] = '\0';
-    while (i < len && head[i] == ' ')
-        i++;
-    k = 0;
-    while (i < len && head[i] != ' ' && head[i] != '?' && head[i] != '\r' && head[i] != '\n') {
-        if (k + 1 < pcap)
-            path[k++] = head[i];
-        i++;
-    }
-    path[k] = '\0';
-}
-
-/* 1 when head (up to its blank line) has a header of that name (case-insensitive). */
-static bool has_header(const char *head, size_t len, const char *name)
-{
-    size_t nl = strlen(name);
-    for (size_t i = 0; i + 1 < len; i++) {
-        if (head[i] != '\n')
-            continue;
-        if (i + 1 + nl < len && strncasecmp(head + i + 1, name, nl) == 0 && head[i + 1 + nl] == ':') {
-            if (strncasecmp(name, "content-length", nl) == 0) { /* "Content-Length: 0" is no body */
-                const char *v = head + i + 2 + nl;
-                while (*v == ' ' || *v == '\t')
-                    v++;
-                if (*v == '0' && (v[1] == '\r' || v[1] == '\n'))
-                    continue;
-            }
-            return true;
-        }
-    }
-    return false;
-}
-
-/* api_guard's take: sort a complete head into a pool, or refuse with 503. */
+/* api_guard's take: sort a complete head into a pool (api_head_sort_raw), or refuse with 503. */
 static int take_connection(void *user, int fd, const struct sockaddr *peer, socklen_t peer_len, const char *head,
                            size_t len, char *why, size_t why_len)
 {
     api_server *s = user;
-    char method[16], path[64];
-    request_line(head, len, method, sizeof method, path, sizeof path);
-    bool get = strcmp(method, "GET") == 0, post = strcmp(method, "POST") == 0;
-    int stream = get && strcmp(path, "/live/events") == 0;
+    api_head_sort sort;
+    api_head_sort_raw(head, len, &sort);
+    int stream = sort.stream;
     api_pool *pool = &s->pool[stream];
     unsigned limit = stream ? s->max_streams : s->max_control;
-    bool control = ((get && strcmp(path, "/status") == 0) || (post && strcmp(path, "/trials/current/abort") == 0)) &&
-                   !has_header(head, len, "content-length") && !has_header(head, len, "transfer-encoding");
-    if (control)
+    if (sort.control)
         limit += API_RESERVED_CONTROL;
     if (atomic_load(&pool->open) >= (int)limit) {
         snprintf(why, why_len, stream ? "too many live streams open (%u); close a page and retry"

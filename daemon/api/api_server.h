@@ -149,11 +149,6 @@ typedef struct api_server api_server;
 int api_server_start(const api_server_config *cfg, const api_ops *ops, void *user, api_server **out,
                      char *why, size_t why_len);
 
-/* The token comparison the server uses: 1 when given[0..glen) equals want[0..wlen). Its running
- * time depends on neither length nor content (always API_TOKEN_MAX + 1 bytes compared); exposed
- * for tests. */
-#define API_TOKEN_MAX 256
-bool api_token_equal(const char *given, size_t glen, const char *want, size_t wlen);
 
 /* The TCP port actually bound (useful with port 0). */
 unsigned api_server_port(const api_server *s);

@@ -145,6 +145,12 @@ static void test_api_request(void **st)
     replay(fuzz_api_request_one, "api_request", NULL, NULL, 3000);
 }
 
+static void test_api_headers(void **st)
+{
+    (void)st;
+    replay(fuzz_api_headers_one, "api_headers", NULL, NULL, 3000);
+}
+
 static void test_calib_file(void **st)
 {
     (void)st;
@@ -168,6 +174,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_scene_ini),   cmocka_unit_test(test_rig_ini),
         cmocka_unit_test(test_set_override), cmocka_unit_test(test_api_request),
+        cmocka_unit_test(test_api_headers),
         cmocka_unit_test(test_calib_file),  cmocka_unit_test(test_replay_rails),
         cmocka_unit_test(test_sweep_csv),
     };

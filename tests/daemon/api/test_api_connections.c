@@ -9,6 +9,7 @@
 
 #include <cmocka.h>
 
+#include "api_head.h"   /* the room's own token comparison, tested here */
 #include "api_server.h"
 
 #include <arpa/inet.h>
