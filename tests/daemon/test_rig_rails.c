@@ -39,7 +39,7 @@ static const char *const grbl_sets[] = {"rail.compress.port=%s/grbl", "rail.shea
                                         "camera.video_dir=%s/videos", "trial.compress_speed_mm_s=20", NULL};
 
 /* The Modbus rig on two free loopback ports. */
-static __attribute__((unused)) void modbus_sets(char buf[2][64], const char *sets[8])
+static void modbus_sets(char buf[2][64], const char *sets[8])
 {
     snprintf(buf[0], sizeof buf[0], "rail.compress.address=127.0.0.1:%d", rig_free_port());
     snprintf(buf[1], sizeof buf[1], "rail.shear.address=127.0.0.1:%d", rig_free_port());
@@ -114,10 +114,195 @@ static void test_grbl_link_lost_mid_shear(void **state)
     link_lost(RIG_GRBL, grbl_sets, "rail");
 }
 
+static void test_modbus_link_lost_mid_shear(void **state)
+{
+    (void)state;
+    char buf[2][64];
+    const char *sets[8] = {0};
+    modbus_sets(buf, sets);
+    link_lost(RIG_MODBUS, sets, "rail");
+}
+
+/* An alarm on command mid-shear (SIGRTMIN): GRBL's ALARM:1 of the controller, or the shear drive's
+ * alarm 0x30 (a drive fault). */
+static void alarm_mid_shear(const char *rig, const char *const *sets, const char *sim_fault, const char *what)
+{
+    rig_run r;
+    start_to_shear(&r, rig, sets, NULL);
+    kill(r.sim, SIGRTMIN);
+    rig_sleep_s(0.2);
+    double t = rig_sim_fault_time(&r, sim_fault);
+    assert_true(isfinite(t));
+    double seen = check_failed(&r, what, t);
+    printf("# %s: detected %.3f s after it was raised\n", sim_fault, seen - t);
+    assert_true(seen - t <= DETECT_BOUND_S);
+}
+
+static void test_grbl_alarm_mid_shear(void **state)
+{
+    (void)state;
+    alarm_mid_shear(RIG_GRBL, grbl_sets, "controller alarm", "GRBL alarm 1");
+}
+
+static void test_modbus_drive_fault_mid_shear(void **state)
+{
+    (void)state;
+    char buf[2][64];
+    const char *sets[8] = {0};
+    modbus_sets(buf, sets);
+    alarm_mid_shear(RIG_MODBUS, sets, "drive alarm", "rail shear");
+}
+
+/* The shear axis stalls 20 mm into the shear (2 s at 10 mm/s, before the snap near 84 mm):
+ * GRBL's open loop sees no progress for stall_timeout_s (1 s); the Modbus drive raises its
+ * position-deviation alarm. */
+static void stall_mid_shear(const char *rig, const char *const *sets, const char *what)
+{
+    rig_run r;
+    const char *extra[] = {"--stall", "Y:70", NULL};
+    rig_start(&r, rig, sets, extra);
+    assert_int_equal(rig_trial(&r, 0), 0);
+    char got[700];
+    if (rig_wait_state(&r, "shearing", 90.0, got, sizeof got)) fail_msg("the trial did not reach shearing: %s", got);
+    double t = rig_now_real();
+    check_failed(&r, what, t);
+}
+
+static void test_grbl_stall_mid_shear(void **state)
+{
+    (void)state;
+    stall_mid_shear(RIG_GRBL, grbl_sets, "stall");
+}
+
+static void test_modbus_stall_mid_shear(void **state)
+{
+    (void)state;
+    char buf[2][64];
+    const char *sets[8] = {0};
+    modbus_sets(buf, sets);
+    stall_mid_shear(RIG_MODBUS, sets, "rail shear");
+}
+
+/* ribbond killed mid-shear with Modbus rails: nobody talks to the drives, whose watchdog
+ * (watchdog_s = 0.5 in the rig file) halts the shear axis: from the simulator's axes log. */
+static void test_modbus_sigkill_mid_shear(void **state)
+{
+    (void)state;
+    char buf[2][64];
+    const char *sets[8] = {0};
+    modbus_sets(buf, sets);
+    rig_run r;
+    start_to_shear(&r, RIG_MODBUS, sets, NULL);
+    double t_kill = rig_now_real();
+    kill(r.daemon, SIGKILL);
+    waitpid(r.daemon, NULL, 0);
+    r.daemon = -1;
+    rig_sleep_s(2.0);
+    rig_stop(&r);
+    double ls = rig_truth_last_move(&r, 1);
+    printf("# SIGKILL mid-shear (Modbus): the shear axis stood %.3f s after the kill (watchdog 0.5 s)\n",
+           ls - t_kill);
+    assert_true(isfinite(ls));
+    assert_true(ls - t_kill > 0.0);
+    /* The watchdog counts from the last request, which came before the kill; the drive halts at
+     * once (mb_sim's alarm 0x85); the axes log has 5 ms lines and the drive thread a 1 ms step. */
+    assert_true(ls - t_kill <= 0.5 + 0.05);
+    /* and it did not stop by itself before the watchdog: the shear was running when killed */
+    assert_true(ls - t_kill > 0.3);
+}
+
+/* The rig simulator itself killed mid-shear: the GRBL pty hangs up (and the camera goes silent):
+ * the trial fails with a named reason, the store is whole. */
+static void test_rigsim_dies_mid_shear(void **state)
+{
+    (void)state;
+    rig_run r;
+    start_to_shear(&r, RIG_GRBL, grbl_sets, NULL);
+    kill(r.sim, SIGKILL);
+    waitpid(r.sim, NULL, 0);
+    r.sim = -1;
+    assert_int_equal(rig_wait_end(&r, 30.0), 0);
+    rig_stop(&r);
+    sqlite3 *db = rig_db_open(&r);
+    char status[64], why[512];
+    rig_q_text(db, "select status from trials where id = 1", status, sizeof status);
+    rig_q_text(db, "select coalesce(reason,'') from trials where id = 1", why, sizeof why);
+    printf("# rig simulator killed: %s: %s\n", status, why);
+    assert_string_equal(status, "failed");
+    /* The controller's pty hung up: the rail is named (the camera's silence may follow it). */
+    assert_non_null(strstr(why, "rail"));
+    double stored = rig_q_num(db, "select count(*) from samples where trial_id = 1");
+    double counted = rig_q_num(db, "select samples_count from trials where id = 1");
+    assert_true(stored > 100);
+    assert_true(stored == counted);
+    rig_check_integrity(db);
+    sqlite3_close(db);
+}
+
+/* The whole trial with Modbus TCP rails: done, the measured snap within 2% of the prediction at
+ * the same resolution, the regimes agree, both rails standing where they started at the end. */
+static void test_modbus_trial(void **state)
+{
+    (void)state;
+    char buf[2][64];
+    const char *sets[8] = {0};
+    modbus_sets(buf, sets);
+    rig_run r;
+    rig_start(&r, RIG_MODBUS, sets, NULL);
+    int rc = rig_trial(&r, 1);
+    rig_sleep_s(1.0);
+    double t_end = rig_now_real();
+    rig_stop(&r);
+    sqlite3 *db = rig_db_open(&r);
+    char status[64], why[512], rm[32], rp[32], lat[400];
+    rig_q_text(db, "select status from trials where id = 1", status, sizeof status);
+    rig_q_text(db, "select coalesce(reason,'') from trials where id = 1", why, sizeof why);
+    printf("# trial: %s %s (ribbonctl %d)\n", status, why, rc);
+    assert_string_equal(status, "done");
+    double meas = rig_q_num(db, "select snap_dw_measured from trials where id = 1");
+    double pred = rig_q_num(db, "select snap_dw from predictions where trial_id = 1");
+    rig_q_text(db, "select regime_measured from trials where id = 1", rm, sizeof rm);
+    rig_q_text(db, "select regime from predictions where trial_id = 1", rp, sizeof rp);
+    rig_q_text(db, "select message from events where trial_id = 1 and message like 'snap-to-stop%'", lat, sizeof lat);
+    printf("# measured %.5f predicted %.5f (%+.2f%%; %s / %s)\n# %s\n", meas, pred, 100.0 * (meas - pred) / pred, rm,
+           rp, lat);
+    assert_true(fabs(meas - pred) <= 0.02 * pred);
+    assert_string_equal(rm, rp);
+    double start_c = rig_q_num(db, "select compress_mm from samples where trial_id = 1 and kind = 0 order by seq limit 1");
+    rig_check_integrity(db);
+    sqlite3_close(db);
+    /* Both axes standing at the end, at their start (the shear at its zero, 50 mm). */
+    char path[160], line[256], last[256] = "";
+    snprintf(path, sizeof path, "%s/axes.csv", r.dir);
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    while (fgets(line, sizeof line, f)) snprintf(last, sizeof last, "%s", line);
+    fclose(f);
+    double mono, real, pc, ps;
+    assert_int_equal(sscanf(last, "%lf,%lf,%lf,%lf", &mono, &real, &pc, &ps), 4);
+    double lc = rig_truth_last_move(&r, 0), ls = rig_truth_last_move(&r, 1);
+    printf("# end: compression at %.3f mm (started %.3f), shear at %.3f mm; last moves %.1f s and %.1f s before "
+           "the end\n",
+           pc, start_c, ps, t_end - lc, t_end - ls);
+    assert_true(fabs(pc - start_c) < 0.05);
+    assert_true(fabs(ps - 50.0) < 0.05);
+    assert_true(lc < t_end - 0.5 && ls < t_end - 0.5);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_teardown(test_grbl_link_lost_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_modbus_link_lost_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_grbl_alarm_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_modbus_drive_fault_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_grbl_stall_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_modbus_stall_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_modbus_sigkill_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_rigsim_dies_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_modbus_trial, rig_teardown),
     };
+    /* RIG_TEST_FILTER=PATTERN runs only the matching tests (cmocka's filter, * wildcards). */
+    if (getenv("RIG_TEST_FILTER")) cmocka_set_test_filter(getenv("RIG_TEST_FILTER"));
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
