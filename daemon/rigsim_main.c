@@ -174,6 +174,7 @@ int main(int argc, char **argv)
             stop_camera = 0;
             rigsim_camera_stop_sending(cam);
         }
+        rigsim_rails_flush(rails);
         rigsim_camera_tick(cam);
         struct timespec t;
         clock_gettime(CLOCK_MONOTONIC, &t);

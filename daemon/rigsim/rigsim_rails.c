@@ -17,6 +17,14 @@
 
 #define RIGSIM_AXES_LOG_S 0.005   /* s between lines of the axes log */
 #define RIGSIM_DRIVE_ALARM 0x30   /* the Modbus drive alarm raised on command (mb_sim's own default) */
+#define RIGSIM_RING 8192          /* axes-log lines buffered for the writer (41 s at 5 ms) */
+
+/* The rails' thread runs at a real-time priority and never writes a file itself (a write may
+ * block for tenths of a second when the kernel throttles dirty pages, as the recorder's video
+ * makes it do): its log lines and fault notes wait here for rigsim_rails_flush. */
+typedef struct axes_line {
+    double mono, real, pc, ps;
+} axes_line;
 
 struct rigsim_rails {
     grbl_sim *sim;              /* GRBL: the controller, or NULL */
@@ -33,6 +41,12 @@ struct rigsim_rails {
     int realtime;               /* the thread runs SCHED_FIFO */
     FILE *axes;                 /* the axes log, or NULL */
     double axes_next;           /* mono time of its next line */
+    axes_line ring[RIGSIM_RING];
+    axes_line out[RIGSIM_RING]; /* the flush's copy, written outside the lock */
+    long ring_head, ring_tail;  /* lines written / flushed (ring index = count % RIGSIM_RING) */
+    char notes[4][48];          /* fault notes to print: what */
+    double note_t[4];           /* and when (unix time) */
+    int n_notes;
 };
 
 static double clock_s(clockid_t id)
@@ -57,10 +71,12 @@ static void positions_locked(rigsim_rails *r, double *pc, double *ps, double *t)
     }
 }
 
-static void note_fault(const char *what)
+/* A fault note for the flush to print, with the time it happened (lock held). */
+static void note_fault(rigsim_rails *r, const char *what)
 {
-    printf("fault: %s at %.3f (unix time)\n", what, clock_s(CLOCK_REALTIME));
-    fflush(stdout);
+    if (r->n_notes == 4) return;
+    snprintf(r->notes[r->n_notes], sizeof r->notes[0], "%s", what);
+    r->note_t[r->n_notes++] = clock_s(CLOCK_REALTIME);
 }
 
 static void *rails_main(void *arg)
@@ -75,7 +91,7 @@ static void *rails_main(void *arg)
             r->lost_noted = 1;
             if (r->mb[0])
                 for (int k = 0; k < 2; k++) mb_sim_set_deaf(r->mb[k], true);
-            note_fault("link lost");
+            note_fault(r, "link lost");
         }
         if (r->alarm_now) {
             r->alarm_now = 0;
@@ -83,7 +99,7 @@ static void *rails_main(void *arg)
                 grbl_sim_raise_alarm(r->sim, 1);
             else
                 mb_sim_raise_alarm(r->mb[1], RIGSIM_DRIVE_ALARM);
-            note_fault(r->sim ? "controller alarm" : "drive alarm");
+            note_fault(r, r->sim ? "controller alarm" : "drive alarm");
         }
         if (!stop) {
             if (r->sim && !lost) grbl_sim_step(r->sim, 0.0);
@@ -94,7 +110,10 @@ static void *rails_main(void *arg)
         if (r->axes && now >= r->axes_next) {
             double pc, ps;
             positions_locked(r, &pc, &ps, NULL);
-            fprintf(r->axes, "%.6f,%.6f,%.6f,%.6f\n", now, clock_s(CLOCK_REALTIME), pc, ps);
+            axes_line *a = &r->ring[r->ring_head % RIGSIM_RING];
+            *a = (axes_line){now, clock_s(CLOCK_REALTIME), pc, ps};
+            r->ring_head++;
+            if (r->ring_head - r->ring_tail > RIGSIM_RING) r->ring_tail = r->ring_head - RIGSIM_RING; /* oldest lost */
             r->axes_next = now + RIGSIM_AXES_LOG_S;
         }
         pthread_mutex_unlock(&r->lock);
@@ -265,6 +284,27 @@ int rigsim_rails_start(const rig_config *cfg, double compress_start_mm, const ri
 
 int rigsim_rails_realtime(const rigsim_rails *r) { return r->realtime; }
 
+void rigsim_rails_flush(rigsim_rails *r)
+{
+    axes_line *out = r->out;
+    char notes[4][48];
+    double note_t[4];
+    pthread_mutex_lock(&r->lock);
+    long n = r->ring_head - r->ring_tail;
+    for (long k = 0; k < n; k++) out[k] = r->ring[(r->ring_tail + k) % RIGSIM_RING];
+    r->ring_tail = r->ring_head;
+    int nn = r->n_notes;
+    memcpy(notes, r->notes, sizeof notes);
+    memcpy(note_t, r->note_t, sizeof note_t);
+    r->n_notes = 0;
+    pthread_mutex_unlock(&r->lock);
+    for (int k = 0; k < nn; k++) printf("fault: %s at %.3f (unix time)\n", notes[k], note_t[k]);
+    if (nn) fflush(stdout);
+    if (!r->axes) return;
+    for (long k = 0; k < n; k++) fprintf(r->axes, "%.6f,%.6f,%.6f,%.6f\n", out[k].mono, out[k].real, out[k].pc, out[k].ps);
+    if (n) fflush(r->axes);
+}
+
 void rigsim_rails_positions(rigsim_rails *r, double *compress_mm, double *shear_mm, double *t_s)
 {
     double t;
@@ -297,6 +337,7 @@ void rigsim_rails_stop(rigsim_rails *r)
     r->stop = 1;
     pthread_mutex_unlock(&r->lock);
     pthread_join(r->thread, NULL);
+    rigsim_rails_flush(r);
     close_all(r);
     pthread_mutex_destroy(&r->lock);
     free(r);

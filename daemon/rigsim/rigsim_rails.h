@@ -49,6 +49,9 @@ int rigsim_rails_realtime(const rigsim_rails *r);
  * now on; the controller (GRBL) or the shear drive (Modbus) raises an alarm now. */
 void rigsim_rails_cut_link(rigsim_rails *r);
 void rigsim_rails_alarm(rigsim_rails *r);
+/* Writes what the rails' thread buffered (the axes log's lines, "fault: ..." notes on stdout):
+ * call it from the main loop; the thread itself never blocks on a file. One caller at a time. */
+void rigsim_rails_flush(rigsim_rails *r);
 void rigsim_rails_stop(rigsim_rails *r);
 
 #endif

@@ -254,7 +254,7 @@ static void test_modbus_trial(void **state)
     double t_end = rig_now_real();
     rig_stop(&r);
     sqlite3 *db = rig_db_open(&r);
-    char status[64], why[512], rm[32], rp[32], lat[400];
+    char status[64], why[512], rm[32], rp[32], lat[400], path_show[160];
     rig_q_text(db, "select status from trials where id = 1", status, sizeof status);
     rig_q_text(db, "select coalesce(reason,'') from trials where id = 1", why, sizeof why);
     printf("# trial: %s %s (ribbonctl %d)\n", status, why, rc);
@@ -268,6 +268,22 @@ static void test_modbus_trial(void **state)
            rp, lat);
     assert_true(fabs(meas - pred) <= 0.02 * pred);
     assert_string_equal(rm, rp);
+    /* The snap-to-stop latency is stored with the trial (the event's numbers, ms to 0.1) and shown. */
+    double lc_s = rig_q_num(db, "select stop_cmd_latency_s from trials where id = 1");
+    double ls_s = rig_q_num(db, "select stop_stand_latency_s from trials where id = 1");
+    double ev_c = NAN;
+    const char *arrow = strstr(lat, "stop command ");
+    if (arrow) ev_c = atof(arrow + strlen("stop command ")) / 1e3;
+    printf("# stored latency: %.1f ms to the stop command, %.1f ms to the rail standing\n", 1e3 * lc_s, 1e3 * ls_s);
+    assert_true(isfinite(lc_s) && lc_s >= 0.0 && lc_s < 1.0);
+    assert_true(fabs(lc_s - ev_c) < 1e-4);
+    assert_true(isnan(ls_s) || ls_s >= lc_s);
+    char cmd[400], shown[400];
+    snprintf(cmd, sizeof cmd, "%s/ribbonctl show 1 --db %s/rig.db > %s/show.txt 2>&1", RIBBON_BIN_DIR, r.dir, r.dir);
+    assert_int_equal(system(cmd), 0);
+    snprintf(path_show, sizeof path_show, "%s/show.txt", r.dir);
+    assert_true(rig_file_has(path_show, "snap-to-stop latency", shown, sizeof shown));
+    printf("# ribbonctl show: %s", shown);
     double start_c = rig_q_num(db, "select compress_mm from samples where trial_id = 1 and kind = 0 order by seq limit 1");
     rig_check_integrity(db);
     sqlite3_close(db);
