@@ -20,15 +20,16 @@
 
 #define PROG "ribbon-rigsim"
 
-/* Faults on command: SIGUSR1 cuts the rails' link, SIGUSR2 stops the camera, SIGRTMIN raises an
- * alarm (GRBL: the controller's ALARM:1; Modbus: the shear drive's alarm) (the handler only sets
- * a flag; the main loop applies it). */
-static volatile sig_atomic_t cut_link, stop_camera, raise_alarm;
+/* Faults on command: SIGUSR1 cuts the rails' link, SIGUSR2 stops the camera, SIGRTMIN freezes the
+ * image, SIGRTMIN+1 raises an alarm (GRBL: the controller's ALARM:1; Modbus: the shear drive's
+ * alarm) (the handler only sets a flag; the main loop applies it). */
+static volatile sig_atomic_t cut_link, stop_camera, freeze_image, raise_alarm;
 static void on_usr(int sig)
 {
     if (sig == SIGUSR1) cut_link = 1;
     if (sig == SIGUSR2) stop_camera = 1;
-    if (sig == SIGRTMIN) raise_alarm = 1;
+    if (sig == SIGRTMIN) freeze_image = 1;
+    if (sig == SIGRTMIN + 1) raise_alarm = 1;
 }
 #define MAX_SETS 32
 
@@ -48,10 +49,12 @@ static void usage(FILE *f)
             "  --stall AXIS:MM       axis X|Y stalls at MM (Modbus: X the compression, Y the shear drive)\n"
             "  --camera-stop-after S the camera stops sending S seconds after start\n"
             "  --freeze-after S      the image freezes S seconds after start\n"
+            "  --lost-packets R      the camera drops each GVSP packet with probability R (0..1)\n"
             "rails: one GRBL controller on a pty (both rails driver = gcode, one port) or two Modbus TCP\n"
             "       drives on 127.0.0.1 (both driver = modbus, map = ribbon-sim)\n"
-            "signals: SIGUSR1 cuts the rails' link now, SIGUSR2 stops the camera now, SIGRTMIN raises\n"
-            "         the alarm now (GRBL ALARM:1; Modbus: the shear drive's alarm 0x30)\n");
+            "signals: SIGUSR1 cuts the rails' link now, SIGUSR2 stops the camera now,\n"
+            "         SIGRTMIN freezes the image now, SIGRTMIN+1 raises the alarm now\n"
+            "         (GRBL ALARM:1; Modbus: the shear drive's alarm 0x30)\n");
 }
 
 static int num(const char *opt, const char *v, double lo, double hi, double *out)
@@ -70,7 +73,7 @@ int main(int argc, char **argv)
     int n_sets = 0;
     double start_dl = 0.2, duration = -1.0;
     rigsim_rail_faults rf = {-1.0, -1.0, 0, 0.0};
-    rigsim_camera_faults cf = {-1.0, -1.0};
+    rigsim_camera_faults cf = {-1.0, -1.0, 0.0};
     for (int i = 2; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         int bad = 0;
@@ -102,6 +105,8 @@ int main(int argc, char **argv)
             bad = num(a, v, 0.0, 1e7, &cf.stop_after_s);
         else if (!strcmp(a, "--freeze-after"))
             bad = num(a, v, 0.0, 1e7, &cf.freeze_after_s);
+        else if (!strcmp(a, "--lost-packets"))
+            bad = num(a, v, 0.0, 1.0, &cf.lost_packets);
         else if (!strcmp(a, "--stall")) {
             if ((v[0] != 'X' && v[0] != 'Y' && v[0] != 'Z') || v[1] != ':') {
                 fprintf(stderr, PROG ": --stall needs AXIS:MM, e.g. Y:60\n");
@@ -157,6 +162,7 @@ int main(int argc, char **argv)
     sigaction(SIGUSR1, &sa, NULL);
     sigaction(SIGUSR2, &sa, NULL);
     sigaction(SIGRTMIN, &sa, NULL);
+    sigaction(SIGRTMIN + 1, &sa, NULL);
     struct timespec t0;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     while (!*stop) {
@@ -175,6 +181,10 @@ int main(int argc, char **argv)
             rigsim_camera_stop_sending(cam);
         }
         rigsim_rails_flush(rails);
+        if (freeze_image) {
+            freeze_image = 0;
+            rigsim_camera_freeze(cam);
+        }
         rigsim_camera_tick(cam);
         struct timespec t;
         clock_gettime(CLOCK_MONOTONIC, &t);

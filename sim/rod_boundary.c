@@ -38,6 +38,9 @@ struct rod_boundary {
     bpoint mark;           /* rod_boundary_mark */
     int prev_valid;        /* prev is the point before cur on a continuation in prev_par */
     rod_par prev_par;
+    int check_valid;       /* last_check is where a move in check_par last verified the point */
+    rod_par check_par;
+    double last_check;
     double slope;          /* d g_odd / d Gamma along the fold curve at the last codim-2 point */
     char why[200];         /* the last augmented solve's failure */
     char msg[400];         /* the last search's failure */
@@ -59,6 +62,9 @@ rod_boundary_opts rod_boundary_opts_default(void)
     o.max_steps = 400;
     o.match_mesh = 0;
     o.verify_every = 10.0;
+    o.direct = 0;
+    o.verify_ends = 1;
+    o.phase1_cap = 20;
     return o;
 }
 
@@ -124,6 +130,7 @@ void rod_boundary_mark(rod_boundary *b) { bpoint_copy(&b->cur, &b->mark); }
 void rod_boundary_return(rod_boundary *b)
 {
     b->prev_valid = 0;
+    b->check_valid = 0;
     bpoint_copy(&b->mark, &b->cur);
     load_point(b, &b->cur);
     rod_crit_update_borders(b->c, b->cur.p);
@@ -195,8 +202,35 @@ static rod_status search(rod_boundary *b, rod_crit_kind kind, int scan, double *
 /* The codim-2 point from the rod's state at p: the fold curve's point (free Delta W) followed in
  * Gamma by the secant on g_odd (search) to a step below 1e-8; with match_mesh re-located on the
  * mesh of the solution's Gamma (at most twice). rep is filled at the solution. */
-static rod_status solve_codim2(rod_boundary *b, double *p, rod_crit_report *rep)
+/* Newton cap of the direct codim-2 solve before the fallback (measured: when it converges it
+ * takes 5-10 iterations). */
+#define DIRECT_CAP 10
+
+/* A continuation that fails with the switch's Delta W below this and falling is named as the
+ * boundary reaching Delta W = 0 (rod_boundary_move). */
+#define DW_NEAR_ZERO 0.05
+
+static int codim2_ok(const rod_crit_report *rep) { return rep->parity_even > 0.5 && rep->parity_odd < -0.5; }
+
+static rod_status solve_codim2(rod_boundary *b, double *p, rod_crit_report *rep, int *direct)
 {
+    *direct = 0;
+    if (b->o.direct && !b->o.match_mesh) {
+        static const rod_par c2_free[2] = {ROD_PAR_DW, ROD_PAR_GAMMA};
+        double pd[ROD_NPAR];
+        memcpy(pd, p, sizeof pd);
+        save_point(b, p, &b->trial);
+        int old = rod_crit_set_cap(b->c, DIRECT_CAP);
+        rod_status sd = rod_crit_solve(b->c, ROD_CRIT_CODIM2, c2_free, pd, rep, b->why, sizeof b->why);
+        rod_crit_set_cap(b->c, old);
+        if (sd == ROD_OK && codim2_ok(rep)) {
+            memcpy(p, pd, sizeof pd);
+            *direct = 1;
+            return ROD_OK;
+        }
+        load_point(b, &b->trial);
+        memcpy(p, b->trial.p, sizeof b->trial.p);
+    }
     rod_status st = search(b, ROD_CRIT_FOLD, 0, p, b->msg, sizeof b->msg);
     for (int k = 0; st == ROD_OK && b->o.match_mesh && k < 2; k++) {
         int want = rod_mesh_outer_edges(b->r->n, p[ROD_PAR_GAMMA]);
@@ -208,7 +242,6 @@ static rod_status solve_codim2(rod_boundary *b, double *p, rod_crit_report *rep)
     return st;
 }
 
-static int codim2_ok(const rod_crit_report *rep) { return rep->parity_even > 0.5 && rep->parity_odd < -0.5; }
 
 /* ---- start ---- */
 
@@ -499,7 +532,8 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
     const char *pname = par == ROD_PAR_PHI ? "phi" : "Delta L";
     /* The secant carries over from a previous move in the same parameter that ended here. */
     int have_prev = b->prev_valid && b->prev_par == par;
-    double last_check = b->cur.p[par], check_step = par == ROD_PAR_PHI ? b->o.verify_every * M_PI / 180.0
+    /* The spacing of the regime-boundary checks carries over too. */
+    double last_check = b->check_valid && b->check_par == par ? b->last_check : b->cur.p[par], check_step = par == ROD_PAR_PHI ? b->o.verify_every * M_PI / 180.0
                                                                         : b->o.verify_every / 100.0;
     if (par == ROD_PAR_PHI && !(target > 0.0 && target < 180.0)) {
         snprintf(reason, sizeof reason, "phi %g deg is outside (0, 180): the creases vanish or close there", target);
@@ -509,6 +543,7 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
         snprintf(reason, sizeof reason, "Delta L %g is outside (0, 1)", target);
         st = ROD_ERR_SCENE;
     }
+    int p1_old = rod_crit_set_phase1_cap(b->c, b->o.phase1_cap);
     for (int steps = 0; st == ROD_OK; steps++) {
         double cv = b->cur.p[par], left = tv - cv;
         if (fabs(left) <= 1e-12) {
@@ -534,7 +569,8 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
         pn[par] = cv + hh;
         rod_params_apply(b->r, pn);
         rod_crit_report rep;
-        rod_status s2 = solve_codim2(b, pn, &rep);
+        int direct = 0;
+        rod_status s2 = solve_codim2(b, pn, &rep, &direct);
         if (s2 == ROD_OK && !codim2_ok(&rep)) {
             s2 = ROD_ERR_BRANCH_LOST;
             snprintf(b->msg, sizeof b->msg, "modes of parity %.2f and %.2f", rep.parity_even, rep.parity_odd);
@@ -543,6 +579,20 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
             h *= 0.5;
             if (h < b->o.min_step_frac * h0) {
                 double at = par == ROD_PAR_PHI ? fabs(cv) * 180.0 / M_PI : cv;
+                double dw1 = b->cur.p[ROD_PAR_DW], dw0 = have_prev ? b->prev.p[ROD_PAR_DW] : dw1;
+                double dpar = have_prev ? b->cur.p[par] - b->prev.p[par] : 0.0;
+                if (have_prev && dw1 < DW_NEAR_ZERO && dw1 < dw0 && dpar * (tv - cv) > 0.0) {
+                    /* The switch's Delta W runs to zero: past it the two bifurcations would meet
+                     * before any shear, and there is no codim-2 point of the sheared branch. */
+                    double z = b->cur.p[par] + dpar * dw1 / (dw0 - dw1);
+                    snprintf(reason, sizeof reason,
+                             "the codim-2 point's Delta W runs to 0 at %s = %.6g (extrapolated; %.4f at %s = %.6g, "
+                             "the last point): beyond it the switch would need a negative shear, so the boundary of "
+                             "the sheared branch ends there",
+                             pname, par == ROD_PAR_PHI ? fabs(z) * 180.0 / M_PI : z, dw1, pname, at);
+                    st = ROD_ERR_BRANCH_LOST;
+                    continue;
+                }
                 snprintf(reason, sizeof reason, "the codim-2 point could not be continued past %s = %.6g: %.150s", pname,
                          at, b->msg);
                 st = s2;
@@ -566,7 +616,7 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
             st = ROD_ERR_BRANCH_LOST;
             break;
         }
-        if (b->o.verify_every > 0.0 && (fabs(pn[par] - last_check) >= check_step || fabs(tv - pn[par]) <= 1e-12)) {
+        if (b->o.verify_every > 0.0 && (fabs(pn[par] - last_check) >= check_step || (b->o.verify_ends && fabs(tv - pn[par]) <= 1e-12))) {
             rod_codim2_point chk;
             fill_info(b, pn, &rep, &chk);
             double fdw;
@@ -584,22 +634,32 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
         have_prev = 1;
         save_point(b, pn, &b->cur);
         fill_info(b, pn, &rep, &b->cur.info);
+        b->cur.info.direct = direct;
         rod_crit_update_borders(b->c, pn);
         if (rec && !append_c2(rec, &b->cur.info)) {
             snprintf(reason, sizeof reason, "out of memory");
             st = ROD_ERR_ALLOC;
             break;
         }
-        if (rep.iterations <= 5) h = fmin(1.5 * h, h0);
+        if (rep.iterations <= (direct ? 10 : 5)) h = fmin(1.5 * h, h0);
     }
+    rod_crit_set_phase1_cap(b->c, p1_old);
     load_point(b, &b->cur);
     b->prev_valid = have_prev;
     b->prev_par = par;
+    b->check_valid = 1;
+    b->check_par = par;
+    b->last_check = last_check;
     if (rec) {
         rec->end_status = st;
         snprintf(rec->end_reason, sizeof rec->end_reason, "%s", reason);
     }
     return st;
+}
+
+int rod_boundary_check(const rod_boundary *b, double *first_dw)
+{
+    return is_regime_boundary(b, &b->cur.info, first_dw);
 }
 
 /* ---- fold and pitchfork curves ---- */

@@ -41,6 +41,16 @@
  * the first instability must lie within 0.02 of the point's Delta W. Where it does not, the move
  * stops with a reason, the points before kept.
  *
+ * Direct or located. Each continued point can be solved directly, by Newton on the whole
+ * codim-2 system (R = 0, g_even = 0, g_odd = 0 in q, Delta W and Gamma; rod_critical.h, with the
+ * even block's near-singular direction deflated), from the secant predictor, falling back to the
+ * location along the fold curve when it fails (opts.direct). Measured (bench's 100 deg of phi,
+ * docs/boundary.md): at N = 61 the two agree to 8e-7 in Gamma* and cost the same; at N = 201 the
+ * direct solve converged in 79 of 257 tries (mean 6.8 iterations, each about 8 Hessian
+ * assemblies), its Gamma* scattered by up to 1.2e-4 around the located one (the test functions'
+ * round-off floor, 1e-16 max |K_ii| = 4e-6, against derivatives near 1), and the trace took
+ * about 1 s more CPU. So it is off by default.
+ *
  * No result field is NaN; every stop has a reason. */
 #ifndef RIBBON_SIM_ROD_BOUNDARY_H
 #define RIBBON_SIM_ROD_BOUNDARY_H
@@ -64,10 +74,20 @@ typedef struct rod_boundary_opts {
     int match_mesh;            /* 1: re-mesh each point as rod_alloc would (see above) */
     double verify_every;       /* check that the point is the regime boundary (see above) at
                                   least every this far in phi (deg) or Delta L / 100; 0: never */
+    int direct;                /* 1: each continued point by Newton on the codim-2 system first
+                                  (free Delta W and Gamma, rod_crit_solve ROD_CRIT_CODIM2, from the
+                                  secant predictor, capped at 10 iterations), the location along
+                                  the fold curve only when it fails; 0 (default): the location
+                                  only (see "Direct or located" above) */
+    int phase1_cap;            /* a continued point's solves fail after this many iterations still
+                                  far from equilibrium (rod_crit_set_phase1_cap); the step halves */
+    int verify_ends;           /* 1: also check at the end of every move (0: only every
+                                  verify_every along consecutive moves; rod_boundary_check) */
 } rod_boundary_opts;
 
 /* Gamma in [0.02, 0.45], gamma_step 0.02, 40 search steps, phi steps of 5 deg, Delta L steps of
- * 0.05, minimum 1/64 of them, 400 steps, match_mesh 0, verify_every 10. */
+ * 0.05, minimum 1/64 of them, 400 steps, match_mesh 0, verify_every 10, direct 0, verify_ends 1,
+ * phase1_cap 20. */
 rod_boundary_opts rod_boundary_opts_default(void);
 
 typedef struct rod_codim2_point {
@@ -84,6 +104,7 @@ typedef struct rod_codim2_point {
     int n_negative;        /* other eigenvalues already negative there: 0 on the regime boundary;
                               > 0 means an earlier instability decides the snap (see move) */
     int iterations;        /* Newton iterations of its solve */
+    int direct;            /* 1: solved by the direct codim-2 Newton, 0: located along the fold curve */
 } rod_codim2_point;
 
 typedef struct rod_boundary_curve {
@@ -128,6 +149,11 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
  * again: a caller that traces several ranges from one point returns there between them. */
 void rod_boundary_mark(rod_boundary *b);
 void rod_boundary_return(rod_boundary *b);
+
+/* The regime-boundary check of rod_boundary_move at the current point: 1 when the first
+ * instability just below Gamma* lies within 0.02 of its Delta W (or the check cannot tell), 0
+ * when an earlier instability decides; *first_dw gets that instability's Delta W (0: none). */
+int rod_boundary_check(const rod_boundary *b, double *first_dw);
 
 /* The current codimension-2 point. */
 void rod_boundary_current(const rod_boundary *b, rod_codim2_point *out);

@@ -42,6 +42,7 @@ struct rod_crit {
     rod_snapshot base;
     rod_stab_ws *sw;         /* inertia of the reported state */
     double scale;            /* max |K_ii| */
+    int phase1_cap;          /* iterations after which a solve still far from equilibrium fails */
 };
 
 rod_crit_opts rod_crit_opts_default(void)
@@ -136,6 +137,7 @@ rod_crit *rod_crit_alloc(rod *r, const rod_crit_opts *o)
     if (!c) return NULL;
     c->r = r;
     c->o = o ? *o : rod_crit_opts_default();
+    c->phase1_cap = c->o.max_iterations;
     int nf = c->nf = rod_nfree(r);
     size_t n = (size_t)nf;
     c->H = malloc(sizeof(double) * n * W);
@@ -312,6 +314,48 @@ static void param_diff(rod_crit *c, const double *p, rod_par k, double *Rp, doub
     rod_params_apply(r, p);
 }
 
+/* Along the direction (dq, e_k) from the state in c->base under p (k < 0: dq alone), the
+ * derivative of both test functions at fixed w, -d/dt w_b^T K(q + t dq, p + t e_k) w_b, into
+ * out[2], by one central difference of the Hessian (entry by entry, as third_along). Taken along
+ * the equilibrium's own response (dq = -K^-1 R_p) it is the total derivative directly, without
+ * the cancellation of g_p - grad_q g . K^-1 R_p (both large where a parameter strains the stiff
+ * edges at fixed q). The step is eps_p in the parameter, the q move held below eps_q l. */
+static void dir_diff(rod_crit *c, const double *p, const double *dq, double dq_sign, int k, double out[2])
+{
+    rod *r = c->r;
+    int nf = c->nf;
+    size_t nb = (size_t)nf * W;
+    double qmax = 0.0;
+    for (int j = 0; j < nf; j++) qmax = fmax(qmax, fabs(dq[j]));
+    double e = k >= 0 ? c->o.eps_p : c->o.eps_q * r->length / fmax(qmax, 1e-300);
+    if (k >= 0 && qmax * e > c->o.eps_q * r->length) e = c->o.eps_q * r->length / qmax;
+    out[0] = out[1] = 0.0;
+    if (k < 0 && !(qmax > 0.0)) return;
+    double pp[ROD_NPAR];
+    for (int s = -1; s <= 1; s += 2) {
+        double *Hs = s > 0 ? c->Hp : c->Hm;
+        rod_snapshot_load(r, &c->base);
+        for (int j = 0; j < nf; j++) r->q[j + ROD_FREE_BEGIN] += s * e * dq_sign * dq[j];
+        memcpy(pp, p, sizeof pp);
+        if (k >= 0) pp[k] += s * e;
+        if (k == ROD_PAR_GAMMA) {
+            rod_frames_update(r);
+            rod_crit_move_gamma(c, pp, r->fold_outer_edges);
+        } else {
+            rod_params_apply(r, pp);
+        }
+        memset(Hs, 0, sizeof(double) * nb);
+        rod_hessian_add(r, 1.0, Hs);
+    }
+    for (size_t i = 0; i < nb; i++) c->Hp[i] -= c->Hm[i];
+    for (int b = 0; b < 2; b++) {
+        rod_band_symv(c->Hp, nf, c->w[b], c->t1);
+        out[b] = -dot(c->w[b], c->t1, nf) / (2.0 * e);
+    }
+    rod_snapshot_load(r, &c->base);
+    rod_params_apply(r, p);
+}
+
 /* Applies p at the rod's q, assembles and factorises, both test functions; saves the base. */
 static rod_status eval_here(rod_crit *c, const double *p, char *why, size_t why_len)
 {
@@ -456,6 +500,20 @@ rod_status rod_crit_refine_mode(rod_crit *c, const double *p, int sign, const do
     return ROD_OK;
 }
 
+int rod_crit_set_phase1_cap(rod_crit *c, int cap)
+{
+    int old = c->phase1_cap;
+    c->phase1_cap = cap;
+    return old;
+}
+
+int rod_crit_set_cap(rod_crit *c, int cap)
+{
+    int old = c->o.max_iterations;
+    c->o.max_iterations = cap;
+    return old;
+}
+
 rod_status rod_crit_update_borders(rod_crit *c, const double *p)
 {
     rod_status st = eval_here(c, p, NULL, 0);
@@ -499,6 +557,127 @@ rod_status rod_crit_gradient(rod_crit *c, const double *p, int sign, rod_par k, 
     return ROD_OK;
 }
 
+/* dR/dp_k at the state in c->base under p by central differences of the gradient, into Rp. */
+static void param_grad(rod_crit *c, const double *p, rod_par k, double *Rp)
+{
+    rod *r = c->r;
+    int nf = c->nf;
+    double pp[ROD_NPAR], e = c->o.eps_p;
+    memcpy(pp, p, sizeof pp);
+    memset(Rp, 0, sizeof(double) * (size_t)nf);
+    for (int s = -1; s <= 1; s += 2) {
+        rod_snapshot_load(r, &c->base);
+        pp[k] = p[k] + s * e;
+        if (k == ROD_PAR_GAMMA) {
+            rod_params_apply(r, p);
+            rod_crit_move_gamma(c, pp, r->fold_outer_edges);
+        } else {
+            rod_params_apply(r, pp);
+        }
+        rod_gradient(r, c->g);
+        for (int j = 0; j < nf; j++) Rp[j] += s * c->g[j + ROD_FREE_BEGIN] / (2.0 * e);
+    }
+    rod_snapshot_load(r, &c->base);
+    rod_params_apply(r, p);
+}
+
+/* Solves a 3 x 3 system by Gaussian elimination with partial pivoting; 0 when singular. */
+static int solve3(double A[3][3], double b[3], double x[3])
+{
+    for (int col = 0; col < 3; col++) {
+        int piv = col;
+        for (int row = col + 1; row < 3; row++)
+            if (fabs(A[row][col]) > fabs(A[piv][col])) piv = row;
+        if (!(fabs(A[piv][col]) > 0.0) || !isfinite(A[piv][col])) return 0;
+        if (piv != col) {
+            for (int k = 0; k < 3; k++) {
+                double t = A[col][k];
+                A[col][k] = A[piv][k];
+                A[piv][k] = t;
+            }
+            double t = b[col];
+            b[col] = b[piv];
+            b[piv] = t;
+        }
+        for (int row = col + 1; row < 3; row++) {
+            double f = A[row][col] / A[col][col];
+            for (int k = col; k < 3; k++) A[row][k] -= f * A[col][k];
+            b[row] -= f * b[col];
+        }
+    }
+    for (int row = 2; row >= 0; row--) {
+        double t = b[row];
+        for (int k = row + 1; k < 3; k++) t -= A[row][k] * x[k];
+        x[row] = t / A[row][row];
+        if (!isfinite(x[row])) return 0;
+    }
+    return 1;
+}
+
+/* One Newton step of the codim-2 system (R = 0, g_even = 0, g_odd = 0; free Delta W and Gamma)
+ * at the base state: dp into dp[2], the q step into c->step.
+ *
+ * Next to the codim-2 point K's even block is singular, so every solve K^-1 f has a component
+ * along the even critical mode of size (v.f) / lambda, and the plain Schur complement
+ * g_p - grad_q g . K^-1 R_p is a rank-one part of size 1 / lambda plus the part that matters
+ * (measured at N = 201: 1e3-1e5 against 1e2, and the two computed ways disagreed in sign):
+ * Newton from it wandered. Deflated instead: each solve y = K^-1 f splits into
+ * x = y - (v.y) w (bounded, v.x = 0) and (v.y) w, with w = K^-1 v / (v.K^-1 v) and v the even
+ * border; the step is dq = x_z - sum_j x_j dp_j + mu w with one more unknown mu and the regular
+ * row g mu + sum_j g (v.Y_j) dp_j = g (v.z) (g = g_even; g (v.y) is bounded). The test
+ * functions' derivatives along each of the directions (-x_j, e_j), w and x_z are taken directly
+ * by one difference of the Hessian each (dir_diff): along the equilibrium's own response they
+ * are small, without the cancellation of the large fixed-q derivatives. */
+static rod_status codim2_step(rod_crit *c, const double *p, const rod_par *free, const double *gsel, double *dp)
+{
+    int nf = c->nf;
+    rod *r = c->r;
+    rod_status st;
+    const double *v0 = c->v[0], *w0 = c->w[0];
+    double g0 = c->gval[0];
+    for (int j = 0; j < 2; j++) {
+        param_grad(c, p, free[j], c->Rp[j]);
+        rod_mode_project(r, 1, c->Rp[j], c->t2);
+        memcpy(c->Y[j], c->Rp[j], sizeof(double) * (size_t)nf);
+        if ((st = solve_proj(c, 1, c->Y[j])) != ROD_OK) return st;
+    }
+    for (int k = 0; k < nf; k++) c->z[k] = -c->R[k];
+    if ((st = solve_proj(c, 1, c->z)) != ROD_OK) return st;
+    double zeta[3];
+    double *x[3] = {c->Y[0], c->Y[1], c->z};
+    for (int j = 0; j < 3; j++) {
+        zeta[j] = dot(v0, x[j], nf);
+        for (int k = 0; k < nf; k++) x[j][k] -= zeta[j] * w0[k];
+    }
+    double d0[2], d1[2], dw[2], dz[2];
+    dir_diff(c, p, c->Y[0], -1.0, free[0], d0);
+    dir_diff(c, p, c->Y[1], -1.0, free[1], d1);
+    dir_diff(c, p, w0, 1.0, -1, dw);
+    dir_diff(c, p, c->z, 1.0, -1, dz);
+    double A[3][3], b[3], u[3];
+    for (int i = 0; i < 2; i++) {
+        A[i][0] = d0[i];
+        A[i][1] = d1[i];
+        A[i][2] = dw[i];
+        b[i] = -gsel[i] - dz[i];
+    }
+    A[2][0] = g0 * zeta[0];
+    A[2][1] = g0 * zeta[1];
+    A[2][2] = g0;
+    b[2] = g0 * zeta[2];
+    /* Row 2 in the units of rows 0 and 1. */
+    double s0 = fmax(fabs(A[0][0]), fmax(fabs(A[0][1]), fabs(A[1][1]))), s2 = fmax(fabs(A[2][0]), fabs(A[2][1]));
+    if (s2 > 0.0 && s0 > 0.0) {
+        for (int k = 0; k < 3; k++) A[2][k] *= s0 / s2;
+        b[2] *= s0 / s2;
+    }
+    if (!solve3(A, b, u)) return ROD_ERR_SINGULAR;
+    dp[0] = u[0];
+    dp[1] = u[1];
+    for (int k = 0; k < nf; k++) c->step[k] = c->z[k] - c->Y[0][k] * u[0] - c->Y[1][k] * u[1] + u[2] * w0[k];
+    return ROD_OK;
+}
+
 rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, double *p, rod_crit_report *rep,
                           char *why, size_t why_len)
 {
@@ -519,9 +698,14 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
     for (int it = 0; it < c->o.max_iterations; it++) {
         if ((st = eval_here(c, p, buf, sizeof buf)) != ROD_OK) break;
         if (rep) rep->iterations = it;
-        double gsel[MAXM], G[MAXM][MAXM];
+        double gsel[MAXM] = {0}, G[MAXM][MAXM] = {{0}};
         for (int i = 0; i < m; i++) gsel[i] = c->gval[blk[i]];
         double res0 = residual_rel(c);
+        if (res0 > PHASE1_RES && it >= c->phase1_cap) {
+            snprintf(buf, sizeof buf, "equilibrium not restored within %d iterations (residual %.3g)", c->phase1_cap, res0);
+            st = ROD_ERR_MAXITER;
+            break;
+        }
         if (res0 > PHASE1_RES) {
             /* Phase 1, far from equilibrium (a parameter step strains the stiff edges): Newton on
              * R = 0 alone with Delta W free and the step orthogonal to the even critical mode,
@@ -561,6 +745,13 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
             snprintf(buf, sizeof buf, "Newton cap %d reached far from equilibrium (residual %.3g)", c->o.max_iterations, res0);
             continue;
         }
+        double dp[MAXM];
+        if (m == 2) {
+            if ((st = codim2_step(c, p, free, gsel, dp)) != ROD_OK) {
+                snprintf(buf, sizeof buf, "singular codim-2 system");
+                break;
+            }
+        } else {
         /* The Jacobian's borders at the base state. */
         for (int i = 0; i < m; i++) {
             third_along(c, c->w[blk[i]], c->a[i]);
@@ -581,19 +772,10 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
             if ((st = solve_proj(c, 1, c->Y[j])) != ROD_OK) break;
         }
         if (st != ROD_OK) break;
-        double S[MAXM][MAXM], rhs[MAXM], dp[MAXM];
-        for (int i = 0; i < m; i++) {
-            rhs[i] = -gsel[i] - dot(c->a[i], c->z, nf);
-            for (int j = 0; j < m; j++) S[i][j] = G[i][j] - dot(c->a[i], c->Y[j], nf);
-        }
-        if (m == 1) {
-            if (!(fabs(S[0][0]) > 0.0)) { st = ROD_ERR_SINGULAR; snprintf(buf, sizeof buf, "singular augmented system"); break; }
-            dp[0] = rhs[0] / S[0][0];
-        } else {
-            double det = S[0][0] * S[1][1] - S[0][1] * S[1][0];
-            if (!(fabs(det) > 0.0) || !isfinite(det)) { st = ROD_ERR_SINGULAR; snprintf(buf, sizeof buf, "singular codim-2 system"); break; }
-            dp[0] = (rhs[0] * S[1][1] - S[0][1] * rhs[1]) / det;
-            dp[1] = (S[0][0] * rhs[1] - S[1][0] * rhs[0]) / det;
+        double S = G[0][0] - dot(c->a[0], c->Y[0], nf), rhs = -gsel[0] - dot(c->a[0], c->z, nf);
+        if (!(fabs(S) > 0.0)) { st = ROD_ERR_SINGULAR; snprintf(buf, sizeof buf, "singular augmented system"); break; }
+        dp[0] = rhs / S;
+        for (int k = 0; k < nf; k++) c->step[k] = c->z[k] - c->Y[0][k] * dp[0];
         }
         double scale = 1.0, dpmax = 0.0;
         for (int j = 0; j < m; j++) {
@@ -607,11 +789,8 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
         /* Converged: residual within tolerance and a negligible step, or a step below 1e4 step_tol that no
          * longer shrinks (the test functions' round-off floor, ~1e-16 max |K_ii|, reached). */
         double dqmax = 0.0;
-        for (int k = 0; k < nf; k++) {
-            double dq = c->z[k];
-            for (int j = 0; j < m; j++) dq -= c->Y[j][k] * dp[j];
-            dqmax = fmax(dqmax, fabs(dq) / (((k + ROD_FREE_BEGIN) % 4 == 3) ? 100.0 : r->length));
-        }
+        for (int k = 0; k < nf; k++)
+            dqmax = fmax(dqmax, fabs(c->step[k]) / (((k + ROD_FREE_BEGIN) % 4 == 3) ? 100.0 : r->length));
         /* The residual's own round-off floor (stiff creases put it near 1e-5 E I1 / l^2, as
          * rod_solver.c explains): below 1e3 tolerances with a full step under 1e-9 l (1e-7 rad)
          * it is converged; likewise below 1e2 of it with a step under 1e-6 l that the test functions' round-off keeps from
@@ -630,11 +809,6 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
          * nodes along the rod to the new mesh (rod_crit_move_gamma), the map the Gamma column of
          * the Jacobian was differenced along. Backtracking halves a step that makes the
          * residual more than four times worse (up to 4 times). */
-        for (int k = 0; k < nf; k++) {
-            double dq = c->z[k];
-            for (int j = 0; j < m; j++) dq -= c->Y[j][k] * dp[j];
-            c->step[k] = dq;
-        }
         double pbase[ROD_NPAR];
         memcpy(pbase, p, sizeof pbase);
         for (int bt = 0; bt < 5; bt++, scale *= 0.5) {

@@ -119,6 +119,14 @@ rod_status rod_crit_refine_mode(rod_crit *c, const double *p, int sign, const do
  * ones nearest zero, this keeps the borders aligned with them as the point moves. */
 rod_status rod_crit_update_borders(rod_crit *c, const double *p);
 
+/* Sets the Newton cap of the solves (rod_crit_opts.max_iterations); returns the previous one. */
+int rod_crit_set_cap(rod_crit *c, int cap);
+
+/* Sets the number of iterations after which a solve whose residual is still above the phase-1
+ * threshold (far from equilibrium) fails at once (default: the Newton cap): a continuation
+ * that halves its step on failure gives up on a bad predictor early. Returns the previous one. */
+int rod_crit_set_phase1_cap(rod_crit *c, int cap);
+
 /* Evaluates R and both test functions at the rod's state under p, without moving anything. */
 rod_status rod_crit_eval(rod_crit *c, const double *p, rod_crit_report *rep, char *why, size_t why_len);
 

@@ -17,6 +17,7 @@
 
 #include <arv.h>
 
+#include <algorithm>
 #include <time.h>
 
 namespace vis {
@@ -97,8 +98,10 @@ public:
             if (arv_buffer_get_image_pixel_format(b) != ARV_PIXEL_FORMAT_MONO_8 || !data ||
                 size < (size_t)w * (size_t)h || w <= 0 || h <= 0) {
                 arv_stream_push_buffer(stream, b);
-                return fail(err, VIS_ERR_FORMAT, "camera %s: frame %llu is not a %dx%d Mono8 image",
-                            name.c_str(), (unsigned long long)id, w, h);
+                return fail(err, VIS_ERR_FORMAT,
+                            "camera %s: frame %llu is not a %dx%d Mono8 image (pixel format 0x%08x, %zu bytes)",
+                            name.c_str(), (unsigned long long)id, w, h,
+                            (unsigned)arv_buffer_get_image_pixel_format(b), size);
             }
             grey.create(h, w, CV_8UC1);
             cv::Mat(h, w, CV_8UC1, const_cast<void *>(data)).copyTo(grey);
@@ -210,11 +213,22 @@ Source *source_aravis_open(const vis_camera_settings &cs, vis_error *err)
         arv_camera_set_exposure_time(s->cam, cs.exposure_us, &e);
         bad = refused(e, s->name, "ExposureTime", err);
         e = nullptr;
+        const double got = bad ? cs.exposure_us : arv_camera_get_exposure_time(s->cam, nullptr);
+        if (!bad && !(std::fabs(got - cs.exposure_us) <= 1e-3 * cs.exposure_us + 1.0)) {
+            fail(err, VIS_ERR_ARG, "camera %s: ExposureTime %g us refused (it is %g us)", s->name.c_str(),
+                 cs.exposure_us, got);
+            bad = true;
+        }
     }
     if (!bad && cs.gain_db >= 0) {
         arv_camera_set_gain(s->cam, cs.gain_db, &e);
         bad = refused(e, s->name, "Gain", err);
         e = nullptr;
+        const double got = bad ? cs.gain_db : arv_camera_get_gain(s->cam, nullptr);
+        if (!bad && !(std::fabs(got - cs.gain_db) <= 0.01 + 1e-3 * cs.gain_db)) {
+            fail(err, VIS_ERR_ARG, "camera %s: Gain %g dB refused (it is %g dB)", s->name.c_str(), cs.gain_db, got);
+            bad = true;
+        }
     }
     guint payload = 0;
     if (!bad) {
@@ -223,12 +237,24 @@ Source *source_aravis_open(const vis_camera_settings &cs, vis_error *err)
         e = nullptr;
     }
     if (!bad) {
+        // GigE Vision: Aravis's packet socket (a memory-mapped ring, used when the process may open
+        // one, e.g. as root) hands packets over by ring block, retired when full or on a timeout,
+        // so the host times the clock map learns from arrive late and unevenly (0.9 ms floor, 3 ms
+        // median on loopback); the ordinary UDP socket hands each packet over as it comes.
+        if (arv_camera_is_gv_device(s->cam))
+            arv_camera_gv_set_stream_options(s->cam, ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
         s->stream = arv_camera_create_stream(s->cam, nullptr, nullptr, &e);
         if (!s->stream) {
             fail(err, VIS_ERR_IO, "camera %s: no stream: %s", s->name.c_str(), gerr_text(e).c_str());
             bad = true;
         }
         e = nullptr;
+    }
+    if (!bad && ARV_IS_GV_STREAM(s->stream)) {
+        // Room in the socket for 8 frames (the kernel caps it at net.core.rmem_max): Aravis's
+        // automatic size is one frame, and a receiver descheduled for a frame period overflows it.
+        g_object_set(s->stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED, "socket-buffer-size",
+                     (gint)std::min<guint64>((guint64)payload * 8u, 1u << 30), nullptr);
     }
     if (!bad) {
         const int n = cs.n_buffers > 0 ? cs.n_buffers : 32;

@@ -61,6 +61,7 @@ int sim_bench_boundary(const rod_scene *sc, sim_bench_boundary_result *out, char
     memset(out, 0, sizeof *out);
     double t0 = now(), c0 = cpu_now();
     rod_boundary_opts bo = rod_boundary_opts_default();
+    bo.verify_ends = 0; /* the 20 moves are one range: checked every 10 deg along it, and at its end */
     rod_boundary *b = NULL;
     rod_codim2_point pt;
     if (rod_boundary_start(sc, &bo, &b, &pt, why, why_len) != ROD_OK) {
@@ -78,6 +79,13 @@ int sim_bench_boundary(const rod_scene *sc, sim_bench_boundary_result *out, char
             return -1;
         }
         rod_boundary_curve_free(&c);
+    }
+    double first_dw;
+    if (!rod_boundary_check(b, &first_dw)) {
+        snprintf(why, why_len, "traced boundary: at phi 130 the codim-2 point is no longer the regime boundary "
+                 "(first instability at Delta W %.4f)", first_dw);
+        rod_boundary_free(b);
+        return -1;
     }
     out->boundary_wall_s = now() - t0;
     out->boundary_cpu_s = cpu_now() - c0;

@@ -42,7 +42,9 @@ static const char usage[] =
     "  fast predictions, the continuation (continue_wall_s), peak memory. Prints one line (one JSON object with --json). Takes about\n"
     "  a minute. --sweep instead: the 10 x 10 sweep in one process against `mpirun -np 2`\n"
     "  (sweep_mpi_efficiency) and with a route per point against continued upper states\n"
-    "  (sweep_seed_saving); several minutes (--set mesh.nodes=61 for the README's mesh).\n";
+    "  (sweep_seed_saving); several minutes (--set mesh.nodes=61 for the README's mesh).\n"
+    "  --boundary instead: only boundary_vs_sweep and its parts (traced boundary at 20 phi\n"
+    "  against the sweep's bisection), one line.\n";
 
 static double now(void)
 {
@@ -124,11 +126,36 @@ static int predict(const rod_scene *sc, int fast, rod_prediction *p)
     return 1;
 }
 
+/* --boundary: only the boundary part (boundary_wall_s, boundary_vs_sweep and their parts). */
+static int bench_boundary_only(const rod_scene *sc, int json)
+{
+    sim_bench_boundary_result bb;
+    char cerr[512] = "";
+    if (sim_bench_boundary(sc, &bb, cerr, sizeof cerr) != 0) {
+        fprintf(stderr, "ribbon-sim bench: boundary: %s\n", cerr);
+        return 1;
+    }
+    if (json)
+        printf("{\"nodes\":%d,\"boundary_wall_s\":%.6g,\"boundary_vs_sweep\":%.6g,\"boundary_sweep_wall_s\":%.6g,"
+               "\"boundary_cpu_s\":%.6g,\"boundary_sweep_cpu_s\":%.6g,\"traced_phi90_gamma\":%.8g,"
+               "\"sweep_phi90_gamma\":%.8g,\"sweep_classifications\":%d}\n",
+               sc->nodes, bb.boundary_wall_s, bb.boundary_vs_sweep, bb.sweep_wall_s, bb.boundary_cpu_s, bb.sweep_cpu_s,
+               bb.traced_phi90_gamma, bb.sweep_phi90_gamma, bb.sweep_classifications);
+    else
+        printf("bench-boundary nodes=%d boundary_vs_sweep=%.2f boundary_cpu_s=%.2f boundary_sweep_cpu_s=%.2f "
+               "boundary_wall_s=%.2f boundary_sweep_wall_s=%.2f traced_phi90_gamma=%.6f sweep_phi90_gamma=%.6f "
+               "sweep_classifications=%d\n",
+               sc->nodes, bb.boundary_vs_sweep, bb.boundary_cpu_s, bb.sweep_cpu_s, bb.boundary_wall_s, bb.sweep_wall_s,
+               bb.traced_phi90_gamma, bb.sweep_phi90_gamma, bb.sweep_classifications);
+    return 0;
+}
+
 int sim_cmd_bench(int argc, char **argv)
 {
-    int sweep = 0, out = 1;
+    int sweep = 0, boundary_only = 0, out = 1;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--sweep")) sweep = 1;
+        else if (!strcmp(argv[i], "--boundary")) boundary_only = 1;
         else argv[out++] = argv[i];
     }
     argc = out;
@@ -138,6 +165,7 @@ int sim_cmd_bench(int argc, char **argv)
     rod_scene sc;
     if (!sim_opts_load_scene(&o, &sc)) return 2;
     if (sweep) return sim_bench_sweep(o.scene, o.sets, o.nsets, o.json);
+    if (boundary_only) return bench_boundary_only(&sc, o.json);
     double banded = 0, dense = 0, dense_ldlt = 0;
     rod_prediction fixed, fast;
     if (!time_newton(&sc, &banded, &dense, &dense_ldlt)) return 1;

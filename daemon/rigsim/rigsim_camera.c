@@ -36,7 +36,40 @@ struct rigsim_camera {
     double t_paused;            /* the last time the twin's clock was paused */
     double last_fill_mono;      /* the last image's send time */
     double img_twin_t, img_dz, img_dl, img_dw; /* what the latest image shows */
+    int8_t *noise;              /* the sensor's noise (NOISE_TABLE values, sigma = camera.noise_sigma) */
+    uint64_t rng;               /* picks each exposure's offset into it */
 };
+
+/* Sensor noise is added per image sent, not per twin render: a real sensor never repeats a frame
+ * bit for bit, even when the twin (slow at the snap) shows the same state twice; so only a
+ * frozen-image fault repeats one (trial_runner.c's frozen check). A table of Gaussian values read
+ * from a random offset per image: 0.3 ms per 640 x 480 image. */
+#define NOISE_TABLE (1 << 20)
+
+static uint64_t xorshift(uint64_t *s)
+{
+    *s ^= *s << 13;
+    *s ^= *s >> 7;
+    *s ^= *s << 17;
+    return *s;
+}
+
+static int8_t *noise_table(double sigma)
+{
+    int8_t *t = malloc(NOISE_TABLE);
+    if (!t) return NULL;
+    uint64_t s = 0x9e3779b97f4a7c15ull;
+    for (int i = 0; i < NOISE_TABLE; i += 2) {
+        double u1 = ((double)(xorshift(&s) >> 11) + 0.5) / 9007199254740992.0;
+        double u2 = (double)(xorshift(&s) >> 11) / 9007199254740992.0;
+        double r = sigma * sqrt(-2.0 * log(u1));
+        double a = fmax(-127.0, fmin(127.0, round(r * cos(2.0 * M_PI * u2))));
+        double b = fmax(-127.0, fmin(127.0, round(r * sin(2.0 * M_PI * u2))));
+        t[i] = (int8_t)a;
+        t[i + 1] = (int8_t)b;
+    }
+    return t;
+}
 
 static double clock_s(clockid_t id)
 {
@@ -131,13 +164,24 @@ static void fill(ArvBuffer *b, void *user, guint32 exposure_us, guint32 gain, Ar
     const int fw = vis_frame_width(c->frame), fh = vis_frame_height(c->frame);
     const size_t stride = vis_frame_stride(c->frame);
     const uint8_t *src = vis_frame_data(c->frame);
-    if (pf == ARV_PIXEL_FORMAT_MONO_8 && dst)
+    if (pf == ARV_PIXEL_FORMAT_MONO_8 && dst) {
         for (int y = 0; y < h; y++) {
             if (y < fh && w <= fw)
                 memcpy(dst + (size_t)y * w, src + (size_t)y * stride, (size_t)w);
             else
                 for (int x = 0; x < w; x++) dst[(size_t)y * w + x] = (x < fw && y < fh) ? src[(size_t)y * stride + x] : 128;
         }
+        const int frozen_now = c->f.freeze_after_s >= 0.0 && clock_s(CLOCK_MONOTONIC) - c->t_start >= c->f.freeze_after_s;
+        if (c->noise && !frozen_now) {
+            const size_t n = (size_t)w * (size_t)h;
+            size_t off = (size_t)(xorshift(&c->rng) % NOISE_TABLE);
+            for (size_t i = 0; i < n; i++) {
+                int v = dst[i] + c->noise[off];
+                dst[i] = (uint8_t)(v < 0 ? 0 : v > 255 ? 255 : v);
+                if (++off == NOISE_TABLE) off = 0;
+            }
+        }
+    }
     const double send_mono = clock_s(CLOCK_MONOTONIC), send_real = clock_s(CLOCK_REALTIME);
     arv_buffer_set_timestamp(b, (guint64)llround(send_real * 1e9));
     double pc, ps;
@@ -165,7 +209,7 @@ int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_st
     c->rails = rails;
     c->calib = cfg->calib;
     c->length_m = sc->length;
-    c->f = f ? *f : (rigsim_camera_faults){-1.0, -1.0};
+    c->f = f ? *f : (rigsim_camera_faults){-1.0, -1.0, 0.0};
     pthread_mutex_init(&c->lock, NULL);
     twin_camera_params cp = twin_camera_params_default();
     cp.width_px = cfg->camera.width_px > 0 ? cfg->camera.width_px : 640;
@@ -174,7 +218,13 @@ int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_st
     c->frame = vis_frame_alloc(cp.width_px, cp.height_px, 1, &ve);
     c->back = vis_frame_alloc(cp.width_px, cp.height_px, 1, &ve);
     c->fps = cfg->camera.fps > 0 ? cfg->camera.fps : 30.0;
-    if (!c->frame || !c->back || mock_camera_open(sc, dl_start, &cp, cfg->camera.noise_sigma, cfg->camera.blur_sigma_px, 1u,
+    c->rng = 0x2545f4914f6cdd1dull;
+    if (cfg->camera.noise_sigma > 0.0 && !(c->noise = noise_table(cfg->camera.noise_sigma))) {
+        snprintf(why, why_len, "out of memory");
+        goto fail;
+    }
+    /* the twin renders without noise: the camera adds it per image (noise_table) */
+    if (!c->frame || !c->back || mock_camera_open(sc, dl_start, &cp, 0.0, cfg->camera.blur_sigma_px, 1u,
                                       &c->twin, why, why_len))
         goto fail;
     if (calib_path) {
@@ -222,6 +272,7 @@ int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_st
         snprintf(why, why_len, "the GigE Vision camera could not be served on 127.0.0.1 (GVCP port 3956 taken?)");
         goto fail;
     }
+    if (c->f.lost_packets > 0.0) g_object_set(c->gv, "gvsp-lost-ratio", c->f.lost_packets, NULL);
     arv_fake_camera_set_fill_pattern(arv_gv_fake_camera_get_fake_camera(c->gv), fill, c);
     *out = c;
     return 0;
@@ -237,6 +288,7 @@ fail:
     if (c->truth) fclose(c->truth);
     mock_camera_close(c->twin);
     vis_frame_free(c->frame);
+    free(c->noise);
     pthread_mutex_destroy(&c->lock);
     free(c);
     return -1;
@@ -257,6 +309,16 @@ int rigsim_camera_tick(rigsim_camera *c)
 }
 
 void rigsim_camera_stop_sending(rigsim_camera *c) { c->f.stop_after_s = 0.0; }
+
+void rigsim_camera_freeze(rigsim_camera *c)
+{
+    pthread_mutex_lock(&c->lock);
+    double now = clock_s(CLOCK_MONOTONIC);
+    c->f.freeze_after_s = now - c->t_start;
+    pthread_mutex_unlock(&c->lock);
+    printf("fault: image frozen at %.3f (unix time)\n", clock_s(CLOCK_REALTIME));
+    fflush(stdout);
+}
 
 long rigsim_camera_frames(rigsim_camera *c)
 {
@@ -286,6 +348,7 @@ void rigsim_camera_stop(rigsim_camera *c)
     if (c->truth) fclose(c->truth);
     mock_camera_close(c->twin);
     vis_frame_free(c->frame);
+    free(c->noise);
     pthread_mutex_destroy(&c->lock);
     free(c);
 }

@@ -5,7 +5,8 @@
  * turns them into (Delta L, Delta W) with the rig file's calibration, advances the twin (the
  * simulated rod, daemon/twin/mock_camera.h) to the expected time of the next image (now + the
  * running mean of a step and render, positions extrapolated at the axes' velocity) and renders it
- * through the synthetic side camera at the rig file's camera size, noise and blur. So the ribbon
+ * through the synthetic side camera at the rig file's camera size and blur; the sensor's noise
+ * (camera.noise_sigma) is added to each image as it is sent, so no two images are the same. So the ribbon
  * follows what the rails really did, not what ribbond commanded. The camera's fill (Aravis's
  * thread, at the frame rate ribbond sets through GenICam) copies the latest image and sets the
  * buffer's timestamp as it leaves (host real-time clock, ns): a slow twin step (the snap needs
@@ -29,6 +30,8 @@ typedef struct rigsim_camera rigsim_camera;
 typedef struct rigsim_camera_faults {
     double stop_after_s;   /* s after start, < 0 = off: the camera stops sending */
     double freeze_after_s; /* s after start, < 0 = off: the same image from then on */
+    double lost_packets;   /* GVSP packets dropped at random, 0..1 (Aravis's gvsp-lost-ratio; the
+                              fake camera does not resend): damaged or lost frames */
 } rigsim_camera_faults;
 
 /* Serves the camera on 127.0.0.1 with serial number `serial`; sc is the scene at the twin's
@@ -42,6 +45,8 @@ int rigsim_camera_tick(rigsim_camera *c);
 long rigsim_camera_frames(rigsim_camera *c);
 /* Fault on command: the camera stops sending at the next tick. */
 void rigsim_camera_stop_sending(rigsim_camera *c);
+/* Fault on command: the image freezes now (the same image is sent from now on). */
+void rigsim_camera_freeze(rigsim_camera *c);
 /* Longest twin step + render, s. */
 double rigsim_camera_max_fill_s(rigsim_camera *c);
 void rigsim_camera_stop(rigsim_camera *c);

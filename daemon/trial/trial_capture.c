@@ -15,6 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "trial_clock_map.h"
 
@@ -45,6 +46,7 @@ struct trial_capture {
     long pix_head;                 /* pixel frames published */
     long rec_seq;                  /* next pixel frame for the recorder */
     int stop;                      /* capture asked to stop */
+    int warm_done;                 /* the clock map's warm-up is over: frames are published */
     int cap_ended;                 /* the capture thread has ended */
     char cap_why[256];             /* why it ended, "" = asked to */
     trial_capture_counts counts;
@@ -55,6 +57,8 @@ struct trial_capture {
     rec_meta *meta;
     vis_frame *scratch;
     trial_clock_map map;
+    int *loss_ring;                /* per published frame: lost + incomplete just before it */
+    long loss_n, loss_sum;         /* frames in the ring, their sum */
     trial_video *video;
     FILE *times;
 };
@@ -68,6 +72,9 @@ trial_capture_params trial_capture_params_default(void)
     p.track_max_age_s = 0.1;
     p.frame_timeout_s = 1.0;
     p.fps = 60.0;
+    p.warmup_s = 1.0;
+    p.max_loss_fraction = 0.25;
+    p.loss_window = 60;
     return p;
 }
 
@@ -78,10 +85,33 @@ static double mono_s(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* FNV-1a over 64-bit words (and the tail bytes) of every row: equal frames, equal hashes. */
+static uint64_t frame_hash(vis_frame *f)
+{
+    const int w = vis_frame_width(f), h = vis_frame_height(f);
+    const size_t stride = vis_frame_stride(f), rowb = (size_t)w * (size_t)vis_frame_channels(f);
+    const uint8_t *d = vis_frame_data(f);
+    uint64_t x = 14695981039346656037ull;
+    for (int y = 0; y < h; y++) {
+        const uint8_t *r = d + (size_t)y * stride;
+        size_t i = 0;
+        for (; i + 8 <= rowb; i += 8) {
+            uint64_t v;
+            memcpy(&v, r + i, 8);
+            x = (x ^ v) * 1099511628211ull;
+        }
+        for (; i < rowb; i++) x = (x ^ r[i]) * 1099511628211ull;
+    }
+    return x;
+}
+
 static void *capture_main(void *arg)
 {
     trial_capture *c = arg;
     vis_error ve;
+    double warm_t0 = NAN;
+    uint64_t prev_hash = 0, prev_id = 0;
+    long same_run = 0;
     for (;;) {
         pthread_mutex_lock(&c->lock);
         if (c->stop) {
@@ -104,7 +134,46 @@ static void *capture_main(void *arg)
             break;
         }
         double t = trial_clock_map_add(&c->map, m.camera_t_s, m.host_t_s);
+        if (!c->warm_done) {
+            /* The clock map's warm-up: frames only teach the map, until they span warmup_s of the
+             * camera's time (a camera without times, or on the host's clock, needs none). */
+            if (!isfinite(warm_t0)) warm_t0 = m.camera_t_s;
+            int over = !isfinite(m.camera_t_s) || c->map.identity || m.camera_t_s - warm_t0 >= c->p.warmup_s;
+            pthread_mutex_lock(&c->lock);
+            c->counts.warmup++;
+            c->counts.lost += m.lost_before; /* the camera's losses count from its first frame */
+            c->counts.incomplete += m.incomplete;
+            if (over) {
+                c->warm_done = 1;
+                pthread_cond_broadcast(&c->cond);
+            }
+            pthread_mutex_unlock(&c->lock);
+            continue;
+        }
+        const uint64_t hash = frame_hash(dst);
+        same_run = same_run > 0 && (hash == prev_hash || m.frame_id == prev_id) ? same_run + 1 : 1;
+        prev_hash = hash;
+        prev_id = m.frame_id;
         pthread_mutex_lock(&c->lock);
+        /* The link's quality over the last loss_window frames. */
+        const int bad = (int)(m.lost_before + m.incomplete);
+        if (c->loss_ring) {
+            const int W = c->p.loss_window;
+            if (c->loss_n >= W) c->loss_sum -= c->loss_ring[c->loss_n % W];
+            c->loss_ring[c->loss_n % W] = bad;
+            c->loss_sum += bad;
+            c->loss_n++;
+            const long seen = (c->loss_n < W ? c->loss_n : W) + c->loss_sum;
+            if (c->loss_n >= W && (double)c->loss_sum > c->p.max_loss_fraction * (double)seen) {
+                snprintf(c->cap_why, sizeof c->cap_why,
+                         "the camera's frames are lost or incomplete: %ld of the last %ld (limit %.0f%%)",
+                         c->loss_sum, seen, 100.0 * c->p.max_loss_fraction);
+                c->counts.lost += m.lost_before;
+                c->counts.incomplete += m.incomplete;
+                pthread_mutex_unlock(&c->lock);
+                break;
+            }
+        }
         if (c->info_head - c->trk_seq >= TRIAL_INFO_SLOTS) {
             snprintf(c->cap_why, sizeof c->cap_why,
                      "the trial loop is %d frames behind the camera: frame records would be overwritten",
@@ -121,6 +190,9 @@ static void *capture_main(void *arg)
         r->fi.t_s = t;
         r->fi.dropped = !have_slot;
         r->fi.video_index = have_slot ? pseq : -1;
+        r->fi.lost_before = m.lost_before;
+        r->fi.incomplete = m.incomplete;
+        r->fi.same_run = same_run;
         r->pseq = pseq;
         c->counts.captured++;
         c->counts.lost += m.lost_before;
@@ -197,15 +269,18 @@ static void free_storage(trial_capture *c)
     free(c->slot);
     free(c->meta);
     free(c->info);
+    free(c->loss_ring);
     vis_frame_free(c->scratch);
 }
 
 trial_capture *trial_capture_start(vis_source *src, const trial_capture_params *p, char *why, size_t why_len)
 {
     if (!src || !p || p->slots < 4 || p->track_max_lag < 1 || p->track_max_lag >= p->slots ||
-        !(p->frame_timeout_s > 0.0) || !(p->fps > 0.0) || !(p->track_delay_s >= 0.0) || !(p->track_max_age_s >= 0.0)) {
+        !(p->frame_timeout_s > 0.0) || !(p->fps > 0.0) || !(p->track_delay_s >= 0.0) || !(p->track_max_age_s >= 0.0) ||
+        !(p->warmup_s >= 0.0 && p->warmup_s <= 60.0) || !(p->max_loss_fraction >= 0.0 && p->max_loss_fraction < 1.0) ||
+        (p->max_loss_fraction > 0.0 && (p->loss_window < 1 || p->loss_window > 100000))) {
         snprintf(why, why_len, "capture: need a source, slots >= 4, 1 <= track_max_lag < slots, positive timeout "
-                               "and fps");
+                               "and fps, a warm-up of 0-60 s, a loss fraction in [0, 1) over 1-100000 frames");
         return NULL;
     }
     trial_capture *c = calloc(1, sizeof *c);
@@ -215,6 +290,7 @@ trial_capture *trial_capture_start(vis_source *src, const trial_capture_params *
     }
     c->p = *p;
     c->src = src;
+    c->warm_done = !(p->warmup_s > 0.0);
     pthread_mutex_init(&c->lock, NULL);
     pthread_cond_init(&c->cond, NULL);
     trial_clock_map_init(&c->map);
@@ -223,7 +299,8 @@ trial_capture *trial_capture_start(vis_source *src, const trial_capture_params *
     c->slot = calloc((size_t)p->slots, sizeof *c->slot);
     c->meta = calloc((size_t)p->slots, sizeof *c->meta);
     c->scratch = vis_frame_alloc(16, 16, 1, &ve);
-    int ok = c->info && c->slot && c->meta && c->scratch;
+    if (p->max_loss_fraction > 0.0) c->loss_ring = calloc((size_t)p->loss_window, sizeof *c->loss_ring);
+    int ok = c->info && c->slot && c->meta && c->scratch && (c->loss_ring || !(p->max_loss_fraction > 0.0));
     for (int k = 0; ok && k < p->slots; k++) ok = (c->slot[k] = vis_frame_alloc(16, 16, 1, &ve)) != NULL;
     if (!ok) {
         snprintf(why, why_len, "capture: out of memory for %d frames", p->slots);
@@ -256,6 +333,23 @@ trial_capture *trial_capture_start(vis_source *src, const trial_capture_params *
         goto fail;
     }
     c->cap_started = 1;
+    /* Nothing is published (and the caller moves nothing) before the clock map has warmed up. */
+    pthread_mutex_lock(&c->lock);
+    while (!c->warm_done && !c->cap_ended) pthread_cond_wait(&c->cond, &c->lock);
+    int warm = c->warm_done;
+    if (!warm) snprintf(why, why_len, "camera: %s", c->cap_why[0] ? c->cap_why : "capture stopped");
+    pthread_mutex_unlock(&c->lock);
+    if (!warm) {
+        /* nothing recorded: no empty video left behind */
+        char w2[256], tpath[4200];
+        trial_capture_stop(c, NULL, w2, sizeof w2);
+        if (p->video_path) {
+            snprintf(tpath, sizeof tpath, "%s.frames.csv", p->video_path);
+            unlink(p->video_path);
+            unlink(tpath);
+        }
+        return NULL;
+    }
     return c;
 fail:
     if (c->times) fclose(c->times);

@@ -5,11 +5,17 @@
  *
  * Capture thread: reads the source (vis_source_read_meta: camera timestamp, frame id, ids lost,
  * buffers incomplete), maps the camera time onto the rails' monotonic clock (trial_clock_map.h)
- * and publishes the frame. It never waits for a consumer: when the ring is full (the recorder is
+ * and publishes the frame. The first `warmup_s` of frames only teach the map (a frame's time is
+ * mapped when it arrives, so the first frames would otherwise be mapped from a handful of
+ * arrivals: 10 ms off seen under load); trial_capture_start returns once it is over. It never waits for a consumer: when the ring is full (the recorder is
  * `slots` frames behind) the frame is read into a scratch frame and counted as dropped.
  * Recorder thread: writes every published frame, cropped, to the video, and one line per frame to
  * the frame-times file beside it (video index, capture index, camera id, camera time, host time,
  * mapped time), so a replay has each frame's true time.
+ * Quality: each frame's pixels are hashed (64 bits, 0.05 ms at 640 x 480) so a frozen image (the
+ * same pixels, or the same camera id, frame after frame) shows as a growing `same_run`: a real
+ * sensor's noise never repeats a frame bit for bit, and the runner decides (trial_runner.c: while
+ * the rails move). Lost and incomplete frames are counted per frame and over a sliding window.
  * Runner (trial_capture_next): gets every frame's record in order (dropped ones too, flagged). When
  * it is more than `track_max_lag` frames behind the camera, or the frame arrived more than
  * `track_max_age_s` ago, frames come flagged `skip`: the runner
@@ -27,6 +33,12 @@
 #include "trial_video.h"
 #include "vision.h"
 
+/* A frozen image (trial_runner.c): this many identical frames in a row while a rail moved at least
+ * TRIAL_FROZEN_MOVE_MM since the first of them (0.2 s at 60 fps; 0.05 mm is 2.5 ms at 20 mm/s,
+ * 50 ms at 1 mm/s, and about a third of a pixel of the rehearsal's camera). */
+#define TRIAL_FROZEN_FRAMES 12
+#define TRIAL_FROZEN_MOVE_MM 0.05
+
 typedef struct trial_capture_params {
     int slots;               /* ring size, frames (>= 4) */
     int track_max_lag;       /* frames behind the camera after which tracking skips (1..slots-1) */
@@ -38,6 +50,13 @@ typedef struct trial_capture_params {
     trial_roi roi;           /* the video's region */
     double fps;              /* for the video header */
     double track_delay_s;    /* test hook: trial_capture_next sleeps this long per tracked frame */
+    double max_loss_fraction; /* frames lost or incomplete over the last loss_window frames (default
+                                0.25) above which capture ends: "camera ...: N of the last M frames
+                                lost or incomplete" (0 = no limit) */
+    int loss_window;         /* frames (default 60: a second at 60 fps) */
+    double warmup_s;         /* the clock map's warm-up (s of camera time, default 1): frames before it
+                                only teach the map and are not published; trial_capture_start
+                                returns after it */
 } trial_capture_params;
 trial_capture_params trial_capture_params_default(void);
 
@@ -51,10 +70,15 @@ typedef struct trial_frame_info {
     double t_s;              /* mapped onto the host monotonic clock, s */
     int dropped;             /* the ring was full: no pixels, not in the video */
     int skip;                /* the runner is behind: store without tracking */
+    long lost_before;        /* frames the camera's ids say never arrived, just before this one */
+    int incomplete;          /* damaged buffers discarded just before this one */
+    long same_run;           /* 1 + how many frames in a row before this one had the same pixels (or
+                                the same camera id): a camera resending one image (frozen) */
 } trial_frame_info;
 
 typedef struct trial_capture_counts {
-    long captured;           /* frames read from the camera */
+    long warmup;             /* frames read for the clock map's warm-up (not published, not recorded) */
+    long captured;           /* frames read from the camera after the warm-up */
     long lost;               /* frames the camera's ids say never arrived */
     long incomplete;         /* buffers the transport delivered damaged */
     long dropped;            /* frames the pipeline dropped (ring full): not in the video */

@@ -21,7 +21,8 @@ static double poll_period(rail *a, rail *b)
 }
 
 int trial_live_open(const rig_config *cfg, rail *compress, rail *shear, const char *video_path, trial_roi roi,
-                    int expect_w, int expect_h, trial_live **out, char *why, size_t why_len)
+                    int expect_w, int expect_h, const vis_calib *cal, trial_live **out, char *why,
+                    size_t why_len)
 {
     *out = NULL;
     trial_live *l = calloc(1, sizeof *l);
@@ -69,6 +70,33 @@ int trial_live_open(const rig_config *cfg, rail *compress, rail *shear, const ch
         free(l);
         return -1;
     }
+    if (cal) {
+        const char *bad = NULL;
+        double u = 0, v = 0;
+        const double pts[4][2] = {{cal->clamp_left_px[0], cal->clamp_left_px[1]},
+                                  {cal->clamp_right_px[0], cal->clamp_right_px[1]},
+                                  {cal->principal_px[0], cal->principal_px[1]},
+                                  {cal->camera_matrix[2], cal->camera_matrix[5]}};
+        const char *names[4] = {"left clamp point", "right clamp point", "principal point", "optical centre"};
+        for (int k = 0; k < 4 && !bad; k++) {
+            if (k == 2 && (pts[k][0] < 0 || pts[k][1] < 0)) continue; /* the image centre */
+            if (k == 3 && !cal->has_intrinsics) continue;
+            if (!(pts[k][0] >= 0 && pts[k][0] < w && pts[k][1] >= 0 && pts[k][1] < h)) {
+                bad = names[k];
+                u = pts[k][0];
+                v = pts[k][1];
+            }
+        }
+        if (bad) {
+            snprintf(why, why_len,
+                     "camera: the calibration (camera.calibration) does not match the camera's %d x %d frames: its "
+                     "%s (%.1f, %.1f) px is outside them: recalibrate for this size, or set camera.width_px/height_px",
+                     w, h, bad, u, v);
+            vis_source_close(l->src);
+            free(l);
+            return -1;
+        }
+    }
     trial_capture_params cp = trial_capture_params_default();
     cp.slots = rc->ring_frames > 0 ? rc->ring_frames : 64;
     cp.track_max_lag = rc->track_max_lag > 0 ? rc->track_max_lag : 16;
@@ -76,6 +104,7 @@ int trial_live_open(const rig_config *cfg, rail *compress, rail *shear, const ch
     cp.roi = roi;
     cp.fps = rc->fps > 0 ? rc->fps : 30.0;
     cp.frame_timeout_s = 0.5;
+    cp.loss_window = cp.fps >= 10.0 ? (int)lround(cp.fps) : 10; /* a second of frames */
     const char *delay = getenv("RIBBON_TEST_TRACK_DELAY_S"); /* test hook: a slow tracker */
     if (delay && *delay) cp.track_delay_s = atof(delay);
     l->cap = trial_capture_start(l->src, &cp, why, why_len);
@@ -115,10 +144,10 @@ int trial_live_close(trial_live *l, trial_capture_counts *counts, char *summary,
     snprintf(summary, summary_len,
              "pipeline: %ld frames captured, %ld lost by the camera or link (id gaps), %ld incomplete buffers, "
              "%ld dropped by the pipeline, %ld recorded, %ld not tracked (loop behind); camera clock %s "
-             "(offset %.6f s, drift %.2g); slowest write %.1f ms after arrival; %ld rail polls, slowest %.1f ms, "
-             "longest gap %.1f ms",
+             "(offset %.6f s, drift %.2g, after %ld warm-up frames); slowest write %.1f ms after arrival; %ld rail "
+             "polls, slowest %.1f ms, longest gap %.1f ms",
              k.captured, k.lost, k.incomplete, k.dropped, k.recorded, k.skipped,
              k.identity_clock ? "is the host's monotonic clock" : "mapped by its arrivals' lower envelope",
-             k.offset_s, k.drift, 1e3 * k.max_capture_to_record_s, polls, 1e3 * max_poll, 1e3 * max_gap);
+             k.offset_s, k.drift, k.warmup, 1e3 * k.max_capture_to_record_s, polls, 1e3 * max_poll, 1e3 * max_gap);
     return rc;
 }

@@ -18,9 +18,13 @@
 typedef struct trial_live trial_live;
 
 /* Opens the camera and starts capture (recording into video_path, region roi) and the rail poller.
- * expect_w/expect_h (> 0): the calibration's frame size; the first frame must have it. */
+ * expect_w/expect_h (> 0): the frame size the trial was set up for (camera.width_px/height_px);
+ * the first frame must have it. cal (or NULL): the trial's calibration, whose points (the clamps,
+ * the principal point) must lie inside that frame: a calibration made for another camera size is a
+ * named error (the file stores no size of its own). Nothing moves before this returns. */
 int trial_live_open(const rig_config *cfg, rail *compress, rail *shear, const char *video_path, trial_roi roi,
-                    int expect_w, int expect_h, trial_live **out, char *why, size_t why_len);
+                    int expect_w, int expect_h, const vis_calib *cal, trial_live **out, char *why,
+                    size_t why_len);
 /* Hands the pipeline to the runner (trial_runner_set_live). */
 void trial_live_attach(trial_live *l, trial_runner *tr);
 /* Stops everything; `summary` gets the counts line ("pipeline: N frames captured, ..."). Returns 0,

@@ -37,6 +37,8 @@ struct trial_replay {
     rail_reading *rails;
     size_t nr, at;
     double fps, t_offset;
+    double *frame_t;   /* an outside video's per-frame times (VIDEO.frames.csv), from its first frame; NULL = f / fps */
+    long n_frame_t;
     double t_check, t_shear, t_return; /* NaN = none */
     long frames_total;
     int64_t new_id;
@@ -49,6 +51,7 @@ void trial_replay_free(trial_replay *r)
     free(r->config_text);
     free(r->smp);
     free(r->rails);
+    free(r->frame_t);
     free(r);
 }
 
@@ -167,6 +170,57 @@ static int read_rails(trial_replay *r, const char *path, char *why, size_t why_l
     return rc;
 }
 
+/* An outside video's frame-times file (VIDEO.frames.csv, as rig mode's recorder writes it:
+ * video_frame,capture_index,camera_id,camera_t_s,host_t_s,t_s): each frame's time, taken from its
+ * first frame (the video's frame 0 is at t = 0, as f / fps would put it). No file: 0 and f / fps. */
+static int read_frame_times(trial_replay *r, char *why, size_t why_len)
+{
+    char path[RIG_PATH_MAX + 16];
+    snprintf(path, sizeof path, "%s.frames.csv", r->video);
+    FILE *f = fopen(path, "r");
+    if (!f) return 0;
+    char line[512];
+    long n = 0, cap = 0, ln = 0;
+    double t0 = NAN;
+    int rc = 0;
+    while (fgets(line, sizeof line, f)) {
+        ln++;
+        if (ln == 1 && strncmp(line, "video_frame", 11) == 0) continue;
+        long vf, ci;
+        unsigned long long id;
+        double cam, host, t;
+        char tail;
+        if (sscanf(line, "%ld,%ld,%llu,%lf,%lf,%lf %c", &vf, &ci, &id, &cam, &host, &t, &tail) != 6 || vf != n ||
+            !isfinite(t) || (n > 0 && !(t - t0 > r->frame_t[n - 1]))) {
+            snprintf(why, why_len,
+                     "frame times %.300s line %ld: not \"video_frame,capture_index,camera_id,camera_t_s,host_t_s,t_s\" "
+                     "for frame %ld with its time after the previous frame's",
+                     path, ln, n);
+            rc = -1;
+            break;
+        }
+        if (n == cap) {
+            cap = cap ? 2 * cap : 1024;
+            double *x = realloc(r->frame_t, (size_t)cap * sizeof *x);
+            if (!x) {
+                snprintf(why, why_len, "out of memory");
+                rc = -1;
+                break;
+            }
+            r->frame_t = x;
+        }
+        if (n == 0) t0 = t;
+        r->frame_t[n++] = t - t0;
+    }
+    fclose(f);
+    if (rc == 0 && n == 0) {
+        snprintf(why, why_len, "frame times %.300s: no frame", path);
+        rc = -1;
+    }
+    r->n_frame_t = rc == 0 ? n : 0;
+    return rc;
+}
+
 /* Shearing: from the first reading off the first shear position to the reading of largest Delta W. */
 static void shear_window(trial_replay *r)
 {
@@ -240,6 +294,7 @@ int trial_replay_from_files(const rig_config *cfg, trial_replay **out, char *why
     if (trial_record_parse(r->calib_json, &r->rec, why, why_len)) goto fail;
     r->t_offset = r->rec.calib.camera_time_offset_s;
     if (read_rails(r, cfg->replay.rails, why, why_len)) goto fail;
+    if (read_frame_times(r, why, why_len)) goto fail;
     shear_window(r);
     r->config_text = trial_config_text(cfg, NULL);
     if (!r->config_text) {
@@ -324,7 +379,12 @@ static int frame_rails(trial_replay *r, long f, store_sample *x, char *why, size
         x->dw = s->dw;
         return 0;
     }
-    const double t = (double)f / r->fps + r->t_offset;
+    if (r->frame_t && f >= r->n_frame_t) {
+        snprintf(why, why_len, "frame %ld of the video has no time in %.300s.frames.csv (%ld frames there)", f,
+                 r->video, r->n_frame_t);
+        return -1;
+    }
+    const double t = (r->frame_t ? r->frame_t[f] : (double)f / r->fps) + r->t_offset;
     const rail_reading *g = r->rails;
     if (t < g[0].t || t > g[r->nr - 1].t) return 1;
     while (r->at + 2 < r->nr && g[r->at + 1].t < t) r->at++;

@@ -9,7 +9,8 @@
  *  - outside files named by a replay-mode rig file: replay.video, replay.rails (a CSV of rail
  *    readings t_s,compress_mm,shear_mm on the rails' clock) and camera.calibration, with the rig
  *    file's [calibration], [detect] and scene. Frame f is at t = f / fps + camera_time_offset_s on
- *    the rails' clock; its rail positions are interpolated linearly between the readings (frames
+ *    the rails' clock, or, when VIDEO.frames.csv is beside the video (rig mode's recorder writes
+ *    it), at its t_s minus frame 0's t_s + camera_time_offset_s: the real, possibly uneven, times; its rail positions are interpolated linearly between the readings (frames
  *    outside the readings are skipped and counted). Shearing is taken to run from the first reading
  *    where the shear rail has left its first position by more than 0.05 mm to the reading of
  *    largest Delta W; the tracker starts fresh at its start and snap detection sees only it.

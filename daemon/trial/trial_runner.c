@@ -134,6 +134,12 @@ typedef struct run_ctx {
     double t_stop_cmd;    /* trial time the shear stop command returned (NaN: none) */
     int stand_noted;      /* the snap-to-stop latency has been reported */
     int w_warned;         /* "no load" warning given */
+    /* The camera's quality (rig mode, trial_capture.h). */
+    double frz_c, frz_s;  /* rail positions at the first frame of the current run of equal frames */
+    uint64_t frz_id;      /* its camera id */
+    long loss_total;      /* frames lost or incomplete so far */
+    double loss_noted_t;  /* trial time of the last loss event (rate: one a second) */
+    long loss_noted;      /* loss_total at it */
 } run_ctx;
 
 static int emit_event(run_ctx *c, const char *kind, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
@@ -555,6 +561,33 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
         double t_rail = t_frame + p->calib.camera_time_offset_s;
         pos_c = position_at(&c.sc, t_poll, t_rail);
         pos_s = position_at(&c.ss, t_poll, t_rail);
+        if (tr->capture) {
+            /* Frames lost or incomplete: counted, and shown in the events (at most one a second). */
+            c.loss_total += fi.lost_before + fi.incomplete;
+            if (c.loss_total > c.loss_noted && (c.loss_noted == 0 || c.t - c.loss_noted_t >= 1.0)) {
+                emit_event(&c, "warning",
+                           "camera: %ld frames lost or incomplete so far (%ld since the last note), before frame %ld",
+                           c.loss_total, c.loss_total - c.loss_noted, fi.index);
+                c.loss_noted = c.loss_total;
+                c.loss_noted_t = c.t;
+            }
+            /* A frozen image: the same pixels (or camera id) frame after frame while the rails move.
+             * A still scene without noise repeats legitimately, so only motion makes it a fault. */
+            if (fi.same_run <= 1) {
+                c.frz_c = pos_c;
+                c.frz_s = pos_s;
+                c.frz_id = fi.camera_id;
+            } else if (fi.same_run >= TRIAL_FROZEN_FRAMES) {
+                double moved = fmax(fabs(pos_c - c.frz_c), fabs(pos_s - c.frz_s));
+                if (moved >= TRIAL_FROZEN_MOVE_MM) {
+                    finish(&c, TRIAL_FAILED,
+                           "camera: the image is frozen: %ld identical frames (camera ids %llu to %llu) while the "
+                           "rails moved %.2f mm",
+                           fi.same_run, (unsigned long long)c.frz_id, (unsigned long long)fi.camera_id, moved);
+                    break;
+                }
+            }
+        }
         memset(&smp, 0, sizeof smp);
         smp.kind = 1;
         smp.frame = tr->capture ? fi.index : frame;

@@ -395,7 +395,7 @@ static int session_open_camera(trial_session *s, session_parts *p, char *why, si
      * AVI); the runner takes its frames, so cam.grab is never called. */
     char vpath[RIG_PATH_MAX + 64];
     snprintf(vpath, sizeof vpath, "%s/trial-%lld.avi", cfg->camera.video_dir, (long long)s->trial_id);
-    if (trial_live_open(cfg, s->compress, s->shear, vpath, s->roi, s->width, s->height, &s->live, why, why_len))
+    if (trial_live_open(cfg, s->compress, s->shear, vpath, s->roi, s->width, s->height, &s->cal, &s->live, why, why_len))
         return -1;
     char w[256];
     store_trial_set_video(s->st, s->trial_id, vpath, w, sizeof w);

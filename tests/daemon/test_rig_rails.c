@@ -2,7 +2,7 @@
  * rehearsal rig files (config/rig-rehearsal.ini: GRBL axes X/Y of one controller on a pty;
  * config/rig-rehearsal-modbus.ini: two Modbus TCP drives on 127.0.0.1), compression at 20 mm/s so
  * a trial reaches shearing in about 7 s. Faults come on command once the trial is shearing
- * (SIGUSR1 link cut, SIGRTMIN alarm) or on position (--stall). Each ends the trial failed with a
+ * (SIGUSR1 link cut, SIGRTMIN+1 alarm) or on position (--stall). Each ends the trial failed with a
  * named reason, both rails standing (the simulator's axes log), every captured sample stored
  * (samples_count in the trial row = rows in samples) and PRAGMA integrity_check ok.
  *   - GRBL link lost mid-shear: detected (the fault event's wall time) within 0.5 s of the cut the
@@ -123,13 +123,13 @@ static void test_modbus_link_lost_mid_shear(void **state)
     link_lost(RIG_MODBUS, sets, "rail");
 }
 
-/* An alarm on command mid-shear (SIGRTMIN): GRBL's ALARM:1 of the controller, or the shear drive's
+/* An alarm on command mid-shear (SIGRTMIN+1): GRBL's ALARM:1 of the controller, or the shear drive's
  * alarm 0x30 (a drive fault). */
 static void alarm_mid_shear(const char *rig, const char *const *sets, const char *sim_fault, const char *what)
 {
     rig_run r;
     start_to_shear(&r, rig, sets, NULL);
-    kill(r.sim, SIGRTMIN);
+    kill(r.sim, SIGRTMIN + 1);
     rig_sleep_s(0.2);
     double t = rig_sim_fault_time(&r, sim_fault);
     assert_true(isfinite(t));

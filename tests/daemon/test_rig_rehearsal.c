@@ -3,12 +3,15 @@
  * on config/rig-rehearsal.ini (compression at 20 mm/s so a trial takes about 30 s).
  *   - a whole trial: done, measured snap within 2% of the prediction at the same resolution, the
  *     regimes agree, no frame lost or dropped, every video frame in the frame-times file, each
- *     frame's stamp against the simulator's true send time (median within 1 ms, every one within
- *     a frame period: the honest margin on a shared 2-core machine), the snap-to-stop latency
+ *     frame's stamp against the simulator's true send time (every one within 1 ms), the snap-to-stop latency
  *     stored, PRAGMA integrity_check ok;
  * Faults come on command (SIGUSR1 / SIGUSR2 to ribbon-rigsim) once the trial is shearing.
  *   (the rails' faults, link lost among them, are test_rig_rails's);
- *   - the camera stops sending mid-shear: failed naming the camera, within 0.5 s + 0.1 s;
+ *   - the camera stops sending mid-shear: failed naming the camera, within 0.5 s;
+ *   - the image freezes mid-shear: failed naming it, within 0.5 s, rails stopped;
+ *   - GVSP packets lost: counted and noted, the trial done; lost heavily: failed, named, rails stopped;
+ *   - bad camera input (no such camera, a refused frame rate, frames not the calibration's size):
+ *     named, nothing moved, nothing stored but the failed trial; `ribbonctl cameras` finds the camera.
  *   - ribbond killed with SIGKILL mid-shear: the shear axis stands within the GRBL driver's bound
  *     (its queued jog segments) as the simulator's truth log shows.
  * Heavy (real time, a minute or more each): normal build only. */
@@ -48,6 +51,7 @@ static void sleep_s(double s)
 
 typedef struct rehearsal rehearsal;
 static rehearsal *current; /* the running rehearsal, stopped by the teardown when a test fails */
+static const char *daemon_extra[4]; /* extra --set for ribbond only (bad input), NULL-terminated */
 struct rehearsal {
     char dir[64];
     char sets[8][300];
@@ -125,6 +129,10 @@ static void start(rehearsal *r, const char *const *sim_extra)
     for (int k = 0; k < r->n_sets; k++) {
         argv[n++] = "--set";
         argv[n++] = r->sets[k];
+    }
+    for (int k = 0; daemon_extra[k]; k++) {
+        argv[n++] = "--set";
+        argv[n++] = daemon_extra[k];
     }
     argv[n] = NULL;
     snprintf(out, sizeof out, "%s/ribbond.out", r->dir);
@@ -291,14 +299,34 @@ static void test_gcode_trial(void **state)
     fclose(f);
     assert_int_equal(nf, rec);
     double worst = 0.0;
-    for (long k = 32; k < nf; k++) worst = fmax(worst, err[k]);
-    /* the median is within 1 ms when more than half are */
+    for (long k = 0; k < nf; k++) worst = fmax(worst, err[k]);
     long below = 0;
     for (long k = 0; k < nf; k++) below += err[k] < 1e-3;
-    printf("# stamps: %ld frames, %ld within 1 ms of the true send time, worst %.3f ms (after the first 32)\n", nf,
-           below, 1e3 * worst);
-    assert_true(below * 2 > nf);
-    assert_true(worst < 1.0 / FPS);
+    printf("# stamps: %ld frames, %ld within 1 ms of the true send time, worst %.3f ms\n", nf, below, 1e3 * worst);
+    /* issue 13: every frame's stored time within 1 ms of the simulator's true send time */
+    assert_int_equal(below, nf);
+}
+
+/* From the truth log: the real time of the last image at which either axis had moved since the
+ * image before (NaN: never). */
+static double last_axis_move(rehearsal *r)
+{
+    char path[160], line[512];
+    snprintf(path, sizeof path, "%s/truth.csv", r->dir);
+    FILE *t = fopen(path, "r");
+    assert_non_null(t);
+    assert_non_null(fgets(line, sizeof line, t));
+    double last = NAN, pc0 = NAN, ps0 = NAN;
+    while (fgets(line, sizeof line, t)) {
+        long k;
+        double mono, real, pc, ps;
+        if (sscanf(line, "%ld,%lf,%lf,%lf,%lf", &k, &mono, &real, &pc, &ps) != 5) continue;
+        if (isfinite(pc0) && (fabs(pc - pc0) > 1e-4 || fabs(ps - ps0) > 1e-4)) last = real;
+        pc0 = pc;
+        ps0 = ps;
+    }
+    fclose(t);
+    return last;
 }
 
 /* Waits (at most 90 s) until trial 1 is shearing; 0 when it is. */
@@ -353,9 +381,150 @@ static void test_camera_stops_mid_shear(void **state)
     assert_string_equal(status, "failed");
     assert_string_equal(st, "shearing");
     assert_non_null(strstr(why, "camera"));
-    assert_true(seen - cut < 0.5 + 0.1);
+    assert_true(seen - cut < 0.5); /* issue 13: within 0.5 s */
     check_integrity(db);
     sqlite3_close(db);
+}
+
+/* The image freezes mid-shear (SIGRTMIN): failed, naming the frozen image, within 0.5 s; both rails
+ * stopped (the truth log: no axis moves 1 s after the detection), samples stored, integrity ok. */
+static void test_frozen_image_mid_shear(void **state)
+{
+    (void)state;
+    rehearsal r;
+    fault_mid_shear(&r, SIGRTMIN);
+    sqlite3 *db = db_open(&r);
+    char status[64], why[512], st[64];
+    q_text(db, "select status from trials where id = 1", status, sizeof status);
+    q_text(db, "select coalesce(reason,'') from trials where id = 1", why, sizeof why);
+    q_text(db, "select state from events where trial_id = 1 and kind = 'fault' order by id limit 1", st, sizeof st);
+    double cut = cut_time(&r, "image frozen"), seen = wall_of(db, "camera: the image is frozen%");
+    double moved = last_axis_move(&r);
+    printf("# %s in %s: %s; detected %.3f s after the freeze; last axis motion %.3f s after it\n", status, st, why,
+           seen - cut, moved - seen);
+    assert_string_equal(status, "failed");
+    assert_string_equal(st, "shearing");
+    assert_non_null(strstr(why, "frozen"));
+    assert_true(seen - cut < 0.5);
+    assert_true(!(moved - seen > 1.0));
+    assert_true(q_num(db, "select count(*) from samples where trial_id = 1") > 100);
+    check_integrity(db);
+    sqlite3_close(db);
+}
+
+/* GVSP packets lost all along (1e-4 of them: a few frames in a hundred damaged): the trial goes on
+ * to done, the losses counted in the pipeline's event and noted as warnings while it ran. */
+static void test_lost_packets_trial_goes_on(void **state)
+{
+    (void)state;
+    rehearsal r;
+    const char *extra[] = {"--lost-packets", "1e-4", NULL};
+    start(&r, extra);
+    int rc = trial(&r, 1);
+    stop(&r);
+    sqlite3 *db = db_open(&r);
+    char status[64], why[512], pipe[600], note[400];
+    q_text(db, "select status from trials where id = 1", status, sizeof status);
+    q_text(db, "select coalesce(reason,'') from trials where id = 1", why, sizeof why);
+    q_text(db, "select message from events where trial_id = 1 and message like 'pipeline:%'", pipe, sizeof pipe);
+    q_text(db, "select message from events where trial_id = 1 and message like 'camera: % lost or incomplete%'", note,
+           sizeof note);
+    printf("# lost packets: %s %s (ribbonctl %d)\n# %s\n# %s\n", status, why, rc, pipe, note);
+    assert_string_equal(status, "done");
+    long cap = -1, lost = -1, inc = -1, drop = -1, rec = -1;
+    assert_int_equal(sscanf(pipe, "pipeline: %ld frames captured, %ld lost by the camera or link (id gaps), %ld "
+                                  "incomplete buffers, %ld dropped by the pipeline, %ld recorded",
+                            &cap, &lost, &inc, &drop, &rec),
+                     5);
+    assert_true(lost + inc > 0);
+    assert_int_equal(rec, cap);
+    assert_true(note[0] != '\0');
+    /* every frame up to the trial's end has its sample (the frames after it are in the video only) */
+    double nfs = q_num(db, "select count(*) from samples where trial_id = 1 and kind = 1");
+    assert_true(nfs > 0.9 * cap);
+    assert_true(nfs == q_num(db, "select max(frame) + 1 from samples where trial_id = 1 and kind = 1"));
+    check_integrity(db);
+    sqlite3_close(db);
+}
+
+/* Packets lost heavily (5e-3: two frames in three damaged): failed with the named quality reason
+ * soon after the start, the rails stopped, samples stored, integrity ok. */
+static void test_heavy_loss_fails(void **state)
+{
+    (void)state;
+    rehearsal r;
+    const char *extra[] = {"--lost-packets", "5e-3", NULL};
+    start(&r, extra);
+    trial(&r, 1);
+    sleep_s(1.5);
+    stop(&r);
+    sqlite3 *db = db_open(&r);
+    char status[64], why[512];
+    q_text(db, "select status from trials where id = 1", status, sizeof status);
+    q_text(db, "select coalesce(reason,'') from trials where id = 1", why, sizeof why);
+    double seen = wall_of(db, "%lost or incomplete: %"), moved = last_axis_move(&r);
+    printf("# heavy loss: %s: %s; last axis motion %.3f s after the detection\n", status, why, moved - seen);
+    assert_string_equal(status, "failed");
+    assert_non_null(strstr(why, "lost or incomplete"));
+    assert_true(isfinite(seen));
+    assert_true(!(moved - seen > 1.0));
+    check_integrity(db);
+    sqlite3_close(db);
+}
+
+/* Bad camera input, each a named error before anything moves: no compression started (no 'start:'
+ * event), no sample, no video; and ribbonctl cameras lists the simulator's camera. */
+static void bad_input_case(const char *set, const char *needle)
+{
+    rehearsal r;
+    daemon_extra[0] = set;
+    daemon_extra[1] = NULL;
+    start(&r, NULL);
+    daemon_extra[0] = NULL;
+    trial(&r, 1);
+    stop(&r);
+    sqlite3 *db = db_open(&r);
+    char status[64], why[512];
+    q_text(db, "select status from trials where id = 1", status, sizeof status);
+    q_text(db, "select coalesce(reason,'') from trials where id = 1", why, sizeof why);
+    printf("# %s: %s: %s\n", set, status, why);
+    assert_string_equal(status, "failed");
+    assert_non_null(strstr(why, needle));
+    assert_true(q_num(db, "select count(*) from events where trial_id = 1 and message like 'start:%'") == 0);
+    assert_true(q_num(db, "select count(*) from samples where trial_id = 1") == 0);
+    check_integrity(db);
+    sqlite3_close(db);
+    char v[160];
+    snprintf(v, sizeof v, "%s/videos/trial-1.avi", r.dir);
+    assert_int_equal(access(v, F_OK), -1);
+    snprintf(v, sizeof v, "%s/videos/trial-1.avi.frames.csv", r.dir);
+    assert_int_equal(access(v, F_OK), -1);
+}
+
+static void test_bad_camera_input(void **state)
+{
+    (void)state;
+    bad_input_case("camera.source=aravis:no-such-camera-4711", "not found");
+    bad_input_case("camera.offset_x_px=4000", "OffsetX 4000 refused"); /* the sensor is 2048 wide */
+    /* the simulator writes the calibration for 640 x 480; ribbond asks the camera for 320 x 480 */
+    bad_input_case("camera.width_px=320", "calibration");
+}
+
+static void test_ribbonctl_cameras_finds_the_simulator(void **state)
+{
+    (void)state;
+    rehearsal r;
+    start(&r, NULL);
+    char cmd[400], path[160], line[1024];
+    snprintf(path, sizeof path, "%s/cameras.json", r.dir);
+    snprintf(cmd, sizeof cmd, "%s/ribbonctl cameras --json > %s 2>&1", BIN, path);
+    int rc = system(cmd);
+    stop(&r);
+    assert_true(WIFEXITED(rc) && WEXITSTATUS(rc) == 0);
+    assert_true(file_has(path, "\"source\":\"aravis:", line, sizeof line));
+    printf("# %s", line);
+    assert_non_null(strstr(line, "RIBBONSIM")); /* ribbon-rigsim's serial */
+    assert_non_null(strstr(line, "GigEVision"));
 }
 
 static void test_sigkill_mid_shear(void **state)
@@ -410,6 +579,13 @@ int main(void)
         cmocka_unit_test_teardown(test_gcode_trial, teardown),
         cmocka_unit_test_teardown(test_camera_stops_mid_shear, teardown),
         cmocka_unit_test_teardown(test_sigkill_mid_shear, teardown),
+        cmocka_unit_test_teardown(test_frozen_image_mid_shear, teardown),
+        cmocka_unit_test_teardown(test_lost_packets_trial_goes_on, teardown),
+        cmocka_unit_test_teardown(test_heavy_loss_fails, teardown),
+        cmocka_unit_test_teardown(test_bad_camera_input, teardown),
+        cmocka_unit_test_teardown(test_ribbonctl_cameras_finds_the_simulator, teardown),
     };
+    /* REHEARSAL_TESTS=PATTERN runs only the matching tests (cmocka's filter: * and ? wildcards). */
+    if (getenv("REHEARSAL_TESTS")) cmocka_set_test_filter(getenv("REHEARSAL_TESTS"));
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

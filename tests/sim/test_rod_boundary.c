@@ -7,6 +7,8 @@
  *     to round-off with one even and one odd mode, and so do several points continued in phi;
  *   - the saddle-node and pitchfork curves pass through the events `continue` locates, at three
  *     Gamma on the same mesh, within 1e-4 in Delta W;
+ *   - the direct codim-2 Newton gives the located points (1e-5) and solves most of them; the
+ *     regime-boundary check on demand; a solve far from equilibrium stops at the phase-1 cap;
  *   - named stops: phi reaching 180 deg, the boundary leaving the Gamma range, no meeting point in
  *     the Gamma range from the start;
  *   - the truss: the codim-2 location equals truss_switch_find (the `truss --find-switch` value)
@@ -251,6 +253,98 @@ static void test_codim2_and_phi(void **state)
     rod_boundary_free(b);
 }
 
+/* The direct codim-2 Newton (opts.direct): from phi 90 to 100 deg most points are solved by it,
+ * each a verified codim-2 point, and the end point agrees with the located one (direct off). */
+static void test_direct_codim2(void **state)
+{
+    (void)state;
+    rod_scene sc = scene(NODES, GAMMA0);
+    double end[2] = {0, 0};
+    size_t ndirect = 0, n = 0;
+    for (int d = 0; d <= 1; d++) {
+        rod_boundary_opts o = rod_boundary_opts_default();
+        o.direct = d;
+        o.verify_ends = 0;
+        rod_boundary *b = NULL;
+        rod_codim2_point pt;
+        char why[512] = "";
+        rod_status st = rod_boundary_start(&sc, &o, &b, &pt, why, sizeof why);
+        if (st != ROD_OK) print_error("%s\n", why);
+        assert_int_equal(st, ROD_OK);
+        rod_boundary_curve c = {0};
+        assert_int_equal(rod_boundary_move(b, ROD_PAR_PHI, 100.0, &c), ROD_OK);
+        for (size_t k = 0; k < c.n; k++) {
+            check_critical(&c.pts[k]);
+            if (d) ndirect += (size_t)c.pts[k].direct;
+            else assert_int_equal(c.pts[k].direct, 0);
+        }
+        if (d) n = c.n;
+        end[d] = c.pts[c.n - 1].gamma;
+        rod_boundary_curve_free(&c);
+        /* The end of a move without its own check: rod_boundary_check on the current point. */
+        double fdw = -1.0;
+        assert_int_equal(rod_boundary_check(b, &fdw), 1);
+        rod_boundary_current(b, &pt);
+        assert_close(fdw, pt.dw, 0.02);
+        rod_boundary_free(b);
+    }
+    print_message("phi 100 deg: Gamma* %.8f located, %.8f with the direct Newton (%zu of %zu points direct)\n", end[0],
+                  end[1], ndirect, n);
+    assert_true(2 * ndirect >= n);
+    assert_close(end[1], end[0], 1e-5);
+}
+
+/* Delta L 0.3: the codim-2 point's Delta W runs to 0 near phi 129.4 deg (N = 61); the move stops
+ * there by that name, the points before kept, their Delta W falling toward 0. */
+static void test_dw_runs_to_zero(void **state)
+{
+    (void)state;
+    rod_scene sc = scene(NODES, GAMMA0);
+    rod_boundary_opts o = rod_boundary_opts_default();
+    o.verify_every = 0.0;
+    rod_boundary *b = NULL;
+    rod_codim2_point pt;
+    char why[512] = "";
+    assert_int_equal(rod_boundary_start(&sc, &o, &b, &pt, why, sizeof why), ROD_OK);
+    rod_boundary_curve c = {0};
+    assert_int_equal(rod_boundary_move(b, ROD_PAR_DL, 0.3, &c), ROD_OK);
+    rod_boundary_curve_free(&c);
+    rod_status st = rod_boundary_move(b, ROD_PAR_PHI, 135.0, &c);
+    print_message("%s (%zu points)\n", c.end_reason, c.n);
+    assert_int_equal(st, ROD_ERR_BRANCH_LOST);
+    assert_non_null(strstr(c.end_reason, "Delta W runs to 0"));
+    assert_true(c.n >= 3);
+    assert_true(c.pts[c.n - 1].dw < 0.05 && c.pts[c.n - 1].dw > 0.0);
+    assert_true(c.pts[c.n - 1].phi_deg > 120.0 && c.pts[c.n - 1].phi_deg < 135.0);
+    for (size_t k = 0; k < c.n; k++) check_critical(&c.pts[k]);
+    rod_boundary_curve_free(&c);
+    rod_boundary_free(b);
+}
+
+/* rod_crit_set_phase1_cap: a solve from a badly strained state (the crease angle moved by 5 deg
+ * at fixed q) fails after the cap, with its reason, instead of running to the Newton cap. */
+static void test_phase1_cap(void **state)
+{
+    (void)state;
+    rod *r = sheared(41, 0.13, 0.3);
+    rod_crit *c = rod_crit_alloc(r, NULL);
+    assert_non_null(c);
+    double p[ROD_NPAR] = {0.3, 0.13, -M_PI / 2, 0.5};
+    p[ROD_PAR_GAMMA] = r->fold_position;
+    assert_int_equal(rod_crit_modes(c, p, NULL, NULL, 0), ROD_OK);
+    p[ROD_PAR_PHI] += 5.0 * M_PI / 180.0;
+    rod_params_apply(r, p);
+    assert_int_equal(rod_crit_set_phase1_cap(c, 3), 40);
+    const rod_par dw_only[1] = {ROD_PAR_DW};
+    rod_crit_report rep;
+    char why[200] = "";
+    assert_int_equal(rod_crit_solve(c, ROD_CRIT_FOLD, dw_only, p, &rep, why, sizeof why), ROD_ERR_MAXITER);
+    print_message("%s\n", why);
+    assert_non_null(strstr(why, "equilibrium not restored within 3 iterations"));
+    rod_crit_free(c);
+    rod_free(r);
+}
+
 static void test_curves_through_continue_events(void **state)
 {
     (void)state;
@@ -346,6 +440,9 @@ int main(void)
         cmocka_unit_test(test_mirror_commutes),
         cmocka_unit_test(test_test_function_derivatives),
         cmocka_unit_test(test_codim2_and_phi),
+        cmocka_unit_test(test_direct_codim2),
+        cmocka_unit_test(test_phase1_cap),
+        cmocka_unit_test(test_dw_runs_to_zero),
         cmocka_unit_test(test_curves_through_continue_events),
         cmocka_unit_test(test_truss_codim2),
     };

@@ -28,14 +28,16 @@
 #if defined(__SANITIZE_ADDRESS__)
 #define FPS 20.0
 /* Under the sanitizers on a loaded machine the transport floor itself wanders (2-13 ms seen at
- * load 18): the bounds are half a frame period and the stop's 0.4 s plus half a second; the
- * normal build checks the tight ones. */
+ * load 18): the bounds are half a frame period (median), a frame period (every frame) and 1 s for
+ * the stop; the normal build checks the tight ones. */
 #define MEDIAN_BOUND_S (0.5 / FPS)
-#define STOP_SLACK_S 0.5
+#define WORST_BOUND_S (1.0 / FPS)
+#define STOP_BOUND_S 1.0
 #else
 #define FPS 60.0
-#define MEDIAN_BOUND_S 2e-3
-#define STOP_SLACK_S 0.1
+#define MEDIAN_BOUND_S 0.5e-3
+#define WORST_BOUND_S 1e-3 /* issue 13: every frame's stored time within 1 ms of its true send time */
+#define STOP_BOUND_S 0.5
 #endif
 #define W 640
 #define H 480
@@ -51,6 +53,8 @@ static double mono(void)
 typedef struct fake {
     ArvGvFakeCamera *gv;
     uint64_t counter;
+    int frozen;              /* 1: every frame is the last one's image again */
+    uint64_t frozen_k;
     double truth[MAX_TRUTH]; /* host monotonic time each frame was made */
 } fake;
 
@@ -68,9 +72,18 @@ static void fill(ArvBuffer *b, void *user, guint32 exposure_us, guint32 gain, Ar
     n = (size_t)arv_buffer_get_image_width(b) * (size_t)arv_buffer_get_image_height(b);
     if (n < 8) return;
     uint64_t k = f->counter++;
-    if (k < MAX_TRUTH) f->truth[k] = mono();
+    if (__atomic_load_n(&f->frozen, __ATOMIC_ACQUIRE)) {
+        if (!f->frozen_k) f->frozen_k = k;
+        k = f->frozen_k;
+    }
     for (size_t i = 8; i < n; i++) p[i] = pattern(k, i);
     memcpy(p, &k, 8);
+    /* Stamped as it leaves (the leader goes out right after this callback), like ribbon-rigsim's
+     * camera: the real-time clock is the camera's, the monotonic time the truth. */
+    struct timespec r;
+    clock_gettime(CLOCK_REALTIME, &r);
+    if (k < MAX_TRUTH) f->truth[k] = mono();
+    arv_buffer_set_timestamp(b, (guint64)r.tv_sec * 1000000000ull + (guint64)r.tv_nsec);
 }
 
 static fake *fake_start(void)
@@ -189,11 +202,11 @@ static long check_video(fake *f, const char *video, double *worst, double *media
     fclose(t);
     vis_frame_free(fr);
     vis_source_close(v);
-    /* The first block's frames are mapped before the envelope settles: judge from frame 32 on. */
+    /* Every frame (the clock map warmed up before the first was published). */
     double w = 0.0;
     int m = 0;
     static double sorted[MAX_TRUTH];
-    for (long k = 32; k < n; k++) {
+    for (long k = 0; k < n; k++) {
         w = fmax(w, err[k]);
         sorted[m++] = err[k];
     }
@@ -229,11 +242,11 @@ static void test_every_frame_recorded_bit_exact_and_stamped(void **state)
     assert_int_equal(k.recorded, k.captured);
     assert_int_equal(n, k.recorded);
     assert_int_equal(k.lost + k.incomplete, 0);
-    /* A frame's mapped time: the camera's stamp plus the fastest arrival's delay (the loopback
-     * transport of 300 kB, which the mapping keeps: the rig's camera_time_offset_s removes it);
-     * within one frame period of the truth always; the floor is 0.3-0.6 ms in Release. */
+    /* A frame's mapped time: the camera's stamp plus the fastest arrival's delay (the leader's
+     * trip over loopback, 0.1 ms, which the mapping keeps: the rig's camera_time_offset_s is for
+     * such a constant); every frame within 1 ms of the truth in the normal build. */
     assert_true(median < MEDIAN_BOUND_S);
-    assert_true(worst < 1.0 / FPS);
+    assert_true(worst < WORST_BOUND_S);
     free(f);
 }
 
@@ -284,12 +297,143 @@ static void test_camera_stops_is_an_error_soon(void **state)
         }
     printf("# camera stopped: error after %.3f s: %s\n", t_err - t_stop, why);
     assert_true(isfinite(t_err));
-    assert_true(t_err - t_stop < 0.5 + STOP_SLACK_S);
+    assert_true(t_err - t_stop < STOP_BOUND_S); /* issue 13: within 0.5 s (normal build) */
     assert_non_null(strstr(why, "camera"));
     trial_capture_counts k;
     trial_capture_stop(c, &k, why, sizeof why);
     vis_frame_free(fr);
     vis_source_close(src);
+    free(f);
+}
+
+/* GVSP packets dropped at random by the camera (Aravis's gvsp-lost-ratio; the fake camera does not
+ * resend): every frame the camera sent is accounted for (published, or counted lost or
+ * incomplete), the video has every published frame, and the capture goes on. */
+static void test_lost_packets_counted(void **state)
+{
+    (void)state;
+    fake *f = fake_start();
+    g_object_set(f->gv, "gvsp-lost-ratio", 5e-4, NULL); /* about 1 frame in 10 damaged */
+    char video[128];
+    snprintf(video, sizeof video, "%s/lossy.avi", dir);
+    trial_capture_counts k;
+    long consumed, skipped;
+    run(f, 3.0, 0.0, video, &k, &consumed, &skipped);
+    uint64_t sent = __atomic_load_n(&f->counter, __ATOMIC_ACQUIRE);
+    fake_stop(f);
+    long accounted = k.warmup + k.captured + k.lost + k.incomplete;
+    printf("# lost packets (5e-4 of them): camera sent %llu, warm-up %ld + captured %ld + lost %ld + incomplete %ld "
+           "= %ld; recorded %ld\n",
+           (unsigned long long)sent, k.warmup, k.captured, k.lost, k.incomplete, accounted, k.recorded);
+    assert_true(k.lost + k.incomplete > 0);
+    assert_int_equal(k.recorded, k.captured);
+    /* the frames still in flight when the capture stopped are the only ones not accounted */
+    assert_true(accounted <= (long)sent);
+    assert_true(accounted >= (long)sent - 4);
+    free(f);
+}
+
+/* Too many damaged frames: the capture ends with a named reason (the runner fails the trial). */
+static void test_heavy_loss_ends_capture(void **state)
+{
+    (void)state;
+    fake *f = fake_start();
+    vis_error ve = {0};
+    vis_source *src = open_cam(&ve);
+    if (!src) fail_msg("camera: %s", ve.message);
+    trial_capture_params p = trial_capture_params_default();
+    p.warmup_s = 0.2;
+    char why[256] = "";
+    trial_capture *c = trial_capture_start(src, &p, why, sizeof why);
+    if (!c) fail_msg("capture: %s", why);
+    g_object_set(f->gv, "gvsp-lost-ratio", 5e-3, NULL); /* 2 frames in 3 damaged */
+    vis_frame *fr = vis_frame_alloc(16, 16, 1, &ve);
+    trial_frame_info fi;
+    int failed = 0;
+    for (int i = 0; i < 2000 && !failed; i++) failed = trial_capture_next(c, fr, &fi, why, sizeof why) != 0;
+    printf("# heavy loss: %s\n", why);
+    assert_true(failed);
+    assert_non_null(strstr(why, "lost or incomplete"));
+    trial_capture_counts k;
+    char w2[256];
+    assert_int_equal(trial_capture_stop(c, &k, w2, sizeof w2), 0);
+    assert_true(k.lost + k.incomplete > 0);
+    vis_frame_free(fr);
+    vis_source_close(src);
+    fake_stop(f);
+    free(f);
+}
+
+/* A frozen camera (the same image frame after frame): same_run counts it; before, every frame is new. */
+static void test_frozen_image_counted(void **state)
+{
+    (void)state;
+    fake *f = fake_start();
+    vis_error ve = {0};
+    vis_source *src = open_cam(&ve);
+    if (!src) fail_msg("camera: %s", ve.message);
+    trial_capture_params p = trial_capture_params_default();
+    p.warmup_s = 0.2;
+    char why[256] = "";
+    trial_capture *c = trial_capture_start(src, &p, why, sizeof why);
+    if (!c) fail_msg("capture: %s", why);
+    vis_frame *fr = vis_frame_alloc(16, 16, 1, &ve);
+    trial_frame_info fi;
+    for (int i = 0; i < 30; i++) {
+        assert_int_equal(trial_capture_next(c, fr, &fi, why, sizeof why), 0);
+        assert_int_equal(fi.same_run, 1);
+    }
+    __atomic_store_n(&f->frozen, 1, __ATOMIC_RELEASE);
+    long run_max = 0;
+    for (int i = 0; i < 60; i++) {
+        assert_int_equal(trial_capture_next(c, fr, &fi, why, sizeof why), 0);
+        if (fi.same_run > run_max) run_max = fi.same_run;
+    }
+    printf("# frozen image: %ld identical frames in a row seen in 60\n", run_max);
+    assert_true(run_max >= TRIAL_FROZEN_FRAMES);
+    trial_capture_counts k;
+    assert_int_equal(trial_capture_stop(c, &k, why, sizeof why), 0);
+    vis_frame_free(fr);
+    vis_source_close(src);
+    fake_stop(f);
+    free(f);
+}
+
+/* Frames in another pixel format than Mono8: the capture does not start (named), and no video or
+ * frame-times file is left behind. */
+static void test_not_mono8_refused_nothing_written(void **state)
+{
+    (void)state;
+    fake *f = fake_start();
+    vis_error ve = {0};
+    vis_source *src = open_cam(&ve);
+    if (!src) fail_msg("camera: %s", ve.message);
+    /* the camera switches to Mono16 behind the program's back */
+    arv_fake_camera_write_register(arv_gv_fake_camera_get_fake_camera(f->gv), ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT,
+                                   ARV_PIXEL_FORMAT_MONO_16);
+    char video[128], times[160];
+    snprintf(video, sizeof video, "%s/mono16.avi", dir);
+    snprintf(times, sizeof times, "%s.frames.csv", video);
+    trial_capture_params p = trial_capture_params_default();
+    p.video_path = video;
+    p.roi = (trial_roi){0, 0, W, H};
+    char why[256] = "";
+    trial_capture *c = NULL;
+    /* frames already in Aravis's pool may still be Mono8: a few tries */
+    for (int i = 0; i < 3 && (c = trial_capture_start(src, &p, why, sizeof why)) != NULL; i++) {
+        char w2[256];
+        trial_capture_stop(c, NULL, w2, sizeof w2);
+        c = NULL;
+        unlink(video);
+        unlink(times);
+    }
+    printf("# %s\n", why);
+    assert_null(c);
+    assert_non_null(strstr(why, "Mono8"));
+    assert_int_equal(access(video, F_OK), -1);
+    assert_int_equal(access(times, F_OK), -1);
+    vis_source_close(src);
+    fake_stop(f);
     free(f);
 }
 
@@ -310,6 +454,11 @@ static void test_named_errors(void **state)
     assert_null(vis_source_open_camera(&cs, &ve));
     printf("# %s\n", ve.message);
     assert_non_null(strstr(ve.message, "refused"));
+    cs.width_px = W;
+    cs.fps = 1e6; /* beyond the camera's AcquisitionFrameRate */
+    assert_null(vis_source_open_camera(&cs, &ve));
+    printf("# %s\n", ve.message);
+    assert_non_null(strstr(ve.message, "AcquisitionFrameRate"));
     fake_stop(f);
     free(f);
 }
@@ -320,6 +469,10 @@ int main(void)
         cmocka_unit_test(test_every_frame_recorded_bit_exact_and_stamped),
         cmocka_unit_test(test_slow_tracker_skips_video_complete),
         cmocka_unit_test(test_camera_stops_is_an_error_soon),
+        cmocka_unit_test(test_lost_packets_counted),
+        cmocka_unit_test(test_heavy_loss_ends_capture),
+        cmocka_unit_test(test_frozen_image_counted),
+        cmocka_unit_test(test_not_mono8_refused_nothing_written),
         cmocka_unit_test(test_named_errors),
     };
     return cmocka_run_group_tests(tests, setup, NULL);

@@ -1,0 +1,155 @@
+/* test_trial_replay_times: a replay of an outside rig recording (a Y800 .avi with the
+ * VIDEO.frames.csv rig mode's recorder writes beside it) puts each frame at its stored time, not at
+ * f / fps: the frames' times here are uneven (a 50 ms period with every other frame 20 ms late and
+ * an absolute base on the rails' clock); the rails CSV is a shear ramp, so each sample's time and
+ * its shear position both tell which time was used. Also: a frames file with a time going back is
+ * a named error. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "rig_config.h"
+#include "store.h"
+#include "trial_replay.h"
+#include "vision.h"
+
+#define NF 30
+#define W 320
+#define H 240
+#define FPS 20.0
+
+static char dir[64];
+
+static double frame_t(int k) { return 1000.0 + 0.05 * k + (k % 2 ? 0.02 : 0.0); } /* rails' clock, s */
+
+static void write_files(int bad_times)
+{
+    char p[160];
+    vis_error ve = {0};
+    snprintf(p, sizeof p, "%s/rec.avi", dir);
+    vis_video_writer *vw = vis_video_writer_open_y800(p, W, H, FPS, &ve);
+    if (!vw) fail_msg("video: %s", ve.message);
+    vis_frame *f = vis_frame_alloc(W, H, 1, &ve);
+    assert_non_null(f);
+    for (int k = 0; k < NF; k++) {
+        uint8_t *d = vis_frame_data(f);
+        for (int y = 0; y < H; y++) memset(d + (size_t)y * vis_frame_stride(f), (k * 7 + y) & 0xff, W);
+        assert_int_equal(vis_video_writer_write(vw, f, &ve), VIS_OK);
+    }
+    vis_video_writer_close(vw);
+    vis_frame_free(f);
+    snprintf(p, sizeof p, "%s/rec.avi.frames.csv", dir);
+    FILE *t = fopen(p, "w");
+    assert_non_null(t);
+    fprintf(t, "video_frame,capture_index,camera_id,camera_t_s,host_t_s,t_s\n");
+    for (int k = 0; k < NF; k++) {
+        double tk = bad_times && k == 10 ? frame_t(k - 2) : frame_t(k);
+        fprintf(t, "%d,%d,%d,%.9f,%.9f,%.9f\n", k, k, 100 + k, 5e8 + tk, tk + 1e-4, tk);
+    }
+    fclose(t);
+    /* the rails: a shear ramp of 10 mm/s over the recording (on the rails' clock, from frame 0) */
+    snprintf(p, sizeof p, "%s/rails.csv", dir);
+    t = fopen(p, "w");
+    assert_non_null(t);
+    fprintf(t, "t_s,compress_mm,shear_mm\n");
+    for (int k = -10; k <= 40; k++) fprintf(t, "%.3f,110,%.6f\n", 0.1 * k, 50.0 + 10.0 * (0.1 * k));
+    fclose(t);
+    vis_calib cal = vis_calib_default();
+    const double l[2] = {40, 120}, r[2] = {280, 120};
+    assert_int_equal(vis_calib_from_clamps(&cal, l, r, 150.0, &ve), VIS_OK);
+    snprintf(p, sizeof p, "%s/camera.calib", dir);
+    assert_int_equal(vis_calib_save(&cal, p, &ve), VIS_OK);
+    snprintf(p, sizeof p, "%s/replay.ini", dir);
+    t = fopen(p, "w");
+    assert_non_null(t);
+    fprintf(t,
+            "[rig]\nmode = replay\nscene = %s/config/scenes/mock-gamma013.ini\n"
+            "[calibration]\ncompress_zero_mm = 50\nshear_zero_mm = 50\ncompress_sign = 1\nshear_sign = 1\n"
+            "camera_side = front\ncamera_time_offset_s = 0\n"
+            "[camera]\ncalibration = %s/camera.calib\n"
+            "[replay]\nvideo = %s/rec.avi\nrails = %s/rails.csv\n"
+            "[store]\npath = %s/trials.db\n[api]\nport = 0\n",
+            RIBBON_SOURCE_DIR, dir, dir, dir, dir);
+    fclose(t);
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    snprintf(dir, sizeof dir, "/tmp/test_trial_replay_times.XXXXXX");
+    return mkdtemp(dir) ? 0 : -1;
+}
+
+static void test_replay_uses_stored_times(void **state)
+{
+    (void)state;
+    write_files(0);
+    char p[160], why[512] = "";
+    snprintf(p, sizeof p, "%s/replay.ini", dir);
+    static rig_config cfg;
+    cfg_error ce;
+    if (rig_config_load(p, NULL, 0, &cfg, &ce) != CFG_OK) fail_msg("%s", cfg_error_format(&ce, why, sizeof why));
+    trial_replay *r = NULL;
+    if (trial_replay_from_files(&cfg, &r, why, sizeof why)) fail_msg("replay: %s", why);
+    store *st = NULL;
+    snprintf(p, sizeof p, "%s/trials.db", dir);
+    assert_int_equal(store_open(p, &st, why, sizeof why), STORE_OK);
+    int64_t id = 0;
+    trial_result res;
+    trial_replay_run(r, st, "uneven times", NULL, NULL, &id, &res, why, sizeof why);
+    trial_replay_free(r);
+    assert_true(id > 0);
+    store_sample *smp = NULL;
+    size_t ns = 0;
+    assert_int_equal(store_samples_get(st, id, &smp, &ns, why, sizeof why), STORE_OK);
+    int seen = 0;
+    double worst_t = 0.0, worst_s = 0.0;
+    for (size_t k = 0; k < ns; k++) {
+        if (smp[k].kind != STORE_SAMPLE_FRAME) continue;
+        const long f = smp[k].frame;
+        assert_true(f >= 0 && f < NF);
+        const double want = frame_t((int)f) - frame_t(0); /* not f / FPS */
+        worst_t = fmax(worst_t, fabs(smp[k].t_s - want));
+        worst_s = fmax(worst_s, fabs(smp[k].shear_mm - (50.0 + 10.0 * want)));
+        seen++;
+    }
+    printf("# %d frame samples; |t - stored time| <= %.2g s, |shear - ramp at it| <= %.2g mm (f / fps would put "
+           "every odd frame 20 ms early)\n",
+           seen, worst_t, worst_s);
+    assert_int_equal(seen, NF);
+    assert_true(worst_t < 1e-6);
+    assert_true(worst_s < 1e-4);
+    free(smp);
+    store_close(st);
+}
+
+static void test_times_going_back_refused(void **state)
+{
+    (void)state;
+    write_files(1);
+    char p[160], why[512] = "";
+    snprintf(p, sizeof p, "%s/replay.ini", dir);
+    static rig_config cfg;
+    cfg_error ce;
+    assert_int_equal(rig_config_load(p, NULL, 0, &cfg, &ce), CFG_OK);
+    trial_replay *r = NULL;
+    assert_int_not_equal(trial_replay_from_files(&cfg, &r, why, sizeof why), 0);
+    printf("# %s\n", why);
+    assert_non_null(strstr(why, "frames.csv line 12"));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_replay_uses_stored_times),
+        cmocka_unit_test(test_times_going_back_refused),
+    };
+    return cmocka_run_group_tests(tests, setup, NULL);
+}
