@@ -47,7 +47,7 @@ static const rail_key rail_keys[] = {
     C("axis", gcode.axis, "gcode: X, Y or Z, the controller axis this rail is"),
     D("segment_s", gcode.segment_s, 0.05, 2, "s", "gcode: motion per jog segment"),
     I("segments_ahead", gcode.segments_ahead, 1, 4, "1", "gcode: segments queued beyond the position"),
-    D("reply_timeout_s", gcode.reply_timeout_s, 0.01, 10, "s", "gcode: wait for ok or a status report"),
+    D("reply_timeout_s", gcode.reply_timeout_s, 0.01, 10, "s", "gcode: wait for ok or a status report (asked again at half of it; lost after it)"),
     D("stall_timeout_s", gcode.stall_timeout_s, 0.05, 60, "s",
       "gcode: time without progress while moving before a stall fault"),
     D("min_segment_mm", gcode.min_segment_mm, 1e-4, 10, "mm", "gcode: shortest jog segment"),

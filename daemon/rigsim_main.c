@@ -1,9 +1,10 @@
 /* rigsim_main.c: `ribbon-rigsim`, the rig's hardware in one process, in real time (daemon/rigsim/):
- * the GRBL controller of the rig file's two rails on a pseudo-terminal linked at their port, the
- * ribbon as the digital twin stepped with the axes' actual positions, and a GigE Vision camera on
- * 127.0.0.1 filming it. Writes the camera calibration file the rig file names, and a truth log of
- * every image sent (time, axis positions). Prints "ready" once ribbond may start, then serves
- * until SIGINT/SIGTERM or --duration. Faults on a schedule (seconds after start). */
+ * the rig file's rails (one GRBL controller on a pseudo-terminal linked at their port, or two
+ * Modbus TCP drives on the 127.0.0.1 addresses they name), the ribbon as the digital twin stepped
+ * with the axes' actual positions, and a GigE Vision camera on 127.0.0.1 filming it. Writes the
+ * camera calibration file the rig file names, a truth log of every image sent (time, axis
+ * positions) and optionally an axes log. Prints "ready" once ribbond may start, then serves until
+ * SIGINT/SIGTERM or --duration. Faults on a schedule (seconds after start) or on signals. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,14 +20,16 @@
 
 #define PROG "ribbon-rigsim"
 
-/* Faults on command: SIGUSR1 cuts the controller's link, SIGUSR2 stops the camera (the handler
- * only sets a flag; the main loop applies it). */
-static volatile sig_atomic_t cut_link, stop_camera, freeze_image;
+/* Faults on command: SIGUSR1 cuts the rails' link, SIGUSR2 stops the camera, SIGRTMIN freezes the
+ * image, SIGRTMIN+1 raises an alarm (GRBL: the controller's ALARM:1; Modbus: the shear drive's
+ * alarm) (the handler only sets a flag; the main loop applies it). */
+static volatile sig_atomic_t cut_link, stop_camera, freeze_image, raise_alarm;
 static void on_usr(int sig)
 {
     if (sig == SIGUSR1) cut_link = 1;
     if (sig == SIGUSR2) stop_camera = 1;
     if (sig == SIGRTMIN) freeze_image = 1;
+    if (sig == SIGRTMIN + 1) raise_alarm = 1;
 }
 #define MAX_SETS 32
 
@@ -38,15 +41,20 @@ static void usage(FILE *f)
             "  --start-dl DL         compression the specimen is mounted at (default 0.2)\n"
             "  --serial S            the camera's serial number (default RIBBONSIM)\n"
             "  --truth PATH          truth log of every image sent (CSV)\n"
+            "  --axes-log PATH       both axes' actual positions every 5 ms (CSV)\n"
             "  --duration S          exit after S seconds (default: until signalled)\n"
-            "  --alarm-after S       the controller raises ALARM:1 S seconds after start\n"
-            "  --link-lost-after S   the controller stops answering S seconds after start\n"
-            "  --stall AXIS:MM       axis X|Y stalls at MM\n"
+            "  --alarm-after S       the controller raises ALARM:1 (Modbus: the shear drive an alarm)\n"
+            "                        S seconds after start\n"
+            "  --link-lost-after S   the controller (the drives) stop answering S seconds after start\n"
+            "  --stall AXIS:MM       axis X|Y stalls at MM (Modbus: X the compression, Y the shear drive)\n"
             "  --camera-stop-after S the camera stops sending S seconds after start\n"
             "  --freeze-after S      the image freezes S seconds after start\n"
             "  --lost-packets R      the camera drops each GVSP packet with probability R (0..1)\n"
-            "signals: SIGUSR1 cuts the controller's link now, SIGUSR2 stops the camera now,\n"
-            "         SIGRTMIN freezes the image now\n");
+            "rails: one GRBL controller on a pty (both rails driver = gcode, one port) or two Modbus TCP\n"
+            "       drives on 127.0.0.1 (both driver = modbus, map = ribbon-sim)\n"
+            "signals: SIGUSR1 cuts the rails' link now, SIGUSR2 stops the camera now,\n"
+            "         SIGRTMIN freezes the image now, SIGRTMIN+1 raises the alarm now\n"
+            "         (GRBL ALARM:1; Modbus: the shear drive's alarm 0x30)\n");
 }
 
 static int num(const char *opt, const char *v, double lo, double hi, double *out)
@@ -60,7 +68,7 @@ int main(int argc, char **argv)
         usage(argc < 2 ? stderr : stdout);
         return argc < 2 ? 2 : 0;
     }
-    const char *rig_path = argv[1], *serial = "RIBBONSIM", *truth = NULL;
+    const char *rig_path = argv[1], *serial = "RIBBONSIM", *truth = NULL, *axes_log = NULL;
     const char *sets[MAX_SETS];
     int n_sets = 0;
     double start_dl = 0.2, duration = -1.0;
@@ -85,6 +93,8 @@ int main(int argc, char **argv)
             serial = v;
         else if (!strcmp(a, "--truth"))
             truth = v;
+        else if (!strcmp(a, "--axes-log"))
+            axes_log = v;
         else if (!strcmp(a, "--duration"))
             bad = num(a, v, 0.0, 1e7, &duration);
         else if (!strcmp(a, "--alarm-after"))
@@ -130,7 +140,7 @@ int main(int argc, char **argv)
     }
     double c0 = rig_calib_compress_mm(&cfg.calib, sc.length, start_dl);
     rigsim_rails *rails = NULL;
-    if (rigsim_rails_start(&cfg, c0, &rf, &rails, why, sizeof why)) {
+    if (rigsim_rails_start(&cfg, c0, &rf, axes_log, &rails, why, sizeof why)) {
         fprintf(stderr, PROG ": rails: %s\n", why);
         return 1;
     }
@@ -141,7 +151,8 @@ int main(int argc, char **argv)
         rigsim_rails_stop(rails);
         return 1;
     }
-    printf("port: %s\ncamera: aravis:127.0.0.1 (serial %s)\ncalibration: %s\ntwin: N = %d, dt = %g s\nready\n",
+    printf("rails thread: %s\n", rigsim_rails_realtime(rails) ? "real-time priority" : "normal priority");
+    printf("rails: %s\ncamera: aravis:127.0.0.1 (serial %s)\ncalibration: %s\ntwin: N = %d, dt = %g s\nready\n",
            rigsim_rails_port(rails), serial, cfg.camera.calibration, sc.nodes, sc.dt);
     fflush(stdout);
     volatile sig_atomic_t *stop = railsim_cli_catch_stop();
@@ -151,6 +162,7 @@ int main(int argc, char **argv)
     sigaction(SIGUSR1, &sa, NULL);
     sigaction(SIGUSR2, &sa, NULL);
     sigaction(SIGRTMIN, &sa, NULL);
+    sigaction(SIGRTMIN + 1, &sa, NULL);
     struct timespec t0;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     while (!*stop) {
@@ -160,10 +172,15 @@ int main(int argc, char **argv)
             cut_link = 0;
             rigsim_rails_cut_link(rails);
         }
+        if (raise_alarm) {
+            raise_alarm = 0;
+            rigsim_rails_alarm(rails);
+        }
         if (stop_camera) {
             stop_camera = 0;
             rigsim_camera_stop_sending(cam);
         }
+        rigsim_rails_flush(rails);
         if (freeze_image) {
             freeze_image = 0;
             rigsim_camera_freeze(cam);

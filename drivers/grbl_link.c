@@ -68,6 +68,7 @@ static void async_line(grbl_link *l, const char *line, size_t len)
 static rail_err read_line(grbl_link *l, char *out, size_t cap, size_t *len, double timeout_s)
 {
     double t0 = rail_clock_now(l->clock);
+    bool last_look = false;
     *len = 0;
     for (int guard = 0; guard < 4096; guard++) {
         /* A complete line already buffered? */
@@ -91,14 +92,21 @@ static rail_err read_line(grbl_link *l, char *out, size_t cap, size_t *len, doub
                          sizeof l->rx);
         }
         double left = timeout_s - (rail_clock_now(l->clock) - t0);
-        if (guard > 0 && left <= 0.0)
+        if (guard > 0 && left <= 0.0 && last_look)
             return lfail(l, RAIL_E_TIMEOUT, "no reply from %.100s within %.3f s", l->ser->path, timeout_s);
+        /* Past the deadline, one last look without waiting: if this thread was not scheduled
+           while the reply arrived, the reply is waiting; only the controller's silence is a
+           timeout, never our own stall. */
+        if (guard > 0 && left <= 0.0)
+            last_look = true;
         size_t got = 0;
         rail_err e = rail_serial_read(l->ser, l->rx + l->rx_len, sizeof l->rx - l->rx_len, &got,
                                       left > 0.05 ? 0.05 : left > 0.0 ? left : 0.0);
         if (e != RAIL_OK)
             return lfail(l, e, "%s", l->ser->why);
         l->rx_len += got;
+        if (got > 0)
+            last_look = false;
     }
     return lfail(l, RAIL_E_TIMEOUT, "no complete reply line");
 }
@@ -203,15 +211,30 @@ rail_err grbl_link_status(grbl_link *l, grbl_report *rep)
     char line[300];
     size_t len;
     rail_err bad = RAIL_OK;
+    bool asked_again = false;
     for (int i = 0; i < 64; i++) {
-        double left = l->reply_timeout_s - (rail_clock_now(l->clock) - t0);
+        /* Half the reply timeout without a report: ask once more (a '?' lost on the line is not
+           a lost controller); the controller is silent, and the link lost, only when neither
+           request is answered within reply_timeout_s of the first. */
+        double el = rail_clock_now(l->clock) - t0;
+        double left = (asked_again ? l->reply_timeout_s : 0.5 * l->reply_timeout_s) - el;
         e = read_line(l, line, sizeof line, &len, left > 0.0 ? left : 0.0);
+        if (e == RAIL_E_TIMEOUT && !asked_again) {
+            asked_again = true;
+            e = grbl_link_realtime(l, '?');
+            if (e != RAIL_OK)
+                return e;
+            continue;
+        }
         if (e == RAIL_E_PROTOCOL) {
             bad = e;
             continue;
         }
         if (e == RAIL_E_TIMEOUT && bad != RAIL_OK)
             return bad;
+        if (e == RAIL_E_TIMEOUT)
+            return lfail(l, e, "no reply to '?' from %.100s within %.3f s (asked twice)", l->ser->path,
+                         l->reply_timeout_s);
         if (e != RAIL_OK)
             return e;
         int code = 0;

@@ -695,3 +695,8 @@ void grbl_sim_close(grbl_sim *s)
         close(s->master);
     free(s);
 }
+
+void grbl_sim_raise_alarm(grbl_sim *s, int code)
+{
+    raise_alarm(s, code);
+}

@@ -48,6 +48,9 @@ const char *grbl_sim_path(const grbl_sim *s);   /* the slave pty path clients op
 /* The axes' actual positions (mm; a stalled axis where it stalled) as of the last step, and the
  * controller's time (its clock, s) of that step. Not thread-safe against grbl_sim_step. */
 void grbl_sim_positions(const grbl_sim *s, double mm[GRBL_SIM_AXES], double *t_s);
+/* A fault on command (not thread-safe against grbl_sim_step): ALARM:code now (axes halt, queue
+ * flushed, locked until $X), as a limit switch or the board's own fault would. */
+void grbl_sim_raise_alarm(grbl_sim *s, int code);
 /* One iteration: wait up to max_wait_s for input, handle it, advance the axes. */
 rail_err grbl_sim_step(grbl_sim *s, double max_wait_s);
 /* Iterate until *stop becomes non-zero (signal flag) or duration_s passes (negative: forever). */

@@ -54,6 +54,7 @@ struct mb_sim {
     double t_start, t_last, t_request;
     rail_axis ax;
     bool homing, stalled, alarm_fired;
+    bool deaf;          /* requests read, never answered (mb_sim_set_deaf) */
     int alarm;         /* current alarm code, 0 = none */
     unsigned rng;
 };
@@ -202,6 +203,8 @@ static bool serve_request(mb_sim *s, int client_fd)
     if (rc <= 0)
         return rc == 0; /* 0: a request for another slave (RTU), ignored */
     advance(s);
+    if (s->deaf)
+        return true; /* the request is lost on the way: no reply, the watchdog is not fed */
     int hl = modbus_get_header_length(s->ctx); /* TCP 7 (unit id is q[6]), RTU 1 (q[0]) */
     int unit = q[hl - 1];
     if (!s->p.rtu && unit != s->p.slave && unit != 0xff && unit != 0) {
@@ -433,4 +436,21 @@ void mb_sim_close(mb_sim *s)
         modbus_free(s->ctx);
     }
     free(s);
+}
+
+void mb_sim_position(const mb_sim *s, double *mm, double *t_s)
+{
+    *mm = s->ax.pos_mm;
+    if (t_s)
+        *t_s = s->t_last;
+}
+
+void mb_sim_raise_alarm(mb_sim *s, int code)
+{
+    raise_alarm(s, code);
+}
+
+void mb_sim_set_deaf(mb_sim *s, bool deaf)
+{
+    s->deaf = deaf;
 }

@@ -18,6 +18,7 @@
 #define RIBBON_DRIVERS_MB_SIM_H
 
 #include <signal.h>
+#include <stdbool.h>
 #include <stddef.h>
 
 #include "rail.h"
@@ -51,6 +52,14 @@ rail_err mb_sim_open(mb_sim **out, const mb_sim_params *p, char *why, size_t why
 int mb_sim_port(const mb_sim *s);           /* TCP port */
 const char *mb_sim_path(const mb_sim *s);   /* RTU: the pty path, "" for TCP */
 rail_err mb_sim_step(mb_sim *s, double max_wait_s);
+/* The axis's actual position (mm; a stalled axis where it stalled) as of the last step, and the
+ * drive's time (its clock, s) of that step. Not thread-safe against mb_sim_step. */
+void mb_sim_position(const mb_sim *s, double *mm, double *t_s);
+/* Faults on command (not thread-safe against mb_sim_step): raise alarm `code` now (the axis
+ * halts: a drive fault); deaf: requests are read and never answered (a cut cable: the axis goes
+ * on until the communication watchdog halts it). */
+void mb_sim_raise_alarm(mb_sim *s, int code);
+void mb_sim_set_deaf(mb_sim *s, bool deaf);
 rail_err mb_sim_run(mb_sim *s, double duration_s, volatile sig_atomic_t *stop);
 void mb_sim_close(mb_sim *s);
 

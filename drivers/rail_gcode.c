@@ -86,10 +86,12 @@ static rail_err gcode_poll(rail *r, void *impl, rail_status *out)
     gcode *k = impl;
     grbl_report rep;
     rail_err e = RAIL_E_TIMEOUT;
-    /* One retry: a single garbled or dropped report is not yet a lost link. */
+    /* One retry after a garbled report: a single bad line is not yet a fault. A silent
+       controller is not retried here: grbl_link_status has already asked twice within
+       reply_timeout_s, which is the bound on detecting a lost link. */
     for (int i = 0; i < 2; i++) {
         e = grbl_link_status(k->l, &rep);
-        if (e == RAIL_OK || e == RAIL_E_DISCONNECTED || e == RAIL_E_IO)
+        if (e != RAIL_E_PROTOCOL)
             break;
     }
     out->code = 0;

@@ -207,6 +207,14 @@ static void print_comparison(const json_t *t)
     printf("\n");
     if (json_is_number(m) && json_is_number(p) && json_number_value(p) != 0.0)
         printf("  difference %.2f%%\n", 100.0 * (json_number_value(m) - json_number_value(p)) / json_number_value(p));
+    json_t *lc = json_object_get(t, "stop_cmd_latency_s"), *ls = json_object_get(t, "stop_stand_latency_s");
+    if (json_is_number(lc)) {
+        printf("  snap-to-stop latency %.1f ms to the stop command", 1e3 * json_number_value(lc));
+        if (json_is_number(ls))
+            printf(", %.1f ms to the shear rail standing\n", 1e3 * json_number_value(ls));
+        else
+            printf(" (the rail was not read standing before the return)\n");
+    }
 }
 
 static int open_db(const ctl_opts *o, store **st, int read_only)

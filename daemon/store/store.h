@@ -33,7 +33,7 @@
 #include <jansson.h>
 
 /* The schema version this program creates and understands (see the migration list in store.c). */
-#define STORE_SCHEMA_VERSION 3
+#define STORE_SCHEMA_VERSION 4
 
 /* Errors of the store layer; store_err_message() gives the generic text, why the specific one. */
 typedef enum store_err {
@@ -186,6 +186,8 @@ typedef struct store_trial {
     store_regime regime_measured;
     char software_version[32];
     int64_t samples;            /* samples stored for the trial */
+    double stop_cmd_latency_s;  /* s, snap detection frame -> shear stop command returned; NaN = none */
+    double stop_stand_latency_s; /* s, snap detection frame -> shear rail read standing; NaN = none */
 } store_trial;
 
 store_err store_trial_create(store *st, const store_trial_def *def, int64_t *id, char *why, size_t why_len);
@@ -201,6 +203,9 @@ store_err store_trial_set_state(store *st, int64_t id, const char *state, char *
  * Not snapped: snap_dw NaN, regime no-snap. */
 store_err store_trial_set_result(store *st, int64_t id, bool snapped, double snap_dw, store_regime regime,
                                  char *why, size_t why_len);
+/* The snap-to-stop latency (s; NaN = not measured, stored NULL; negative or infinite refused). */
+store_err store_trial_set_latency(store *st, int64_t id, double stop_cmd_s, double stop_stand_s, char *why,
+                                  size_t why_len);
 store_err store_trial_set_video(store *st, int64_t id, const char *video_path, char *why, size_t why_len);
 /* At daemon start-up: every unfinished trial ('running', or 'created': killed before it started
  * moving) becomes 'interrupted' (ended at wall_s, a reason and a fault event added). *count gets

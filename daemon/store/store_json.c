@@ -14,13 +14,14 @@
     " t.video_path, t.source_trial_id, s.name, t.created_at, t.started_at, t.ended_at,"                     \
     " t.software_version, t.samples_count,"                                                                 \
     " p.id, p.snap_dw, p.regime, p.nodes, p.dt, p.adaptive, p.est_error, p.wall_s, p.imperfection,"          \
-    " p.scene_hash, t.calibration_json"                                                                     \
+    " p.scene_hash, t.calibration_json, t.stop_cmd_latency_s, t.stop_stand_latency_s"                                                                     \
     " FROM trials t LEFT JOIN specimens s ON s.id = t.specimen_id"                                          \
     " LEFT JOIN predictions p ON p.id = (SELECT max(id) FROM predictions WHERE trial_id = t.id) "
 
 enum { C_ID, C_MODE, C_STATUS, C_STATE, C_REASON, C_SNAPPED, C_SNAP_DW, C_REGIME, C_VIDEO, C_SOURCE, C_SPECIMEN,
        C_CREATED, C_STARTED, C_ENDED, C_VERSION, C_SAMPLES, C_P_ID, C_P_SNAP_DW, C_P_REGIME, C_P_NODES, C_P_DT,
-       C_P_ADAPTIVE, C_P_EST_ERROR, C_P_WALL_S, C_P_IMPERFECTION, C_P_HASH, C_CALIBRATION };
+       C_P_ADAPTIVE, C_P_EST_ERROR, C_P_WALL_S, C_P_IMPERFECTION, C_P_HASH, C_CALIBRATION, C_STOP_CMD,
+       C_STOP_STAND };
 
 static json_t *jreal(double v)
 {
@@ -88,7 +89,9 @@ static json_t *trial_object(sqlite3_stmt *s)
               set(o, "video_path", jcol_text(s, C_VIDEO)) && set(o, "source_trial", jcol_int(s, C_SOURCE)) &&
               set(o, "specimen", jcol_text(s, C_SPECIMEN)) && set(o, "created", jcol_text(s, C_CREATED)) &&
               set(o, "started", jcol_text(s, C_STARTED)) && set(o, "ended", jcol_text(s, C_ENDED)) &&
-              set(o, "software_version", jcol_text(s, C_VERSION));
+              set(o, "software_version", jcol_text(s, C_VERSION)) &&
+              set(o, "stop_cmd_latency_s", jcol_real(s, C_STOP_CMD)) &&
+              set(o, "stop_stand_latency_s", jcol_real(s, C_STOP_STAND));
     if (ok && sqlite3_column_type(s, C_P_ID) == SQLITE_NULL) {
         ok = set(o, "prediction", json_null());
     } else if (ok) {

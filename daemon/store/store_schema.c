@@ -18,7 +18,8 @@
  *   trials           id | mode status state reason | config_text calibration_json |
  *                    specimen_id -> specimens | source_trial_id -> trials | video_path |
  *                    created_at started_at ended_at | snapped snap_dw_measured regime_measured |
- *                    software_version | samples_count (v3, kept by the sample writer)
+ *                    software_version | samples_count (v3, kept by the sample writer) |
+ *                    stop_cmd_latency_s stop_stand_latency_s (v4: snap-to-stop latency)
  *   samples          (trial_id -> trials, seq) | t_s kind frame | compress_mm shear_mm |
  *                    dl dw dz a quality reason                              (WITHOUT ROWID)
  *   events           id | trial_id -> trials | t_s wall_time state kind message
@@ -113,6 +114,14 @@ static const char schema_v3[] =
     "UPDATE trials SET samples_count = (SELECT count(*) FROM samples WHERE samples.trial_id = trials.id);"
     "PRAGMA user_version = 3;";
 
+/* v4: the snap-to-stop latency of a live trial (issue 13): from the frame in which the snap was
+ * detected to the shear stop command's return, and to the first fresh reading of the shear rail
+ * standing (s). NULL when there was no snap stop, or it was not seen standing before the return. */
+static const char schema_v4[] =
+    "ALTER TABLE trials ADD COLUMN stop_cmd_latency_s REAL CHECK (stop_cmd_latency_s >= 0);"
+    "ALTER TABLE trials ADD COLUMN stop_stand_latency_s REAL CHECK (stop_stand_latency_s >= 0);"
+    "PRAGMA user_version = 4;";
+
 typedef struct store_migration {
     int version;      /* user_version after the step */
     const char *what; /* for reasons */
@@ -123,6 +132,7 @@ static const store_migration migrations[] = {
     {1, "base schema", schema_v1},
     {2, "ladder cache and indexes", schema_v2},
     {3, "sample count per trial", schema_v3},
+    {4, "snap-to-stop latency per trial", schema_v4},
 };
 #define N_MIGRATIONS (sizeof migrations / sizeof migrations[0])
 _Static_assert(sizeof migrations / sizeof migrations[0] == STORE_SCHEMA_VERSION,

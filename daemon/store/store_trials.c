@@ -214,6 +214,29 @@ store_err store_trial_set_result(store *st, int64_t id, bool snapped, double sna
     return update_one(st, s, id, "saving a trial's result", why, why_len);
 }
 
+store_err store_trial_set_latency(store *st, int64_t id, double stop_cmd_s, double stop_stand_s, char *why,
+                                  size_t why_len)
+{
+    store_err e = store_check_writable(st, why, why_len);
+    if (e != STORE_OK)
+        return e;
+    const double v[2] = {stop_cmd_s, stop_stand_s};
+    const char *name[2] = {"stop_cmd_latency_s", "stop_stand_latency_s"};
+    for (int k = 0; k < 2; k++)
+        if (!isnan(v[k]) && !(isfinite(v[k]) && v[k] >= 0.0))
+            return store_fail(why, why_len, STORE_E_INVALID, "trial %s %g: a latency is finite and not negative",
+                              name[k], v[k]);
+    sqlite3_stmt *s;
+    e = store_prepare(st, "UPDATE trials SET stop_cmd_latency_s = ?1, stop_stand_latency_s = ?2 WHERE id = ?3", &s,
+                      why, why_len);
+    if (e != STORE_OK)
+        return e;
+    store_bind_real(s, 1, stop_cmd_s);
+    store_bind_real(s, 2, stop_stand_s);
+    sqlite3_bind_int64(s, 3, id);
+    return update_one(st, s, id, "saving a trial's snap-to-stop latency", why, why_len);
+}
+
 store_err store_trial_set_video(store *st, int64_t id, const char *video_path, char *why, size_t why_len)
 {
     store_err e = store_check_writable(st, why, why_len);
@@ -281,7 +304,7 @@ store_err store_trial_mark_interrupted(store *st, double wall_s, int *count, cha
 #define TRIAL_COLUMNS                                                                                       \
     "SELECT t.id, t.mode, t.status, t.state, t.reason, t.specimen_id, s.name, t.source_trial_id,"           \
     " t.video_path, t.created_at, t.started_at, t.ended_at, t.snapped, t.snap_dw_measured,"                 \
-    " t.regime_measured, t.software_version, t.samples_count"                                               \
+    " t.regime_measured, t.software_version, t.samples_count, t.stop_cmd_latency_s, t.stop_stand_latency_s"                                               \
     " FROM trials t LEFT JOIN specimens s ON s.id = t.specimen_id "
 
 /* The shared trial row behind store_trial_get/_list. */
@@ -309,6 +332,8 @@ static store_err store_trial_read_row(sqlite3_stmt *s, store_trial *out)
         return STORE_E_CORRUPT;
     store_col_text(s, 15, out->software_version, sizeof out->software_version);
     out->samples = sqlite3_column_int64(s, 16);
+    out->stop_cmd_latency_s = store_col_real(s, 17);
+    out->stop_stand_latency_s = store_col_real(s, 18);
     return STORE_OK;
 }
 

@@ -133,9 +133,9 @@ int trial_live_close(trial_live *l, trial_capture_counts *counts, char *summary,
     if (!l) return 0;
     trial_capture_counts k;
     memset(&k, 0, sizeof k);
-    double max_poll = 0.0;
+    double max_poll = 0.0, max_gap = 0.0;
     long polls = 0;
-    trial_rail_poller_stats(l->poller, &max_poll, &polls);
+    trial_rail_poller_stats(l->poller, &max_poll, &max_gap, &polls);
     trial_rail_poller_stop(l->poller);
     int rc = trial_capture_stop(l->cap, &k, why, why_len);
     vis_source_close(l->src);
@@ -144,9 +144,10 @@ int trial_live_close(trial_live *l, trial_capture_counts *counts, char *summary,
     snprintf(summary, summary_len,
              "pipeline: %ld frames captured, %ld lost by the camera or link (id gaps), %ld incomplete buffers, "
              "%ld dropped by the pipeline, %ld recorded, %ld not tracked (loop behind); camera clock %s "
-             "(offset %.6f s, drift %.2g, after %ld warm-up frames); slowest write %.1f ms after arrival; %ld rail polls, slowest %.1f ms",
+             "(offset %.6f s, drift %.2g, after %ld warm-up frames); slowest write %.1f ms after arrival; %ld rail "
+             "polls, slowest %.1f ms, longest gap %.1f ms",
              k.captured, k.lost, k.incomplete, k.dropped, k.recorded, k.skipped,
              k.identity_clock ? "is the host's monotonic clock" : "mapped by its arrivals' lower envelope",
-             k.offset_s, k.drift, k.warmup, 1e3 * k.max_capture_to_record_s, polls, 1e3 * max_poll);
+             k.offset_s, k.drift, k.warmup, 1e3 * k.max_capture_to_record_s, polls, 1e3 * max_poll, 1e3 * max_gap);
     return rc;
 }

@@ -1,6 +1,7 @@
 /* trial_rail_poller.c: the rails' own polling thread in a live trial (see trial_rail_poller.h). */
 #include "trial_rail_poller.h"
 
+#include <math.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -22,12 +23,14 @@ struct trial_rail_poller {
     rail_err err;
     char why[256];
     double max_poll_s;
+    double max_gap_s;        /* longest time from the end of one poll to the start of the next */
     long polls;
 };
 
 static void *poll_main(void *arg)
 {
     trial_rail_poller *p = arg;
+    double prev_end = NAN;
     for (;;) {
         pthread_mutex_lock(&p->lock);
         int stop = p->stop;
@@ -74,6 +77,8 @@ static void *poll_main(void *arg)
         p->err = e;
         if (e != RAIL_OK) snprintf(p->why, sizeof p->why, "%s", why);
         if (t1 - t0 > p->max_poll_s) p->max_poll_s = t1 - t0;
+        if (t0 - prev_end > p->max_gap_s) p->max_gap_s = t0 - prev_end;
+        prev_end = t1;
         p->polls++;
         p->have = 1;
         pthread_cond_broadcast(&p->first);
@@ -134,10 +139,11 @@ rail_err trial_rail_poller_latest(trial_rail_poller *p, rail_status *sc, rail_st
 void trial_rail_poller_lock(trial_rail_poller *p) { pthread_mutex_lock(&p->rails); }
 void trial_rail_poller_unlock(trial_rail_poller *p) { pthread_mutex_unlock(&p->rails); }
 
-void trial_rail_poller_stats(trial_rail_poller *p, double *max_poll_s, long *polls)
+void trial_rail_poller_stats(trial_rail_poller *p, double *max_poll_s, double *max_gap_s, long *polls)
 {
     pthread_mutex_lock(&p->lock);
     *max_poll_s = p->max_poll_s;
+    *max_gap_s = p->max_gap_s;
     *polls = p->polls;
     pthread_mutex_unlock(&p->lock);
 }

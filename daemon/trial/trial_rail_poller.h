@@ -27,8 +27,9 @@ rail_err trial_rail_poller_latest(trial_rail_poller *p, rail_status *sc, rail_st
                                   size_t why_len);
 void trial_rail_poller_lock(trial_rail_poller *p);
 void trial_rail_poller_unlock(trial_rail_poller *p);
-/* Longest time one poll took (s) and polls made. */
-void trial_rail_poller_stats(trial_rail_poller *p, double *max_poll_s, long *polls);
+/* Longest time one poll took (s), longest gap from one poll's end to the next one's start (s: the
+ * period plus any wait for the rails' lock or for the thread to be scheduled), and polls made. */
+void trial_rail_poller_stats(trial_rail_poller *p, double *max_poll_s, double *max_gap_s, long *polls);
 /* Stops the thread (the rails are left as they are: the runner stops them). NULL is a no-op. */
 void trial_rail_poller_stop(trial_rail_poller *p);
 

@@ -541,7 +541,13 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
         fi.index = frame;
         if (tr->capture) {
             if (trial_capture_next(tr->capture, tr->frame, &fi, why, sizeof why)) {
-                finish(&c, TRIAL_FAILED, "%s", why);
+                /* The wait for the frame may have outlasted a rail fault (a whole rig that died):
+                 * the rails' fault is named first, the camera's after it. */
+                char rwhy[256];
+                if (poll_rails(&c, rwhy, sizeof rwhy) != RAIL_OK)
+                    finish(&c, TRIAL_FAILED, "rail fault in %s: %s; and %s", trial_state_name(c.st), rwhy, why);
+                else
+                    finish(&c, TRIAL_FAILED, "%s", why);
                 break;
             }
             t_frame = fi.t_s;

@@ -498,6 +498,10 @@ static void session_store_result(trial_session *s)
     if (s->result.final == TRIAL_DONE || s->result.snapped)
         store_trial_set_result(s->st, s->trial_id, s->result.snapped, s->result.snapped ? s->result.snap_dw : NAN, reg,
                                w, sizeof w);
+    if (isfinite(s->result.stop_cmd_latency_s) &&
+        store_trial_set_latency(s->st, s->trial_id, s->result.stop_cmd_latency_s, s->result.stop_stand_latency_s, w,
+                                sizeof w) != STORE_OK)
+        session_event(s, NAN, STORE_EVENT_FAULT, w);
     store_status fin = s->result.final == TRIAL_DONE      ? STORE_STATUS_DONE
                        : s->result.final == TRIAL_ABORTED ? STORE_STATUS_ABORTED
                                                           : STORE_STATUS_FAILED;

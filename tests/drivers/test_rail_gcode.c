@@ -5,6 +5,7 @@
  * and dropped replies, and a killed controller detected as disconnected within 0.5 s.
  * Real clock: motions are short and fast so the whole file runs in a few seconds. */
 #include <math.h>
+#include <signal.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -396,6 +397,35 @@ static void test_killed_controller_is_disconnected(void **s)
     rail_close(r);
 }
 
+/* A controller that goes silent (its process stopped, the pty still open): the status request is
+ * asked again at half the reply timeout and the link is lost after reply_timeout_s of silence in
+ * all, not after two full timeouts; once it answers again, polls succeed. */
+static void test_silent_controller_lost_within_reply_timeout(void **s)
+{
+    (void)s;
+    char path[128];
+    grbl_sim_params sp = grbl_sim_params_default();
+    pid_t pid = grblsim_spawn(&sp, path, sizeof path);
+    rail *r = open_axis(path, 'X', "shear", NULL);
+    rail_status st;
+    assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
+    const double reply_timeout = rail_gcode_params_default().reply_timeout_s;
+    kill(pid, SIGSTOP);
+    double t0 = rail_clock_now(rail_clock_real());
+    rail_err e = rail_status_poll(r, &st);
+    double dt = rail_clock_now(rail_clock_real()) - t0;
+    kill(pid, SIGCONT);
+    assert_int_equal(e, RAIL_E_TIMEOUT);
+    assert_non_null(strstr(rail_last_error(r), "asked twice"));
+    assert_true(dt >= reply_timeout);
+    assert_true(dt < reply_timeout + 0.1); /* one timeout, not two */
+    e = RAIL_E_TIMEOUT;
+    for (int i = 0; i < 5 && e != RAIL_OK; i++) e = rail_status_poll(r, &st);
+    assert_int_equal(e, RAIL_OK);
+    rail_close(r);
+    grblsim_kill(pid);
+}
+
 static void test_slow_shear_rate(void **s)
 {
     (void)s;
@@ -515,6 +545,7 @@ int main(void)
         cmocka_unit_test(test_stall_detected),
         cmocka_unit_test(test_estop_mid_move),
         cmocka_unit_test(test_garbled_and_dropped_replies),
+        cmocka_unit_test(test_silent_controller_lost_within_reply_timeout),
         cmocka_unit_test(test_killed_controller_is_disconnected),
         cmocka_unit_test(test_slow_shear_rate),
         cmocka_unit_test(test_reconnect_never_resumes),

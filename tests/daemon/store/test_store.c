@@ -243,6 +243,7 @@ static void test_migrate_v1_to_current(void **state)
     assert_int_equal(t.regime_measured, STORE_REGIME_ASYMMETRIC);
     assert_string_equal(t.software_version, "0.0.9");
     assert_int_equal(t.samples, 3); /* v3 back-filled the count */
+    assert_true(isnan(t.stop_cmd_latency_s) && isnan(t.stop_stand_latency_s)); /* v4: none measured */
     int64_t n;
     OK(store_samples_count(st, 1, &n, why, sizeof why));
     assert_int_equal(n, 3);
@@ -1033,6 +1034,43 @@ static void assert_keys(const json_t *o)
             fail_msg("key %s missing", keys[i]);
 }
 
+/* v4: the snap-to-stop latency of a trial: stored, read back, NULL for NaN, in the JSON, and a
+ * negative or infinite latency refused without touching the row. */
+static void test_trial_latency(void **state)
+{
+    fixture *f = *state;
+    store *st;
+    OK(store_open(f->db, &st, why, sizeof why));
+    store_trial_def d = store_trial_def_default();
+    d.mode = STORE_MODE_RIG;
+    d.created_wall_s = T0;
+    int64_t id;
+    OK(store_trial_create(st, &d, &id, why, sizeof why));
+    store_trial t;
+    OK(store_trial_get(st, id, &t, why, sizeof why));
+    assert_true(isnan(t.stop_cmd_latency_s) && isnan(t.stop_stand_latency_s));
+    OK(store_trial_set_latency(st, id, 0.0254, 0.0711, why, sizeof why));
+    OK(store_trial_get(st, id, &t, why, sizeof why));
+    NEAR(t.stop_cmd_latency_s, 0.0254, 0);
+    NEAR(t.stop_stand_latency_s, 0.0711, 0);
+    assert_int_equal(store_trial_set_latency(st, id, -0.001, NAN, why, sizeof why), STORE_E_INVALID);
+    assert_non_null(strstr(why, "stop_cmd_latency_s"));
+    assert_int_equal(store_trial_set_latency(st, id, 0.01, INFINITY, why, sizeof why), STORE_E_INVALID);
+    OK(store_trial_get(st, id, &t, why, sizeof why));
+    NEAR(t.stop_cmd_latency_s, 0.0254, 0); /* unchanged by the refusals */
+    json_t *j = NULL;
+    OK(store_trial_json(st, id, &j, why, sizeof why));
+    NEAR(json_real_value(json_object_get(j, "stop_cmd_latency_s")), 0.0254, 0);
+    json_decref(j);
+    OK(store_trial_set_latency(st, id, 0.03, NAN, why, sizeof why)); /* not seen standing: NULL */
+    assert_int_equal(q_int(store_handle(st), "SELECT count(*) FROM trials WHERE stop_stand_latency_s IS NULL"), 1);
+    OK(store_trial_json(st, id, &j, why, sizeof why));
+    assert_true(json_is_null(json_object_get(j, "stop_stand_latency_s")));
+    json_decref(j);
+    assert_int_equal(store_trial_set_latency(st, id + 99, 0.1, 0.1, why, sizeof why), STORE_E_NOTFOUND);
+    store_close(st);
+}
+
 static void test_json(void **state)
 {
     fixture *f = *state;
@@ -1285,6 +1323,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_writer_commit_triggers, setup, teardown),
         cmocka_unit_test_setup_teardown(test_writer_disk_full, setup, teardown),
         cmocka_unit_test_setup_teardown(test_trial_curve, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_trial_latency, setup, teardown),
         cmocka_unit_test_setup_teardown(test_json, setup, teardown),
         cmocka_unit_test_setup_teardown(test_csv, setup, teardown),
         cmocka_unit_test_setup_teardown(test_bench_small, setup, teardown),

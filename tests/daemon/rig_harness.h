@@ -1,0 +1,64 @@
+/* rig_harness.h: the rig on loopback for the real-time rig tests: ribbon-rigsim and ribbond started
+ * on one rig file in a temporary directory (the same --set overrides for both), a trial through
+ * ribbonctl, the store read back, the simulator's truth (its "fault: ... at UNIX-TIME" lines and
+ * truth log). Both programs run at nice -10 when the test runs as root, as `make rehearsal` runs
+ * them (REHEARSAL_NICE): the machine is shared with compilers. Failures end the test (cmocka). */
+#ifndef RIBBON_TESTS_RIG_HARNESS_H
+#define RIBBON_TESTS_RIG_HARNESS_H
+
+#include <sqlite3.h>
+#include <stddef.h>
+#include <sys/types.h>
+
+#define RIG_HARNESS_SETS 16
+
+typedef struct rig_run {
+    char dir[64];
+    char sets[RIG_HARNESS_SETS][300];
+    int n_sets;
+    pid_t sim, daemon;
+    char url[128];
+} rig_run;
+
+double rig_now_real(void);
+void rig_sleep_s(double s);
+/* A free TCP port on 127.0.0.1 (bound and released; loopback only). */
+int rig_free_port(void);
+
+/* Prepares r (a temporary directory; the store, videos and calibration go there) with the rig
+ * file's overrides `sets` (NULL-terminated, "%s" in a value is replaced by the directory). */
+void rig_prepare(rig_run *r, const char *const *sets);
+/* Starts ribbon-rigsim on rig (with sim_extra arguments) and waits for "ready". */
+void rig_start_sim(rig_run *r, const char *rig, const char *const *sim_extra);
+/* Starts ribbond on rig and waits for its URL. */
+void rig_start_daemon(rig_run *r, const char *rig);
+/* Both, the simulator first. */
+void rig_start(rig_run *r, const char *rig, const char *const *sets, const char *const *sim_extra);
+void rig_stop(rig_run *r);
+/* The teardown for cmocka: stops whatever rig_start left running. */
+int rig_teardown(void **state);
+
+/* `ribbonctl start` (with --wait when wait); its exit code. */
+int rig_trial(rig_run *r, int wait);
+/* Waits at most timeout_s until trial 1's state is `state` (or final); 0 when it is. On failure
+ * the state and reason reached are in got. */
+int rig_wait_state(rig_run *r, const char *state, double timeout_s, char *got, size_t got_len);
+/* Waits at most timeout_s until trial 1 is no longer created or running; 0 when it ended. */
+int rig_wait_end(rig_run *r, double timeout_s);
+
+sqlite3 *rig_db_open(rig_run *r);
+int rig_q_text(sqlite3 *db, const char *sql, char *out, size_t n);
+double rig_q_num(sqlite3 *db, const char *sql);
+/* Unix time of the first event whose message is LIKE `like`, NaN if none. */
+double rig_event_wall(sqlite3 *db, const char *like);
+void rig_check_integrity(sqlite3 *db);
+/* The unix time in the simulator's line "fault: WHAT at T", NaN if none. */
+double rig_sim_fault_time(rig_run *r, const char *what);
+/* 1 when `needle` is in the file at path (its line copied to line_out). */
+int rig_file_has(const char *path, const char *needle, char *line_out, size_t n);
+
+/* From the simulator's truth log: the last real (unix) time axis `col` (0 compression, 1 shear)
+ * moved by more than 1e-4 mm between two images; NaN if it never did. */
+double rig_truth_last_move(rig_run *r, int col);
+
+#endif

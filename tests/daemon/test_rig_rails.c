@@ -1,0 +1,340 @@
+/* test_rig_rails: the rig's rails faults in real time against ribbon-rigsim (issue 13 E), on the
+ * rehearsal rig files (config/rig-rehearsal.ini: GRBL axes X/Y of one controller on a pty;
+ * config/rig-rehearsal-modbus.ini: two Modbus TCP drives on 127.0.0.1), compression at 20 mm/s so
+ * a trial reaches shearing in about 7 s. Faults come on command once the trial is shearing
+ * (SIGUSR1 link cut, SIGRTMIN+1 alarm) or on position (--stall). Each ends the trial failed with a
+ * named reason, both rails standing (the simulator's axes log), every captured sample stored
+ * (samples_count in the trial row = rows in samples) and PRAGMA integrity_check ok.
+ *   - GRBL link lost mid-shear: detected (the fault event's wall time) within 0.5 s of the cut the
+ *     simulator logged;
+ *   - GRBL controller alarm mid-shear; a stalled shear axis;
+ *   - Modbus drive fault mid-shear; Modbus link lost mid-shear (0.5 s too);
+ *   - ribbond killed with SIGKILL mid-shear with Modbus rails: the drives' watchdog halts the shear
+ *     axis within watchdog_s (0.5 s in the rig file) + its deceleration, from the axes log;
+ *   - the whole trial with Modbus rails: measured snap within 2% of the prediction, regimes agree,
+ *     both rails standing at their start at the end;
+ *   - the rig simulator killed mid-shear: the trial fails naming the rail, nothing half-written.
+ * Heavy (real time, about 20-40 s each): normal build only. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "rig_harness.h"
+
+#define RIG_GRBL RIBBON_SOURCE_DIR "/config/rig-rehearsal.ini"
+#define RIG_MODBUS RIBBON_SOURCE_DIR "/config/rig-rehearsal-modbus.ini"
+#define DETECT_BOUND_S 0.5 /* issue 13: a lost rail link is detected within 0.5 s */
+
+static const char *const grbl_sets[] = {"rail.compress.port=%s/grbl", "rail.shear.port=%s/grbl",
+                                        "camera.calibration=%s/camera.calib", "store.path=%s/rig.db",
+                                        "camera.video_dir=%s/videos", "trial.compress_speed_mm_s=20", NULL};
+
+/* The Modbus rig on two free loopback ports. */
+static void modbus_sets(char buf[2][64], const char *sets[8])
+{
+    snprintf(buf[0], sizeof buf[0], "rail.compress.address=127.0.0.1:%d", rig_free_port());
+    snprintf(buf[1], sizeof buf[1], "rail.shear.address=127.0.0.1:%d", rig_free_port());
+    const char *rest[] = {"camera.calibration=%s/camera.calib", "store.path=%s/rig.db", "camera.video_dir=%s/videos",
+                          "trial.compress_speed_mm_s=20", NULL};
+    sets[0] = buf[0];
+    sets[1] = buf[1];
+    for (int k = 0; k < 5; k++) sets[2 + k] = rest[k];
+}
+
+/* Starts the rig and a trial, waits until it is shearing (fails the test with the state reached
+ * otherwise), then 0.5 s more: mid-shear, before the snap (Delta W near 0.3 is 3 s of shear). */
+static void start_to_shear(rig_run *r, const char *rig, const char *const *sets, const char *const *sim_extra)
+{
+    rig_start(r, rig, sets, sim_extra);
+    assert_int_equal(rig_trial(r, 0), 0);
+    char got[700];
+    if (rig_wait_state(r, "shearing", 90.0, got, sizeof got)) fail_msg("the trial did not reach shearing: %s", got);
+    rig_sleep_s(0.5);
+}
+
+/* After a fault: the trial ended failed in shearing naming `what`, every sample stored, integrity
+ * ok, both axes standing (their last move in the axes log more than 0.3 s before the end, which
+ * is after the fault). Returns the fault event's wall time. */
+static double check_failed(rig_run *r, const char *what, double t_fault)
+{
+    assert_int_equal(rig_wait_end(r, 60.0), 0);
+    rig_sleep_s(1.0);
+    double t_end = rig_now_real();
+    rig_stop(r);
+    sqlite3 *db = rig_db_open(r);
+    char status[64], why[512], st[64];
+    rig_q_text(db, "select status from trials where id = 1", status, sizeof status);
+    rig_q_text(db, "select coalesce(reason,'') from trials where id = 1", why, sizeof why);
+    rig_q_text(db, "select state from events where trial_id = 1 and kind = 'fault' order by id limit 1", st, sizeof st);
+    double seen = rig_event_wall(db, "rail fault%");
+    printf("# %s in %s: %s\n", status, st, why);
+    assert_string_equal(status, "failed");
+    assert_string_equal(st, "shearing");
+    assert_non_null(strstr(why, what));
+    double stored = rig_q_num(db, "select count(*) from samples where trial_id = 1");
+    double counted = rig_q_num(db, "select samples_count from trials where id = 1");
+    printf("# samples: %.0f stored, %.0f counted in the trial\n", stored, counted);
+    assert_true(stored > 100);
+    assert_true(stored == counted);
+    rig_check_integrity(db);
+    sqlite3_close(db);
+    double lc = rig_truth_last_move(r, 0), ls = rig_truth_last_move(r, 1);
+    printf("# axes: compression last moved %.3f s, shear %.3f s after the fault\n", lc - t_fault, ls - t_fault);
+    assert_true(!isfinite(lc) || lc < t_end - 0.3);
+    assert_true(isfinite(ls) && ls < t_end - 0.3);
+    return seen;
+}
+
+static void link_lost(const char *rig, const char *const *sets, const char *what)
+{
+    rig_run r;
+    start_to_shear(&r, rig, sets, NULL);
+    kill(r.sim, SIGUSR1);
+    rig_sleep_s(0.2);
+    double cut = rig_sim_fault_time(&r, "link lost");
+    assert_true(isfinite(cut));
+    double seen = check_failed(&r, what, cut);
+    printf("# link lost: detected %.3f s after the cut (bound %.1f s)\n", seen - cut, DETECT_BOUND_S);
+    assert_true(seen - cut > 0.0);
+    assert_true(seen - cut <= DETECT_BOUND_S);
+}
+
+static void test_grbl_link_lost_mid_shear(void **state)
+{
+    (void)state;
+    link_lost(RIG_GRBL, grbl_sets, "rail");
+}
+
+static void test_modbus_link_lost_mid_shear(void **state)
+{
+    (void)state;
+    char buf[2][64];
+    const char *sets[8] = {0};
+    modbus_sets(buf, sets);
+    link_lost(RIG_MODBUS, sets, "rail");
+}
+
+/* An alarm on command mid-shear (SIGRTMIN+1): GRBL's ALARM:1 of the controller, or the shear drive's
+ * alarm 0x30 (a drive fault). */
+static void alarm_mid_shear(const char *rig, const char *const *sets, const char *sim_fault, const char *what)
+{
+    rig_run r;
+    start_to_shear(&r, rig, sets, NULL);
+    kill(r.sim, SIGRTMIN + 1);
+    rig_sleep_s(0.2);
+    double t = rig_sim_fault_time(&r, sim_fault);
+    assert_true(isfinite(t));
+    double seen = check_failed(&r, what, t);
+    printf("# %s: detected %.3f s after it was raised\n", sim_fault, seen - t);
+    assert_true(seen - t <= DETECT_BOUND_S);
+}
+
+static void test_grbl_alarm_mid_shear(void **state)
+{
+    (void)state;
+    alarm_mid_shear(RIG_GRBL, grbl_sets, "controller alarm", "GRBL alarm 1");
+}
+
+static void test_modbus_drive_fault_mid_shear(void **state)
+{
+    (void)state;
+    char buf[2][64];
+    const char *sets[8] = {0};
+    modbus_sets(buf, sets);
+    alarm_mid_shear(RIG_MODBUS, sets, "drive alarm", "rail shear");
+}
+
+/* The shear axis stalls 20 mm into the shear (2 s at 10 mm/s, before the snap near 84 mm):
+ * GRBL's open loop sees no progress for stall_timeout_s (1 s); the Modbus drive raises its
+ * position-deviation alarm. */
+static void stall_mid_shear(const char *rig, const char *const *sets, const char *what)
+{
+    rig_run r;
+    const char *extra[] = {"--stall", "Y:70", NULL};
+    rig_start(&r, rig, sets, extra);
+    assert_int_equal(rig_trial(&r, 0), 0);
+    char got[700];
+    if (rig_wait_state(&r, "shearing", 90.0, got, sizeof got)) fail_msg("the trial did not reach shearing: %s", got);
+    double t = rig_now_real();
+    check_failed(&r, what, t);
+}
+
+static void test_grbl_stall_mid_shear(void **state)
+{
+    (void)state;
+    stall_mid_shear(RIG_GRBL, grbl_sets, "stall");
+}
+
+static void test_modbus_stall_mid_shear(void **state)
+{
+    (void)state;
+    char buf[2][64];
+    const char *sets[8] = {0};
+    modbus_sets(buf, sets);
+    stall_mid_shear(RIG_MODBUS, sets, "rail shear");
+}
+
+/* ribbond killed mid-shear with Modbus rails: nobody talks to the drives, whose watchdog
+ * (watchdog_s = 0.5 in the rig file) halts the shear axis: from the simulator's axes log. */
+static void test_modbus_sigkill_mid_shear(void **state)
+{
+    (void)state;
+    char buf[2][64];
+    const char *sets[8] = {0};
+    modbus_sets(buf, sets);
+    rig_run r;
+    start_to_shear(&r, RIG_MODBUS, sets, NULL);
+    double t_kill = rig_now_real();
+    kill(r.daemon, SIGKILL);
+    waitpid(r.daemon, NULL, 0);
+    r.daemon = -1;
+    rig_sleep_s(2.0);
+    rig_stop(&r);
+    double ls = rig_truth_last_move(&r, 1);
+    printf("# SIGKILL mid-shear (Modbus): the shear axis stood %.3f s after the kill (watchdog 0.5 s)\n",
+           ls - t_kill);
+    assert_true(isfinite(ls));
+    assert_true(ls - t_kill > 0.0);
+    /* The watchdog counts from the last request, which came before the kill; the drive halts at
+     * once (mb_sim's alarm 0x85); the axes log has 5 ms lines and the drive thread a 1 ms step. */
+    assert_true(ls - t_kill <= 0.5 + 0.05);
+    /* and it did not stop by itself before the watchdog: the shear was running when killed */
+    assert_true(ls - t_kill > 0.3);
+}
+
+/* The rig simulator itself killed mid-shear: the GRBL pty hangs up (and the camera goes silent):
+ * the trial fails with a named reason, the store is whole. */
+static void test_rigsim_dies_mid_shear(void **state)
+{
+    (void)state;
+    rig_run r;
+    start_to_shear(&r, RIG_GRBL, grbl_sets, NULL);
+    kill(r.sim, SIGKILL);
+    waitpid(r.sim, NULL, 0);
+    r.sim = -1;
+    assert_int_equal(rig_wait_end(&r, 30.0), 0);
+    rig_stop(&r);
+    sqlite3 *db = rig_db_open(&r);
+    char status[64], why[512];
+    rig_q_text(db, "select status from trials where id = 1", status, sizeof status);
+    rig_q_text(db, "select coalesce(reason,'') from trials where id = 1", why, sizeof why);
+    printf("# rig simulator killed: %s: %s\n", status, why);
+    assert_string_equal(status, "failed");
+    /* The controller's pty hung up: the rail is named (the camera's silence may follow it). */
+    assert_non_null(strstr(why, "rail"));
+    double stored = rig_q_num(db, "select count(*) from samples where trial_id = 1");
+    double counted = rig_q_num(db, "select samples_count from trials where id = 1");
+    assert_true(stored > 100);
+    assert_true(stored == counted);
+    rig_check_integrity(db);
+    sqlite3_close(db);
+}
+
+/* The whole trial with Modbus TCP rails: done, the measured snap within 2% of the prediction at
+ * the same resolution, the regimes agree, both rails standing where they started at the end. */
+static void test_modbus_trial(void **state)
+{
+    (void)state;
+    char buf[2][64];
+    const char *sets[8] = {0};
+    modbus_sets(buf, sets);
+    rig_run r;
+    rig_start(&r, RIG_MODBUS, sets, NULL);
+    int rc = rig_trial(&r, 1);
+    rig_sleep_s(1.0);
+    double t_end = rig_now_real();
+    rig_stop(&r);
+    sqlite3 *db = rig_db_open(&r);
+    char status[64], why[512], rm[32], rp[32], lat[400], path_show[160];
+    rig_q_text(db, "select status from trials where id = 1", status, sizeof status);
+    rig_q_text(db, "select coalesce(reason,'') from trials where id = 1", why, sizeof why);
+    printf("# trial: %s %s (ribbonctl %d)\n", status, why, rc);
+    assert_string_equal(status, "done");
+    double meas = rig_q_num(db, "select snap_dw_measured from trials where id = 1");
+    double pred = rig_q_num(db, "select snap_dw from predictions where trial_id = 1");
+    rig_q_text(db, "select regime_measured from trials where id = 1", rm, sizeof rm);
+    rig_q_text(db, "select regime from predictions where trial_id = 1", rp, sizeof rp);
+    rig_q_text(db, "select message from events where trial_id = 1 and message like 'snap-to-stop%'", lat, sizeof lat);
+    printf("# measured %.5f predicted %.5f (%+.2f%%; %s / %s)\n# %s\n", meas, pred, 100.0 * (meas - pred) / pred, rm,
+           rp, lat);
+    /* What the camera showed near the snap: the twin's image age at each send (truth log column
+     * 11). An image older than a frame period shows the ribbon where it was, not where it is. */
+    char tpath[160], tl[512];
+    snprintf(tpath, sizeof tpath, "%s/truth.csv", r.dir);
+    FILE *tf = fopen(tpath, "r");
+    assert_non_null(tf);
+    double age_max = 0.0;
+    while (fgets(tl, sizeof tl, tf)) {
+        double v[11];
+        if (sscanf(tl, "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6],
+                   &v[7], &v[8], &v[9], &v[10]) == 11 &&
+            fabs(v[6] - pred) < 0.02)
+            age_max = fmax(age_max, v[10]);
+    }
+    fclose(tf);
+    printf("# the twin's images near the snap were at most %.0f ms old when sent\n", 1e3 * age_max);
+    assert_true(fabs(meas - pred) <= 0.02 * pred);
+    assert_string_equal(rm, rp);
+    /* The snap-to-stop latency is stored with the trial (the event's numbers, ms to 0.1) and shown. */
+    double lc_s = rig_q_num(db, "select stop_cmd_latency_s from trials where id = 1");
+    double ls_s = rig_q_num(db, "select stop_stand_latency_s from trials where id = 1");
+    double ev_c = NAN;
+    const char *arrow = strstr(lat, "stop command ");
+    if (arrow) ev_c = atof(arrow + strlen("stop command ")) / 1e3;
+    printf("# stored latency: %.1f ms to the stop command, %.1f ms to the rail standing\n", 1e3 * lc_s, 1e3 * ls_s);
+    assert_true(isfinite(lc_s) && lc_s >= 0.0 && lc_s < 1.0);
+    assert_true(fabs(lc_s - ev_c) < 1e-4);
+    assert_true(isnan(ls_s) || ls_s >= lc_s);
+    char cmd[400], shown[400];
+    snprintf(cmd, sizeof cmd, "%s/ribbonctl show 1 --db %s/rig.db > %s/show.txt 2>&1", RIBBON_BIN_DIR, r.dir, r.dir);
+    assert_int_equal(system(cmd), 0);
+    snprintf(path_show, sizeof path_show, "%s/show.txt", r.dir);
+    assert_true(rig_file_has(path_show, "snap-to-stop latency", shown, sizeof shown));
+    printf("# ribbonctl show: %s", shown);
+    double start_c = rig_q_num(db, "select compress_mm from samples where trial_id = 1 and kind = 0 order by seq limit 1");
+    rig_check_integrity(db);
+    sqlite3_close(db);
+    /* Both axes standing at the end, at their start (the shear at its zero, 50 mm). */
+    char path[160], line[256], last[256] = "";
+    snprintf(path, sizeof path, "%s/axes.csv", r.dir);
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    while (fgets(line, sizeof line, f)) snprintf(last, sizeof last, "%s", line);
+    fclose(f);
+    double mono, real, pc, ps;
+    assert_int_equal(sscanf(last, "%lf,%lf,%lf,%lf", &mono, &real, &pc, &ps), 4);
+    double lc = rig_truth_last_move(&r, 0), ls = rig_truth_last_move(&r, 1);
+    printf("# end: compression at %.3f mm (started %.3f), shear at %.3f mm; last moves %.1f s and %.1f s before "
+           "the end\n",
+           pc, start_c, ps, t_end - lc, t_end - ls);
+    assert_true(fabs(pc - start_c) < 0.05);
+    assert_true(fabs(ps - 50.0) < 0.05);
+    assert_true(lc < t_end - 0.5 && ls < t_end - 0.5);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_teardown(test_grbl_link_lost_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_modbus_link_lost_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_grbl_alarm_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_modbus_drive_fault_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_grbl_stall_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_modbus_stall_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_modbus_sigkill_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_rigsim_dies_mid_shear, rig_teardown),
+        cmocka_unit_test_teardown(test_modbus_trial, rig_teardown),
+    };
+    /* RIG_TEST_FILTER=PATTERN runs only the matching tests (cmocka's filter, * wildcards). */
+    if (getenv("RIG_TEST_FILTER")) cmocka_set_test_filter(getenv("RIG_TEST_FILTER"));
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
