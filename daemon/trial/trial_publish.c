@@ -12,13 +12,19 @@ void trial_publish_begin(live_bus *b, int64_t trial_id, const char *mode, const 
     live_bus_publish(b, m, 1);
 }
 
-void trial_publish_state(live_bus *b, int64_t trial_id, trial_state s, double t_s, const char *why)
+void trial_publish_state_name(live_bus *b, int64_t trial_id, const char *state, double t_s, const char *why)
 {
     if (!b) return;
-    char m[1024], t[32], w[600];
+    char m[1024], t[32], w[600], n[32];
     snprintf(m, sizeof m, "{\"type\":\"state\",\"trial\":%lld,\"state\":\"%s\",\"t\":%s,\"why\":\"%s\"}",
-             (long long)trial_id, trial_state_name(s), live_num(t, sizeof t, t_s), live_str(w, sizeof w, why));
+             (long long)trial_id, live_str(n, sizeof n, state), live_num(t, sizeof t, t_s),
+             live_str(w, sizeof w, why));
     live_bus_publish(b, m, 0);
+}
+
+void trial_publish_state(live_bus *b, int64_t trial_id, trial_state s, double t_s, const char *why)
+{
+    trial_publish_state_name(b, trial_id, trial_state_name(s), t_s, why);
 }
 
 void trial_publish_event(live_bus *b, int64_t trial_id, double t_s, const char *kind, const char *message)

@@ -6,6 +6,8 @@
  *   2. Replaying that trial (its video and recorded rail positions) reproduces its measured snap
  *      within one frame's Delta W; so does its video, rails CSV and camera calibration replayed as
  *      an outside recording by ribbond in replay mode (on the replay thread; an abort ends it).
+ *      Through the API the trial's samples CSV is the store's export text, and GET /phase.png
+ *      answers at once and has the predicted map within a bounded time.
  *   3. API error cases: unknown trial 404, bad fields 400 (naming the key), abort when idle 409.
  *   4. kill -9 in the middle of a trial, then a restart: integrity_check ok, the trial is marked
  *      interrupted, and the committed samples are all there (contiguous sequence numbers).
@@ -24,7 +26,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/time.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -98,6 +104,81 @@ static void sleep_s(double s)
 {
     struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
     nanosleep(&ts, NULL);
+}
+
+/* GET path over a plain loopback socket (the reply's headers are wanted): the whole reply,
+ * malloc'ed and NUL-terminated, its length in *len. */
+static char *raw_get(unsigned port, const char *path, size_t *len)
+{
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    assert_true(fd >= 0);
+    struct timeval tv = {.tv_sec = 60};
+    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    assert_int_equal(connect(fd, (struct sockaddr *)&a, sizeof a), 0);
+    char req[256];
+    int n = snprintf(req, sizeof req, "GET %s HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n", path);
+    assert_int_equal(send(fd, req, (size_t)n, MSG_NOSIGNAL), n);
+    size_t cap = 1 << 16, got = 0;
+    char *b = malloc(cap);
+    assert_non_null(b);
+    for (;;) {
+        if (got + 1 == cap) {
+            b = realloc(b, cap *= 2);
+            assert_non_null(b);
+        }
+        ssize_t r = recv(fd, b + got, cap - 1 - got, 0);
+        if (r <= 0) break;
+        got += (size_t)r;
+    }
+    close(fd);
+    b[got] = '\0';
+    *len = got;
+    return b;
+}
+
+/* The X-Phase-Map header's value of a reply, into v. */
+static void phase_map_header(const char *reply, char *v, size_t n)
+{
+    const char *h = strstr(reply, "\r\nX-Phase-Map: ");
+    assert_non_null(h);
+    h += strlen("\r\nX-Phase-Map: ");
+    size_t k = strcspn(h, "\r");
+    snprintf(v, n, "%.*s", (int)k, h);
+}
+
+/* GET /phase.png: a PNG at once (the trials alone while the predicted map is computed), the map's
+ * state in X-Phase-Map, and the map itself within a bounded time: then the figure has the map's
+ * cells drawn too, so it differs from the first. */
+static void phase_png_route(unsigned port)
+{
+    size_t len0 = 0;
+    double t0 = (double)time(NULL);
+    char *r0 = raw_get(port, "/phase.png", &len0);
+    char state[200];
+    phase_map_header(r0, state, sizeof state);
+    printf("phase.png: first reply %zu bytes, map %s\n", len0, state);
+    assert_non_null(strstr(r0, "\r\nContent-Type: image/png\r\n"));
+    assert_true(strstr(r0, "\r\n\r\n\x89PNG") != NULL);
+    assert_true(strncmp(state, "computing", 9) == 0 || strncmp(state, "ready", 5) == 0);
+    char *r1 = NULL;
+    size_t len1 = 0;
+    for (int k = 0; k < 600; k++) {
+        free(r1);
+        r1 = raw_get(port, "/phase.png", &len1);
+        phase_map_header(r1, state, sizeof state);
+        if (strncmp(state, "computing", 9) != 0) break;
+        sleep_s(0.5);
+    }
+    printf("phase.png: map %s after %.0f s, %zu bytes\n", state, (double)time(NULL) - t0, len1);
+    assert_true(strncmp(state, "ready", 5) == 0);
+    assert_true(strstr(r1, "\r\n\r\n\x89PNG") != NULL);
+    const char *b0 = strstr(r0, "\r\n\r\n") + 4, *b1 = strstr(r1, "\r\n\r\n") + 4;
+    size_t n0 = len0 - (size_t)(b0 - r0), n1 = len1 - (size_t)(b1 - r1);
+    assert_true(n1 != n0 || memcmp(b0, b1, n0) != 0); /* the map's cells were drawn */
+    free(r0);
+    free(r1);
 }
 
 /* Polls GET /status until the daemon is idle; returns 1 when it became idle in time. */
@@ -356,6 +437,46 @@ static void mock_trial_then_replay(void **state)
         assert_true(len > 1000 && !memcmp(png, "\x89PNG", 4));
         free(png);
     }
+
+    /* The samples CSV through the API: the text the store's export writes (`ribbonctl export ID
+     * --csv` calls the same writer), one row per stored sample; an unknown trial is a 404. */
+    {
+        char url[64];
+        snprintf(url, sizeof url, "http://127.0.0.1:%u", port);
+        api_client_config c = api_client_config_default();
+        c.base_url = url;
+        int st = 0;
+        unsigned char *csv = NULL;
+        size_t len = 0;
+        snprintf(path, sizeof path, "/trials/%lld/samples.csv", (long long)id);
+        assert_int_equal(api_client_request(&c, "GET", path, NULL, &st, NULL, &csv, &len, why, sizeof why), 0);
+        assert_int_equal(st, 200);
+        store *own = NULL;
+        char db[128];
+        snprintf(db, sizeof db, "%s/trials.db", dir);
+        assert_int_equal(store_open(db, &own, why, sizeof why), STORE_OK);
+        char *want = NULL;
+        size_t want_len = 0;
+        assert_int_equal(store_export_trial_csv_text(own, id, &want, &want_len, why, sizeof why), STORE_OK);
+        store_close(own);
+        long rows = -1; /* the header is not a row */
+        for (size_t k = 0; k < len; k++) rows += csv[k] == '\n';
+        printf("samples.csv: %zu bytes, %ld rows (%lld samples)\n", len, rows, (long long)samples);
+        assert_int_equal(len, want_len);
+        assert_memory_equal(csv, want, len);
+        assert_true(len > 60 && !memcmp(csv, "seq,t_s,kind,frame,compress_mm,shear_mm,dl,dw,dz,a,quality,reason\n", 60));
+        assert_int_equal(rows, samples);
+        free(want);
+        free(csv);
+        csv = NULL;
+        assert_int_equal(api_client_request(&c, "GET", "/trials/999/samples.csv", NULL, &st, NULL, &csv, &len, why,
+                                            sizeof why), 0);
+        assert_int_equal(st, 404);
+        assert_non_null(strstr(why, "999"));
+        free(csv);
+    }
+
+    phase_png_route(port);
 
     /* API errors. */
     t = NULL;
