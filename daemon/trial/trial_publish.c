@@ -95,3 +95,12 @@ void trial_publish_result(live_bus *b, int64_t trial_id, const trial_result *r)
              live_num(d, sizeof d, r->duration_s));
     live_bus_publish(b, m, 0);
 }
+
+void trial_publish_stored(live_bus *b, int64_t trial_id, trial_state final)
+{
+    if (!b) return;
+    char m[160];
+    snprintf(m, sizeof m, "{\"type\":\"stored\",\"trial\":%lld,\"final\":\"%s\"}", (long long)trial_id,
+             trial_state_name(final));
+    live_bus_publish(b, m, 0);
+}

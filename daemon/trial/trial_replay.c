@@ -516,6 +516,7 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
     rc = 0;
     trial_publish_result(r->bus, id, res);
     trial_publish_state(r->bus, id, TRIAL_DONE, res->duration_s, NULL);
+    trial_publish_stored(r->bus, id, TRIAL_DONE);
     goto done;
 fail:
     if (w) {
@@ -532,6 +533,7 @@ fail:
     if (id) {
         trial_publish_result(r->bus, id, res);
         trial_publish_state(r->bus, id, res->final, NAN, why);
+        trial_publish_stored(r->bus, id, res->final);
     }
 done:
     vis_frame_free(frame);

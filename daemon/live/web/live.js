@@ -180,6 +180,9 @@ function handle(m) {
       setNum('snap-measured', m.snapped ? m.snap_dw : null);
       $('regime-measured').textContent = m.regime;
       dirty = true;
+      break;
+    case 'stored': // the store has the trial's end: the table and the phase diagram show it
+      lastStored = m.trial;
       loadTrials().catch(() => {});
       loadPhase().catch(() => {});
       break;
@@ -282,9 +285,10 @@ function authedLink(path, text, id, filename) {
 
 // ---- the phase diagram: ribbond's phase report, fetched again after each trial and while its
 // predicted map is still being computed (X-Phase-Map says how far) ------------------------------
-let phaseUrl = null, phaseCount = 0, phaseTimer = null;
+let phaseUrl = null, phaseCount = 0, phaseTimer = null, lastStored = null;
 async function loadPhase() {
   clearTimeout(phaseTimer);
+  const stored = lastStored; // the last trial the store had finished when this was asked for
   const r = await api('/phase.png');
   if (!r.ok) return;
   const map = r.headers.get('X-Phase-Map') || '-';
@@ -295,6 +299,7 @@ async function loadPhase() {
   phaseCount++;
   $('phase').dataset.updates = String(phaseCount);
   $('phase').dataset.map = map;
+  $('phase').dataset.trial = stored === null ? '' : String(stored);
   $('phase-info').textContent = 'predicted map: ' + map;
   if (map.startsWith('computing') || map === 'not started') phaseTimer = setTimeout(() => loadPhase().catch(() => {}), 3000);
 }

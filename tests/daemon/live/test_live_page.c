@@ -12,7 +12,8 @@
  *      first trial started from the page is followed like a trial (replaying, the source's steps,
  *      done), its points drawn beside the source's prediction, its snap the one ribbonctl shows.
  * Screenshots go to the build folder (test-output/live_page/); with RIBBON_LIVE_FIGURE=path the
- * one taken during the shear is also written there (the README's figure is made so).
+ * one taken during the shear is also written there (the README's figure is made so), and with
+ * RIBBON_LIVE_TRIALS_FIGURE=path the trials table and phase diagram after the first trial.
  * Heavy and labelled "browser": the sanitizer build skips it. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -134,6 +135,13 @@ static void links_and_phase(webdriver *wd, const char *url, const char *id)
         kit_sleep_ms(200);
     }
     if (!href[0]) fail_msg("no CSV link for trial %s in the trials table", id);
+    char row_status[64] = "";
+    snprintf(script, sizeof script, "return document.getElementById('csv-%s').closest('tr').cells[1].textContent;", id);
+    for (t0 = kit_now(); kit_now() - t0 < 20; kit_sleep_ms(200)) { /* reloaded on the stored message */
+        page_string(wd, script, row_status, sizeof row_status);
+        if (strcmp(row_status, "done") == 0) break;
+    }
+    assert_string_equal(row_status, "done");
     char *csv = NULL;
     assert_int_equal(kit_http("GET", href, NULL, NULL, &csv, 30), 200);
     char cmd[600];
@@ -155,13 +163,15 @@ static void links_and_phase(webdriver *wd, const char *url, const char *id)
     for (;;) {
         char why[512];
         json_t *j = wd_exec(wd, "const p = document.getElementById('phase');"
-                                "return {map: p.dataset.map || '', w: p.naturalWidth, n: +(p.dataset.updates || 0)};",
+                                "return {map: p.dataset.map || '', w: p.naturalWidth, trial: p.dataset.trial || ''};",
                             why, sizeof why);
         if (!j) fail_msg("phase: %s", why);
         snprintf(map, sizeof map, "%s", json_string_value(json_object_get(j, "map")));
         width = (long)json_number_value(json_object_get(j, "w"));
+        /* drawn after the store had this trial's end, so its point is on the map */
+        int after = strcmp(json_string_value(json_object_get(j, "trial")), id) == 0;
         json_decref(j);
-        if (strncmp(map, "ready", 5) == 0 && width > 0) break;
+        if (strncmp(map, "ready", 5) == 0 && width > 0 && after) break;
         if (strncmp(map, "failed", 6) == 0) fail_msg("phase map: %s", map);
         if (kit_now() - t0 > 180) fail_msg("no predicted phase map on the page after 180 s (%s)", map);
         kit_sleep_ms(500);
@@ -282,6 +292,11 @@ static void test_live_page(void **state)
     json_t *scrolled = wd_exec(&wd, "document.getElementById('trials-box').scrollIntoView(); return 1;", why, sizeof why);
     json_decref(scrolled);
     save_shot(&wd, dir, "live-page-phase.png");
+    const char *trials_fig = getenv("RIBBON_LIVE_TRIALS_FIGURE");
+    if (trials_fig && *trials_fig) {
+        if (wd_screenshot(&wd, trials_fig, why, sizeof why) != 0) fail_msg("figure: %s", why);
+        printf("# figure %s\n", trials_fig);
+    }
     scrolled = wd_exec(&wd, "window.scrollTo(0, 0); return 1;", why, sizeof why);
     json_decref(scrolled);
     json_t *log = wd_console(&wd, why, sizeof why);
