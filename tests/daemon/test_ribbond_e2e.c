@@ -196,6 +196,55 @@ static int wait_idle(unsigned port, double max_s)
     return 0;
 }
 
+/* What the replay `nid` published on the live bus (the page follows it so): its trial message
+ * (mode replay), the state replaying, then shearing, one sample per stored sample, the result,
+ * the state done and the stored message, in that order. */
+static void replay_published(rig_daemon *d, json_int_t nid, json_int_t samples)
+{
+    uint64_t cursor = live_bus_first(d->bus), seq = 0, missed = 0;
+    char buf[1100];
+    long n_samples = 0, order = 0;
+    int saw_trial = 0, saw_replaying = 0, saw_shearing = 0, saw_result = 0, saw_done = 0, saw_stored = 0;
+    int len;
+    while ((len = live_bus_read(d->bus, &cursor, buf, sizeof buf, 0, &seq, &missed)) > 0) {
+        json_error_t je;
+        json_t *m = json_loads(buf, 0, &je);
+        if (!m) fail_msg("bus message is not JSON: %s (%s)", buf, je.text);
+        const char *type = json_string_value(json_object_get(m, "type"));
+        assert_non_null(type);
+        if (json_integer_value(json_object_get(m, "trial")) == nid) {
+            const char *st = json_string_value(json_object_get(m, "state"));
+            order++;
+            if (!strcmp(type, "trial")) {
+                assert_string_equal(json_string_value(json_object_get(m, "mode")), "replay");
+                saw_trial = (int)order;
+            } else if (!strcmp(type, "state") && !strcmp(st, "replaying")) {
+                saw_replaying = (int)order;
+            } else if (!strcmp(type, "state") && !strcmp(st, "shearing")) {
+                saw_shearing = (int)order;
+            } else if (!strcmp(type, "sample")) {
+                n_samples++;
+            } else if (!strcmp(type, "result")) {
+                assert_string_equal(json_string_value(json_object_get(m, "final")), "done");
+                saw_result = (int)order;
+            } else if (!strcmp(type, "state") && !strcmp(st, "done")) {
+                saw_done = (int)order;
+            } else if (!strcmp(type, "stored")) {
+                saw_stored = (int)order;
+            }
+        }
+        json_decref(m);
+    }
+    printf("replay on the live bus: %ld samples (%lld stored), %llu missed; order trial %d, replaying %d, shearing "
+           "%d, result %d, done %d, stored %d\n",
+           n_samples, (long long)samples, (unsigned long long)missed, saw_trial, saw_replaying, saw_shearing,
+           saw_result, saw_done, saw_stored);
+    assert_int_equal(missed, 0);
+    assert_int_equal(n_samples, samples);
+    assert_true(saw_trial == 1 && saw_replaying > saw_trial && saw_shearing > saw_replaying);
+    assert_true(saw_result > saw_shearing && saw_done > saw_result && saw_stored > saw_done);
+}
+
 /* The stored trial `id` written out as an outside recording would come: its video, a rails CSV
  * (t_s,compress_mm,shear_mm), a camera calibration file in the video's pixels and a replay rig
  * file naming them; ribbond in replay mode replays it on its replay thread (answering the API
@@ -269,7 +318,9 @@ static void replay_outside_recording(store *st, int64_t id, double meas, double 
     assert_string_equal(status, "done");
     assert_true(fabs(got - meas) <= frame_dw + 1e-9);
     assert_true(json_is_null(json_object_get(t, "source_trial"))); /* outside files: no source trial */
+    json_int_t frames = json_integer_value(json_object_get(t, "samples"));
     json_decref(t);
+    replay_published(&d, nid, frames);
 
     /* An abort right after the start: the replay thread stops, the trial ends aborted. */
     t = NULL;
