@@ -44,12 +44,14 @@ void trial_publish_sample(live_bus *b, int64_t trial_id, const trial_sample *x)
     int measured = x->kind && x->measured;
     snprintf(m, sizeof m,
              "{\"type\":\"sample\",\"trial\":%lld,\"kind\":\"%s\",\"frame\":%ld,\"t\":%s,\"compress_mm\":%s,"
-             "\"shear_mm\":%s,\"dl\":%s,\"dw\":%s,\"measured\":%s,\"dz\":%s,\"a\":%s,\"quality\":%s}",
+             "\"shear_mm\":%s,\"dl\":%s,\"dw\":%s,\"measured\":%s,\"dz\":%s,\"a\":%s,\"quality\":%s,"
+             "\"untracked\":%s}",
              (long long)trial_id, x->kind ? "frame" : "rail", x->kind ? x->frame : -1L, live_num(t, sizeof t, x->t_s),
              live_num(cm, sizeof cm, x->compress_mm), live_num(sm, sizeof sm, x->shear_mm),
              live_num(dl, sizeof dl, x->dl), live_num(dw, sizeof dw, x->dw), measured ? "true" : "false",
              live_num(dz, sizeof dz, measured ? x->dz : 0.0 / 0.0), live_num(a, sizeof a, measured ? x->a : 0.0 / 0.0),
-             live_num(q, sizeof q, x->kind ? x->quality : 0.0 / 0.0));
+             live_num(q, sizeof q, x->kind ? x->quality : 0.0 / 0.0),
+             !x->kind || !x->not_tracked ? "null" : x->not_tracked == 2 ? "\"dropped\"" : "\"skipped\"");
     live_bus_publish(b, m, 0);
 }
 

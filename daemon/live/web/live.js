@@ -50,7 +50,10 @@ function resetView(trial) {
   view = { trial, samples: 0, frames: 0, measured: 0, missed: 0, haveFrame: false, predSnap: null, measSnap: null };
   $('trial-id').textContent = trial === null ? '-' : String(trial);
   for (const id of ['v-dl', 'v-dw', 'v-dz', 'v-a', 'v-q', 'v-t', 'snap-predicted', 'snap-measured']) setNum(id, null);
-  for (const id of ['v-samples', 'v-frames', 'v-measured', 'v-unmeasured', 'v-missed']) $(id).textContent = '0';
+  for (const id of ['v-samples', 'v-frames', 'v-measured', 'v-unmeasured', 'v-missed', 'v-dropped', 'v-skipped'])
+    $(id).textContent = '0';
+  view.dropped = 0;
+  view.skipped = 0;
   $('regime-predicted').textContent = '-';
   $('regime-measured').textContent = '-';
   $('events').textContent = '';
@@ -151,6 +154,8 @@ function handle(m) {
         $('v-frames').textContent = String(view.frames);
         $('v-unmeasured').textContent = String(view.frames - view.measured - (m.measured ? 1 : 0));
         setNum('v-q', m.quality, 3);
+        if (m.untracked === 'dropped') $('v-dropped').textContent = String(++view.dropped);
+        if (m.untracked === 'skipped') $('v-skipped').textContent = String(++view.skipped);
         if (m.measured) {
           view.measured++;
           $('v-measured').textContent = String(view.measured);
