@@ -7,7 +7,8 @@
  *      within one frame's Delta W; so does its video, rails CSV and camera calibration replayed as
  *      an outside recording by ribbond in replay mode (on the replay thread; an abort ends it).
  *      Through the API the trial's samples CSV is the store's export text, and GET /phase.png
- *      answers at once and has the predicted map within a bounded time.
+ *      answers at once while the predicted map is computed (cancelled by the daemon's close); a
+ *      replay in replay mode publishes on the live bus what the page follows.
  *   3. API error cases: unknown trial 404, bad fields 400 (naming the key), abort when idle 409.
  *   4. kill -9 in the middle of a trial, then a restart: integrity_check ok, the trial is marked
  *      interrupted, and the committed samples are all there (contiguous sequence numbers).
@@ -106,6 +107,13 @@ static void sleep_s(double s)
     nanosleep(&ts, NULL);
 }
 
+static double mono_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 /* GET path over a plain loopback socket (the reply's headers are wanted): the whole reply,
  * malloc'ed and NUL-terminated, its length in *len. */
 static char *raw_get(unsigned port, const char *path, size_t *len)
@@ -148,37 +156,21 @@ static void phase_map_header(const char *reply, char *v, size_t n)
     snprintf(v, n, "%.*s", (int)k, h);
 }
 
-/* GET /phase.png: a PNG at once (the trials alone while the predicted map is computed), the map's
- * state in X-Phase-Map, and the map itself within a bounded time: then the figure has the map's
- * cells drawn too, so it differs from the first. */
+/* GET /phase.png: a PNG at once (the trials alone while the predicted map is computed, some
+ * 10 s of a core in the Release build, minutes under the sanitizers), the map's state in
+ * X-Phase-Map; closing the daemon right after cancels the computation (rig_daemon_close returns).
+ * The finished map is checked on the page by test_live_page (heavy). */
 static void phase_png_route(unsigned port)
 {
     size_t len0 = 0;
-    double t0 = (double)time(NULL);
     char *r0 = raw_get(port, "/phase.png", &len0);
     char state[200];
     phase_map_header(r0, state, sizeof state);
     printf("phase.png: first reply %zu bytes, map %s\n", len0, state);
     assert_non_null(strstr(r0, "\r\nContent-Type: image/png\r\n"));
     assert_true(strstr(r0, "\r\n\r\n\x89PNG") != NULL);
-    assert_true(strncmp(state, "computing", 9) == 0 || strncmp(state, "ready", 5) == 0);
-    char *r1 = NULL;
-    size_t len1 = 0;
-    for (int k = 0; k < 600; k++) {
-        free(r1);
-        r1 = raw_get(port, "/phase.png", &len1);
-        phase_map_header(r1, state, sizeof state);
-        if (strncmp(state, "computing", 9) != 0) break;
-        sleep_s(0.5);
-    }
-    printf("phase.png: map %s after %.0f s, %zu bytes\n", state, (double)time(NULL) - t0, len1);
-    assert_true(strncmp(state, "ready", 5) == 0);
-    assert_true(strstr(r1, "\r\n\r\n\x89PNG") != NULL);
-    const char *b0 = strstr(r0, "\r\n\r\n") + 4, *b1 = strstr(r1, "\r\n\r\n") + 4;
-    size_t n0 = len0 - (size_t)(b0 - r0), n1 = len1 - (size_t)(b1 - r1);
-    assert_true(n1 != n0 || memcmp(b0, b1, n0) != 0); /* the map's cells were drawn */
+    assert_true(strncmp(state, "computing", 9) == 0);
     free(r0);
-    free(r1);
 }
 
 /* Polls GET /status until the daemon is idle; returns 1 when it became idle in time. */
@@ -528,6 +520,7 @@ static void mock_trial_then_replay(void **state)
     }
 
     phase_png_route(port);
+    double close_t0 = mono_s();
 
     /* API errors. */
     t = NULL;
@@ -548,6 +541,8 @@ static void mock_trial_then_replay(void **state)
 
     /* Replay: the same video and rail positions through the pipeline again. */
     rig_daemon_close(&d, "test done");
+    printf("rig_daemon_close with the phase map computing: %.2f s after the request\n", mono_s() - close_t0);
+    assert_true(mono_s() - close_t0 < 30); /* the map was cancelled, not finished (30 points) */
     store *st = NULL;
     char db[128];
     snprintf(db, sizeof db, "%s/trials.db", dir);
