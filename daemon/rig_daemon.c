@@ -75,6 +75,10 @@ int rig_daemon_serve(rig_daemon *d, unsigned *port, char *why, size_t why_len)
     }
     live_assets_load(&d->assets);
     if (d->assets.warning[0]) say(d, "%s", d->assets.warning);
+    if (!d->phase && !(d->phase = phase_map_create(&d->cfg.scene))) {
+        snprintf(why, why_len, "out of memory for the phase map");
+        return -1;
+    }
     ac.assets = d->assets.list;
     ac.n_assets = d->assets.n;
     api_ops ops = rig_daemon_ops();
@@ -90,6 +94,8 @@ void rig_daemon_close(rig_daemon *d, const char *reason)
     live_bus_close(d->bus);
     api_server_stop(d->api);
     d->api = NULL;
+    phase_map_free(d->phase); /* cancels a map being computed */
+    d->phase = NULL;
     pthread_mutex_lock(&d->lock);
     trial_session *s = d->session;
     replay_job *rj = d->replay;
@@ -227,6 +233,7 @@ static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *ht
         *http_status = 400; /* the recording named cannot be replayed */
         return -1;
     }
+    trial_replay_set_bus(r, d->bus); /* the live page follows the replay */
     char what[320]; /* r belongs to the job once it starts */
     snprintf(what, sizeof what, "%.300s", trial_replay_video(r));
     int64_t nid = 0;
@@ -354,6 +361,32 @@ static int op_report(void *user, int64_t id, unsigned char **png, size_t *len, i
     return 0;
 }
 
+/* The CSV `ribbonctl export ID --csv` writes: the store's one writer. */
+static int op_samples_csv(void *user, int64_t id, char **csv, size_t *len, int *http_status, char *why,
+                          size_t why_len)
+{
+    rig_daemon *d = user;
+    store_err e = store_export_trial_csv_text(d->st, id, csv, len, why, why_len);
+    if (e == STORE_OK) return 0;
+    *http_status = e == STORE_E_NOTFOUND ? 404 : 500;
+    return -1;
+}
+
+/* The phase report over the predicted map; the first request starts the map's computation, and
+ * until it is ready the trials are drawn alone (map says how far it is). */
+static int op_phase(void *user, unsigned char **png, size_t *len, char *map, size_t map_len, int *http_status,
+                    char *why, size_t why_len)
+{
+    rig_daemon *d = user;
+    char w[256];
+    if (phase_map_start(d->phase, w, sizeof w) != 0) say(d, "phase map: %s", w);
+    const phase_grid *g = phase_map_grid(d->phase);
+    phase_map_state(d->phase, map, map_len);
+    if (trial_phase_report_png_bytes(d->st, g, png, len, why, why_len) == 0) return 0;
+    *http_status = 500;
+    return -1;
+}
+
 static int op_events(void *user, api_stream *out, char *why, size_t why_len)
 {
     rig_daemon *d = user; /* d->bus is set before the server starts and freed after it stops */
@@ -382,6 +415,8 @@ api_ops rig_daemon_ops(void)
     o.list = op_list;
     o.show = op_show;
     o.report_png = op_report;
+    o.samples_csv = op_samples_csv;
+    o.phase_png = op_phase;
     o.events = op_events;
     o.camera_jpeg = op_camera;
     o.prediction = op_prediction;

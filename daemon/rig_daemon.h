@@ -17,6 +17,7 @@
 #include "rail.h"
 #include "rig_config.h"
 #include "trial.h"
+#include "trial_report.h"
 #include "store.h"
 
 #define RIG_DAEMON_MAX_OVERRIDES 64
@@ -35,6 +36,7 @@ typedef struct rig_daemon {
     api_server *api;
     live_bus *bus;             /* the live page's: every trial publishes into it */
     live_assets assets;        /* the live page's files */
+    phase_map *phase;          /* the predicted phase diagram (GET /phase.png), computed on demand */
     void (*log)(const char *line);
 } rig_daemon;
 

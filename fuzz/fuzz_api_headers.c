@@ -161,7 +161,7 @@ static void check_head(const api_head_sort *sort, const char *method, const char
             continue;
         if (v.route == API_ROUTE_NONE || v.route == API_ROUTE_BAD_ID || v.route == API_ROUTE_BAD_PATH)
             fail("a request passed without a route");
-        if ((v.route == API_ROUTE_TRIAL || v.route == API_ROUTE_REPORT) && v.id < 1)
+        if ((v.route == API_ROUTE_TRIAL || v.route == API_ROUTE_REPORT || v.route == API_ROUTE_SAMPLES_CSV) && v.id < 1)
             fail("an id route passed with id < 1");
         if (!api_route_method_ok(v.route, method))
             fail("a request passed with a method its route does not allow");

@@ -27,7 +27,8 @@ static void route(const char *line)
     char why[256] = "";
     api_route r = api_route_parse(path, &id, why, sizeof why);
     if ((int)r < API_ROUTE_NONE || r > API_ROUTE_BAD_PATH) fuzz_fail("api_request", "a route out of its enum");
-    if ((r == API_ROUTE_TRIAL || r == API_ROUTE_REPORT) && id < 1) fuzz_fail("api_request", "an id route with id < 1");
+    if ((r == API_ROUTE_TRIAL || r == API_ROUTE_REPORT || r == API_ROUTE_SAMPLES_CSV) && id < 1)
+        fuzz_fail("api_request", "an id route with id < 1");
     if (r == API_ROUTE_BAD_ID && why[0] == '\0') fuzz_fail("api_request", "a bad id without a reason");
     const char *allow = api_route_allow(r);
     int ok = api_route_method_ok(r, method);

@@ -178,7 +178,8 @@ void api_head_check(const api_head_policy *p, bool stream_pool, const char *meth
         v->status = 404;
         snprintf(why, why_len,
                  "no such path: %.200s (paths: /status, /trials, /trials/current/abort, /trials/ID, "
-                 "/trials/ID/report.png, /live/events, /live/camera.jpg, /live/prediction)",
+                 "/trials/ID/report.png, /trials/ID/samples.csv, /phase.png, /live/events, "
+                 "/live/camera.jpg, /live/prediction)",
                  url);
         return;
     }

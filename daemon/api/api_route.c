@@ -66,6 +66,7 @@ api_route api_route_parse(const char *path, int64_t *id, char *why, size_t why_l
 {
     static const char prefix[] = "/trials/";
     static const char report[] = "/report.png";
+    static const char samples[] = "/samples.csv";
     if (path == NULL)
         return API_ROUTE_NONE;
     if (!api_path_grammar_ok(path, why, why_len))
@@ -76,6 +77,8 @@ api_route api_route_parse(const char *path, int64_t *id, char *why, size_t why_l
         return API_ROUTE_CAMERA;
     if (strcmp(path, "/live/prediction") == 0)
         return API_ROUTE_PREDICTION;
+    if (strcmp(path, "/phase.png") == 0)
+        return API_ROUTE_PHASE;
     if (strcmp(path, "/status") == 0)
         return API_ROUTE_STATUS;
     if (strcmp(path, "/trials") == 0)
@@ -95,6 +98,9 @@ api_route api_route_parse(const char *path, int64_t *id, char *why, size_t why_l
     } else if (strcmp(slash, report) == 0) {
         r = API_ROUTE_REPORT;
         len = (size_t)(slash - seg);
+    } else if (strcmp(slash, samples) == 0) {
+        r = API_ROUTE_SAMPLES_CSV;
+        len = (size_t)(slash - seg);
     } else {
         return API_ROUTE_NONE;
     }
@@ -112,9 +118,11 @@ const char *api_route_allow(api_route r)
     case API_ROUTE_STATUS:
     case API_ROUTE_TRIAL:
     case API_ROUTE_REPORT:
+    case API_ROUTE_SAMPLES_CSV:
     case API_ROUTE_EVENTS:
     case API_ROUTE_CAMERA:
     case API_ROUTE_PREDICTION:
+    case API_ROUTE_PHASE:
         return "GET";
     case API_ROUTE_TRIALS:
         return "GET, POST";
@@ -138,9 +146,11 @@ int api_route_method_ok(api_route r, const char *method)
     case API_ROUTE_STATUS:
     case API_ROUTE_TRIAL:
     case API_ROUTE_REPORT:
+    case API_ROUTE_SAMPLES_CSV:
     case API_ROUTE_EVENTS:
     case API_ROUTE_CAMERA:
     case API_ROUTE_PREDICTION:
+    case API_ROUTE_PHASE:
         return get;
     case API_ROUTE_TRIALS:
         return get || post;

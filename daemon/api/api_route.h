@@ -9,15 +9,17 @@
 
 typedef enum api_route {
     API_ROUTE_NONE = 0, /* no such path: 404 */
-    API_ROUTE_BAD_ID,   /* /trials/{id} or /trials/{id}/report.png with a bad id: 400 */
+    API_ROUTE_BAD_ID,   /* /trials/{id}[/report.png|/samples.csv] with a bad id: 400 */
     API_ROUTE_STATUS,   /* /status                   GET */
     API_ROUTE_TRIALS,   /* /trials                   GET (list), POST (start) */
     API_ROUTE_ABORT,    /* /trials/current/abort     POST */
     API_ROUTE_TRIAL,    /* /trials/{id}              GET */
     API_ROUTE_REPORT,   /* /trials/{id}/report.png   GET */
+    API_ROUTE_SAMPLES_CSV, /* /trials/{id}/samples.csv GET */
     API_ROUTE_EVENTS,   /* /live/events              GET (the stream pool) */
     API_ROUTE_CAMERA,   /* /live/camera.jpg          GET */
     API_ROUTE_PREDICTION, /* /live/prediction        GET */
+    API_ROUTE_PHASE,    /* /phase.png                GET */
     API_ROUTE_BAD_PATH, /* a byte outside the grammar (or not starting with '/'): 400 (keep last:
                            the fuzz target checks routes against it) */
 } api_route;

@@ -108,9 +108,10 @@ api_server_config api_server_config_default(void)
 
 /* ---------------------------------------------------------------- replies */
 
-/* Queue a reply whose body is buf[0..len), malloc'ed; ownership passes to libmicrohttpd. */
-static enum MHD_Result reply_buffer(struct MHD_Connection *c, int status, const char *ctype, void *buf,
-                                    size_t len, const char *allow)
+/* Queue a reply whose body is buf[0..len), malloc'ed; ownership passes to libmicrohttpd. xname
+ * (may be NULL) is one more header, with the value xvalue. */
+static enum MHD_Result reply_buffer_x(struct MHD_Connection *c, int status, const char *ctype, void *buf,
+                                      size_t len, const char *allow, const char *xname, const char *xvalue)
 {
     struct MHD_Response *r = MHD_create_response_from_buffer(len, buf, MHD_RESPMEM_MUST_FREE);
     if (r == NULL) {
@@ -126,10 +127,18 @@ static enum MHD_Result reply_buffer(struct MHD_Connection *c, int status, const 
         ok = MHD_add_response_header(r, MHD_HTTP_HEADER_ALLOW, allow);
     if (ok == MHD_YES && status == MHD_HTTP_UNAUTHORIZED)
         ok = MHD_add_response_header(r, MHD_HTTP_HEADER_WWW_AUTHENTICATE, "Bearer realm=\"ribbond\"");
+    if (ok == MHD_YES && xname != NULL)
+        ok = MHD_add_response_header(r, xname, xvalue);
     if (ok == MHD_YES)
         ok = MHD_queue_response(c, (unsigned)status, r);
     MHD_destroy_response(r);
     return ok;
+}
+
+static enum MHD_Result reply_buffer(struct MHD_Connection *c, int status, const char *ctype, void *buf,
+                                    size_t len, const char *allow)
+{
+    return reply_buffer_x(c, status, ctype, buf, len, allow, NULL, NULL);
 }
 
 /* Serialise j (compact, one trailing newline) into a malloc'ed buffer. NULL on failure. */
@@ -453,6 +462,44 @@ static enum MHD_Result dispatch(api_server *s, struct MHD_Connection *c, const c
         if (rc == 0)
             return reply_error(c, 500, "internal error: ops->report_png succeeded without an image", NULL);
         return finish_op(c, "report_png", rc, NULL, status, why);
+    }
+
+    case API_ROUTE_SAMPLES_CSV: {
+        if (ops->samples_csv == NULL)
+            break;
+        char *csv = NULL;
+        size_t len = 0;
+        rc = ops->samples_csv(s->user, req->id, &csv, &len, &status, why, sizeof why);
+        if (rc == 0 && csv != NULL && len > 0 && status >= 200 && status <= 299) {
+            char disposition[96];
+            snprintf(disposition, sizeof disposition, "attachment; filename=\"trial-%lld-samples.csv\"",
+                     (long long)req->id);
+            return reply_buffer_x(c, status, "text/csv; charset=utf-8", csv, len, NULL, "Content-Disposition",
+                                  disposition);
+        }
+        free(csv);
+        if (rc == 0)
+            return reply_error(c, 500, "internal error: ops->samples_csv succeeded without a body", NULL);
+        return finish_op(c, "samples_csv", rc, NULL, status, why);
+    }
+
+    case API_ROUTE_PHASE: {
+        if (ops->phase_png == NULL)
+            break;
+        unsigned char *png = NULL;
+        size_t len = 0;
+        char map[API_WHY_MAX] = "";
+        rc = ops->phase_png(s->user, &png, &len, map, sizeof map, &status, why, sizeof why);
+        if (rc == 0 && png != NULL && len > 0 && status >= 200 && status <= 299) {
+            for (char *p = map; *p; p++) /* a header value: visible ASCII and spaces only */
+                if ((unsigned char)*p < 0x20 || (unsigned char)*p >= 0x7f)
+                    *p = '?';
+            return reply_buffer_x(c, status, "image/png", png, len, NULL, "X-Phase-Map", map[0] ? map : "-");
+        }
+        free(png);
+        if (rc == 0)
+            return reply_error(c, 500, "internal error: ops->phase_png succeeded without an image", NULL);
+        return finish_op(c, "phase_png", rc, NULL, status, why);
     }
 
     case API_ROUTE_EVENTS: {

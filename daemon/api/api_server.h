@@ -11,6 +11,8 @@
  *   GET  /trials                   list                       200 array    500
  *   GET  /trials/{id}              show(id)                   200 object   404 no such trial
  *   GET  /trials/{id}/report.png   report_png(id)             200 PNG      404, 500
+ *   GET  /trials/{id}/samples.csv  samples_csv(id)            200 CSV      404, 500
+ *   GET  /phase.png                phase_png                  200 PNG      500
  *   GET  /live/events              events                     200 text/event-stream (never ends)
  *   GET  /live/camera.jpg          camera_jpeg                200 JPEG     404 no frame yet
  *   GET  /live/prediction          prediction                 200 object   404 none yet
@@ -131,6 +133,16 @@ typedef struct api_ops {
      * free()); *len > 0. 404 when the trial does not exist. */
     int (*report_png)(void *user, int64_t id, unsigned char **png, size_t *len, int *http_status,
                       char *why, size_t why_len);
+    /* GET /trials/{id}/samples.csv: the trial's samples as CSV (the text `ribbonctl export ID --csv`
+     * writes), malloc'ed (the server calls free()); *len > 0. 404 when the trial does not exist.
+     * Sent as text/csv with Content-Disposition naming trial-ID-samples.csv. */
+    int (*samples_csv)(void *user, int64_t id, char **csv, size_t *len, int *http_status, char *why,
+                       size_t why_len);
+    /* GET /phase.png: the phase report (every trial's measured regime on the predicted map) as PNG
+     * bytes, malloc'ed. map (map_len bytes) gets one line on the predicted map's state ("ready",
+     * "computing 4/30", "failed: ..."), sent as the X-Phase-Map header. */
+    int (*phase_png)(void *user, unsigned char **png, size_t *len, char *map, size_t map_len, int *http_status,
+                     char *why, size_t why_len);
     /* GET /live/events: a new event stream for one client (see api_stream). The exception to the
      * threading contract: it is called on the stream pool's thread for that client, so it may run
      * concurrently with the other ops (and with itself); it must only touch thread-safe state. */

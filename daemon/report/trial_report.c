@@ -62,7 +62,25 @@ trial_err trial_report_png(store *st, int64_t id, const char *png_path, char *wh
     return ps == PLOT_OK ? TRIAL_OK : TRIAL_E_FAILED;
 }
 
-trial_err trial_report_png_bytes(store *st, int64_t id, unsigned char **png, size_t *len, char *why, size_t why_len)
+/* What a figure drawn to a file is as bytes: draw(...) into a temporary file, read it back. */
+typedef struct png_job {
+    store *st;
+    int64_t id;             /* the trial report's */
+    const phase_grid *grid; /* the phase report's */
+} png_job;
+
+static trial_err draw_trial(const png_job *j, const char *path, char *why, size_t why_len)
+{
+    return trial_report_png(j->st, j->id, path, why, why_len);
+}
+
+static trial_err draw_phase(const png_job *j, const char *path, char *why, size_t why_len)
+{
+    return trial_phase_report_png(j->st, j->grid, path, why, why_len) == 0 ? TRIAL_OK : TRIAL_E_FAILED;
+}
+
+static trial_err png_bytes(trial_err (*draw)(const png_job *, const char *, char *, size_t), const png_job *j,
+                           unsigned char **png, size_t *len, char *why, size_t why_len)
 {
     char path[] = "/tmp/ribbon-report-XXXXXX.png";
     int fd = mkstemps(path, 4);
@@ -71,7 +89,7 @@ trial_err trial_report_png_bytes(store *st, int64_t id, unsigned char **png, siz
         return TRIAL_E_FAILED;
     }
     close(fd);
-    trial_err rc = trial_report_png(st, id, path, why, why_len);
+    trial_err rc = draw(j, path, why, why_len);
     if (rc == TRIAL_OK) {
         FILE *f = fopen(path, "rb");
         long n = -1;
@@ -92,52 +110,17 @@ trial_err trial_report_png_bytes(store *st, int64_t id, unsigned char **png, siz
     return rc;
 }
 
-int phase_grid_compute(const rod_scene *base, double phi0, double phi1, size_t n_phi, double g0, double g1,
-                       size_t n_gamma, phase_grid *out, void (*progress)(void *u, size_t done, size_t total),
-                       void *u, char *why, size_t why_len)
+trial_err trial_report_png_bytes(store *st, int64_t id, unsigned char **png, size_t *len, char *why, size_t why_len)
 {
-    memset(out, 0, sizeof *out);
-    if (n_phi < 1 || n_gamma < 1 || n_phi > 64 || n_gamma > 64) {
-        snprintf(why, why_len, "phase grid: 1 to 64 values of each parameter");
-        return -1;
-    }
-    out->n_phi = n_phi;
-    out->n_gamma = n_gamma;
-    out->phi_deg = calloc(n_phi, sizeof(double));
-    out->gamma = calloc(n_gamma, sizeof(double));
-    out->regime = calloc(n_phi * n_gamma, sizeof(int));
-    if (!out->phi_deg || !out->gamma || !out->regime) {
-        phase_grid_free(out);
-        snprintf(why, why_len, "phase grid: out of memory");
-        return -1;
-    }
-    for (size_t i = 0; i < n_phi; i++) out->phi_deg[i] = n_phi > 1 ? phi0 + (phi1 - phi0) * i / (n_phi - 1) : phi0;
-    for (size_t j = 0; j < n_gamma; j++) out->gamma[j] = n_gamma > 1 ? g0 + (g1 - g0) * j / (n_gamma - 1) : g0;
-    double sign = base->fold_angle_deg < 0 ? -1.0 : 1.0;
-    for (size_t i = 0; i < n_phi; i++)
-        for (size_t j = 0; j < n_gamma; j++) {
-            rod_scene s = *base;
-            s.fold_angle_deg = sign * fabs(out->phi_deg[i]);
-            s.fold_position = out->gamma[j];
-            rod_predict_opts o = rod_predict_opts_default();
-            o.adaptive = 1;
-            rod_prediction p;
-            char err[256];
-            int code = PLOT_REGIME_UNKNOWN;
-            if (rod_scene_check(&s, NULL, 0, NULL, 0) == 0 && rod_predict(&s, &o, &p, err, sizeof err) == ROD_OK)
-                code = !p.snapped ? PLOT_REGIME_NO_SNAP : p.asymmetric ? PLOT_REGIME_ASYMMETRIC : PLOT_REGIME_SYMMETRIC;
-            out->regime[i * n_gamma + j] = code;
-            if (progress) progress(u, i * n_gamma + j + 1, n_phi * n_gamma);
-        }
-    return 0;
+    png_job j = {.st = st, .id = id};
+    return png_bytes(draw_trial, &j, png, len, why, why_len);
 }
 
-void phase_grid_free(phase_grid *g)
+int trial_phase_report_png_bytes(store *st, const phase_grid *grid, unsigned char **png, size_t *len, char *why,
+                                 size_t why_len)
 {
-    free(g->phi_deg);
-    free(g->gamma);
-    free(g->regime);
-    memset(g, 0, sizeof *g);
+    png_job j = {.st = st, .grid = grid};
+    return png_bytes(draw_phase, &j, png, len, why, why_len) == TRIAL_OK ? 0 : -1;
 }
 
 int trial_phase_report_png(store *st, const phase_grid *grid, const char *png_path, char *why, size_t why_len)

@@ -500,7 +500,7 @@ static int cmd_phase_report(const ctl_opts *o)
     if (open_db(o, &st, 1)) return 1;
     phase_grid g;
     fprintf(stderr, "predicting the phase diagram (%zu x %zu points, N = %d)\n", np, ng, sc.nodes);
-    int rc = phase_grid_compute(&sc, p0, p1, np, g0, g1, ng, &g, grid_progress, NULL, why, sizeof why);
+    int rc = phase_grid_compute(&sc, p0, p1, np, g0, g1, ng, &g, grid_progress, NULL, NULL, why, sizeof why);
     if (rc == 0) rc = trial_phase_report_png(st, &g, o->out, why, sizeof why);
     phase_grid_free(&g);
     store_close(st);

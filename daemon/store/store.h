@@ -377,6 +377,9 @@ store_err store_trials_json(store *st, json_t **out_array, char *why, size_t why
  *   seq,t_s,kind,frame,compress_mm,shear_mm,dl,dw,dz,a,quality,reason
  * (kind is "rail" or "frame"). Numbers round-trip exactly. */
 store_err store_export_trial_csv(store *st, int64_t id, FILE *out, char *why, size_t why_len);
+/* The same text in memory (the API's GET /trials/{id}/samples.csv): *text malloc'ed (the caller
+ * frees it), *len bytes, NUL-terminated. STORE_E_NOTFOUND for an unknown trial. */
+store_err store_export_trial_csv_text(store *st, int64_t id, char **text, size_t *len, char *why, size_t why_len);
 /* Into dir (created if missing): trials.csv (one row per trial, the JSON keys flattened) and
  * trial-<id>-samples.csv per trial. Each file is written beside and renamed when complete. */
 store_err store_export_all(store *st, const char *dir, char *why, size_t why_len);

@@ -1,5 +1,6 @@
-/* store_export.c: CSV for offline analysis (`ribbonctl export`): one trial's samples, or every
- * trial (trials.csv) plus each trial's samples into a directory.
+/* store_export.c: CSV for offline analysis (`ribbonctl export`, and the API's
+ * GET /trials/{id}/samples.csv, which sends the same text): one trial's samples, or every trial
+ * (trials.csv) plus each trial's samples into a directory.
  *
  * Format (RFC 4180): a header line, comma-separated cells, a missing value is an empty cell, a
  * text cell is quoted when it holds a comma, a quote or a line break. Numbers are printed with the
@@ -89,6 +90,27 @@ store_err store_export_trial_csv(store *st, int64_t id, FILE *out, char *why, si
     if (e == STORE_OK)
         e = write_failed(out, "the samples CSV", why, why_len);
     return e;
+}
+
+store_err store_export_trial_csv_text(store *st, int64_t id, char **text, size_t *len, char *why, size_t why_len)
+{
+    *text = NULL;
+    *len = 0;
+    char *buf = NULL;
+    size_t n = 0;
+    FILE *f = open_memstream(&buf, &n);
+    if (!f)
+        return store_fail(why, why_len, STORE_E_NOMEM, "no memory for the samples CSV: %s", strerror(errno));
+    store_err e = store_export_trial_csv(st, id, f, why, why_len);
+    if (fclose(f) != 0 && e == STORE_OK)
+        e = store_fail(why, why_len, STORE_E_NOMEM, "no memory for the samples CSV");
+    if (e != STORE_OK) {
+        free(buf);
+        return e;
+    }
+    *text = buf;
+    *len = n;
+    return STORE_OK;
 }
 
 /* The columns of trials.csv: JSON key, and the prediction's key when nested. */

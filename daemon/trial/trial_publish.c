@@ -12,13 +12,19 @@ void trial_publish_begin(live_bus *b, int64_t trial_id, const char *mode, const 
     live_bus_publish(b, m, 1);
 }
 
-void trial_publish_state(live_bus *b, int64_t trial_id, trial_state s, double t_s, const char *why)
+void trial_publish_state_name(live_bus *b, int64_t trial_id, const char *state, double t_s, const char *why)
 {
     if (!b) return;
-    char m[1024], t[32], w[600];
+    char m[1024], t[32], w[600], n[32];
     snprintf(m, sizeof m, "{\"type\":\"state\",\"trial\":%lld,\"state\":\"%s\",\"t\":%s,\"why\":\"%s\"}",
-             (long long)trial_id, trial_state_name(s), live_num(t, sizeof t, t_s), live_str(w, sizeof w, why));
+             (long long)trial_id, live_str(n, sizeof n, state), live_num(t, sizeof t, t_s),
+             live_str(w, sizeof w, why));
     live_bus_publish(b, m, 0);
+}
+
+void trial_publish_state(live_bus *b, int64_t trial_id, trial_state s, double t_s, const char *why)
+{
+    trial_publish_state_name(b, trial_id, trial_state_name(s), t_s, why);
 }
 
 void trial_publish_event(live_bus *b, int64_t trial_id, double t_s, const char *kind, const char *message)
@@ -38,12 +44,14 @@ void trial_publish_sample(live_bus *b, int64_t trial_id, const trial_sample *x)
     int measured = x->kind && x->measured;
     snprintf(m, sizeof m,
              "{\"type\":\"sample\",\"trial\":%lld,\"kind\":\"%s\",\"frame\":%ld,\"t\":%s,\"compress_mm\":%s,"
-             "\"shear_mm\":%s,\"dl\":%s,\"dw\":%s,\"measured\":%s,\"dz\":%s,\"a\":%s,\"quality\":%s}",
+             "\"shear_mm\":%s,\"dl\":%s,\"dw\":%s,\"measured\":%s,\"dz\":%s,\"a\":%s,\"quality\":%s,"
+             "\"untracked\":%s}",
              (long long)trial_id, x->kind ? "frame" : "rail", x->kind ? x->frame : -1L, live_num(t, sizeof t, x->t_s),
              live_num(cm, sizeof cm, x->compress_mm), live_num(sm, sizeof sm, x->shear_mm),
              live_num(dl, sizeof dl, x->dl), live_num(dw, sizeof dw, x->dw), measured ? "true" : "false",
              live_num(dz, sizeof dz, measured ? x->dz : 0.0 / 0.0), live_num(a, sizeof a, measured ? x->a : 0.0 / 0.0),
-             live_num(q, sizeof q, x->kind ? x->quality : 0.0 / 0.0));
+             live_num(q, sizeof q, x->kind ? x->quality : 0.0 / 0.0),
+             !x->kind || !x->not_tracked ? "null" : x->not_tracked == 2 ? "\"dropped\"" : "\"skipped\"");
     live_bus_publish(b, m, 0);
 }
 
@@ -87,5 +95,14 @@ void trial_publish_result(live_bus *b, int64_t trial_id, const trial_result *r)
              r->snapped ? "true" : "false", live_num(s, sizeof s, r->snapped ? r->snap_dw : 0.0 / 0.0),
              live_str(reg, sizeof reg, r->regime), r->frames, r->measured_frames,
              live_num(d, sizeof d, r->duration_s));
+    live_bus_publish(b, m, 0);
+}
+
+void trial_publish_stored(live_bus *b, int64_t trial_id, trial_state final)
+{
+    if (!b) return;
+    char m[160];
+    snprintf(m, sizeof m, "{\"type\":\"stored\",\"trial\":%lld,\"final\":\"%s\"}", (long long)trial_id,
+             trial_state_name(final));
     live_bus_publish(b, m, 0);
 }

@@ -14,6 +14,7 @@
 #include "replay_rails_csv.h"
 #include "snap_detect.h"
 #include "trial_config_text.h"
+#include "trial_publish.h"
 #include "trial_record.h"
 #include "trial_specimen.h"
 #include "vision.h"
@@ -42,7 +43,11 @@ struct trial_replay {
     double t_check, t_shear, t_return; /* NaN = none */
     long frames_total;
     int64_t new_id;
+    char note[256];
+    live_bus *bus; /* NULL: nothing published */
 };
+
+void trial_replay_set_bus(trial_replay *r, live_bus *bus) { r->bus = bus; }
 
 void trial_replay_free(trial_replay *r)
 {
@@ -343,11 +348,13 @@ int trial_replay_create(trial_replay *r, store *st, const char *note, int64_t *n
     char w[256];
     store_trial_set_status(st, *new_id, STORE_STATUS_RUNNING, NULL, store_wall_now(), w, sizeof w);
     r->new_id = *new_id;
+    snprintf(r->note, sizeof r->note, "%s", note ? note : "");
     return 0;
 }
 
-static void add_event(store *st, int64_t id, double t, store_event_kind kind, const char *msg)
+static void add_event(store *st, live_bus *bus, int64_t id, double t, store_event_kind kind, const char *msg)
 {
+    trial_publish_event(bus, id, t, store_event_kind_name(kind), msg);
     store_event ev;
     memset(&ev, 0, sizeof ev);
     ev.trial_id = id;
@@ -398,6 +405,49 @@ static int frame_rails(trial_replay *r, long f, store_sample *x, char *why, size
     return 0;
 }
 
+/* The source trial's stored prediction, for the page to draw beside the replay's points. */
+static void publish_source_prediction(trial_replay *r, store *st)
+{
+    if (!r->bus || r->source_id <= 0) return;
+    store_prediction p = store_prediction_default();
+    char w[256];
+    if (store_prediction_get_by_trial(st, r->source_id, &p, w, sizeof w) != STORE_OK) return;
+    trial_publish_prediction(r->bus, r->new_id, 1, p.snapped, p.snap_dw, store_regime_name(p.regime), p.curve.n,
+                             p.curve.dw, p.curve.dz, p.curve.a, NULL);
+    store_prediction_free(&p);
+}
+
+/* A stored frame sample as the page's sample message. */
+static void publish_sample(live_bus *bus, int64_t id, const store_sample *x, int measured)
+{
+    if (!bus) return;
+    trial_sample t;
+    memset(&t, 0, sizeof t);
+    t.kind = 1;
+    t.frame = x->frame;
+    t.t_s = x->t_s;
+    t.compress_mm = x->compress_mm;
+    t.shear_mm = x->shear_mm;
+    t.dl = x->dl;
+    t.dw = x->dw;
+    t.measured = measured;
+    t.dz = x->dz;
+    t.a = x->a;
+    t.quality = x->quality;
+    trial_publish_sample(bus, id, &t);
+}
+
+/* The steps of the source the replay passes at frame time t (once each, in order). */
+static void publish_steps(trial_replay *r, double t, int *step)
+{
+    const double at[3] = {r->t_check, r->t_shear, r->t_return};
+    static const char *const name[3] = {"checking", "shearing", "returning"};
+    while (*step < 3 && (!isfinite(at[*step]) || t >= at[*step])) {
+        if (isfinite(at[*step])) trial_publish_state_name(r->bus, r->new_id, name[*step], t, NULL);
+        (*step)++;
+    }
+}
+
 int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
                          void (*progress)(void *u, long frame, long total), void *u, trial_result *res, char *why,
                          size_t why_len)
@@ -436,7 +486,10 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
     snap_detect det;
     snap_detect_init(&det, &rec->snap);
     long total = vis_source_frame_count(vs), skipped = 0;
-    int reset_done = 0;
+    int reset_done = 0, step = 0, snap_told = 0;
+    trial_publish_begin(r->bus, id, "replay", r->note);
+    trial_publish_state_name(r->bus, id, "replaying", NAN, r->video);
+    publish_source_prediction(r, st);
     for (long f = 0;; f++) {
         if (cancel && atomic_load(cancel)) {
             snprintf(why, why_len, "replay aborted at frame %ld", f);
@@ -480,9 +533,16 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
         }
         if (store_samples_add(w, &x, why, why_len) != STORE_OK) goto fail;
         res->frames++;
+        publish_steps(r, x.t_s, &step);
+        publish_sample(r->bus, id, &x, measured);
+        trial_publish_frame(r->bus, frame, trk, f, x.t_s);
         int in_shear = isfinite(r->t_shear) ? (x.t_s >= r->t_shear && (!isfinite(r->t_return) || x.t_s < r->t_return))
                                             : 1;
         if (in_shear) snap_detect_add(&det, f, x.t_s, x.dw, x.dz, x.a, measured);
+        if (!snap_told && snap_detect_snapped(&det)) {
+            trial_publish_state_name(r->bus, id, "snapped", x.t_s, NULL);
+            snap_told = 1;
+        }
         res->duration_s = x.t_s;
         if (progress && f % 50 == 0) progress(u, f, total);
     }
@@ -510,10 +570,13 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
     else
         snprintf(msg, sizeof msg, "replayed %ld frames of %.200s (%ld outside the rail readings, skipped): %s at "
                  "Delta W = %.5f", res->frames, r->video, skipped, res->regime, res->snap_dw);
-    add_event(st, id, res->duration_s, STORE_EVENT_INFO, msg);
+    add_event(st, r->bus, id, res->duration_s, STORE_EVENT_INFO, msg);
     store_trial_set_status(st, id, STORE_STATUS_DONE, NULL, store_wall_now(), w2, sizeof w2);
     res->final = TRIAL_DONE;
     rc = 0;
+    trial_publish_result(r->bus, id, res);
+    trial_publish_state(r->bus, id, TRIAL_DONE, res->duration_s, NULL);
+    trial_publish_stored(r->bus, id, TRIAL_DONE);
     goto done;
 fail:
     if (w) {
@@ -521,12 +584,17 @@ fail:
         w = NULL;
     }
     if (id) {
-        add_event(st, id, NAN, aborted ? STORE_EVENT_INFO : STORE_EVENT_FAULT, why);
+        add_event(st, r->bus, id, NAN, aborted ? STORE_EVENT_INFO : STORE_EVENT_FAULT, why);
         store_trial_set_status(st, id, aborted ? STORE_STATUS_ABORTED : STORE_STATUS_FAILED, why, store_wall_now(), w2,
                                sizeof w2);
     }
     res->final = aborted ? TRIAL_ABORTED : TRIAL_FAILED;
     snprintf(res->reason, sizeof res->reason, "%s", why);
+    if (id) {
+        trial_publish_result(r->bus, id, res);
+        trial_publish_state(r->bus, id, res->final, NAN, why);
+        trial_publish_stored(r->bus, id, res->final);
+    }
 done:
     vis_frame_free(frame);
     vis_tracker_free(trk);

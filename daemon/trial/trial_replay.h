@@ -24,6 +24,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "live.h"
 #include "rig_config.h"
 #include "store.h"
 #include "trial_runner.h"
@@ -46,6 +47,12 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
                          void (*progress)(void *u, long frame, long total), void *u, trial_result *res, char *why,
                          size_t why_len);
 void trial_replay_free(trial_replay *r);
+/* The live page's bus (may be NULL: nothing published, as in `ribbonctl replay`): execute then
+ * publishes what a trial does (docs/live-page.md): the trial, its states ("replaying", then the
+ * source's checking, shearing, snapped, returning as the replay passes them, then done / aborted
+ * / failed), every sample, camera frames with the tracked centreline, its events, the source
+ * trial's stored prediction (if it has one) and the result. The bus must outlive the execution. */
+void trial_replay_set_bus(trial_replay *r, live_bus *bus);
 
 /* The source trial (0 for files) and the video's frame count (-1 = unknown). */
 int64_t trial_replay_source(const trial_replay *r);

@@ -312,6 +312,7 @@ static void fail_early(trial_session *s, const char *why)
                            store_wall_now(), w, sizeof w);
     s->result.final = aborted ? TRIAL_ABORTED : TRIAL_FAILED;
     snprintf(s->result.reason, sizeof s->result.reason, "%s", why);
+    trial_publish_stored(s->bus, s->trial_id, s->result.final);
     pthread_mutex_lock(&s->lock);
     s->status.state = s->result.final;
     pthread_mutex_unlock(&s->lock);
@@ -507,6 +508,7 @@ static void session_store_result(trial_session *s)
                                                           : STORE_STATUS_FAILED;
     store_trial_set_status(s->st, s->trial_id, fin, s->result.reason[0] ? s->result.reason : NULL, store_wall_now(), w,
                            sizeof w);
+    trial_publish_stored(s->bus, s->trial_id, s->result.final);
     logf_(s, "%s%s%s; measured %s at Delta W = %.5f", trial_state_name(s->result.final),
           s->result.reason[0] ? ": " : "", s->result.reason, s->result.regime, s->result.snap_dw);
 }

@@ -6,6 +6,9 @@
  *   2. Replaying that trial (its video and recorded rail positions) reproduces its measured snap
  *      within one frame's Delta W; so does its video, rails CSV and camera calibration replayed as
  *      an outside recording by ribbond in replay mode (on the replay thread; an abort ends it).
+ *      Through the API the trial's samples CSV is the store's export text, and GET /phase.png
+ *      answers at once while the predicted map is computed (cancelled by the daemon's close); a
+ *      replay in replay mode publishes on the live bus what the page follows.
  *   3. API error cases: unknown trial 404, bad fields 400 (naming the key), abort when idle 409.
  *   4. kill -9 in the middle of a trial, then a restart: integrity_check ok, the trial is marked
  *      interrupted, and the committed samples are all there (contiguous sequence numbers).
@@ -24,7 +27,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/time.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -100,6 +107,72 @@ static void sleep_s(double s)
     nanosleep(&ts, NULL);
 }
 
+static double mono_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* GET path over a plain loopback socket (the reply's headers are wanted): the whole reply,
+ * malloc'ed and NUL-terminated, its length in *len. */
+static char *raw_get(unsigned port, const char *path, size_t *len)
+{
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    assert_true(fd >= 0);
+    struct timeval tv = {.tv_sec = 60};
+    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    assert_int_equal(connect(fd, (struct sockaddr *)&a, sizeof a), 0);
+    char req[256];
+    int n = snprintf(req, sizeof req, "GET %s HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n", path);
+    assert_int_equal(send(fd, req, (size_t)n, MSG_NOSIGNAL), n);
+    size_t cap = 1 << 16, got = 0;
+    char *b = malloc(cap);
+    assert_non_null(b);
+    for (;;) {
+        if (got + 1 == cap) {
+            b = realloc(b, cap *= 2);
+            assert_non_null(b);
+        }
+        ssize_t r = recv(fd, b + got, cap - 1 - got, 0);
+        if (r <= 0) break;
+        got += (size_t)r;
+    }
+    close(fd);
+    b[got] = '\0';
+    *len = got;
+    return b;
+}
+
+/* The X-Phase-Map header's value of a reply, into v. */
+static void phase_map_header(const char *reply, char *v, size_t n)
+{
+    const char *h = strstr(reply, "\r\nX-Phase-Map: ");
+    assert_non_null(h);
+    h += strlen("\r\nX-Phase-Map: ");
+    size_t k = strcspn(h, "\r");
+    snprintf(v, n, "%.*s", (int)k, h);
+}
+
+/* GET /phase.png: a PNG at once (the trials alone while the predicted map is computed, some
+ * 10 s of a core in the Release build, minutes under the sanitizers), the map's state in
+ * X-Phase-Map; closing the daemon right after cancels the computation (rig_daemon_close returns).
+ * The finished map is checked on the page by test_live_page (heavy). */
+static void phase_png_route(unsigned port)
+{
+    size_t len0 = 0;
+    char *r0 = raw_get(port, "/phase.png", &len0);
+    char state[200];
+    phase_map_header(r0, state, sizeof state);
+    printf("phase.png: first reply %zu bytes, map %s\n", len0, state);
+    assert_non_null(strstr(r0, "\r\nContent-Type: image/png\r\n"));
+    assert_true(strstr(r0, "\r\n\r\n\x89PNG") != NULL);
+    assert_true(strncmp(state, "computing", 9) == 0);
+    free(r0);
+}
+
 /* Polls GET /status until the daemon is idle; returns 1 when it became idle in time. */
 static int wait_idle(unsigned port, double max_s)
 {
@@ -113,6 +186,55 @@ static int wait_idle(unsigned port, double max_s)
         sleep_s(0.1);
     }
     return 0;
+}
+
+/* What the replay `nid` published on the live bus (the page follows it so): its trial message
+ * (mode replay), the state replaying, then shearing, one sample per stored sample, the result,
+ * the state done and the stored message, in that order. */
+static void replay_published(rig_daemon *d, json_int_t nid, json_int_t samples)
+{
+    uint64_t cursor = live_bus_first(d->bus), seq = 0, missed = 0;
+    char buf[1100];
+    long n_samples = 0, order = 0;
+    int saw_trial = 0, saw_replaying = 0, saw_shearing = 0, saw_result = 0, saw_done = 0, saw_stored = 0;
+    int len;
+    while ((len = live_bus_read(d->bus, &cursor, buf, sizeof buf, 0, &seq, &missed)) > 0) {
+        json_error_t je;
+        json_t *m = json_loads(buf, 0, &je);
+        if (!m) fail_msg("bus message is not JSON: %s (%s)", buf, je.text);
+        const char *type = json_string_value(json_object_get(m, "type"));
+        assert_non_null(type);
+        if (json_integer_value(json_object_get(m, "trial")) == nid) {
+            const char *st = json_string_value(json_object_get(m, "state"));
+            order++;
+            if (!strcmp(type, "trial")) {
+                assert_string_equal(json_string_value(json_object_get(m, "mode")), "replay");
+                saw_trial = (int)order;
+            } else if (!strcmp(type, "state") && !strcmp(st, "replaying")) {
+                saw_replaying = (int)order;
+            } else if (!strcmp(type, "state") && !strcmp(st, "shearing")) {
+                saw_shearing = (int)order;
+            } else if (!strcmp(type, "sample")) {
+                n_samples++;
+            } else if (!strcmp(type, "result")) {
+                assert_string_equal(json_string_value(json_object_get(m, "final")), "done");
+                saw_result = (int)order;
+            } else if (!strcmp(type, "state") && !strcmp(st, "done")) {
+                saw_done = (int)order;
+            } else if (!strcmp(type, "stored")) {
+                saw_stored = (int)order;
+            }
+        }
+        json_decref(m);
+    }
+    printf("replay on the live bus: %ld samples (%lld stored), %llu missed; order trial %d, replaying %d, shearing "
+           "%d, result %d, done %d, stored %d\n",
+           n_samples, (long long)samples, (unsigned long long)missed, saw_trial, saw_replaying, saw_shearing,
+           saw_result, saw_done, saw_stored);
+    assert_int_equal(missed, 0);
+    assert_int_equal(n_samples, samples);
+    assert_true(saw_trial == 1 && saw_replaying > saw_trial && saw_shearing > saw_replaying);
+    assert_true(saw_result > saw_shearing && saw_done > saw_result && saw_stored > saw_done);
 }
 
 /* The stored trial `id` written out as an outside recording would come: its video, a rails CSV
@@ -188,7 +310,9 @@ static void replay_outside_recording(store *st, int64_t id, double meas, double 
     assert_string_equal(status, "done");
     assert_true(fabs(got - meas) <= frame_dw + 1e-9);
     assert_true(json_is_null(json_object_get(t, "source_trial"))); /* outside files: no source trial */
+    json_int_t frames = json_integer_value(json_object_get(t, "samples"));
     json_decref(t);
+    replay_published(&d, nid, frames);
 
     /* An abort right after the start: the replay thread stops, the trial ends aborted. */
     t = NULL;
@@ -357,6 +481,47 @@ static void mock_trial_then_replay(void **state)
         free(png);
     }
 
+    /* The samples CSV through the API: the text the store's export writes (`ribbonctl export ID
+     * --csv` calls the same writer), one row per stored sample; an unknown trial is a 404. */
+    {
+        char url[64];
+        snprintf(url, sizeof url, "http://127.0.0.1:%u", port);
+        api_client_config c = api_client_config_default();
+        c.base_url = url;
+        int st = 0;
+        unsigned char *csv = NULL;
+        size_t len = 0;
+        snprintf(path, sizeof path, "/trials/%lld/samples.csv", (long long)id);
+        assert_int_equal(api_client_request(&c, "GET", path, NULL, &st, NULL, &csv, &len, why, sizeof why), 0);
+        assert_int_equal(st, 200);
+        store *own = NULL;
+        char db[128];
+        snprintf(db, sizeof db, "%s/trials.db", dir);
+        assert_int_equal(store_open(db, &own, why, sizeof why), STORE_OK);
+        char *want = NULL;
+        size_t want_len = 0;
+        assert_int_equal(store_export_trial_csv_text(own, id, &want, &want_len, why, sizeof why), STORE_OK);
+        store_close(own);
+        long rows = -1; /* the header is not a row */
+        for (size_t k = 0; k < len; k++) rows += csv[k] == '\n';
+        printf("samples.csv: %zu bytes, %ld rows (%lld samples)\n", len, rows, (long long)samples);
+        assert_int_equal(len, want_len);
+        assert_memory_equal(csv, want, len);
+        assert_true(len > 60 && !memcmp(csv, "seq,t_s,kind,frame,compress_mm,shear_mm,dl,dw,dz,a,quality,reason\n", 60));
+        assert_int_equal(rows, samples);
+        free(want);
+        free(csv);
+        csv = NULL;
+        assert_int_equal(api_client_request(&c, "GET", "/trials/999/samples.csv", NULL, &st, NULL, &csv, &len, why,
+                                            sizeof why), 0);
+        assert_int_equal(st, 404);
+        assert_non_null(strstr(why, "999"));
+        free(csv);
+    }
+
+    phase_png_route(port);
+    double close_t0 = mono_s();
+
     /* API errors. */
     t = NULL;
     assert_int_equal(http(port, "GET", "/trials/999", NULL, &t, why, sizeof why), 404);
@@ -376,6 +541,8 @@ static void mock_trial_then_replay(void **state)
 
     /* Replay: the same video and rail positions through the pipeline again. */
     rig_daemon_close(&d, "test done");
+    printf("rig_daemon_close with the phase map computing: %.2f s after the request\n", mono_s() - close_t0);
+    assert_true(mono_s() - close_t0 < 30); /* the map was cancelled, not finished (30 points) */
     store *st = NULL;
     char db[128];
     snprintf(db, sizeof db, "%s/trials.db", dir);

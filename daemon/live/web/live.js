@@ -1,7 +1,9 @@
 // live.js: the live page's behaviour (docs/live-page.md). Follows ribbond's event stream
 // (GET /live/events, read with fetch so the token can travel in the Authorization header),
-// draws the measured points against the prediction with Chart.js, refreshes the camera picture,
-// and calls the existing API for start and abort: the page has no power the API does not have.
+// draws the measured points against the prediction with Chart.js, refreshes the camera picture
+// and the phase diagram, lists the trials with links to their report and samples CSV, and calls
+// the existing API for start and abort: the page has no power the API does not have. A replay
+// (replay mode) is followed the same way: it publishes what a trial does.
 'use strict';
 
 const $ = (id) => document.getElementById(id);
@@ -48,7 +50,10 @@ function resetView(trial) {
   view = { trial, samples: 0, frames: 0, measured: 0, missed: 0, haveFrame: false, predSnap: null, measSnap: null };
   $('trial-id').textContent = trial === null ? '-' : String(trial);
   for (const id of ['v-dl', 'v-dw', 'v-dz', 'v-a', 'v-q', 'v-t', 'snap-predicted', 'snap-measured']) setNum(id, null);
-  for (const id of ['v-samples', 'v-frames', 'v-measured', 'v-unmeasured', 'v-missed']) $(id).textContent = '0';
+  for (const id of ['v-samples', 'v-frames', 'v-measured', 'v-unmeasured', 'v-missed', 'v-dropped', 'v-skipped'])
+    $(id).textContent = '0';
+  view.dropped = 0;
+  view.skipped = 0;
   $('regime-predicted').textContent = '-';
   $('regime-measured').textContent = '-';
   $('events').textContent = '';
@@ -149,6 +154,8 @@ function handle(m) {
         $('v-frames').textContent = String(view.frames);
         $('v-unmeasured').textContent = String(view.frames - view.measured - (m.measured ? 1 : 0));
         setNum('v-q', m.quality, 3);
+        if (m.untracked === 'dropped') $('v-dropped').textContent = String(++view.dropped);
+        if (m.untracked === 'skipped') $('v-skipped').textContent = String(++view.skipped);
         if (m.measured) {
           view.measured++;
           $('v-measured').textContent = String(view.measured);
@@ -178,7 +185,11 @@ function handle(m) {
       setNum('snap-measured', m.snapped ? m.snap_dw : null);
       $('regime-measured').textContent = m.regime;
       dirty = true;
+      break;
+    case 'stored': // the store has the trial's end: the table and the phase diagram show it
+      lastStored = m.trial;
       loadTrials().catch(() => {});
+      loadPhase().catch(() => {});
       break;
     default: break;
   }
@@ -200,6 +211,7 @@ async function follow() {
       setLink(true, 'live');
       loadStatus().catch(() => {});
       loadTrials().catch(() => {});
+      loadPhase().catch(() => {});
       const reader = r.body.getReader();
       const dec = new TextDecoder();
       let buf = '';
@@ -228,6 +240,8 @@ async function loadStatus() {
   if (!r.ok) return;
   const s = await r.json();
   $('mode').textContent = '(' + s.mode + ')';
+  $('source-box').hidden = s.mode !== 'replay'; // replay mode: POST /trials {"source_trial": ID}
+  $('overrides').disabled = s.mode === 'replay';
   if (s.state === 'idle' && (!view || view.trial === null)) setState('idle');
 }
 
@@ -242,11 +256,57 @@ async function loadTrials() {
     const cells = [t.id, t.status, fmt(t.snap_dw_measured), t.regime_measured || '-', fmt(t.snap_dw_predicted),
       t.regime_predicted || '-'];
     for (const c of cells) tr.insertCell().textContent = String(c);
-    const a = document.createElement('a');
-    a.href = '/trials/' + t.id + '/report.png';
-    a.textContent = 'PNG';
-    tr.insertCell().appendChild(a);
+    // Links open in the browser, which cannot send the token: beyond loopback they are fetched
+    // with it (authedLink) and handed over as a blob.
+    tr.insertCell().appendChild(authedLink('/trials/' + t.id + '/report.png', 'PNG', 'report-' + t.id, null));
+    tr.insertCell().appendChild(authedLink('/trials/' + t.id + '/samples.csv', 'CSV', 'csv-' + t.id,
+      'trial-' + t.id + '-samples.csv'));
   }
+}
+
+// A link to an API route: a plain href on a ribbond that needs no token; with a token the click
+// fetches the route with it and opens (or saves, with a file name) what came back.
+function authedLink(path, text, id, filename) {
+  const a = document.createElement('a');
+  a.href = path;
+  a.id = id;
+  a.textContent = text;
+  if (filename) a.download = filename;
+  a.addEventListener('click', async (e) => {
+    if (!token) return;
+    e.preventDefault();
+    const r = await api(path);
+    if (!r.ok) return;
+    const url = URL.createObjectURL(await r.blob());
+    const b = document.createElement('a');
+    b.href = url;
+    if (filename) b.download = filename;
+    else b.target = '_blank';
+    b.click();
+    setTimeout(() => URL.revokeObjectURL(url), 60000);
+  });
+  return a;
+}
+
+// ---- the phase diagram: ribbond's phase report, fetched again after each trial and while its
+// predicted map is still being computed (X-Phase-Map says how far) ------------------------------
+let phaseUrl = null, phaseCount = 0, phaseTimer = null, lastStored = null;
+async function loadPhase() {
+  clearTimeout(phaseTimer);
+  const stored = lastStored; // the last trial the store had finished when this was asked for
+  const r = await api('/phase.png');
+  if (!r.ok) return;
+  const map = r.headers.get('X-Phase-Map') || '-';
+  const url = URL.createObjectURL(await r.blob());
+  $('phase').src = url;
+  if (phaseUrl) URL.revokeObjectURL(phaseUrl);
+  phaseUrl = url;
+  phaseCount++;
+  $('phase').dataset.updates = String(phaseCount);
+  $('phase').dataset.map = map;
+  $('phase').dataset.trial = stored === null ? '' : String(stored);
+  $('phase-info').textContent = 'predicted map: ' + map;
+  if (map.startsWith('computing') || map === 'not started') phaseTimer = setTimeout(() => loadPhase().catch(() => {}), 3000);
 }
 
 // ---- camera -----------------------------------------------------------------------------------
@@ -284,7 +344,9 @@ $('start').addEventListener('click', () => {
   const note = $('note').value.trim();
   if (note) body.note = note;
   const set = $('overrides').value.split('\n').map((l) => l.trim()).filter((l) => l);
-  if (set.length) body.set = set;
+  if (set.length && !$('overrides').disabled) body.set = set;
+  const source = parseInt($('source').value, 10);
+  if (!$('source-box').hidden && source >= 1) body.source_trial = source;
   control('/trials', body).catch((e) => ($('control-msg').textContent = String(e)));
 });
 $('abort').addEventListener('click', () => control('/trials/current/abort', {}).catch((e) => ($('control-msg').textContent = String(e))));

@@ -198,7 +198,43 @@ static int fake_report(void *user, int64_t id, unsigned char **png, size_t *len,
     return 0;
 }
 
+/* The fake samples CSV of trial id: a header and one row naming the id (a comma and a quote in a
+ * text cell, as the store writes them). */
+static int fake_samples_csv(void *user, int64_t id, char **csv, size_t *len, int *http_status, char *why,
+                            size_t why_len)
+{
+    fake_model *m = user;
+    pthread_mutex_lock(&m->lock);
+    m->ops_called++;
+    int count = m->count;
+    pthread_mutex_unlock(&m->lock);
+    if (id < 1 || id > count) {
+        snprintf(why, why_len, "trial %lld does not exist", (long long)id);
+        *http_status = 404;
+        return -1;
+    }
+    char text[200];
+    int n = snprintf(text, sizeof text, "seq,t_s,reason\n%lld,0.5,\"low, \"\"quality\"\"\"\n", (long long)id);
+    *csv = malloc((size_t)n + 1);
+    if (!*csv) return -1;
+    memcpy(*csv, text, (size_t)n + 1);
+    *len = (size_t)n;
+    return 0;
+}
+
+/* The fake phase report: FAKE_PNG_LEN bytes as fake_report, with the map's state. */
+static int fake_phase_png(void *user, unsigned char **png, size_t *len, char *map, size_t map_len, int *http_status,
+                          char *why, size_t why_len)
+{
+    (void)http_status;
+    if (fake_report(user, 1, png, len, http_status, why, why_len) != 0) return -1;
+    snprintf(map, map_len, "computing 3/30\n"); /* the line break is sent as '?' */
+    return 0;
+}
+
 static const api_ops fake_ops = {
+    .samples_csv = fake_samples_csv,
+    .phase_png = fake_phase_png,
     .status = fake_status,
     .start = fake_start,
     .abort_current = fake_abort,
@@ -362,10 +398,19 @@ static void test_route_table(void **state)
         assert_int_equal(api_route_parse(bad_path[i], &id, why, sizeof why), API_ROUTE_BAD_PATH);
     assert_int_equal(api_route_parse("/status%00garbage", &id, why, sizeof why), API_ROUTE_BAD_PATH);
     assert_non_null(strstr(why, "'%' at offset 7"));
+    assert_int_equal(api_route_parse("/trials/17/samples.csv", &id, why, sizeof why), API_ROUTE_SAMPLES_CSV);
+    assert_int_equal(id, 17);
+    assert_int_equal(api_route_parse("/trials/0/samples.csv", &id, why, sizeof why), API_ROUTE_BAD_ID);
+    assert_int_equal(api_route_parse("/trials/x/samples.csv", &id, why, sizeof why), API_ROUTE_BAD_ID);
+    assert_int_equal(api_route_parse("/phase.png", &id, why, sizeof why), API_ROUTE_PHASE);
+    assert_string_equal(api_route_allow(API_ROUTE_SAMPLES_CSV), "GET");
+    assert_string_equal(api_route_allow(API_ROUTE_PHASE), "GET");
+    assert_false(api_route_method_ok(API_ROUTE_SAMPLES_CSV, "POST"));
     assert_int_equal(api_route_parse("/live/events", &id, why, sizeof why), API_ROUTE_EVENTS);
     assert_int_equal(api_route_parse("/live/camera.jpg", &id, why, sizeof why), API_ROUTE_CAMERA);
     assert_int_equal(api_route_parse("/live/prediction", &id, why, sizeof why), API_ROUTE_PREDICTION);
     const char *none[] = {"/", "/statu", "/status/", "/trials/1/report.jpg", "/trials/1/report.png/x",
+                          "/trials/1/samples.csv/x", "/trials/1/samples", "/phase.png/", "/phase",
                           "/trialsx", "/trials/current/abort/", "/live", "/live/events/"};
     for (size_t i = 0; i < sizeof none / sizeof none[0]; i++)
         assert_int_equal(api_route_parse(none[i], &id, why, sizeof why), API_ROUTE_NONE);
@@ -753,6 +798,41 @@ static void test_report_png_bytes(void **state)
     assert_non_null(strstr(why, "is not JSON (content type image/png)"));
 }
 
+/* GET /trials/{id}/samples.csv: the op's text as text/csv with its file name, byte for byte; an
+ * unknown trial 404 (JSON), a bad id 400 before any op, POST 405. GET /phase.png: the op's PNG
+ * with the map's state as X-Phase-Map (control bytes sent as '?'). */
+static void test_samples_csv_and_phase_png(void **state)
+{
+    fixture *f = *state;
+    char why[512];
+    assert_int_equal(req(f, "POST", "/trials", NULL, NULL, why, sizeof why), 201);
+    int calls = f->m.ops_called;
+    assert_int_equal(req(f, "GET", "/trials/2/samples.csv", NULL, NULL, why, sizeof why), 404);
+    assert_string_equal(why, "trial 2 does not exist");
+    assert_int_equal(req(f, "GET", "/trials/0/samples.csv", NULL, NULL, why, sizeof why), 400);
+    assert_int_equal(req(f, "POST", "/trials/1/samples.csv", NULL, NULL, why, sizeof why), 405);
+    assert_int_equal(f->m.ops_called, calls + 1); /* only the 404 reached the op */
+
+    char reply[4096];
+    const char *parts[] = {"GET /trials/1/samples.csv HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n"};
+    raw_exchange(api_server_port(f->srv), parts, NULL, 1, 0, reply, sizeof reply);
+    assert_int_equal(raw_status(reply), 200);
+    assert_non_null(strstr(reply, "\r\nContent-Type: text/csv; charset=utf-8\r\n"));
+    assert_non_null(strstr(reply, "\r\nContent-Disposition: attachment; filename=\"trial-1-samples.csv\"\r\n"));
+    assert_string_equal(raw_body(reply), "seq,t_s,reason\n1,0.5,\"low, \"\"quality\"\"\"\n");
+
+    size_t cap = FAKE_PNG_LEN + 4096;
+    char *big = malloc(cap);
+    assert_non_null(big);
+    const char *phase[] = {"GET /phase.png HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n"};
+    size_t got = raw_exchange(api_server_port(f->srv), phase, NULL, 1, 0, big, cap);
+    assert_int_equal(raw_status(big), 200);
+    assert_non_null(strstr(big, "\r\nContent-Type: image/png\r\n"));
+    assert_non_null(strstr(big, "\r\nX-Phase-Map: computing 3/30?\r\n"));
+    assert_int_equal(got - (size_t)(raw_body(big) - big), FAKE_PNG_LEN);
+    free(big);
+}
+
 static void test_client_when_nothing_listens(void **state)
 {
     (void)state;
@@ -852,6 +932,8 @@ static void test_op_contract(void **state)
     assert_string_equal(why, "store is locked");
     assert_int_equal(req(f, "POST", "/trials", NULL, NULL, why, sizeof why), 501);
     assert_int_equal(req(f, "GET", "/trials/1/report.png", NULL, NULL, why, sizeof why), 501);
+    assert_int_equal(req(f, "GET", "/trials/1/samples.csv", NULL, NULL, why, sizeof why), 501);
+    assert_int_equal(req(f, "GET", "/phase.png", NULL, NULL, why, sizeof why), 501);
 }
 
 static int group_setup(void **state)
@@ -892,6 +974,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_port_in_use_names_reason, setup, teardown),
         cmocka_unit_test(test_ipv6_loopback),
         cmocka_unit_test_setup_teardown(test_report_png_bytes, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_samples_csv_and_phase_png, setup, teardown),
         cmocka_unit_test(test_client_when_nothing_listens),
         cmocka_unit_test_setup_teardown(test_partial_writes, setup, teardown),
         cmocka_unit_test_setup_teardown(test_op_contract, setup_partial_ops, teardown),

@@ -36,6 +36,12 @@ void kit_fresh_dir(const char *name, char *dir, size_t n)
 
 int kit_ribbond_start(ribbond_child *c, const char *dir, unsigned port, const char *const *sets)
 {
+    return kit_ribbond_start_config(c, dir, "mock.ini", port, sets);
+}
+
+int kit_ribbond_start_config(ribbond_child *c, const char *dir, const char *config, unsigned port,
+                             const char *const *sets)
+{
     memset(c, 0, sizeof *c);
     snprintf(c->dir, sizeof c->dir, "%s", dir);
     snprintf(c->log, sizeof c->log, "%s/ribbond.log", dir);
@@ -45,7 +51,7 @@ int kit_ribbond_start(ribbond_child *c, const char *dir, unsigned port, const ch
     int k = 0;
     static char bin[300], cfg[300];
     snprintf(bin, sizeof bin, "%s/ribbond", RIBBON_BIN_DIR);
-    snprintf(cfg, sizeof cfg, "%s/config/mock.ini", RIBBON_SOURCE_DIR);
+    snprintf(cfg, sizeof cfg, "%s/config/%s", RIBBON_SOURCE_DIR, config);
     argv[k++] = bin;
     argv[k++] = "--config";
     argv[k++] = cfg;

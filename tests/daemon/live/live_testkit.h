@@ -19,6 +19,9 @@ void kit_fresh_dir(const char *name, char *dir, size_t n);
 /* Starts ribbond on config/mock.ini in dir, port (0 = any) and the extra --set overrides (NULL
  * terminated); waits for "listening on". Returns 0, or -1 (the log is printed). */
 int kit_ribbond_start(ribbond_child *c, const char *dir, unsigned port, const char *const *sets);
+/* The same on config/CONFIG (e.g. "replay.ini": replay mode on the store mock.ini filled). */
+int kit_ribbond_start_config(ribbond_child *c, const char *dir, const char *config, unsigned port,
+                             const char *const *sets);
 /* SIGTERM and wait (at most 60 s, then SIGKILL). Returns the exit status. */
 int kit_ribbond_stop(ribbond_child *c);
 

@@ -43,7 +43,7 @@ static void test_token_guards_live_data(void **state)
 
     /* The data: 401 without the token and with a wrong one, as the API's JSON error. */
     const char *data_paths[] = {"/live/events", "/live/camera.jpg", "/live/prediction", "/status", "/trials",
-                                "/trials/1", "/trials/1/report.png"};
+                                "/trials/1", "/trials/1/report.png", "/trials/1/samples.csv", "/phase.png"};
     for (size_t i = 0; i < sizeof data_paths / sizeof *data_paths; i++) {
         snprintf(url, sizeof url, "%s%s", c.url, data_paths[i]);
         int st = kit_http("GET", url, NULL, NULL, &body, 10);
@@ -64,6 +64,10 @@ static void test_token_guards_live_data(void **state)
     assert_int_equal(kit_http("GET", url, TOKEN, NULL, NULL, 10), 404); /* none yet, but allowed */
     snprintf(url, sizeof url, "%s/live/camera.jpg", c.url);
     assert_int_equal(kit_http("GET", url, TOKEN, NULL, NULL, 10), 404);
+    snprintf(url, sizeof url, "%s/trials/1/samples.csv", c.url);
+    assert_int_equal(kit_http("GET", url, TOKEN, NULL, NULL, 10), 404); /* no such trial, but allowed */
+    snprintf(url, sizeof url, "%s/phase.png", c.url);
+    assert_int_equal(kit_http("GET", url, TOKEN, NULL, NULL, 30), 200); /* no trials yet: the map alone */
     snprintf(url, sizeof url, "%s/live/events", c.url);
     assert_int_equal(kit_http("GET", url, TOKEN, NULL, &body, 1.5), 200);
     assert_non_null(strstr(body, "data: {\"type\":\"hello\""));

@@ -5,9 +5,15 @@
  *      prediction's curve appears, the camera picture updates, and the final measured and
  *      predicted snap on the page are the ones `ribbonctl show --json` gives; no console error;
  *   2. Abort on the page aborts a running trial;
- *   3. ribbond restarted under the page: the page shows it was gone and reconnects.
+ *      The trials table links each trial's report PNG and samples CSV (the CSV is the text
+ *      `ribbonctl export ID --csv` writes), and the phase diagram shows the predicted map;
+ *   3. ribbond restarted under the page: the page shows it was gone and reconnects;
+ *   4. ribbond restarted in replay mode (config/replay.ini on the same store): a replay of the
+ *      first trial started from the page is followed like a trial (replaying, the source's steps,
+ *      done), its points drawn beside the source's prediction, its snap the one ribbonctl shows.
  * Screenshots go to the build folder (test-output/live_page/); with RIBBON_LIVE_FIGURE=path the
- * one taken during the shear is also written there (the README's figure is made so).
+ * one taken during the shear is also written there (the README's figure is made so), and with
+ * RIBBON_LIVE_TRIALS_FIGURE=path the trials table and phase diagram after the first trial.
  * Heavy and labelled "browser": the sanitizer build skips it. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -82,6 +88,95 @@ static json_t *ribbonctl_show(const char *url, const char *id)
     pclose(p);
     if (!j) fail_msg("ribbonctl show %s: not JSON (%s)", id, e.text);
     return j;
+}
+
+/* One string the page's script returns (out gets "" when it is not a string). */
+static void page_string(webdriver *wd, const char *script, char *out, size_t n)
+{
+    char why[512];
+    json_t *j = wd_exec(wd, script, why, sizeof why);
+    if (!j) fail_msg("script: %s", why);
+    snprintf(out, n, "%s", json_string_value(j) ? json_string_value(j) : "");
+    json_decref(j);
+}
+
+/* The whole stdout of a command (malloc'ed). */
+static char *command_output(const char *cmd)
+{
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    size_t cap = 1 << 16, n = 0;
+    char *b = malloc(cap);
+    assert_non_null(b);
+    size_t got;
+    while ((got = fread(b + n, 1, cap - n - 1, p)) > 0) {
+        n += got;
+        if (n + 1 == cap) {
+            b = realloc(b, cap *= 2);
+            assert_non_null(b);
+        }
+    }
+    b[n] = '\0';
+    assert_int_equal(pclose(p), 0);
+    return b;
+}
+
+/* The trials table's links of trial `id` (the report PNG and the samples CSV) answer, and the CSV
+ * link's text is what `ribbonctl export ID --csv` writes; the phase diagram on the page has its
+ * predicted map within a bounded time. */
+static void links_and_phase(webdriver *wd, const char *url, const char *id)
+{
+    char href[300], script[300];
+    double t0 = kit_now();
+    for (;;) { /* the table is reloaded when the result comes */
+        snprintf(script, sizeof script, "const a = document.getElementById('csv-%s'); return a ? a.href : '';", id);
+        page_string(wd, script, href, sizeof href);
+        if (href[0] || kit_now() - t0 > 20) break;
+        kit_sleep_ms(200);
+    }
+    if (!href[0]) fail_msg("no CSV link for trial %s in the trials table", id);
+    char row_status[64] = "";
+    snprintf(script, sizeof script, "return document.getElementById('csv-%s').closest('tr').cells[1].textContent;", id);
+    for (t0 = kit_now(); kit_now() - t0 < 20; kit_sleep_ms(200)) { /* reloaded on the stored message */
+        page_string(wd, script, row_status, sizeof row_status);
+        if (strcmp(row_status, "done") == 0) break;
+    }
+    assert_string_equal(row_status, "done");
+    char *csv = NULL;
+    assert_int_equal(kit_http("GET", href, NULL, NULL, &csv, 30), 200);
+    char cmd[600];
+    snprintf(cmd, sizeof cmd, "'%s/ribbonctl' export %s --csv --url %s", RIBBON_BIN_DIR, id, url);
+    char *want = command_output(cmd);
+    printf("# CSV link %s: %zu bytes; ribbonctl export: %zu bytes\n", href, strlen(csv), strlen(want));
+    assert_true(strlen(want) > 1000);
+    assert_string_equal(csv, want);
+    free(csv);
+    free(want);
+    snprintf(script, sizeof script, "const a = document.getElementById('report-%s'); return a ? a.href : '';", id);
+    page_string(wd, script, href, sizeof href);
+    if (!href[0]) fail_msg("no report link for trial %s", id);
+    assert_int_equal(kit_http("GET", href, NULL, NULL, NULL, 60), 200);
+
+    char map[200] = "";
+    t0 = kit_now();
+    long width = 0;
+    for (;;) {
+        char why[512];
+        json_t *j = wd_exec(wd, "const p = document.getElementById('phase');"
+                                "return {map: p.dataset.map || '', w: p.naturalWidth, trial: p.dataset.trial || ''};",
+                            why, sizeof why);
+        if (!j) fail_msg("phase: %s", why);
+        snprintf(map, sizeof map, "%s", json_string_value(json_object_get(j, "map")));
+        width = (long)json_number_value(json_object_get(j, "w"));
+        /* drawn after the store had this trial's end, so its point is on the map */
+        int after = strcmp(json_string_value(json_object_get(j, "trial")), id) == 0;
+        json_decref(j);
+        if (strncmp(map, "ready", 5) == 0 && width > 0 && after) break;
+        if (strncmp(map, "failed", 6) == 0) fail_msg("phase map: %s", map);
+        if (kit_now() - t0 > 180) fail_msg("no predicted phase map on the page after 180 s (%s)", map);
+        kit_sleep_ms(500);
+    }
+    printf("# phase diagram on the page: %ld px wide, map %s (%.1f s after the trial)\n", width, map, kit_now() - t0);
 }
 
 static int has_word(const char *list, const char *w)
@@ -193,6 +288,17 @@ static void test_live_page(void **state)
     assert_true(fabs(atof(v.sm) - sm) < 1e-8);
     assert_true(fabs(atof(v.sp) - sp) < 1e-8);
     json_decref(show);
+    links_and_phase(&wd, c.url, v.trial);
+    json_t *scrolled = wd_exec(&wd, "document.getElementById('trials-box').scrollIntoView(); return 1;", why, sizeof why);
+    json_decref(scrolled);
+    save_shot(&wd, dir, "live-page-phase.png");
+    const char *trials_fig = getenv("RIBBON_LIVE_TRIALS_FIGURE");
+    if (trials_fig && *trials_fig) {
+        if (wd_screenshot(&wd, trials_fig, why, sizeof why) != 0) fail_msg("figure: %s", why);
+        printf("# figure %s\n", trials_fig);
+    }
+    scrolled = wd_exec(&wd, "window.scrollTo(0, 0); return 1;", why, sizeof why);
+    json_decref(scrolled);
     json_t *log = wd_console(&wd, why, sizeof why);
     if (!log) fail_msg("console: %s", why);
     size_t i;
@@ -252,6 +358,58 @@ static void test_live_page(void **state)
     assert_string_equal(v.link, "1");
     assert_string_equal(v.down, "1");
     printf("# reconnected %.1f s after ribbond came back\n", kit_now() - t0);
+
+    /* 4. Replay mode: the same page follows a replay of the first trial, started from its Start
+     * button (POST /trials {} replays [replay] source_trial). */
+    assert_int_equal(kit_ribbond_stop(&c), 0);
+    char source[64];
+    snprintf(source, sizeof source, "replay.source_trial=%s", first_trial);
+    const char *replay_sets[] = {source, NULL};
+    assert_int_equal(kit_ribbond_start_config(&c, dir, "replay.ini", port, replay_sets), 0);
+    char mode[64] = "";
+    t0 = kit_now();
+    do {
+        look(&wd, &v);
+        page_string(&wd, "return document.getElementById('mode').textContent;", mode, sizeof mode);
+        if (strcmp(v.link, "1") == 0 && strcmp(mode, "(replay)") == 0) break;
+        kit_sleep_ms(100);
+    } while (kit_now() - t0 < 30);
+    assert_string_equal(mode, "(replay)");
+    json_t *clear = wd_exec(&wd, "document.getElementById('state').dataset.seen = ''; return 1;", why, sizeof why);
+    json_decref(clear);
+    char last_trial[32];
+    snprintf(last_trial, sizeof last_trial, "%s", v.trial);
+    long cam_before = v.cam;
+    click(&wd, "start");
+    long replay_points_running = 0;
+    t0 = kit_now();
+    for (;;) {
+        look(&wd, &v);
+        int other = strcmp(v.trial, last_trial) != 0 && strcmp(v.trial, "-") != 0;
+        if (other && strcmp(v.state, "done") != 0 && v.points > replay_points_running) replay_points_running = v.points;
+        if (other && strcmp(v.state, "done") == 0 && v.sm[0]) break;
+        if (other && (strcmp(v.state, "aborted") == 0 || strcmp(v.state, "failed") == 0))
+            fail_msg("replay ended %s (page says: %s)", v.state, v.msg);
+        if (kit_now() - t0 > 120) fail_msg("no end of the replay after 120 s (state %s, %s)", v.state, v.msg);
+        kit_sleep_ms(100);
+    }
+    save_shot(&wd, dir, "live-page-replay.png");
+    printf("# replay trial %s: states seen '%s'; %ld points (%ld seen while it ran); measured %s predicted %s\n",
+           v.trial, v.seen, v.points, replay_points_running, v.sm, v.sp);
+    static const char *const replay_steps[] = {"replaying", "checking", "shearing", "snapped", "returning", "done"};
+    for (size_t k = 0; k < sizeof replay_steps / sizeof *replay_steps; k++)
+        if (!has_word(v.seen, replay_steps[k])) fail_msg("replay state %s never shown (seen: %s)", replay_steps[k], v.seen);
+    assert_true(v.points > 100);
+    assert_true(v.predicted > 0); /* the source's prediction drawn beside the replay */
+    show = ribbonctl_show(c.url, v.trial);
+    assert_string_equal(json_string_value(json_object_get(show, "mode")), "replay");
+    assert_true(fabs(atof(v.sm) - json_real_value(json_object_get(show, "snap_dw_measured"))) < 1e-8);
+    json_decref(show);
+    show = ribbonctl_show(c.url, first_trial);
+    assert_true(fabs(atof(v.sp) - json_real_value(json_object_get(show, "snap_dw_predicted"))) < 1e-8);
+    json_decref(show);
+    assert_true(v.cam > cam_before); /* the replay's frames on the camera picture */
+
     wd_close(&wd);
     assert_int_equal(kit_ribbond_stop(&c), 0);
     char cmd[500];
