@@ -120,14 +120,9 @@ int kit_ribbond_stop(ribbond_child *c)
     return st;
 }
 
-typedef struct grow {
-    char *p;
-    size_t n;
-} grow;
-
-static size_t on_body(char *d, size_t sz, size_t nm, void *u)
+size_t kit_curl_collect(char *d, size_t sz, size_t nm, void *u)
 {
-    grow *g = u;
+    kit_body *g = u;
     size_t k = sz * nm;
     char *q = realloc(g->p, g->n + k + 1);
     if (!q) return 0;
@@ -143,7 +138,7 @@ int kit_http(const char *method, const char *url, const char *token, const char 
 {
     CURL *h = curl_easy_init();
     if (!h) return -1;
-    grow g = {calloc(1, 1), 0};
+    kit_body g = {calloc(1, 1), 0};
     struct curl_slist *hd = NULL;
     char auth[400];
     if (token) {
@@ -155,7 +150,7 @@ int kit_http(const char *method, const char *url, const char *token, const char 
     curl_easy_setopt(h, CURLOPT_CUSTOMREQUEST, method);
     if (json_body) curl_easy_setopt(h, CURLOPT_POSTFIELDS, json_body);
     curl_easy_setopt(h, CURLOPT_HTTPHEADER, hd);
-    curl_easy_setopt(h, CURLOPT_WRITEFUNCTION, on_body);
+    curl_easy_setopt(h, CURLOPT_WRITEFUNCTION, kit_curl_collect);
     curl_easy_setopt(h, CURLOPT_WRITEDATA, &g);
     curl_easy_setopt(h, CURLOPT_TIMEOUT_MS, (long)(timeout_s * 1000));
     curl_easy_setopt(h, CURLOPT_NOSIGNAL, 1L);

@@ -27,6 +27,13 @@ int kit_ribbond_stop(ribbond_child *c);
 
 /* One request: status, body malloc'ed (NUL-terminated) in *body if body is not NULL. token may be
  * NULL. json_body (may be NULL) is sent with POST. Returns the HTTP status, or -1. */
+/* A response body grown by kit_curl_collect (libcurl's write callback; p NUL-terminated, caller frees p). */
+typedef struct kit_body {
+    char *p;
+    size_t n;
+} kit_body;
+size_t kit_curl_collect(char *d, size_t sz, size_t nm, void *body);
+
 int kit_http(const char *method, const char *url, const char *token, const char *json_body, char **body,
              double timeout_s);
 

@@ -1,5 +1,6 @@
 /* webdriver.c: a minimal WebDriver client over libcurl and jansson (see webdriver.h). */
 #include "webdriver.h"
+#include "live_testkit.h"
 
 #include <arpa/inet.h>
 #include <curl/curl.h>
@@ -23,24 +24,6 @@ int wd_available(void)
     return access(CHROMIUM, X_OK) == 0 && access(CHROMEDRIVER, X_OK) == 0;
 }
 
-typedef struct buf {
-    char *p;
-    size_t n;
-} buf;
-
-static size_t on_data(char *d, size_t sz, size_t nm, void *u)
-{
-    buf *b = u;
-    size_t k = sz * nm;
-    char *q = realloc(b->p, b->n + k + 1);
-    if (!q) return 0;
-    memcpy(q + b->n, d, k);
-    b->p = q;
-    b->n += k;
-    b->p[b->n] = '\0';
-    return k;
-}
-
 /* One WebDriver command; returns the reply's "value" (new reference) or NULL with why. */
 static json_t *call(webdriver *wd, const char *method, const char *path, json_t *body, double timeout_s, char *why,
                     size_t why_len)
@@ -48,14 +31,14 @@ static json_t *call(webdriver *wd, const char *method, const char *path, json_t 
     char url[512];
     snprintf(url, sizeof url, "%s%s", wd->base, path);
     CURL *h = curl_easy_init();
-    buf b = {NULL, 0};
+    kit_body b = {NULL, 0};
     char *text = body ? json_dumps(body, JSON_COMPACT) : NULL;
     struct curl_slist *hd = curl_slist_append(NULL, "Content-Type: application/json");
     curl_easy_setopt(h, CURLOPT_URL, url);
     curl_easy_setopt(h, CURLOPT_CUSTOMREQUEST, method);
     if (text) curl_easy_setopt(h, CURLOPT_POSTFIELDS, text);
     curl_easy_setopt(h, CURLOPT_HTTPHEADER, hd);
-    curl_easy_setopt(h, CURLOPT_WRITEFUNCTION, on_data);
+    curl_easy_setopt(h, CURLOPT_WRITEFUNCTION, kit_curl_collect);
     curl_easy_setopt(h, CURLOPT_WRITEDATA, &b);
     curl_easy_setopt(h, CURLOPT_TIMEOUT_MS, (long)(timeout_s * 1000));
     curl_easy_setopt(h, CURLOPT_NOSIGNAL, 1L);
