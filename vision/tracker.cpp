@@ -74,7 +74,7 @@ extern "C" vis_track_params vis_track_params_default(void)
     p.step_px = 1.0;
     p.end_margin_px = 3.0;
     p.fit_window = 0.08;
-    p.end_window = 0.09;
+    p.end_window = 0.11;
     p.min_contrast = 12.0;
     p.min_quality = 0.3;
     p.min_bend_ratio = 2.0;
