@@ -33,6 +33,29 @@ const int DEG_MID = 5;
 const int DEG_CURVE = 3;
 const int DEG_END = 4;
 
+// The weighted normal equations of a degree M - 1 fit over samples [lo, hi) around s0 (tricube
+// weights out to `far`), added into A, bx, bz. A template so that the loops over j and k unroll.
+template <int M>
+inline void accumulate(const FitInput &in, size_t lo, size_t hi, double s0, double hw, double far,
+                       double (&A)[6][6], double (&bx)[6], double (&bz)[6])
+{
+    for (size_t i = lo; i < hi; i++) {
+        const double u = (in.s[i] - s0) / hw;
+        const double r = std::fabs(in.s[i] - s0) / far;
+        const double w3 = 1 - r * r * r;
+        const double w = w3 * w3 * w3;
+        const double pw[6] = {1, u, u * u, u * u * u, u * u * u * u, u * u * u * u * u};
+        const double px = in.xz[i].x, pz = in.xz[i].y;
+        for (int j = 0; j < M; j++) {
+            const double wj = w * pw[j];
+            for (int k = 0; k < M; k++)
+                A[j][k] += wj * pw[k];
+            bx[j] += wj * px;
+            bz[j] += wj * pz;
+        }
+    }
+}
+
 // Value and first derivative of x(s), z(s) at s0 from a local weighted cubic.
 bool local_eval(const FitInput &in, double s0, double hw, int max_deg, Pt &pos, Pt &der)
 {
@@ -59,18 +82,12 @@ bool local_eval(const FitInput &in, double s0, double hw, int max_deg, Pt &pos, 
     deg = std::max(1, std::min(deg, 5));
     const int m = deg + 1;
     double A[6][6] = {{0}}, bx[6] = {0}, bz[6] = {0};
-    for (size_t i = lo; i < hi; i++) {
-        const double u = (in.s[i] - s0) / hw;
-        const double r = std::fabs(in.s[i] - s0) / far;
-        const double w3 = 1 - r * r * r;
-        const double w = w3 * w3 * w3;
-        double pw[6] = {1, u, u * u, u * u * u, u * u * u * u, u * u * u * u * u};
-        for (int j = 0; j < m; j++) {
-            for (int k = 0; k < m; k++)
-                A[j][k] += w * pw[j] * pw[k];
-            bx[j] += w * pw[j] * in.xz[i].x;
-            bz[j] += w * pw[j] * in.xz[i].y;
-        }
+    switch (m) {  // the sums unrolled for the size at hand (same operations, same order)
+    case 2: accumulate<2>(in, lo, hi, s0, hw, far, A, bx, bz); break;
+    case 3: accumulate<3>(in, lo, hi, s0, hw, far, A, bx, bz); break;
+    case 4: accumulate<4>(in, lo, hi, s0, hw, far, A, bx, bz); break;
+    case 5: accumulate<5>(in, lo, hi, s0, hw, far, A, bx, bz); break;
+    default: accumulate<6>(in, lo, hi, s0, hw, far, A, bx, bz); break;
     }
     // Solve the small normal equations by Gaussian elimination with partial pivoting.
     for (int c = 0; c < m; c++) {
