@@ -73,9 +73,8 @@ bool local_eval(const FitInput &in, double s0, double hw, int max_deg, Pt &pos, 
     const size_t hi = (size_t)(std::upper_bound(in.s.begin(), in.s.end(), b) - in.s.begin());
     if (hi <= lo + 1)
         return false;
-    double far = 0;
-    for (size_t i = lo; i < hi; i++)
-        far = std::max(far, std::fabs(in.s[i] - s0));
+    // The farthest sample from s0: s is increasing, so one of the two ends of the window.
+    double far = std::max(std::fabs(in.s[lo] - s0), std::fabs(in.s[hi - 1] - s0));
     far = far * 1.1 + 1e-12;
     const size_t cnt = hi - lo;
     int deg = std::min(max_deg, (int)cnt / 3);
