@@ -12,7 +12,8 @@
  *   - ribbond killed with SIGKILL mid-shear with Modbus rails: the drives' watchdog halts the shear
  *     axis within watchdog_s (0.5 s in the rig file) + its deceleration, from the axes log;
  *   - the whole trial with Modbus rails: measured snap within 2% of the prediction, regimes agree,
- *     both rails standing at their start at the end;
+ *     no frame lost or dropped, every frame's stamp within 1 ms of the simulator's send time, both
+ *     rails standing at their start at the end;
  *   - the rig simulator killed mid-shear: the trial fails naming the rail, nothing half-written.
  * Heavy (real time, about 20-40 s each): normal build only. */
 #include <setjmp.h>
@@ -240,7 +241,8 @@ static void test_rigsim_dies_mid_shear(void **state)
 }
 
 /* The whole trial with Modbus TCP rails: done, the measured snap within 2% of the prediction at
- * the same resolution, the regimes agree, both rails standing where they started at the end. */
+ * the same resolution, the regimes agree, no frame lost, incomplete or dropped, every video frame's
+ * stamp within 1 ms of the simulator's true send time, both rails standing where they started. */
 static void test_modbus_trial(void **state)
 {
     (void)state;
@@ -284,6 +286,12 @@ static void test_modbus_trial(void **state)
     printf("# the twin's images near the snap were at most %.0f ms old when sent\n", 1e3 * age_max);
     assert_true(fabs(meas - pred) <= 0.02 * pred);
     assert_string_equal(rm, rp);
+    /* no frame lost or dropped, every one recorded, each stamp within 1 ms of its true send time */
+    rig_pipeline pl = rig_pipeline_counts(db);
+    assert_true(pl.captured > 0);
+    assert_int_equal(pl.lost + pl.incomplete + pl.dropped, 0);
+    assert_int_equal(pl.recorded, pl.captured);
+    rig_check_stamps(&r, pl.recorded);
     /* The snap-to-stop latency is stored with the trial (the event's numbers, ms to 0.1) and shown. */
     double lc_s = rig_q_num(db, "select stop_cmd_latency_s from trials where id = 1");
     double ls_s = rig_q_num(db, "select stop_stand_latency_s from trials where id = 1");
