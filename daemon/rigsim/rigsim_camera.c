@@ -252,9 +252,11 @@ static void *twin_main(void *arg)
     return NULL;
 }
 
-/* How old the image sent at send_mono is (lock held): counted when older than half a period. */
-static void note_age(rigsim_camera *c, double send_mono, double send_real)
+/* How old the image sent at send_mono is (lock held): counted when older than half a period; a
+ * frozen image (the fault) is old on purpose and not counted. */
+static void note_age(rigsim_camera *c, double send_mono, double send_real, int frozen)
 {
+    if (frozen) return;
     const double age = send_mono - (c->img_twin_t + c->t0);
     if (age > c->age_max_s) c->age_max_s = age;
     if (age > 0.5 / c->fps) {
@@ -308,7 +310,7 @@ static void fill(ArvBuffer *b, void *user, guint32 exposure_us, guint32 gain, Ar
         fprintf(c->truth, "%ld,%.9f,%.9f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,%.9f,%.6f\n", c->frames, send_mono, send_real, pc,
                 ps, rig_calib_dl(&c->calib, c->length_m, pc), rig_calib_dw(&c->calib, c->length_m, ps), c->img_dz,
                 frozen, c->img_twin_t, send_mono - (c->img_twin_t + c->t0));
-    note_age(c, send_mono, send_real);
+    note_age(c, send_mono, send_real, frozen);
     c->frames++;
     c->last_fill_mono = send_mono;
     pthread_mutex_unlock(&c->lock);
