@@ -162,6 +162,12 @@ static const rig_key rig_keys[] = {
     {"camera", "track_max_lag", RIG_KEY_INT, OFF(camera.track_max_lag), 0, 1, 4095, 0, 0, NULL,
      "frames", "16", "rig mode: when the trial loop is more than this many frames behind the camera, "
                       "frames are stored untracked (counted) until it catches up; below ring_frames"},
+    {"camera", "frozen_frames", RIG_KEY_INT, OFF(camera.frozen_frames), 0, 2, 100000, 0, 0, NULL, "frames", "12",
+     "rig mode: this many identical frames in a row (the same pixels or camera id) while a rail moved "
+     "camera.frozen_move_mm since the first of them end the trial failed (a frozen image)"},
+    {"camera", "frozen_move_mm", RIG_KEY_DOUBLE, OFF(camera.frozen_move_mm), 0, 0.0, 1000.0, MINO, 0, NULL, "mm",
+     "0.05", "rig mode: the rail motion during camera.frozen_frames identical frames that makes them a frozen "
+             "image (a still scene repeats legitimately)"},
     {"camera", "noise_sigma", RIG_KEY_DOUBLE, OFF(camera.noise_sigma), 0, 0.0, 255.0, 0, 0, NULL,
      "grey", "2", "mock: additive Gaussian noise of the rendered frames"},
     {"camera", "blur_sigma_px", RIG_KEY_DOUBLE, OFF(camera.blur_sigma_px), 0, 0.0, 100.0, 0, 0,
@@ -1278,6 +1284,8 @@ static void config_defaults(rig_config *cfg)
     cfg->camera.gain_db = -1.0;
     cfg->camera.ring_frames = 64;
     cfg->camera.track_max_lag = 16;
+    cfg->camera.frozen_frames = 12;     /* daemon/trial/trial_capture.h TRIAL_FROZEN_FRAMES */
+    cfg->camera.frozen_move_mm = 0.05;  /* ... TRIAL_FROZEN_MOVE_MM */
     cfg->detect.dz_jump = 0.02;
     cfg->detect.jump_fraction = 0.3;
     cfg->detect.min_quality = 0.3;

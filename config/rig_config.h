@@ -117,6 +117,8 @@ typedef struct rig_camera {
     /* The live pipeline (rig mode, trial_capture.h). */
     int ring_frames;            /* frames the capture ring holds before the video drops */
     int track_max_lag;          /* frames behind the camera after which tracking skips frames */
+    int frozen_frames;          /* identical frames in a row that are a frozen image ... */
+    double frozen_move_mm;      /* ... mm: while a rail moved at least this much since the first */
 } rig_camera;
 
 typedef struct rig_detect {

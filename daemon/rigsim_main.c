@@ -152,6 +152,7 @@ int main(int argc, char **argv)
         return 1;
     }
     printf("rails thread: %s\n", rigsim_rails_realtime(rails) ? "real-time priority" : "normal priority");
+    printf("twin thread: %s\n", rigsim_camera_twin_realtime(cam) ? "real-time priority" : "normal priority");
     printf("rails: %s\ncamera: aravis:127.0.0.1 (serial %s)\ncalibration: %s\ntwin: N = %d, dt = %g s\nready\n",
            rigsim_rails_port(rails), serial, cfg.camera.calibration, sc.nodes, sc.dt);
     fflush(stdout);
@@ -191,8 +192,9 @@ int main(int argc, char **argv)
         double el = (double)(t.tv_sec - t0.tv_sec) + 1e-9 * (double)(t.tv_nsec - t0.tv_nsec);
         if (duration >= 0.0 && el >= duration) break;
     }
-    printf("images sent: %ld, slowest twin step + render %.1f ms\n", rigsim_camera_frames(cam),
-           1e3 * rigsim_camera_max_fill_s(cam));
+    char rep[400];
+    rigsim_camera_report(cam, rep, sizeof rep);
+    printf("%s\n", rep);
     rigsim_camera_stop(cam);
     rigsim_rails_stop(rails);
     return 0;

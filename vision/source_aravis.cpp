@@ -209,6 +209,27 @@ Source *source_aravis_open(const vis_camera_settings &cs, vis_error *err)
             }
         }
     }
+    // Aravis writes an exposure or gain outside the feature's GenICam bounds without a word (its
+    // fake camera then reads it back unchanged; a real one clamps or ignores it): refused here by
+    // name with the bounds, before it is written.
+    if (!bad && cs.exposure_us > 0) {
+        double lo = 0.0, hi = 0.0;
+        arv_camera_get_exposure_time_bounds(s->cam, &lo, &hi, nullptr);
+        if (hi > lo && (cs.exposure_us < lo || cs.exposure_us > hi)) {
+            fail(err, VIS_ERR_ARG, "camera %s: ExposureTime %g us refused: the camera allows %g..%g us",
+                 s->name.c_str(), cs.exposure_us, lo, hi);
+            bad = true;
+        }
+    }
+    if (!bad && cs.gain_db >= 0) {
+        double lo = 0.0, hi = 0.0;
+        arv_camera_get_gain_bounds(s->cam, &lo, &hi, nullptr);
+        if (hi > lo && (cs.gain_db < lo || cs.gain_db > hi)) {
+            fail(err, VIS_ERR_ARG, "camera %s: Gain %g dB refused: the camera allows %g..%g dB", s->name.c_str(),
+                 cs.gain_db, lo, hi);
+            bad = true;
+        }
+    }
     if (!bad && cs.exposure_us > 0) {
         arv_camera_set_exposure_time(s->cam, cs.exposure_us, &e);
         bad = refused(e, s->name, "ExposureTime", err);

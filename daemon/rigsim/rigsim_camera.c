@@ -2,6 +2,7 @@
 #include "rigsim_camera.h"
 
 #include <arv.h>
+#include <errno.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -12,6 +13,10 @@
 #include "twin.h"
 
 #define RIGSIM_IDLE_GAP_S 0.25 /* s without an image after which the twin's clock pauses */
+#define RIGSIM_RENDER_MARGIN_S 2e-3 /* s: an image is ready this long before its send time */
+#define RIGSIM_LEAD_RENDERS 32      /* renders whose slowest sets how early the next one starts */
+#define RIGSIM_GRID_SENDS 8         /* sends whose earliest gives the camera's schedule */
+#define RIGSIM_NOTE_EVERY_S 1.0     /* s at least between two "twin: behind" notes */
 
 struct rigsim_camera {
     ArvGvFakeCamera *gv;
@@ -30,12 +35,19 @@ struct rigsim_camera {
     vis_frame *back;            /* the twin thread renders here, then swaps it with `frame` */
     pthread_t twin_thread;
     int twin_started, twin_stop;
-    double fps;                 /* the rig file's frame rate (paces the twin thread) */
-    double render_ema_s;        /* running mean of a twin step + render, s (twin thread only) */
+    int twin_realtime;          /* the twin's thread runs SCHED_FIFO */
+    double fps;                 /* the rig file's frame rate (the period until the sends show theirs) */
+    double render_cpu_s;        /* the twin thread's CPU time, s */
+    long renders;               /* images rendered */
     double t_start;             /* host monotonic start, for the fault schedule */
     double t_paused;            /* the last time the twin's clock was paused */
     double last_fill_mono;      /* the last image's send time */
     double img_twin_t, img_dz, img_dl, img_dw; /* what the latest image shows */
+    /* Images sent older than half a frame period (the instant they show is nearer the previous
+     * send than their own): counted, the worst kept, noted by rigsim_camera_tick. */
+    long behind, behind_noted;
+    double behind_worst_s, behind_worst_real, behind_note_worst_s, last_note_mono;
+    double age_max_s;           /* the oldest image sent, s */
     int8_t *noise;              /* the sensor's noise (NOISE_TABLE values, sigma = camera.noise_sigma) */
     uint64_t rng;               /* picks each exposure's offset into it */
 };
@@ -94,54 +106,129 @@ static void paired_clocks(double *mono, double *real)
     }
 }
 
-/* The twin's own thread: step the twin to the expected time of the next image (now + the running
- * mean of a step and render, positions extrapolated at the axes' velocity), render it into the back
- * frame, swap it in as the latest image. Paced at twice the camera's rate at most. */
+static double thread_cpu_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void sleep_until(double mono)
+{
+    struct timespec ts;
+    ts.tv_sec = (time_t)mono;
+    ts.tv_nsec = (long)((mono - (double)ts.tv_sec) * 1e9);
+    if (ts.tv_nsec >= 1000000000L) ts.tv_nsec = 999999999L;
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
+    }
+}
+
+/* The twin's own thread: one image per camera frame, rendered for that frame's send time. The
+ * camera sends at its own period (measured from the sends: ribbond sets the frame rate through
+ * GenICam); the thread picks the next send it can still make (now + the running mean of a step
+ * and render + RIGSIM_RENDER_MARGIN_S), sleeps until it is that far away, reads the axes' actual
+ * positions, extrapolates them to the send time at the axes' velocity, steps the twin to it,
+ * renders and swaps the image in. So an image shows the ribbon at the instant it is sent, not at
+ * the instant the render began (it used to render twice per frame period as fast as it could and
+ * the fill took the latest: images 4 ms old on average, and two renders per frame).
+ * (Measured, docs/rig-realtime.md: the render is 5 ms of the 5.7 ms a frame costs; the twin's
+ * steps through the snap 20 ms at most in a frame period.) */
 static void *twin_main(void *arg)
 {
     rigsim_camera *c = arg;
-    double prev_t = NAN, prev_c = 0.0, prev_s = 0.0;
+    const double nominal = 1.0 / c->fps;
+    double period = nominal, prev_last = NAN, prev_ts = NAN, prev_c = 0.0, prev_s = 0.0, done_target = -1.0;
+    long prev_frames = -1, n_renders = 0, n_grid = 0, grid_n[RIGSIM_GRID_SENDS];
+    double grid_t[RIGSIM_GRID_SENDS];
+    double recent[RIGSIM_LEAD_RENDERS] = {0}; /* the last renders' times, s */
     for (;;) {
         pthread_mutex_lock(&c->lock);
         int stop = c->twin_stop;
+        double last = c->last_fill_mono;
+        long frames = c->frames;
         pthread_mutex_unlock(&c->lock);
         if (stop) break;
         double t = clock_s(CLOCK_MONOTONIC);
-        pthread_mutex_lock(&c->lock);
-        double last = c->last_fill_mono;
-        pthread_mutex_unlock(&c->lock);
         /* Nobody streams: the twin's clock pauses (RIGSIM_IDLE_GAP_S). */
         if (t - last > RIGSIM_IDLE_GAP_S) {
             pthread_mutex_lock(&c->lock);
             c->t0 += t - fmax(last, c->t_paused);
             c->t_paused = t;
             pthread_mutex_unlock(&c->lock);
+            prev_frames = -1;
+            n_grid = 0;
             struct timespec ts = {0, 5000000};
             nanosleep(&ts, NULL);
             continue;
         }
-        double pc, ps;
-        rigsim_rails_positions(c->rails, &pc, &ps, NULL);
-        double vc = 0.0, vs = 0.0;
-        if (isfinite(prev_t) && t > prev_t) {
-            vc = (pc - prev_c) / (t - prev_t);
-            vs = (ps - prev_s) / (t - prev_t);
+        /* The camera's period, from consecutive sends (a mean over the frames between two looks),
+         * and its schedule: Aravis's fake camera sends on a fixed grid, so a late send does not
+         * move the next one; the grid is the earliest of the last RIGSIM_GRID_SENDS sends carried
+         * forward by whole periods. */
+        if (prev_frames >= 0 && frames > prev_frames && last > prev_last) {
+            double d = (last - prev_last) / (double)(frames - prev_frames);
+            if (d > 0.25 * nominal && d < 4.0 * nominal) period = 0.9 * period + 0.1 * d;
         }
-        prev_t = t;
+        if (frames != prev_frames) {
+            grid_t[n_grid % RIGSIM_GRID_SENDS] = last;
+            grid_n[n_grid % RIGSIM_GRID_SENDS] = frames - 1;
+            n_grid++;
+        }
+        prev_frames = frames;
+        prev_last = last;
+        double next_send = last + period; /* the send of image `frames` */
+        for (long k = 0; k < n_grid && k < RIGSIM_GRID_SENDS; k++)
+            next_send = fmin(next_send, grid_t[k] + (double)(frames - grid_n[k]) * period);
+        if (next_send < last + 0.5 * period) next_send = last + period;
+        /* The next send this render can make (and not one already rendered for): it starts 1.5 x
+         * the slowest of the last RIGSIM_LEAD_RENDERS renders (+ a margin) before the send, at
+         * most two periods (the renders grow frame by frame towards the snap; starting early
+         * costs only the extrapolation's length). */
+        double slowest = 0.0;
+        for (int k = 0; k < RIGSIM_LEAD_RENDERS; k++) slowest = fmax(slowest, recent[k]);
+        double lead = fmin(1.5 * slowest + RIGSIM_RENDER_MARGIN_S, 2.0 * period);
+        double target = next_send;
+        while (target - lead < t || target <= done_target + 0.5 * period) target += period;
+        sleep_until(target - lead);
+        pthread_mutex_lock(&c->lock);
+        stop = c->twin_stop;
+        pthread_mutex_unlock(&c->lock);
+        if (stop) break;
+        double t_render = clock_s(CLOCK_MONOTONIC), cpu0 = thread_cpu_s();
+        double pc, ps, tp;
+        rigsim_rails_positions(c->rails, &pc, &ps, &tp);
+        double vc = 0.0, vs = 0.0;
+        if (isfinite(prev_ts) && tp > prev_ts && tp - prev_ts < 0.5) {
+            vc = (pc - prev_c) / (tp - prev_ts);
+            vs = (ps - prev_s) / (tp - prev_ts);
+        }
+        prev_ts = tp;
         prev_c = pc;
         prev_s = ps;
-        double ahead = c->render_ema_s;
-        double ec = pc + vc * ahead, es = ps + vs * ahead;
+        double ec = pc + vc * (target - tp), es = ps + vs * (target - tp);
         double dl = rig_calib_dl(&c->calib, c->length_m, ec), dw = rig_calib_dw(&c->calib, c->length_m, es);
         pthread_mutex_lock(&c->lock);
-        double t_twin = t + ahead - c->t0;
-        int frozen = c->f.freeze_after_s >= 0.0 && t - c->t_start >= c->f.freeze_after_s;
+        double t_twin = target - c->t0;
+        int frozen = c->f.freeze_after_s >= 0.0 && t_render - c->t_start >= c->f.freeze_after_s;
         pthread_mutex_unlock(&c->lock);
+        double t_drawn = t_render;
         if (!frozen) {
             vis_error ve = {0};
             double tf;
-            if (mock_camera_grab(c->twin, t_twin, dl, dw, c->back, &tf, &ve) == VIS_OK) {
+            const int drawn = mock_camera_grab(c->twin, t_twin, dl, dw, c->back, &tf, &ve) == VIS_OK;
+            t_drawn = clock_s(CLOCK_MONOTONIC);
+            if (drawn) {
                 double dz = mock_camera_true_dz(c->twin);
+                /* Swapped in once the send before its own has gone (that one shows its own image),
+                 * or when that send is a period late. */
+                for (;;) {
+                    pthread_mutex_lock(&c->lock);
+                    const int gone = c->last_fill_mono >= target - 1.5 * period || c->twin_stop;
+                    pthread_mutex_unlock(&c->lock);
+                    if (gone || clock_s(CLOCK_MONOTONIC) > target) break;
+                    struct timespec ts = {0, 200000};
+                    nanosleep(&ts, NULL);
+                }
                 pthread_mutex_lock(&c->lock);
                 vis_frame *x = c->frame;
                 c->frame = c->back;
@@ -153,18 +240,33 @@ static void *twin_main(void *arg)
                 pthread_mutex_unlock(&c->lock);
             }
         }
-        double took = clock_s(CLOCK_MONOTONIC) - t;
-        c->render_ema_s = c->render_ema_s == 0.0 ? took : 0.8 * c->render_ema_s + 0.2 * took;
+        done_target = target;
+        const double took = t_drawn - t_render;
+        recent[n_renders++ % RIGSIM_LEAD_RENDERS] = took;
         pthread_mutex_lock(&c->lock);
+        c->renders++;
+        c->render_cpu_s += thread_cpu_s() - cpu0;
         if (took > c->max_fill_s) c->max_fill_s = took;
         pthread_mutex_unlock(&c->lock);
-        double rest = 0.5 / c->fps - took;
-        if (rest > 0) {
-            struct timespec ts = {0, (long)(rest * 1e9)};
-            nanosleep(&ts, NULL);
-        }
     }
     return NULL;
+}
+
+/* How old the image sent at send_mono is (lock held): counted when older than half a period; a
+ * frozen image (the fault) is old on purpose and not counted. */
+static void note_age(rigsim_camera *c, double send_mono, double send_real, int frozen)
+{
+    if (frozen) return;
+    const double age = send_mono - (c->img_twin_t + c->t0);
+    if (age > c->age_max_s) c->age_max_s = age;
+    if (age > 0.5 / c->fps) {
+        c->behind++;
+        if (age > c->behind_note_worst_s) c->behind_note_worst_s = age;
+        if (age > c->behind_worst_s) {
+            c->behind_worst_s = age;
+            c->behind_worst_real = send_real;
+        }
+    }
 }
 
 /* The camera's fill: the latest twin image, stamped as it leaves (never waits for the twin). */
@@ -208,6 +310,7 @@ static void fill(ArvBuffer *b, void *user, guint32 exposure_us, guint32 gain, Ar
         fprintf(c->truth, "%ld,%.9f,%.9f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,%.9f,%.6f\n", c->frames, send_mono, send_real, pc,
                 ps, rig_calib_dl(&c->calib, c->length_m, pc), rig_calib_dw(&c->calib, c->length_m, ps), c->img_dz,
                 frozen, c->img_twin_t, send_mono - (c->img_twin_t + c->t0));
+    note_age(c, send_mono, send_real, frozen);
     c->frames++;
     c->last_fill_mono = send_mono;
     pthread_mutex_unlock(&c->lock);
@@ -284,6 +387,12 @@ int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_st
         goto fail;
     }
     c->twin_started = 1;
+    /* The twin stands for the ribbon, which never waits for a CPU: like the rails' controller
+     * (rigsim_rails.c, priority 10) its thread runs at a real-time priority when the process may,
+     * below the controller's. It sleeps between images (0.35 of a core at 640 x 480, 60 fps);
+     * refused, it runs at the process's priority (rigsim_camera_twin_realtime says which). */
+    struct sched_param sp = {.sched_priority = 5};
+    c->twin_realtime = pthread_setschedparam(c->twin_thread, SCHED_FIFO, &sp) == 0;
     c->gv = arv_gv_fake_camera_new("127.0.0.1", serial);
     if (!c->gv || !arv_gv_fake_camera_is_running(c->gv)) {
         snprintf(why, why_len, "the GigE Vision camera could not be served on 127.0.0.1 (GVCP port 3956 taken?)");
@@ -313,6 +422,23 @@ fail:
 
 int rigsim_camera_tick(rigsim_camera *c)
 {
+    pthread_mutex_lock(&c->lock);
+    const double now = clock_s(CLOCK_MONOTONIC);
+    const long nb = c->behind - c->behind_noted;
+    const double worst = c->behind_note_worst_s;
+    const int note = nb > 0 && now - c->last_note_mono >= RIGSIM_NOTE_EVERY_S;
+    if (note) {
+        c->behind_noted = c->behind;
+        c->behind_note_worst_s = 0.0;
+        c->last_note_mono = now;
+    }
+    pthread_mutex_unlock(&c->lock);
+    if (note) {
+        printf("twin: behind real time: %ld images sent older than half a frame period since the last note (the "
+               "oldest %.1f ms) at %.3f (unix time)\n",
+               nb, 1e3 * worst, clock_s(CLOCK_REALTIME));
+        fflush(stdout);
+    }
     if (c->stopped) return 1;
     if (c->f.stop_after_s >= 0.0 && clock_s(CLOCK_MONOTONIC) - c->t_start >= c->f.stop_after_s) {
         g_object_unref(c->gv); /* joins its threads: no fill runs after this */
@@ -351,6 +477,20 @@ double rigsim_camera_max_fill_s(rigsim_camera *c)
     double m = c->max_fill_s;
     pthread_mutex_unlock(&c->lock);
     return m;
+}
+
+int rigsim_camera_twin_realtime(const rigsim_camera *c) { return c->twin_realtime; }
+
+void rigsim_camera_report(rigsim_camera *c, char *out, size_t n)
+{
+    pthread_mutex_lock(&c->lock);
+    const double up = clock_s(CLOCK_MONOTONIC) - c->t_start;
+    snprintf(out, n,
+             "images sent: %ld, rendered: %ld (twin thread %.2f of a core), slowest twin step + render %.1f ms; "
+             "images older than half a frame period when sent: %ld (the oldest %.1f ms)",
+             c->frames, c->renders, up > 0.0 ? c->render_cpu_s / up : 0.0, 1e3 * c->max_fill_s, c->behind,
+             1e3 * c->age_max_s);
+    pthread_mutex_unlock(&c->lock);
 }
 
 void rigsim_camera_stop(rigsim_camera *c)

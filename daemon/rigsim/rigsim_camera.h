@@ -1,11 +1,13 @@
 /* rigsim_camera.h: the rig simulator's camera: a GigE Vision device on 127.0.0.1 (Aravis's fake
  * GigE Vision camera) whose every image is the digital twin rendered at that instant.
  *
- * The twin has its own thread: it reads the controller's ACTUAL axis positions (rigsim_rails.h),
- * turns them into (Delta L, Delta W) with the rig file's calibration, advances the twin (the
- * simulated rod, daemon/twin/mock_camera.h) to the expected time of the next image (now + the
- * running mean of a step and render, positions extrapolated at the axes' velocity) and renders it
- * through the synthetic side camera at the rig file's camera size and blur; the sensor's noise
+ * The twin has its own thread (a real-time priority when the process may): once per camera frame
+ * it reads the controller's ACTUAL axis positions (rigsim_rails.h), extrapolates them at the axes'
+ * velocity to that frame's send time (the camera's schedule, measured from its sends), turns them
+ * into (Delta L, Delta W) with the rig file's calibration, advances the twin (the simulated rod,
+ * daemon/twin/mock_camera.h) to the send time and renders it through the synthetic side camera at
+ * the rig file's camera size and blur, early enough to be ready before the send; images sent older
+ * than half a frame period are counted and noted (rigsim_camera_tick); the sensor's noise
  * (camera.noise_sigma) is added to each image as it is sent, so no two images are the same. So the ribbon
  * follows what the rails really did, not what ribbond commanded. The camera's fill (Aravis's
  * thread, at the frame rate ribbond sets through GenICam) copies the latest image and sets the
@@ -40,7 +42,9 @@ typedef struct rigsim_camera_faults {
 int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_start, rigsim_rails *rails,
                         const char *serial, const char *calib_path, const char *truth_path,
                         const rigsim_camera_faults *f, rigsim_camera **out, char *why, size_t why_len);
-/* Call now and then from the main loop: applies the scheduled stop. 1 once stopped. */
+/* Call now and then from the main loop: applies the scheduled stop, and prints "twin: behind real
+ * time: ..." (at most once a second) when images were sent older than half a frame period. 1 once
+ * stopped. */
 int rigsim_camera_tick(rigsim_camera *c);
 long rigsim_camera_frames(rigsim_camera *c);
 /* Fault on command: the camera stops sending at the next tick. */
@@ -49,6 +53,11 @@ void rigsim_camera_stop_sending(rigsim_camera *c);
 void rigsim_camera_freeze(rigsim_camera *c);
 /* Longest twin step + render, s. */
 double rigsim_camera_max_fill_s(rigsim_camera *c);
+/* 1 when the twin's thread got a real-time priority (SCHED_FIFO, below the rails' thread). */
+int rigsim_camera_twin_realtime(const rigsim_camera *c);
+/* One line: images sent and rendered, the twin thread's share of a core, the slowest render, how
+ * many images were sent older than half a frame period and the oldest. */
+void rigsim_camera_report(rigsim_camera *c, char *out, size_t n);
 void rigsim_camera_stop(rigsim_camera *c);
 
 #endif

@@ -35,7 +35,8 @@
 
 /* A frozen image (trial_runner.c): this many identical frames in a row while a rail moved at least
  * TRIAL_FROZEN_MOVE_MM since the first of them (0.2 s at 60 fps; 0.05 mm is 2.5 ms at 20 mm/s,
- * 50 ms at 1 mm/s, and about a third of a pixel of the rehearsal's camera). */
+ * 50 ms at 1 mm/s, and about a third of a pixel of the rehearsal's camera). The defaults of the rig
+ * file's camera.frozen_frames and camera.frozen_move_mm (trial_plan). */
 #define TRIAL_FROZEN_FRAMES 12
 #define TRIAL_FROZEN_MOVE_MM 0.05
 

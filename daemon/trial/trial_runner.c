@@ -577,9 +577,9 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
                 c.frz_c = pos_c;
                 c.frz_s = pos_s;
                 c.frz_id = fi.camera_id;
-            } else if (fi.same_run >= TRIAL_FROZEN_FRAMES) {
+            } else if (fi.same_run >= (p->frozen_frames > 0 ? p->frozen_frames : TRIAL_FROZEN_FRAMES)) {
                 double moved = fmax(fabs(pos_c - c.frz_c), fabs(pos_s - c.frz_s));
-                if (moved >= TRIAL_FROZEN_MOVE_MM) {
+                if (moved >= (p->frozen_move_mm > 0.0 ? p->frozen_move_mm : TRIAL_FROZEN_MOVE_MM)) {
                     finish(&c, TRIAL_FAILED,
                            "camera: the image is frozen: %ld identical frames (camera ids %llu to %llu) while the "
                            "rails moved %.2f mm",

@@ -80,6 +80,10 @@ typedef struct trial_plan {
                                     on the rails' clock (mock mode, real or virtual) */
     int torque_witness;          /* 1: the shear rail's load (rail_status.load) is a second witness */
     double load_jump;            /* witness threshold, fraction of the load range seen in the shear */
+    int frozen_frames;           /* live camera: identical frames in a row that are a frozen image
+                                    when a rail moved frozen_move_mm since the first (0 = the
+                                    defaults, TRIAL_FROZEN_FRAMES, TRIAL_FROZEN_MOVE_MM) */
+    double frozen_move_mm;
 } trial_plan;
 
 /* A camera as the runner sees it: the frame of time t_s (rail clock) with the clamps at (dl, dw).

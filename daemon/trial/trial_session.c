@@ -446,6 +446,8 @@ static trial_plan session_plan(const rig_config *cfg)
     plan.snap.asym_threshold = cfg->scene.asym_threshold;
     plan.snap.dz_jump = cfg->detect.dz_jump;
     plan.snap.post_snap_s = cfg->trial.post_snap_s;
+    plan.frozen_frames = cfg->camera.frozen_frames;
+    plan.frozen_move_mm = cfg->camera.frozen_move_mm;
     plan.fps = cfg->camera.fps;
     plan.torque_witness = cfg->detect.torque_witness;
     plan.load_jump = cfg->detect.load_jump;

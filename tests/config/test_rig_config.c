@@ -306,6 +306,8 @@ static void test_base_loads(void **state)
     assert_true(NEAR(cfg.trial.hold_s, 2.0));
     assert_true(NEAR(cfg.trial.return_speed_mm_s, 5.0));
     assert_int_equal(cfg.camera.roi, RIG_ROI_AUTO);
+    assert_int_equal(cfg.camera.frozen_frames, 12);
+    assert_true(NEAR(cfg.camera.frozen_move_mm, 0.05));
     assert_string_equal(cfg.api.listen, "127.0.0.1");
     assert_string_equal(cfg.specimen.name, "paper-gamma013"); /* the scene file's name */
     assert_string_equal(cfg.camera.video_dir, CONFIG_DIR "/videos");
@@ -378,6 +380,10 @@ static void test_bad_values(void **state)
     expect_line(make1(24, "roi = 1,2,3"), CFG_ERR_VALUE, 24, "camera.roi", "x,y,w,h");
     expect_line(make1(24, "roi = 0,0,0,10"), CFG_ERR_RANGE, 24, "camera.roi", NULL);
     expect_line(make1(24, "source = webcam"), CFG_ERR_VALUE, 24, "camera.source", "device index");
+    /* the frozen-image rule: at least 2 frames, a motion above 0 */
+    expect_line(make1(24, "frozen_frames = 1"), CFG_ERR_RANGE, 24, "camera.frozen_frames", "[2, 100000]");
+    expect_line(make1(24, "frozen_frames = 12.5"), CFG_ERR_VALUE, 24, "camera.frozen_frames", "not an integer");
+    expect_line(make1(24, "frozen_move_mm = 0"), CFG_ERR_RANGE, 24, "camera.frozen_move_mm", "(0, 1000] mm");
     expect_line(make1(26, "torque_witness = yes"), CFG_ERR_VALUE, 26, "detect.torque_witness",
                 "off | on");
     expect_line(make1(26, "min_quality = 1.5"), CFG_ERR_RANGE, 26, "detect.min_quality", NULL);

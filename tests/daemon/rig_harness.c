@@ -23,7 +23,41 @@
 
 #define BIN RIBBON_BIN_DIR
 
-static rig_run *current; /* the running rig, stopped by the teardown when a test fails */
+/* Every process spawned and not yet reaped, for the teardown (rig_teardown). */
+#define RIG_MAX_CHILDREN 8
+static pid_t children[RIG_MAX_CHILDREN];
+
+static void child_add(pid_t p)
+{
+    for (int k = 0; k < RIG_MAX_CHILDREN; k++)
+        if (children[k] <= 0) {
+            children[k] = p;
+            return;
+        }
+}
+
+/* SIGTERM, then SIGKILL if it has not exited within grace_s; reaps it. */
+static void child_end(pid_t p, double grace_s)
+{
+    if (p <= 0) return;
+    /* Reaped already (by the test: -1, not our child) or exited: nothing to kill, and the id may
+     * be another process's by now. */
+    int exited = waitpid(p, NULL, WNOHANG) != 0;
+    if (!exited) kill(p, SIGTERM);
+    for (double w = 0.0; !exited && w < grace_s; w += 0.02) {
+        if (waitpid(p, NULL, WNOHANG) != 0) {
+            exited = 1;
+            break;
+        }
+        rig_sleep_s(0.02);
+    }
+    if (!exited) {
+        kill(p, SIGKILL);
+        waitpid(p, NULL, 0);
+    }
+    for (int k = 0; k < RIG_MAX_CHILDREN; k++)
+        if (children[k] == p) children[k] = 0;
+}
 
 double rig_now_real(void)
 {
@@ -66,6 +100,7 @@ static pid_t spawn(const char *const *argv, const char *out_path, const char *er
         execv(argv[0], (char *const *)argv);
         _exit(127);
     }
+    if (p > 0) child_add(p);
     return p;
 }
 
@@ -89,7 +124,6 @@ void rig_prepare(rig_run *r, const char *const *sets)
 {
     memset(r, 0, sizeof *r);
     r->sim = r->daemon = -1;
-    current = r;
     snprintf(r->dir, sizeof r->dir, "/tmp/test_rig.XXXXXX");
     assert_non_null(mkdtemp(r->dir));
     char dir[sizeof r->dir];
@@ -115,6 +149,12 @@ static int add_sets(const rig_run *r, const char **argv, int n)
     return n;
 }
 
+void rig_daemon_set(rig_run *r, const char *set)
+{
+    assert_true(r->n_daemon_sets < 4);
+    snprintf(r->daemon_sets[r->n_daemon_sets++], sizeof r->daemon_sets[0], "%s", set);
+}
+
 void rig_start_sim(rig_run *r, const char *rig, const char *const *sim_extra)
 {
     const char *argv[64];
@@ -137,6 +177,7 @@ void rig_start_sim(rig_run *r, const char *rig, const char *const *sim_extra)
     r->sim = spawn(argv, out, err);
     for (int i = 0; i < 300 && !rig_file_has(out, "ready", NULL, 0); i++) {
         if (waitpid(r->sim, NULL, WNOHANG) == r->sim) {
+            child_end(r->sim, 0.0);
             r->sim = -1;
             break;
         }
@@ -153,6 +194,10 @@ void rig_start_daemon(rig_run *r, const char *rig)
     argv[n++] = "--config";
     argv[n++] = rig;
     n = add_sets(r, argv, n);
+    for (int k = 0; k < r->n_daemon_sets; k++) {
+        argv[n++] = "--set";
+        argv[n++] = r->daemon_sets[k];
+    }
     argv[n] = NULL;
     char out[128], err[128];
     snprintf(out, sizeof out, "%s/ribbond.out", r->dir);
@@ -175,23 +220,16 @@ void rig_start(rig_run *r, const char *rig, const char *const *sets, const char 
 
 void rig_stop(rig_run *r)
 {
-    if (r->daemon > 0) {
-        kill(r->daemon, SIGTERM);
-        waitpid(r->daemon, NULL, 0);
-        r->daemon = -1;
-    }
-    if (r->sim > 0) {
-        kill(r->sim, SIGTERM);
-        waitpid(r->sim, NULL, 0);
-        r->sim = -1;
-    }
+    child_end(r->daemon, 5.0);
+    r->daemon = -1;
+    child_end(r->sim, 5.0);
+    r->sim = -1;
 }
 
 int rig_teardown(void **state)
 {
     (void)state;
-    if (current) rig_stop(current);
-    current = NULL;
+    for (int k = 0; k < RIG_MAX_CHILDREN; k++) child_end(children[k], 5.0);
     return 0;
 }
 
@@ -301,6 +339,66 @@ int rig_wait_end(rig_run *r, double timeout_s)
     }
     sqlite3_close(db);
     return ok;
+}
+
+rig_pipeline rig_pipeline_counts(sqlite3 *db)
+{
+    char pipe[600];
+    rig_pipeline p = {-1, -1, -1, -1, -1};
+    rig_q_text(db, "select message from events where trial_id = 1 and message like 'pipeline:%'", pipe, sizeof pipe);
+    printf("# %s\n", pipe);
+    assert_int_equal(sscanf(pipe, "pipeline: %ld frames captured, %ld lost by the camera or link (id gaps), %ld "
+                                  "incomplete buffers, %ld dropped by the pipeline, %ld recorded",
+                            &p.captured, &p.lost, &p.incomplete, &p.dropped, &p.recorded),
+                     5);
+    return p;
+}
+
+void rig_check_stamps(rig_run *r, long recorded)
+{
+    char path[160];
+    snprintf(path, sizeof path, "%s/truth.csv", r->dir);
+    FILE *t = fopen(path, "r");
+    assert_non_null(t);
+    static double real[200000], mono[200000], err[200000];
+    long nt = 0;
+    char line[512];
+    assert_non_null(fgets(line, sizeof line, t));
+    while (nt < 200000 && fgets(line, sizeof line, t)) {
+        long k;
+        if (sscanf(line, "%ld,%lf,%lf", &k, &mono[nt], &real[nt]) == 3) nt++;
+    }
+    fclose(t);
+    snprintf(path, sizeof path, "%s/videos/trial-1.avi.frames.csv", r->dir);
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    assert_non_null(fgets(line, sizeof line, f));
+    long nf = 0, j = 0;
+    while (nf < 200000 && fgets(line, sizeof line, f)) {
+        long vf, ci;
+        unsigned long long id;
+        double cam, host, mapped;
+        assert_int_equal(sscanf(line, "%ld,%ld,%llu,%lf,%lf,%lf", &vf, &ci, &id, &cam, &host, &mapped), 6);
+        assert_int_equal(vf, nf);
+        while (j + 1 < nt && fabs(real[j + 1] - cam) < fabs(real[j] - cam)) j++;
+        assert_true(nt > 0 && fabs(real[j] - cam) < 1e-4); /* the frame is one the simulator sent */
+        err[nf++] = fabs(mapped - mono[j]);
+    }
+    fclose(f);
+    assert_int_equal(nf, recorded);
+    double worst = 0.0;
+    long worst_at = -1, below = 0;
+    for (long k = 0; k < nf; k++) {
+        if (err[k] > worst) {
+            worst = err[k];
+            worst_at = k;
+        }
+        below += err[k] < 1e-3;
+    }
+    printf("# stamps: %ld frames, %ld within 1 ms of the true send time, worst %.3f ms (video frame %ld)\n", nf,
+           below, 1e3 * worst, worst_at);
+    /* issue 13: every frame's stored time within 1 ms of the simulator's true send time */
+    assert_int_equal(below, nf);
 }
 
 double rig_truth_last_move(rig_run *r, int col)

@@ -16,6 +16,8 @@ typedef struct rig_run {
     char dir[64];
     char sets[RIG_HARNESS_SETS][300];
     int n_sets;
+    char daemon_sets[4][300]; /* overrides for ribbond only (rig_daemon_set) */
+    int n_daemon_sets;
     pid_t sim, daemon;
     char url[128];
 } rig_run;
@@ -28,14 +30,19 @@ int rig_free_port(void);
 /* Prepares r (a temporary directory; the store, videos and calibration go there) with the rig
  * file's overrides `sets` (NULL-terminated, "%s" in a value is replaced by the directory). */
 void rig_prepare(rig_run *r, const char *const *sets);
+/* An override for ribbond only (bad input the simulator must not see), before rig_start_daemon. */
+void rig_daemon_set(rig_run *r, const char *set);
 /* Starts ribbon-rigsim on rig (with sim_extra arguments) and waits for "ready". */
 void rig_start_sim(rig_run *r, const char *rig, const char *const *sim_extra);
 /* Starts ribbond on rig and waits for its URL. */
 void rig_start_daemon(rig_run *r, const char *rig);
 /* Both, the simulator first. */
 void rig_start(rig_run *r, const char *rig, const char *const *sets, const char *const *sim_extra);
+/* SIGTERM to ribbond, then the simulator; SIGKILL to one that has not exited 5 s later. */
 void rig_stop(rig_run *r);
-/* The teardown for cmocka: stops whatever rig_start left running. */
+/* The teardown for cmocka: kills every process the harness started that is still running. It
+ * keeps their ids itself (not in the test's rig_run, which a failed assertion's longjmp leaves on a
+ * dead stack frame), so a failing test never leaves a simulator serving port 3956 to the next. */
 int rig_teardown(void **state);
 
 /* `ribbonctl start` (with --wait when wait); its exit code. */
@@ -56,6 +63,16 @@ void rig_check_integrity(sqlite3 *db);
 double rig_sim_fault_time(rig_run *r, const char *what);
 /* 1 when `needle` is in the file at path (its line copied to line_out). */
 int rig_file_has(const char *path, const char *needle, char *line_out, size_t n);
+
+/* The pipeline event's counts ("pipeline: N frames captured, ..."); fails the test when absent. */
+typedef struct rig_pipeline {
+    long captured, lost, incomplete, dropped, recorded;
+} rig_pipeline;
+rig_pipeline rig_pipeline_counts(sqlite3 *db);
+/* Each video frame's stored time (trial-1.avi.frames.csv) against the simulator's true send time
+ * of the same image (the truth log, matched by the camera's timestamp): asserts every frame is one
+ * the simulator sent, there are `recorded` of them, and every one is within 1 ms (issue 13 E). */
+void rig_check_stamps(rig_run *r, long recorded);
 
 /* From the simulator's truth log: the last real (unix) time axis `col` (0 compression, 1 shear)
  * moved by more than 1e-4 mm between two images; NaN if it never did. */
