@@ -181,6 +181,8 @@ typedef struct plot_sweep_point {
     plot_regime regime;
     bool no_state;      /* no stable state found here: a grey diamond (regime ignored) */
     double bar_to;      /* with no_state: a grey bar from y to bar_to (NaN or y: none) */
+    double bar_from;    /* with a bar: where it starts instead of y (0: at y), e.g. the two folds
+                           that bound a gap without the state */
 } plot_sweep_point;
 
 typedef struct plot_sweep_line {
