@@ -731,6 +731,9 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
             /* On the pitchfork curve the even block is regular: restore equilibrium at fixed
              * Delta W (holding v_even's component there would undo the step along the branch). */
             if (!isfinite(ddw) || p1_hold_dw) ddw = 0.0;
+            /* A pitchfork in Gamma or phi (Delta W held): the even block is regular, so equilibrium is
+             * restored at the fixed parameter (the even mode's constraint would push it along). */
+            if (slack != ROD_PAR_DW && kind == ROD_CRIT_PITCHFORK) ddw = 0.0;
             ddw = fmax(-c->o.max_dp[slack], fmin(c->o.max_dp[slack], ddw));
             for (int k = 0; k < nf; k++) c->step[k] = c->z[k] - c->Y[0][k] * ddw;
             double pbase[ROD_NPAR];

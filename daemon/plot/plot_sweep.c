@@ -126,7 +126,7 @@ static plot_status sweep_draw(void *vctx, char *why, size_t why_len)
             e[n++] = (plot_legend_entry){"no stable upper state (evidence in the CSV)", PLOT_LEGEND_KIND_SYMBOL,
                                          PLOT_COL_UNSTABLE, 0, 0, "◆", 1.2};
         if (bars)
-            e[n++] = (plot_legend_entry){"grey bar: no upper state, to its fold", PLOT_LEGEND_KIND_BOX,
+            e[n++] = (plot_legend_entry){"grey bar: to the fold or pitchfork that ends it", PLOT_LEGEND_KIND_BOX,
                                          PLOT_COL_CELL_NOSNAP, 0, 0, NULL, 0};
         bool marked = false;
         for (size_t k = 0; k < d->n_lines && n < PLOT_LEGEND_MAX - 1; k++) {
