@@ -79,16 +79,29 @@ static void fill(ArvBuffer *b, void *user, guint32 exposure_us, guint32 gain, Ar
     for (size_t i = 8; i < n; i++) p[i] = pattern(k, i);
     memcpy(p, &k, 8);
     /* Stamped as it leaves (the leader goes out right after this callback), like ribbon-rigsim's
-     * camera: the real-time clock is the camera's, the monotonic time the truth. */
+     * camera: the real-time clock is the camera's, the monotonic time the truth.
+     * Both clocks as one instant: the real-time read between two monotonic reads, again if a
+     * preemption split them (the truth is the midpoint). */
     struct timespec r;
-    clock_gettime(CLOCK_REALTIME, &r);
-    if (k < MAX_TRUTH) f->truth[k] = mono();
+    double m1, m2;
+    int tries = 0;
+    do {
+        m1 = mono();
+        clock_gettime(CLOCK_REALTIME, &r);
+        m2 = mono();
+    } while (m2 - m1 > 20e-6 && ++tries < 10);
+    if (k < MAX_TRUTH) f->truth[k] = 0.5 * (m1 + m2);
     arv_buffer_set_timestamp(b, (guint64)r.tv_sec * 1000000000ull + (guint64)r.tv_nsec);
 }
+
+/* The running fake camera, for the teardown: a failed assertion leaves the test by longjmp, and a
+ * camera left serving port 3956 would answer the next test's camera too. */
+static fake *running;
 
 static fake *fake_start(void)
 {
     fake *f = calloc(1, sizeof *f);
+    running = f;
     assert_non_null(f);
     f->gv = arv_gv_fake_camera_new("127.0.0.1", "RIBBONTEST");
     assert_non_null(f->gv);
@@ -101,6 +114,20 @@ static void fake_stop(fake *f)
 {
     if (f->gv) g_object_unref(f->gv);
     f->gv = NULL;
+}
+
+static void fake_free(fake *f)
+{
+    fake_stop(f);
+    free(f);
+    running = NULL;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    if (running) fake_free(running);
+    return 0;
 }
 
 static vis_source *open_cam(vis_error *ve)
@@ -123,8 +150,8 @@ static int setup(void **state)
 }
 
 /* Runs the pipeline for `seconds`, consuming in order; returns the counts. */
-static void run(fake *f, double seconds, double track_delay_s, const char *video, trial_capture_counts *k,
-                long *consumed, long *skipped_seen)
+static void run(fake *f, double seconds, double track_delay_s, double max_loss_fraction, const char *video,
+                trial_capture_counts *k, long *consumed, long *skipped_seen)
 {
     vis_error ve = {0};
     vis_source *src = open_cam(&ve);
@@ -134,6 +161,7 @@ static void run(fake *f, double seconds, double track_delay_s, const char *video
     p.roi = (trial_roi){0, 0, W, H};
     p.fps = FPS;
     p.track_delay_s = track_delay_s;
+    if (max_loss_fraction >= 0.0) p.max_loss_fraction = max_loss_fraction;
     char why[256] = "";
     trial_capture *c = trial_capture_start(src, &p, why, sizeof why);
     if (!c) fail_msg("capture: %s", why);
@@ -229,7 +257,7 @@ static void test_every_frame_recorded_bit_exact_and_stamped(void **state)
     snprintf(video, sizeof video, "%s/full.avi", dir);
     trial_capture_counts k;
     long consumed, skipped;
-    run(f, 3.0, 0.0, video, &k, &consumed, &skipped);
+    run(f, 3.0, 0.0, -1.0, video, &k, &consumed, &skipped);
     fake_stop(f);
     double worst, median;
     long n = check_video(f, video, &worst, &median);
@@ -247,7 +275,7 @@ static void test_every_frame_recorded_bit_exact_and_stamped(void **state)
      * such a constant); every frame within 1 ms of the truth in the normal build. */
     assert_true(median < MEDIAN_BOUND_S);
     assert_true(worst < WORST_BOUND_S);
-    free(f);
+    fake_free(f);
 }
 
 static void test_slow_tracker_skips_video_complete(void **state)
@@ -258,7 +286,7 @@ static void test_slow_tracker_skips_video_complete(void **state)
     snprintf(video, sizeof video, "%s/slow.avi", dir);
     trial_capture_counts k;
     long consumed, skipped;
-    run(f, 3.0, 3.0 / FPS, video, &k, &consumed, &skipped);
+    run(f, 3.0, 3.0 / FPS, -1.0, video, &k, &consumed, &skipped);
     fake_stop(f);
     double worst, median;
     long n = check_video(f, video, &worst, &median);
@@ -269,7 +297,7 @@ static void test_slow_tracker_skips_video_complete(void **state)
     assert_int_equal(k.dropped, 0);
     assert_int_equal(n, k.captured);
     assert_true(worst < 1.0 / FPS);
-    free(f);
+    fake_free(f);
 }
 
 static void test_camera_stops_is_an_error_soon(void **state)
@@ -303,7 +331,7 @@ static void test_camera_stops_is_an_error_soon(void **state)
     trial_capture_stop(c, &k, why, sizeof why);
     vis_frame_free(fr);
     vis_source_close(src);
-    free(f);
+    fake_free(f);
 }
 
 /* GVSP packets dropped at random by the camera (Aravis's gvsp-lost-ratio; the fake camera does not
@@ -318,7 +346,10 @@ static void test_lost_packets_counted(void **state)
     snprintf(video, sizeof video, "%s/lossy.avi", dir);
     trial_capture_counts k;
     long consumed, skipped;
-    run(f, 3.0, 0.0, video, &k, &consumed, &skipped);
+    /* No quality limit here: this test is the accounting (test_heavy_loss_ends_capture is the
+     * limit's). On a loaded CI machine the transport adds its own losses to the camera's: 46 of 106
+     * frames once, over the default 25% limit, and the run stopped before its accounting. */
+    run(f, 3.0, 0.0, 0.0, video, &k, &consumed, &skipped);
     uint64_t sent = __atomic_load_n(&f->counter, __ATOMIC_ACQUIRE);
     fake_stop(f);
     long accounted = k.warmup + k.captured + k.lost + k.incomplete;
@@ -330,7 +361,7 @@ static void test_lost_packets_counted(void **state)
     /* the frames still in flight when the capture stopped are the only ones not accounted */
     assert_true(accounted <= (long)sent);
     assert_true(accounted >= (long)sent - 4);
-    free(f);
+    fake_free(f);
 }
 
 /* Too many damaged frames: the capture ends with a named reason (the runner fails the trial). */
@@ -361,7 +392,7 @@ static void test_heavy_loss_ends_capture(void **state)
     vis_frame_free(fr);
     vis_source_close(src);
     fake_stop(f);
-    free(f);
+    fake_free(f);
 }
 
 /* A frozen camera (the same image frame after frame): same_run counts it; before, every frame is new. */
@@ -396,7 +427,7 @@ static void test_frozen_image_counted(void **state)
     vis_frame_free(fr);
     vis_source_close(src);
     fake_stop(f);
-    free(f);
+    fake_free(f);
 }
 
 /* Frames in another pixel format than Mono8: the capture does not start (named), and no video or
@@ -434,7 +465,7 @@ static void test_not_mono8_refused_nothing_written(void **state)
     assert_int_equal(access(times, F_OK), -1);
     vis_source_close(src);
     fake_stop(f);
-    free(f);
+    fake_free(f);
 }
 
 static void test_named_errors(void **state)
@@ -460,20 +491,20 @@ static void test_named_errors(void **state)
     printf("# %s\n", ve.message);
     assert_non_null(strstr(ve.message, "AcquisitionFrameRate"));
     fake_stop(f);
-    free(f);
+    fake_free(f);
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_every_frame_recorded_bit_exact_and_stamped),
-        cmocka_unit_test(test_slow_tracker_skips_video_complete),
-        cmocka_unit_test(test_camera_stops_is_an_error_soon),
-        cmocka_unit_test(test_lost_packets_counted),
-        cmocka_unit_test(test_heavy_loss_ends_capture),
-        cmocka_unit_test(test_frozen_image_counted),
-        cmocka_unit_test(test_not_mono8_refused_nothing_written),
-        cmocka_unit_test(test_named_errors),
+        cmocka_unit_test_teardown(test_every_frame_recorded_bit_exact_and_stamped, teardown),
+        cmocka_unit_test_teardown(test_slow_tracker_skips_video_complete, teardown),
+        cmocka_unit_test_teardown(test_camera_stops_is_an_error_soon, teardown),
+        cmocka_unit_test_teardown(test_lost_packets_counted, teardown),
+        cmocka_unit_test_teardown(test_heavy_loss_ends_capture, teardown),
+        cmocka_unit_test_teardown(test_frozen_image_counted, teardown),
+        cmocka_unit_test_teardown(test_not_mono8_refused_nothing_written, teardown),
+        cmocka_unit_test_teardown(test_named_errors, teardown),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }
