@@ -38,7 +38,7 @@ typedef struct upper {
     int fold_pf[2];      /* (at most 2, one from each side): 0 fold, 1 pitchfork; their Gamma, */
     double fold_at[2];
     double fold_from[2]; /* the Gamma each continuation came from, */
-    double fold_eig[2];  /* the even eigenvalue at the last state there (E I1 / l^2) */
+    double fold_eig[2];  /* the critical block's eigenvalue at the last state there (E I1 / l^2) */
     double fold_rel[2];  /* and at the fold, over max |K_ii| */
 } upper;
 
@@ -119,7 +119,7 @@ static void by_continuation(row_task *t, const upper *from, upper *u, double gam
             u->fold_pf[k] = fr.pitchfork;
             u->fold_at[k] = fr.at;
             u->fold_from[k] = from->sc.fold_position;
-            u->fold_eig[k] = rep.eig_last;
+            u->fold_eig[k] = fr.eig_from;
             u->fold_rel[k] = fr.eig_rel;
             u->lost = 1;
             u->lost_at = fr.at;
