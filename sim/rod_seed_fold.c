@@ -2,7 +2,9 @@
  * with Gamma or phi free and Delta W held (see rod_seed_fold.h). */
 #include "rod_seed_fold.h"
 #include "rod_observe.h"
+#include "rod_route.h"
 #include "rod_seed.h"
+#include "rod_solver.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -133,4 +135,37 @@ rod_status rod_seed_fold_locate(const rod *last, const rod_scene *last_sc, const
     rod_crit_free(c);
     rod_free(r);
     return st == ROD_OK || rep->located ? ROD_OK : st;
+}
+
+int rod_seed_end_between(const rod_scene *from_sc, const rod_scene *to_sc, rod_seed_fold_report *rep)
+{
+    memset(rep, 0, sizeof *rep);
+    rod_scene a = *from_sc, b = *to_sc;
+    a.fold_angle_rel = b.fold_angle_rel = 0.0;
+    rod *r = NULL, *out = NULL, *last = NULL;
+    if (rod_alloc(&a, &r, rep->why, sizeof rep->why) != ROD_OK) return 0;
+    rod_solver *s = rod_solver_alloc(r);
+    if (!s) {
+        rod_free(r);
+        return -1;
+    }
+    int found = 0;
+    rod_route_report rr = {0};
+    rod_seed_report sr;
+    rod_scene lsc;
+    if (rod_route_to_state(r, s, &a, +1, &rr) != ROD_OK || rod_seed_is_stable(r) != 1) {
+        snprintf(rep->why, sizeof rep->why, "no stable upper state at the start");
+    } else if (rod_seed_continue_keep(r, &a, &b, s, &out, &sr, &last, &lsc) == ROD_OK) {
+        snprintf(rep->why, sizeof rep->why, "continuation reached the target: its upper state exists");
+    } else if (!last) {
+        snprintf(rep->why, sizeof rep->why, "continuation did not take a step");
+    } else {
+        rod_status st = rod_seed_fold_locate(last, &lsc, &b, rep);
+        found = st == ROD_ERR_ALLOC ? -1 : rep->located;
+    }
+    rod_free(out);
+    rod_free(last);
+    rod_solver_free(s);
+    rod_free(r);
+    return found;
 }

@@ -58,4 +58,11 @@ typedef struct rod_seed_fold_report {
 rod_status rod_seed_fold_locate(const rod *last, const rod_scene *last_sc, const rod_scene *to_sc,
                                 rod_seed_fold_report *rep);
 
+/* The same from scratch, for callers without a neighbour's state (the predicted phase map): the
+ * route to the upper state of from_sc (perfect scene), continuation toward to_sc (differing in
+ * Gamma or the crease angle), and the location where it stops. 1 when the state ends before
+ * to_sc at a located fold or pitchfork (rep says where), 0 when it does not (to_sc reached, the
+ * route failed, or nothing located: rep->why), -1 out of memory. */
+int rod_seed_end_between(const rod_scene *from_sc, const rod_scene *to_sc, rod_seed_fold_report *rep);
+
 #endif

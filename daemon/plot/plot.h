@@ -53,7 +53,8 @@ typedef enum plot_regime {
     PLOT_REGIME_UNKNOWN = 0, /* failed run, not classified, or not known */
     PLOT_REGIME_ASYMMETRIC,  /* pitchfork first: snaps through an asymmetric shape */
     PLOT_REGIME_SYMMETRIC,   /* saddle-node first: snaps symmetrically */
-    PLOT_REGIME_NO_SNAP      /* shear limit reached without a snap */
+    PLOT_REGIME_NO_SNAP,     /* shear limit reached without a snap */
+    PLOT_REGIME_NO_UPPER     /* no stable upper state to snap from (a located fold or pitchfork ends it) */
 } plot_regime;
 
 /* "asymmetric", "symmetric", "none" / "no snap" / "no-snap" / "no_snap" (case-insensitive);
