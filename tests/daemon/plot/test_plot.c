@@ -493,6 +493,8 @@ static void test_regime_names(void **state)
     assert_int_equal(plot_regime_parse("diverged"), PLOT_REGIME_UNKNOWN);
     assert_int_equal(plot_regime_parse(NULL), PLOT_REGIME_UNKNOWN);
     assert_string_equal(plot_regime_name(PLOT_REGIME_NO_SNAP), "no snap");
+    assert_int_equal(plot_regime_parse("no-upper"), PLOT_REGIME_NO_UPPER);
+    assert_string_equal(plot_regime_name(PLOT_REGIME_NO_UPPER), "no-upper");
     assert_string_equal(plot_regime_name((plot_regime)99), "unknown");
 }
 
