@@ -40,6 +40,7 @@ struct Attempt {
     double valid_frac = 0;          // share of the arc with a clear ridge
     double length_rel = 0;          // measured length / known length - 1 (0 when unknown)
     double bend_rel = 0;            // tightest radius of curvature / the ridge's median width
+    bool ran = false;               // tried on this frame
     vis_measure m{};
     std::vector<vis::Pt> curve_px;  // smooth centreline, pixels
 };
@@ -73,10 +74,10 @@ extern "C" vis_track_params vis_track_params_default(void)
     p.step_px = 1.0;
     p.end_margin_px = 3.0;
     p.fit_window = 0.08;
-    p.end_window = 0.06;
+    p.end_window = 0.11;
     p.min_contrast = 12.0;
     p.min_quality = 0.3;
-    p.min_bend_ratio = 0.0;
+    p.min_bend_ratio = 2.0;
     return p;
 }
 
@@ -203,17 +204,22 @@ void projected_length_bounds(double l, double shear, double *lo, double *hi)
 
 // A cross-section centroid is the centreline only where the ribbon bends gently against its
 // apparent width: where the radius of curvature comes within about twice the width of the ridge
-// (the twisted strip turns its face to the camera in a tight fold, or the two legs of a closing
-// loop merge into one wedge), the normal profile mixes in the neighbouring arc and the centroids
-// slide to the outside of the bend (Delta Z off 1-4 px, A off 0.1-2 rad at quality 0.99 on the
-// simulator family at Delta L 0.7, every one of them at a ratio below 1.95, every frame within
-// target above 2.06). With min_bend_ratio set (2 for that), such a frame is not measured. It is off
-// by default: on the mock trial's twin (N = 31) it loses the frames around the snap, and the
-// trial then sees no snap (test_install_staged, test_rig_rehearsal).
+// and the strip shows its face (twisted, in a tight fold, or the two legs of a closing loop
+// merging into one wedge), the normal profile mixes in the neighbouring arc and the centroids
+// slide to the outside of the bend (Delta Z off 1-6 px, A off 0.1-2 rad at quality 0.9-0.99 on the
+// simulator family, every one at a ratio below 1.95). Seen edge on, the ridge's width is the
+// blur's, and a tight bend costs nothing: the mock trial's lower state (320 x 240, creases at
+// Gamma 0.13) sits at a ratio of 1.8-1.9 with a ridge 3 px wide, 2.5 px where narrowest, and is
+// measured within target. So the ratio counts only where the face shows, the median ridge at
+// least FACE_PX wider than the narrowest tenth of the ribbon (the edge-on stretches near the
+// clamps); a curve tighter than its own ridge width (ratio below 1, a cusp) is refused either way.
+// With min_bend_ratio (2 by default) such a frame is not measured.
+const double FACE_PX = 2.0;
 
 // Tightest radius of curvature of the smooth curve (mm, `ppmm` px per mm) over the valid samples'
-// median ridge width, both in pixels. Large when nothing bends. (The widest ridge near the tightest
-// point, tried instead, flags the creases of folded ribbons, which are tight but seen edge-on.)
+// median ridge width, both in pixels; 1e9 (nothing to refuse) when the strip is seen edge on and
+// the ratio is at least 1. (The widest ridge near the tightest point, tried instead, flags the
+// creases of folded ribbons, which are tight but seen edge-on.)
 double bend_over_width(const std::vector<Pt> &curve, double ppmm, const std::vector<vis::TraceSample> &smp,
                        std::vector<double> &w)
 {
@@ -225,6 +231,8 @@ double bend_over_width(const std::vector<Pt> &curve, double ppmm, const std::vec
         return 1e9;
     std::nth_element(w.begin(), w.begin() + (long)(w.size() / 2), w.end());
     const double wmed = std::max(1.0, w[w.size() / 2]);
+    std::nth_element(w.begin(), w.begin() + (long)(w.size() / 10), w.end());
+    const double w10 = w[w.size() / 10];
     double rmin = 1e9;
     for (size_t j = 1; j + 1 < curve.size(); j++) {
         const Pt a = curve[j] - curve[j - 1], b = curve[j + 1] - curve[j];
@@ -232,7 +240,8 @@ double bend_over_width(const std::vector<Pt> &curve, double ppmm, const std::vec
         if (ang > 0)
             rmin = std::min(rmin, 0.5 * (cv::norm(a) + cv::norm(b)) / ang * ppmm);
     }
-    return rmin / wmed;
+    const double ratio = rmin / wmed;
+    return ratio < 1.0 || wmed - w10 >= FACE_PX ? ratio : 1e9;
 }
 
 // Occlusion: the ribbon is seen leaving both clamps (most samples valid in the first and last tenth)
@@ -258,6 +267,7 @@ bool occluded(const std::vector<vis::TraceSample> &smp)
 void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_in, int passes,
                 Attempt &at)
 {
+    at.ran = true;
     at.reason = VIS_REASON_LOST;
     at.quality = 0;
     at.valid_frac = 0;
@@ -502,6 +512,8 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
         const int r = (int)std::ceil(t->p.ribbon_max_px);
         const cv::Rect full(0, 0, grey.cols, grey.rows);
         Attempt *best = nullptr;
+        for (Attempt &a : t->att)
+            a.ran = false;
         if (!t->prev.empty()) {
             // Following: trace the grey levels themselves (each profile has its own background).
             t->trace_img = grey;
@@ -553,6 +565,21 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
                 best = pick_better(best, &fresh);
             }
         }
+        // The bend is the ribbon's, not the path's: a followed curve that passes the bend check
+        // while a fresh path of the same length, ridge all along, is refused by it has cut the
+        // tight bend short (the symmetric snap's U at 500 fps: the followed curve's tightest radius
+        // 14 px against the walks' 10 px, A off 0.13 rad at quality 0.92, the walks within 0.01
+        // rad). Such a frame is lost, not measured.
+        if (best == &t->att[0] && best->reason == VIS_REASON_NONE && t->p.min_bend_ratio > 0)
+            for (int i = 1; i < 4; i++) {
+                const Attempt &a = t->att[i];
+                if (a.ran && a.reason == VIS_REASON_LOST && a.bend_rel >= 1.0 && a.bend_rel < t->p.min_bend_ratio &&
+                    a.valid_frac >= 0.95 && std::fabs(a.m.length_mm / best->m.length_mm - 1.0) < 0.05) {
+                    best->reason = VIS_REASON_LOST;
+                    best->quality = std::min(best->quality, a.quality);
+                    break;
+                }
+            }
         if (best && best->reason == VIS_REASON_LOST && best->valid_frac < 0.25)
             any_path = false;  // nothing ribbon-like along any path
         if (!best || !any_path) {

@@ -317,13 +317,15 @@ typedef struct vis_track_params {
     double step_px;            /* spacing of centreline samples along the arc, pixels (1) */
     double end_margin_px;      /* samples closer than this to a clamp point are not traced, px (3) */
     double fit_window;         /* half-window of the interior local fits, fraction of the length (0.08) */
-    double end_window;         /* one-sided window of the end-tangent fits, fraction of length (0.06) */
+    double end_window;         /* one-sided window of the end-tangent fits, fraction of length (0.09:
+                                  less noise in A than 0.06, docs/vision-acquisition-and-replay-speed.md) */
     double min_contrast;       /* weakest ridge accepted, grey levels (12) */
     double min_quality;        /* below this quality (0..1) a frame is reported LOST (0.3) */
     double min_bend_ratio;     /* a curve whose tightest radius of curvature is below this many
-                                  median ridge widths is reported LOST, not measured (0 = off, the
-                                  default; 2 makes the simulator family's confident wrong answers
-                                  lost: docs/vision-acquisition-and-replay-speed.md) */
+                                  median ridge widths, where the strip shows its face (median
+                                  ridge 2 px wider than its narrowest tenth), is reported LOST,
+                                  not measured; below 1 always (2, the default; 0 = off:
+                                  docs/vision-acquisition-and-replay-speed.md) */
 } vis_track_params;
 vis_track_params vis_track_params_default(void);
 

@@ -46,9 +46,10 @@
 /* Measured shapes reached (of 208 full, 13 quick), asserted as floors; the issue asks for all. */
 #define FAMILY_MEASURED_FLOOR 169
 #define QUICK_MEASURED_FLOOR 8
-/* Sequences: wrong frames reached over the six (one, the symmetric snap at 500 fps: A off 0.14 rad
- * at quality 0.92 beside the crease); the issue asks for none. */
-#define SEQ_WRONG_REACHED 1
+/* Sequences: wrong frames over the six (the issue asks for none; before the followed curve had to
+ * agree with the fresh paths' bend, one: the symmetric snap at 500 fps, A off 0.13 rad at quality
+ * 0.92 beside the U's bottom). */
+#define SEQ_WRONG_REACHED 0
 /* The camera 10 m away (as the twin's camera for the paper's ribbon), not the twin's automatic 1 m
  * for this strip: sheared 60-90 mm, the DER strip is nowhere near any depth profile the tracker
  * can assume (it stays near y = 0 for the first third and turns to the shear in the middle), and
@@ -93,6 +94,16 @@ static int on_sample(void *user, const rod_sample *s, const rod *r)
     return 0;
 }
 
+static rod_scene load_scene_file(const char *path, const char **sets, int nsets)
+{
+    rod_scene sc;
+    cfg_error ce;
+    char buf[1200];
+    if (cfg_scene_load(path, sets, nsets, &sc, &ce) != CFG_OK)
+        fail_msg("%s", cfg_error_format(&ce, buf, sizeof buf));
+    return sc;
+}
+
 static rod_scene load_scene(const trial_spec *sp)
 {
     char s0[64], s1[64], s2[64];
@@ -108,10 +119,18 @@ static rod_scene load_scene(const trial_spec *sp)
     return sc;
 }
 
+static void run_scene(trial_states *st, rod_prediction *pred);
+
 static void run_trial(const trial_spec *sp, trial_states *st, rod_prediction *pred)
 {
-    memset(pred, 0, sizeof *pred);
     st->sc = load_scene(sp);
+    run_scene(st, pred);
+}
+
+/* rod_predict on st->sc, keeping every accepted state. */
+static void run_scene(trial_states *st, rod_prediction *pred)
+{
+    memset(pred, 0, sizeof *pred);
     char err[512];
     assert_int_equal(twin_shape_init(&st->ts, &st->sc, TWIN_Y_RIG, err, sizeof err), TWIN_OK);
     st->npts = st->ts.n;
@@ -128,7 +147,7 @@ static void run_trial(const trial_spec *sp, trial_states *st, rod_prediction *pr
     po.user = st;
     const rod_status rs = rod_predict(&st->sc, &po, pred, err, sizeof err);
     if (rs != ROD_OK)
-        fail_msg("rod_predict at Delta L %g, creases %g deg at %g: %s", sp->dl, sp->fold_deg, sp->gamma, err);
+        fail_msg("rod_predict at Delta L %g: %s", st->sc.compression, err);
     assert_false(st->failed);
 }
 
@@ -157,9 +176,10 @@ static void scene_camera(const rod_scene *sc, vis_render_params *rp, vis_calib *
     const double face_px = sc->width * 1000.0 * cal->px_per_mm;
     tp->ribbon_max_px = ceil(face_px + 2.0);
     tp->band_px = fmax(12.0, 1.5 * tp->ribbon_max_px);
-    /* The bend check (off by default): without it 11 of the 190 measured shapes are confident
-     * wrong answers (FAM_NO_BEND=1 shows them). */
-    tp->min_bend_ratio = getenv("FAM_NO_BEND") ? 0.0 : 2.0;
+    /* The bend check is the default's (min_bend_ratio 2): without it 11 of the 190 measured shapes
+     * are confident wrong answers (FAM_NO_BEND=1 shows them). */
+    if (getenv("FAM_NO_BEND"))
+        tp->min_bend_ratio = 0.0;
 }
 
 typedef struct score {
@@ -436,12 +456,12 @@ static void test_sequences(void **state)
             failures += sr.lost_in_snap != 0 || snap_t < 0 || abs(snap_m - snap_t) > 1 ||
                         asym != pred.asymmetric || sr.s.wrong != 0;
             seq_wrong += sr.s.wrong;
-            /* Reached: the asymmetric snap's regime at every rate, its snap frame within 3 frames
-             * and at most a fifth of its frames lost. The symmetric snap (Gamma 0.21, Delta L
-             * 0.5) loses up to 57% of its snap frames to the bend check and its regime is misread
-             * at 120 and 500 fps. */
+            /* Reached: the regime at every rate, both regimes; the asymmetric snap's snap frame
+             * within 3 frames and at most a fifth of its frames lost. The symmetric snap (Gamma
+             * 0.21, Delta L 0.5: a twisted U) loses up to 54% of its snap frames to the bend check
+             * (lost, never wrong), so its snap frame is up to 10 frames late at 500 fps. */
+            assert_int_equal(asym, pred.asymmetric);
             if (pred.asymmetric) {
-                assert_true(asym);
                 assert_true(snap_t >= 0 && abs(snap_m - snap_t) <= 3);
                 assert_true(5 * sr.lost_in_snap <= sr.in_snap);
             }
@@ -455,12 +475,127 @@ static void test_sequences(void **state)
     assert_true(seq_wrong <= SEQ_WRONG_REACHED);
 }
 
+/* ---------------------------------------------------------------- the default quality rule */
+
+/* The snap window of a trial's states (|d(Delta Z)/dt| above 0.1 / s), as pick_states finds it. */
+static void snap_window(const trial_states *st, int *on, int *off)
+{
+    *on = *off = -1;
+    for (int i = 1; i < st->n; i++) {
+        const double v = fabs(st->dz[i] - st->dz[i - 1]) / fmax(1e-9, st->t[i] - st->t[i - 1]);
+        if (v > 0.1) {
+            if (*on < 0)
+                *on = i - 1;
+            *off = i;
+        }
+    }
+}
+
+/* The default tracker parameters (only the length set) on the mock trial's own twin: the lab strip
+ * with creases at Gamma 0.13 (scenes/mock-gamma013.ini) at N = 31, filmed as test_install_staged
+ * films it (320 x 240, the twin's automatic camera, noise 2, blur 0.8). After the snap its lower
+ * state bends within twice the ridge's width (1.8-1.9) but is seen edge on: every frame measured,
+ * Delta Z within 1 px, A within 0.15 rad (at this size A carries 0.06 rad RMS of noise; the bend check counted every width, and lost them all: the mock
+ * trial saw no snap). Then the noise in A on one upper state filmed 40 times at 640 x 480 (its
+ * spread, not its error: the shape is the same): with the end tangents from quartics on 11%
+ * windows 0.0082 rad here, 0.0119 with the old cubics on 6% (a quartic on 6%, FAM_EW=0.06:
+ * 0.0355), bar 0.0105 (the renderer's
+ * noise is seeded, so the figure is the same on every run). The symmetric snap's regime is read
+ * from the largest |A| of up to 257 frames, against 0.05: the old noise read it wrong at 120 and
+ * 500 fps (peak 0.058 and 0.054, the truth 0; now 0.049 and 0.042, over a bias of -0.034 at one
+ * state early in the snap). */
+static void test_default_rule_on_mock_twin(void **state)
+{
+    (void)state;
+    static trial_states st;
+    static const char *sets[] = {"mesh.nodes=31", "solver.dt=0.004"};
+    st.sc = load_scene_file(RIBBON_SOURCE_DIR "/config/scenes/mock-gamma013.ini", sets, 2);
+    rod_prediction pred;
+    run_scene(&st, &pred);
+    assert_true(pred.snapped);
+    int on, off;
+    snap_window(&st, &on, &off);
+    assert_true(on >= 0 && off < st.n - 1);
+    char why[256];
+    twin_camera_params cp = twin_camera_params_default();
+    cp.width_px = 320;
+    cp.height_px = 240;
+    vis_render_params rp;
+    vis_calib cal;
+    assert_int_equal(twin_render_params_for_scene(&st.sc, &cp, &rp, why, sizeof why), TWIN_OK);
+    assert_int_equal(twin_calib_for_scene(&st.sc, &rp.camera, &cal, why, sizeof why), TWIN_OK);
+    rp.noise_sigma = 2.0;
+    rp.blur_sigma_px = 0.8;
+    vis_track_params tp = vis_track_params_default();
+    tp.length_mm = st.sc.length * 1000.0;
+    vis_error err;
+    vis_renderer *r = vis_renderer_create(&rp, &err);
+    vis_tracker *follow = vis_tracker_create(&tp, &cal, &err);
+    assert_non_null(r);
+    assert_non_null(follow);
+    vis_frame *f = vis_frame_alloc(8, 8, 1, NULL);
+    score s = {0};
+    const int nk = 12;
+    for (int j = 0; j < nk; j++) {
+        const int k = off + (int)((double)(st.n - 1 - off) * (j + 1) / nk);
+        vis_tracker *fresh = vis_tracker_create(&tp, &cal, &err);
+        render_track(r, fresh, &st, k, &s, f, NULL, NULL, NULL, NULL);
+        vis_tracker_free(fresh);
+        render_track(r, follow, &st, k, &s, f, NULL, NULL, NULL, NULL);
+    }
+    printf("mock twin's lower state, 320 x 240, default parameters: %d/%d measured, Delta Z error %.3f px RMS "
+           "(max %.3f), A error %.4f rad RMS (max %.4f), %d wrong\n",
+           s.measured, s.frames, s.measured ? sqrt(s.sdz / s.measured) : 0.0, s.dz_max,
+           s.measured ? sqrt(s.sa / s.measured) : 0.0, s.a_max, s.wrong);
+    assert_int_equal(s.measured, s.frames);
+    assert_true(s.dz_max <= 1.0);
+    assert_true(s.a_max <= 0.15);
+    vis_tracker_free(follow);
+    vis_renderer_free(r);
+
+    /* The spread of A: one upper state, 40 renderings (new noise each), fresh trackers. */
+    cp = twin_camera_params_default();
+    cp.distance_m = CAMERA_DISTANCE_M;
+    assert_int_equal(twin_render_params_for_scene(&st.sc, &cp, &rp, why, sizeof why), TWIN_OK);
+    assert_int_equal(twin_calib_for_scene(&st.sc, &rp.camera, &cal, why, sizeof why), TWIN_OK);
+    rp.noise_sigma = 3.0;
+    rp.blur_sigma_px = 1.0;
+    rp.light_gradient = 0.3;
+    rp.vignette = 0.2;
+    r = vis_renderer_create(&rp, &err);
+    assert_non_null(r);
+    const int k = on / 2, reps = 40;
+    if (getenv("FAM_EW")) /* by hand: other end windows */
+        tp.end_window = atof(getenv("FAM_EW"));
+    double sum = 0, sum2 = 0;
+    int n = 0;
+    for (int j = 0; j < reps; j++) {
+        double a = 0;
+        vis_tracker *fresh = vis_tracker_create(&tp, &cal, &err);
+        if (render_track(r, fresh, &st, k, &s, f, NULL, &a, NULL, NULL)) {
+            sum += a;
+            sum2 += a * a;
+            n++;
+        }
+        vis_tracker_free(fresh);
+    }
+    const double sd = n > 1 ? sqrt(fmax(0.0, (sum2 - sum * sum / n) / (n - 1))) : 1.0;
+    printf("A spread over %d renderings of one upper state (640 x 480): %.4f rad (end windows %.2f)\n", n, sd,
+           tp.end_window);
+    assert_int_equal(n, reps);
+    assert_true(sd <= 0.0105);
+    vis_renderer_free(r);
+    vis_frame_free(f);
+    trial_free(&st);
+}
+
 int main(int argc, char **argv)
 {
     quick = argc > 1 && !strcmp(argv[1], "--quick");
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_family_from_scratch),
         cmocka_unit_test(test_sequences),
+        cmocka_unit_test(test_default_rule_on_mock_twin),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
