@@ -711,8 +711,17 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
              * R = 0 alone with Delta W free and the step orthogonal to the even critical mode,
              * [[K, f], [v_even^T, 0]], which stays regular at a fold; the test functions'
              * linearisation is not trusted there. */
-            rod_load shear = {ROD_LOAD_SHEAR, p[ROD_PAR_DL], 0.0};
-            rod_load_vector(r, &shear, c->Rp[0]);
+            /* With Delta W held (no free parameter is Delta W: a fold in Gamma or phi at fixed
+             * shear), the slack is the free parameter's own: its column dR/dp takes the load's
+             * place, so the step stays regular at a fold in that parameter. */
+            int slack = ROD_PAR_DW;
+            if (m == 1 && free[0] != ROD_PAR_DW) slack = free[0];
+            if (slack == ROD_PAR_DW) {
+                rod_load shear = {ROD_LOAD_SHEAR, p[ROD_PAR_DL], 0.0};
+                rod_load_vector(r, &shear, c->Rp[0]);
+            } else {
+                param_grad(c, p, (rod_par)slack, c->Rp[0]);
+            }
             rod_mode_project(r, 1, c->Rp[0], c->t2);
             for (int k = 0; k < nf; k++) c->z[k] = -c->R[k];
             if ((st = solve_proj(c, 1, c->z)) != ROD_OK) break;
@@ -722,7 +731,10 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
             /* On the pitchfork curve the even block is regular: restore equilibrium at fixed
              * Delta W (holding v_even's component there would undo the step along the branch). */
             if (!isfinite(ddw) || p1_hold_dw) ddw = 0.0;
-            ddw = fmax(-c->o.max_dp[ROD_PAR_DW], fmin(c->o.max_dp[ROD_PAR_DW], ddw));
+            /* A pitchfork in Gamma or phi (Delta W held): the even block is regular, so equilibrium is
+             * restored at the fixed parameter (the even mode's constraint would push it along). */
+            if (slack != ROD_PAR_DW && kind == ROD_CRIT_PITCHFORK) ddw = 0.0;
+            ddw = fmax(-c->o.max_dp[slack], fmin(c->o.max_dp[slack], ddw));
             for (int k = 0; k < nf; k++) c->step[k] = c->z[k] - c->Y[0][k] * ddw;
             double pbase[ROD_NPAR];
             memcpy(pbase, p, sizeof pbase);
@@ -730,10 +742,20 @@ rod_status rod_crit_solve(rod_crit *c, rod_crit_kind kind, const rod_par *free, 
             for (int bt = 0; bt < 8; bt++, sc1 *= 0.5) {
                 rod_snapshot_load(r, &c->base);
                 memcpy(p, pbase, sizeof pbase);
-                p[ROD_PAR_DW] += sc1 * ddw;
-                rod_params_apply(r, p);
-                for (int k = 0; k < nf; k++) r->q[k + ROD_FREE_BEGIN] += sc1 * c->step[k];
-                rod_frames_update(r);
+                if (slack == ROD_PAR_DW) {
+                    p[ROD_PAR_DW] += sc1 * ddw;
+                    rod_params_apply(r, p);
+                    for (int k = 0; k < nf; k++) r->q[k + ROD_FREE_BEGIN] += sc1 * c->step[k];
+                    rod_frames_update(r);
+                } else {
+                    /* As a Newton step below: q moved, then the parameter (Gamma along the mesh map). */
+                    rod_params_apply(r, p);
+                    for (int k = 0; k < nf; k++) r->q[k + ROD_FREE_BEGIN] += sc1 * c->step[k];
+                    p[slack] += sc1 * ddw;
+                    rod_frames_update(r);
+                    if (slack == ROD_PAR_GAMMA) rod_crit_move_gamma(c, p, r->fold_outer_edges);
+                    else rod_params_apply(r, p);
+                }
                 rod_gradient(r, c->g);
                 double rn = 0.0;
                 for (int k = 0; k < nf; k++) rn = fmax(rn, fabs(c->g[k + ROD_FREE_BEGIN]));

@@ -153,6 +153,13 @@ static rod_scene scene_at(const rod_scene *a, const rod_scene *b, double p)
 rod_status rod_seed_continue(const rod *from, const rod_scene *from_sc, const rod_scene *to_sc, rod_solver *s,
                              rod **out, rod_seed_report *rep)
 {
+    return rod_seed_continue_keep(from, from_sc, to_sc, s, out, rep, NULL, NULL);
+}
+
+rod_status rod_seed_continue_keep(const rod *from, const rod_scene *from_sc, const rod_scene *to_sc, rod_solver *s,
+                                  rod **out, rod_seed_report *rep, rod **last_out, rod_scene *last_sc)
+{
+    if (last_out) *last_out = NULL;
     rod_seed_report local;
     if (!rep) rep = &local;
     memset(rep, 0, sizeof *rep);
@@ -214,6 +221,7 @@ rod_status rod_seed_continue(const rod *from, const rod_scene *from_sc, const ro
             p = pn;
             rep->phi_reached = sc.fold_angle_deg;
             rep->gamma_reached = sc.fold_position;
+            if (last_sc) *last_sc = sc;
             if (nr.iterations <= 5) dp = fmin(1.5 * dp, dp_max);
             continue;
         }
@@ -232,7 +240,8 @@ rod_status rod_seed_continue(const rod *from, const rod_scene *from_sc, const ro
         if (st == ROD_OK) st = ROD_ERR_BRANCH_LOST;
         rep->eig_start = lowest_eigenvalue((rod *)from);
         rep->eig_last = cur ? lowest_eigenvalue(cur) : rep->eig_start;
-        rod_free(cur);
+        if (last_out) *last_out = cur;
+        else rod_free(cur);
         return st;
     }
     *out = cur;

@@ -52,4 +52,11 @@ int rod_seed_is_stable(rod *r);
 rod_status rod_seed_continue(const rod *from, const rod_scene *from_sc, const rod_scene *to_sc, rod_solver *s,
                              rod **out, rod_seed_report *rep);
 
+/* As rod_seed_continue; on a failure *last (unless last is NULL) gets the last stable state the
+ * path solved (a rod of scene *last_sc, at rep->phi_reached, rep->gamma_reached; the caller frees
+ * it), or NULL when no step was solved: where to look for the fold that ended the path
+ * (rod_seed_fold.h). */
+rod_status rod_seed_continue_keep(const rod *from, const rod_scene *from_sc, const rod_scene *to_sc, rod_solver *s,
+                                  rod **out, rod_seed_report *rep, rod **last, rod_scene *last_sc);
+
 #endif

@@ -53,7 +53,8 @@ typedef enum plot_regime {
     PLOT_REGIME_UNKNOWN = 0, /* failed run, not classified, or not known */
     PLOT_REGIME_ASYMMETRIC,  /* pitchfork first: snaps through an asymmetric shape */
     PLOT_REGIME_SYMMETRIC,   /* saddle-node first: snaps symmetrically */
-    PLOT_REGIME_NO_SNAP      /* shear limit reached without a snap */
+    PLOT_REGIME_NO_SNAP,     /* shear limit reached without a snap */
+    PLOT_REGIME_NO_UPPER     /* no stable upper state to snap from (a located fold or pitchfork ends it) */
 } plot_regime;
 
 /* "asymmetric", "symmetric", "none" / "no snap" / "no-snap" / "no_snap" (case-insensitive);
@@ -181,6 +182,8 @@ typedef struct plot_sweep_point {
     plot_regime regime;
     bool no_state;      /* no stable state found here: a grey diamond (regime ignored) */
     double bar_to;      /* with no_state: a grey bar from y to bar_to (NaN or y: none) */
+    double bar_from;    /* with a bar: where it starts instead of y (0: at y), e.g. the two folds
+                           that bound a gap without the state */
 } plot_sweep_point;
 
 typedef struct plot_sweep_line {

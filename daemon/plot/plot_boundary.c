@@ -38,14 +38,16 @@ typedef struct boundary_ctx {
     const plot_boundary_data *d;
     double x0, x1, y0, y1; /* axis ranges */
     int w, h;              /* page, px */
-    bool any[3];           /* sweep points of each marker kind: asymmetric, symmetric, other */
+    bool any[4];           /* sweep points of each marker kind: asymmetric, symmetric, other, no state */
     bool star;             /* the special point is drawn */
 } boundary_ctx;
 
-/* The sweep markers' kind: 0 circle (asymmetric), 1 square (symmetric), 2 cross. */
-static int point_kind(plot_regime r)
+/* The sweep markers' kind: 0 circle (asymmetric), 1 square (symmetric), 2 cross, 3 diamond (no
+ * stable upper state). */
+static int point_kind(const plot_sweep_point *p)
 {
-    return r == PLOT_REGIME_ASYMMETRIC ? 0 : r == PLOT_REGIME_SYMMETRIC ? 1 : 2;
+    if (p->no_state) return 3;
+    return p->regime == PLOT_REGIME_ASYMMETRIC ? 0 : p->regime == PLOT_REGIME_SYMMETRIC ? 1 : 2;
 }
 
 static void marker(int kind, double x, double y, double rx, double ry)
@@ -54,6 +56,8 @@ static void marker(int kind, double x, double y, double rx, double ry)
         plot_marker_polygon(x, y, rx, ry, 36, 0.0);
     else if (kind == 1)
         plot_marker_polygon(x, y, rx * M_SQRT2, ry * M_SQRT2, 4, M_PI / 4);
+    else if (kind == 3)
+        plot_marker_polygon(x, y, rx, ry, 4, 0.0);
     else
         plot_marker_cross(x, y, rx, ry);
 }
@@ -74,11 +78,13 @@ static int legend_entries(const boundary_ctx *c, plot_legend_entry *e)
                                      cv->mark == PLOT_CURVE_MARK_SQUARE ? PLOT_GLYPH_SQUARE_OPEN : PLOT_GLYPH_CIRCLE_OPEN,
                                      1.3};
     }
-    static const char *point_text[3] = {"sweep point: pitchfork first (asymmetric snap)",
+    static const char *point_text[4] = {"sweep point: pitchfork first (asymmetric snap)",
                                         "sweep point: saddle-node first (symmetric snap)",
-                                        "sweep point: failed or no instability"};
-    static const char *point_glyph[3] = {PLOT_GLYPH_CIRCLE_OPEN, PLOT_GLYPH_SQUARE_OPEN, PLOT_GLYPH_CROSS};
-    for (int k = 0; k < 3; k++)
+                                        "sweep point: failed or no instability",
+                                        "sweep point: no stable upper state"};
+    static const char *point_glyph[4] = {PLOT_GLYPH_CIRCLE_OPEN, PLOT_GLYPH_SQUARE_OPEN, PLOT_GLYPH_CROSS,
+                                         PLOT_GLYPH_DIAMOND_OPEN};
+    for (int k = 0; k < 4; k++)
         if (c->any[k])
             e[n++] = (plot_legend_entry){point_text[k], PLOT_LEGEND_KIND_SYMBOL, PLOT_COL_UNSTABLE, 0, 0,
                                          point_glyph[k], 1.3};
@@ -112,7 +118,7 @@ static plot_status boundary_draw(void *vctx, char *why, size_t why_len)
     for (size_t k = 0; k < d->n_points; k++) {
         const plot_sweep_point *p = &d->points[k];
         if (isfinite(p->x) && isfinite(p->y))
-            marker(point_kind(p->regime), p->x, p->y, rx, ry);
+            marker(point_kind(p), p->x, p->y, rx, ry);
     }
     if (c->star) {
         PLFLT vx[2] = {d->star_x, d->star_x}, vy[2] = {c->y0, c->y1};
@@ -201,7 +207,7 @@ plot_status plot_boundary(const char *png_path, const plot_boundary_data *d, cha
         if (isfinite(d->points[k].x) && isfinite(d->points[k].y)) {
             plot_range_add1(&rx, d->points[k].x);
             plot_range_add1(&ry, d->points[k].y);
-            c.any[point_kind(d->points[k].regime)] = true;
+            c.any[point_kind(&d->points[k])] = true;
         }
     c.star = isfinite(d->star_x) && isfinite(d->star_y);
     if (c.star) {

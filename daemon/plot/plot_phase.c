@@ -63,6 +63,7 @@ static int cell_color(plot_regime r)
     case PLOT_REGIME_ASYMMETRIC: return PLOT_COL_CELL_ASYM;
     case PLOT_REGIME_SYMMETRIC: return PLOT_COL_CELL_SYM;
     case PLOT_REGIME_NO_SNAP: return PLOT_COL_CELL_NOSNAP;
+    case PLOT_REGIME_NO_UPPER: return PLOT_COL_CELL_NOUPPER;
     case PLOT_REGIME_UNKNOWN: break;
     }
     return PLOT_COL_CELL_UNKNOWN;
@@ -86,6 +87,7 @@ static void trial_style(plot_regime r, int *color, const char **glyph, double *s
         *glyph = PLOT_GLYPH_CROSS;
         *scale = 1.6;
         return;
+    case PLOT_REGIME_NO_UPPER: /* measured trials are never this; drawn as unknown */
     case PLOT_REGIME_UNKNOWN: break;
     }
     *color = PLOT_COL_MARK_OTHER;
@@ -96,7 +98,7 @@ static void trial_style(plot_regime r, int *color, const char **glyph, double *s
 static bool regime_valid(plot_regime r)
 {
     return r == PLOT_REGIME_UNKNOWN || r == PLOT_REGIME_ASYMMETRIC || r == PLOT_REGIME_SYMMETRIC ||
-           r == PLOT_REGIME_NO_SNAP;
+           r == PLOT_REGIME_NO_SNAP || r == PLOT_REGIME_NO_UPPER;
 }
 
 static plot_status check_axis(const char *name, const double *v, size_t n, char *why, size_t why_len)
@@ -185,7 +187,7 @@ static plot_status phase_draw(void *vctx, char *why, size_t why_len)
     plvpor(VP_LEFT, VP_RIGHT, VP_BOTTOM, VP_TOP);
     plwind(c->x0, c->x1, c->y0, c->y1);
 
-    bool cells[4] = {false, false, false, false};
+    bool cells[5] = {false, false, false, false, false};
     draw_cells(d, cells);
 
     plcol0(PLOT_COL_INK);
@@ -205,7 +207,7 @@ static plot_status phase_draw(void *vctx, char *why, size_t why_len)
         pllsty(PLOT_LSTY_SOLID);
     }
 
-    bool marks[4] = {false, false, false, false};
+    bool marks[5] = {false, false, false, false, false};
     for (size_t i = 0; i < d->n_trials; i++) {
         const plot_phase_trial *t = &d->trials[i];
         if (!isfinite(t->gamma) || !isfinite(t->phi_deg))
@@ -224,29 +226,31 @@ static plot_status phase_draw(void *vctx, char *why, size_t why_len)
 
     plot_legend_entry e[PLOT_LEGEND_MAX];
     int n = 0;
-    static const plot_regime order[4] = {PLOT_REGIME_ASYMMETRIC, PLOT_REGIME_SYMMETRIC, PLOT_REGIME_NO_SNAP,
-                                         PLOT_REGIME_UNKNOWN};
-    static const char *cell_text[4] = {
+    static const plot_regime order[5] = {PLOT_REGIME_ASYMMETRIC, PLOT_REGIME_SYMMETRIC, PLOT_REGIME_NO_SNAP,
+                                         PLOT_REGIME_NO_UPPER, PLOT_REGIME_UNKNOWN};
+    static const char *cell_text[5] = {
         [PLOT_REGIME_ASYMMETRIC] = "predicted asymmetric",
         [PLOT_REGIME_SYMMETRIC] = "predicted symmetric",
         [PLOT_REGIME_NO_SNAP] = "predicted no snap",
+        [PLOT_REGIME_NO_UPPER] = "no stable upper state",
         [PLOT_REGIME_UNKNOWN] = "prediction failed",
     };
-    static const char *mark_text[4] = {
+    static const char *mark_text[5] = {
         [PLOT_REGIME_ASYMMETRIC] = "measured asymmetric",
         [PLOT_REGIME_SYMMETRIC] = "measured symmetric",
         [PLOT_REGIME_NO_SNAP] = "measured no snap",
+        [PLOT_REGIME_NO_UPPER] = "measured unknown",
         [PLOT_REGIME_UNKNOWN] = "measured unknown",
     };
-    for (int k = 0; k < 4; k++)
+    for (int k = 0; k < 5; k++)
         if (cells[order[k]])
             e[n++] = (plot_legend_entry){cell_text[order[k]], PLOT_LEGEND_KIND_BOX, cell_color(order[k]), 0, 0, NULL,
                                          0};
     if (have_boundary)
         e[n++] = (plot_legend_entry){"predicted boundary", PLOT_LEGEND_KIND_LINE, PLOT_COL_INK, PLOT_LSTY_DASHED,
                                      PLOT_WIDTH_DATA, NULL, 0};
-    for (int k = 0; k < 4; k++) {
-        if (!marks[order[k]])
+    for (int k = 0; k < 5; k++) {
+        if (order[k] == PLOT_REGIME_NO_UPPER || !marks[order[k]])
             continue;
         int color;
         const char *glyph;

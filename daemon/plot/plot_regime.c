@@ -21,6 +21,8 @@ plot_regime plot_regime_parse(const char *s)
     if (strcasecmp(s, "none") == 0 || strcasecmp(s, "no snap") == 0 || strcasecmp(s, "no-snap") == 0 ||
         strcasecmp(s, "no_snap") == 0)
         return PLOT_REGIME_NO_SNAP;
+    if (strcasecmp(s, "no-upper") == 0)
+        return PLOT_REGIME_NO_UPPER;
     return PLOT_REGIME_UNKNOWN;
 }
 
@@ -30,6 +32,7 @@ const char *plot_regime_name(plot_regime r)
     case PLOT_REGIME_ASYMMETRIC: return "asymmetric";
     case PLOT_REGIME_SYMMETRIC: return "symmetric";
     case PLOT_REGIME_NO_SNAP: return "no snap";
+    case PLOT_REGIME_NO_UPPER: return "no-upper";
     case PLOT_REGIME_UNKNOWN: break;
     }
     return "unknown";

@@ -28,6 +28,7 @@ enum plot_color {
     PLOT_COL_SERIES_4,       /* reddish purple */
     PLOT_COL_SERIES_5,       /* sky blue */
     PLOT_COL_SERIES_6,       /* vermilion */
+    PLOT_COL_CELL_NOUPPER,   /* pale lilac: predicted cells without a stable upper state */
     PLOT_COL_COUNT
 };
 

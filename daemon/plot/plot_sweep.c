@@ -62,8 +62,9 @@ static plot_status sweep_draw(void *vctx, char *why, size_t why_len)
         const plot_sweep_point *p = &d->points[k];
         if (!p->no_state || !isfinite(p->x) || !isfinite(p->y) || !isfinite(p->bar_to) || p->bar_to == p->y)
             continue;
+        double from = isfinite(p->bar_from) && p->bar_from != 0.0 ? p->bar_from : p->y;
         PLFLT bx[4] = {p->x - 0.6 * rx, p->x + 0.6 * rx, p->x + 0.6 * rx, p->x - 0.6 * rx};
-        PLFLT by[4] = {p->y, p->y, p->bar_to, p->bar_to};
+        PLFLT by[4] = {from, from, p->bar_to, p->bar_to};
         plcol0(PLOT_COL_CELL_NOSNAP);
         plpsty(0);
         plfill(4, bx, by);
@@ -122,10 +123,10 @@ static plot_status sweep_draw(void *vctx, char *why, size_t why_len)
                 e[n++] = (plot_legend_entry){mark_text[order[k]], PLOT_LEGEND_KIND_SYMBOL, PLOT_COL_INK, 0, 0,
                                              glyph[order[k]], 1.2};
         if (seen[4])
-            e[n++] = (plot_legend_entry){"no stable upper state found", PLOT_LEGEND_KIND_SYMBOL, PLOT_COL_UNSTABLE, 0,
-                                         0, "◆", 1.2};
+            e[n++] = (plot_legend_entry){"no stable upper state (evidence in the CSV)", PLOT_LEGEND_KIND_SYMBOL,
+                                         PLOT_COL_UNSTABLE, 0, 0, "◆", 1.2};
         if (bars)
-            e[n++] = (plot_legend_entry){"grey bar: up to where continuation lost it", PLOT_LEGEND_KIND_BOX,
+            e[n++] = (plot_legend_entry){"grey bar: to the fold or pitchfork that ends it", PLOT_LEGEND_KIND_BOX,
                                          PLOT_COL_CELL_NOSNAP, 0, 0, NULL, 0};
         bool marked = false;
         for (size_t k = 0; k < d->n_lines && n < PLOT_LEGEND_MAX - 1; k++) {

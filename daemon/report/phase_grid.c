@@ -8,6 +8,7 @@
 
 #include "plot.h"
 #include "rod_protocol.h"
+#include "rod_seed_fold.h"
 
 /* rod_predict's per-step hook: non-zero stops the run once the grid is cancelled. */
 static int stop_when_cancelled(void *user, const rod_sample *s, const rod *r)
@@ -61,6 +62,34 @@ int phase_grid_compute(const rod_scene *base, double phi0, double phi1, size_t n
                 code = !p.snapped ? PLOT_REGIME_NO_SNAP : p.asymmetric ? PLOT_REGIME_ASYMMETRIC : PLOT_REGIME_SYMMETRIC;
             out->regime[i * n_gamma + j] = code;
             if (progress) progress(u, i * n_gamma + j + 1, n_phi * n_gamma);
+        }
+    /* A failed cell whose upper state, followed from the nearest classified cell of its row or
+     * column, ends at a located fold or pitchfork before it has no stable upper state to snap
+     * from (rod_seed_fold.h; docs/sweeps.md part B): the cell says so instead of "failed". */
+    for (size_t i = 0; i < n_phi; i++)
+        for (size_t j = 0; j < n_gamma; j++) {
+            if (out->regime[i * n_gamma + j] != PLOT_REGIME_UNKNOWN) continue;
+            for (int d = 0; d < 4 && !(cancel && atomic_load(cancel)); d++) {
+                long di = d == 2 ? -1 : d == 3 ? 1 : 0, dj = d == 0 ? -1 : d == 1 ? 1 : 0;
+                long ii = (long)i + di, jj = (long)j + dj;
+                while (ii >= 0 && jj >= 0 && ii < (long)n_phi && jj < (long)n_gamma &&
+                       (out->regime[ii * n_gamma + jj] == PLOT_REGIME_UNKNOWN ||
+                        out->regime[ii * n_gamma + jj] == PLOT_REGIME_NO_UPPER)) {
+                    ii += di;
+                    jj += dj;
+                }
+                if (ii < 0 || jj < 0 || ii >= (long)n_phi || jj >= (long)n_gamma) continue;
+                rod_scene from = *base, to = *base;
+                from.fold_angle_deg = sign * fabs(out->phi_deg[ii]);
+                from.fold_position = out->gamma[jj];
+                to.fold_angle_deg = sign * fabs(out->phi_deg[i]);
+                to.fold_position = out->gamma[j];
+                rod_seed_fold_report fr;
+                if (rod_seed_end_between(&from, &to, &fr) == 1) {
+                    out->regime[i * n_gamma + j] = PLOT_REGIME_NO_UPPER;
+                    break;
+                }
+            }
         }
     if (cancel && atomic_load(cancel)) { /* the last point may have been cut short */
         phase_grid_free(out);

@@ -53,7 +53,8 @@ int sim_plot_boundary(const char *path, const rod_boundary_curve *curves, const 
     size_t np = 0;
     for (size_t k = 0; k < nsw; k++) {
         const sweep_row *r = &sweep->rows[k];
-        if (r->kind == 'p') pts[np++] = (plot_sweep_point){r->phi, r->gamma, regime_of(r->regime), false, NAN};
+        if (r->kind == 'p')
+            pts[np++] = (plot_sweep_point){r->phi, r->gamma, regime_of(r->regime), !strcmp(r->regime, "no-upper"), NAN, 0.0};
     }
     plot_boundary_data d;
     plot_boundary_data_default(&d);

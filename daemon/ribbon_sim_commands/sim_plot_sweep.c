@@ -96,9 +96,22 @@ int sim_plot_sweep(const char *path, const sweep_table *t, double phi_a, double 
         bool no_state = !strcmp(r->regime, "no-upper");
         /* Only snaps have a Delta W at their first instability. */
         if (line && (no_state || (g != PLOT_REGIME_ASYMMETRIC && g != PLOT_REGIME_SYMMETRIC))) continue;
-        const char *at = strstr(r->note, "lost at Gamma ");
-        double bar = no_state && at ? strtod(at + 14, NULL) : NAN;
-        pts[np++] = (plot_sweep_point){line ? r->gamma : r->phi, line ? r->first_dw : r->gamma, g, no_state, bar};
+        /* The bar: to the located fold (two folds: between them), else to where continuation lost it. */
+        double bar = NAN, bar_from = 0.0;
+        const char *at;
+        if (no_state && (!strncmp(r->note, "fold at Gamma ", 14) || !strncmp(r->note, "pitchfork at Gamma ", 19))) {
+            at = strstr(r->note, "at Gamma ");
+            bar = strtod(at + 9, NULL);
+            const char *and = strstr(at, " and ");
+            const char *at2 = and ? strstr(and, "at Gamma ") : NULL;
+            if (at2 && at2 < strstr(r->note, "(")) {
+                bar_from = bar;
+                bar = strtod(at2 + 9, NULL);
+            }
+        } else if (no_state && (at = strstr(r->note, "lost at Gamma "))) {
+            bar = strtod(at + 14, NULL);
+        }
+        pts[np++] = (plot_sweep_point){line ? r->gamma : r->phi, line ? r->first_dw : r->gamma, g, no_state, bar, bar_from};
     }
     d.points = pts;
     d.n_points = np;

@@ -4,6 +4,7 @@
 #include "rod_bifurcation.h"
 #include "rod_route.h"
 #include "rod_seed.h"
+#include "rod_seed_fold.h"
 #include "rod_solver.h"
 
 #include <math.h>
@@ -33,6 +34,12 @@ typedef struct upper {
     char why[320];       /* when not reached: the evidence */
     int lost;            /* not reached, and both paths lost it as a stable state */
     double lost_at;      /* Gamma of the last stable state continuation reached */
+    int nfold;           /* critical points located where continuation toward this point ended */
+    int fold_pf[2];      /* (at most 2, one from each side): 0 fold, 1 pitchfork; their Gamma, */
+    double fold_at[2];
+    double fold_from[2]; /* the Gamma each continuation came from, */
+    double fold_eig[2];  /* the critical block's eigenvalue at the last state there (E I1 / l^2) */
+    double fold_rel[2];  /* and at the fold, over max |K_ii| */
 } upper;
 
 typedef struct row_task {
@@ -93,7 +100,9 @@ static void by_continuation(row_task *t, const upper *from, upper *u, double gam
     double t0 = now();
     u->sc = scene_at(t, gamma);
     rod_seed_report rep;
-    rod_status st = rod_seed_continue(from->r, &from->sc, &u->sc, t->s, &u->r, &rep);
+    rod *last = NULL;
+    rod_scene last_sc;
+    rod_status st = rod_seed_continue_keep(from->r, &from->sc, &u->sc, t->s, &u->r, &rep, &last, &last_sc);
     if (st == ROD_OK) {
         snprintf(u->how, sizeof u->how, "continued");
     } else {
@@ -101,7 +110,22 @@ static void by_continuation(row_task *t, const upper *from, upper *u, double gam
         u->lost_at = rep.gamma_reached;
         snprintf(u->why, sizeof u->why, "continued from Gamma %.4g: lost at Gamma %.4g (lowest eigenvalue %.3g -> %.3g)",
                  from->sc.fold_position, rep.gamma_reached, rep.eig_start, rep.eig_last);
+        /* Where continuation stopped, the fold that ends the state, located directly (Gamma free,
+         * Delta W = 0; rod_seed_fold.h): the evidence that the upper state does not exist at
+         * this point, rather than a path that failed. */
+        rod_seed_fold_report fr;
+        if (last && u->nfold < 2 && rod_seed_fold_locate(last, &last_sc, &u->sc, &fr) == ROD_OK && fr.located) {
+            int k = u->nfold++;
+            u->fold_pf[k] = fr.pitchfork;
+            u->fold_at[k] = fr.at;
+            u->fold_from[k] = from->sc.fold_position;
+            u->fold_eig[k] = fr.eig_from;
+            u->fold_rel[k] = fr.eig_rel;
+            u->lost = 1;
+            u->lost_at = fr.at;
+        }
     }
+    rod_free(last);
     u->wall_s += now() - t0;
 }
 
@@ -162,6 +186,14 @@ static void chain(row_task *t, upper *ups)
                      ups[k].sc.fold_position, back.lost_at);
             ups[j].wall_s += back.wall_s;
             ups[j].lost = ups[j].lost && back.lost;
+            for (int f = 0; f < back.nfold && ups[j].nfold < 2; f++) {
+                int q = ups[j].nfold++;
+                ups[j].fold_pf[q] = back.fold_pf[f];
+                ups[j].fold_at[q] = back.fold_at[f];
+                ups[j].fold_from[q] = back.fold_from[f];
+                ups[j].fold_eig[q] = back.fold_eig[f];
+                ups[j].fold_rel[q] = back.fold_rel[f];
+            }
         }
     }
 }
@@ -182,8 +214,25 @@ static void classify(const upper *u, sweep_row *row)
     double t0 = now();
     snprintf(row->first_type, sizeof row->first_type, "none");
     if (!u->r) {
-        snprintf(row->regime, sizeof row->regime, "%s", u->lost ? "no-upper" : "failed");
-        snprintf(row->note, sizeof row->note, "%.159s", u->why[0] ? u->why : "the upper state was not reached");
+        /* A located fold on the way is the evidence of "no upper state" whatever else failed (the
+         * route's Newton cap there is the same missing state). */
+        snprintf(row->regime, sizeof row->regime, "%s", u->lost || u->nfold ? "no-upper" : "failed");
+        static const char *const what[2] = {"fold", "pitchfork"};
+        const char *route = strstr(u->why, "; route");
+        if (u->nfold == 1) {
+            /* A fold: the state ends there; a pitchfork (odd mode): it goes on past it, unstable. */
+            snprintf(row->note, sizeof row->note,
+                     "%s at Gamma %.6f (continued from %.4g; Delta W 0; %s eigenvalue %.2g -> %.1e max|K_ii|)%s%.50s",
+                     what[u->fold_pf[0]], u->fold_at[0], u->fold_from[0], u->fold_pf[0] ? "odd" : "even", u->fold_eig[0],
+                     u->fold_rel[0], route ? "; " : "", route ? route + 2 : "");
+        } else if (u->nfold == 2) {
+            snprintf(row->note, sizeof row->note,
+                     "%s at Gamma %.6f and %s at Gamma %.6f (continued from %.4g and %.4g; Delta W 0; eigenvalue -> %.1e max|K_ii|)",
+                     what[u->fold_pf[0]], u->fold_at[0], what[u->fold_pf[1]], u->fold_at[1], u->fold_from[0], u->fold_from[1],
+                     fmax(u->fold_rel[0], u->fold_rel[1]));
+        } else {
+            snprintf(row->note, sizeof row->note, "%.159s", u->why[0] ? u->why : "the upper state was not reached");
+        }
         row->wall_s = u->wall_s;
         return;
     }

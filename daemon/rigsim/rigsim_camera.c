@@ -18,6 +18,16 @@
 #define RIGSIM_GRID_SENDS 8         /* sends whose earliest gives the camera's schedule */
 #define RIGSIM_NOTE_EVERY_S 1.0     /* s at least between two "twin: behind" notes */
 
+/* One line of the truth log, as the send made it. The sends only queue their lines (under the
+ * camera's lock, no I/O); the main loop writes them (rigsim_camera_tick), so a slow disk never
+ * delays an image. A 0.56 s gap in the sends was seen at load 7 with the write in the send. */
+typedef struct truth_line {
+    long image;
+    double mono, real, pc, ps, dl, dw, dz, twin_t, age;
+    int frozen;
+} truth_line;
+#define RIGSIM_TRUTH_RING 8192 /* lines: 55 s at 150 fps between two writes, which come every 10 ms */
+
 struct rigsim_camera {
     ArvGvFakeCamera *gv;
     rigsim_rails *rails;
@@ -28,6 +38,10 @@ struct rigsim_camera {
     double t0;
     rigsim_camera_faults f;
     FILE *truth;
+    truth_line ring[RIGSIM_TRUTH_RING];
+    truth_line out[RIGSIM_TRUTH_RING]; /* the writer's copy, written outside the lock */
+    long ring_head, ring_tail;  /* lines queued / taken for writing (index = count % RIGSIM_TRUTH_RING) */
+    long truth_lost;            /* lines the ring had to overwrite before they were written */
     pthread_mutex_t lock;   /* the fill thread against stop and the counters */
     long frames;
     double max_fill_s;
@@ -306,10 +320,17 @@ static void fill(ArvBuffer *b, void *user, guint32 exposure_us, guint32 gain, Ar
     double pc, ps;
     rigsim_rails_positions(c->rails, &pc, &ps, NULL);
     int frozen = c->f.freeze_after_s >= 0.0 && send_mono - c->t_start >= c->f.freeze_after_s;
-    if (c->truth)
-        fprintf(c->truth, "%ld,%.9f,%.9f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,%.9f,%.6f\n", c->frames, send_mono, send_real, pc,
-                ps, rig_calib_dl(&c->calib, c->length_m, pc), rig_calib_dw(&c->calib, c->length_m, ps), c->img_dz,
-                frozen, c->img_twin_t, send_mono - (c->img_twin_t + c->t0));
+    if (c->truth) {
+        c->ring[c->ring_head % RIGSIM_TRUTH_RING] = (truth_line){
+            c->frames, send_mono, send_real, pc, ps, rig_calib_dl(&c->calib, c->length_m, pc),
+            rig_calib_dw(&c->calib, c->length_m, ps), c->img_dz, c->img_twin_t, send_mono - (c->img_twin_t + c->t0),
+            frozen};
+        c->ring_head++;
+        if (c->ring_head - c->ring_tail > RIGSIM_TRUTH_RING) {
+            c->truth_lost += c->ring_head - c->ring_tail - RIGSIM_TRUTH_RING;
+            c->ring_tail = c->ring_head - RIGSIM_TRUTH_RING;
+        }
+    }
     note_age(c, send_mono, send_real, frozen);
     c->frames++;
     c->last_fill_mono = send_mono;
@@ -420,8 +441,25 @@ fail:
     return -1;
 }
 
+/* Writes the queued truth lines (the main loop's thread; the sends only queue them). */
+static void truth_write(rigsim_camera *c)
+{
+    if (!c->truth) return;
+    pthread_mutex_lock(&c->lock);
+    const long n = c->ring_head - c->ring_tail;
+    for (long k = 0; k < n; k++) c->out[k] = c->ring[(c->ring_tail + k) % RIGSIM_TRUTH_RING];
+    c->ring_tail = c->ring_head;
+    pthread_mutex_unlock(&c->lock);
+    for (long k = 0; k < n; k++) {
+        const truth_line *l = &c->out[k];
+        fprintf(c->truth, "%ld,%.9f,%.9f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,%.9f,%.6f\n", l->image, l->mono, l->real, l->pc,
+                l->ps, l->dl, l->dw, l->dz, l->frozen, l->twin_t, l->age);
+    }
+}
+
 int rigsim_camera_tick(rigsim_camera *c)
 {
+    truth_write(c);
     pthread_mutex_lock(&c->lock);
     const double now = clock_s(CLOCK_MONOTONIC);
     const long nb = c->behind - c->behind_noted;
@@ -446,6 +484,7 @@ int rigsim_camera_tick(rigsim_camera *c)
         c->stopped = 1;
         printf("fault: camera stopped at %.3f (unix time)\n", clock_s(CLOCK_REALTIME));
         fflush(stdout);
+        truth_write(c);
         if (c->truth) fflush(c->truth);
     }
     return c->stopped;
@@ -487,9 +526,9 @@ void rigsim_camera_report(rigsim_camera *c, char *out, size_t n)
     const double up = clock_s(CLOCK_MONOTONIC) - c->t_start;
     snprintf(out, n,
              "images sent: %ld, rendered: %ld (twin thread %.2f of a core), slowest twin step + render %.1f ms; "
-             "images older than half a frame period when sent: %ld (the oldest %.1f ms)",
+             "images older than half a frame period when sent: %ld (the oldest %.1f ms)%s",
              c->frames, c->renders, up > 0.0 ? c->render_cpu_s / up : 0.0, 1e3 * c->max_fill_s, c->behind,
-             1e3 * c->age_max_s);
+             1e3 * c->age_max_s, c->truth_lost ? "; TRUTH LOG INCOMPLETE: lines overwritten before written" : "");
     pthread_mutex_unlock(&c->lock);
 }
 
@@ -501,6 +540,8 @@ void rigsim_camera_stop(rigsim_camera *c)
     c->twin_stop = 1;
     pthread_mutex_unlock(&c->lock);
     if (c->twin_started) pthread_join(c->twin_thread, NULL);
+    truth_write(c); /* no send after the camera's unref: the last lines */
+    if (c->truth_lost) fprintf(stderr, "ribbon-rigsim: truth log incomplete: %ld lines overwritten before written\n", c->truth_lost);
     vis_frame_free(c->back);
     if (c->truth) fclose(c->truth);
     mock_camera_close(c->twin);

@@ -493,6 +493,8 @@ static void test_regime_names(void **state)
     assert_int_equal(plot_regime_parse("diverged"), PLOT_REGIME_UNKNOWN);
     assert_int_equal(plot_regime_parse(NULL), PLOT_REGIME_UNKNOWN);
     assert_string_equal(plot_regime_name(PLOT_REGIME_NO_SNAP), "no snap");
+    assert_int_equal(plot_regime_parse("no-upper"), PLOT_REGIME_NO_UPPER);
+    assert_string_equal(plot_regime_name(PLOT_REGIME_NO_UPPER), "no-upper");
     assert_string_equal(plot_regime_name((plot_regime)99), "unknown");
 }
 
@@ -609,7 +611,7 @@ static void test_sweep_map(void **state)
     plot_sweep_point pts[6];
     for (int i = 0; i < 6; i++)
         pts[i] = (plot_sweep_point){60.0 + 10.0 * (i % 3), i < 3 ? 0.1 : 0.3,
-                                    i < 3 ? PLOT_REGIME_ASYMMETRIC : PLOT_REGIME_SYMMETRIC, false, NAN};
+                                    i < 3 ? PLOT_REGIME_ASYMMETRIC : PLOT_REGIME_SYMMETRIC, false, NAN, 0.0};
     double bx[3] = {60, 70, 80}, by[3] = {0.2, 0.21, 0.22};
     plot_sweep_line line = {bx, by, 3, false, true, NULL};
     plot_sweep_data d;
@@ -663,7 +665,7 @@ static void test_boundary_curves(void **state)
     y[1][10] = NAN; /* a gap */
     plot_boundary_curve cv[2] = {{x[0], y[0], 20, PLOT_CURVE_MARK_SQUARE, "fold"},
                                  {x[1], y[1], 20, PLOT_CURVE_MARK_CIRCLE, "pitchfork"}};
-    plot_sweep_point pts[2] = {{0.12, 0.35, PLOT_REGIME_ASYMMETRIC, false, NAN}, {0.27, 0.45, PLOT_REGIME_SYMMETRIC, false, NAN}};
+    plot_sweep_point pts[2] = {{0.12, 0.35, PLOT_REGIME_ASYMMETRIC, false, NAN, 0.0}, {0.27, 0.45, PLOT_REGIME_SYMMETRIC, false, NAN, 0.0}};
     plot_boundary_data d;
     plot_boundary_data_default(&d);
     assert_true(isnan(d.star_x) && isnan(d.star_y));

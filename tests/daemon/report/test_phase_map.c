@@ -2,7 +2,8 @@
  * the state before and while it computes, phase_map_start called twice starts one computation,
  * and phase_map_free during the computation returns within a few seconds (cancelled at the next
  * time step, not after the 30 predictions, some 10-20 s); phase_grid_compute with the cancel
- * already set computes nothing and says "cancelled". The finished map is checked end to end by
+ * already set computes nothing and says "cancelled"; a cell without an upper state is marked
+ * PLOT_REGIME_NO_UPPER with its fold located. The finished map is checked end to end by
  * test_ribbond_e2e (GET /phase.png). */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -13,6 +14,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "plot.h"
 #include "trial_report.h"
 
 static double now_s(void)
@@ -61,11 +63,35 @@ static void test_grid_cancelled_before_start(void **state)
     assert_null(g.regime);
 }
 
+/* A cell whose prediction fails because there is no upper state is marked so: at phi 150 deg,
+ * Gamma 0.24 (N = 41, the map's resolution) the route hits Newton's cap at 90% of the crease ramp;
+ * followed from the cell at phi 120 deg, the upper state ends at a fold in phi near 134.9 deg
+ * (located, rod_seed_fold.h), so the cell is PLOT_REGIME_NO_UPPER, not "prediction failed"
+ * (PLOT_REGIME_UNKNOWN, what it was without the location). The other three cells are predicted.
+ * Four cells, about a second. */
+static void test_no_upper_state_cell(void **state)
+{
+    (void)state;
+    rod_scene sc = rod_scene_default();
+    sc.nodes = 41;
+    sc.dt = 0.01;
+    phase_grid g;
+    char why[256] = "";
+    assert_int_equal(phase_grid_compute(&sc, 120, 150, 2, 0.20, 0.24, 2, &g, NULL, NULL, NULL, why, sizeof why), 0);
+    for (int k = 0; k < 4; k++) print_message("phi %g Gamma %g: regime %d\n", g.phi_deg[k / 2], g.gamma[k % 2], g.regime[k]);
+    assert_int_equal(g.regime[1 * 2 + 1], PLOT_REGIME_NO_UPPER);
+    for (int k = 0; k < 3; k++)
+        assert_true(g.regime[k] == PLOT_REGIME_ASYMMETRIC || g.regime[k] == PLOT_REGIME_SYMMETRIC ||
+                    g.regime[k] == PLOT_REGIME_NO_SNAP);
+    phase_grid_free(&g);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cancel_during_computation),
         cmocka_unit_test(test_grid_cancelled_before_start),
+        cmocka_unit_test(test_no_upper_state_cell),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

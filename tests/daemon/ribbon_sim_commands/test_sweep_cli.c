@@ -2,7 +2,8 @@
  * grid: the CSV has one point row per grid point and a boundary between the asymmetric and the
  * symmetric regime inside the bracketing grid cell; a rerun resumes (adds no row); a file that is
  * not a sweep file is refused; bad ranges are usage errors; two shards joined by sweep-merge hold
- * the same rows as one run; the upper states continued in Gamma classify like a route per point.
+ * the same rows as one run; the upper states continued in Gamma classify like a route per point;
+ * a point between two folds of the upper state is "no-upper" with them located.
  * N = 41 keeps it to seconds. (The MPI runs: test_sweep_mpi.sh.) */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -211,6 +212,38 @@ static void test_continued_upper_states_classify_like_routes(void **state)
     unlink(route);
 }
 
+/* The README diagram's last cross, (phi 135 deg, Gamma 0.244): neither continuation from the
+ * neighbours at Gamma 0.217 and 0.272 nor the route reaches an upper state there. The row says
+ * "no-upper", with the two folds in Gamma (Delta W 0) that end the state coming from either
+ * side, located directly (sim/rod_seed_fold.c): one between 0.217 and 0.244, one between 0.244
+ * and 0.272, each with its even eigenvalue at zero to round-off. Without the location the row was
+ * "failed" (Newton's cap). N = 41, a third of a second. */
+static void test_no_upper_state_between_two_folds(void **state)
+{
+    (void)state;
+    char out[256];
+    snprintf(out, sizeof out, "/tmp/test_sweep_fold_%d.csv", (int)getpid());
+    unlink(out);
+    assert_int_equal(run_grid("135:135:1", "0.216666666666666667:0.272222222222222222:3", out, NULL, NULL), 0);
+    sweep_table t = load_sorted(out);
+    const sweep_row *mid = NULL;
+    for (size_t k = 0; k < t.n; k++)
+        if (t.rows[k].kind == 'p' && fabs(t.rows[k].gamma - 0.24444) < 1e-4) mid = &t.rows[k];
+    assert_non_null(mid);
+    assert_string_equal(mid->regime, "no-upper");
+    double f1 = 0.0, f2 = 0.0, rel = 1.0;
+    assert_int_equal(sscanf(mid->note, "fold at Gamma %lf and fold at Gamma %lf", &f1, &f2), 2);
+    const char *ev = strstr(mid->note, "eigenvalue -> ");
+    assert_non_null(ev);
+    rel = strtod(ev + 14, NULL);
+    assert_true(rel < 1e-12);
+    double lo = fmin(f1, f2), hi = fmax(f1, f2);
+    assert_true(lo > 0.2167 && lo < 0.2444);
+    assert_true(hi > 0.2444 && hi < 0.2722);
+    sweep_table_free(&t);
+    unlink(out);
+}
+
 static void test_bad_axes_and_shards(void **state)
 {
     (void)state;
@@ -235,6 +268,7 @@ int main(void)
         cmocka_unit_test(test_refuses_foreign_file_and_bad_ranges),
         cmocka_unit_test(test_shards_merge_to_the_same_rows),
         cmocka_unit_test(test_continued_upper_states_classify_like_routes),
+        cmocka_unit_test(test_no_upper_state_between_two_folds),
         cmocka_unit_test(test_bad_axes_and_shards),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
