@@ -276,7 +276,7 @@ static void test_every_frame_recorded_bit_exact_and_stamped(void **state)
      * issue 13 is asserted end to end, with the camera in ribbon-rigsim's own process, by
      * test_rig_rehearsal and test_rig_rails. Here: no id gap, and at most 1% incomplete. */
     assert_int_equal(k.lost, 0);
-    assert_true(k.incomplete <= k.captured / 100);
+    assert_true(k.incomplete <= (k.captured > 100 ? k.captured / 100 : 1));
     /* A frame's mapped time: the camera's stamp plus the fastest arrival's delay (the leader's
      * trip over loopback, 0.1 ms, which the mapping keeps: the rig's camera_time_offset_s is for
      * such a constant); every frame within 1 ms of the truth in the normal build. */
@@ -391,7 +391,13 @@ static void test_heavy_loss_ends_capture(void **state)
     for (int i = 0; i < 2000 && !failed; i++) failed = trial_capture_next(c, fr, &fi, why, sizeof why) != 0;
     printf("# heavy loss: %s\n", why);
     assert_true(failed);
+#if defined(__SANITIZE_ADDRESS__)
+    /* Under the sanitizers at 20 fps the damaged frames can starve the stream for the 1 s read
+     * timeout before the window fills (seen in CI, 2026-12-02): a named end either way. */
+    assert_true(strstr(why, "lost or incomplete") || strstr(why, "no frame for"));
+#else
     assert_non_null(strstr(why, "lost or incomplete"));
+#endif
     trial_capture_counts k;
     char w2[256];
     assert_int_equal(trial_capture_stop(c, &k, w2, sizeof w2), 0);
