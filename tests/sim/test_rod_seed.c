@@ -20,30 +20,7 @@
 #include "rod_solver.h"
 #include "scene_file.h"
 
-#define BASE_SCENE RIBBON_SOURCE_DIR "/config/scenes/paper-gamma013.ini"
-
-static rod_scene scene(double phi_deg, double gamma)
-{
-    const char *ovr[] = {"mesh.nodes=61"};
-    rod_scene sc;
-    cfg_error err;
-    assert_int_equal(cfg_scene_load(BASE_SCENE, ovr, 1, &sc, &err), CFG_OK);
-    sc.fold_angle_rel = 0.0;
-    sc.fold_angle_deg = -phi_deg;
-    sc.fold_position = gamma;
-    return sc;
-}
-
-static rod *routed(const rod_scene *sc, rod_solver **s)
-{
-    rod *r = NULL;
-    assert_int_equal(rod_alloc(sc, &r, NULL, 0), ROD_OK);
-    if (!*s) *s = rod_solver_alloc(r);
-    assert_non_null(*s);
-    rod_route_report rep = {0};
-    assert_int_equal(rod_route_to_state(r, *s, sc, +1, &rep), ROD_OK);
-    return r;
-}
+#include "seed_scene_kit.h"
 
 static double max_diff(const rod *a, const rod *b)
 {
