@@ -510,14 +510,6 @@ long rigsim_camera_frames(rigsim_camera *c)
     return n;
 }
 
-double rigsim_camera_max_fill_s(rigsim_camera *c)
-{
-    pthread_mutex_lock(&c->lock);
-    double m = c->max_fill_s;
-    pthread_mutex_unlock(&c->lock);
-    return m;
-}
-
 int rigsim_camera_twin_realtime(const rigsim_camera *c) { return c->twin_realtime; }
 
 void rigsim_camera_report(rigsim_camera *c, char *out, size_t n)

@@ -51,8 +51,6 @@ long rigsim_camera_frames(rigsim_camera *c);
 void rigsim_camera_stop_sending(rigsim_camera *c);
 /* Fault on command: the image freezes now (the same image is sent from now on). */
 void rigsim_camera_freeze(rigsim_camera *c);
-/* Longest twin step + render, s. */
-double rigsim_camera_max_fill_s(rigsim_camera *c);
 /* 1 when the twin's thread got a real-time priority (SCHED_FIFO, below the rails' thread). */
 int rigsim_camera_twin_realtime(const rigsim_camera *c);
 /* One line: images sent and rendered, the twin thread's share of a core, the slowest render, how
