@@ -12,7 +12,8 @@
 // host time the buffer was started (Aravis's system timestamp, real-time clock, converted to
 // CLOCK_MONOTONIC at the moment of the pop). Buffers the transport could not complete (missing
 // packets, timeouts) are pushed back unread and counted; gaps in the block ids count frames that
-// never arrived at all.
+// never arrived at all; a buffer delivered after a newer one was counted in that gap already and
+// is dropped uncounted (vis_block_ids_next, block_ids.cpp).
 #include "source.hpp"
 
 #include <arv.h>
@@ -47,8 +48,8 @@ public:
     ArvStream *stream = nullptr;
     std::string name;
     double rate = 0;
-    bool have_id = false;
-    guint64 last_id = 0;
+    vis_block_ids ids = {0, 0};
+    long pending_lost = 0;        // gaps before incomplete buffers, reported with the next frame
     long pending_incomplete = 0;
 
     ~AravisSource() override
@@ -73,22 +74,23 @@ public:
     {
         for (int tries = 0; tries < 1000; tries++) {
             // The first frame may take the stream's set-up (packet size, the camera's own start).
-            const guint64 wait = have_id ? ARV_READ_TIMEOUT_US : ARV_FIRST_TIMEOUT_US;
+            const guint64 wait = ids.have ? ARV_READ_TIMEOUT_US : ARV_FIRST_TIMEOUT_US;
             ArvBuffer *b = arv_stream_timeout_pop_buffer(stream, wait);
             if (!b)
                 return fail(err, VIS_ERR_IO, "camera %s %s: no frame for %.1f s", name.c_str(),
-                            have_id ? "stopped sending" : "sends nothing", wait * 1e-6);
+                            ids.have ? "stopped sending" : "sends nothing", wait * 1e-6);
             const double mono = clock_s(CLOCK_MONOTONIC), real = clock_s(CLOCK_REALTIME);
             const guint64 id = arv_buffer_get_frame_id(b);
-            long gap = 0;
-            if (have_id && id > last_id + 1)
-                gap = (long)(id - last_id - 1);
-            else if (have_id && id < last_id && last_id <= 65535)  // GigE Vision 1.x: 16-bit ids,
-                gap = (long)((65535 - last_id) + (id - 1));           // 65535 -> 1 (0 is never used)
+            const long gap = vis_block_ids_next(&ids, id);
+            if (gap == VIS_BLOCK_LATE) {
+                // Delivered after a newer frame: already counted lost in that frame's gap, and a
+                // frame older than one published is not published (stamps stay in order).
+                arv_stream_push_buffer(stream, b);
+                continue;
+            }
             if (arv_buffer_get_status(b) != ARV_BUFFER_STATUS_SUCCESS) {
+                pending_lost += gap;
                 pending_incomplete++;
-                have_id = true;
-                last_id = id;
                 arv_stream_push_buffer(stream, b);
                 continue;
             }
@@ -110,11 +112,10 @@ public:
             m.camera_t_s = cam_ns ? (double)cam_ns * 1e-9 : NAN;
             m.host_t_s = sys_ns ? (double)sys_ns * 1e-9 - (real - mono) : mono;
             m.frame_id = id;
-            m.lost_before = gap;
+            m.lost_before = pending_lost + gap;
             m.incomplete = (int)pending_incomplete;
+            pending_lost = 0;
             pending_incomplete = 0;
-            have_id = true;
-            last_id = id;
             arv_stream_push_buffer(stream, b);
             return VIS_OK;
         }

@@ -240,6 +240,23 @@ typedef struct vis_frame_meta {
     long lost_before;
     int incomplete;
 } vis_frame_meta;
+/* A camera's block ids, followed to count the frames that never arrived. GigE Vision 1.x ids are
+ * 16 bits and wrap 65535 -> 1 (0 is never used); GigE Vision 2 and USB3 Vision ids are 64 bits.
+ * A transport may deliver a frame late, after a newer one (a buffer with missing packets is closed
+ * when its timeout runs out, after the frames behind it completed): its id was already counted in
+ * the gap before the newer frame, so it is late, counted nowhere again, and the ids' position stays
+ * at the newest frame. */
+typedef struct vis_block_ids {
+    int have;      /* an id was seen */
+    uint64_t last; /* the newest id seen */
+} vis_block_ids;
+#define VIS_BLOCK_LATE (-1L)
+/* The frames lost just before `id` (0 or more), or VIS_BLOCK_LATE for an id at most 1,024 behind
+ * the newest one seen (a late or repeated buffer; in the 16-bit range also just across a wrap).
+ * Further back is a 16-bit wrap (the ids' last value at most 65535) or, for 64-bit ids, the camera
+ * starting its ids again (0 lost). */
+long vis_block_ids_next(vis_block_ids *ids, uint64_t id);
+
 /* Like vis_source_read, with the frame's metadata. A source that is not a live camera gives
  * camera_t_s = its own time (t_s) and counts frames. */
 vis_status vis_source_read_meta(vis_source *src, vis_frame *out, vis_frame_meta *meta, vis_error *err);
