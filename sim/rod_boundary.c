@@ -2,8 +2,8 @@
  * and the fold and pitchfork curves through it (rod_boundary.h).
  *
  * A point of any of these curves is a rod state with its parameters and mesh (bpoint); the
- * session keeps the current codimension-2 point and, inside one continuation, the previous one
- * for the secant predictor. Re-meshing (match_mesh) moves a state to another outer edge count by
+ * session keeps the current codimension-2 point and, inside one continuation, the two before it
+ * for the quadratic predictor (the secant when only one is known). Re-meshing (match_mesh) moves a state to another outer edge count by
  * linear interpolation in arc length of the node positions and of the twist angles (at edge
  * midpoints); the augmented Newton then re-converges from there. */
 #include "rod_boundary.h"
@@ -33,10 +33,11 @@ struct rod_boundary {
     rod_solver *solver;    /* static solves after a re-mesh */
     double sign;           /* sign of the crease angle */
     double *k1;
-    bpoint cur, prev, trial;
+    bpoint cur, prev, prev2, trial;
     bpoint scur, sprev;    /* the search's own last two points */
     bpoint mark;           /* rod_boundary_mark */
     int prev_valid;        /* prev is the point before cur on a continuation in prev_par */
+    int prev2_valid;       /* and prev2 the point before prev, on the same continuation */
     rod_par prev_par;
     int check_valid;       /* last_check is where a move in check_par last verified the point */
     rod_par check_par;
@@ -65,6 +66,7 @@ rod_boundary_opts rod_boundary_opts_default(void)
     o.direct = 0;
     o.verify_ends = 1;
     o.phase1_cap = 20;
+    o.predictor = 2;
     return o;
 }
 
@@ -101,6 +103,7 @@ void rod_boundary_free(rod_boundary *b)
     if (!b) return;
     rod_snapshot_free(&b->cur.snap);
     rod_snapshot_free(&b->prev.snap);
+    rod_snapshot_free(&b->prev2.snap);
     rod_snapshot_free(&b->trial.snap);
     rod_snapshot_free(&b->scur.snap);
     rod_snapshot_free(&b->mark.snap);
@@ -130,6 +133,7 @@ void rod_boundary_mark(rod_boundary *b) { bpoint_copy(&b->cur, &b->mark); }
 void rod_boundary_return(rod_boundary *b)
 {
     b->prev_valid = 0;
+    b->prev2_valid = 0;
     b->check_valid = 0;
     bpoint_copy(&b->mark, &b->cur);
     load_point(b, &b->cur);
@@ -355,7 +359,7 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
     b->o.crit.tolerance = b->sc.tolerance;
     b->c = rod_crit_alloc(r, &b->o.crit);
     rod_solver *s = b->solver = rod_solver_alloc(r);
-    if (!b->k1 || !b->c || !s || !bpoint_alloc(r, &b->cur) || !bpoint_alloc(r, &b->prev) ||
+    if (!b->k1 || !b->c || !s || !bpoint_alloc(r, &b->cur) || !bpoint_alloc(r, &b->prev) || !bpoint_alloc(r, &b->prev2) ||
         !bpoint_alloc(r, &b->trial) || !bpoint_alloc(r, &b->scur) || !bpoint_alloc(r, &b->sprev) ||
         !bpoint_alloc(r, &b->mark)) {
         rod_boundary_free(b);
@@ -532,6 +536,8 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
     const char *pname = par == ROD_PAR_PHI ? "phi" : "Delta L";
     /* The secant carries over from a previous move in the same parameter that ended here. */
     int have_prev = b->prev_valid && b->prev_par == par;
+    int have_prev2 = have_prev && b->prev2_valid;
+    const int quadratic = b->o.predictor >= 2;
     /* The spacing of the regime-boundary checks carries over too. */
     double last_check = b->check_valid && b->check_par == par ? b->last_check : b->cur.p[par], check_step = par == ROD_PAR_PHI ? b->o.verify_every * M_PI / 180.0
                                                                         : b->o.verify_every / 100.0;
@@ -559,7 +565,21 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
         double hh = fmin(h, fabs(left)) * (left > 0 ? 1.0 : -1.0), pn[ROD_NPAR];
         load_point(b, &b->cur);
         memcpy(pn, b->cur.p, sizeof pn);
-        if (have_prev && b->prev.n_out == b->cur.n_out) {
+        if (quadratic && have_prev2 && b->prev2.n_out == b->cur.n_out && b->prev.n_out == b->cur.n_out) {
+            /* Quadratic predictor through the last three points (Lagrange weights at cv + hh):
+             * its error is O(h^3) against the secant's O(h^2), so the corrector starts closer and
+             * the step can stay long. */
+            double s0 = b->prev2.p[par], s1 = b->prev.p[par], s2 = cv, x = cv + hh;
+            double w2 = (x - s1) * (x - s0) / ((s2 - s1) * (s2 - s0));
+            double w1 = (x - s2) * (x - s0) / ((s1 - s2) * (s1 - s0));
+            double w0 = (x - s2) * (x - s1) / ((s0 - s2) * (s0 - s1));
+            for (int i = ROD_FREE_BEGIN; i < b->r->free_end; i++)
+                b->r->q[i] = w2 * b->cur.snap.q[i] + w1 * b->prev.snap.q[i] + w0 * b->prev2.snap.q[i];
+            for (int k = 0; k < 2; k++) {
+                int j = k ? ROD_PAR_GAMMA : ROD_PAR_DW;
+                pn[j] = w2 * b->cur.p[j] + w1 * b->prev.p[j] + w0 * b->prev2.p[j];
+            }
+        } else if (have_prev && b->prev.n_out == b->cur.n_out) {
             double f = hh / (b->cur.p[par] - b->prev.p[par]);
             for (int i = ROD_FREE_BEGIN; i < b->r->free_end; i++)
                 b->r->q[i] += f * (b->cur.snap.q[i] - b->prev.snap.q[i]);
@@ -583,8 +603,11 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
                 double dpar = have_prev ? b->cur.p[par] - b->prev.p[par] : 0.0;
                 if (have_prev && dw1 < DW_NEAR_ZERO && dw1 < dw0 && dpar * (tv - cv) > 0.0) {
                     /* The switch's Delta W runs to zero: past it the two bifurcations would meet
-                     * before any shear, and there is no codim-2 point of the sheared branch. */
-                    double z = b->cur.p[par] + dpar * dw1 / (dw0 - dw1);
+                     * before any shear, and there is no codim-2 point of the sheared branch. It
+                     * ends as a square root (Delta W^2 linear in phi: 0.00303 per deg over the
+                     * last 3 deg at Delta L 0.3, N = 61), so the end is extrapolated in Delta W^2;
+                     * a straight line in Delta W overshoots, by more the longer the last step. */
+                    double z = b->cur.p[par] + dpar * dw1 * dw1 / (dw0 * dw0 - dw1 * dw1);
                     snprintf(reason, sizeof reason,
                              "the codim-2 point's Delta W runs to 0 at %s = %.6g (extrapolated; %.4f at %s = %.6g, "
                              "the last point): beyond it the switch would need a negative shear, so the boundary of "
@@ -630,6 +653,8 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
             }
             last_check = pn[par]; /* the check builds its own rod: this one still holds the point */
         }
+        if (have_prev) bpoint_copy(&b->prev, &b->prev2);
+        have_prev2 = have_prev;
         bpoint_copy(&b->cur, &b->prev);
         have_prev = 1;
         save_point(b, pn, &b->cur);
@@ -646,6 +671,7 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
     rod_crit_set_phase1_cap(b->c, p1_old);
     load_point(b, &b->cur);
     b->prev_valid = have_prev;
+    b->prev2_valid = have_prev2;
     b->prev_par = par;
     b->check_valid = 1;
     b->check_par = par;
@@ -790,6 +816,7 @@ rod_status rod_boundary_crit_curve(rod_boundary *b, rod_crit_kind kind, double g
     }
     bpoint_copy(&b->trial, &b->cur);
     load_point(b, &b->cur);
+    b->prev_valid = b->prev2_valid = 0; /* prev held the curve's points: no secant from them */
     qsort(out->pts, out->n, sizeof *out->pts, cmp_gamma);
     out->end_status = worst;
     return worst;

@@ -17,7 +17,7 @@
  * Hessian's even and odd blocks both singular.
  *
  * Continuation (rod_boundary_move). Natural-parameter continuation of the codimension-2 point in
- * phi or Delta L with a secant predictor from the last two points (Gamma, Delta W and q); each
+ * phi or Delta L with a quadratic predictor from the last three points (Gamma, Delta W and q); each
  * point is located as at the start (fold curve, secant on g_odd from the predicted Gamma, with the
  * last slope); steps halved on failure down to a minimum and grown by 1.5 after an easy solve. Each accepted point
  * has a verified pair of critical modes (even and odd). Stops, with every good point kept: Gamma
@@ -43,7 +43,7 @@
  *
  * Direct or located. Each continued point can be solved directly, by Newton on the whole
  * codim-2 system (R = 0, g_even = 0, g_odd = 0 in q, Delta W and Gamma; rod_critical.h, with the
- * even block's near-singular direction deflated), from the secant predictor, falling back to the
+ * even block's near-singular direction deflated), from the predictor, falling back to the
  * location along the fold curve when it fails (opts.direct). Measured (bench's 100 deg of phi,
  * docs/boundary.md): at N = 61 the two agree to 8e-7 in Gamma* and cost the same; at N = 201 the
  * direct solve converged in 79 of 257 tries (mean 6.8 iterations, each about 8 Hessian
@@ -76,18 +76,22 @@ typedef struct rod_boundary_opts {
                                   least every this far in phi (deg) or Delta L / 100; 0: never */
     int direct;                /* 1: each continued point by Newton on the codim-2 system first
                                   (free Delta W and Gamma, rod_crit_solve ROD_CRIT_CODIM2, from the
-                                  secant predictor, capped at 10 iterations), the location along
+                                  predictor, capped at 10 iterations), the location along
                                   the fold curve only when it fails; 0 (default): the location
                                   only (see "Direct or located" above) */
     int phase1_cap;            /* a continued point's solves fail after this many iterations still
                                   far from equilibrium (rod_crit_set_phase1_cap); the step halves */
     int verify_ends;           /* 1: also check at the end of every move (0: only every
                                   verify_every along consecutive moves; rod_boundary_check) */
+    int predictor;             /* a continued point's first guess (q, Gamma, Delta W): 2 (default)
+                                  quadratic through the last three points of the continuation,
+                                  1 secant through the last two (the first step after a start or a
+                                  re-mesh uses what it has) */
 } rod_boundary_opts;
 
 /* Gamma in [0.02, 0.45], gamma_step 0.02, 40 search steps, phi steps of 5 deg, Delta L steps of
  * 0.05, minimum 1/64 of them, 400 steps, match_mesh 0, verify_every 10, direct 0, verify_ends 1,
- * phase1_cap 20. */
+ * phase1_cap 20, predictor 2. */
 rod_boundary_opts rod_boundary_opts_default(void);
 
 typedef struct rod_codim2_point {
