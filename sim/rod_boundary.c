@@ -3,8 +3,8 @@
  *
  * A point of any of these curves is a rod state with its parameters and mesh (bpoint); the
  * session keeps the current codimension-2 point and, inside one continuation, the two before it
- * for the quadratic predictor (the secant when only one is known). Re-meshing (match_mesh) moves a state to another outer edge count by
- * linear interpolation in arc length of the node positions and of the twist angles (at edge
+ * for the quadratic predictor (the secant when only one is known). Re-meshing (match_mesh) moves
+ * a state to another outer edge count by linear interpolation in arc length of the node positions and of the twist angles (at edge
  * midpoints); the augmented Newton then re-converges from there. */
 #include "rod_boundary.h"
 #include "rod_bifurcation.h"
@@ -359,8 +359,8 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
     b->o.crit.tolerance = b->sc.tolerance;
     b->c = rod_crit_alloc(r, &b->o.crit);
     rod_solver *s = b->solver = rod_solver_alloc(r);
-    if (!b->k1 || !b->c || !s || !bpoint_alloc(r, &b->cur) || !bpoint_alloc(r, &b->prev) || !bpoint_alloc(r, &b->prev2) ||
-        !bpoint_alloc(r, &b->trial) || !bpoint_alloc(r, &b->scur) || !bpoint_alloc(r, &b->sprev) ||
+    if (!b->k1 || !b->c || !s || !bpoint_alloc(r, &b->cur) || !bpoint_alloc(r, &b->prev) ||
+        !bpoint_alloc(r, &b->prev2) || !bpoint_alloc(r, &b->trial) || !bpoint_alloc(r, &b->scur) || !bpoint_alloc(r, &b->sprev) ||
         !bpoint_alloc(r, &b->mark)) {
         rod_boundary_free(b);
         snprintf(why, why_len, "out of memory");
@@ -575,10 +575,9 @@ rod_status rod_boundary_move(rod_boundary *b, rod_par par, double target, rod_bo
             double w0 = (x - s2) * (x - s1) / ((s0 - s2) * (s0 - s1));
             for (int i = ROD_FREE_BEGIN; i < b->r->free_end; i++)
                 b->r->q[i] = w2 * b->cur.snap.q[i] + w1 * b->prev.snap.q[i] + w0 * b->prev2.snap.q[i];
-            for (int k = 0; k < 2; k++) {
-                int j = k ? ROD_PAR_GAMMA : ROD_PAR_DW;
-                pn[j] = w2 * b->cur.p[j] + w1 * b->prev.p[j] + w0 * b->prev2.p[j];
-            }
+            pn[ROD_PAR_DW] = w2 * b->cur.p[ROD_PAR_DW] + w1 * b->prev.p[ROD_PAR_DW] + w0 * b->prev2.p[ROD_PAR_DW];
+            pn[ROD_PAR_GAMMA] =
+                w2 * b->cur.p[ROD_PAR_GAMMA] + w1 * b->prev.p[ROD_PAR_GAMMA] + w0 * b->prev2.p[ROD_PAR_GAMMA];
         } else if (have_prev && b->prev.n_out == b->cur.n_out) {
             double f = hh / (b->cur.p[par] - b->prev.p[par]);
             for (int i = ROD_FREE_BEGIN; i < b->r->free_end; i++)

@@ -188,6 +188,17 @@ static void check_critical(const rod_codim2_point *pt)
 #define NODES 61
 #define GAMMA0 0.172
 
+/* A boundary session started at the scene's codim-2 point (its start asserted). */
+static rod_boundary *started(const rod_scene *sc, const rod_boundary_opts *o, rod_codim2_point *pt)
+{
+    rod_boundary *b = NULL;
+    char why[512] = "";
+    rod_status st = rod_boundary_start(sc, o, &b, pt, why, sizeof why);
+    if (st != ROD_OK) print_error("%s\n", why);
+    assert_int_equal(st, ROD_OK);
+    return b;
+}
+
 static void test_codim2_and_phi(void **state)
 {
     (void)state;
@@ -265,12 +276,8 @@ static void test_direct_codim2(void **state)
         rod_boundary_opts o = rod_boundary_opts_default();
         o.direct = d;
         o.verify_ends = 0;
-        rod_boundary *b = NULL;
         rod_codim2_point pt;
-        char why[512] = "";
-        rod_status st = rod_boundary_start(&sc, &o, &b, &pt, why, sizeof why);
-        if (st != ROD_OK) print_error("%s\n", why);
-        assert_int_equal(st, ROD_OK);
+        rod_boundary *b = started(&sc, &o, &pt);
         rod_boundary_curve c = {0};
         assert_int_equal(rod_boundary_move(b, ROD_PAR_PHI, 100.0, &c), ROD_OK);
         for (size_t k = 0; k < c.n; k++) {
@@ -305,10 +312,8 @@ static double dw_zero_end(int predictor)
     rod_boundary_opts o = rod_boundary_opts_default();
     o.verify_every = 0.0;
     o.predictor = predictor;
-    rod_boundary *b = NULL;
     rod_codim2_point pt;
-    char why[512] = "";
-    assert_int_equal(rod_boundary_start(&sc, &o, &b, &pt, why, sizeof why), ROD_OK);
+    rod_boundary *b = started(&sc, &o, &pt);
     rod_boundary_curve c = {0};
     assert_int_equal(rod_boundary_move(b, ROD_PAR_DL, 0.3, &c), ROD_OK);
     rod_boundary_curve_free(&c);
@@ -351,10 +356,8 @@ static void test_quadratic_predictor(void **state)
         rod_boundary_opts o = rod_boundary_opts_default();
         o.predictor = order;
         o.verify_every = 0.0;
-        rod_boundary *b = NULL;
         rod_codim2_point pt;
-        char why[512] = "";
-        assert_int_equal(rod_boundary_start(&sc, &o, &b, &pt, why, sizeof why), ROD_OK);
+        rod_boundary *b = started(&sc, &o, &pt);
         rod_boundary_curve c = {0};
         assert_int_equal(rod_boundary_move(b, ROD_PAR_PHI, 130.0, &c), ROD_OK);
         for (size_t k = 0; k < c.n; k++) check_critical(&c.pts[k]);
