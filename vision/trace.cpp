@@ -71,6 +71,12 @@ static inline float bilinear(const cv::Mat &m, double x, double y)
            fy * ((1 - fx) * (float)r1[x0] + fx * (float)r1[x1]);
 }
 
+float sample_at(const cv::Mat &img, bool invert, Pt q)
+{
+    const float v = img.depth() == CV_8U ? bilinear<uint8_t>(img, q.x, q.y) : bilinear<float>(img, q.x, q.y);
+    return invert ? 255.f - v : v;
+}
+
 void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, double band,
                 double margin, double min_contrast, double max_width, std::vector<TraceSample> &out,
                 std::vector<float> &prof, std::vector<float> &tmp)
@@ -192,7 +198,7 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
                 kp = k;
         }
         const double peak = prof[(size_t)kp] - base;
-        TraceSample ts{guide[i], s, peak, false, 0.0};
+        TraceSample ts{guide[i], s, peak, false, 0.0, base};
         const double thr = base + 0.3 * peak;
         int lo = kp, hi = kp;
         while (lo > 0 && prof[(size_t)(lo - 1)] > thr)

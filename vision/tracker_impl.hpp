@@ -57,7 +57,10 @@ struct TraceSample {
     double peak;   // ridge height above the profile's lower quartile, grey levels
     bool valid;    // a clear ridge was found
     double width;  // px, the ridge's extent above 30% of its height (valid samples)
+    double base;   // the profile's lower quartile (the local background), grey levels
 };
+// Bilinear sample of `img` (CV_8U or CV_32F, inverted when `invert`) at q, 0 outside.
+float sample_at(const cv::Mat &img, bool invert, Pt q);
 // Resample `guide` (from left clamp to right clamp) every `step` px into `out`; polyline length in
 // *len; `cum` is scratch.
 void resample(const std::vector<Pt> &guide, double step, double *len, std::vector<double> &cum,

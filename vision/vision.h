@@ -341,8 +341,9 @@ typedef struct vis_track_params {
     double min_bend_ratio;     /* a curve whose tightest radius of curvature is below this many
                                   median ridge widths, where the strip shows its face (median
                                   ridge 2 px wider than its narrowest tenth), is reported LOST,
-                                  not measured; below 1 always (2, the default; 0 = off:
-                                  docs/vision-acquisition-and-replay-speed.md) */
+                                  not measured, unless it is nearly symmetric (|A| below 0.1 rad)
+                                  at a ratio of 1.25 or more; below 1 always (2, the default;
+                                  0 = off: docs/vision-acquisition-and-replay-speed.md) */
 } vis_track_params;
 vis_track_params vis_track_params_default(void);
 

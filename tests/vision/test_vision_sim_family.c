@@ -44,7 +44,7 @@
 #define WRONG_A_RAD 0.1
 #define MAX_STATES 20000
 /* Measured shapes reached (of 208 full, 13 quick), asserted as floors; the issue asks for all. */
-#define FAMILY_MEASURED_FLOOR 169
+#define FAMILY_MEASURED_FLOOR 177
 #define QUICK_MEASURED_FLOOR 8
 /* Sequences: wrong frames over the six (the issue asks for none; before the followed curve had to
  * agree with the fresh paths' bend, one: the symmetric snap at 500 fps, A off 0.13 rad at quality
@@ -176,8 +176,9 @@ static void scene_camera(const rod_scene *sc, vis_render_params *rp, vis_calib *
     const double face_px = sc->width * 1000.0 * cal->px_per_mm;
     tp->ribbon_max_px = ceil(face_px + 2.0);
     tp->band_px = fmax(12.0, 1.5 * tp->ribbon_max_px);
-    /* The bend check is the default's (min_bend_ratio 2): without it 11 of the 190 measured shapes
-     * are confident wrong answers (FAM_NO_BEND=1 shows them). */
+    /* The bend check is the default's (min_bend_ratio 2, waived for nearly symmetric shapes at
+     * ratios from 1.25): without it 9 of the 188 measured shapes are confident wrong answers, and
+     * 3 sequence frames (FAM_NO_BEND=1 shows them; the bridging check stays on). */
     if (getenv("FAM_NO_BEND"))
         tp->min_bend_ratio = 0.0;
 }
@@ -456,14 +457,21 @@ static void test_sequences(void **state)
             failures += sr.lost_in_snap != 0 || snap_t < 0 || abs(snap_m - snap_t) > 1 ||
                         asym != pred.asymmetric || sr.s.wrong != 0;
             seq_wrong += sr.s.wrong;
-            /* Reached: the regime at every rate, both regimes; the asymmetric snap's snap frame
-             * within 3 frames and at most a fifth of its frames lost. The symmetric snap (Gamma
-             * 0.21, Delta L 0.5: a twisted U) loses up to 54% of its snap frames to the bend check
-             * (lost, never wrong), so its snap frame is up to 10 frames late at 500 fps. */
+            /* Reached: the regime at every rate, both regimes. The symmetric snap (Gamma 0.21,
+             * Delta L 0.5: a twisted U, bend ratios 1.3-1.8 with the face showing): every snap frame
+             * measured and the snap frame within one, at every rate (the bend check's waiver for
+             * nearly symmetric shapes, and the bridging check on followed curves; before them it
+             * lost 9 of 16, 33 of 62 and 138 of 257). The asymmetric snap: its snap frame within 3
+             * frames and at most a fifth of its snap frames lost (its tight bends at |A| above 0.1
+             * are refused: measured, A was 0.03-0.12 rad off there). */
             assert_int_equal(asym, pred.asymmetric);
+            assert_true(snap_t >= 0);
             if (pred.asymmetric) {
-                assert_true(snap_t >= 0 && abs(snap_m - snap_t) <= 3);
+                assert_true(abs(snap_m - snap_t) <= 3);
                 assert_true(5 * sr.lost_in_snap <= sr.in_snap);
+            } else {
+                assert_int_equal(sr.lost_in_snap, 0);
+                assert_true(abs(snap_m - snap_t) <= 1);
             }
             vis_tracker_free(sr.trk);
             vis_renderer_free(sr.r);
