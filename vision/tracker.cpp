@@ -269,6 +269,7 @@ int bridged_points(const cv::Mat &img, bool invert, const std::vector<Pt> &curve
 {
     const size_t n = smp.size(), m = curve.size();
     int worst = 0;
+    size_t k = 1;  // curve points before k lie before the current gap (gaps come in arc order)
     for (size_t i = 1; i < n;) {
         if (smp[i].valid || !smp[i - 1].valid) {
             i++;
@@ -283,11 +284,11 @@ int bridged_points(const cv::Mat &img, bool invert, const std::vector<Pt> &curve
         const double thr = 0.5 * (a.base + b.base) + 0.3 * std::min(a.peak, b.peak);
         const double fa = a.s / len_px, fb = b.s / len_px;
         int off = 0;
-        for (size_t k = 1; k + 1 < m; k++) {
-            const double f = (double)k / (double)(m - 1);
-            if (f > fa && f < fb && vis::sample_at(img, invert, curve[k]) < thr)
+        while (k + 1 < m && (double)k / (double)(m - 1) <= fa)
+            k++;
+        for (; k + 1 < m && (double)k / (double)(m - 1) < fb; k++)
+            if (vis::sample_at(img, invert, curve[k]) < thr)
                 off++;
-        }
         worst = std::max(worst, off);
         i = j;
     }
