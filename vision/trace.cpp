@@ -15,6 +15,7 @@
 #include "tracker_impl.hpp"
 
 #include <algorithm>
+#include <cstring>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -77,6 +78,99 @@ float sample_at(const cv::Mat &img, bool invert, Pt q)
     return invert ? 255.f - v : v;
 }
 
+// The lower quartile of every second value of the profile p[0..n) (the (nt / 4)-th smallest of
+// the nt values at even k): the q + 1 smallest kept sorted in `b` by insertion, one pass. The
+// same value as std::nth_element on a copy (a selection, nothing summed).
+static float lower_quartile(const float *p, size_t n, float *b)
+{
+    const size_t nt = (n + 1) / 2, q = nt / 4;
+    size_t m = 0;  // values kept, sorted increasing: b[0..m)
+    for (size_t k = 0; k < n; k += 2) {
+        const float v = p[k];
+        if (m == q + 1) {
+            if (!(v < b[q]))
+                continue;
+            m--;  // b[q] drops out
+        }
+        size_t j = m++;
+        for (; j > 0 && b[j - 1] > v; j--)
+            b[j] = b[j - 1];
+        b[j] = v;
+    }
+    return b[q];
+}
+
+#if defined(__SSE2__)
+// The same for four profiles of n values at p, p + n, p + 2 n, p + 3 n at once, one per lane, for
+// q = nt / 4 == Q: the Q + 1 smallest kept sorted in registers, each value inserted without a
+// branch (b[j] = min(b[j], max(b[j - 1], v)) keeps a sorted list sorted, v in its place and the
+// largest out).
+template <int Q>
+static void lower_quartiles4(const float *p, size_t n, float *base)
+{
+    __m128 b[Q + 1];
+    for (int j = 0; j <= Q; j++)
+        b[j] = _mm_set1_ps(INFINITY);
+    for (size_t k = 0; k < n; k += 2) {
+        const __m128 v = _mm_setr_ps(p[k], p[n + k], p[2 * n + k], p[3 * n + k]);
+        for (int j = Q; j > 0; j--)
+            b[j] = _mm_min_ps(b[j], _mm_max_ps(b[j - 1], v));
+        b[0] = _mm_min_ps(b[0], v);
+    }
+    _mm_storeu_ps(base, b[Q]);
+}
+#endif
+
+// The lower quartiles of nb profiles of n values each, one after the other at p, into base;
+// `b` is scratch of n values.
+static void lower_quartiles(const float *p, size_t n, int nb, float *base, float *b)
+{
+#if defined(__SSE2__)
+    if (nb == 4)
+        switch ((n + 1) / 2 / 4) {
+        case 4: lower_quartiles4<4>(p, n, base); return;
+        case 5: lower_quartiles4<5>(p, n, base); return;
+        case 6: lower_quartiles4<6>(p, n, base); return;
+        case 7: lower_quartiles4<7>(p, n, base); return;
+        default: break;
+        }
+#endif
+    for (int j = 0; j < nb; j++)
+        base[j] = lower_quartile(p + (size_t)j * n, n, b);
+}
+
+// Index of the first largest value of p[0..n) (what a scan keeping strict improvements finds):
+// the largest value four lanes at a time, then its first position.
+static int first_max(const float *p, size_t n)
+{
+    float vmax = p[0];
+    size_t k = 0;
+#if defined(__SSE2__)
+    if (n >= 4) {
+        __m128 m = _mm_loadu_ps(p);
+        for (k = 4; k + 4 <= n; k += 4)
+            m = _mm_max_ps(m, _mm_loadu_ps(p + k));
+        m = _mm_max_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)));
+        m = _mm_max_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
+        vmax = _mm_cvtss_f32(m);
+    }
+#endif
+    for (; k < n; k++)
+        vmax = p[k] > vmax ? p[k] : vmax;
+    k = 0;
+#if defined(__SSE2__)
+    const __m128 vm = _mm_set1_ps(vmax);
+    for (; k + 4 <= n; k += 4) {
+        const int hit = _mm_movemask_ps(_mm_cmpeq_ps(_mm_loadu_ps(p + k), vm));
+        if (hit)
+            return (int)k + __builtin_ctz((unsigned)hit);
+    }
+#endif
+    while (p[k] != vmax)
+        k++;
+    return (int)k;
+}
+
 void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, double band,
                 double margin, double min_contrast, double max_width, std::vector<TraceSample> &out,
                 std::vector<float> &prof, std::vector<float> &tmp)
@@ -88,172 +182,215 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
     const bool u8 = img.depth() == CV_8U;
     const double d = 0.5;  // profile step, px: finer steps measured no more accurate
     const int K = (int)std::floor(band / d);
-    prof.resize((size_t)(2 * K + 1));
-    tmp.resize(prof.size());
+    const size_t P = (size_t)(2 * K + 1);  // values in a profile
+    prof.resize(4 * P);                    // four profiles
+    tmp.resize(P + 4);                     // selection scratch, then their four background levels
     double s = 0;
     for (size_t i = 1; i < n; i++)
         s += cv::norm(guide[i] - guide[i - 1]);
     const double L = s;
     s = 0;
-    for (size_t i = 0; i < n; i++) {
-        if (i > 0)
-            s += cv::norm(guide[i] - guide[i - 1]);
-        if (s < margin || s > L - margin)
-            continue;
-        const Pt t = guide[std::min(i + 1, n - 1)] - guide[i > 0 ? i - 1 : 0];
-        const double tl = cv::norm(t);
-        if (!(tl > 0))
-            continue;
-        const Pt nrm(-t.y / tl, t.x / tl);
-        const Pt c = guide[i];
-        const Pt e0 = c - (K * d) * nrm, e1 = c + (K * d) * nrm;
-        const bool inside = std::min(e0.x, e1.x) >= 0 && std::min(e0.y, e1.y) >= 0 &&
-                            std::max(e0.x, e1.x) < img.cols - 1 && std::max(e0.y, e1.y) < img.rows - 1;
-        if (inside && u8) {
-            // The whole profile is inside the image: unchecked bilinear on the 8-bit frame.
-            const float sx = (float)(d * nrm.x), sy = (float)(d * nrm.y);
-            float x = (float)e0.x, y = (float)e0.y;
-            const size_t step = img.step[0];
-            int k0 = 0;
-#if defined(__SSE2__)
-            // Four points at a time: the same positions (a running sum, lane by lane), the same
-            // single-precision operations in the same order on each lane, so bit for bit the
-            // scalar loop's values; only the neighbours are loaded one point at a time.
-            {
-                const __m128 one = _mm_set1_ps(1.f), c255 = _mm_set1_ps(255.f);
-                const __m128i lo8 = _mm_set1_epi32(0xff);
-                alignas(16) float xs[4], ys[4];
-                alignas(16) int ix[4], iy[4];
-                for (; k0 + 4 <= 2 * K + 1; k0 += 4) {
-                    for (int l = 0; l < 4; l++, x += sx, y += sy) {
-                        xs[l] = x;
-                        ys[l] = y;
+    // Four normals at a time: their profiles, then their four background levels together, then
+    // each profile's ridge, in the guide's order.
+    size_t i = 0;
+    for (;;) {
+        size_t idx[4];
+        double sv[4];
+        Pt nv[4];
+        int nb = 0;
+        for (; i < n && nb < 4; i++) {
+            if (i > 0)
+                s += cv::norm(guide[i] - guide[i - 1]);
+            if (s < margin || s > L - margin)
+                continue;
+            const Pt t = guide[std::min(i + 1, n - 1)] - guide[i > 0 ? i - 1 : 0];
+            const double tl = cv::norm(t);
+            if (!(tl > 0))
+                continue;
+            const Pt nrm(-t.y / tl, t.x / tl);
+            float *const pr = prof.data() + (size_t)nb * P;
+            idx[nb] = i;
+            sv[nb] = s;
+            nv[nb] = nrm;
+            nb++;
+            const Pt c = guide[i];
+            const Pt e0 = c - (K * d) * nrm, e1 = c + (K * d) * nrm;
+            const bool inside = std::min(e0.x, e1.x) >= 0 && std::min(e0.y, e1.y) >= 0 &&
+                                std::max(e0.x, e1.x) < img.cols - 1 && std::max(e0.y, e1.y) < img.rows - 1;
+            if (inside && u8) {
+                // The whole profile is inside the image: unchecked bilinear on the 8-bit frame.
+                const float sx = (float)(d * nrm.x), sy = (float)(d * nrm.y);
+                float x = (float)e0.x, y = (float)e0.y;
+                const size_t step = img.step[0];
+                const uint8_t *const data = img.data;
+                int k0 = 0;
+#if defined(__SSE2__) && defined(__x86_64__)
+                // Four points at a time: the same positions (a running sum, lane by lane: x and y side
+                // by side in one register), the same single-precision operations in the same order on
+                // each lane, so bit for bit the scalar loop's values. The row offsets y0 * step come
+                // from 16-bit multiplies (exact: both below 2^15, which the frame's size is checked for)
+                // and each point's four neighbours are inserted as two 16-bit words into one lane
+                // (top pair low, bottom pair high).
+                if (step < 32768 && img.rows < 32768) {
+                    const __m128 one = _mm_set1_ps(1.f), c255 = _mm_set1_ps(255.f);
+                    const __m128i lo8 = _mm_set1_epi32(0xff), step16 = _mm_set1_epi32((int)step);
+                    const __m128 sxy = _mm_setr_ps(sx, sy, 0.f, 0.f);
+                    __m128 xy = _mm_setr_ps(x, y, 0.f, 0.f);
+                    auto word = [](const uint8_t *q) {
+                        uint16_t w;
+                        memcpy(&w, q, 2);
+                        return (int)w;
+                    };
+                    for (; k0 + 4 <= 2 * K + 1; k0 += 4) {
+                        const __m128 p0 = xy, p1 = _mm_add_ps(p0, sxy), p2 = _mm_add_ps(p1, sxy),
+                                     p3 = _mm_add_ps(p2, sxy);
+                        xy = _mm_add_ps(p3, sxy);
+                        const __m128 q01 = _mm_movelh_ps(p0, p1), q23 = _mm_movelh_ps(p2, p3);  // x y x y
+                        const __m128 X = _mm_shuffle_ps(q01, q23, _MM_SHUFFLE(2, 0, 2, 0));
+                        const __m128 Y = _mm_shuffle_ps(q01, q23, _MM_SHUFFLE(3, 1, 3, 1));
+                        const __m128i IX = _mm_cvttps_epi32(X), IY = _mm_cvttps_epi32(Y);
+                        const __m128 FX = _mm_sub_ps(X, _mm_cvtepi32_ps(IX)), FY = _mm_sub_ps(Y, _mm_cvtepi32_ps(IY));
+                        const __m128i OFF = _mm_add_epi32(_mm_madd_epi16(IY, step16), IX);
+                        const uint64_t o01 = (uint64_t)_mm_cvtsi128_si64(OFF),
+                                       o23 = (uint64_t)_mm_cvtsi128_si64(_mm_unpackhi_epi64(OFF, OFF));
+                        const uint8_t *r0 = data + (uint32_t)o01, *r1 = data + (o01 >> 32),
+                                      *r2 = data + (uint32_t)o23, *r3 = data + (o23 >> 32);
+                        __m128i T = _mm_cvtsi32_si128(word(r0));
+                        T = _mm_insert_epi16(T, word(r1), 2);
+                        T = _mm_insert_epi16(T, word(r2), 4);
+                        T = _mm_insert_epi16(T, word(r3), 6);
+                        __m128i B = _mm_cvtsi32_si128(word(r0 + step) << 16);
+                        B = _mm_insert_epi16(B, word(r1 + step), 3);
+                        B = _mm_insert_epi16(B, word(r2 + step), 5);
+                        B = _mm_insert_epi16(B, word(r3 + step), 7);
+                        const __m128i TB = _mm_or_si128(T, B);  // per lane: r0[0], r0[1], r1[0], r1[1]
+                        const __m128 P00 = _mm_cvtepi32_ps(_mm_and_si128(TB, lo8));
+                        const __m128 P01 = _mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(TB, 8), lo8));
+                        const __m128 P10 = _mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(TB, 16), lo8));
+                        const __m128 P11 = _mm_cvtepi32_ps(_mm_srli_epi32(TB, 24));
+                        const __m128 GX = _mm_sub_ps(one, FX), GY = _mm_sub_ps(one, FY);
+                        const __m128 top_v = _mm_add_ps(_mm_mul_ps(GX, P00), _mm_mul_ps(FX, P01));
+                        const __m128 bot_v = _mm_add_ps(_mm_mul_ps(GX, P10), _mm_mul_ps(FX, P11));
+                        __m128 V = _mm_add_ps(_mm_mul_ps(GY, top_v), _mm_mul_ps(FY, bot_v));
+                        if (invert)
+                            V = _mm_sub_ps(c255, V);
+                        _mm_storeu_ps(pr + k0, V);
                     }
-                    const __m128 X = _mm_load_ps(xs), Y = _mm_load_ps(ys);
-                    const __m128i IX = _mm_cvttps_epi32(X), IY = _mm_cvttps_epi32(Y);
-                    const __m128 FX = _mm_sub_ps(X, _mm_cvtepi32_ps(IX)), FY = _mm_sub_ps(Y, _mm_cvtepi32_ps(IY));
-                    _mm_store_si128((__m128i *)ix, IX);
-                    _mm_store_si128((__m128i *)iy, IY);
-                    int top[4], bot[4];
-                    for (int l = 0; l < 4; l++) {
-                        const uint8_t *r0 = img.data + (size_t)iy[l] * step + ix[l], *r1 = r0 + step;
-                        top[l] = r0[0] | (r0[1] << 8);
-                        bot[l] = r1[0] | (r1[1] << 8);
-                    }
-                    const __m128i T = _mm_setr_epi32(top[0], top[1], top[2], top[3]);
-                    const __m128i B = _mm_setr_epi32(bot[0], bot[1], bot[2], bot[3]);
-                    const __m128 P00 = _mm_cvtepi32_ps(_mm_and_si128(T, lo8));
-                    const __m128 P01 = _mm_cvtepi32_ps(_mm_srli_epi32(T, 8));
-                    const __m128 P10 = _mm_cvtepi32_ps(_mm_and_si128(B, lo8));
-                    const __m128 P11 = _mm_cvtepi32_ps(_mm_srli_epi32(B, 8));
-                    const __m128 GX = _mm_sub_ps(one, FX), GY = _mm_sub_ps(one, FY);
-                    const __m128 top_v = _mm_add_ps(_mm_mul_ps(GX, P00), _mm_mul_ps(FX, P01));
-                    const __m128 bot_v = _mm_add_ps(_mm_mul_ps(GX, P10), _mm_mul_ps(FX, P11));
-                    __m128 V = _mm_add_ps(_mm_mul_ps(GY, top_v), _mm_mul_ps(FY, bot_v));
-                    if (invert)
-                        V = _mm_sub_ps(c255, V);
-                    _mm_storeu_ps(prof.data() + k0, V);
+                    x = _mm_cvtss_f32(xy);
+                    y = _mm_cvtss_f32(_mm_shuffle_ps(xy, xy, _MM_SHUFFLE(1, 1, 1, 1)));
+                }
+#endif
+                for (int k = k0; k <= 2 * K; k++, x += sx, y += sy) {
+                    const int x0 = (int)x, y0 = (int)y;
+                    const float fx = x - (float)x0, fy = y - (float)y0;
+                    const uint8_t *r0 = data + (size_t)y0 * step + x0, *r1 = r0 + step;
+                    const float v = (1 - fy) * ((1 - fx) * r0[0] + fx * r0[1]) + fy * ((1 - fx) * r1[0] + fx * r1[1]);
+                    pr[k] = invert ? 255.f - v : v;
+                }
+            } else {
+                for (int k = -K; k <= K; k++) {
+                    const Pt q = c + (k * d) * nrm;
+                    const float v = u8 ? bilinear<uint8_t>(img, q.x, q.y) : bilinear<float>(img, q.x, q.y);
+                    pr[k + K] = invert ? 255.f - v : v;
                 }
             }
-#endif
-            for (int k = k0; k <= 2 * K; k++, x += sx, y += sy) {
-                const int x0 = (int)x, y0 = (int)y;
-                const float fx = x - (float)x0, fy = y - (float)y0;
-                const uint8_t *r0 = img.data + (size_t)y0 * step + x0, *r1 = r0 + step;
-                const float v = (1 - fy) * ((1 - fx) * r0[0] + fx * r0[1]) + fy * ((1 - fx) * r1[0] + fx * r1[1]);
-                prof[(size_t)k] = invert ? 255.f - v : v;
-            }
-        } else {
-            for (int k = -K; k <= K; k++) {
-                const Pt q = c + (k * d) * nrm;
-                const float v = u8 ? bilinear<uint8_t>(img, q.x, q.y) : bilinear<float>(img, q.x, q.y);
-                prof[(size_t)(k + K)] = invert ? 255.f - v : v;
-            }
         }
+        if (nb == 0)
+            break;
         // Background level: the lower quartile (the band is at least twice the ribbon, so at least
         // half of the profile is background).
         // Every second sample (1 px apart) is plenty for a quartile and halves the selection.
-        size_t nt = 0;
-        for (size_t k = 0; k < prof.size(); k += 2)
-            tmp[nt++] = prof[k];
-        const size_t q = nt / 4;
-        std::nth_element(tmp.begin(), tmp.begin() + (long)q, tmp.begin() + (long)nt);
-        const double base = tmp[q];
-        int kmax = 0;
-        float vmax = prof[0];
-        for (int k = 1; k < 2 * K + 1; k++)
-            if (prof[(size_t)k] > vmax) {
-                vmax = prof[(size_t)k];
-                kmax = k;
-            }
-        // The ridge followed is the local maximum nearest the guide among those at least 60% as
-        // high as the strongest: where another branch of the ribbon (a loop, a crossing) enters the
-        // band, the strongest peak may be the other branch.
-        const double hmax = prof[(size_t)kmax] - base;
-        int kp = kmax;
-        for (int k = 1; k < 2 * K; k++) {
-            const float v = prof[(size_t)k];
-            if (v - base >= 0.6 * hmax && v >= prof[(size_t)k - 1] && v > prof[(size_t)k + 1] &&
-                std::abs(k - K) < std::abs(kp - K))
-                kp = k;
-        }
-        const double peak = prof[(size_t)kp] - base;
-        TraceSample ts{guide[i], s, peak, false, 0.0, base};
-        const double thr = base + 0.3 * peak;
-        int lo = kp, hi = kp;
-        while (lo > 0 && prof[(size_t)(lo - 1)] > thr)
-            lo--;
-        while (hi < 2 * K && prof[(size_t)(hi + 1)] > thr)
-            hi++;
-        // The other branch's extent, left out of the noise estimate below.
-        int lo2 = kmax, hi2 = kmax;
-        if (kmax != kp) {
-            const double thr2 = base + 0.3 * hmax;
-            while (lo2 > 0 && prof[(size_t)(lo2 - 1)] > thr2)
-                lo2--;
-            while (hi2 < 2 * K && prof[(size_t)(hi2 + 1)] > thr2)
-                hi2++;
-            if (lo2 <= hi && hi2 >= lo) {
-                // The two peaks are one blob (a shoulder of one ridge): keep the one peak.
+        float *const bases = tmp.data() + P;
+        lower_quartiles(prof.data(), P, nb, bases, tmp.data());
+        for (int jb = 0; jb < nb; jb++) {
+            const float *const pf = prof.data() + (size_t)jb * P;
+            const size_t ii = idx[jb];
+            const Pt nrm = nv[jb];
+            const double base = bases[jb];
+            const int kmax = first_max(pf, P);
+            // The ridge followed is the local maximum nearest the guide among those at least 60% as
+            // high as the strongest: where another branch of the ribbon (a loop, a crossing) enters the
+            // band, the strongest peak may be the other branch. (Searched outward from the guide, lower
+            // side first: the first one found is the one a scan in increasing k keeps, the nearest and,
+            // of two as near, the lower; none nearer than the strongest leaves the strongest.)
+            const double hmax = pf[(size_t)kmax] - base;
+            int kp = kmax;
+            const int dmax = std::abs(kmax - K);
+            for (int dk = 0; dk < dmax && kp == kmax; dk++)
+                for (int k = K - dk; k <= K + dk; k += dk > 0 ? 2 * dk : 1) {
+                    const float v = pf[(size_t)k];
+                    if (k >= 1 && k < 2 * K && v - base >= 0.6 * hmax && v >= pf[(size_t)k - 1] &&
+                        v > pf[(size_t)k + 1]) {
+                        kp = k;
+                        break;
+                    }
+                }
+            const double peak = pf[(size_t)kp] - base;
+            TraceSample ts{guide[ii], sv[jb], peak, false, 0.0, base};
+            const double thr = base + 0.3 * peak;
+            int lo = kp, hi = kp;
+            while (lo > 0 && pf[(size_t)(lo - 1)] > thr)
+                lo--;
+            while (hi < 2 * K && pf[(size_t)(hi + 1)] > thr)
+                hi++;
+            // The other branch's extent, left out of the noise estimate below.
+            int lo2 = kmax, hi2 = kmax;
+            if (kmax != kp) {
+                const double thr2 = base + 0.3 * hmax;
+                while (lo2 > 0 && pf[(size_t)(lo2 - 1)] > thr2)
+                    lo2--;
+                while (hi2 < 2 * K && pf[(size_t)(hi2 + 1)] > thr2)
+                    hi2++;
+                if (lo2 <= hi && hi2 >= lo) {
+                    // The two peaks are one blob (a shoulder of one ridge): keep the one peak.
+                    lo2 = hi2 = -100;
+                }
+            } else {
                 lo2 = hi2 = -100;
             }
-        } else {
-            lo2 = hi2 = -100;
+            // Noise: spread of the profile outside the peak (1 px clear of it on each side).
+            // (In increasing k, as one loop with the test would, skipping the excluded stretches.)
+            double ss = 0;
+            int cnt = 0;
+            const int a1 = lo - 4, b1 = hi + 4, a2 = lo2 - 4, b2 = hi2 + 4;
+            for (int k = 0; k < 2 * K + 1;) {
+                if (k >= a1 && k <= b1) {
+                    k = b1 + 1;
+                    continue;
+                }
+                if (k >= a2 && k <= b2) {
+                    k = b2 + 1;
+                    continue;
+                }
+                int end = 2 * K + 1;  // up to the next excluded stretch
+                if (a1 > k)
+                    end = std::min(end, a1);
+                if (a2 > k)
+                    end = std::min(end, a2);
+                cnt += end - k;
+                for (; k < end; k++) {
+                    const double dv = pf[(size_t)k] - base;
+                    ss += dv * dv;
+                }
+            }
+            const double noise = cnt >= 8 ? std::sqrt(ss / cnt) : 0.0;
+            const double width = (hi - lo) * d;
+            if (peak >= min_contrast && peak >= 5.0 * noise && width <= max_width + 2.0 && lo > 0 &&
+                hi < 2 * K) {
+                double sw = 0, so = 0, kk = lo - K;  // kk = k - K, exact
+                for (int k = lo; k <= hi; k++, kk += 1.0) {
+                    const double w = pf[(size_t)k] - thr;
+                    sw += w;
+                    so += w * kk * d;
+                }
+                if (sw > 0) {
+                    ts.p = guide[ii] + (so / sw) * nrm;
+                    ts.valid = true;
+                    ts.width = width;
+                }
+            }
+            out.push_back(ts);
         }
-        // Noise: spread of the profile outside the peak (1 px clear of it on each side).
-        // (In increasing k, as one loop with the test would, skipping the excluded stretches.)
-        double ss = 0;
-        int cnt = 0;
-        for (int k = 0; k < 2 * K + 1; k++) {
-            if (k >= lo - 4 && k <= hi + 4) {
-                k = hi + 4;
-                continue;
-            }
-            if (k >= lo2 - 4 && k <= hi2 + 4) {
-                k = hi2 + 4;
-                continue;
-            }
-            const double dv = prof[(size_t)k] - base;
-            ss += dv * dv;
-            cnt++;
-        }
-        const double noise = cnt >= 8 ? std::sqrt(ss / cnt) : 0.0;
-        const double width = (hi - lo) * d;
-        if (peak >= min_contrast && peak >= 5.0 * noise && width <= max_width + 2.0 && lo > 0 &&
-            hi < 2 * K) {
-            double sw = 0, so = 0;
-            for (int k = lo; k <= hi; k++) {
-                const double w = prof[(size_t)k] - thr;
-                sw += w;
-                so += w * (k - K) * d;
-            }
-            if (sw > 0) {
-                ts.p = guide[i] + (so / sw) * nrm;
-                ts.valid = true;
-                ts.width = width;
-            }
-        }
-        out.push_back(ts);
     }
 }
 
