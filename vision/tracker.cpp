@@ -249,11 +249,13 @@ double bend_over_width(const std::vector<Pt> &curve, double ppmm, const std::vec
 // fit cuts the bend and the centroids slide off the centreline; what that does to A is mostly a
 // shift of the arc-length midpoint (the two halves come out unequally short), times the tangent's
 // turning rate there. On a nearly symmetric shape the two halves are cut alike and the midpoint
-// stays: the symmetric snap's twisted U (ratios 1.3-1.8, |A| below 0.04) is measured within 0.5 px
-// and 0.035 rad on the simulator family, while every shape at those ratios whose A came out 0.1 rad
-// or more off had |A| of 0.14 or more (a loop's apex or an arch's flank at the midpoint). So
-// between SYM_BEND_RATIO and min_bend_ratio a curve whose |A| is below SYM_A_RAD is measured.
-// Below SYM_BEND_RATIO (the Delta L 0.7 loop's merged legs, 1.14-1.24) it is refused whatever A.
+// stays: the symmetric snap's twisted U (ratios 1.28-1.98, |A| below 0.04) is measured with A
+// within 0.035 rad on the simulator family and its sequences, while every shape at those ratios whose A
+// came out 0.1 rad or more off had |A| of 0.14 or more (a loop's apex or an arch's flank at the
+// midpoint). So between SYM_BEND_RATIO and min_bend_ratio a curve whose |A| is below SYM_A_RAD is
+// measured. Delta Z there keeps the centroid's bias (0.67-0.71 px RMS, 1.11 px at most over the
+// 187 such frames): right for the regime and the snap frame, not for the 0.3 px bar. Below
+// SYM_BEND_RATIO (the Delta L 0.7 loop's merged legs, 1.14-1.24) it is refused whatever A.
 const double SYM_BEND_RATIO = 1.25;
 const double SYM_A_RAD = 0.1;
 
@@ -262,8 +264,9 @@ const double SYM_A_RAD = 0.1;
 // 5.6 px above the band, A within 0.03, quality 0.92). Every gap of invalid samples between two
 // valid ones is checked: the curve points inside it must read at least the ridge level of the
 // samples either side (their background + 30% of the lower peak, the tracer's own threshold).
-// Returns the number of curve points off the ridge in the worst gap. Over the simulator family and
-// its sequences (1473 attempts) it fired on 9, none of them then within target.
+// Returns the number of curve points off the ridge in the worst gap. With the bend check off, over
+// the simulator family and its sequences (1473 attempts) it fired on 9: three were the frame's
+// answer and 3.1-5.6 px wrong, the other six lost to a better attempt anyway.
 int bridged_points(const cv::Mat &img, bool invert, const std::vector<Pt> &curve,
                    const std::vector<vis::TraceSample> &smp, double len_px)
 {

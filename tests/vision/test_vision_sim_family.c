@@ -463,7 +463,7 @@ static void test_sequences(void **state)
              * nearly symmetric shapes, and the bridging check on followed curves; before them it
              * lost 9 of 16, 33 of 62 and 138 of 257). The asymmetric snap: its snap frame within 3
              * frames and at most a fifth of its snap frames lost (its tight bends at |A| above 0.1
-             * are refused: measured, A was 0.03-0.12 rad off there). */
+             * are refused: measured with the bend check off, A was up to 0.12 rad off there). */
             assert_int_equal(asym, pred.asymmetric);
             assert_true(snap_t >= 0);
             if (pred.asymmetric) {
