@@ -430,7 +430,8 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
     at.quality = valid_frac / (1.0 + (resid_px / 0.5) * (resid_px / 0.5));
     at.bend_rel = bend_over_width(fr.curve, g.vm.ppmm, samples, ws.widths);
     const double bend_min = p.min_bend_ratio;
-    at.bend_refused = at.bend_rel < bend_min && !(at.bend_rel >= SYM_BEND_RATIO && std::fabs(fr.a) < SYM_A_RAD);
+    const bool symmetric = at.bend_rel >= SYM_BEND_RATIO && std::fabs(fr.a) < SYM_A_RAD;
+    at.bend_refused = at.bend_rel < bend_min && !symmetric;
     if (at.bend_refused)
         at.quality *= 0.1 * at.bend_rel / bend_min;
     at.m.dz = fr.height / length;
