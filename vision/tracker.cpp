@@ -18,7 +18,8 @@
 //      refining the centreline to sub-pixel;
 //   6. metric curve: undistortion (if the calibration has intrinsics), then depth correction: the
 //      point at arc fraction xi is assumed at depth y = shear (3 xi^2 - 2 xi^3) (clamped ends keep
-//      their tangent along x, so the shear profile is flat at both clamps), and its pixel's ray is
+//      their tangent along x, so the shear profile is flat at both clamps), or at the depth of the
+//      caller's profile (a prediction's shape, depth_profile.cpp), and its pixel's ray is
 //      intersected with the plane at that depth, camera tilt included (view_model.cpp);
 //   7. local smooth fit, Delta Z, A, quality, reason. With the length known, the measured
 //      (projected) length must lie within the bounds the shear allows (projected_length_bounds);
@@ -63,6 +64,9 @@ struct vis_tracker {
     cv::Mat trace_img;               // what the tracer samples: sig, or the grey frame itself
     bool trace_invert = false;       // sample 255 - value (grey frame, dark ribbon)
     cv::Size size;
+    vis::DepthProfile depth;         // depth along the arc (default cubic; vis_tracker_set_depth_profile)
+    vis::DepthLibrary library;       // a prediction's shapes (vis_tracker_set_depth_library)
+    Attempt redo;                    // the best attempt measured again with the library's depth
 };
 
 extern "C" vis_track_params vis_track_params_default(void)
@@ -128,6 +132,33 @@ extern "C" vis_tracker *vis_tracker_create(const vis_track_params *p, const vis_
 
 extern "C" void vis_tracker_free(vis_tracker *t) { delete t; }
 
+extern "C" vis_status vis_tracker_set_depth_profile(vis_tracker *t, const double *frac, const double *depth_rel,
+                                                    size_t n, vis_error *err)
+{
+    if (!t)
+        return vis::fail(err, VIS_ERR_ARG, "vis_tracker_set_depth_profile: NULL tracker");
+    VIS_GUARD(err, VIS_ERR_INTERNAL, {
+        std::string why;
+        if (!t->depth.set(frac, depth_rel, n, why))
+            return vis::fail(err, VIS_ERR_ARG, "%s", why.c_str());
+        vis::ok(err);
+        return VIS_OK;
+    })
+}
+
+extern "C" vis_status vis_tracker_set_depth_library(vis_tracker *t, const vis_depth_library *lib, vis_error *err)
+{
+    if (!t)
+        return vis::fail(err, VIS_ERR_ARG, "vis_tracker_set_depth_library: NULL tracker");
+    VIS_GUARD(err, VIS_ERR_INTERNAL, {
+        std::string why;
+        if (!t->library.set(lib, why))
+            return vis::fail(err, VIS_ERR_ARG, "%s", why.c_str());
+        vis::ok(err);
+        return VIS_OK;
+    })
+}
+
 extern "C" void vis_tracker_reset(vis_tracker *t)
 {
     if (!t)
@@ -177,18 +208,16 @@ const double LENGTH_SLACK = 0.03;
 const double LENGTH_TOL = 0.08;
 
 struct Geometry {
-    vis::ViewModel vm;  // image <-> plane model (principal point, scale, distance, tilt)
-    Pt left, right;     // clamp points in the image at this frame's shear, pixels
-    double shear;       // mm
+    vis::ViewModel vm;                 // image <-> plane model (principal point, scale, distance, tilt)
+    Pt left, right;                    // clamp points in the image at this frame's shear, pixels
+    double shear;                      // mm
+    const vis::DepthProfile *depth;    // depth / shear along the projected arc, for this frame
 };
 
-// Depth (mm, away from the camera) of the centreline at arc fraction xi: the shear profile of a
-// ribbon clamped flat at both ends, shear * (3 xi^2 - 2 xi^3).
-double depth_at(const Geometry &g, double xi)
-{
-    xi = std::min(1.0, std::max(0.0, xi));
-    return g.shear * (3 * xi * xi - 2 * xi * xi * xi);
-}
+// Depth (mm, away from the camera) of the centreline at projected arc fraction xi: by default the
+// shear profile of a ribbon clamped flat at both ends, shear * (3 xi^2 - 2 xi^3); the caller's
+// profile when it gave one (depth_profile.cpp).
+double depth_at(const Geometry &g, double xi) { return g.shear * g.depth->at(xi); }
 
 // Bounds on the length of the centreline's x-z projection (what the tracker measures) for a ribbon
 // of length l whose depth goes from 0 at the left clamp to `shear` at the right one, monotonically:
@@ -560,6 +589,8 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
         g.vm.D = c.camera_distance_mm;
         g.vm.tilt = c.camera_tilt_rad;
         g.shear = shear_mm;
+        t->depth.prepare(t->p.length_mm, shear_mm);
+        g.depth = &t->depth;
         if (g.vm.D > 0 && !(g.vm.D + shear_mm > 0.05 * g.vm.D))
             return vis::fail(err, VIS_ERR_ARG, "shear %g mm puts the clamp behind the camera", shear_mm);
         // The clamp points are calibrated at zero shear; the right one moves with the shear rail.
@@ -646,6 +677,17 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
                     break;
                 }
             }
+        // With a prediction's shapes: measure again with the depth of the one nearest to what was
+        // measured (the pixels are traced again along the curve just found).
+        if (best && best->reason == VIS_REASON_NONE && !t->library.empty()) {
+            const long k = t->library.nearest(shear_mm, best->m.dz, best->m.a);
+            if (t->library.use(k, t->depth)) {
+                t->depth.prepare(t->p.length_mm, shear_mm);
+                track_from(t, g, best->curve_px, 2, t->redo);  // redo is never best here
+                if (t->redo.reason == VIS_REASON_NONE)
+                    best = &t->redo;
+            }
+        }
         if (best && best->reason == VIS_REASON_LOST && best->valid_frac < 0.25)
             any_path = false;  // nothing ribbon-like along any path
         if (!best || !any_path) {

@@ -4,12 +4,14 @@
 //   path_walk.cpp  ridge signal -> the same by walking the ridge (loops, crossings)
 //   trace.cpp      image + guide curve -> sub-pixel centreline samples along the arc
 //   view_model.cpp pixels <-> millimetres in the ribbon's plane (depth from the shear, camera pitch)
+//   depth_profile.cpp the centreline's depth along the arc (default cubic, or a prediction's)
 //   curve_fit.cpp  samples -> smooth metric curve -> Delta Z, A, midpoint
 #ifndef RIBBON_VIS_TRACKER_IMPL_HPP
 #define RIBBON_VIS_TRACKER_IMPL_HPP
 
 #include "vis_internal.hpp"
 
+#include <string>
 #include <vector>
 
 namespace vis {
@@ -86,6 +88,45 @@ struct ViewModel {
 Pt view_to_metric(const ViewModel &m, Pt uv, double depth);
 // The inverse: (x, z) mm at depth -> pixel; NaN when behind the camera.
 Pt view_to_image(const ViewModel &m, Pt xz, double depth);
+
+// --- depth_profile.cpp
+// Depth over the shear along the projected arc: the default cubic 3 xi^2 - 2 xi^3, or a caller's
+// profile (material arc fraction -> depth / shear) mapped per frame onto the projected arc.
+class DepthProfile {
+public:
+    static constexpr size_t MAX_POINTS = 100000;
+    static constexpr double MAX_REL = 10.0;
+    // n = 0 restores the cubic; false (with why) for a profile that is not one.
+    bool set(const double *frac, const double *rel, size_t n, std::string &why);
+    // Map onto the projected arc for a ribbon of length_mm (0 = unknown) at this shear.
+    void prepare(double length_mm, double shear_mm);
+    // Depth / shear at projected arc fraction xi (clamped to [0, 1]).
+    double at(double xi) const;
+    bool custom() const { return !frac_.empty(); }
+    // A profile already checked (a library's shape): copied into the buffers kept, no allocation
+    // once they have the size.
+    void set_checked(const double *frac, const double *rel, size_t n);
+
+private:
+    std::vector<double> frac_, rel_, proj_;
+};
+
+// Shapes a prediction expects (vis_tracker_set_depth_library), each keyed by its shear, Delta Z and
+// A: a frame measured as (shear, Delta Z, A) takes the depth of the nearest one, distances in
+// units of KEY_SHEAR_MM, KEY_DZ and KEY_A_RAD.
+class DepthLibrary {
+public:
+    static constexpr size_t MAX_SHAPES = 200000, MAX_POINTS = 4096, MAX_VALUES = 50000000;
+    static constexpr double KEY_SHEAR_MM = 2.0, KEY_DZ = 0.005, KEY_A_RAD = 0.02;
+    bool set(const vis_depth_library *lib, std::string &why);  // NULL or no shapes: none
+    bool empty() const { return shear_.empty(); }
+    long nearest(double shear_mm, double dz, double a) const;   // -1 when empty
+    bool use(long i, DepthProfile &into) const;                 // shape i's profile into `into`
+
+private:
+    std::vector<double> shear_, dz_, a_, frac_, rel_;
+    size_t n_points_ = 0;
+};
 
 // --- curve_fit.cpp
 struct FitInput {

@@ -383,6 +383,36 @@ void vis_tracker_skip(vis_tracker *t, vis_measure *out);
 /* The last smooth centreline in pixels, from the left clamp: copies up to `max` (u, v) pairs into
  * `uv` and returns how many exist. */
 size_t vis_tracker_curve(const vis_tracker *t, double *uv, size_t max);
+/* The centreline's depth along the ribbon for the frames that follow, from a prediction of their
+ * shape (the trial's own simulation): n points of (frac[i], depth_rel[i]), frac the arc fraction
+ * along the ribbon (material arc length / l) from 0 at the left clamp to 1 at the right one,
+ * strictly increasing, depth_rel the depth away from the camera over the shear (0 at the left
+ * clamp, 1 at the right one; |depth_rel| <= 10). Each frame maps it onto the projected arc it
+ * measures with its own shear and the known length. n = 0 restores the default profile, shear
+ * (3 xi^2 - 2 xi^3), which the DER strip is nowhere near under shear (docs/vision.md, "Depth").
+ * Kept across vis_tracker_reset. VIS_ERR_ARG (with the reason) for a profile that is not one; the
+ * tracker's profile is then unchanged. */
+vis_status vis_tracker_set_depth_profile(vis_tracker *t, const double *frac, const double *depth_rel,
+                                         size_t n, vis_error *err);
+/* Shapes a prediction of the trial expects (its simulation's states: before, during and after the
+ * snap), from which the tracker takes each frame's depth: n_shapes shapes of n_points points,
+ * shape i keyed by shear_mm[i] (the right clamp's shear, as vis_tracker_process takes it), dz[i]
+ * and a[i] (Delta Z / l and A of the shape's x-z projection, as the camera sees them: the
+ * simulator's dz_cam and a_cam), its profile frac[i n_points + j], depth_rel[i n_points + j] as
+ * vis_tracker_set_depth_profile takes one. */
+typedef struct vis_depth_library {
+    size_t n_shapes, n_points;
+    const double *shear_mm, *dz, *a;
+    const double *frac, *depth_rel;
+} vis_depth_library;
+/* With a library (copied in; NULL or n_shapes 0 removes it), every measured frame is measured again
+ * with the depth of the library's shape nearest to what it measured (shear within about 2 mm,
+ * Delta Z 0.005, A 0.02 rad), starting from the last frame's; the shape stays for the next frame.
+ * A single side camera cannot see depth and the shapes through a snap differ in it: at 1 m the
+ * default profile puts 28 of 179 simulated shapes more than 2 px or 0.1 rad off, the library none
+ * (docs/vision.md, "Depth"). VIS_ERR_ARG with the reason for a library that is not one (the old
+ * one stays). A profile set by vis_tracker_set_depth_profile is replaced at the next frame. */
+vis_status vis_tracker_set_depth_library(vis_tracker *t, const vis_depth_library *lib, vis_error *err);
 /* Forget the previous curve (the next frame is searched from scratch). */
 void vis_tracker_reset(vis_tracker *t);
 

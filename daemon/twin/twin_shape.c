@@ -151,3 +151,30 @@ twin_status twin_shape_lerp(twin_shape *out, const twin_shape *a, const twin_sha
     }
     return TWIN_OK;
 }
+
+size_t twin_shape_depth_profile(const vis_shape *sh, double *frac, double *depth_rel)
+{
+    if (!sh || !sh->pos || sh->n < 2 || !frac || !depth_rel)
+        return 0;
+    const double *p = sh->pos;
+    const size_t n = sh->n;
+    const double y0 = p[1], shear = p[3 * (n - 1) + 1] - y0;
+    if (!(fabs(shear) >= TWIN_DEPTH_MIN_SHEAR_M))
+        return 0;
+    double len = 0.0;
+    frac[0] = 0.0;
+    for (size_t i = 1; i < n; i++) {
+        const double dx = p[3 * i] - p[3 * i - 3], dy = p[3 * i + 1] - p[3 * i - 2], dz = p[3 * i + 2] - p[3 * i - 1];
+        len += sqrt(dx * dx + dy * dy + dz * dz);
+        frac[i] = len;
+    }
+    if (!(len > 0.0))
+        return 0;
+    for (size_t i = 0; i < n; i++) {
+        frac[i] = i + 1 == n ? 1.0 : frac[i] / len;
+        depth_rel[i] = (p[3 * i + 1] - y0) / shear;
+        if (i > 0 && !(frac[i] > frac[i - 1]))
+            return 0; /* coincident nodes: not a profile */
+    }
+    return n;
+}

@@ -74,4 +74,14 @@ twin_status twin_shape_from_rod(twin_shape *ts, const rod *r, char *why, size_t 
 twin_status twin_shape_lerp(twin_shape *out, const twin_shape *a, const twin_shape *b, double w,
                             char *why, size_t why_len);
 
+/* Below this shear (metres) the depth over the shear is not defined well enough to be a profile. */
+#define TWIN_DEPTH_MIN_SHEAR_M 1e-4
+
+/* A shape's depth profile as vis_tracker_set_depth_profile takes it (sh: a twin_shape's view, or
+ * any vis_shape): for each of the sh->n points its arc fraction along the centreline (from the
+ * left clamp point) and its depth over the shear (y relative to the left clamp point over the
+ * right one's). frac and depth_rel hold sh->n values. Returns the number of points, or 0 (nothing written worth using) when the shear is
+ * below TWIN_DEPTH_MIN_SHEAR_M or the shape is degenerate. No allocation. */
+size_t twin_shape_depth_profile(const vis_shape *sh, double *frac, double *depth_rel);
+
 #endif

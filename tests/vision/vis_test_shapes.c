@@ -6,7 +6,15 @@
 
 #define DENSE 8192
 
+double vt_depth_cubic(double xi) { return 3 * xi * xi - 2 * xi * xi * xi; }
+
 void vt_from_dense(vt_shape *s, size_t n, const double *xd, const double *zd, size_t m, double dw)
+{
+    vt_from_dense_depth(s, n, xd, zd, m, dw, vt_depth_cubic);
+}
+
+void vt_from_dense_depth(vt_shape *s, size_t n, const double *xd, const double *zd, size_t m, double dw,
+                         double (*depth)(double xi))
 {
     /* Resample the dense planar curve (xd, zd) at n points equally spaced in arc length. */
     double cum[DENSE];
@@ -22,7 +30,7 @@ void vt_from_dense(vt_shape *s, size_t n, const double *xd, const double *zd, si
         const double w = (sv - cum[j]) / (cum[j + 1] - cum[j]);
         const double xi = (double)i / (double)(n - 1);
         s->pos[3 * i] = xd[j] + w * (xd[j + 1] - xd[j]);
-        s->pos[3 * i + 1] = dw * (3 * xi * xi - 2 * xi * xi * xi);
+        s->pos[3 * i + 1] = dw * depth(xi);
         s->pos[3 * i + 2] = zd[j] + w * (zd[j + 1] - zd[j]);
     }
     for (size_t i = 0; i < n; i++) {
@@ -73,6 +81,11 @@ static double arch_fill(double *xd, double *zd, double X, double R, double phi)
 
 void vt_arch(vt_shape *s, size_t n, double l, double X, double phi, double dw)
 {
+    vt_arch_depth(s, n, l, X, phi, dw, vt_depth_cubic);
+}
+
+void vt_arch_depth(vt_shape *s, size_t n, double l, double X, double phi, double dw, double (*depth)(double xi))
+{
     static double xd[DENSE], zd[DENSE];
     /* Inextensible ribbon between fixed clamps: find the amplitude R that gives arc length l
      * (bisection, capped; the length grows with R). */
@@ -85,7 +98,7 @@ void vt_arch(vt_shape *s, size_t n, double l, double X, double phi, double dw)
             lo = R;
     }
     arch_fill(xd, zd, X, 0.5 * (lo + hi), phi);
-    vt_from_dense(s, n, xd, zd, DENSE, dw);
+    vt_from_dense_depth(s, n, xd, zd, DENSE, dw, depth);
 }
 
 void vt_overhang(vt_shape *s, size_t n, double l, double T, double dw)

@@ -27,6 +27,12 @@ typedef struct vt_shape {
  * in arc length, sheared by dw. */
 void vt_from_dense(vt_shape *s, size_t n, const double *xd, const double *zd, size_t m, double dw);
 void vt_arch(vt_shape *s, size_t n, double l, double X, double phi, double dw);
+/* The same with another depth profile: y = dw depth(xi), xi the planar arc fraction (depth(0) = 0,
+ * depth(1) = 1); vt_depth_cubic is the default's. */
+double vt_depth_cubic(double xi);
+void vt_from_dense_depth(vt_shape *s, size_t n, const double *xd, const double *zd, size_t m, double dw,
+                         double (*depth)(double xi));
+void vt_arch_depth(vt_shape *s, size_t n, double l, double X, double phi, double dw, double (*depth)(double xi));
 void vt_overhang(vt_shape *s, size_t n, double l, double T, double dw);
 /* Camera fitted around the shape with margin; 320 x 240 unless changed after. */
 vis_render_params vt_render_params(const vt_shape *s, int w, int h);
