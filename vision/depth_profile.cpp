@@ -163,7 +163,7 @@ bool DepthLibrary::set(const vis_depth_library *lib, std::string &why)
     return true;
 }
 
-long DepthLibrary::nearest(double shear_mm, double dz, double a) const
+long DepthLibrary::nearest(double shear_mm, double dz, double a, double *dist) const
 {
     long best = -1;
     double dbest = 0;
@@ -176,6 +176,8 @@ long DepthLibrary::nearest(double shear_mm, double dz, double a) const
             dbest = d;
         }
     }
+    if (dist)
+        *dist = best < 0 ? INFINITY : std::sqrt(dbest);
     return best;
 }
 

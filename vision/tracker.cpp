@@ -680,7 +680,7 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
         // With a prediction's shapes: measure again with the depth of the one nearest to what was
         // measured (the pixels are traced again along the curve just found).
         if (best && best->reason == VIS_REASON_NONE && !t->library.empty()) {
-            const long k = t->library.nearest(shear_mm, best->m.dz, best->m.a);
+            const long k = t->library.nearest(shear_mm, best->m.dz, best->m.a, nullptr);
             if (t->library.use(k, t->depth)) {
                 t->depth.prepare(t->p.length_mm, shear_mm);
                 track_from(t, g, best->curve_px, 2, t->redo);  // redo is never best here

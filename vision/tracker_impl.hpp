@@ -120,7 +120,8 @@ public:
     static constexpr double KEY_SHEAR_MM = 2.0, KEY_DZ = 0.005, KEY_A_RAD = 0.02;
     bool set(const vis_depth_library *lib, std::string &why);  // NULL or no shapes: none
     bool empty() const { return shear_.empty(); }
-    long nearest(double shear_mm, double dz, double a) const;   // -1 when empty
+    // The nearest shape (-1 when empty), its distance in key units in *dist (may be NULL).
+    long nearest(double shear_mm, double dz, double a, double *dist) const;
     bool use(long i, DepthProfile &into) const;                 // shape i's profile into `into`
 
 private:
