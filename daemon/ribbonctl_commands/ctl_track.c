@@ -3,7 +3,8 @@
  *   ribbonctl track VIDEO|PATTERN [--calib FILE | SCALE [--clamp-left X,Y --clamp-right X,Y]]
  *                   [--camera-distance-mm D] [--camera-tilt-rad T] [--shear-csv FILE] [--length-mm L]
  *                   [--polarity auto|dark|light] [--csv OUT] [--overlay OUT.mkv]
- *                   [--save-calib FILE] [--json] [--quiet]
+ *                   [--save-calib FILE] [--depth-scene SCENE [--depth-set section.key=value ...]]
+ *                   [--json] [--quiet]
  *   SCALE: --px-per-mm S | --clamp-spacing-mm MM | --length-mm L alone
  *
  * PATTERN: an image sequence such as dir/frame_%04d.png (numbered from 0).
@@ -17,11 +18,17 @@
  * (frame, t, dz, a, quality, reason: dz and a empty when the frame has no measurement, never NaN),
  * optionally an FFV1 overlay video, and prints a summary (--json: frames, tracked, mean_quality,
  * snap_frame, damaged, error, and the calibration used: px_per_mm, clamp_left, clamp_right,
- * clamps_frame where the clamps were found, null when given or never found). A progress bar goes to stderr. A video that stops before its
+ * clamps_frame where the clamps were found, null when given or never found; depth_shapes, the
+ * predicted shapes taken for the depth, null without --depth-scene). A progress bar goes to stderr. A video that stops before its
  * announced length is read up to the damage; the outputs keep every frame read, the damage is
  * reported and the exit status is 1. Exit status: 0 done, 1 input or output failed, 2 usage.
  * --shear-csv gives the shear rail position per frame (lines "frame,shear_mm", header allowed) for
- * the depth correction; frames not listed take the last value given (0 before the first). */
+ * the depth correction; frames not listed take the last value given (0 before the first).
+ * --depth-scene predicts the scene (rod_predict, adaptive steps, 2 s after the snap) before the
+ * frames are read and gives the tracker the prediction's shapes as its depth (twin_depth.h,
+ * docs/vision.md "Depth"): each frame is measured at the depth of the predicted shape nearest to
+ * what it shows, instead of the default profile. Only worth it with the camera close (about 1 m
+ * for a 200 mm strip) and only as good as the prediction of the snap; the default is off. */
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
@@ -30,12 +37,20 @@
 
 #include "ctl.h"
 #include "cfg_number.h"
+#include "rod_protocol.h"
+#include "scene_file.h"
+#include "twin.h"
 #include "vision.h"
 
 #define TRACK_MAX_FRAMES 50000000 /* loop cap: about 19 days at 30 fps */
+#define TRACK_MAX_DEPTH_SETS 64
 
 typedef struct track_cli {
     const char *video, *calib_file, *csv, *overlay, *save_calib, *shear_csv;
+    const char *depth_scene;                       /* --depth-scene (NULL: the default profile) */
+    const char *depth_sets[TRACK_MAX_DEPTH_SETS];  /* --depth-set overrides */
+    int n_depth_sets;
+    vis_depth_library depth;                       /* the prediction's shapes (n_shapes 0: none) */
     double px_per_mm, spacing_mm, distance_mm, tilt_rad;
     int have_tilt;
     double left[2], right[2];
@@ -75,6 +90,11 @@ static void usage(FILE *f)
             "  --csv OUT                per-frame CSV: frame,t,dz,a,quality,reason\n"
             "  --overlay OUT.mkv        overlay video (FFV1)\n"
             "  --save-calib FILE        write the calibration used (given or found)\n"
+            "  --depth-scene SCENE      predict this scene first and take each frame's depth from\n"
+            "                           the predicted shape nearest to it (docs/vision.md, Depth):\n"
+            "                           for a camera close to the ribbon; default: the clamped\n"
+            "                           shear profile. --length-mm defaults to the scene's length\n"
+            "  --depth-set K=V          override in that scene, section.key=value (repeatable)\n"
             "  --json                   summary as JSON on stdout\n"
             "  --quiet                  no progress bar\n");
 }
@@ -139,6 +159,14 @@ static int parse_args(int argc, char **argv, track_cli *c)
             c->save_calib = v;
         } else if (!strcmp(a, "--shear-csv")) {
             c->shear_csv = v;
+        } else if (!strcmp(a, "--depth-scene")) {
+            c->depth_scene = v;
+        } else if (!strcmp(a, "--depth-set")) {
+            if (v && c->n_depth_sets >= TRACK_MAX_DEPTH_SETS) {
+                fprintf(stderr, "ribbonctl track: more than %d --depth-set overrides\n", TRACK_MAX_DEPTH_SETS);
+                return -1;
+            }
+            if (v) c->depth_sets[c->n_depth_sets++] = v;
         } else if (!strcmp(a, "--px-per-mm")) {
             if (parse_num(a, v, &c->px_per_mm) || c->px_per_mm <= 0)
                 return -1;
@@ -215,6 +243,75 @@ static int parse_args(int argc, char **argv, track_cli *c)
         fprintf(stderr, "ribbonctl track: give --px-per-mm or --clamp-spacing-mm, not both\n");
         return -1;
     }
+    if (c->n_depth_sets > 0 && !c->depth_scene) {
+        fprintf(stderr, "ribbonctl track: --depth-set needs --depth-scene\n");
+        return -1;
+    }
+    return 0;
+}
+
+typedef struct depth_run {
+    twin_depth d;
+    int quiet;
+    char why[256];
+    twin_status failed;
+} depth_run;
+
+static int depth_on_sample(void *user, const rod_sample *s, const rod *r)
+{
+    depth_run *dr = user;
+    const twin_status st = twin_depth_add(&dr->d, s, r, dr->why, sizeof dr->why);
+    if (st != TWIN_OK) {
+        dr->failed = st;
+        return 1; /* stop: the library would be silently short */
+    }
+    return 0;
+}
+
+/* --depth-scene: the scene predicted, its shapes kept in `dr` (c->depth points into it). 0, or 1
+ * after saying why. */
+static int depth_predict(track_cli *c, depth_run *dr)
+{
+    rod_scene sc;
+    cfg_error ce;
+    if (cfg_scene_load(c->depth_scene, c->depth_sets, c->n_depth_sets, &sc, &ce) != CFG_OK) {
+        char buf[1200];
+        fprintf(stderr, "ribbonctl track: --depth-scene: %s\n", cfg_error_format(&ce, buf, sizeof buf));
+        return 1;
+    }
+    if (twin_depth_init(&dr->d, &sc, dr->why, sizeof dr->why) != TWIN_OK) {
+        fprintf(stderr, "ribbonctl track: --depth-scene: %s\n", dr->why);
+        return 1;
+    }
+    if (!(c->tp.length_mm > 0))
+        c->tp.length_mm = sc.length * 1000.0;
+    if (!dr->quiet)
+        fprintf(stderr, "track: predicting %s for the depth (N = %d)...\n", c->depth_scene, sc.nodes);
+    rod_predict_opts o = rod_predict_opts_default();
+    o.adaptive = 1;
+    o.post_snap_time = 2.0;
+    o.on_sample = depth_on_sample;
+    o.user = dr;
+    rod_prediction p;
+    char err[256] = "";
+    const rod_status rs = rod_predict(&sc, &o, &p, err, sizeof err);
+    if (dr->failed != TWIN_OK) {
+        fprintf(stderr, "ribbonctl track: --depth-scene: %s\n", dr->why);
+        return 1;
+    }
+    if (rs != ROD_OK) {
+        fprintf(stderr, "ribbonctl track: --depth-scene: the prediction failed: %s\n", err);
+        return 1;
+    }
+    c->depth = twin_depth_library(&dr->d);
+    if (c->depth.n_shapes == 0) {
+        fprintf(stderr, "ribbonctl track: --depth-scene: the prediction has no sheared shape to take a depth from\n");
+        return 1;
+    }
+    if (!dr->quiet)
+        fprintf(stderr, "track: depth from %zu predicted shapes (%s, %.1f s)%s\n", c->depth.n_shapes,
+                p.snapped ? "snapped" : "no snap", p.wall_s,
+                dr->d.full ? "; the shapes past the cap were left out" : "");
     return 0;
 }
 
@@ -346,7 +443,12 @@ static vis_tracker *tracker_for(const track_cli *c, const track_cal *tc, vis_tra
     vis_track_params tp = c->tp;
     if (tc->scale_pending)
         tp.length_mm = 0.0;
-    return vis_tracker_create(&tp, &tc->cal, err);
+    vis_tracker *t = vis_tracker_create(&tp, &tc->cal, err);
+    if (t && c->depth.n_shapes > 0 && vis_tracker_set_depth_library(t, &c->depth, err) != VIS_OK) {
+        vis_tracker_free(t);
+        return NULL;
+    }
+    return t;
 }
 
 static json_t *json_point(const double p[2])
@@ -630,6 +732,8 @@ static void track_report(const track_cli *c, const track_cal *tc, track_run *r)
         json_object_set_new(o, "clamp_left", tc->have_clamps ? json_point(tc->cal.clamp_left_px) : json_null());
         json_object_set_new(o, "clamp_right", tc->have_clamps ? json_point(tc->cal.clamp_right_px) : json_null());
         json_object_set_new(o, "clamps_frame", r->clamps_frame >= 0 ? json_integer(r->clamps_frame) : json_null());
+        json_object_set_new(o, "depth_shapes",
+                            c->depth.n_shapes ? json_integer((json_int_t)c->depth.n_shapes) : json_null());
         json_object_set_new(o, "damaged", json_boolean(r->damaged));
         json_object_set_new(o, "error", r->failure[0] ? json_string(r->failure) : json_null());
         char *s = json_dumps(o, JSON_COMPACT);
@@ -665,13 +769,23 @@ int ctl_track_main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
+    depth_run dr;
+    memset(&dr, 0, sizeof dr);
+    dr.quiet = c.quiet;
+    if (c.depth_scene && depth_predict(&c, &dr)) {
+        twin_depth_release(&dr.d);
+        return 1;
+    }
     track_cal tc;
     const int cal_rc = track_calibration(&c, &tc);
-    if (cal_rc)
+    if (cal_rc) {
+        twin_depth_release(&dr.d);
         return cal_rc;
+    }
     shear_table shear = {NULL, 0};
     if (c.shear_csv && shear_load(c.shear_csv, &shear)) {
         free(shear.mm);
+        twin_depth_release(&dr.d);
         return 1;
     }
     track_run r;
@@ -684,5 +798,6 @@ int ctl_track_main(int argc, char **argv)
     track_report(&c, &tc, &r);
     free(shear.mm);
     track_run_free(&r);
+    twin_depth_release(&dr.d);
     return r.rc;
 }

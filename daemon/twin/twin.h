@@ -2,6 +2,7 @@
  * twin as the camera sees it). Everything outside this folder includes this header only.
  *
  *   twin_shape.h    a simulated rod state as the vision's shape (centreline, width, twist)
+ *   twin_depth.h    a prediction's shapes as the tracker's depth library
  *   twin_camera.h   the camera that frames a scene (render parameters, its calibration)
  *   twin_frames.h   the frame clock of a simulated run (which states become frames)
  *   mock_camera.h   mock mode's camera: the twin stepped with the mock rails' positions, rendered */
@@ -9,6 +10,7 @@
 #define RIBBON_TWIN_H
 
 #include "twin_shape.h"
+#include "twin_depth.h"
 #include "twin_camera.h"
 #include "twin_frames.h"
 #include "mock_camera.h"
