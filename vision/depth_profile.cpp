@@ -120,6 +120,7 @@ bool DepthLibrary::set(const vis_depth_library *lib, std::string &why)
 {
     if (!lib || lib->n_shapes == 0) {
         shear_.clear();
+        key_xz_.clear();
         dz_.clear();
         a_.clear();
         frac_.clear();
@@ -152,8 +153,24 @@ bool DepthLibrary::set(const vis_depth_library *lib, std::string &why)
             return false;
         }
     }
+    std::vector<Pt> kx;
+    if (lib->xz_mm) {
+        kx.resize(ns * KEY_POINTS);
+        std::vector<Pt> c(np);
+        for (size_t i = 0; i < ns; i++) {
+            for (size_t j = 0; j < np; j++) {
+                c[j] = Pt(lib->xz_mm[2 * (i * np + j)], lib->xz_mm[2 * (i * np + j) + 1]);
+                if (!std::isfinite(c[j].x) || !std::isfinite(c[j].y)) {
+                    why = "depth library: shape " + std::to_string(i) + " has a non-finite projection point";
+                    return false;
+                }
+            }
+            resample_even(c, kx.data() + i * KEY_POINTS);
+        }
+    }
     std::vector<double> s(lib->shear_mm, lib->shear_mm + ns), z(lib->dz, lib->dz + ns), a(lib->a, lib->a + ns),
         f(lib->frac, lib->frac + ns * np), r(lib->depth_rel, lib->depth_rel + ns * np);
+    key_xz_.swap(kx);
     shear_.swap(s);
     dz_.swap(z);
     a_.swap(a);
@@ -178,6 +195,50 @@ long DepthLibrary::nearest(double shear_mm, double dz, double a, double *dist) c
     }
     if (dist)
         *dist = best < 0 ? INFINITY : std::sqrt(dbest);
+    return best;
+}
+
+void DepthLibrary::resample_even(const std::vector<Pt> &c, Pt *out)
+{
+    double len = 0;
+    for (size_t j = 1; j < c.size(); j++)
+        len += cv::norm(c[j] - c[j - 1]);
+    size_t j = 0;
+    double at = 0;  // arc length at c[j]
+    for (int k = 0; k < KEY_POINTS; k++) {
+        const double target = len * k / (KEY_POINTS - 1);
+        while (j + 2 < c.size() && at + cv::norm(c[j + 1] - c[j]) < target) {
+            at += cv::norm(c[j + 1] - c[j]);
+            j++;
+        }
+        const double seg = cv::norm(c[j + 1] - c[j]);
+        const double w = seg > 0 ? std::min(1.0, std::max(0.0, (target - at) / seg)) : 0.0;
+        out[k] = c[j] + w * (c[j + 1] - c[j]);
+    }
+}
+
+long DepthLibrary::nearest_curve(double shear_mm, const std::vector<Pt> &curve) const
+{
+    if (key_xz_.empty() || curve.size() < 2)
+        return -1;
+    probe_.resize(KEY_POINTS);
+    resample_even(curve, probe_.data());
+    long best = -1;
+    double dbest = 0;
+    for (size_t i = 0; i < shear_.size(); i++) {
+        const Pt *q = key_xz_.data() + i * KEY_POINTS;
+        double ss = 0;
+        for (int k = 0; k < KEY_POINTS; k++) {
+            const Pt e = q[k] - probe_[k];
+            ss += e.dot(e);
+        }
+        const double ds = (shear_[i] - shear_mm) / KEY_SHEAR_MM;
+        const double d = ds * ds + ss / KEY_POINTS / (KEY_XZ_MM * KEY_XZ_MM);
+        if (best < 0 || d < dbest) {
+            best = (long)i;
+            dbest = d;
+        }
+    }
     return best;
 }
 

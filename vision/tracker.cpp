@@ -45,6 +45,7 @@ struct Attempt {
     bool ran = false;               // tried on this frame
     vis_measure m{};
     std::vector<vis::Pt> curve_px;  // smooth centreline, pixels
+    std::vector<vis::Pt> curve_mm;  // the same in the plane, mm from the left clamp point
 };
 }  // namespace
 
@@ -474,8 +475,11 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
     at.m.mid_px[0] = mid.x;
     at.m.mid_px[1] = mid.y;
     at.curve_px.resize(fr.curve.size());
-    for (size_t j = 0; j < fr.curve.size(); j++)
+    at.curve_mm.resize(fr.curve.size());
+    for (size_t j = 0; j < fr.curve.size(); j++) {
         at.curve_px[j] = to_px(fr.curve[j], (double)j / (fr.curve.size() - 1));
+        at.curve_mm[j] = fr.curve[j] - fin.xz[0];
+    }
     if (t->c.has_intrinsics) {
         // The stored curve guides the next frame in raw image coordinates: redistort.
         cv::Mat K(3, 3, CV_64F, t->c.camera_matrix), dist(1, 5, CV_64F, t->c.dist);
@@ -678,9 +682,11 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
                 }
             }
         // With a prediction's shapes: measure again with the depth of the one nearest to what was
-        // measured (the pixels are traced again along the curve just found).
+        // measured, by its projection when the library has them, else by Delta Z and A (the
+        // pixels are traced again along the curve just found).
         if (best && best->reason == VIS_REASON_NONE && !t->library.empty()) {
-            const long k = t->library.nearest(shear_mm, best->m.dz, best->m.a, nullptr);
+            const long k = t->library.has_curves() ? t->library.nearest_curve(shear_mm, best->curve_mm)
+                                                   : t->library.nearest(shear_mm, best->m.dz, best->m.a, nullptr);
             if (t->library.use(k, t->depth)) {
                 t->depth.prepare(t->p.length_mm, shear_mm);
                 track_from(t, g, best->curve_px, 2, t->redo);  // redo is never best here

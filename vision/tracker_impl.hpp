@@ -122,10 +122,20 @@ public:
     bool empty() const { return shear_.empty(); }
     // The nearest shape (-1 when empty), its distance in key units in *dist (may be NULL).
     long nearest(double shear_mm, double dz, double a, double *dist) const;
+    // With projections: the shape whose projection (KEY_POINTS points evenly along its arc) is
+    // nearest to `curve` (mm, relative to the left clamp, from left clamp to right), RMS distance
+    // in units of KEY_XZ_MM, shear as above; -1 without projections.
+    long nearest_curve(double shear_mm, const std::vector<Pt> &curve) const;
+    bool has_curves() const { return !key_xz_.empty(); }
+    static constexpr int KEY_POINTS = 16;
+    static constexpr double KEY_XZ_MM = 0.5;
     bool use(long i, DepthProfile &into) const;                 // shape i's profile into `into`
 
 private:
     std::vector<double> shear_, dz_, a_, frac_, rel_;
+    std::vector<Pt> key_xz_;  // n_shapes x KEY_POINTS
+    mutable std::vector<Pt> probe_;
+    static void resample_even(const std::vector<Pt> &c, Pt *out);  // KEY_POINTS points
     size_t n_points_ = 0;
 };
 

@@ -404,14 +404,19 @@ typedef struct vis_depth_library {
     size_t n_shapes, n_points;
     const double *shear_mm, *dz, *a;
     const double *frac, *depth_rel;
+    const double *xz_mm;   /* NULL, or n_shapes x n_points x 2: each point's (x, z) relative to the
+                              left clamp point, mm (the shape's x-z projection): then the nearest
+                              shape is the one whose projection is nearest the frame's curve */
 } vis_depth_library;
 /* With a library (copied in; NULL or n_shapes 0 removes it), every measured frame is measured again
- * with the depth of the library's shape nearest to what it measured (shear within about 2 mm,
- * Delta Z 0.005, A 0.02 rad), starting from the last frame's; the shape stays for the next frame.
+ * with the depth of the library's shape nearest to what it measured, starting from the last
+ * frame's; the shape stays for the next frame. Nearest: with xz_mm, the shear (in units of 2 mm)
+ * and the RMS distance between the frame's curve and the shape's projection, 16 points evenly along
+ * each (in units of 0.5 mm); without, the shear, Delta Z (0.005) and A (0.02 rad).
  * A single side camera cannot see depth and the shapes through a snap differ in it: at 1 m the
  * default profile puts 26 of 46 frames of three simulated trials more than 2 px or 0.1 rad off, a
  * library from another run of the same trials none; one whose snap comes 0.8 mm of shear later,
- * 22 (docs/vision.md, "Depth"). VIS_ERR_ARG with the reason for a library that is not one (the old
+ * 21 (docs/vision.md, "Depth"). VIS_ERR_ARG with the reason for a library that is not one (the old
  * one stays). A profile set by vis_tracker_set_depth_profile is replaced at the next frame. */
 vis_status vis_tracker_set_depth_library(vis_tracker *t, const vis_depth_library *lib, vis_error *err);
 /* Forget the previous curve (the next frame is searched from scratch). */

@@ -25,9 +25,9 @@ twin_status twin_depth_init(twin_depth *d, const rod_scene *sc, char *why, size_
 static int grow(twin_depth *d)
 {
     const size_t cap = d->cap ? 2 * d->cap : 256, np = d->ts.n;
-    double *p[5] = {d->shear_mm, d->dz, d->a, d->frac, d->rel};
-    const size_t per[5] = {1, 1, 1, np, np};
-    for (int k = 0; k < 5; k++) {
+    double *p[6] = {d->shear_mm, d->dz, d->a, d->frac, d->rel, d->xz};
+    const size_t per[6] = {1, 1, 1, np, np, 2 * np};
+    for (int k = 0; k < 6; k++) {
         double *q = realloc(p[k], cap * per[k] * sizeof *q);
         if (!q) return -1; /* what was grown stays, with the old capacity */
         p[k] = q;
@@ -36,7 +36,8 @@ static int grow(twin_depth *d)
         case 1: d->dz = q; break;
         case 2: d->a = q; break;
         case 3: d->frac = q; break;
-        default: d->rel = q; break;
+        case 4: d->rel = q; break;
+        default: d->xz = q; break;
         }
     }
     d->cap = cap;
@@ -66,6 +67,11 @@ twin_status twin_depth_add(twin_depth *d, const rod_sample *s, const rod *r, cha
     if (twin_shape_depth_profile(&d->ts.view, d->frac + d->n * np, d->rel + d->n * np) != np) return TWIN_OK;
     for (size_t i = 0; i < np; i++)
         if (fabs(d->rel[d->n * np + i]) > 10.0) return TWIN_OK; /* a near-zero shear: no profile */
+    const double *q = d->ts.pos;
+    for (size_t i = 0; i < np; i++) {
+        d->xz[2 * (d->n * np + i)] = (q[3 * i] - q[0]) * 1000.0;
+        d->xz[2 * (d->n * np + i) + 1] = (q[3 * i + 2] - q[2]) * 1000.0;
+    }
     d->shear_mm[d->n] = d->ts.pos[3 * (np - 1) + 1] * 1000.0;
     d->dz[d->n] = s->dz_cam;
     d->a[d->n] = s->a_cam;
@@ -75,7 +81,7 @@ twin_status twin_depth_add(twin_depth *d, const rod_sample *s, const rod *r, cha
 
 vis_depth_library twin_depth_library(const twin_depth *d)
 {
-    vis_depth_library lib = {0, 0, NULL, NULL, NULL, NULL, NULL};
+    vis_depth_library lib = {0, 0, NULL, NULL, NULL, NULL, NULL, NULL};
     if (!d || d->n == 0) return lib;
     lib.n_shapes = d->n;
     lib.n_points = d->ts.n;
@@ -84,6 +90,7 @@ vis_depth_library twin_depth_library(const twin_depth *d)
     lib.a = d->a;
     lib.frac = d->frac;
     lib.depth_rel = d->rel;
+    lib.xz_mm = d->xz;
     return lib;
 }
 
@@ -96,5 +103,6 @@ void twin_depth_release(twin_depth *d)
     free(d->a);
     free(d->frac);
     free(d->rel);
+    free(d->xz);
     memset(d, 0, sizeof *d);
 }

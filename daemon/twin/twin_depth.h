@@ -1,6 +1,6 @@
 /* twin_depth.h: a prediction's shapes as the tracker's depth library (vis_depth_library): the
- * states of a simulated run, thinned, each as its depth profile (twin_shape_depth_profile) keyed by
- * its shear, Delta Z and A as the camera sees them (docs/vision.md, "Depth").
+ * states of a simulated run, thinned, each as its depth profile (twin_shape_depth_profile) with
+ * its x-z projection, its shear, Delta Z and A as the camera sees them (docs/vision.md, "Depth").
  *
  * Fed from rod_predict's per-step callback (twin_depth_add); a state is kept when its projected
  * Delta Z or A moved by TWIN_DEPTH_STEP_DZ / TWIN_DEPTH_STEP_A, or its shear by
@@ -26,6 +26,7 @@ typedef struct twin_depth {
     size_t n, cap;           /* shapes kept, room for */
     double *shear_mm, *dz, *a;  /* n each */
     double *frac, *rel;      /* n x ts.n */
+    double *xz;              /* n x ts.n x 2: the x-z projection, mm from the left clamp point */
     int full;                /* 1 once TWIN_DEPTH_MAX_SHAPES were kept (later states dropped) */
 } twin_depth;
 

@@ -461,8 +461,8 @@ static int errors_vs_truth(const char *track_csv, const char *truth_csv, double 
 
 /* --depth-scene: a DER trial of the lab strip rendered by `ribbonctl render` with the twin's own
  * camera (1 m), tracked with the default depth profile and with the scene's predicted shapes.
- * Measured (46 frames, 640 x 480): A 0.0254 rad RMS (max 0.087) with the default, 0.0109 (max
- * 0.022) with the prediction's depth; Delta Z 0.42 and 0.45 px RMS (at N = 31 the polygon, not the
+ * Measured (46 frames, 640 x 480): A 0.0254 rad RMS (max 0.087) with the default, 0.0108 with the
+ * prediction's depth; Delta Z 0.42 and 0.45 px RMS (at N = 31 the polygon, not the
  * depth, dominates it). Then the option's errors: --depth-set alone, a scene that does not load. */
 static void test_depth_from_scene(void **state)
 {

@@ -166,13 +166,14 @@ static void test_profile_puts_the_depth_right(void **state)
 }
 
 /* Three shapes in the library, each with its own depth: every frame takes the depth of the shape
- * it shows, as if that shape's profile had been set. */
+ * it shows, as if that shape's profile had been set; keyed by Delta Z and A, and by projections. */
 static void test_library_takes_the_shape_shown(void **state)
 {
     (void)state;
     const double phis[3] = {0.6, -0.5, 0.0};
     double (*depths[3])(double) = {depth_middle, depth_early, vt_depth_cubic};
     static vt_shape s3[3];
+    static double xz[3 * NPTS * 2];
     double key[9], frac[3 * NPTS], rel[3 * NPTS];
     rig g;
     rig_make(&g, 0.0);
@@ -180,14 +181,20 @@ static void test_library_takes_the_shape_shown(void **state)
     for (int k = 0; k < 3; k++) {
         vt_arch_depth(&s3[k], NPTS, 0.2, 0.16, phis[k], SHEAR_M, depths[k]);
         profile_of(&s3[k], frac + k * NPTS, rel + k * NPTS);
+        for (int j = 0; j < NPTS; j++) {
+            xz[2 * (k * NPTS + j)] = (s3[k].pos[3 * j] - s3[k].pos[0]) * 1000.0;
+            xz[2 * (k * NPTS + j) + 1] = (s3[k].pos[3 * j + 2] - s3[k].pos[2]) * 1000.0;
+        }
         vis_render_truth truth;
         assert_int_equal(vis_renderer_draw(g.r, &s3[k].view, g.f, &truth, &err), VIS_OK);
         key[k] = SHEAR_M * 1000.0;
         key[3 + k] = truth.truth.dz_cam;
         key[6 + k] = truth.truth.a_cam;
     }
-    const vis_depth_library lib = {3, NPTS, key, key + 3, key + 6, frac, rel};
+    for (int by_curve = 0; by_curve < 2; by_curve++)
     for (int k = 0; k < 3; k++) {
+        /* keyed by Delta Z and A, then by the projections */
+        const vis_depth_library lib = {3, NPTS, key, key + 3, key + 6, frac, rel, by_curve ? xz : NULL};
         g.tp.length_mm = length_3d(&s3[k]) * 1000.0;
         vis_tracker *tl = vis_tracker_create(&g.tp, &g.c, &err), *tp = vis_tracker_create(&g.tp, &g.c, &err),
                     *td = vis_tracker_create(&g.tp, &g.c, &err);
@@ -197,8 +204,8 @@ static void test_library_takes_the_shape_shown(void **state)
         assert_int_equal(vis_tracker_set_depth_library(tl, &lib, &err), VIS_OK);
         assert_int_equal(vis_tracker_set_depth_profile(tp, frac + k * NPTS, rel + k * NPTS, NPTS, &err), VIS_OK);
         const result rl = measure(&g, tl, &s3[k]), rp = measure(&g, tp, &s3[k]), rd = measure(&g, td, &s3[k]);
-        printf("shape %d: library %+.3f px %+.4f rad, its own profile %+.3f px %+.4f rad, default %+.3f px %+.4f rad\n",
-               k, rl.edz_px, rl.ea, rp.edz_px, rp.ea, rd.edz_px, rd.ea);
+        printf("%s shape %d: library %+.3f px %+.4f rad, its own profile %+.3f px %+.4f rad, default %+.3f px %+.4f rad\n",
+               by_curve ? "by projection" : "by Delta Z, A", k, rl.edz_px, rl.ea, rp.edz_px, rp.ea, rd.edz_px, rd.ea);
         assert_true(fabs(rl.edz_px) < 0.15);
         assert_true(fabs(rl.ea) < 0.015);
         if (k < 2)
@@ -245,7 +252,12 @@ static void test_bad_profiles_are_refused(void **state)
     bad[5] = 11.0; /* beyond +-10 shears */
     expect_refused(vis_tracker_set_depth_profile(t, frac, bad, NPTS, &err), &err);
     double key[3] = {40.0, 0.1, 0.0};
-    vis_depth_library lib = {1, NPTS, key, key + 1, key + 2, frac, rel};
+    static double xz[2 * NPTS];
+    vis_depth_library lib = {1, NPTS, key, key + 1, key + 2, frac, rel, NULL};
+    lib.xz_mm = xz;
+    xz[7] = NAN;
+    expect_refused(vis_tracker_set_depth_library(t, &lib, &err), &err);
+    lib.xz_mm = NULL;
     lib.n_points = 1;
     expect_refused(vis_tracker_set_depth_library(t, &lib, &err), &err);
     lib.n_points = NPTS;
