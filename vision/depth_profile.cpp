@@ -180,22 +180,28 @@ bool DepthLibrary::set(const vis_depth_library *lib, std::string &why)
     return true;
 }
 
-long DepthLibrary::nearest(double shear_mm, double dz, double a, double *dist) const
+// Index of the smallest cost(i) over i < n (the first of equal ones), -1 when n is 0.
+template <class Cost> static long argmin(size_t n, Cost cost)
 {
     long best = -1;
     double dbest = 0;
-    for (size_t i = 0; i < shear_.size(); i++) {
-        const double ds = (shear_[i] - shear_mm) / KEY_SHEAR_MM, dd = (dz_[i] - dz) / KEY_DZ,
-                     da = (a_[i] - a) / KEY_A_RAD;
-        const double d = ds * ds + dd * dd + da * da;
+    for (size_t i = 0; i < n; i++) {
+        const double d = cost(i);
         if (best < 0 || d < dbest) {
             best = (long)i;
             dbest = d;
         }
     }
-    if (dist)
-        *dist = best < 0 ? INFINITY : std::sqrt(dbest);
     return best;
+}
+
+long DepthLibrary::nearest(double shear_mm, double dz, double a) const
+{
+    return argmin(shear_.size(), [&](size_t i) {
+        const double ds = (shear_[i] - shear_mm) / KEY_SHEAR_MM, dd = (dz_[i] - dz) / KEY_DZ,
+                     da = (a_[i] - a) / KEY_A_RAD;
+        return ds * ds + dd * dd + da * da;
+    });
 }
 
 void DepthLibrary::resample_even(const std::vector<Pt> &c, Pt *out)
@@ -223,9 +229,7 @@ long DepthLibrary::nearest_curve(double shear_mm, const std::vector<Pt> &curve) 
         return -1;
     probe_.resize(KEY_POINTS);
     resample_even(curve, probe_.data());
-    long best = -1;
-    double dbest = 0;
-    for (size_t i = 0; i < shear_.size(); i++) {
+    return argmin(shear_.size(), [&](size_t i) {
         const Pt *q = key_xz_.data() + i * KEY_POINTS;
         double ss = 0;
         for (int k = 0; k < KEY_POINTS; k++) {
@@ -233,13 +237,8 @@ long DepthLibrary::nearest_curve(double shear_mm, const std::vector<Pt> &curve) 
             ss += e.dot(e);
         }
         const double ds = (shear_[i] - shear_mm) / KEY_SHEAR_MM;
-        const double d = ds * ds + ss / KEY_POINTS / (KEY_XZ_MM * KEY_XZ_MM);
-        if (best < 0 || d < dbest) {
-            best = (long)i;
-            dbest = d;
-        }
-    }
-    return best;
+        return ds * ds + ss / KEY_POINTS / (KEY_XZ_MM * KEY_XZ_MM);
+    });
 }
 
 bool DepthLibrary::use(long i, DepthProfile &into) const

@@ -686,7 +686,7 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
         // pixels are traced again along the curve just found).
         if (best && best->reason == VIS_REASON_NONE && !t->library.empty()) {
             const long k = t->library.has_curves() ? t->library.nearest_curve(shear_mm, best->curve_mm)
-                                                   : t->library.nearest(shear_mm, best->m.dz, best->m.a, nullptr);
+                                                   : t->library.nearest(shear_mm, best->m.dz, best->m.a);
             if (t->library.use(k, t->depth)) {
                 t->depth.prepare(t->p.length_mm, shear_mm);
                 track_from(t, g, best->curve_px, 2, t->redo);  // redo is never best here

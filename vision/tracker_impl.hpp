@@ -95,7 +95,7 @@ Pt view_to_image(const ViewModel &m, Pt xz, double depth);
 class DepthProfile {
 public:
     static constexpr size_t MAX_POINTS = 100000;
-    static constexpr double MAX_REL = 10.0;
+    static constexpr double MAX_REL = VIS_DEPTH_REL_MAX;
     // n = 0 restores the cubic; false (with why) for a profile that is not one.
     bool set(const double *frac, const double *rel, size_t n, std::string &why);
     // Map onto the projected arc for a ribbon of length_mm (0 = unknown) at this shear.
@@ -120,8 +120,8 @@ public:
     static constexpr double KEY_SHEAR_MM = 2.0, KEY_DZ = 0.005, KEY_A_RAD = 0.02;
     bool set(const vis_depth_library *lib, std::string &why);  // NULL or no shapes: none
     bool empty() const { return shear_.empty(); }
-    // The nearest shape (-1 when empty), its distance in key units in *dist (may be NULL).
-    long nearest(double shear_mm, double dz, double a, double *dist) const;
+    // The nearest shape by shear, Delta Z and A (-1 when empty).
+    long nearest(double shear_mm, double dz, double a) const;
     // With projections: the shape whose projection (KEY_POINTS points evenly along its arc) is
     // nearest to `curve` (mm, relative to the left clamp, from left clamp to right), RMS distance
     // in units of KEY_XZ_MM, shear as above; -1 without projections.

@@ -387,11 +387,12 @@ size_t vis_tracker_curve(const vis_tracker *t, double *uv, size_t max);
  * shape (the trial's own simulation): n points of (frac[i], depth_rel[i]), frac the arc fraction
  * along the ribbon (material arc length / l) from 0 at the left clamp to 1 at the right one,
  * strictly increasing, depth_rel the depth away from the camera over the shear (0 at the left
- * clamp, 1 at the right one; |depth_rel| <= 10). Each frame maps it onto the projected arc it
+ * clamp, 1 at the right one; |depth_rel| <= VIS_DEPTH_REL_MAX). Each frame maps it onto the projected arc it
  * measures with its own shear and the known length. n = 0 restores the default profile, shear
  * (3 xi^2 - 2 xi^3), which the DER strip is nowhere near under shear (docs/vision.md, "Depth").
  * Kept across vis_tracker_reset. VIS_ERR_ARG (with the reason) for a profile that is not one; the
  * tracker's profile is then unchanged. */
+#define VIS_DEPTH_REL_MAX 10.0 /* largest |depth / shear| a profile may hold */
 vis_status vis_tracker_set_depth_profile(vis_tracker *t, const double *frac, const double *depth_rel,
                                          size_t n, vis_error *err);
 /* Shapes a prediction of the trial expects (its simulation's states: before, during and after the

@@ -252,7 +252,6 @@ static int parse_args(int argc, char **argv, track_cli *c)
 
 typedef struct depth_run {
     twin_depth d;
-    int quiet;
     char why[256];
     twin_status failed;
 } depth_run;
@@ -285,7 +284,7 @@ static int depth_predict(track_cli *c, depth_run *dr)
     }
     if (!(c->tp.length_mm > 0))
         c->tp.length_mm = sc.length * 1000.0;
-    if (!dr->quiet)
+    if (!c->quiet)
         fprintf(stderr, "track: predicting %s for the depth (N = %d)...\n", c->depth_scene, sc.nodes);
     rod_predict_opts o = rod_predict_opts_default();
     o.adaptive = 1;
@@ -308,7 +307,7 @@ static int depth_predict(track_cli *c, depth_run *dr)
         fprintf(stderr, "ribbonctl track: --depth-scene: the prediction has no sheared shape to take a depth from\n");
         return 1;
     }
-    if (!dr->quiet)
+    if (!c->quiet)
         fprintf(stderr, "track: depth from %zu predicted shapes (%s, %.1f s)%s\n", c->depth.n_shapes,
                 p.snapped ? "snapped" : "no snap", p.wall_s,
                 dr->d.full ? "; the shapes past the cap were left out" : "");
@@ -771,7 +770,6 @@ int ctl_track_main(int argc, char **argv)
     }
     depth_run dr;
     memset(&dr, 0, sizeof dr);
-    dr.quiet = c.quiet;
     if (c.depth_scene && depth_predict(&c, &dr)) {
         twin_depth_release(&dr.d);
         return 1;

@@ -66,7 +66,7 @@ twin_status twin_depth_add(twin_depth *d, const rod_sample *s, const rod *r, cha
     const size_t np = d->ts.n;
     if (twin_shape_depth_profile(&d->ts.view, d->frac + d->n * np, d->rel + d->n * np) != np) return TWIN_OK;
     for (size_t i = 0; i < np; i++)
-        if (fabs(d->rel[d->n * np + i]) > 10.0) return TWIN_OK; /* a near-zero shear: no profile */
+        if (fabs(d->rel[d->n * np + i]) > VIS_DEPTH_REL_MAX) return TWIN_OK; /* a near-zero shear: no profile */
     const double *q = d->ts.pos;
     for (size_t i = 0; i < np; i++) {
         d->xz[2 * (d->n * np + i)] = (q[3 * i] - q[0]) * 1000.0;

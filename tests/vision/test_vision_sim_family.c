@@ -33,6 +33,7 @@
 #include "rod_protocol.h"
 #include "scene_file.h"
 #include "twin_camera.h"
+#include "twin_depth.h"
 #include "twin_frames.h"
 #include "twin_shape.h"
 #include "vision.h"
@@ -532,14 +533,39 @@ static void snap_window(const trial_states *st, int *on, int *off)
 /* A prediction's shapes as the tracker's depth (vis_tracker_set_depth_library), with the twin's own
  * camera for this strip: 1 m away, where the 80-90 mm of shear is 9% of the distance. The library
  * is another run of each trial, at twice the time step (dt 0.004 s: its snap 0.7, 0.0 and 0.2 mm
- * of shear from the rendered run's), so the rendered shapes are not in it; its shapes are matched
- * by their x-z projections (FAM_LIB_SCALAR=1: by Delta Z and A). The same frames (two renderers
+ * of shear from the rendered run's), so the rendered shapes are not in it, collected as a session
+ * would by twin_depth (101-147 shapes after its thinning); its shapes are matched by their x-z
+ * projections (FAM_LIB_SCALAR=1: by Delta Z and A). The same frames (two renderers
  * of one seed) are tracked with the default depth profile and with the library. Full: the default
  * puts 26 of the 46 measured more than 2 px or 0.1 rad off (1.92 px RMS); the library none,
- * 0.221 px and 0.0227 rad RMS (0.295 px and 0.0230 by Delta Z and A): Delta Z within the issue's
+ * 0.222 px and 0.0227 rad RMS (0.296 px and 0.0230 by Delta Z and A): Delta Z within the issue's
  * bar, A not (see below). The library is only as good as the prediction of the snap: from a run
  * at N = 51 (snap 0.8 mm later at Delta L 0.5) 21 of 46 were off (2.2 px RMS; 22 and 3.1 px by
  * Delta Z and A), FAM_LIB_N=51 FAM_LIB_DT=0.002 shows it. */
+/* rod_predict on sc (as run_scene, without keeping the states), its shapes collected by twin_depth,
+ * the library a session's prediction would give. */
+static int collect_depth(void *user, const rod_sample *s, const rod *r)
+{
+    char why[256];
+    if (twin_depth_add(user, s, r, why, sizeof why) != TWIN_OK)
+        fail_msg("twin_depth_add: %s", why);
+    return 0;
+}
+
+static void predict_library(const rod_scene *sc, twin_depth *d, rod_prediction *pred)
+{
+    char err[512];
+    assert_int_equal(twin_depth_init(d, sc, err, sizeof err), TWIN_OK);
+    rod_predict_opts po = rod_predict_opts_default();
+    po.adaptive = 1;
+    po.post_snap_time = 0.3;
+    po.on_sample = collect_depth;
+    po.user = d;
+    if (rod_predict(sc, &po, pred, err, sizeof err) != ROD_OK)
+        fail_msg("rod_predict at Delta L %g: %s", sc->compression, err);
+    assert_false(d->full);
+}
+
 #define DEPTH_A_REACHED_RAD 0.025
 static const trial_spec DEPTH_TRIALS[] = {{0.3, 0, 0.21}, {0.5, 0, 0.21}, {0.6, -90, 0.21}};
 
@@ -547,7 +573,7 @@ static void test_depth_from_prediction(void **state)
 {
     (void)state;
     const int ntr = quick ? 1 : (int)(sizeof DEPTH_TRIALS / sizeof DEPTH_TRIALS[0]);
-    static trial_states st, pr;
+    static trial_states st;
     vis_frame *f = vis_frame_alloc(8, 8, 1, NULL);
     assert_non_null(f);
     score with = {0}, without = {0};
@@ -557,35 +583,16 @@ static void test_depth_from_prediction(void **state)
         run_trial(sp, &st, &pred);
         if (getenv("FAM_VERBOSE"))
             printf("  truth: snap at Delta W %.5f (%s)\n", pred.snap_dw, pred.asymmetric ? "asymmetric" : "symmetric");
-        pr.sc = load_scene_n(sp, getenv("FAM_LIB_N") ? atoi(getenv("FAM_LIB_N")) : 101,
-                             getenv("FAM_LIB_DT") ? atof(getenv("FAM_LIB_DT")) : 0.004);
-        run_scene(&pr, &pred);
+        const rod_scene psc = load_scene_n(sp, getenv("FAM_LIB_N") ? atoi(getenv("FAM_LIB_N")) : 101,
+                                           getenv("FAM_LIB_DT") ? atof(getenv("FAM_LIB_DT")) : 0.004);
+        twin_depth dep;
+        predict_library(&psc, &dep, &pred);
         if (getenv("FAM_VERBOSE"))
             printf("  prediction: snap at Delta W %.5f (%s)\n", pred.snap_dw, pred.asymmetric ? "asymmetric" : "symmetric");
-        /* The library: every state of the prediction with a shear to divide by. */
-        const size_t np = pr.npts;
-        double *key = malloc(sizeof(double) * 3 * (size_t)pr.n);
-        double *fr = malloc(sizeof(double) * np * (size_t)pr.n), *rel = malloc(sizeof(double) * np * (size_t)pr.n);
-        double *xz = malloc(sizeof(double) * 2 * np * (size_t)pr.n);
-        assert_true(key && fr && rel && xz);
-        size_t ns = 0;
-        for (int i = 0; i < pr.n; i++) {
-            vis_shape sh = pr.ts.view;
-            sh.pos = pr.pos + (size_t)i * 3 * np;
-            sh.normal = pr.nrm + (size_t)i * 3 * np;
-            if (twin_shape_depth_profile(&sh, fr + ns * np, rel + ns * np) != np)
-                continue;
-            for (size_t j = 0; j < np; j++) {
-                xz[2 * (ns * np + j)] = (sh.pos[3 * j] - sh.pos[0]) * 1000.0;
-                xz[2 * (ns * np + j) + 1] = (sh.pos[3 * j + 2] - sh.pos[2]) * 1000.0;
-            }
-            key[ns] = sh.pos[3 * (np - 1) + 1] * 1000.0;
-            key[pr.n + ns] = pr.dz_cam[i];
-            key[2 * pr.n + ns] = pr.a_cam[i];
-            ns++;
-        }
-        const vis_depth_library lib = {ns, np, key, key + pr.n, key + 2 * pr.n, fr, rel,
-                                       getenv("FAM_LIB_SCALAR") ? NULL : xz};
+        vis_depth_library lib = twin_depth_library(&dep);
+        if (getenv("FAM_LIB_SCALAR"))
+            lib.xz_mm = NULL;
+        const size_t ns = lib.n_shapes;
         vis_render_params rp;
         vis_calib cal;
         vis_track_params tp;
@@ -598,7 +605,7 @@ static void test_depth_from_prediction(void **state)
         int ks[64];
         const int nk = quick ? pick_states(&st, 3, 3, 1, ks) : pick_states(&st, 6, 10, 4, ks);
         printf("depth from a prediction (%zu shapes, N = %d, dt %g s), camera %.2f m: trial Delta L %.2f, creases %g deg\n",
-               ns, pr.sc.nodes, pr.sc.dt, rp.camera.distance_m, sp->dl, sp->fold_deg);
+               ns, psc.nodes, psc.dt, rp.camera.distance_m, sp->dl, sp->fold_deg);
         for (int j = 0; j < nk; j++)
             for (int use = 0; use < 2; use++) {
                 vis_tracker *trk = vis_tracker_create(&tp, &cal, &err);
@@ -610,11 +617,7 @@ static void test_depth_from_prediction(void **state)
             }
         vis_renderer_free(r[0]);
         vis_renderer_free(r[1]);
-        free(key);
-        free(fr);
-        free(rel);
-        free(xz);
-        trial_free(&pr);
+        twin_depth_release(&dep);
         trial_free(&st);
     }
     vis_frame_free(f);
