@@ -9,10 +9,10 @@
 #include <cstdio>
 #include <vector>
 
-extern "C" vis_status vis_overlay_draw(const vis_frame *in, const vis_tracker *t, const vis_measure *m,
-                                       int frame, vis_frame *out, vis_error *err)
+extern "C" vis_status vis_overlay_draw_curve(const vis_frame *in, const double *uv, size_t n, const vis_measure *m,
+                                             int frame, vis_frame *out, vis_error *err)
 {
-    if (!in || !out || !m || in->mat.empty())
+    if (!in || !out || !m || in->mat.empty() || (n > 0 && !uv))
         return vis::fail(err, VIS_ERR_ARG, "vis_overlay_draw: NULL or empty argument");
     VIS_GUARD(err, VIS_ERR_INTERNAL, {
         cv::Mat bgr;
@@ -24,10 +24,7 @@ extern "C" vis_status vis_overlay_draw(const vis_frame *in, const vis_tracker *t
         const double sc = 1 << shift;
         // Pixel -> fixed point, clamped so that no coordinate can overflow an int.
         auto fx = [&](double v) { return (int)std::lround(std::isfinite(v) ? std::min(1e5, std::max(-1e5, v)) * sc : 0.0); };
-        if (t && m->reason == VIS_REASON_NONE) {
-            const size_t n = vis_tracker_curve(t, nullptr, 0);
-            std::vector<double> uv(2 * n);
-            vis_tracker_curve(t, uv.data(), n);
+        if (m->reason == VIS_REASON_NONE) {
             std::vector<cv::Point> pts(n);
             for (size_t i = 0; i < n; i++)
                 pts[i] = cv::Point(fx(uv[2 * i]), fx(uv[2 * i + 1]));
@@ -47,5 +44,18 @@ extern "C" vis_status vis_overlay_draw(const vis_frame *in, const vis_tracker *t
         out->mat = bgr;
         vis::ok(err);
         return VIS_OK;
+    })
+}
+
+extern "C" vis_status vis_overlay_draw(const vis_frame *in, const vis_tracker *t, const vis_measure *m,
+                                       int frame, vis_frame *out, vis_error *err)
+{
+    if (!in || !out || !m || in->mat.empty())
+        return vis::fail(err, VIS_ERR_ARG, "vis_overlay_draw: NULL or empty argument");
+    VIS_GUARD(err, VIS_ERR_INTERNAL, {
+        const size_t n = t && m->reason == VIS_REASON_NONE ? vis_tracker_curve(t, nullptr, 0) : 0;
+        std::vector<double> uv(2 * n);
+        vis_tracker_curve(t, uv.data(), n);
+        return vis_overlay_draw_curve(in, uv.data(), n, m, frame, out, err);
     })
 }

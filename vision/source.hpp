@@ -24,6 +24,15 @@ public:
     }
     static double monotonic_s();
     uint64_t counted = 0;
+    // Pass over the next frame: VIS_OK, VIS_ERR_END or an error, as read() would say. Cheap only
+    // where cheap_skip() (raw grey packets: demuxed, not copied); otherwise it is a read.
+    virtual vis_status skip(vis_error *err)
+    {
+        cv::Mat m;
+        double t = 0;
+        return read(m, t, err);
+    }
+    virtual bool cheap_skip() const { return false; }
     virtual int frame_count() const { return -1; }
     virtual double fps() const { return 0.0; }
 };

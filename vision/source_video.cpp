@@ -64,28 +64,11 @@ public:
             index++;
             return VIS_OK;
         }
-        if (!cap.read(raw) || raw.empty()) {
-            if (live)
-                return fail(err, VIS_ERR_IO, "camera %s: no frame after frame %d", name.c_str(),
-                            index - 1);
-            if (count > 0 && index < count)
-                return fail(err, VIS_ERR_FORMAT,
-                            "video %s is damaged: %d of %d announced frames readable (last good "
-                            "frame %d)",
-                            name.c_str(), index, count, index - 1);
-            if (count <= 0)
-                return fail(err, VIS_ERR_FORMAT,
-                            "video %s is damaged: its container announces no frame count (index "
-                            "missing: the writer was killed or its disk filled?); %d frames readable",
-                            name.c_str(), index);
-            return fail(err, VIS_ERR_END, "end of video %s after %d frames", name.c_str(), index);
-        }
+        if (!cap.read(raw) || raw.empty())
+            return failed_read(err);
         if (packets) {
             if (raw.total() * raw.elemSize() != (size_t)width * (size_t)height)
-                return fail(err, VIS_ERR_FORMAT,
-                            "video %s is damaged: frame %d holds %zu bytes, not %d x %d (last good "
-                            "frame %d)",
-                            name.c_str(), index, raw.total() * raw.elemSize(), width, height, index - 1);
+                return short_packet(err);
             raw.reshape(1, height).copyTo(grey);
         } else {
             to_grey(raw, grey);
@@ -93,6 +76,40 @@ public:
         t_s = rate > 0 ? index / rate : cap.get(cv::CAP_PROP_POS_MSEC) * 1e-3;
         index++;
         return VIS_OK;
+    }
+    // Raw packets: the next one demuxed, its bytes not copied out (nor its size checked: whoever
+    // reads that frame does).
+    vis_status skip(vis_error *err) override
+    {
+        if (!packets || have_first)
+            return Source::skip(err);
+        if (!cap.grab())
+            return failed_read(err);
+        index++;
+        return VIS_OK;
+    }
+    bool cheap_skip() const override { return packets; }
+    // No frame where one was expected: the end, damage, or a camera's failure.
+    vis_status failed_read(vis_error *err)
+    {
+        if (live)
+            return fail(err, VIS_ERR_IO, "camera %s: no frame after frame %d", name.c_str(), index - 1);
+        if (count > 0 && index < count)
+            return fail(err, VIS_ERR_FORMAT,
+                        "video %s is damaged: %d of %d announced frames readable (last good frame %d)",
+                        name.c_str(), index, count, index - 1);
+        if (count <= 0)
+            return fail(err, VIS_ERR_FORMAT,
+                        "video %s is damaged: its container announces no frame count (index missing: the "
+                        "writer was killed or its disk filled?); %d frames readable",
+                        name.c_str(), index);
+        return fail(err, VIS_ERR_END, "end of video %s after %d frames", name.c_str(), index);
+    }
+    vis_status short_packet(vis_error *err)
+    {
+        return fail(err, VIS_ERR_FORMAT,
+                    "video %s is damaged: frame %d holds %zu bytes, not %d x %d (last good frame %d)",
+                    name.c_str(), index, raw.total() * raw.elemSize(), width, height, index - 1);
     }
     // A live V4L2 camera: OpenCV's V4L2 backend answers CAP_PROP_POS_MSEC with the dequeued
     // buffer's timestamp (struct v4l2_buffer.timestamp, in ms), which UVC drivers take from

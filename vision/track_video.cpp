@@ -1,16 +1,203 @@
 // track_video.cpp: a whole video decoded and tracked on every core, results identical to the serial
 // loop (vis_track_video).
 //
-// The tracker is sequential by nature: frame k is followed from frame k-1's curve, so two frames
-// cannot be tracked at once without changing the results. What runs in parallel is everything
-// else: decoding runs on its own thread (plus libavcodec's own threads) through the prefetching
-// source (source_prefetch.cpp) while the calling thread tracks, so the wall time is about
-// max(decode, track) per frame instead of their sum. The tracker sees exactly the frames, in
-// exactly the order, of the serial loop, so each frame's vis_measure is bit for bit the serial one
-// (test_vision_track_video checks it). threads = 1 is the plain serial loop (the reference and
-// the one-core figure); any other count decodes ahead on one extra thread (there is no more
-// parallelism in a sequential tracker to hand out).
-#include "vis_internal.hpp"
+// threads = 1 is the plain serial loop (the reference and the one-core figure). Otherwise the
+// stretches between the tracker's refresh points (vis_track_params.refresh_frames) go to separate
+// cores, each tracked from a fresh copy of the tracker, so every frame's vis_measure is bit for bit
+// the serial one (test_vision_track_video checks it) and `t` ends in the serial loop's state:
+//   - raw grey recordings (Y800, the trials' own): every worker reads the file itself, passing
+//     over the other workers' stretches as packets (demuxed, not copied), so each frame is read
+//     and tracked on one core with its pixels in that core's cache. Handing frames decoded on one
+//     thread to trackers on others cost 0.16 ms of CPU a 1280 x 720 frame in moving them between
+//     cores (a third of the tracking), measured with vis_track_pipe;
+//   - every other format (FFV1: decoding is what costs) decodes ahead on one thread
+//     (source_prefetch.cpp, plus libavcodec's own threads) into vis_track_pipe (track_pipe.cpp).
+#include "source.hpp"
+#include "tracker_impl.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace {
+
+vis_status serial(vis_source *src, vis_tracker *t, const double *shear_mm, size_t n_shear, vis_measure *out,
+                  size_t max_frames, size_t *n_frames, vis_frame *f, vis_error *err)
+{
+    for (size_t i = 0; i < max_frames; i++) {
+        const vis_status s = vis_source_read(src, f, nullptr, err);
+        if (s == VIS_ERR_END)
+            return VIS_OK;
+        if (s != VIS_OK)
+            return s;
+        const vis_status rc = vis_tracker_process(t, f, shear_mm && i < n_shear ? shear_mm[i] : 0.0, &out[i], err);
+        if (rc != VIS_OK)
+            return rc;
+        *n_frames = i + 1;
+    }
+    return VIS_OK;
+}
+
+vis_status piped(vis_source *src, vis_track_pipe *p, const double *shear_mm, size_t n_shear, vis_measure *out,
+                 size_t max_frames, size_t *n_frames, vis_frame *f, vis_error *err)
+{
+    size_t pushed = 0;
+    vis_status rc = VIS_OK;
+    // One result out (waiting for it when `wait`); false when none was taken.
+    auto take = [&](int wait) {
+        const vis_status s = vis_track_pipe_pop(p, wait, &out[*n_frames], nullptr, 0, nullptr, nullptr, err);
+        if (s == VIS_ERR_NOT_FOUND || s == VIS_ERR_END)
+            return false;
+        if (s != VIS_OK) {
+            rc = s;
+            return false;
+        }
+        (*n_frames)++;
+        return true;
+    };
+    while (rc == VIS_OK && pushed < max_frames) {
+        if (vis_track_pipe_held(p) >= vis_track_pipe_capacity(p) && !take(1))
+            break;
+        const vis_status s = vis_source_read(src, f, nullptr, err);
+        if (s == VIS_ERR_END)
+            break;
+        if (s != VIS_OK) {
+            rc = s;
+            break;
+        }
+        const double sh = shear_mm && pushed < n_shear ? shear_mm[pushed] : 0.0;
+        if ((rc = vis_track_pipe_push(p, f, sh, 0, err)) != VIS_OK)
+            break;
+        pushed++;
+        while (take(0)) {
+        }
+    }
+    // The frames already in the pipe come out even after a read error (they precede the damage).
+    const vis_status keep = rc;
+    const vis_error kept = err ? *err : vis_error{};
+    rc = VIS_OK;
+    while (rc == VIS_OK && take(1)) {
+    }
+    if (keep != VIS_OK) {
+        if (err)
+            *err = kept;
+        return keep;
+    }
+    return rc;
+}
+
+// Raw grey recordings: `n` workers, each with its own reader and tracker copy, taking the stretches
+// in order. The first frame that ends or fails the stream (or whose tracking fails) bounds the
+// result: everything before it was tracked (every earlier stretch was taken before it).
+struct Readers {
+    std::mutex mu;
+    uint64_t next = 0;              // next stretch to hand out
+    uint64_t stop_at = UINT64_MAX;  // first frame that ended or failed
+    vis_status stop_status = VIS_ERR_END;
+    vis_error stop_err{};
+    void failed(uint64_t i, vis_status s, const vis_error &e)
+    {
+        std::lock_guard<std::mutex> lk(mu);
+        if (i < stop_at) {
+            stop_at = i;
+            stop_status = s;
+            stop_err = e;
+        }
+    }
+};
+
+struct TrackerFree {
+    void operator()(vis_tracker *t) const { vis_tracker_free(t); }
+};
+
+vis_status readers(const char *path, vis::Source *first_src, vis_tracker *t, int n, const double *shear_mm,
+                   size_t n_shear, vis_measure *out, size_t max_frames, size_t *n_frames, vis_error *err)
+{
+    const uint64_t K = (uint64_t)vis::tracker_refresh_frames(t);
+    Readers sh;
+    std::vector<std::unique_ptr<vis_tracker, TrackerFree>> trk;
+    std::vector<int64_t> last(n, -1);  // the last frame each worker tracked
+    for (int w = 0; w < n; w++)
+        trk.emplace_back(vis::tracker_fresh_copy(t));
+    auto work = [&](int w, vis::Source *src) {
+        vis_error e{};
+        uint64_t pos = 0;  // the frame src hands out next
+        cv::Mat grey;
+        vis_frame f;
+        for (;;) {
+            uint64_t a;
+            {
+                std::lock_guard<std::mutex> lk(sh.mu);
+                a = sh.next++ * K;
+                if (a >= sh.stop_at || a >= max_frames)
+                    return;
+            }
+            // Passed over packet by packet: OpenCV 4.6's seek (CAP_PROP_POS_FRAMES) on raw
+            // packets does not land on the frame asked for (tried: results differed).
+            for (; pos < a; pos++) {
+                const vis_status s = src->skip(&e);
+                if (s != VIS_OK) {
+                    sh.failed(pos, s, e);
+                    return;
+                }
+            }
+            const uint64_t b = std::min<uint64_t>(a + K, max_frames);
+            for (uint64_t i = a; i < b; i++) {
+                double ts = 0;
+                vis_status s = src->read(grey, ts, &e);
+                pos++;
+                if (s == VIS_OK) {
+                    if (i == a)  // only once its frame is read: a worker at the end keeps its state
+                        vis_tracker_reset(trk[(size_t)w].get());
+                    f.mat = grey;
+                    s = vis_tracker_process(trk[(size_t)w].get(), &f, shear_mm && i < n_shear ? shear_mm[i] : 0.0,
+                                            &out[i], &e);
+                    f.mat.release();
+                    vis::tracker_drop_views(trk[(size_t)w].get());
+                }
+                if (s != VIS_OK) {
+                    sh.failed(i, s, e);
+                    return;
+                }
+                last[(size_t)w] = (int64_t)i;
+            }
+        }
+    };
+    std::vector<std::unique_ptr<vis::Source>> src;
+    src.emplace_back(first_src);
+    std::string open_fail;
+    for (int w = 1; w < n; w++) {
+        vis_error e{};
+        vis::Source *s = vis::source_video_open(path, &e);
+        if (!s || !s->cheap_skip()) {  // the file changed under us: say so, do not guess
+            delete s;
+            return vis::fail(err, VIS_ERR_IO, "video %s: a second reader could not open it as the first did", path);
+        }
+        src.emplace_back(s);
+    }
+    std::vector<std::thread> th;
+    for (int w = 1; w < n; w++)
+        th.emplace_back(work, w, src[(size_t)w].get());
+    work(0, src[0].get());
+    for (std::thread &x : th)
+        x.join();
+    *n_frames = (size_t)std::min<uint64_t>(sh.stop_at, max_frames);
+    for (int w = 0; w < n && *n_frames > 0; w++)
+        if (last[(size_t)w] == (int64_t)*n_frames - 1)
+            vis::tracker_take_state(t, trk[(size_t)w].get());
+    if (sh.stop_status != VIS_ERR_END && sh.stop_at < max_frames) {
+        vis_tracker_reset(t);
+        if (err)
+            *err = sh.stop_err;
+        return sh.stop_status;
+    }
+    return VIS_OK;
+}
+
+}  // namespace
 
 extern "C" vis_status vis_track_video(const char *path, vis_tracker *t, const double *shear_mm,
                                       size_t n_shear, int threads, vis_measure *out, size_t max_frames,
@@ -19,23 +206,37 @@ extern "C" vis_status vis_track_video(const char *path, vis_tracker *t, const do
     if (!path || !t || !out || !n_frames || threads < 0 || threads > 64)
         return vis::fail(err, VIS_ERR_ARG, "vis_track_video: NULL argument or threads outside 0..64");
     *n_frames = 0;
+    vis_tracker_reset(t);
+    const int n = threads ? threads : (int)std::max(1u, std::thread::hardware_concurrency());
+    if (n > 1 && vis::tracker_refresh_frames(t) > 0) {
+        vis_status rc = VIS_OK;
+        VIS_GUARD(err, VIS_ERR_INTERNAL, {
+            vis::Source *first = vis::source_video_open(path, err);
+            if (!first)
+                return err ? err->code : VIS_ERR_IO;
+            if (first->cheap_skip())
+                rc = readers(path, first, t, n, shear_mm, n_shear, out, max_frames, n_frames, err);
+            else {
+                delete first;
+                rc = VIS_ERR_NOT_FOUND;  // decoded formats: the pipe below
+            }
+        })
+        if (rc != VIS_ERR_NOT_FOUND) {
+            if (rc == VIS_OK)
+                vis::ok(err);
+            return rc;
+        }
+    }
     vis_source *src = threads == 1 ? vis_source_open_video(path, err) : vis_source_open_video_prefetch(path, err);
     if (!src)
         return err ? err->code : VIS_ERR_IO;
     vis_frame *f = vis_frame_alloc(8, 8, 1, err);
-    vis_status rc = f ? VIS_OK : VIS_ERR_NOMEM;
-    for (size_t i = 0; rc == VIS_OK && i < max_frames; i++) {
-        const vis_status s = vis_source_read(src, f, nullptr, err);
-        if (s == VIS_ERR_END)
-            break;
-        if (s != VIS_OK) {
-            rc = s;
-            break;
-        }
-        rc = vis_tracker_process(t, f, shear_mm && i < n_shear ? shear_mm[i] : 0.0, &out[i], err);
-        if (rc == VIS_OK)
-            *n_frames = i + 1;
-    }
+    vis_track_pipe *p = f && threads != 1 ? vis_track_pipe_create(t, threads, err) : nullptr;
+    vis_status rc = !f ? VIS_ERR_NOMEM : threads != 1 && !p ? (err ? err->code : VIS_ERR_INTERNAL) : VIS_OK;
+    if (rc == VIS_OK)
+        rc = p ? piped(src, p, shear_mm, n_shear, out, max_frames, n_frames, f, err)
+               : serial(src, t, shear_mm, n_shear, out, max_frames, n_frames, f, err);
+    vis_track_pipe_free(p);
     vis_frame_free(f);
     vis_source_close(src);
     if (rc == VIS_OK)

@@ -65,7 +65,9 @@ struct vis_tracker {
     cv::Mat trace_img;               // what the tracer samples: sig, or the grey frame itself
     bool trace_invert = false;       // sample 255 - value (grey frame, dark ribbon)
     cv::Size size;
-    vis::DepthProfile depth;         // depth along the arc (default cubic; vis_tracker_set_depth_profile)
+    vis::DepthProfile depth;         // depth along the arc this frame (the base, or a library's shape)
+    vis::DepthProfile base_depth;    // the profile of vis_tracker_set_depth_profile (default cubic)
+    long since_reset = 0;            // vis_tracker_process calls since made or reset (refresh_frames)
     vis::DepthLibrary library;       // a prediction's shapes (vis_tracker_set_depth_library)
     Attempt redo;                    // the best attempt measured again with the library's depth
 };
@@ -84,6 +86,7 @@ extern "C" vis_track_params vis_track_params_default(void)
     p.min_contrast = 12.0;
     p.min_quality = 0.3;
     p.min_bend_ratio = 2.0;
+    p.refresh_frames = 100;
     return p;
 }
 
@@ -104,6 +107,10 @@ static bool track_params_valid(const vis_track_params &p, vis_error *err)
                   "track params: need length_mm >= 0, 1 <= band_px <= 100, 1 <= ribbon_max_px <= 100, "
                   "0.25 <= step_px <= 20, 0 <= end_margin_px <= 200, 0 < fit_window <= 0.25, 0 < end_window <= 0.5, "
                   "0 <= min_contrast <= 255, 0 <= min_quality <= 1, 0 <= min_bend_ratio <= 10, a known polarity");
+        return false;
+    }
+    if (p.refresh_frames < 0 || p.refresh_frames > 100000) {
+        vis::fail(err, VIS_ERR_ARG, "track params: refresh_frames %d is outside 0..100000", p.refresh_frames);
         return false;
     }
     return true;
@@ -140,8 +147,9 @@ extern "C" vis_status vis_tracker_set_depth_profile(vis_tracker *t, const double
         return vis::fail(err, VIS_ERR_ARG, "vis_tracker_set_depth_profile: NULL tracker");
     VIS_GUARD(err, VIS_ERR_INTERNAL, {
         std::string why;
-        if (!t->depth.set(frac, depth_rel, n, why))
+        if (!t->base_depth.set(frac, depth_rel, n, why))
             return vis::fail(err, VIS_ERR_ARG, "%s", why.c_str());
+        t->depth = t->base_depth;
         vis::ok(err);
         return VIS_OK;
     })
@@ -165,9 +173,41 @@ extern "C" void vis_tracker_reset(vis_tracker *t)
     if (!t)
         return;
     t->prev.clear();
+    t->prev_length = 0;
+    t->curve.clear();
     if (t->p.polarity == VIS_POLARITY_AUTO)
         t->polarity = 0;
+    t->depth = t->base_depth;
+    t->since_reset = 0;
 }
+
+vis_tracker *vis::tracker_fresh_copy(const vis_tracker *t)
+{
+    vis_tracker *c = new vis_tracker(*t);
+    // cv::Mat copies share pixels: give the copy its own scratch images.
+    c->work = cv::Mat();
+    c->sig = cv::Mat();
+    c->trace_img = cv::Mat();
+    vis_tracker_reset(c);
+    return c;
+}
+
+void vis::tracker_take_state(vis_tracker *into, const vis_tracker *from)
+{
+    into->prev = from->prev;
+    into->prev_length = from->prev_length;
+    into->curve = from->curve;
+    into->polarity = from->polarity;
+    into->depth = from->depth;
+    into->since_reset = from->since_reset;
+    into->size = from->size;
+}
+
+void vis::tracker_drop_views(vis_tracker *t) { t->trace_img = cv::Mat(); }
+
+int vis::tracker_refresh_frames(const vis_tracker *t) { return t->p.refresh_frames; }
+
+long vis::tracker_since_reset(const vis_tracker *t) { return t->since_reset; }
 
 static void measure_clear(vis_measure *m, vis_reason r)
 {
@@ -560,6 +600,11 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
     if (!vis::finite(shear_mm))
         return vis::fail(err, VIS_ERR_ARG, "vis_tracker_process: shear_mm is not finite");
     measure_clear(out, VIS_REASON_UNREADABLE);
+    // Every refresh_frames-th frame starts from scratch: a function of the count alone, so a
+    // stretch that begins there tracks the same on a fresh copy of the tracker (track_pipe.cpp).
+    if (t->p.refresh_frames > 0 && t->since_reset >= t->p.refresh_frames)
+        vis_tracker_reset(t);
+    t->since_reset++;
     if (!f || f->mat.empty() || f->mat.depth() != CV_8U) {
         vis::ok(err);
         return VIS_OK;

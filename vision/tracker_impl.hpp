@@ -172,6 +172,18 @@ struct Workspace {
     FitScratch fit;
 };
 
+// --- tracker.cpp, for track_pipe.cpp
+// A copy of t (its parameters, calibration, depth profile and library) in the state
+// vis_tracker_reset leaves, with scratch of its own.
+vis_tracker *tracker_fresh_copy(const vis_tracker *t);
+// What carries from one frame to the next (previous curve, polarity, depth, the refresh count),
+// copied from `from` into `into`.
+void tracker_take_state(vis_tracker *into, const vis_tracker *from);
+// Let go of the frame's pixels (views kept for the tracer), so the caller may reuse the buffer.
+void tracker_drop_views(vis_tracker *t);
+int tracker_refresh_frames(const vis_tracker *t);
+long tracker_since_reset(const vis_tracker *t);  // vis_tracker_process calls since made or reset
+
 }  // namespace vis
 
 #endif

@@ -344,6 +344,12 @@ typedef struct vis_track_params {
                                   not measured, unless it is nearly symmetric (|A| below 0.1 rad)
                                   at a ratio of 1.25 or more; below 1 always (2, the default;
                                   0 = off: docs/vision-acquisition-and-replay-speed.md) */
+    int refresh_frames;        /* every this many frames (counted by vis_tracker_process since the
+                                  tracker was made or reset) the previous curve is forgotten and the
+                                  frame acquired from scratch, as after vis_tracker_reset: no drift
+                                  of following outlives it, and a recording splits there into
+                                  stretches that track on separate cores with the serial results
+                                  (vis_track_pipe). 0 = never; 0..100000 (100) */
 } vis_track_params;
 vis_track_params vis_track_params_default(void);
 
@@ -420,12 +426,46 @@ typedef struct vis_depth_library {
  * 21 (docs/vision.md, "Depth"). VIS_ERR_ARG with the reason for a library that is not one (the old
  * one stays). A profile set by vis_tracker_set_depth_profile is replaced at the next frame. */
 vis_status vis_tracker_set_depth_library(vis_tracker *t, const vis_depth_library *lib, vis_error *err);
-/* Forget the previous curve (the next frame is searched from scratch). */
+/* Forget the previous curve (the next frame is searched from scratch), the polarity when it is
+ * AUTO, and a library's shape (back to the profile of vis_tracker_set_depth_profile); the count of
+ * refresh_frames starts again. */
 void vis_tracker_reset(vis_tracker *t);
 
-/* Track every frame of the video at `path` (up to max_frames) with `t`, in order, into out[0..]:
- * decoding ahead on another thread while this one tracks (vis_source_open_video_prefetch;
- * `threads` 1 = the plain serial loop, any other value the prefetching one). out[i] is exactly what vis_tracker_process would give on frame i in a serial loop.
+/* Frames tracked on several cores with the serial results (vision/track_pipe.cpp). The caller
+ * pushes frames in order and pops their results in the same order. The stretches between the
+ * tracker's refresh points (vis_track_params.refresh_frames, and every push with `reset`) go to
+ * `threads` workers (0 = one per core), each tracking on its own copy of `t`: every result is bit
+ * for bit what vis_tracker_process(t, ...) gives on the same frames in a serial loop that goes on
+ * from t as it is at create and calls vis_tracker_reset(t) where `reset` is set. With
+ * refresh_frames 0 there is one stretch and one worker (tracking then only overlaps the caller's
+ * decoding). `t` is copied at create and must not be used meanwhile; vis_track_pipe_free puts back
+ * into it the state the serial loop ends in (reset instead when frames were left unpopped). The
+ * pipe holds at most vis_track_pipe_capacity frames: (threads + 1) refresh_frames, 16 to 256.
+ * One thread calls push and pop. */
+typedef struct vis_track_pipe vis_track_pipe;
+vis_track_pipe *vis_track_pipe_create(vis_tracker *t, int threads, vis_error *err);
+void vis_track_pipe_free(vis_track_pipe *p);
+size_t vis_track_pipe_capacity(const vis_track_pipe *p);
+size_t vis_track_pipe_held(const vis_track_pipe *p);   /* pushed and not yet popped */
+int vis_track_pipe_workers(const vis_track_pipe *p);
+/* Hand frame `f` over with its shear (see vis_tracker_process); `reset` forgets before it. The
+ * pixels move into the pipe without a copy: `f` comes back holding another buffer (contents
+ * undefined, often of the same size, ready to be read into). VIS_ERR_ARG when the pipe is full
+ * (pop first), for a NULL or empty frame, or a shear that is not finite. */
+vis_status vis_track_pipe_push(vis_track_pipe *p, vis_frame *f, double shear_mm, int reset, vis_error *err);
+/* The oldest frame's result: its status is the return value (VIS_OK, or the error that
+ * vis_tracker_process gave on it, in err), its measure in *m, its centreline in uv (up to max_uv
+ * (u, v) pairs; *n_uv the count, as vis_tracker_curve), and the frame itself moved into `frame`
+ * (may be NULL; its old buffer goes back to the pipe). Waits for it when `wait`; otherwise
+ * VIS_ERR_NOT_FOUND when it is not done yet. VIS_ERR_END when the pipe holds no frame. */
+vis_status vis_track_pipe_pop(vis_track_pipe *p, int wait, vis_measure *m, double *uv, size_t max_uv,
+                              size_t *n_uv, vis_frame *frame, vis_error *err);
+
+/* Track every frame of the video at `path` (up to max_frames) with `t`, in order, into out[0..],
+ * starting with vis_tracker_reset(t): `threads` 1 is the plain serial loop; any other value decodes
+ * ahead on another thread (vis_source_open_video_prefetch) and tracks on `threads` cores (0 = all)
+ * through vis_track_pipe. out[i] is exactly what vis_tracker_process gives on frame i in the serial
+ * loop, and `t` ends in the same state.
  * shear_mm[i] (NULL or i >= n_shear: 0) is frame i's shear. *n_frames gets the frames done; a
  * damaged video returns its error after the frames before the damage (vision/track_video.cpp). */
 vis_status vis_track_video(const char *path, vis_tracker *t, const double *shear_mm, size_t n_shear,
@@ -435,6 +475,9 @@ vis_status vis_track_video(const char *path, vis_tracker *t, const double *shear
 /* Draw the tracked centreline, midpoint and values over `in` into `out` (3-channel). */
 vis_status vis_overlay_draw(const vis_frame *in, const vis_tracker *t, const vis_measure *m, int frame,
                             vis_frame *out, vis_error *err);
+/* The same with the centreline given: n (u, v) pairs (as vis_track_pipe_pop hands them out). */
+vis_status vis_overlay_draw_curve(const vis_frame *in, const double *uv, size_t n, const vis_measure *m, int frame,
+                                  vis_frame *out, vis_error *err);
 
 /* Index of the first frame after a jump in Delta Z, or -1. A jump is a change between consecutive
  * measured frames larger than `min_jump` (normalised) and than `fraction` of the overall range. */

@@ -4,7 +4,7 @@
  *                   [--camera-distance-mm D] [--camera-tilt-rad T] [--shear-csv FILE] [--length-mm L]
  *                   [--polarity auto|dark|light] [--csv OUT] [--overlay OUT.mkv]
  *                   [--save-calib FILE] [--depth-scene SCENE [--depth-set section.key=value ...]]
- *                   [--json] [--quiet]
+ *                   [--threads N] [--refresh-frames K] [--json] [--quiet]
  *   SCALE: --px-per-mm S | --clamp-spacing-mm MM | --length-mm L alone
  *
  * PATTERN: an image sequence such as dir/frame_%04d.png (numbered from 0).
@@ -28,7 +28,10 @@
  * frames are read and gives the tracker the prediction's shapes as its depth (twin_depth.h,
  * docs/vision.md "Depth"): each frame is measured at the depth of the predicted shape nearest to
  * what it shows, instead of the default profile. Only worth it with the camera close (about 1 m
- * for a 200 mm strip) and only as good as the prediction of the snap; the default is off. */
+ * for a 200 mm strip) and only as good as the prediction of the snap; the default is off.
+ * Once the calibration is complete the frames go through vis_track_pipe: the stretches between
+ * the tracker's refresh points (--refresh-frames, 100 by default) are tracked on --threads cores
+ * (0, the default: all; 1: the plain serial loop), every result bit for bit the serial loop's. */
 #include <jansson.h>
 #include <math.h>
 #include <stdio.h>
@@ -44,6 +47,7 @@
 
 #define TRACK_MAX_FRAMES 50000000 /* loop cap: about 19 days at 30 fps */
 #define TRACK_MAX_DEPTH_SETS 64
+#define TRACK_UV_MAX 65536 /* centreline points kept for the overlay */
 
 typedef struct track_cli {
     const char *video, *calib_file, *csv, *overlay, *save_calib, *shear_csv;
@@ -55,6 +59,7 @@ typedef struct track_cli {
     int have_tilt;
     double left[2], right[2];
     int have_left, have_right, json, quiet;
+    int threads;                                   /* --threads: 0 all cores, 1 serial */
     vis_track_params tp;
 } track_cli;
 
@@ -95,6 +100,10 @@ static void usage(FILE *f)
             "                           for a camera close to the ribbon; default: the clamped\n"
             "                           shear profile. --length-mm defaults to the scene's length\n"
             "  --depth-set K=V          override in that scene, section.key=value (repeatable)\n"
+            "  --threads N              cores that track (0, the default: all; 1: the serial loop);\n"
+            "                           the results are the same whatever N\n"
+            "  --refresh-frames K       acquire from scratch every K frames (100; 0: never): the\n"
+            "                           stretches between are what the cores share\n"
             "  --json                   summary as JSON on stdout\n"
             "  --quiet                  no progress bar\n");
 }
@@ -180,6 +189,17 @@ static int parse_args(int argc, char **argv, track_cli *c)
             if (parse_num(a, v, &c->tilt_rad) || fabs(c->tilt_rad) > 1.2)
                 return -1;
             c->have_tilt = 1;
+        } else if (!strcmp(a, "--threads") || !strcmp(a, "--refresh-frames")) {
+            double x = 0;
+            const int th = !strcmp(a, "--threads");
+            if (parse_num(a, v, &x) || x != floor(x) || x < 0 || x > (th ? 64 : 100000)) {
+                fprintf(stderr, "ribbonctl track: %s needs a whole number from 0 to %d\n", a, th ? 64 : 100000);
+                return -1;
+            }
+            if (th)
+                c->threads = (int)x;
+            else
+                c->tp.refresh_frames = (int)x;
         } else if (!strcmp(a, "--length-mm")) {
             if (parse_num(a, v, &c->tp.length_mm) || c->tp.length_mm <= 0)
                 return -1;
@@ -473,7 +493,13 @@ typedef struct track_run {
     int damaged;
     long clamps_frame; /* frame where the clamps were found, -1 when given */
     char failure[400];
+    /* Once the calibration is complete: the tracker's work on every core. */
+    vis_track_pipe *pipe;
+    double *t_ring;    /* the times of the frames in the pipe, by frame number modulo its capacity */
+    double *uv;        /* a popped frame's centreline */
+    vis_frame *popped; /* a popped frame (for the overlay) */
 } track_run;
+
 
 /* The calibration from --calib, or from the given parts (clamp points may still be found later);
  * saved now when already complete. Returns 0, or the exit status after printing the reason. */
@@ -518,6 +544,11 @@ static int track_open(const track_cli *c, const track_cal *tc, track_run *r)
     r->over = vis_frame_alloc(8, 8, 3, &err);
     if ((tc->have_clamps && !r->trk) || !r->frame || !r->over) {
         snprintf(r->failure, sizeof r->failure, "%s", err.message);
+        return 1;
+    }
+    r->uv = malloc(2 * TRACK_UV_MAX * sizeof *r->uv);
+    if (!r->uv) {
+        snprintf(r->failure, sizeof r->failure, "out of memory");
         return 1;
     }
     if (c->csv) {
@@ -625,16 +656,11 @@ static int track_record(track_run *r, size_t i, double t, const vis_measure *m)
     return 0;
 }
 
-/* Frame i with its measurement drawn on it, appended to the overlay video (opened at the first
- * frame). 0, or 1 with r->failure set. */
-static int track_overlay(const track_cli *c, track_run *r, size_t i, const vis_measure *m,
-                         double fps)
+/* r->over (a frame with its measurement drawn on it) appended to the overlay video (opened at the
+ * first frame). 0, or 1 with r->failure set. */
+static int track_overlay_write(const track_cli *c, track_run *r, double fps)
 {
     vis_error err;
-    if (vis_overlay_draw(r->frame, r->trk, m, (int)i, r->over, &err) != VIS_OK) {
-        snprintf(r->failure, sizeof r->failure, "overlay: %s", err.message);
-        return 1;
-    }
     if (!r->ov) {
         r->ov = vis_video_writer_open(c->overlay, vis_frame_width(r->over), vis_frame_height(r->over),
                                       3, fps > 0 ? fps : 25.0, &err);
@@ -650,6 +676,67 @@ static int track_overlay(const track_cli *c, track_run *r, size_t i, const vis_m
     return 0;
 }
 
+/* Frame i (its time t) measured: recorded, drawn on the overlay (with the centreline uv, n pairs),
+ * the progress shown. 0, or 1 with r->failure set. */
+static int track_done(const track_cli *c, track_run *r, size_t i, double t, const vis_frame *frame,
+                      const double *uv, size_t n, const vis_measure *m, double fps, int total)
+{
+    if (track_record(r, i, t, m))
+        return 1;
+    if (c->overlay) {
+        vis_error err;
+        if (vis_overlay_draw_curve(frame, uv, n, m, (int)i, r->over, &err) != VIS_OK) {
+            snprintf(r->failure, sizeof r->failure, "overlay: %s", err.message);
+            return 1;
+        }
+        if (track_overlay_write(c, r, fps))
+            return 1;
+    }
+    if (!c->quiet && r->n % 10 == 0)
+        progress(r->n, total, 0);
+    return 0;
+}
+
+/* The oldest frame in the pipe, when done (waiting for it when `wait`). 1 when one was taken, 0
+ * when none, -1 with r->failure set. */
+static int track_pop(const track_cli *c, track_run *r, int wait, double fps, int total)
+{
+    vis_error err;
+    vis_measure m;
+    size_t n = 0;
+    const vis_status s = vis_track_pipe_pop(r->pipe, wait, &m, r->uv, TRACK_UV_MAX, &n, r->popped, &err);
+    if (s == VIS_ERR_NOT_FOUND || s == VIS_ERR_END)
+        return 0;
+    const size_t i = r->n;
+    if (s != VIS_OK) {
+        snprintf(r->failure, sizeof r->failure, "frame %zu: %s", i, err.message);
+        return -1;
+    }
+    const size_t cap = vis_track_pipe_capacity(r->pipe);
+    if (track_done(c, r, i, r->t_ring[i % cap], r->popped, r->uv, n < TRACK_UV_MAX ? n : TRACK_UV_MAX, &m, fps,
+                   total))
+        return -1;
+    return 1;
+}
+
+/* The tracker is complete (clamps and scale known): from the next frame on it works through the
+ * pipe, unless --threads 1. 0, or 1 with r->failure set. */
+static int track_start_pipe(const track_cli *c, track_run *r)
+{
+    if (c->threads == 1 || r->pipe)
+        return 0;
+    vis_error err;
+    r->pipe = vis_track_pipe_create(r->trk, c->threads, &err);
+    const size_t cap = r->pipe ? vis_track_pipe_capacity(r->pipe) : 0;
+    r->t_ring = r->pipe ? calloc(cap, sizeof *r->t_ring) : NULL;
+    r->popped = r->pipe ? vis_frame_alloc(8, 8, 1, &err) : NULL;
+    if (!r->pipe || !r->t_ring || !r->popped) {
+        snprintf(r->failure, sizeof r->failure, "tracking on every core: %s", r->pipe ? "out of memory" : err.message);
+        return 1;
+    }
+    return 0;
+}
+
 /* Every frame of the source, up to the end, the damage or the first failure. */
 static void track_frames(const track_cli *c, track_cal *tc, const shear_table *shear, track_run *r)
 {
@@ -659,6 +746,11 @@ static void track_frames(const track_cli *c, track_cal *tc, const shear_table *s
     const double fps = vis_source_fps(r->src);
     for (size_t i = 0; i < TRACK_MAX_FRAMES; i++) {
         double t = 0.0;
+        if (r->pipe && vis_track_pipe_held(r->pipe) >= vis_track_pipe_capacity(r->pipe) &&
+            track_pop(c, r, 1, fps, total) < 0) {
+            r->rc = 1;
+            break;
+        }
         const vis_status st = vis_source_read(r->src, r->frame, &t, &err);
         if (st == VIS_ERR_END)
             break;
@@ -668,10 +760,26 @@ static void track_frames(const track_cli *c, track_cal *tc, const shear_table *s
             r->rc = 1;
             break;
         }
+        const double sh = shear_at(shear, i);
+        if (r->pipe) {
+            r->t_ring[i % vis_track_pipe_capacity(r->pipe)] = t;
+            if (vis_track_pipe_push(r->pipe, r->frame, sh, 0, &err) != VIS_OK) {
+                snprintf(r->failure, sizeof r->failure, "frame %zu: %s", i, err.message);
+                r->rc = 1;
+                break;
+            }
+            int got;
+            while ((got = track_pop(c, r, 0, fps, total)) > 0) {
+            }
+            if (got < 0) {
+                r->rc = 1;
+                break;
+            }
+            continue;
+        }
         vis_measure m;
         memset(&m, 0, sizeof m);
         m.reason = VIS_REASON_CLAMP_NOT_FOUND;
-        const double sh = shear_at(shear, i);
         if (!tc->have_clamps && track_find_clamps(c, tc, r, i, sh, show)) {
             r->rc = 1;
             break;
@@ -686,12 +794,20 @@ static void track_frames(const track_cli *c, track_cal *tc, const shear_table *s
             r->rc = 1;
             break;
         }
-        if (track_record(r, i, t, &m) || (c->overlay && track_overlay(c, r, i, &m, fps))) {
+        const size_t n = r->trk && c->overlay ? vis_tracker_curve(r->trk, r->uv, TRACK_UV_MAX) : 0;
+        if (track_done(c, r, i, t, r->frame, r->uv, n < TRACK_UV_MAX ? n : TRACK_UV_MAX, &m, fps, total) ||
+            (r->trk && !tc->scale_pending && track_start_pipe(c, r))) {
             r->rc = 1;
             break;
         }
-        if (show && r->n % 10 == 0)
-            progress(r->n, total, 0);
+    }
+    /* The frames still in the pipe were read before any failure: they are kept. */
+    if (r->pipe) {
+        int got;
+        while ((got = track_pop(c, r, 1, fps, total)) > 0) {
+        }
+        if (got < 0)
+            r->rc = 1;
     }
     if (show)
         progress(r->n, total, 1);
@@ -750,6 +866,10 @@ static void track_report(const track_cli *c, const track_cal *tc, track_run *r)
 
 static void track_run_free(track_run *r)
 {
+    vis_track_pipe_free(r->pipe);
+    free(r->t_ring);
+    free(r->uv);
+    vis_frame_free(r->popped);
     free(r->dz);
     free(r->valid);
     vis_frame_free(r->frame);

@@ -1,6 +1,6 @@
 /* ctl_vision_bench.c: `ribbonctl vision-bench`: speed of the vision module, one JSON line.
  *
- *   ribbonctl vision-bench [--width W --height H] [--frames N] [--dir DIR]
+ *   ribbonctl vision-bench [--width W --height H] [--frames N] [--refresh K] [--dir DIR]
  *
  * Renders N frames (default 200) of a ribbon arch (a cosine arch between clamps 160 mm apart, 5 mm
  * wide and 1 mm thick, about 5 px in the image, with a slowly growing asymmetric mode) at W x H (default 1280 x 720), writes them to an
@@ -17,9 +17,11 @@
  * Issue 5's targets (one thread): track_fps >= 500, decode_track_fps >= 150. Rendering is not
  * timed. Then (issue 14) one line per recording format ("bench":"vision_video", FFV1 .mkv and raw
  * Y800 .avi of the same frames): decode + track through vis_track_video serially on one pinned
- * CPU and with decoding ahead on its own thread, the speed-up, whether every frame's result is
- * identical, the CPU ms of decoding and of tracking apart and the bound overlapping them gives on
- * two free cores (the machine is shared, so wall clock alone says little), the load average; and
+ * CPU and on every core (stretches of K = --refresh frames, the tracker's refresh_frames, default
+ * 100, tracked in parallel: raw Y800 read by each worker, FFV1 decoded on one thread into
+ * vis_track_pipe), the speed-up, whether every frame's result is identical, the CPU ms of decoding
+ * and of tracking apart in the serial run and the bound overlapping them alone would give, the CPU
+ * ms a frame of the all-cores run (all threads), the load average; and
  * one line for the tracker alone on a 1280 x 256 ROI on one pinned CPU ("bench":"vision_roi",
  * target 1000 fps). docs/vision-acquisition-and-replay-speed.md has the measured figures. */
 #define _GNU_SOURCE /* sched_setaffinity: the one-core figures run pinned to one CPU */
@@ -207,9 +209,10 @@ static int bench_video_format(const char *path, const char *format, vis_frame **
     if (sa != VIS_OK)
         goto out;
     t0 = now_s();
+    const double par_c0 = cpu_s();
     if (vis_track_video(path, t2, NULL, 0, 0, b, (size_t)frames, &nb, err) != VIS_OK)
         goto out;
-    const double par_s = now_s() - t0;
+    const double par_s = now_s() - t0, par_cpu = cpu_s() - par_c0;
     int identical = na == nb;
     for (size_t i = 0; identical && i < na; i++)
         identical = a[i].reason == b[i].reason && a[i].dz == b[i].dz && a[i].a == b[i].a &&
@@ -221,15 +224,15 @@ static int bench_video_format(const char *path, const char *format, vis_frame **
         la[0] = -1;
     const double dms = na ? 1e3 * dec_cpu / (double)na : 0, tms = na ? 1e3 * trk_cpu / (double)na : 0;
     const double mx = dms > tms ? dms : tms;
-    printf("{\"bench\":\"vision_video\",\"format\":\"%s\",\"width\":%d,\"height\":%d,\"frames\":%zu,"
+    printf("{\"bench\":\"vision_video\",\"format\":\"%s\",\"width\":%d,\"height\":%d,\"frames\":%zu,\"refresh_frames\":%d,"
            "\"one_core_pinned\":%s,\"fps_one_core\":%.1f,\"fps_all_cores\":%.1f,\"cores\":%ld,"
            "\"speedup\":%.2f,\"identical\":%s,\"decode_cpu_ms\":%.2f,\"track_cpu_ms\":%.2f,"
            "\"fps_one_core_cpu\":%.1f,\"fps_overlap_bound_cpu\":%.1f,\"speedup_bound_cpu\":%.2f,"
-           "\"load_avg\":%.1f,\"target_speedup\":1.8,\"target_fps\":150}\n",
-           format, w, h, nb, pinned ? "true" : "false", (double)na / serial_s, (double)nb / par_s, cores,
+           "\"all_cores_cpu_ms\":%.2f,\"load_avg\":%.1f,\"target_speedup\":1.8,\"target_fps\":150}\n",
+           format, w, h, nb, tp->refresh_frames, pinned ? "true" : "false", (double)na / serial_s, (double)nb / par_s, cores,
            serial_s / par_s * (double)nb / (double)(na ? na : 1), identical ? "true" : "false", dms, tms,
            dms + tms > 0 ? 1e3 / (dms + tms) : 0.0, mx > 0 ? 1e3 / mx : 0.0, mx > 0 ? (dms + tms) / mx : 0.0,
-           la[0]);
+           nb ? 1e3 * par_cpu / (double)nb : 0.0, la[0]);
     rc = 0;
 out:
     free(a);
@@ -300,12 +303,16 @@ out:
 
 int ctl_vision_bench_main(int argc, char **argv)
 {
-    int w = 1280, h = 720, frames = 200;
+    int w = 1280, h = 720, frames = 200, refresh = vis_track_params_default().refresh_frames;
     const char *dir = getenv("TMPDIR");
     for (int i = 1; i < argc; i++) {
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            printf("usage: ribbonctl vision-bench [--width W --height H] [--frames N] [--dir DIR]\n");
+            printf("usage: ribbonctl vision-bench [--width W --height H] [--frames N] [--refresh K] [--dir DIR]\n"
+                   "  One JSON line per measurement (see docs/vision-acquisition-and-replay-speed.md): the tracker\n"
+                   "  and FFV1 decoding on one thread; decode + track of a W x H recording (default 1280 x 720,\n"
+                   "  N frames, default 200) in FFV1 and raw Y800, on one pinned core and on every core, with the\n"
+                   "  tracker refreshing every K frames (default: the tracker's, 100); the tracker on a 1280 x 256 ROI.\n");
             return 0;
         } else if (!strcmp(argv[i], "--width") && v) {
             w = atoi(v);
@@ -316,6 +323,9 @@ int ctl_vision_bench_main(int argc, char **argv)
         } else if (!strcmp(argv[i], "--frames") && v) {
             frames = atoi(v);
             i++;
+        } else if (!strcmp(argv[i], "--refresh") && v) {
+            refresh = atoi(v);
+            i++;
         } else if (!strcmp(argv[i], "--dir") && v) {
             dir = v;
             i++;
@@ -324,9 +334,10 @@ int ctl_vision_bench_main(int argc, char **argv)
             return 2;
         }
     }
-    if (w < 64 || h < 48 || w > 8192 || h > 8192 || frames < 1 || frames > BENCH_MAX_FRAMES) {
-        fprintf(stderr, "ribbonctl vision-bench: need 64 <= width, 48 <= height <= 8192, 1 <= frames <= %d\n",
-                BENCH_MAX_FRAMES);
+    if (w < 64 || h < 48 || w > 8192 || h > 8192 || frames < 1 || frames > BENCH_MAX_FRAMES || refresh < 0 ||
+        refresh > 100000) {
+        fprintf(stderr, "ribbonctl vision-bench: need 64 <= width, 48 <= height <= 8192, 1 <= frames <= %d, "
+                "0 <= refresh <= 100000\n", BENCH_MAX_FRAMES);
         return 2;
     }
     char path[1024];
@@ -370,6 +381,7 @@ int ctl_vision_bench_main(int argc, char **argv)
     cal.px_per_mm = rp.camera.focal_px / rp.camera.distance_m / 1000.0;
     vis_track_params tp = vis_track_params_default();
     tp.ribbon_max_px = 8.0;
+    tp.refresh_frames = refresh;
     t = vis_tracker_create(&tp, &cal, &err);
     if (!t)
         goto out;

@@ -66,6 +66,14 @@ void trial_publish_frame(live_bus *b, const vis_frame *f, const vis_tracker *trk
                            vis_frame_stride(f), vis_frame_data((vis_frame *)f), uv, n);
 }
 
+void trial_publish_frame_curve(live_bus *b, const vis_frame *f, const double *uv, size_t n, long index, double t_s)
+{
+    if (!b || !f || !live_bus_frame_due(b, t_s)) return;
+    if (n > LIVE_UV_MAX) n = LIVE_UV_MAX;
+    live_bus_publish_frame(b, t_s, index, vis_frame_width(f), vis_frame_height(f), vis_frame_channels(f),
+                           vis_frame_stride(f), vis_frame_data((vis_frame *)f), uv, n);
+}
+
 void trial_publish_prediction(live_bus *b, int64_t trial_id, int ok, int snapped, double snap_dw, const char *regime,
                            size_t n, const double *dw, const double *dz, const double *a, const char *why)
 {

@@ -20,6 +20,8 @@ void trial_publish_event(live_bus *b, int64_t trial_id, double t_s, const char *
 void trial_publish_sample(live_bus *b, int64_t trial_id, const trial_sample *smp);
 /* The frame with the tracker's last centreline, when the bus wants one (at most 10 a second). */
 void trial_publish_frame(live_bus *b, const vis_frame *f, const vis_tracker *trk, long index, double t_s);
+/* The same with the centreline given (n (u, v) pairs, the first LIVE_UV_MAX kept). */
+void trial_publish_frame_curve(live_bus *b, const vis_frame *f, const double *uv, size_t n, long index, double t_s);
 void trial_publish_prediction(live_bus *b, int64_t trial_id, int ok, int snapped, double snap_dw, const char *regime,
                            size_t n, const double *dw, const double *dz, const double *a, const char *why);
 void trial_publish_result(live_bus *b, int64_t trial_id, const trial_result *r);

@@ -448,6 +448,68 @@ static void publish_steps(trial_replay *r, double t, int *step)
     }
 }
 
+/* One replay's frames between the tracking pipe and the store. */
+typedef struct replay_loop {
+    trial_replay *r;
+    store_samples *w;
+    trial_result *res;
+    vis_track_pipe *pipe;
+    store_sample *pending; /* the rails' sample of each frame in the pipe, by push count modulo cap */
+    size_t cap, pushed, taken;
+    vis_frame *shown;      /* a frame out of the pipe, for the live page */
+    double uv[2 * LIVE_UV_MAX];
+    snap_detect det;
+    int step, snap_told;
+    long total;
+    void (*progress)(void *u, long frame, long total);
+    void *u;
+} replay_loop;
+
+/* The oldest frame's measurement out of the pipe (waiting for it when `wait`) and what follows it:
+ * the sample stored, the live page told, the snap detector fed. 1 when a frame was taken, 0 when
+ * none was ready, -1 with `why` set. */
+static int replay_take(replay_loop *L, int wait, char *why, size_t why_len)
+{
+    vis_measure m;
+    vis_error ve = {0};
+    size_t n_uv = 0;
+    const vis_status s = vis_track_pipe_pop(L->pipe, wait, &m, L->uv, LIVE_UV_MAX, &n_uv, L->shown, &ve);
+    if (s == VIS_ERR_NOT_FOUND || s == VIS_ERR_END) return 0;
+    if (s != VIS_OK) {
+        snprintf(why, why_len, "tracker: %s", ve.message);
+        return -1;
+    }
+    trial_replay *r = L->r;
+    const trial_record *rec = &r->rec;
+    const int64_t id = r->new_id;
+    store_sample x = L->pending[L->taken++ % L->cap];
+    const long f = x.frame;
+    int measured = m.reason == VIS_REASON_NONE && m.quality >= rec->min_quality && isfinite(m.dz) && isfinite(m.a);
+    x.kind = STORE_SAMPLE_FRAME;
+    x.quality = isfinite(m.quality) ? m.quality : 0.0;
+    if (measured) {
+        x.dz = m.dz;
+        x.a = rig_calib_a_sign(&rec->calib) * m.a;
+        L->res->measured_frames++;
+    } else {
+        snprintf(x.reason, sizeof x.reason, "%s", m.reason == VIS_REASON_NONE ? "low quality" : vis_reason_str(m.reason));
+    }
+    if (store_samples_add(L->w, &x, why, why_len) != STORE_OK) return -1;
+    L->res->frames++;
+    publish_steps(r, x.t_s, &L->step);
+    publish_sample(r->bus, id, &x, measured);
+    trial_publish_frame_curve(r->bus, L->shown, L->uv, n_uv, f, x.t_s);
+    int in_shear = isfinite(r->t_shear) ? (x.t_s >= r->t_shear && (!isfinite(r->t_return) || x.t_s < r->t_return)) : 1;
+    if (in_shear) snap_detect_add(&L->det, f, x.t_s, x.dw, x.dz, x.a, measured);
+    if (!L->snap_told && snap_detect_snapped(&L->det)) {
+        trial_publish_state_name(r->bus, id, "snapped", x.t_s, NULL);
+        L->snap_told = 1;
+    }
+    L->res->duration_s = x.t_s;
+    if (L->progress && f % 50 == 0) L->progress(L->u, f, L->total);
+    return 1;
+}
+
 int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
                          void (*progress)(void *u, long frame, long total), void *u, trial_result *res, char *why,
                          size_t why_len)
@@ -458,6 +520,8 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
     int rc = -1, aborted = 0;
     vis_source *vs = NULL;
     vis_tracker *trk = NULL;
+    vis_track_pipe *pipe = NULL;
+    replay_loop L = {0};
     vis_frame *frame = NULL;
     store_samples *w = NULL;
     char w2[256];
@@ -483,19 +547,36 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
         goto fail;
     }
     if (store_samples_begin(st, id, NULL, &w, why, why_len) != STORE_OK) goto fail;
-    snap_detect det;
-    snap_detect_init(&det, &rec->snap);
-    long total = vis_source_frame_count(vs), skipped = 0;
-    int reset_done = 0, step = 0, snap_told = 0;
+    L.r = r;
+    L.w = w;
+    L.res = res;
+    L.progress = progress;
+    L.u = u;
+    snap_detect_init(&L.det, &rec->snap);
+    L.total = vis_source_frame_count(vs);
+    long skipped = 0;
+    int reset_done = 0;
     trial_publish_begin(r->bus, id, "replay", r->note);
     trial_publish_state_name(r->bus, id, "replaying", NAN, r->video);
     publish_source_prediction(r, st);
+    /* Tracked on every core (vis_track_pipe: the results are the serial loop's); what follows a
+     * frame's measurement happens as it comes out, in order. */
+    pipe = vis_track_pipe_create(trk, 0, &ve);
+    L.cap = pipe ? vis_track_pipe_capacity(pipe) : 0;
+    L.pending = pipe ? calloc(L.cap, sizeof *L.pending) : NULL;
+    L.shown = pipe ? vis_frame_alloc(16, 16, 1, &ve) : NULL;
+    if (!pipe || !L.pending || !L.shown) {
+        snprintf(why, why_len, "tracker: %s", pipe ? "out of memory" : ve.message);
+        goto fail;
+    }
+    L.pipe = pipe;
     for (long f = 0;; f++) {
         if (cancel && atomic_load(cancel)) {
             snprintf(why, why_len, "replay aborted at frame %ld", f);
             aborted = 1;
             goto fail;
         }
+        if (vis_track_pipe_held(pipe) >= L.cap && replay_take(&L, 1, why, why_len) < 0) goto fail;
         vis_status s = vis_source_read(vs, frame, NULL, &ve);
         if (s == VIS_ERR_END) break;
         if (s != VIS_OK) {
@@ -509,43 +590,26 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
             skipped++;
             continue;
         }
+        int reset = 0;
         if (!reset_done && isfinite(r->t_check) && x.t_s >= r->t_check) {
-            vis_tracker_reset(trk);
+            reset = 1; /* frames during the moves are not trusted */
             reset_done = 1;
         }
-        vis_measure m;
-        if (vis_tracker_process(trk, frame, x.dw * rec->length_m * 1000.0, &m, &ve) != VIS_OK) {
+        x.frame = f;
+        L.pending[L.pushed % L.cap] = x;
+        if (vis_track_pipe_push(pipe, frame, x.dw * rec->length_m * 1000.0, reset, &ve) != VIS_OK) {
             snprintf(why, why_len, "tracker: %s", ve.message);
             goto fail;
         }
-        int measured = m.reason == VIS_REASON_NONE && m.quality >= rec->min_quality && isfinite(m.dz) &&
-                       isfinite(m.a);
-        x.kind = STORE_SAMPLE_FRAME;
-        x.frame = f;
-        x.quality = isfinite(m.quality) ? m.quality : 0.0;
-        if (measured) {
-            x.dz = m.dz;
-            x.a = rig_calib_a_sign(&rec->calib) * m.a;
-            res->measured_frames++;
-        } else {
-            snprintf(x.reason, sizeof x.reason, "%s",
-                     m.reason == VIS_REASON_NONE ? "low quality" : vis_reason_str(m.reason));
+        L.pushed++;
+        int got;
+        while ((got = replay_take(&L, 0, why, why_len)) > 0) {
         }
-        if (store_samples_add(w, &x, why, why_len) != STORE_OK) goto fail;
-        res->frames++;
-        publish_steps(r, x.t_s, &step);
-        publish_sample(r->bus, id, &x, measured);
-        trial_publish_frame(r->bus, frame, trk, f, x.t_s);
-        int in_shear = isfinite(r->t_shear) ? (x.t_s >= r->t_shear && (!isfinite(r->t_return) || x.t_s < r->t_return))
-                                            : 1;
-        if (in_shear) snap_detect_add(&det, f, x.t_s, x.dw, x.dz, x.a, measured);
-        if (!snap_told && snap_detect_snapped(&det)) {
-            trial_publish_state_name(r->bus, id, "snapped", x.t_s, NULL);
-            snap_told = 1;
-        }
-        res->duration_s = x.t_s;
-        if (progress && f % 50 == 0) progress(u, f, total);
+        if (got < 0) goto fail;
     }
+    for (int got = 1; got > 0;)
+        if ((got = replay_take(&L, 1, why, why_len)) < 0) goto fail;
+    snap_detect det = L.det;
     if (store_samples_end(w, why, why_len) != STORE_OK) {
         w = NULL;
         goto fail;
@@ -596,6 +660,9 @@ fail:
         trial_publish_stored(r->bus, id, res->final);
     }
 done:
+    vis_track_pipe_free(pipe);
+    free(L.pending);
+    vis_frame_free(L.shown);
     vis_frame_free(frame);
     vis_tracker_free(trk);
     if (vs) vis_source_close(vs);
