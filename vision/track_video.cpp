@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -120,9 +121,10 @@ vis_status readers(const char *path, vis::Source *first_src, vis_tracker *t, int
     Readers sh;
     std::vector<std::unique_ptr<vis_tracker, TrackerFree>> trk;
     std::vector<int64_t> last(n, -1);  // the last frame each worker tracked
+    std::vector<uint64_t> at(n, 0);    // the frame each worker is reading or passing over
     for (int w = 0; w < n; w++)
         trk.emplace_back(vis::tracker_fresh_copy(t));
-    auto work = [&](int w, vis::Source *src) {
+    auto work_frames = [&](int w, vis::Source *src) {
         vis_error e{};
         uint64_t pos = 0;  // the frame src hands out next
         cv::Mat grey;
@@ -138,6 +140,7 @@ vis_status readers(const char *path, vis::Source *first_src, vis_tracker *t, int
             // Passed over packet by packet: OpenCV 4.6's seek (CAP_PROP_POS_FRAMES) on raw
             // packets does not land on the frame asked for (tried: results differed).
             for (; pos < a; pos++) {
+                at[(size_t)w] = pos;
                 const vis_status s = src->skip(&e);
                 if (s != VIS_OK) {
                     sh.failed(pos, s, e);
@@ -146,6 +149,7 @@ vis_status readers(const char *path, vis::Source *first_src, vis_tracker *t, int
             }
             const uint64_t b = std::min<uint64_t>(a + K, max_frames);
             for (uint64_t i = a; i < b; i++) {
+                at[(size_t)w] = i;
                 double ts = 0;
                 vis_status s = src->read(grey, ts, &e);
                 pos++;
@@ -166,9 +170,19 @@ vis_status readers(const char *path, vis::Source *first_src, vis_tracker *t, int
             }
         }
     };
+    // Nothing thrown may leave a thread (OpenCV's allocations): it ends the frames at the one that
+    // worker was on.
+    auto work = [&](int w, vis::Source *src) {
+        try {
+            work_frames(w, src);
+        } catch (const std::exception &x) {
+            vis_error e{};
+            vis::fail(&e, VIS_ERR_INTERNAL, "video %s: %s", path, x.what());
+            sh.failed(at[(size_t)w], VIS_ERR_INTERNAL, e);
+        }
+    };
     std::vector<std::unique_ptr<vis::Source>> src;
     src.emplace_back(first_src);
-    std::string open_fail;
     for (int w = 1; w < n; w++) {
         vis_error e{};
         vis::Source *s = vis::source_video_open(path, &e);
@@ -179,8 +193,13 @@ vis_status readers(const char *path, vis::Source *first_src, vis_tracker *t, int
         src.emplace_back(s);
     }
     std::vector<std::thread> th;
-    for (int w = 1; w < n; w++)
-        th.emplace_back(work, w, src[(size_t)w].get());
+    for (int w = 1; w < n; w++) {
+        try {
+            th.emplace_back(work, w, src[(size_t)w].get());
+        } catch (const std::system_error &) {
+            break;  // no more threads to be had: the stretches go to the workers there are
+        }
+    }
     work(0, src[0].get());
     for (std::thread &x : th)
         x.join();
