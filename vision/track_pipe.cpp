@@ -22,10 +22,14 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <new>
+#include <system_error>
 #include <thread>
 #include <vector>
 
 namespace {
+
+constexpr size_t MAX_HELD = 256;  // frames the pipe holds at most (1280 x 720 grey: 236 MB)
 
 struct Slot {
     cv::Mat frame;
@@ -57,7 +61,8 @@ struct vis_track_pipe {
     std::unique_ptr<vis_tracker, TrackerFree> start;  // its state at create
     uint64_t first_len = 0;        // frames the first stretch runs before the owner's next refresh
     int refresh = 0;
-    std::vector<std::unique_ptr<vis_tracker, TrackerFree>> trk;  // one per worker
+    std::vector<std::unique_ptr<vis_tracker, TrackerFree>> trk;  // one per worker (asked for)
+    int n_workers = 0;                                            // threads that started
     std::vector<std::thread> threads;
     std::vector<Slot> ring;
     std::deque<Stretch> stretches;   // not yet finished by their worker, oldest first
@@ -110,10 +115,15 @@ void vis_track_pipe::run(int w)
         };
         const bool from_start = s->from_start;
         lk.unlock();
-        if (from_start)
-            vis::tracker_take_state(t, start.get());
-        else
-            vis_tracker_reset(t);
+        bool ready = true;
+        try {
+            if (from_start)
+                vis::tracker_take_state(t, start.get());
+            else
+                vis_tracker_reset(t);
+        } catch (const std::exception &) {  // out of memory copying the curve: every frame says so
+            ready = false;
+        }
         lk.lock();
         for (uint64_t j = first;; j++) {
             if (!(stop || j < pushed || j >= end_of()))
@@ -125,6 +135,8 @@ void vis_track_pipe::run(int w)
             Slot &sl = slot(j);
             lk.unlock();
             try {
+                if (!ready)
+                    throw std::bad_alloc();
                 vis_frame f;
                 f.mat = sl.frame;  // shares the pixels, no copy
                 sl.status = vis_tracker_process(t, &f, sl.shear, &sl.m, &sl.err);
@@ -165,18 +177,26 @@ extern "C" vis_track_pipe *vis_track_pipe_create(vis_tracker *t, int threads, vi
         if (p->refresh == 0)
             n = 1;  // one stretch: nothing to share
         const size_t cap = p->refresh ? (size_t)(n + 1) * (size_t)p->refresh : 16;
-        p->ring.resize(std::min<size_t>(256, std::max<size_t>(16, cap)));
+        p->ring.resize(std::min<size_t>(MAX_HELD, std::max<size_t>(16, cap)));
+        // Stretches in flight are bounded by the ring: more workers would wait with a tracker each.
+        if (p->refresh > 0)
+            n = (int)std::min<size_t>((size_t)n, p->ring.size() / (size_t)p->refresh + 1);
         for (int w = 0; w < n; w++)
             p->trk.emplace_back(vis::tracker_fresh_copy(t));
-        try {
-            for (int w = 0; w < n; w++) {
-                vis_track_pipe *raw = p.get();
+        p->threads.reserve((size_t)n);
+        for (int w = 0; w < n; w++) {
+            vis_track_pipe *raw = p.get();
+            try {
                 p->threads.emplace_back([raw, w] { raw->run(w); });
+            } catch (const std::system_error &) {
+                if (w == 0) {
+                    vis_track_pipe_free(p.release());
+                    throw;
+                }
+                break;  // no more threads to be had: the stretches go to the workers there are
             }
-        } catch (...) {
-            vis_track_pipe_free(p.release());
-            throw;
         }
+        p->n_workers = (int)p->threads.size();
         vis::ok(err);
         return p.release();
     })
@@ -211,7 +231,7 @@ extern "C" size_t vis_track_pipe_held(const vis_track_pipe *p)
     return (size_t)(p->pushed - p->popped);
 }
 
-extern "C" int vis_track_pipe_workers(const vis_track_pipe *p) { return p ? (int)p->trk.size() : 0; }
+extern "C" int vis_track_pipe_workers(const vis_track_pipe *p) { return p ? p->n_workers : 0; }
 
 extern "C" vis_status vis_track_pipe_push(vis_track_pipe *p, vis_frame *f, double shear_mm, int reset,
                                           vis_error *err)

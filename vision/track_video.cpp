@@ -46,48 +46,47 @@ vis_status piped(vis_source *src, vis_track_pipe *p, const double *shear_mm, siz
                  size_t max_frames, size_t *n_frames, vis_frame *f, vis_error *err)
 {
     size_t pushed = 0;
-    vis_status rc = VIS_OK;
+    vis_status tracked = VIS_OK;  // the first frame the tracker failed on ends everything
     // One result out (waiting for it when `wait`); false when none was taken.
     auto take = [&](int wait) {
         const vis_status s = vis_track_pipe_pop(p, wait, &out[*n_frames], nullptr, 0, nullptr, nullptr, err);
         if (s == VIS_ERR_NOT_FOUND || s == VIS_ERR_END)
             return false;
         if (s != VIS_OK) {
-            rc = s;
+            tracked = s;
             return false;
         }
         (*n_frames)++;
         return true;
     };
-    while (rc == VIS_OK && pushed < max_frames) {
+    vis_status read = VIS_OK;
+    vis_error read_err{};
+    while (tracked == VIS_OK && pushed < max_frames) {
         if (vis_track_pipe_held(p) >= vis_track_pipe_capacity(p) && !take(1))
             break;
-        const vis_status s = vis_source_read(src, f, nullptr, err);
+        const vis_status s = vis_source_read(src, f, nullptr, &read_err);
         if (s == VIS_ERR_END)
             break;
         if (s != VIS_OK) {
-            rc = s;
+            read = s;
             break;
         }
         const double sh = shear_mm && pushed < n_shear ? shear_mm[pushed] : 0.0;
-        if ((rc = vis_track_pipe_push(p, f, sh, 0, err)) != VIS_OK)
+        if ((tracked = vis_track_pipe_push(p, f, sh, 0, err)) != VIS_OK)
             break;
         pushed++;
         while (take(0)) {
         }
     }
-    // The frames already in the pipe come out even after a read error (they precede the damage).
-    const vis_status keep = rc;
-    const vis_error kept = err ? *err : vis_error{};
-    rc = VIS_OK;
-    while (rc == VIS_OK && take(1)) {
+    // The frames still in the pipe precede the end or the damage: they come out, up to a frame the
+    // tracker fails on (what follows that one is never handed out, as in the serial loop).
+    while (tracked == VIS_OK && take(1)) {
     }
-    if (keep != VIS_OK) {
-        if (err)
-            *err = kept;
-        return keep;
-    }
-    return rc;
+    if (tracked != VIS_OK)
+        return tracked;
+    if (read != VIS_OK && err)
+        *err = read_err;
+    return read;
 }
 
 // Raw grey recordings: `n` workers, each with its own reader and tracker copy, taking the stretches
@@ -186,13 +185,15 @@ vis_status readers(const char *path, vis::Source *first_src, vis_tracker *t, int
     for (int w = 1; w < n; w++) {
         vis_error e{};
         vis::Source *s = vis::source_video_open(path, &e);
-        if (!s || !s->cheap_skip()) {  // the file changed under us: say so, do not guess
+        if (!s || !s->cheap_skip()) {  // no more readers to be had (descriptors?): fewer workers
             delete s;
-            return vis::fail(err, VIS_ERR_IO, "video %s: a second reader could not open it as the first did", path);
+            break;
         }
         src.emplace_back(s);
     }
+    n = (int)src.size();
     std::vector<std::thread> th;
+    th.reserve((size_t)n);
     for (int w = 1; w < n; w++) {
         try {
             th.emplace_back(work, w, src[(size_t)w].get());
@@ -218,6 +219,9 @@ vis_status readers(const char *path, vis::Source *first_src, vis_tracker *t, int
 
 }  // namespace
 
+static vis_status track_video(const char *path, vis_tracker *t, const double *shear_mm, size_t n_shear, int threads,
+                              vis_measure *out, size_t max_frames, size_t *n_frames, vis_error *err);
+
 extern "C" vis_status vis_track_video(const char *path, vis_tracker *t, const double *shear_mm,
                                       size_t n_shear, int threads, vis_measure *out, size_t max_frames,
                                       size_t *n_frames, vis_error *err)
@@ -226,6 +230,15 @@ extern "C" vis_status vis_track_video(const char *path, vis_tracker *t, const do
         return vis::fail(err, VIS_ERR_ARG, "vis_track_video: NULL argument or threads outside 0..64");
     *n_frames = 0;
     vis_tracker_reset(t);
+    const vis_status rc = track_video(path, t, shear_mm, n_shear, threads, out, max_frames, n_frames, err);
+    if (rc != VIS_OK)
+        vis_tracker_reset(t);  // after a failure the tracker starts afresh, whichever way it ran
+    return rc;
+}
+
+static vis_status track_video(const char *path, vis_tracker *t, const double *shear_mm, size_t n_shear, int threads,
+                              vis_measure *out, size_t max_frames, size_t *n_frames, vis_error *err)
+{
     const int n = threads ? threads : (int)std::max(1u, std::thread::hardware_concurrency());
     if (n > 1 && vis::tracker_refresh_frames(t) > 0) {
         vis_status rc = VIS_OK;

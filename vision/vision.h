@@ -434,7 +434,8 @@ void vis_tracker_reset(vis_tracker *t);
 /* Frames tracked on several cores with the serial results (vision/track_pipe.cpp). The caller
  * pushes frames in order and pops their results in the same order. The stretches between the
  * tracker's refresh points (vis_track_params.refresh_frames, and every push with `reset`) go to
- * `threads` workers (0 = one per core), each tracking on its own copy of `t`: every result is bit
+ * `threads` workers (0 = one per core; at most capacity / refresh_frames + 1, since only that many
+ * stretches fit in the pipe at once), each tracking on its own copy of `t`: every result is bit
  * for bit what vis_tracker_process(t, ...) gives on the same frames in a serial loop that goes on
  * from t as it is at create and calls vis_tracker_reset(t) where `reset` is set. With
  * refresh_frames 0 there is one stretch and one worker (tracking then only overlaps the caller's
@@ -462,10 +463,12 @@ vis_status vis_track_pipe_pop(vis_track_pipe *p, int wait, vis_measure *m, doubl
                               size_t *n_uv, vis_frame *frame, vis_error *err);
 
 /* Track every frame of the video at `path` (up to max_frames) with `t`, in order, into out[0..],
- * starting with vis_tracker_reset(t): `threads` 1 is the plain serial loop; any other value decodes
- * ahead on another thread (vis_source_open_video_prefetch) and tracks on `threads` cores (0 = all)
- * through vis_track_pipe. out[i] is exactly what vis_tracker_process gives on frame i in the serial
- * loop, and `t` ends in the same state.
+ * starting with vis_tracker_reset(t): `threads` 1 is the plain serial loop; any other value tracks
+ * the stretches between refresh points on `threads` cores (0 = all): on a raw grey (Y800) file each
+ * worker reads the file itself, passing over the others' frames; other formats decode ahead on
+ * another thread (vis_source_open_video_prefetch) into vis_track_pipe. out[i] is exactly what
+ * vis_tracker_process gives on frame i in the serial loop, and `t` ends in the same state; after a
+ * failure (damage, or the tracker's error on a frame, which ends the run there) `t` is reset.
  * shear_mm[i] (NULL or i >= n_shear: 0) is frame i's shear. *n_frames gets the frames done; a
  * damaged video returns its error after the frames before the damage (vision/track_video.cpp). */
 vis_status vis_track_video(const char *path, vis_tracker *t, const double *shear_mm, size_t n_shear,

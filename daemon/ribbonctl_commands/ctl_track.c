@@ -17,7 +17,8 @@
  * Reads the video through vision's frame source, tracks every frame, writes one CSV row per frame
  * (frame, t, dz, a, quality, reason: dz and a empty when the frame has no measurement, never NaN),
  * optionally an FFV1 overlay video, and prints a summary (--json: frames, tracked, mean_quality,
- * snap_frame, damaged, error, and the calibration used: px_per_mm, clamp_left, clamp_right,
+ * snap_frame, damaged, error, tracking_threads (the cores that tracked; 1 for the serial loop),
+ * and the calibration used: px_per_mm, clamp_left, clamp_right,
  * clamps_frame where the clamps were found, null when given or never found; depth_shapes, the
  * predicted shapes taken for the depth, null without --depth-scene). A progress bar goes to stderr. A video that stops before its
  * announced length is read up to the damage; the outputs keep every frame read, the damage is
@@ -710,6 +711,7 @@ static int track_pop(const track_cli *c, track_run *r, int wait, double fps, int
     const size_t i = r->n;
     if (s != VIS_OK) {
         snprintf(r->failure, sizeof r->failure, "frame %zu: %s", i, err.message);
+        r->damaged = 0; /* the run ends here, before any damage read further on */
         return -1;
     }
     const size_t cap = vis_track_pipe_capacity(r->pipe);
@@ -801,8 +803,9 @@ static void track_frames(const track_cli *c, track_cal *tc, const shear_table *s
             break;
         }
     }
-    /* The frames still in the pipe were read before any failure: they are kept. */
-    if (r->pipe) {
+    /* The frames still in the pipe were read before the end or the damage: they are kept, up to a
+     * frame the tracker fails on (after any other failure, nothing more is written). */
+    if (r->pipe && (!r->rc || r->damaged)) {
         int got;
         while ((got = track_pop(c, r, 1, fps, total)) > 0) {
         }
@@ -849,6 +852,7 @@ static void track_report(const track_cli *c, const track_cal *tc, track_run *r)
         json_object_set_new(o, "clamps_frame", r->clamps_frame >= 0 ? json_integer(r->clamps_frame) : json_null());
         json_object_set_new(o, "depth_shapes",
                             c->depth.n_shapes ? json_integer((json_int_t)c->depth.n_shapes) : json_null());
+        json_object_set_new(o, "tracking_threads", json_integer(r->pipe ? vis_track_pipe_workers(r->pipe) : 1));
         json_object_set_new(o, "damaged", json_boolean(r->damaged));
         json_object_set_new(o, "error", r->failure[0] ? json_string(r->failure) : json_null());
         char *s = json_dumps(o, JSON_COMPACT);

@@ -581,11 +581,11 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
         if (s == VIS_ERR_END) break;
         if (s != VIS_OK) {
             snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
-            goto fail;
+            goto drain_and_fail;
         }
         store_sample x = store_sample_default();
         int fr = frame_rails(r, f, &x, why, why_len);
-        if (fr < 0) goto fail;
+        if (fr < 0) goto drain_and_fail;
         if (fr > 0) {
             skipped++;
             continue;
@@ -607,8 +607,14 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
         }
         if (got < 0) goto fail;
     }
-    for (int got = 1; got > 0;)
+    for (int got = 1; got > 0;) {
+        if (cancel && atomic_load(cancel)) {
+            snprintf(why, why_len, "replay aborted at frame %ld", (long)L.taken);
+            aborted = 1;
+            goto fail;
+        }
         if ((got = replay_take(&L, 1, why, why_len)) < 0) goto fail;
+    }
     snap_detect det = L.det;
     if (store_samples_end(w, why, why_len) != STORE_OK) {
         w = NULL;
@@ -642,6 +648,16 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
     trial_publish_state(r->bus, id, TRIAL_DONE, res->duration_s, NULL);
     trial_publish_stored(r->bus, id, TRIAL_DONE);
     goto done;
+drain_and_fail:
+    /* The frames already in the pipe come before the failure: they are stored, as the serial loop
+     * stored them (a tracker's error on one of them is the earlier failure, and said instead). */
+    if (pipe) {
+        char why2[256];
+        int got;
+        while ((got = replay_take(&L, 1, why2, sizeof why2)) > 0) {
+        }
+        if (got < 0) snprintf(why, why_len, "%s", why2);
+    }
 fail:
     if (w) {
         store_samples_end(w, w2, sizeof w2);

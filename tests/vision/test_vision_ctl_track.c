@@ -388,6 +388,15 @@ static void test_threads_same_results(void **state)
             snprintf(cmd, sizeof cmd, "'%s' track '%s' %s --length-mm 200 --refresh-frames 3 --threads %d --csv '%s' "
                      "--overlay '%s' --json --quiet", RIBBONCTL_PATH, video, cal_arg, threads[j], csvn, ovn);
             assert_int_equal(run(cmd, out, sizeof out), 0);
+            json_error_t je;
+            json_t *o = json_loads(out, 0, &je);
+            assert_non_null(o);
+            const json_int_t used = json_integer_value(json_object_get(o, "tracking_threads"));
+            json_decref(o);
+            if (threads[j] == 0)
+                assert_true(used >= 1);
+            else
+                assert_int_equal(used, threads[j]); /* --threads 2: two cores did track */
             if (j == 0) {
                 snprintf(csv1, sizeof csv1, "%s", csvn);
                 snprintf(ov1, sizeof ov1, "%s", ovn);
@@ -398,6 +407,30 @@ static void test_threads_same_results(void **state)
         }
         printf("%s: CSV and overlay identical with --threads 1, 2 and 0\n", k ? "found clamps" : calib_opt[0]);
     }
+    /* The tracker's error on frame 7 (a shear that puts the clamp behind the camera) ends the run
+     * there, however many cores: the same rows, the same message, exit status 1. */
+    char shear_csv[620], err_out[2][4096];
+    snprintf(shear_csv, sizeof shear_csv, "%s/bad_shear.csv", vt_tmpdir());
+    FILE *sf = fopen(shear_csv, "w");
+    assert_non_null(sf);
+    fprintf(sf, "frame,shear_mm\n0,0\n7,-1e9\n8,0\n");
+    fclose(sf);
+    for (int j = 0; j < 2; j++) {
+        snprintf(csvn, sizeof csvn, "%s/bad_shear_%d.csv", vt_tmpdir(), j);
+        snprintf(cmd, sizeof cmd, "'%s' track '%s' --calib '%s' --shear-csv '%s' --refresh-frames 3 --threads %d "
+                 "--csv '%s' --json --quiet 2>/dev/null", RIBBONCTL_PATH, video, calib, shear_csv, j ? 2 : 1, csvn);
+        assert_int_equal(run(cmd, err_out[j], sizeof err_out[j]), 1);
+        json_error_t je;
+        json_t *o = json_loads(err_out[j], 0, &je);
+        assert_non_null(o);
+        assert_int_equal(json_integer_value(json_object_get(o, "frames")), 7);
+        assert_non_null(strstr(json_string_value(json_object_get(o, "error")), "frame 7"));
+        assert_true(json_is_false(json_object_get(o, "damaged")));
+        json_decref(o);
+    }
+    snprintf(csv1, sizeof csv1, "%s/bad_shear_0.csv", vt_tmpdir());
+    assert_true(same_file(csv1, csvn));
+    printf("tracker error at frame 7: %s", err_out[1]);
     snprintf(cmd, sizeof cmd, "'%s' track '%s' --calib '%s' --threads 65 2>/dev/null", RIBBONCTL_PATH, video, calib);
     assert_int_equal(run(cmd, out, sizeof out), 2);
     snprintf(cmd, sizeof cmd, "'%s' track '%s' --calib '%s' --refresh-frames -1 2>/dev/null", RIBBONCTL_PATH, video,

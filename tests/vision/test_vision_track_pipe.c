@@ -143,7 +143,7 @@ static void check_video(const char *ext)
     static vis_measure ref[NF], got[NF];
     serial(K, NULL, ref, NULL, NULL);
     const int threads[4] = {1, 2, 3, 0};
-    vis_measure next_ref;
+    static vis_measure next_ref[K + 2];
     for (int k = 0; k < 4; k++) {
         vis_track_params tp = params(K);
         vis_tracker *t = vis_tracker_create(&tp, &cal, NULL);
@@ -155,11 +155,14 @@ static void check_video(const char *ext)
         assert_int_equal(n, NF);
         for (int i = 0; i < NF; i++)
             assert_true(same(&ref[i], &got[i]));
-        vis_measure next;
-        assert_int_equal(vis_tracker_process(t, mem[7], 0.2, &next, NULL), VIS_OK);
-        if (k == 0)
-            next_ref = next;
-        assert_true(same(&next, &next_ref));
+        /* The tracker goes on as the serial one does: K + 2 more frames (past its next refresh). */
+        for (int j = 0; j < K + 2; j++) {
+            vis_measure next;
+            assert_int_equal(vis_tracker_process(t, mem[(7 + 3 * j) % NF], 0.2, &next, NULL), VIS_OK);
+            if (k == 0)
+                next_ref[j] = next;
+            assert_true(same(&next, &next_ref[j]));
+        }
         vis_tracker_free(t);
     }
     printf("%s: %d frames in stretches of %d, identical on 1, 2, 3 and all cores\n", ext, NF, K);
@@ -278,7 +281,7 @@ static void test_cut_file(void **state)
     size_t na = 0, nb = 0;
     vis_error ea, eb;
     const vis_status sa = vis_track_video(cut, t, NULL, 0, 1, a, NF, &na, &ea);
-    const vis_status sb = vis_track_video(cut, t, NULL, 0, 0, b, NF, &nb, &eb);
+    const vis_status sb = vis_track_video(cut, t, NULL, 0, 2, b, NF, &nb, &eb); /* one reader each */
     printf("cut Y800: serial %zu frames then %s; all cores %zu frames then %s\n", na, ea.message, nb, eb.message);
     assert_int_equal(sa, VIS_ERR_FORMAT);
     assert_int_equal(sb, sa);
@@ -295,6 +298,43 @@ static void test_cut_file(void **state)
     vis_tracker_free(t);
 }
 
+/* The tracker's error on frame 12 (a shear that puts the clamp behind the camera) ends the run
+ * there on every core, as in the serial loop: the 12 frames before it, the same message, and no
+ * later frame's result handed out in its place (repeated: the workers run ahead by a varying
+ * number of frames). */
+static void test_tracker_error_mid_stream(void **state)
+{
+    (void)state;
+    enum { BAD = 12 };
+    double shear[NF];
+    for (int i = 0; i < NF; i++)
+        shear[i] = i == BAD ? -1e9 : 0.01 * i;
+    const char *ext[2] = {"avi", "mkv"};
+    for (int e = 0; e < 2; e++) {
+        char path[600];
+        snprintf(path, sizeof path, "%s/bad_shear.%s", vt_tmpdir(), ext[e]);
+        write_video(path, e == 0);
+        static vis_measure a[NF], b[NF];
+        vis_track_params tp = params(K);
+        vis_tracker *t = vis_tracker_create(&tp, &cal, NULL);
+        size_t na = 0, nb = 0;
+        vis_error ea, eb;
+        assert_int_equal(vis_track_video(path, t, shear, NF, 1, a, NF, &na, &ea), VIS_ERR_ARG);
+        assert_int_equal(na, BAD);
+        for (int rep = 0; rep < 6; rep++) {
+            memset(b, 0, sizeof b);
+            assert_int_equal(vis_track_video(path, t, shear, NF, rep % 2 ? 2 : 0, b, NF, &nb, &eb), VIS_ERR_ARG);
+            assert_int_equal(nb, na);
+            assert_string_equal(eb.message, ea.message);
+            for (size_t i = 0; i < na; i++)
+                assert_true(same(&a[i], &b[i]));
+            assert_int_equal(vis_tracker_curve(t, NULL, 0), 0); /* reset after the failure */
+        }
+        printf("%s: the tracker's error on frame %d ends every run there: %s\n", ext[e], BAD, ea.message);
+        vis_tracker_free(t);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -302,6 +342,7 @@ int main(void)
         cmocka_unit_test(test_video_every_core),
         cmocka_unit_test(test_pipe_resets_and_frames),
         cmocka_unit_test(test_cut_file),
+        cmocka_unit_test(test_tracker_error_mid_stream),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
