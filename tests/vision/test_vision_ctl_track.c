@@ -29,6 +29,7 @@
 #include <sys/wait.h>
 
 #include "vis_test_run.h"
+#include "vis_test_video.h"
 
 #define NF 12
 #define SNAP_AT 6
@@ -127,16 +128,7 @@ static void test_truncated_video_and_usage(void **state)
     (void)state;
     char cut[620], cmd[3000], out[4096];
     snprintf(cut, sizeof cut, "%s/cli_cut.mkv", vt_tmpdir());
-    FILE *in = fopen(video, "rb"), *o = fopen(cut, "wb");
-    assert_non_null(in);
-    assert_non_null(o);
-    fseek(in, 0, SEEK_END);
-    const long n = ftell(in);
-    fseek(in, 0, SEEK_SET);
-    for (long i = 0; i < n * 6 / 10; i++)
-        fputc(fgetc(in), o);
-    fclose(in);
-    fclose(o);
+    assert_int_equal(vt_cut_copy(video, cut, 6, 10), 0);
     snprintf(cmd, sizeof cmd, "'%s' track '%s' --calib '%s' --csv '%s' --json --quiet 2>/dev/null",
              RIBBONCTL_PATH, cut, calib, csv);
     assert_int_equal(run(cmd, out, sizeof out), 1);

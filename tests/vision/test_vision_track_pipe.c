@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "vis_test_run.h"
+#include "vis_test_video.h"
 
 #define NF 23
 #define K 5
@@ -26,15 +27,6 @@ static vt_shape shape;
 static vis_frame *mem[NF];
 static vis_render_params rp;
 static vis_calib cal;
-
-static int same(const vis_measure *a, const vis_measure *b)
-{
-    return a->reason == b->reason && !memcmp(&a->dz, &b->dz, sizeof a->dz) && !memcmp(&a->a, &b->a, sizeof a->a) &&
-           !memcmp(&a->quality, &b->quality, sizeof a->quality) &&
-           !memcmp(&a->length_mm, &b->length_mm, sizeof a->length_mm) &&
-           !memcmp(a->mid_px, b->mid_px, sizeof a->mid_px) &&
-           !memcmp(&a->residual_px, &b->residual_px, sizeof a->residual_px);
-}
 
 static vis_track_params params(int refresh)
 {
@@ -101,13 +93,13 @@ static void test_refresh_is_a_fresh_start(void **state)
         assert_int_equal(vis_tracker_process(alone, mem[i], 0.01 * i, &m, NULL), VIS_OK);
         vis_tracker_free(alone);
         if (i % K == 0)
-            assert_true(same(&with[i], &m)); /* a refresh frame: as a new tracker sees it */
+            assert_true(vt_same_measure(&with[i], &m)); /* a refresh frame: as a new tracker sees it */
         else
-            followed += !same(&with[i], &m); /* in between, following is still used */
+            followed += !vt_same_measure(&with[i], &m); /* in between, following is still used */
         if (i < K)
-            assert_true(same(&with[i], &without[i])); /* the same start */
+            assert_true(vt_same_measure(&with[i], &without[i])); /* the same start */
         else
-            differ += !same(&with[i], &without[i]);
+            differ += !vt_same_measure(&with[i], &without[i]);
     }
     printf("refresh every %d frames: %d of %d later frames differ from never refreshing, %d followed frames "
            "differ from a new tracker's\n", K, differ, NF - K, followed);
@@ -119,15 +111,9 @@ static void test_refresh_is_a_fresh_start(void **state)
     assert_non_null(strstr(err.message, "refresh_frames"));
 }
 
-static void write_video(const char *path, int y800)
+static void write_video(const char *path)
 {
-    vis_error err;
-    vis_video_writer *w = y800 ? vis_video_writer_open_y800(path, rp.camera.width_px, rp.camera.height_px, 30.0, &err)
-                               : vis_video_writer_open(path, rp.camera.width_px, rp.camera.height_px, 1, 30.0, &err);
-    assert_non_null(w);
-    for (int i = 0; i < NF; i++)
-        assert_int_equal(vis_video_writer_write(w, mem[i], &err), VIS_OK);
-    vis_video_writer_close(w);
+    assert_int_equal(vt_write_frames(path, mem, NF, 30.0), 0);
 }
 
 /* vis_track_video on 1 (the serial loop), 2, 3 and all cores; then the tracker goes on with the
@@ -136,7 +122,7 @@ static void check_video(const char *ext)
 {
     char path[600];
     snprintf(path, sizeof path, "%s/pipe.%s", vt_tmpdir(), ext);
-    write_video(path, strcmp(ext, "avi") == 0);
+    write_video(path);
     double shear[NF];
     for (int i = 0; i < NF; i++)
         shear[i] = 0.01 * i;
@@ -154,14 +140,14 @@ static void check_video(const char *ext)
         assert_int_equal(vis_track_video(path, t, shear, NF, threads[k], got, NF, &n, &err), VIS_OK);
         assert_int_equal(n, NF);
         for (int i = 0; i < NF; i++)
-            assert_true(same(&ref[i], &got[i]));
+            assert_true(vt_same_measure(&ref[i], &got[i]));
         /* The tracker goes on as the serial one does: K + 2 more frames (past its next refresh). */
         for (int j = 0; j < K + 2; j++) {
             vis_measure next;
             assert_int_equal(vis_tracker_process(t, mem[(7 + 3 * j) % NF], 0.2, &next, NULL), VIS_OK);
             if (k == 0)
                 next_ref[j] = next;
-            assert_true(same(&next, &next_ref[j]));
+            assert_true(vt_same_measure(&next, &next_ref[j]));
         }
         vis_tracker_free(t);
     }
@@ -192,7 +178,7 @@ static void test_pipe_resets_and_frames(void **state)
     enum { HANDOVER = 3 };
     for (int i = 0; i < HANDOVER; i++) {
         assert_int_equal(vis_tracker_process(t, mem[i], 0.01 * i, &m, NULL), VIS_OK);
-        assert_true(same(&m, &ref[i]));
+        assert_true(vt_same_measure(&m, &ref[i]));
     }
     vis_track_pipe *p = vis_track_pipe_create(t, 2, &err);
     assert_non_null(p);
@@ -209,7 +195,7 @@ static void test_pipe_resets_and_frames(void **state)
             if (s == VIS_ERR_NOT_FOUND || s == VIS_ERR_END)
                 break;
             assert_int_equal(s, VIS_OK);
-            assert_true(same(&m, &ref[popped]));
+            assert_true(vt_same_measure(&m, &ref[popped]));
             /* the frame itself comes back */
             assert_int_equal(memcmp(vis_frame_data(back), vis_frame_data(mem[popped]),
                                     vis_frame_stride(back) * (size_t)vis_frame_height(back)), 0);
@@ -217,7 +203,7 @@ static void test_pipe_resets_and_frames(void **state)
         }
     }
     while (vis_track_pipe_pop(p, 1, &m, uv, 4096, &n_uv, back, &err) == VIS_OK) {
-        assert_true(same(&m, &ref[popped]));
+        assert_true(vt_same_measure(&m, &ref[popped]));
         popped++;
     }
     assert_int_equal(popped, NF);
@@ -264,17 +250,8 @@ static void test_cut_file(void **state)
     char path[600], cut[600];
     snprintf(path, sizeof path, "%s/whole.avi", vt_tmpdir());
     snprintf(cut, sizeof cut, "%s/cut.avi", vt_tmpdir());
-    write_video(path, 1);
-    FILE *in = fopen(path, "rb"), *out = fopen(cut, "wb");
-    assert_non_null(in);
-    assert_non_null(out);
-    fseek(in, 0, SEEK_END);
-    const long size = ftell(in);
-    fseek(in, 0, SEEK_SET);
-    for (long k = 0; k < size * 7 / 10; k++)
-        fputc(fgetc(in), out);
-    fclose(in);
-    fclose(out);
+    write_video(path);
+    assert_int_equal(vt_cut_copy(path, cut, 7, 10), 0);
     static vis_measure a[NF], b[NF];
     vis_track_params tp = params(K);
     vis_tracker *t = vis_tracker_create(&tp, &cal, NULL);
@@ -289,12 +266,12 @@ static void test_cut_file(void **state)
     assert_true(na > (size_t)K && na < NF);
     assert_string_equal(ea.message, eb.message);
     for (size_t i = 0; i < na; i++)
-        assert_true(same(&a[i], &b[i]));
+        assert_true(vt_same_measure(&a[i], &b[i]));
     /* Fewer frames asked for than there are: the same first ones. */
     assert_int_equal(vis_track_video(path, t, NULL, 0, 0, b, 12, &nb, &eb), VIS_OK);
     assert_int_equal(nb, 12);
     for (size_t i = 0; i < 12; i++)
-        assert_true(same(&a[i], &b[i]));
+        assert_true(vt_same_measure(&a[i], &b[i]));
     vis_tracker_free(t);
 }
 
@@ -313,7 +290,7 @@ static void test_tracker_error_mid_stream(void **state)
     for (int e = 0; e < 2; e++) {
         char path[600];
         snprintf(path, sizeof path, "%s/bad_shear.%s", vt_tmpdir(), ext[e]);
-        write_video(path, e == 0);
+        write_video(path);
         static vis_measure a[NF], b[NF];
         vis_track_params tp = params(K);
         vis_tracker *t = vis_tracker_create(&tp, &cal, NULL);
@@ -327,7 +304,7 @@ static void test_tracker_error_mid_stream(void **state)
             assert_int_equal(nb, na);
             assert_string_equal(eb.message, ea.message);
             for (size_t i = 0; i < na; i++)
-                assert_true(same(&a[i], &b[i]));
+                assert_true(vt_same_measure(&a[i], &b[i]));
             assert_int_equal(vis_tracker_curve(t, NULL, 0), 0); /* reset after the failure */
         }
         printf("%s: the tracker's error on frame %d ends every run there: %s\n", ext[e], BAD, ea.message);

@@ -18,40 +18,18 @@
 #include <string.h>
 
 #include "vis_test_run.h"
+#include "vis_test_video.h"
 
 #define NF 24
 
 static vt_shape shape;
 
-/* Field by field (memcmp would also compare padding): identical bits in every number. */
-static int same(const vis_measure *a, const vis_measure *b)
-{
-    return a->reason == b->reason && !memcmp(&a->dz, &b->dz, sizeof a->dz) && !memcmp(&a->a, &b->a, sizeof a->a) &&
-           !memcmp(&a->quality, &b->quality, sizeof a->quality) &&
-           !memcmp(&a->length_mm, &b->length_mm, sizeof a->length_mm) &&
-           !memcmp(a->mid_px, b->mid_px, sizeof a->mid_px) &&
-           !memcmp(&a->residual_px, &b->residual_px, sizeof a->residual_px);
-}
-
-static void write_video(const char *path, vis_frame **mem, const vis_render_params *p)
-{
-    vis_error err;
-    const size_t len = strlen(path);
-    vis_video_writer *w = strcmp(path + len - 4, ".avi") == 0
-                              ? vis_video_writer_open_y800(path, p->camera.width_px, p->camera.height_px, 30.0, &err)
-                              : vis_video_writer_open(path, p->camera.width_px, p->camera.height_px, 1, 30.0, &err);
-    assert_non_null(w);
-    for (int i = 0; i < NF; i++)
-        assert_int_equal(vis_video_writer_write(w, mem[i], &err), VIS_OK);
-    vis_video_writer_close(w);
-}
-
-static void check_format(const char *ext, vis_frame **mem, const vis_render_params *p, const vis_calib *c,
+static void check_format(const char *ext, vis_frame **mem, const vis_calib *c,
                          const vis_track_params *tp)
 {
     char path[600];
     snprintf(path, sizeof path, "%s/engine.%s", vt_tmpdir(), ext);
-    write_video(path, mem, p);
+    assert_int_equal(vt_write_frames(path, mem, NF, 30.0), 0);
     vis_error err;
     /* Reference: the plain loop. */
     static vis_measure ref[NF], ser[NF], par[NF];
@@ -81,8 +59,8 @@ static void check_format(const char *ext, vis_frame **mem, const vis_render_para
     assert_int_equal(n, NF);
     vis_tracker_free(t);
     for (int i = 0; i < NF; i++) {
-        assert_true(same(&ref[i], &ser[i]));
-        assert_true(same(&ref[i], &par[i]));
+        assert_true(vt_same_measure(&ref[i], &ser[i]));
+        assert_true(vt_same_measure(&ref[i], &par[i]));
     }
     /* max_frames stops early; four threads on two cores are fine too. */
     t = vis_tracker_create(tp, c, &err);
@@ -108,8 +86,8 @@ static void test_engine_identical(void **state)
         mem[i] = vis_frame_alloc(8, 8, 1, NULL);
         assert_int_equal(vis_renderer_draw(r, &shape.view, mem[i], NULL, NULL), VIS_OK);
     }
-    check_format("mkv", mem, &p, &c, &tp);
-    check_format("avi", mem, &p, &c, &tp);
+    check_format("mkv", mem, &c, &tp);
+    check_format("avi", mem, &c, &tp);
     for (int i = 0; i < NF; i++)
         vis_frame_free(mem[i]);
     vis_renderer_free(r);
@@ -132,17 +110,8 @@ static void check_prefetch(const char *ext)
     char path[600], cut[600];
     snprintf(path, sizeof path, "%s/pf.%s", vt_tmpdir(), ext);
     snprintf(cut, sizeof cut, "%s/pf_cut.%s", vt_tmpdir(), ext);
-    write_video(path, mem, &p);
-    FILE *in = fopen(path, "rb"), *out = fopen(cut, "wb");
-    assert_non_null(in);
-    assert_non_null(out);
-    fseek(in, 0, SEEK_END);
-    const long size = ftell(in);
-    fseek(in, 0, SEEK_SET);
-    for (long k = 0; k < size * 6 / 10; k++)
-        fputc(fgetc(in), out);
-    fclose(in);
-    fclose(out);
+    assert_int_equal(vt_write_frames(path, mem, NF, 30.0), 0);
+    assert_int_equal(vt_cut_copy(path, cut, 6, 10), 0);
     const char *files[2] = {path, cut};
     for (int w = 0; w < 2; w++) {
         vis_error e1, e2;
