@@ -465,24 +465,15 @@ typedef struct replay_loop {
     void *u;
 } replay_loop;
 
-/* The oldest frame's measurement out of the pipe (waiting for it when `wait`) and what follows it:
- * the sample stored, the live page told, the snap detector fed. 1 when a frame was taken, 0 when
- * none was ready, -1 with `why` set. */
-static int replay_take(replay_loop *L, int wait, char *why, size_t why_len)
+/* Frame x.frame measured as m (its centreline uv, n_uv pairs; the frame itself): the sample stored,
+ * the live page told, the snap detector fed. 0, or -1 with `why` set. */
+static int replay_record(replay_loop *L, store_sample x, const vis_measure *mp, const double *uv, size_t n_uv,
+                         const vis_frame *shown, char *why, size_t why_len)
 {
-    vis_measure m;
-    vis_error ve = {0};
-    size_t n_uv = 0;
-    const vis_status s = vis_track_pipe_pop(L->pipe, wait, &m, L->uv, LIVE_UV_MAX, &n_uv, L->shown, &ve);
-    if (s == VIS_ERR_NOT_FOUND || s == VIS_ERR_END) return 0;
-    if (s != VIS_OK) {
-        snprintf(why, why_len, "tracker: %s", ve.message);
-        return -1;
-    }
+    const vis_measure m = *mp;
     trial_replay *r = L->r;
     const trial_record *rec = &r->rec;
     const int64_t id = r->new_id;
-    store_sample x = L->pending[L->taken++ % L->cap];
     const long f = x.frame;
     int measured = m.reason == VIS_REASON_NONE && m.quality >= rec->min_quality && isfinite(m.dz) && isfinite(m.a);
     x.kind = STORE_SAMPLE_FRAME;
@@ -498,7 +489,7 @@ static int replay_take(replay_loop *L, int wait, char *why, size_t why_len)
     L->res->frames++;
     publish_steps(r, x.t_s, &L->step);
     publish_sample(r->bus, id, &x, measured);
-    trial_publish_frame_curve(r->bus, L->shown, L->uv, n_uv, f, x.t_s);
+    trial_publish_frame_curve(r->bus, shown, uv, n_uv, f, x.t_s);
     int in_shear = isfinite(r->t_shear) ? (x.t_s >= r->t_shear && (!isfinite(r->t_return) || x.t_s < r->t_return)) : 1;
     if (in_shear) snap_detect_add(&L->det, f, x.t_s, x.dw, x.dz, x.a, measured);
     if (!L->snap_told && snap_detect_snapped(&L->det)) {
@@ -507,7 +498,24 @@ static int replay_take(replay_loop *L, int wait, char *why, size_t why_len)
     }
     L->res->duration_s = x.t_s;
     if (L->progress && f % 50 == 0) L->progress(L->u, f, L->total);
-    return 1;
+    return 0;
+}
+
+/* The oldest frame's measurement out of the pipe (waiting for it when `wait`), recorded. 1 when a
+ * frame was taken, 0 when none was ready, -1 with `why` set. */
+static int replay_take(replay_loop *L, int wait, char *why, size_t why_len)
+{
+    vis_measure m;
+    vis_error ve = {0};
+    size_t n_uv = 0;
+    const vis_status s = vis_track_pipe_pop(L->pipe, wait, &m, L->uv, LIVE_UV_MAX, &n_uv, L->shown, &ve);
+    if (s == VIS_ERR_NOT_FOUND || s == VIS_ERR_END) return 0;
+    if (s != VIS_OK) {
+        snprintf(why, why_len, "tracker: %s", ve.message);
+        return -1;
+    }
+    store_sample x = L->pending[L->taken++ % L->cap];
+    return replay_record(L, x, &m, L->uv, n_uv, L->shown, why, why_len) ? -1 : 1;
 }
 
 int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
@@ -570,6 +578,11 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
         goto fail;
     }
     L.pipe = pipe;
+    /* The calibration's clamp points are at the trial's compression: frames whose compress rail is
+     * more than half a pixel from there are stored untracked (clamp_not_found), as the runner does. */
+    const double target_mm = rig_calib_compress_mm(&rec->calib, rec->length_m, rec->compression);
+    const double tol_mm = cal.px_per_mm > 0 ? 0.5 / cal.px_per_mm : 0.0;
+    long moving = 0;
     for (long f = 0;; f++) {
         if (cancel && atomic_load(cancel)) {
             snprintf(why, why_len, "replay aborted at frame %ld", f);
@@ -590,12 +603,23 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
             skipped++;
             continue;
         }
+        x.frame = f;
+        if (tol_mm > 0 && fabs(x.compress_mm - target_mm) > tol_mm) {
+            /* Samples are stored in frame order: the frames in the pipe first. */
+            for (int got = 1; got > 0;)
+                if ((got = replay_take(&L, 1, why, why_len)) < 0) goto fail;
+            vis_measure m;
+            memset(&m, 0, sizeof m);
+            m.reason = VIS_REASON_CLAMP_NOT_FOUND;
+            if (replay_record(&L, x, &m, NULL, 0, frame, why, why_len)) goto fail;
+            moving++;
+            continue;
+        }
         int reset = 0;
         if (!reset_done && isfinite(r->t_check) && x.t_s >= r->t_check) {
             reset = 1; /* frames during the moves are not trusted */
             reset_done = 1;
         }
-        x.frame = f;
         L.pending[L.pushed % L.cap] = x;
         if (vis_track_pipe_push(pipe, frame, x.dw * rec->length_m * 1000.0, reset, &ve) != VIS_OK) {
             snprintf(why, why_len, "tracker: %s", ve.message);
@@ -625,6 +649,18 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
         snprintf(why, why_len, "no frame of %.300s falls within the rail readings (check "
                                "calibration.camera_time_offset_s)", r->video);
         goto fail;
+    }
+    if (moving == res->frames) {
+        snprintf(why, why_len, "no frame of %.300s has the compress rail at the trial's compression (Delta L %.4f, "
+                 "%.2f mm): the camera calibration's clamp points are there (check the rails' calibration and "
+                 "compression)", r->video, rec->compression, target_mm);
+        goto fail;
+    }
+    if (moving > 0) {
+        char note[200];
+        snprintf(note, sizeof note, "%ld frames with the compress rail away from the trial's compression stored "
+                 "untracked (clamp_not_found)", moving);
+        add_event(st, r->bus, id, NAN, STORE_EVENT_INFO, note);
     }
     res->snapped = snap_detect_snapped(&det);
     res->snap_dw = res->snapped ? snap_detect_dw(&det) : 0.0;

@@ -615,7 +615,12 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             continue;
         }
         vis_measure m;
-        if (vis_tracker_process(tr->tracker, tr->frame, smp.dw * l * 1000.0, &m, &ve) != VIS_OK) {
+        if (p->clamp_tol_mm > 0 && fabs(pos_c - c.target_compress_mm) > p->clamp_tol_mm) {
+            /* The compress rail is moving (or back at zero): the clamps are not at the calibrated
+             * points, and a frame measured against those would be a confident wrong answer. */
+            memset(&m, 0, sizeof m);
+            m.reason = VIS_REASON_CLAMP_NOT_FOUND;
+        } else if (vis_tracker_process(tr->tracker, tr->frame, smp.dw * l * 1000.0, &m, &ve) != VIS_OK) {
             finish(&c, TRIAL_FAILED, "tracker: %s", ve.message);
             break;
         }

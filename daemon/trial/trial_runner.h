@@ -84,6 +84,10 @@ typedef struct trial_plan {
                                     when a rail moved frozen_move_mm since the first (0 = the
                                     defaults, TRIAL_FROZEN_FRAMES, TRIAL_FROZEN_MOVE_MM) */
     double frozen_move_mm;
+    double clamp_tol_mm;         /* > 0: frames are tracked only while the compress rail is within
+                                    this of the trial's compression, where the camera calibration's
+                                    clamp points are (half a pixel); others are stored untracked,
+                                    reason clamp_not_found. 0: every frame is tracked */
 } trial_plan;
 
 /* A camera as the runner sees it: the frame of time t_s (rail clock) with the clamps at (dl, dw).

@@ -4,7 +4,8 @@
  * Checks: the state sequence of a good trial, the measured snap Delta W against the fake's, the
  * rails back where they started; the shear limit without a snap; a ribbon in the lower state is
  * refused before shearing; a stalled rail fails the trial and stops both; an abort from another
- * thread stops the rails and ends the trial aborted, with both rails standing. */
+ * thread stops the rails and ends the trial aborted, with both rails standing; frames with the
+ * compress rail away from the calibrated clamps are stored untracked, not measured. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -54,6 +55,9 @@ typedef struct log {
     char last_event[320];
     char both_event[320]; /* the last event naming both witnesses */
     int n_witness;        /* events of the load witness */
+    double target_dl, tol_dl;
+    long measured_away;   /* frames measured with the compress rail more than tol_dl from target_dl */
+    long clamps_moving;   /* frames stored untracked as clamp_not_found */
 } log_t;
 
 static int on_state(void *u, trial_state s, double t, const char *why)
@@ -81,6 +85,8 @@ static int on_sample(void *u, const trial_sample *s, char *why, size_t why_len)
     log_t *lg = u;
     lg->samples++;
     if (s->kind == 1) lg->frames++;
+    if (s->kind == 1 && s->measured && fabs(s->dl - lg->target_dl) > lg->tol_dl) lg->measured_away++;
+    if (s->kind == 1 && !s->measured && s->reason == VIS_REASON_CLAMP_NOT_FOUND) lg->clamps_moving++;
     return 0;
 }
 
@@ -88,6 +94,7 @@ typedef struct rig {
     rail_vclock vc;
     rail *c, *s;
     fake f;
+    double px_per_mm; /* the tracker's calibration */
     vis_tracker *trk;
     trial_plan plan;
     log_t log;
@@ -149,6 +156,7 @@ static void rig_open(rig *r, double stall_at_mm)
     vis_calib cal;
     double left[3] = {0, 0, 0}, right[3] = {L * 0.5, 0, 0};
     assert_int_equal(vis_calib_from_camera(&cal, &rp.camera, left, right, &ve), VIS_OK);
+    r->px_per_mm = cal.px_per_mm;
     vis_track_params tp = vis_track_params_default();
     tp.length_mm = L * 1000.0;
     r->trk = vis_tracker_create(&tp, &cal, &ve);
@@ -206,6 +214,38 @@ static void good_trial(void **state)
     assert_int_equal(r.log.frames, res.frames);
     assert_int_equal(r.log.samples, res.frames + res.rail_readings);
     rig_close(&r);
+}
+
+/* The tracker's clamp points are the calibration's, at the trial's compression (Delta L 0.5): while
+ * the compress rail moves, the fake's clamps are elsewhere. With the plan's clamp_tol_mm (half a
+ * pixel, as the session sets it) no frame is measured away from there (without it, frames of the
+ * compression and the return are), those frames are stored as clamp_not_found, and the trial is
+ * the same. */
+static void frames_away_from_compression_untracked(void **state)
+{
+    (void)state;
+    long away[2], moving[2];
+    double snap[2];
+    for (int k = 0; k < 2; k++) {
+        rig r;
+        rig_open(&r, NAN);
+        r.plan.clamp_tol_mm = k ? 0.5 / r.px_per_mm : 0.0;
+        r.log.target_dl = 0.5;
+        r.log.tol_dl = 0.5 / r.px_per_mm / (L * 1000.0) + 1e-9;
+        trial_result res;
+        rig_run(&r, &res);
+        assert_int_equal(res.final, TRIAL_DONE);
+        away[k] = r.log.measured_away;
+        moving[k] = r.log.clamps_moving;
+        snap[k] = res.snap_dw;
+        printf("clamp_tol_mm %.4f: %ld frames, %ld measured away from the compression, %ld clamp_not_found; snap "
+               "Delta W %.5f %s\n", r.plan.clamp_tol_mm, res.frames, away[k], moving[k], res.snap_dw, res.regime);
+        rig_close(&r);
+    }
+    assert_true(away[0] > 0);
+    assert_int_equal(away[1], 0);
+    assert_true(moving[1] >= away[0]);
+    assert_true(snap[1] == snap[0]);
 }
 
 static void shear_limit_no_snap(void **state)
@@ -378,6 +418,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(good_trial),
+        cmocka_unit_test(frames_away_from_compression_untracked),
         cmocka_unit_test(shear_limit_no_snap),
         cmocka_unit_test(load_witness_alone),
         cmocka_unit_test(load_and_vision_witnesses),
