@@ -465,6 +465,22 @@ typedef struct replay_loop {
     void *u;
 } replay_loop;
 
+/* Whether any of the recording's rail readings has the compress rail within tol_mm of target_mm;
+ * the range recorded in *lo, *hi. */
+static int compress_in_place(const trial_replay *r, double target_mm, double tol_mm, double *lo, double *hi)
+{
+    int any = 0;
+    const size_t n = r->smp ? r->ns : r->nr;
+    for (size_t k = 0; k < n; k++) {
+        const double c = r->smp ? r->smp[k].compress_mm : r->rails[k].compress_mm;
+        if (!isfinite(c)) continue;
+        *lo = fmin(*lo, c);
+        *hi = fmax(*hi, c);
+        any = any || fabs(c - target_mm) <= tol_mm;
+    }
+    return any;
+}
+
 /* Frame x.frame measured as m (its centreline uv, n_uv pairs; the frame itself): the sample stored,
  * the live page told, the snap detector fed. 0, or -1 with `why` set. */
 static int replay_record(replay_loop *L, store_sample x, const vis_measure *mp, const double *uv, size_t n_uv,
@@ -579,9 +595,22 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
     }
     L.pipe = pipe;
     /* The calibration's clamp points are at the trial's compression: frames whose compress rail is
-     * more than half a pixel from there are stored untracked (clamp_not_found), as the runner does. */
+     * more than half a pixel (at least TRIAL_COMPRESS_ARRIVED_MM) from there are stored untracked
+     * ("clamp not found"), as the runner does. */
     const double target_mm = rig_calib_compress_mm(&rec->calib, rec->length_m, rec->compression);
-    const double tol_mm = cal.px_per_mm > 0 ? 0.5 / cal.px_per_mm : 0.0;
+    double tol_mm = cal.px_per_mm > 0 ? fmax(0.5 / cal.px_per_mm, TRIAL_COMPRESS_ARRIVED_MM) : 0.0;
+    double lo_mm = INFINITY, hi_mm = -INFINITY;
+    if (tol_mm > 0 && !compress_in_place(r, target_mm, tol_mm, &lo_mm, &hi_mm)) {
+        /* A recording whose rails never put the clamps where the calibration has them (another rig
+         * file's compression, or a CSV without the compression's readings): tracked as recorded,
+         * and said so. */
+        char note[300];
+        snprintf(note, sizeof note, "the compress rail is never within %.2f mm of the trial's compression (Delta L "
+                 "%.4f, %.2f mm; recorded %.2f to %.2f mm): every frame tracked against the calibrated clamp points",
+                 tol_mm, rec->compression, target_mm, lo_mm, hi_mm);
+        add_event(st, r->bus, id, NAN, STORE_EVENT_WARNING, note);
+        tol_mm = 0.0;
+    }
     long moving = 0;
     for (long f = 0;; f++) {
         if (cancel && atomic_load(cancel)) {
@@ -650,16 +679,10 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
                                "calibration.camera_time_offset_s)", r->video);
         goto fail;
     }
-    if (moving == res->frames) {
-        snprintf(why, why_len, "no frame of %.300s has the compress rail at the trial's compression (Delta L %.4f, "
-                 "%.2f mm): the camera calibration's clamp points are there (check the rails' calibration and "
-                 "compression)", r->video, rec->compression, target_mm);
-        goto fail;
-    }
     if (moving > 0) {
         char note[200];
         snprintf(note, sizeof note, "%ld frames with the compress rail away from the trial's compression stored "
-                 "untracked (clamp_not_found)", moving);
+                 "untracked (clamp not found)", moving);
         add_event(st, r->bus, id, NAN, STORE_EVENT_INFO, note);
     }
     res->snapped = snap_detect_snapped(&det);

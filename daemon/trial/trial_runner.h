@@ -85,10 +85,14 @@ typedef struct trial_plan {
                                     defaults, TRIAL_FROZEN_FRAMES, TRIAL_FROZEN_MOVE_MM) */
     double frozen_move_mm;
     double clamp_tol_mm;         /* > 0: frames are tracked only while the compress rail is within
-                                    this of the trial's compression, where the camera calibration's
-                                    clamp points are (half a pixel); others are stored untracked,
-                                    reason clamp_not_found. 0: every frame is tracked */
+                                    this (at least TRIAL_COMPRESS_ARRIVED_MM) of the trial's
+                                    compression, where the camera calibration's clamp points are
+                                    (the session: half a pixel); others are stored untracked with
+                                    the reason "clamp not found". 0: every frame is tracked */
 } trial_plan;
+
+/* How near its target the compression rail counts as arrived (holding starts there), mm. */
+#define TRIAL_COMPRESS_ARRIVED_MM 0.05
 
 /* A camera as the runner sees it: the frame of time t_s (rail clock) with the clamps at (dl, dw).
  * A real camera ignores dl and dw and blocks until its next frame, returning its time in *t_frame;

@@ -384,6 +384,29 @@ static void replay_refuses_wrong_or_cut_video(store *st, int64_t id, const char 
     }
 }
 
+/* No frame of trial `id` is measured with the compress rail away from the trial's compression
+ * (Delta L 0.5), where the calibration's clamp points are (more than 0.5 mm: the runner's bound is
+ * half a pixel, 0.2 mm here); and the compression's frames are there, stored untracked. */
+static void none_measured_off_compression(store *st, int64_t id)
+{
+    char why[256];
+    store_sample *smp = NULL;
+    size_t n = 0;
+    assert_int_equal(store_samples_get(st, id, &smp, &n, why, sizeof why), STORE_OK);
+    const double tol_dl = 0.5 / 200.0; /* half a pixel at 1 px/mm or more (the mock's is 2.49), l 200 mm */
+    long away = 0, untracked = 0;
+    for (size_t k = 0; k < n; k++) {
+        if (smp[k].kind != STORE_SAMPLE_FRAME) continue;
+        if (isfinite(smp[k].dz) && fabs(smp[k].dl - 0.5) > tol_dl) away++;
+        if (!isfinite(smp[k].dz) && !strcmp(smp[k].reason, "clamp not found")) untracked++;
+    }
+    free(smp);
+    printf("trial %lld: %ld frames measured off the compression, %ld stored untracked as clamp not found\n",
+           (long long)id, away, untracked);
+    assert_int_equal(away, 0);
+    assert_true(untracked > 0);
+}
+
 static void mock_trial_then_replay(void **state)
 {
     (void)state;
@@ -564,6 +587,8 @@ static void mock_trial_then_replay(void **state)
     assert_int_equal(store_trial_get(st, rid, &rt, why, sizeof why), STORE_OK);
     assert_int_equal(rt.source_trial_id, id);
     assert_int_equal(rt.mode, STORE_MODE_REPLAY);
+    none_measured_off_compression(st, id);
+    none_measured_off_compression(st, rid);
     replay_outside_recording(st, id, meas, frame_dw);
     replay_refuses_wrong_or_cut_video(st, id, dir);
     store_close(st);

@@ -103,7 +103,11 @@ static void test_replay_uses_stored_times(void **state)
     assert_int_equal(store_open(p, &st, why, sizeof why), STORE_OK);
     int64_t id = 0;
     trial_result res;
-    trial_replay_run(r, st, "uneven times", NULL, NULL, &id, &res, why, sizeof why);
+    /* The rails CSV holds the compress rail at 110 mm, not the rig file's 150 (Delta L 0.5): the
+     * frames are tracked as recorded, with a warning, not refused. */
+    const int rc = trial_replay_run(r, st, "uneven times", NULL, NULL, &id, &res, why, sizeof why);
+    if (rc) fprintf(stderr, "replay: %s\n", why);
+    assert_int_equal(rc, 0);
     trial_replay_free(r);
     assert_true(id > 0);
     store_sample *smp = NULL;
