@@ -50,18 +50,14 @@ struct Stretch {
     bool from_start = false;  // goes on from the caller's tracker as it was at create, not reset
 };
 
-struct TrackerFree {
-    void operator()(vis_tracker *t) const { vis_tracker_free(t); }
-};
-
 }  // namespace
 
 struct vis_track_pipe {
     vis_tracker *owner = nullptr;  // the caller's tracker: state back at free
-    std::unique_ptr<vis_tracker, TrackerFree> start;  // its state at create
+    vis::TrackerPtr start;         // its state at create
     uint64_t first_len = 0;        // frames the first stretch runs before the owner's next refresh
     int refresh = 0;
-    std::vector<std::unique_ptr<vis_tracker, TrackerFree>> trk;  // one per worker (asked for)
+    std::vector<vis::TrackerPtr> trk;  // one per worker (asked for)
     int n_workers = 0;                                            // threads that started
     std::vector<std::thread> threads;
     std::vector<Slot> ring;
@@ -213,7 +209,7 @@ extern "C" void vis_track_pipe_free(vis_track_pipe *p)
     p->cv_work.notify_all();
     for (std::thread &th : p->threads)
         th.join();
-    // Every frame handed back: the newest stretch's worker holds what the serial loop ends in.
+    // Every frame handed back: the worker of the last one holds what the serial loop ends in.
     if (p->popped == p->pushed && p->last_worker >= 0)
         vis::tracker_take_state(p->owner, p->trk[(size_t)p->last_worker].get());
     else if (p->popped != p->pushed)

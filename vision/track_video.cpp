@@ -25,6 +25,9 @@
 
 namespace {
 
+// Frame i's shear (0 past the table).
+double shear_of(const double *shear_mm, size_t n_shear, size_t i) { return shear_mm && i < n_shear ? shear_mm[i] : 0.0; }
+
 vis_status serial(vis_source *src, vis_tracker *t, const double *shear_mm, size_t n_shear, vis_measure *out,
                   size_t max_frames, size_t *n_frames, vis_frame *f, vis_error *err)
 {
@@ -34,7 +37,7 @@ vis_status serial(vis_source *src, vis_tracker *t, const double *shear_mm, size_
             return VIS_OK;
         if (s != VIS_OK)
             return s;
-        const vis_status rc = vis_tracker_process(t, f, shear_mm && i < n_shear ? shear_mm[i] : 0.0, &out[i], err);
+        const vis_status rc = vis_tracker_process(t, f, shear_of(shear_mm, n_shear, i), &out[i], err);
         if (rc != VIS_OK)
             return rc;
         *n_frames = i + 1;
@@ -71,8 +74,7 @@ vis_status piped(vis_source *src, vis_track_pipe *p, const double *shear_mm, siz
             read = s;
             break;
         }
-        const double sh = shear_mm && pushed < n_shear ? shear_mm[pushed] : 0.0;
-        if ((tracked = vis_track_pipe_push(p, f, sh, 0, err)) != VIS_OK)
+        if ((tracked = vis_track_pipe_push(p, f, shear_of(shear_mm, n_shear, pushed), 0, err)) != VIS_OK)
             break;
         pushed++;
         while (take(0)) {
@@ -109,16 +111,12 @@ struct Readers {
     }
 };
 
-struct TrackerFree {
-    void operator()(vis_tracker *t) const { vis_tracker_free(t); }
-};
-
 vis_status readers(const char *path, vis::Source *first_src, vis_tracker *t, int n, const double *shear_mm,
                    size_t n_shear, vis_measure *out, size_t max_frames, size_t *n_frames, vis_error *err)
 {
     const uint64_t K = (uint64_t)vis::tracker_refresh_frames(t);
     Readers sh;
-    std::vector<std::unique_ptr<vis_tracker, TrackerFree>> trk;
+    std::vector<vis::TrackerPtr> trk;
     std::vector<int64_t> last(n, -1);  // the last frame each worker tracked
     std::vector<uint64_t> at(n, 0);    // the frame each worker is reading or passing over
     for (int w = 0; w < n; w++)
@@ -156,7 +154,7 @@ vis_status readers(const char *path, vis::Source *first_src, vis_tracker *t, int
                     if (i == a)  // only once its frame is read: a worker at the end keeps its state
                         vis_tracker_reset(trk[(size_t)w].get());
                     f.mat = grey;
-                    s = vis_tracker_process(trk[(size_t)w].get(), &f, shear_mm && i < n_shear ? shear_mm[i] : 0.0,
+                    s = vis_tracker_process(trk[(size_t)w].get(), &f, shear_of(shear_mm, n_shear, i),
                                             &out[i], &e);
                     f.mat.release();
                     vis::tracker_drop_views(trk[(size_t)w].get());

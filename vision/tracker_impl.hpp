@@ -11,6 +11,7 @@
 
 #include "vis_internal.hpp"
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -182,6 +183,11 @@ void tracker_take_state(vis_tracker *into, const vis_tracker *from);
 // Let go of the frame's pixels (views kept for the tracer), so the caller may reuse the buffer.
 void tracker_drop_views(vis_tracker *t);
 int tracker_refresh_frames(const vis_tracker *t);
+// An owned tracker (freed with vis_tracker_free).
+struct TrackerFree {
+    void operator()(vis_tracker *t) const { vis_tracker_free(t); }
+};
+using TrackerPtr = std::unique_ptr<vis_tracker, TrackerFree>;
 long tracker_since_reset(const vis_tracker *t);  // vis_tracker_process calls since made or reset
 
 }  // namespace vis

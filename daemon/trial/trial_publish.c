@@ -60,10 +60,7 @@ void trial_publish_frame(live_bus *b, const vis_frame *f, const vis_tracker *trk
     if (!b || !f || !live_bus_frame_due(b, t_s)) return;
     static const size_t max = LIVE_UV_MAX;
     double uv[2 * LIVE_UV_MAX];
-    size_t n = trk ? vis_tracker_curve(trk, uv, max) : 0;
-    if (n > max) n = max;
-    live_bus_publish_frame(b, t_s, index, vis_frame_width(f), vis_frame_height(f), vis_frame_channels(f),
-                           vis_frame_stride(f), vis_frame_data((vis_frame *)f), uv, n);
+    trial_publish_frame_curve(b, f, uv, trk ? vis_tracker_curve(trk, uv, max) : 0, index, t_s);
 }
 
 void trial_publish_frame_curve(live_bus *b, const vis_frame *f, const double *uv, size_t n, long index, double t_s)

@@ -595,10 +595,10 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
     }
     L.pipe = pipe;
     /* The calibration's clamp points are at the trial's compression: frames whose compress rail is
-     * more than half a pixel (at least TRIAL_COMPRESS_ARRIVED_MM) from there are stored untracked
-     * ("clamp not found"), as the runner does. */
+     * further from there than trial_clamp_tol_mm are stored untracked ("clamp not found"), as the
+     * runner does. */
     const double target_mm = rig_calib_compress_mm(&rec->calib, rec->length_m, rec->compression);
-    double tol_mm = cal.px_per_mm > 0 ? fmax(0.5 / cal.px_per_mm, TRIAL_COMPRESS_ARRIVED_MM) : 0.0;
+    double tol_mm = trial_clamp_tol_mm(cal.px_per_mm);
     double lo_mm = INFINITY, hi_mm = -INFINITY;
     if (tol_mm > 0 && !compress_in_place(r, target_mm, tol_mm, &lo_mm, &hi_mm)) {
         /* A recording whose rails never put the clamps where the calibration has them (another rig

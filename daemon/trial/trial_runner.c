@@ -234,7 +234,7 @@ static void finish(run_ctx *c, trial_state s, const char *fmt, ...)
 
 static int rail_idle_at(const rail_status *st, double target)
 {
-    return st->state == RAIL_STATE_IDLE && fabs(st->position_mm - target) < TRIAL_COMPRESS_ARRIVED_MM;
+    return st->state == RAIL_STATE_IDLE && fabs(st->position_mm - target) < TRIAL_RAIL_ARRIVED_MM;
 }
 
 /* Position of a rail at time t (rail clock) from its latest status. A fresh reading is the
@@ -615,8 +615,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             continue;
         }
         vis_measure m;
-        if (p->clamp_tol_mm > 0 &&
-            fabs(pos_c - c.target_compress_mm) > fmax(p->clamp_tol_mm, TRIAL_COMPRESS_ARRIVED_MM)) {
+        if (p->clamp_tol_mm > 0 && fabs(pos_c - c.target_compress_mm) > p->clamp_tol_mm) {
             /* The compress rail is moving (or back at zero): the clamps are not at the calibrated
              * points, and a frame measured against those would be a confident wrong answer. */
             memset(&m, 0, sizeof m);

@@ -32,6 +32,7 @@
 #ifndef RIBBON_DAEMON_TRIAL_RUNNER_H
 #define RIBBON_DAEMON_TRIAL_RUNNER_H
 
+#include <math.h>
 #include <stdatomic.h>
 #include <stddef.h>
 
@@ -85,14 +86,21 @@ typedef struct trial_plan {
                                     defaults, TRIAL_FROZEN_FRAMES, TRIAL_FROZEN_MOVE_MM) */
     double frozen_move_mm;
     double clamp_tol_mm;         /* > 0: frames are tracked only while the compress rail is within
-                                    this (at least TRIAL_COMPRESS_ARRIVED_MM) of the trial's
-                                    compression, where the camera calibration's clamp points are
-                                    (the session: half a pixel); others are stored untracked with
-                                    the reason "clamp not found". 0: every frame is tracked */
+                                    this of the trial's compression, where the camera calibration's
+                                    clamp points are (the session: trial_clamp_tol_mm); others are
+                                    stored untracked with the reason "clamp not found". 0: every
+                                    frame is tracked */
 } trial_plan;
 
-/* How near its target the compression rail counts as arrived (holding starts there), mm. */
-#define TRIAL_COMPRESS_ARRIVED_MM 0.05
+/* How near its target a rail counts as arrived (holding starts there), mm. */
+#define TRIAL_RAIL_ARRIVED_MM 0.05
+/* The compress rail's distance from the trial's compression within which the calibration's clamp
+ * points hold: half a pixel, and never less than a rail that has arrived may be off; 0 (no rule)
+ * without a scale. The live runner and replays use this one rule. */
+static inline double trial_clamp_tol_mm(double px_per_mm)
+{
+    return px_per_mm > 0 ? fmax(0.5 / px_per_mm, TRIAL_RAIL_ARRIVED_MM) : 0.0;
+}
 
 /* A camera as the runner sees it: the frame of time t_s (rail clock) with the clamps at (dl, dw).
  * A real camera ignores dl and dw and blocks until its next frame, returning its time in *t_frame;

@@ -460,8 +460,7 @@ static trial_plan session_plan(const rig_config *cfg)
 static int session_run(trial_session *s, session_parts *p, char *why, size_t why_len)
 {
     trial_plan plan = session_plan(&s->cfg);
-    /* The calibration's clamp points are at the trial's compression: half a pixel from there. */
-    plan.clamp_tol_mm = s->cal.px_per_mm > 0 ? 0.5 / s->cal.px_per_mm : 0.0;
+    plan.clamp_tol_mm = trial_clamp_tol_mm(s->cal.px_per_mm);
     if (store_samples_begin(s->st, s->trial_id, NULL, &s->writer, why, why_len) != STORE_OK) return -1;
     trial_sink sink = {sink_state, sink_event, sink_sample, sink_frame, s};
     if (trial_runner_init(&s->runner, &plan, s->compress, s->shear, p->cam, p->trk, sink, why, why_len)) return -1;

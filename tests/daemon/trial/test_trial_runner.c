@@ -218,7 +218,7 @@ static void good_trial(void **state)
 
 /* The tracker's clamp points are the calibration's, at the trial's compression (Delta L 0.5): while
  * the compress rail moves, the fake's clamps are elsewhere. With the plan's clamp_tol_mm (half a
- * pixel, as the session sets it) no frame is measured away from there (without it, frames of the
+ * pixel, trial_clamp_tol_mm, as the session sets it) no frame is measured away from there (without it, frames of the
  * compression and the return are), those frames are stored as clamp_not_found, and the trial is
  * the same. */
 static void frames_away_from_compression_untracked(void **state)
@@ -229,9 +229,9 @@ static void frames_away_from_compression_untracked(void **state)
     for (int k = 0; k < 2; k++) {
         rig r;
         rig_open(&r, NAN);
-        r.plan.clamp_tol_mm = k ? 0.5 / r.px_per_mm : 0.0;
+        r.plan.clamp_tol_mm = k ? trial_clamp_tol_mm(r.px_per_mm) : 0.0; /* as the session sets it */
         r.log.target_dl = 0.5;
-        r.log.tol_dl = 0.5 / r.px_per_mm / (L * 1000.0) + 1e-9;
+        r.log.tol_dl = trial_clamp_tol_mm(r.px_per_mm) / (L * 1000.0) + 1e-9;
         trial_result res;
         rig_run(&r, &res);
         assert_int_equal(res.final, TRIAL_DONE);
