@@ -48,27 +48,46 @@ bool path_walk(const cv::Mat &sig, Pt a, Pt b, const WalkParams &wp, std::vector
     if (!(cl > 2 * wp.step) || !(wp.threshold > 0))
         return false;
     const Pt e = chord * (1.0 / cl);
-    // Leaving direction: the ray (3 .. 3 + reach px) with the largest mean signal, within 85 deg of
-    // the chord (the jaw is behind the clamp point).
+    // Leaving direction. The clamp holds the ribbon's end tangent along the jaw axis, which the
+    // image shows along the clamp chord (within the camera's tilt and perspective: LEAVE_DEV), but
+    // the ribbon may curve away from it within a few pixels. So the candidates are arcs that leave
+    // within LEAVE_DEV of the chord and turn by up to LEAVE_TURN over their length (3 .. 3 + reach
+    // px); the one with the largest mean signal gives the first direction and turning rate. Straight
+    // rays over a wider fan were tried first: at zero shear (the ribbon edge-on and faint) they left
+    // along the bright sliver the ridge filter leaves on the jaw's face, at 84 deg from the chord,
+    // and the walk came back along it or wandered off (the simulator family's folded ribbons at
+    // Delta L 0.6-0.7 and zero shear).
     const double reach = std::max(6.0, 3.0 * wp.half_band);
-    double best = -1, best_ang = 0;
-    for (int k = -42; k <= 42; k++) {
-        const double ang = k * (M_PI / 180.0) * 2.0;
-        const Pt d = rot(e, ang);
-        double acc = 0;
-        int cnt = 0;
-        for (double r = 3.0; r <= 3.0 + reach; r += 1.0, cnt++)
-            acc += sample(sig, a.x + r * d.x, a.y + r * d.y);
-        acc /= cnt;
-        if (acc > best) {
-            best = acc;
-            best_ang = ang;
+    const double LEAVE_DEV = 40.0 * M_PI / 180.0, LEAVE_TURN = M_PI;
+    double best = -1, best_ang = 0, best_rate = 0;
+    for (int k = -20; k <= 20; k++) {
+        const double ang = LEAVE_DEV * k / 20.0;
+        for (int j = -18; j <= 18; j++) {
+            const double rate = LEAVE_TURN * j / 18.0 / (3.0 + reach);  // radians per px
+            double acc = 0, x = a.x, y = a.y, h = ang;
+            int cnt = 0;
+            for (double r = 0.0; r < 3.0 + reach; r += 1.0) {
+                const Pt d = rot(e, h + 0.5 * rate);
+                x += d.x;
+                y += d.y;
+                h += rate;
+                if (r + 1.0 >= 3.0) {
+                    acc += sample(sig, x, y);
+                    cnt++;
+                }
+            }
+            acc /= cnt;
+            if (acc > best) {
+                best = acc;
+                best_ang = ang;
+                best_rate = rate;
+            }
         }
     }
     if (best < wp.threshold)
         return false;
     Pt t = rot(e, best_ang);
-    double turn = 0;  // radians per step
+    double turn = best_rate * wp.step;  // radians per step
     Pt p = a;
     path.push_back(a);
     const int K = (int)std::ceil(wp.half_band / 0.5);

@@ -45,7 +45,7 @@
 #define WRONG_A_RAD 0.1
 #define MAX_STATES 20000
 /* Measured shapes reached (of 208 full, 13 quick), asserted as floors; the issue asks for all. */
-#define FAMILY_MEASURED_FLOOR 177
+#define FAMILY_MEASURED_FLOOR 181
 #define QUICK_MEASURED_FLOOR 8
 /* Sequences: wrong frames over the six (the issue asks for none; before the followed curve had to
  * agree with the fresh paths' bend, one: the symmetric snap at 500 fps, A off 0.13 rad at quality
@@ -74,6 +74,7 @@ typedef struct trial_states {
     double *pos, *nrm;  /* MAX_STATES x 3 npts */
     size_t npts;
     int failed;
+    vis_camera cam;  /* the camera the states are rendered with */
 } trial_states;
 
 static int on_sample(void *user, const rod_sample *s, const rod *r)
@@ -190,11 +191,88 @@ static void scene_camera_at(const rod_scene *sc, double distance_m, vis_render_p
      * 3 sequence frames (FAM_NO_BEND=1 shows them; the bridging check stays on). */
     if (getenv("FAM_NO_BEND"))
         tp->min_bend_ratio = 0.0;
+    if (getenv("FAM_MINC")) /* by hand: another weakest ridge */
+        tp->min_contrast = atof(getenv("FAM_MINC"));
 }
 
 static void scene_camera(const rod_scene *sc, vis_render_params *rp, vis_calib *cal, vis_track_params *tp)
 {
     scene_camera_at(sc, getenv("FAM_DIST") ? atof(getenv("FAM_DIST")) : CAMERA_DISTANCE_M, rp, cal, tp);
+}
+
+/* Where the ribbon hides itself. Two stretches of the ribbon far apart along it but closer in the
+ * image than their projected half extents plus TOUCH_GAP_PX (two blur sigmas: a gap narrower than
+ * that shows no background between them) are not separable. A crossing at an angle does that over
+ * a short run (2 D / sin(angle) for a touching distance D); legs that run alongside each other
+ * (a loop closing, the two legs of a fold lying over each other) do it over a long one. Returns the
+ * longest such run along the projected centreline, in units of its touching distance D: above
+ * ALONGSIDE_RUNS (a crossing shallower than about 30 degrees) part of the ribbon lies over or
+ * against another part and is not in view. */
+#define TOUCH_GAP_PX 2.0
+#define ALONGSIDE_RUNS 4.0
+static double alongside_run(const vis_shape *sh, const vis_camera *cam)
+{
+    const size_t n = sh->n;
+    double *c = malloc(sizeof(double) * 2 * n), *e = malloc(sizeof(double) * n), *a = malloc(sizeof(double) * n);
+    unsigned char *hit = calloc(n, 1);
+    double *dd = calloc(n, sizeof(double));
+    assert_true(c && e && a && hit && dd);
+    for (size_t i = 0; i < n; i++) {
+        const double *p = sh->pos + 3 * i, *nn = sh->normal + 3 * i;
+        const size_t i0 = i ? i - 1 : 0, i1 = i + 1 < n ? i + 1 : n - 1;
+        double t[3], d[3], tl = 0, dl = 0;
+        for (int k = 0; k < 3; k++) {
+            t[k] = sh->pos[3 * i1 + k] - sh->pos[3 * i0 + k];
+            tl += t[k] * t[k];
+        }
+        tl = sqrt(tl);
+        d[0] = t[1] * nn[2] - t[2] * nn[1];
+        d[1] = t[2] * nn[0] - t[0] * nn[2];
+        d[2] = t[0] * nn[1] - t[1] * nn[0];
+        for (int k = 0; k < 3; k++)
+            dl += d[k] * d[k];
+        dl = sqrt(dl);
+        assert_int_equal(vis_camera_project(cam, p, c + 2 * i, NULL), VIS_OK);
+        e[i] = 0;
+        for (int sa = -1; sa <= 1; sa += 2)
+            for (int sb = -1; sb <= 1; sb += 2) {
+                double q[3], uv[2];
+                for (int k = 0; k < 3; k++)
+                    q[k] = p[k] + sa * 0.5 * sh->width_m * d[k] / dl + sb * 0.5 * sh->thickness_m * nn[k];
+                assert_int_equal(vis_camera_project(cam, q, uv, NULL), VIS_OK);
+                e[i] = fmax(e[i], hypot(uv[0] - c[2 * i], uv[1] - c[2 * i + 1]));
+            }
+        a[i] = i ? a[i - 1] + hypot(c[2 * i] - c[2 * i - 2], c[2 * i + 1] - c[2 * i - 1]) : 0;
+        (void)tl;
+    }
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = i + 1; j < n; j++) {
+            const double D = e[i] + e[j] + TOUCH_GAP_PX;
+            if (a[j] - a[i] > M_PI * D && hypot(c[2 * i] - c[2 * j], c[2 * i + 1] - c[2 * j + 1]) < D) {
+                hit[i] = hit[j] = 1;
+                dd[i] = fmax(dd[i], D);
+                dd[j] = fmax(dd[j], D);
+            }
+        }
+    double worst = 0;
+    for (size_t i = 0; i < n;) {
+        if (!hit[i]) {
+            i++;
+            continue;
+        }
+        size_t j = i;
+        double dmax = 0;
+        while (j < n && hit[j])
+            dmax = fmax(dmax, dd[j++]);
+        worst = fmax(worst, (a[j - 1] - a[i] + (a[n - 1] / (n - 1))) / dmax);
+        i = j;
+    }
+    free(c);
+    free(e);
+    free(a);
+    free(hit);
+    free(dd);
+    return worst;
 }
 
 typedef struct score {
@@ -238,9 +316,16 @@ static int render_track(vis_renderer *r, vis_tracker *trk, const trial_states *s
         *a_true = g->a_cam;
     if (dz_true)
         *dz_true = g->dz_cam;
+    const double run = alongside_run(&sh, &st->cam);
     if (m.reason != VIS_REASON_NONE) {
-        printf("  state %d (t %.3f s, shear %.1f mm): not measured: %s (quality %.3f)\n", k, st->t[k], shear_mm,
-               vis_reason_str(m.reason), m.quality);
+        printf("  state %d (t %.3f s, shear %.1f mm): not measured: %s (quality %.3f), alongside %.1f\n", k, st->t[k], shear_mm,
+               vis_reason_str(m.reason), m.quality, run);
+        const char *dump = getenv("FAM_DUMP"); /* a folder: the frames not measured, as rendered */
+        if (dump) {
+            char path[512];
+            snprintf(path, sizeof path, "%s/lost_%03d_%d.png", dump, s->frames, k);
+            (void)vis_frame_save(f, path, &err);
+        }
         return 0;
     }
     const double edz = (m.dz * st->sc.length - g->dz_cam * g->length_m) * truth.px_per_m;
@@ -332,6 +417,7 @@ static void test_family_from_scratch(void **state)
         vis_calib cal;
         vis_track_params tp;
         scene_camera(&st.sc, &rp, &cal, &tp);
+        st.cam = rp.camera;
         rp.seed = (uint64_t)(q + 1);
         vis_error err;
         vis_renderer *r = vis_renderer_create(&rp, &err);
@@ -441,6 +527,7 @@ static void test_sequences(void **state)
         vis_calib cal;
         vis_track_params tp;
         scene_camera(&st.sc, &rp, &cal, &tp);
+        st.cam = rp.camera;
         vis_error err;
         for (int q = 0; q < (quick ? 1 : 3); q++) {
             const double fps = fps_list[q];
@@ -597,6 +684,7 @@ static void test_depth_from_prediction(void **state)
         vis_calib cal;
         vis_track_params tp;
         scene_camera_at(&st.sc, 0.0, &rp, &cal, &tp); /* automatic: 1 m for this strip */
+        st.cam = rp.camera;
         rp.seed = (uint64_t)(q + 1);
         vis_error err;
         vis_renderer *r[2] = {vis_renderer_create(&rp, &err), vis_renderer_create(&rp, &err)};
@@ -674,6 +762,7 @@ static void test_default_rule_on_mock_twin(void **state)
     vis_calib cal;
     assert_int_equal(twin_render_params_for_scene(&st.sc, &cp, &rp, why, sizeof why), TWIN_OK);
     assert_int_equal(twin_calib_for_scene(&st.sc, &rp.camera, &cal, why, sizeof why), TWIN_OK);
+    st.cam = rp.camera;
     rp.noise_sigma = 2.0;
     rp.blur_sigma_px = 0.8;
     vis_track_params tp = vis_track_params_default();
