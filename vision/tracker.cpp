@@ -21,6 +21,9 @@
 //      their tangent along x, so the shear profile is flat at both clamps), or at the depth of the
 //      caller's profile (a prediction's shape, depth_profile.cpp), and its pixel's ray is
 //      intersected with the plane at that depth, camera tilt included (view_model.cpp);
+//   6b. when no attempt measured and one was refused only for a tight bend with the ribbon's face
+//      showing (where cross-section centroids slide inward), its bends are measured with the
+//      silhouette model (bend_model.cpp) and it is measured again (refine_bends);
 //   7. local smooth fit, Delta Z, A, quality, reason. With the length known, the measured
 //      (projected) length must lie within the bounds the shear allows (projected_length_bounds);
 //      quality falls outside them and beyond 8% the frame is lost, never a confident shortcut.
@@ -43,6 +46,9 @@ struct Attempt {
     double bend_rel = 0;            // tightest radius of curvature / the ridge's median width
     bool bend_refused = false;      // refused by the bend check (bend_rel, the face, A)
     bool ran = false;               // tried on this frame
+    bool bends_modelled = false;    // tight bends measured by the silhouette model (bend_model.cpp)
+    double len_px = 0;              // the guide's length, px (the samples' arc positions run over it)
+    std::vector<vis::TraceSample> samples;  // the tracer's last pass
     vis_measure m{};
     std::vector<vis::Pt> curve_px;  // smooth centreline, pixels
     std::vector<vis::Pt> curve_mm;  // the same in the plane, mm from the left clamp point
@@ -70,6 +76,9 @@ struct vis_tracker {
     long since_reset = 0;            // vis_tracker_process calls since made or reset (refresh_frames)
     vis::DepthLibrary library;       // a prediction's shapes (vis_tracker_set_depth_library)
     Attempt redo;                    // the best attempt measured again with the library's depth
+    Attempt bent;                    // a refused attempt with its tight bends modelled
+    vis::BendModel bend_model;
+    std::vector<vis::Pt> bend_win, bend_others, bend_out;
 };
 
 extern "C" vis_track_params vis_track_params_default(void)
@@ -387,11 +396,16 @@ bool occluded(const std::vector<vis::TraceSample> &smp)
     return worst > n / 5 && head * 3 >= (n / 10) * 2 && tail * 3 >= (n / 10) * 2;
 }
 
+void finish_attempt(vis_tracker *t, const Geometry &g, Attempt &at);
+
 // Steps 5 to 7 from a guide curve, into `at`.
 void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_in, int passes,
                 Attempt &at)
 {
     at.ran = true;
+    at.bends_modelled = false;
+    at.samples.clear();
+    at.len_px = 0;
     at.reason = VIS_REASON_LOST;
     at.quality = 0;
     at.valid_frac = 0;
@@ -439,9 +453,29 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
             guide.swap(ws.smooth_tmp);
         }
     }
+    at.len_px = len_px;
+    at.samples.assign(samples.begin(), samples.end());
+    finish_attempt(t, g, at);
+}
+
+// Steps 6 and 7 from the attempt's samples (at.samples, at.len_px).
+void finish_attempt(vis_tracker *t, const Geometry &g, Attempt &at)
+{
+    const vis_track_params &p = t->p;
+    vis::Workspace &ws = t->ws;
+    const std::vector<vis::TraceSample> &samples = at.samples;
+    const double len_px = at.len_px;
+    at.reason = VIS_REASON_LOST;
+    at.quality = 0;
+    at.length_rel = 0;
+    at.bend_rel = 0;
+    at.bend_refused = false;
+    at.m = vis_measure{};
     size_t nv = 0;
     for (const auto &s : samples)
         nv += s.valid;
+    if (samples.empty())
+        return;
     const double valid_frac = (double)nv / samples.size();
     at.valid_frac = valid_frac;
 
@@ -501,7 +535,7 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
     at.bend_rel = bend_over_width(fr.curve, g.vm.ppmm, samples, ws.widths);
     const double bend_min = p.min_bend_ratio;
     const bool symmetric = at.bend_rel >= SYM_BEND_RATIO && std::fabs(fr.a) < SYM_A_RAD;
-    at.bend_refused = at.bend_rel < bend_min && !symmetric;
+    at.bend_refused = at.bend_rel < bend_min && !symmetric && !at.bends_modelled;
     if (at.bend_refused)
         at.quality *= 0.1 * at.bend_rel / bend_min;
     at.m.dz = fr.height / length;
@@ -566,6 +600,122 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
         at.reason = VIS_REASON_OCCLUDED;
     else if (at.quality < p.min_quality || at.bend_refused)
         at.reason = VIS_REASON_LOST;
+}
+
+// Tight bends with the face showing, measured by the silhouette model (bend_model.cpp) instead of
+// being refused: `src` is an attempt the bend check refused; its samples through every stretch of
+// the smooth curve tighter than min_bend_ratio ridge widths are replaced by the model's centreline
+// (over the inner BEND_INNER of a window of BEND_WIDTHS median widths either side), and the
+// attempt is measured again into `dst`, the bend check waived. False (dst not measured) when a
+// bend's model does not fit the pixels: a residual above BEND_RMS_REL of the band's contrast, or a
+// centreline moved by more than the band's half-width.
+const double BEND_WIDTHS = 4.0;
+const double BEND_INNER = 0.6;
+const double BEND_RMS_NOISE = 1.5;
+
+bool refine_bends(vis_tracker *t, const Geometry &g, const cv::Mat &grey, bool dark, const Attempt &src,
+                  Attempt &dst)
+{
+    const std::vector<Pt> &cv_ = src.curve_px;
+    const std::vector<vis::TraceSample> &smp = src.samples;
+    if (cv_.size() < 8 || smp.size() < 16 || !(src.len_px > 0))
+        return false;
+    std::vector<double> &w = t->ws.widths;
+    w.clear();
+    for (const auto &q : smp)
+        if (q.valid)
+            w.push_back(q.width);
+    if (w.size() < 16)
+        return false;
+    std::nth_element(w.begin(), w.begin() + (long)(w.size() / 2), w.end());
+    const double wmed = std::max(1.0, w[w.size() / 2]);
+    const double rlim = t->p.min_bend_ratio * wmed;
+    // Tight stretches of the smooth curve (pixels), by index; their tightest points.
+    const size_t m = cv_.size();
+    std::vector<double> cum(m, 0.0);
+    for (size_t j = 1; j < m; j++)
+        cum[j] = cum[j - 1] + cv::norm(cv_[j] - cv_[j - 1]);
+    std::vector<double> centres;  // arc positions of the tightest points, as fractions of the arc
+    double run_min = 1e18, run_at = -1;
+    for (size_t j = 1; j + 1 <= m; j++) {
+        double rad = 1e18;
+        if (j + 1 < m) {
+            const Pt a = cv_[j] - cv_[j - 1], b = cv_[j + 1] - cv_[j];
+            const double ang = std::fabs(std::atan2(a.x * b.y - a.y * b.x, a.dot(b)));
+            if (ang > 0)
+                rad = 0.5 * (cv::norm(a) + cv::norm(b)) / ang;
+        }
+        if (rad < rlim) {
+            if (rad < run_min) {
+                run_min = rad;
+                run_at = cum[j] / cum.back();
+            }
+        } else if (run_at >= 0) {
+            centres.push_back(run_at);
+            run_min = 1e18;
+            run_at = -1;
+        }
+    }
+    if (centres.empty())
+        return false;
+    dst.ran = true;
+    dst.samples.assign(smp.begin(), smp.end());
+    dst.len_px = src.len_px;
+    const double W = std::min(80.0, std::max(16.0, BEND_WIDTHS * wmed));
+    for (double cf : centres) {
+        const double sc = cf * src.len_px;
+        if (sc - W < 0 || sc + W > src.len_px)
+            return false;  // a bend at a clamp: the model needs arc on both sides
+        std::vector<Pt> &win = t->bend_win, &oth = t->bend_others;
+        win.clear();
+        oth.clear();
+        double sa = -1, sb = -1, hw = 0;
+        for (const auto &q : dst.samples) {
+            if (!q.valid)
+                continue;
+            if (q.s >= sc - W && q.s <= sc + W) {
+                if (sa < 0)
+                    sa = q.s;
+                sb = q.s;
+                win.push_back(q.p);
+                hw = std::max(hw, 0.5 * q.width);
+            } else if (q.s < sc - W - 3 || q.s > sc + W + 3) {
+                oth.push_back(q.p);
+            }
+        }
+        oth.push_back(g.left);
+        oth.push_back(g.right);
+        if (win.size() < 16 || !(sb > sa))
+            return false;
+        vis::BendFitInfo info;
+        if (!t->bend_model.refine(grey, dark, win, oth, hw, BEND_RMS_NOISE, t->bend_out, &info))
+            return false;
+        if (!(info.rms <= BEND_RMS_NOISE * info.noise) || info.delta_max > std::max(1.0, hw))
+            return false;
+        // Replace the inner part of the window with the model's centreline.
+        const std::vector<Pt> &out = t->bend_out;
+        const double ia = sa + 0.5 * (1.0 - BEND_INNER) * (sb - sa), ib = sb - 0.5 * (1.0 - BEND_INNER) * (sb - sa);
+        std::vector<vis::TraceSample> merged;
+        merged.reserve(dst.samples.size() + out.size());
+        bool inserted = false;
+        for (const auto &q : dst.samples) {
+            if (q.s >= ia && q.s <= ib)
+                continue;
+            if (!inserted && q.s > ib) {
+                for (size_t k = 0; k < out.size(); k++) {
+                    const double s = sa + (sb - sa) * (double)k / (double)(out.size() - 1);
+                    if (s >= ia && s <= ib)
+                        merged.push_back(vis::TraceSample{out[k], s, q.peak, true, 2.0 * hw, q.base});
+                }
+                inserted = true;
+            }
+            merged.push_back(q);
+        }
+        dst.samples.swap(merged);
+    }
+    dst.bends_modelled = true;
+    finish_attempt(t, g, dst);
+    return dst.reason == VIS_REASON_NONE;
 }
 
 // The better of two attempts: a measured one over one that is not; between two of the same kind,
@@ -726,6 +876,19 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
                     break;
                 }
             }
+        // No attempt measured, and one was refused only for a tight bend with the face showing:
+        // measure its bends with the silhouette model (refine_bends). Of such attempts, the one
+        // with the most ridge along it and the length nearest the ribbon's.
+        if (best && best->reason != VIS_REASON_NONE && t->p.min_bend_ratio > 0) {
+            const Attempt *cand = nullptr;
+            for (const Attempt &a : t->att)
+                if (a.ran && a.bend_refused && a.valid_frac >= 0.9 && std::fabs(a.length_rel) <= LENGTH_TOL &&
+                    (!cand || a.valid_frac - std::fabs(a.length_rel) > cand->valid_frac - std::fabs(cand->length_rel)))
+                    cand = &a;
+            t->bent.ran = false;
+            if (cand && refine_bends(t, g, grey, dark, *cand, t->bent))
+                best = pick_better(best, &t->bent);
+        }
         // With a prediction's shapes: measure again with the depth of the one nearest to what was
         // measured, by its projection when the library has them, else by Delta Z and A (the
         // pixels are traced again along the curve just found).

@@ -6,6 +6,8 @@
 //   view_model.cpp pixels <-> millimetres in the ribbon's plane (depth from the shear, camera pitch)
 //   depth_profile.cpp the centreline's depth along the arc (default cubic, or a prediction's)
 //   curve_fit.cpp  samples -> smooth metric curve -> Delta Z, A, midpoint
+//   bend_model.cpp image + samples through a tight twisted bend -> the centreline there, from a
+//                  model of the band's silhouette
 #ifndef RIBBON_VIS_TRACKER_IMPL_HPP
 #define RIBBON_VIS_TRACKER_IMPL_HPP
 
@@ -76,6 +78,40 @@ void smooth(const std::vector<Pt> &c, int h, std::vector<Pt> &out);
 void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, double band,
                 double margin, double min_contrast, double max_width, std::vector<TraceSample> &out,
                 std::vector<float> &prof, std::vector<float> &tmp);
+
+// --- bend_model.cpp
+struct BendFitInfo {
+    double rms = 0;        // residual RMS over the band's pixels, grey levels
+    double noise = 0;      // the noise on the background pixels (robust), grey levels
+    double contrast = 0;   // the silhouette's contrast above the background, grey levels
+    double sigma = 0;      // blur, px
+    int pixels = 0;        // pixels counted
+    double v[2] = {0, 0};  // the cross-section's half-vector at the window's middle, px
+    double delta_max = 0;  // largest move of the centreline, px
+    bool broken = false;   // the cross-section fitted in two halves (a crease)
+};
+// The centreline through a tight bend from a model of the band's silhouette (see bend_model.cpp).
+class BendModel {
+public:
+    BendModel();
+    ~BendModel();
+    // Only scratch inside: a copy starts with its own, empty.
+    BendModel(const BendModel &);
+    BendModel &operator=(const BendModel &);
+    // `window`: the traced centreline over the bend (pixels, in arc order); `others`: points of the
+    // rest of the ribbon (pixels whose nearest point is one of these are not counted);
+    // `half_width_px`: the band's largest half-width there. `img` as for trace_pass (CV_8U grey
+    // or CV_32F ridge signal, `invert` for a dark ribbon on grey). On success `out` holds the
+    // model's centreline, every 1 px along the window. A model whose residual over the band is
+    // above max_rms_over_noise times the background's noise is fitted again broken at the middle
+    // (a crease); the caller judges the result by info.
+    bool refine(const cv::Mat &img, bool invert, const std::vector<Pt> &window, const std::vector<Pt> &others,
+                double half_width_px, double max_rms_over_noise, std::vector<Pt> &out, BendFitInfo *info);
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 // --- view_model.cpp
 struct ViewModel {

@@ -45,8 +45,8 @@
 #define WRONG_A_RAD 0.1
 #define MAX_STATES 20000
 /* Measured shapes reached (of 208 full, 13 quick), asserted as floors; the issue asks for all. */
-#define FAMILY_MEASURED_FLOOR 181
-#define QUICK_MEASURED_FLOOR 8
+#define FAMILY_MEASURED_FLOOR 191
+#define QUICK_MEASURED_FLOOR 10
 /* Sequences: wrong frames over the six (the issue asks for none; before the followed curve had to
  * agree with the fresh paths' bend, one: the symmetric snap at 500 fps, A off 0.13 rad at quality
  * 0.92 beside the U's bottom). */
@@ -317,6 +317,27 @@ static int render_track(vis_renderer *r, vis_tracker *trk, const trial_states *s
     if (dz_true)
         *dz_true = g->dz_cam;
     const double run = alongside_run(&sh, &st->cam);
+    if (getenv("FAM_TRUTH_DIR")) { /* scratch: truth centreline and width ends per state */
+        char pth[512];
+        snprintf(pth, sizeof pth, "%s/truth_%g_%g_%g_%d.txt", getenv("FAM_TRUTH_DIR"), st->sc.compression, st->sc.fold_angle_deg, st->sc.fold_position, k);
+        FILE *fo = fopen(pth, "w");
+        for (size_t i = 0; fo && i < sh.n; i++) {
+            const double *p = sh.pos + 3 * i, *nn = sh.normal + 3 * i;
+            const size_t i0 = i ? i - 1 : 0, i1 = i + 1 < sh.n ? i + 1 : sh.n - 1;
+            double t[3], d[3], dl = 0, uv[2], u1[2], u2[2], q[3];
+            for (int c = 0; c < 3; c++) t[c] = sh.pos[3 * i1 + c] - sh.pos[3 * i0 + c];
+            d[0] = t[1] * nn[2] - t[2] * nn[1]; d[1] = t[2] * nn[0] - t[0] * nn[2]; d[2] = t[0] * nn[1] - t[1] * nn[0];
+            for (int c = 0; c < 3; c++) dl += d[c] * d[c];
+            dl = sqrt(dl);
+            vis_camera_project(&st->cam, p, uv, NULL);
+            for (int c = 0; c < 3; c++) q[c] = p[c] + 0.5 * sh.width_m * d[c] / dl;
+            vis_camera_project(&st->cam, q, u1, NULL);
+            for (int c = 0; c < 3; c++) q[c] = p[c] - 0.5 * sh.width_m * d[c] / dl;
+            vis_camera_project(&st->cam, q, u2, NULL);
+            fprintf(fo, "%f %f %f %f %f %f\n", uv[0], uv[1], u1[0], u1[1], u2[0], u2[1]);
+        }
+        if (fo) fclose(fo);
+    }
     if (m.reason != VIS_REASON_NONE) {
         printf("  state %d (t %.3f s, shear %.1f mm): not measured: %s (quality %.3f), alongside %.1f\n", k, st->t[k], shear_mm,
                vis_reason_str(m.reason), m.quality, run);
@@ -575,22 +596,17 @@ static void test_sequences(void **state)
             failures += sr.lost_in_snap != 0 || snap_t < 0 || abs(snap_m - snap_t) > 1 ||
                         asym != pred.asymmetric || sr.s.wrong != 0;
             seq_wrong += sr.s.wrong;
-            /* Reached: the regime at every rate, both regimes. The symmetric snap (Gamma 0.21,
-             * Delta L 0.5: a twisted U, bend ratios 1.3-1.8 with the face showing): every snap frame
-             * measured and the snap frame within one, at every rate (the bend check's waiver for
-             * nearly symmetric shapes, and the bridging check on followed curves; before them it
-             * lost 9 of 16, 33 of 62 and 138 of 257). The asymmetric snap: its snap frame within 3
-             * frames and at most a fifth of its snap frames lost (its tight bends at |A| above 0.1
-             * are refused: measured with the bend check off, A was up to 0.12 rad off there). */
+            /* The issue's bars, both regimes, every rate: the regime read right, every snap frame
+             * measured and the snap frame within one. Reached for the symmetric snap (a twisted U,
+             * bend ratios 1.3-1.8) by the bend check's waiver for nearly symmetric shapes and the
+             * bridging check (before them it lost 9 of 16, 33 of 62 and 138 of 257); for the
+             * asymmetric one by the silhouette model at its twisted crease corners
+             * (vision/bend_model.cpp; before it it lost 0 of 5, 3 of 23 and 15 of 95, its snap
+             * frame 3 late at 500 fps). */
             assert_int_equal(asym, pred.asymmetric);
             assert_true(snap_t >= 0);
-            if (pred.asymmetric) {
-                assert_true(abs(snap_m - snap_t) <= 3);
-                assert_true(5 * sr.lost_in_snap <= sr.in_snap);
-            } else {
-                assert_int_equal(sr.lost_in_snap, 0);
-                assert_true(abs(snap_m - snap_t) <= 1);
-            }
+            assert_int_equal(sr.lost_in_snap, 0);
+            assert_true(abs(snap_m - snap_t) <= 1);
             vis_tracker_free(sr.trk);
             vis_renderer_free(sr.r);
         }

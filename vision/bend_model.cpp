@@ -1,0 +1,468 @@
+// bend_model.cpp: the centreline through a tight bend where the ribbon's face shows, from a model
+// of the band's silhouette instead of cross-section centroids.
+//
+// Why: a twisted ribbon's cross-section projects to a segment that is oblique to the curve. Along a
+// straight stretch the band it sweeps is still symmetric about the centreline, so the tracer's
+// centroids are right; in a bend whose radius is a few widths, the segments of the neighbouring arc
+// reach past the inner edge (by about (h_t)^2 / 2R for a tangential half-extent h_t at radius R),
+// the band grows on the inside and every centroid there slides inward. On the simulator family's
+// Delta L 0.7 arch (state 531) the traced samples are within 0.1-0.3 px of the truth everywhere but
+// at the twisted apex, where they sit 0.96 px inside; the apex is the arc's midpoint, so Delta Z is
+// 1 px off and A 0.10 rad.
+//
+// The model, over a window of arc around the bend (pixels): a centreline c(s) = c0(s) + delta(s)
+// n0(s) (c0 the traced samples lightly smoothed, n0 their normal, delta piecewise linear on KNOTS
+// knots: about 4 px apart on the usual window, fine enough for a crease's corner and a folded
+// apex, which 7 and 13 knots were not), a cross-section segment of half-vector v(s) linear in s
+// (its direction and length follow the twist), a half-thickness TAU_PX, a Gaussian blur sigma,
+// and the image as a plane of background plus a contrast times the blurred silhouette (those four
+// solved in closed form at every step). The silhouette is drawn supersampled (SUPER x SUPER per
+// pixel), the sections joined segment to segment as the renderer joins them. Levenberg-Marquardt
+// on the pixels of the window (those nearer to it than to the rest of the ribbon), from six
+// starts (the segment across the curve or tilted either way along it; the apex where it was
+// traced or half a band further out), with a light penalty on delta's second differences. When
+// that leaves more than the caller's multiple of the noise on the band, the cross-section's two
+// halves are fitted apart (a crease turns it abruptly). The refined centreline replaces the
+// samples of the window's inner part (tracker.cpp, refine_bends), and the caller accepts the
+// model only if its residual on the band is within that multiple of the noise read on the
+// background around it.
+#include "tracker_impl.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+
+namespace vis {
+
+namespace {
+
+const int KNOTS = 21;
+// Parameters: delta at the knots; v = (a0 + a1 u, b0 + b1 u) on the first half of the window and
+// (c0 + c1 u, d0 + d1 u) on the second (tied to the first half's unless the model is broken at the
+// middle, as at a crease); log sigma.
+const int IV = KNOTS, IVR = KNOTS + 4, ISIG = KNOTS + 8;
+const int NP = KNOTS + 9;
+const int SUPER = 4;
+const double TAU_PX = 0.3;
+const double SMOOTH_W = 0.02;  // penalty on delta's second differences, per knot, in residual units
+const int MAX_ITERS = 25;
+
+struct Patch {
+    cv::Rect r;             // the patch, image pixels
+    cv::Mat data;           // observed, CV_32F (ribbon bright)
+    std::vector<int> idx;   // counted pixels: y * w + x within the patch
+};
+
+}  // namespace
+
+struct BendModel::Impl {
+    std::vector<Pt> c0, n0;        // base centreline, normals (dense, 1 px)
+    std::vector<double> u;         // position in the window, -1..1
+    Patch patch;
+    cv::Mat fine, coarse, blurred;
+    std::vector<cv::Point> poly;
+    std::vector<cv::Point> hull;
+    bool broken = false;  // the cross-section's two halves fitted apart (IVR..IVR+3 active)
+    std::vector<double> bg;
+
+    bool active(int k) const { return broken || k < IVR || k >= IVR + 4; }
+
+    // Model image for params p into `blurred` (patch size); false on a degenerate params.
+    bool render(const double *p)
+    {
+        const double sigma = std::exp(p[ISIG]);
+        if (!(sigma > 0.2 && sigma < 5.0))
+            return false;
+        fine.create(patch.r.height * SUPER, patch.r.width * SUPER, CV_8U);
+        fine.setTo(0);
+        const double ox = patch.r.x, oy = patch.r.y;
+        const int SH = 4;  // fillConvexPoly's fractional bits
+        const double scale = SUPER * (1 << SH);
+        auto to_fine = [&](Pt q) {
+            return cv::Point((int)std::lround(((q.x - ox + 0.5) * SUPER - 0.5) * (1 << SH)),
+                             (int)std::lround(((q.y - oy + 0.5) * SUPER - 0.5) * (1 << SH)));
+        };
+        (void)scale;
+        Pt prev[4];
+        for (size_t k = 0; k < c0.size(); k++) {
+            const double uk = u[k];
+            // delta: piecewise linear on KNOTS knots over u in [-1, 1]
+            const double x = (uk + 1.0) * 0.5 * (KNOTS - 1);
+            const int j = std::min(KNOTS - 2, std::max(0, (int)std::floor(x)));
+            const double f = x - j;
+            const double delta = (1 - f) * p[j] + f * p[j + 1];
+            const Pt c = c0[k] + delta * n0[k];
+            const int iv = broken && uk >= 0 ? IVR : IV;
+            const Pt v(p[iv] + p[iv + 1] * uk, p[iv + 2] + p[iv + 3] * uk);
+            const Pt th = TAU_PX * n0[k];
+            const Pt cur[4] = {c - v - th, c - v + th, c + v + th, c + v - th};
+            if (k > 0) {
+                poly.clear();
+                for (int i = 0; i < 4; i++) {
+                    poly.push_back(to_fine(prev[i]));
+                    poly.push_back(to_fine(cur[i]));
+                }
+                cv::convexHull(poly, hull);
+                cv::fillConvexPoly(fine, hull, cv::Scalar(255), cv::LINE_8, SH);
+            }
+            std::copy(cur, cur + 4, prev);
+        }
+        cv::resize(fine, coarse, patch.r.size(), 0, 0, cv::INTER_AREA);
+        coarse.convertTo(blurred, CV_32F, 1.0 / 255.0);
+        const int ks = 2 * (int)std::ceil(3.0 * sigma) + 1;
+        cv::GaussianBlur(blurred, blurred, cv::Size(ks, ks), sigma, sigma, cv::BORDER_CONSTANT);
+        return true;
+    }
+
+    // Residuals for params p (counted pixels, then the smoothness terms), with the background plane
+    // and contrast solved in closed form. Returns false on a degenerate model.
+    bool residuals(const double *p, std::vector<double> &r, double *contrast)
+    {
+        if (!render(p))
+            return false;
+        const int w = patch.r.width;
+        // Least squares for data ~ b0 + bx x + by y + k m.
+        double A[4][4] = {{0}}, b[4] = {0};
+        for (int id : patch.idx) {
+            const int y = id / w, x = id % w;
+            const double m = blurred.at<float>(y, x), d = patch.data.at<float>(y, x);
+            const double q[4] = {1.0, (double)x, (double)y, m};
+            for (int i = 0; i < 4; i++) {
+                for (int k = 0; k < 4; k++)
+                    A[i][k] += q[i] * q[k];
+                b[i] += q[i] * d;
+            }
+        }
+        double c[4];
+        if (!solve4(A, b, c))
+            return false;
+        if (contrast)
+            *contrast = c[3];
+        r.resize(patch.idx.size() + KNOTS - 2);
+        size_t n = 0;
+        for (int id : patch.idx) {
+            const int y = id / w, x = id % w;
+            r[n++] = c[0] + c[1] * x + c[2] * y + c[3] * blurred.at<float>(y, x) - patch.data.at<float>(y, x);
+        }
+        const double sw = SMOOTH_W * std::fabs(c[3]);
+        for (int j = 1; j + 1 < KNOTS; j++)
+            r[n++] = sw * (p[j - 1] - 2 * p[j] + p[j + 1]);
+        return true;
+    }
+
+    static bool solve4(double A[4][4], double b[4], double x[4])
+    {
+        double M[4][5];
+        for (int i = 0; i < 4; i++) {
+            for (int k = 0; k < 4; k++)
+                M[i][k] = A[i][k];
+            M[i][4] = b[i];
+        }
+        for (int col = 0; col < 4; col++) {
+            int piv = col;
+            for (int i = col + 1; i < 4; i++)
+                if (std::fabs(M[i][col]) > std::fabs(M[piv][col]))
+                    piv = i;
+            if (!(std::fabs(M[piv][col]) > 1e-12))
+                return false;
+            for (int k = 0; k < 5; k++)
+                std::swap(M[col][k], M[piv][k]);
+            for (int i = 0; i < 4; i++)
+                if (i != col) {
+                    const double f = M[i][col] / M[col][col];
+                    for (int k = col; k < 5; k++)
+                        M[i][k] -= f * M[col][k];
+                }
+        }
+        for (int i = 0; i < 4; i++)
+            x[i] = M[i][4] / M[i][i];
+        return true;
+    }
+
+    static double sumsq(const std::vector<double> &r)
+    {
+        double s = 0;
+        for (double v : r)
+            s += v * v;
+        return s;
+    }
+
+    // The residual over the band (model above 5% of the contrast) against the noise read on the
+    // background pixels (model below 1%): a model that fits leaves the noise alone on both.
+    bool quality(const double *p, double *rms, double *noise, double *contrast)
+    {
+        std::vector<double> r;
+        if (!residuals(p, r, contrast))
+            return false;
+        double ss = 0;
+        int nb = 0;
+        bg.clear();
+        for (size_t i = 0; i < patch.idx.size(); i++) {
+            const int id = patch.idx[i];
+            const float mv = blurred.at<float>(id / patch.r.width, id % patch.r.width);
+            if (mv >= 0.05f) {
+                ss += r[i] * r[i];
+                nb++;
+            } else if (mv < 0.01f) {
+                bg.push_back(std::fabs(r[i]));
+            }
+        }
+        if (nb < 20 || bg.size() < 20)
+            return false;
+        std::nth_element(bg.begin(), bg.begin() + (long)(bg.size() / 2), bg.end());
+        *noise = 1.4826 * bg[bg.size() / 2];
+        *rms = std::sqrt(ss / (double)nb);
+        return true;
+    }
+
+    // Levenberg-Marquardt from p; returns the final sum of squares (inf when it failed).
+    double fit(double *p, int iters)
+    {
+        std::vector<double> r0, r1, J((size_t)NP * 0);
+        double contrast = 0;
+        if (!residuals(p, r0, &contrast))
+            return INFINITY;
+        double f0 = sumsq(r0), lambda = 1e-2;
+        const size_t m = r0.size();
+        std::vector<double> Jm(m * NP);
+        for (int it = 0; it < iters; it++) {
+            // Forward differences.
+            for (int k = 0; k < NP; k++) {
+                if (!active(k)) {
+                    for (size_t i = 0; i < m; i++)
+                        Jm[i * NP + k] = 0.0;
+                    continue;
+                }
+                double q[NP];
+                std::copy(p, p + NP, q);
+                const double h = k == ISIG ? 0.02 : 0.1;
+                q[k] += h;
+                if (!residuals(q, r1, nullptr) || r1.size() != m)
+                    return INFINITY;
+                for (size_t i = 0; i < m; i++)
+                    Jm[i * NP + k] = (r1[i] - r0[i]) / h;
+            }
+            double JtJ[NP][NP] = {{0}}, g[NP] = {0};
+            for (size_t i = 0; i < m; i++) {
+                const double *ji = &Jm[i * NP];
+                for (int a = 0; a < NP; a++) {
+                    g[a] += ji[a] * r0[i];
+                    for (int b2 = a; b2 < NP; b2++)
+                        JtJ[a][b2] += ji[a] * ji[b2];
+                }
+            }
+            for (int a = 0; a < NP; a++)
+                for (int b2 = 0; b2 < a; b2++)
+                    JtJ[a][b2] = JtJ[b2][a];
+            bool improved = false;
+            for (int tries = 0; tries < 6 && !improved; tries++) {
+                cv::Mat M(NP, NP, CV_64F), rhs(NP, 1, CV_64F), dx;
+                for (int a = 0; a < NP; a++) {
+                    for (int b2 = 0; b2 < NP; b2++)
+                        M.at<double>(a, b2) = JtJ[a][b2] + (a == b2 ? lambda * (JtJ[a][a] + 1e-9) + (active(a) ? 0.0 : 1.0) : 0.0);
+                    rhs.at<double>(a) = -g[a];
+                }
+                if (!cv::solve(M, rhs, dx, cv::DECOMP_CHOLESKY)) {
+                    lambda *= 10;
+                    continue;
+                }
+                double q[NP];
+                for (int a = 0; a < NP; a++)
+                    q[a] = p[a] + dx.at<double>(a);
+                if (residuals(q, r1, nullptr) && r1.size() == m) {
+                    const double f1 = sumsq(r1);
+                    if (f1 < f0) {
+                        std::copy(q, q + NP, p);
+                        r0.swap(r1);
+                        const double gain = (f0 - f1) / f0;
+                        f0 = f1;
+                        lambda = std::max(1e-6, lambda * 0.3);
+                        improved = true;
+                        if (gain < 1e-5)
+                            return f0;
+                        break;
+                    }
+                }
+                lambda *= 10;
+            }
+            if (!improved)
+                break;
+        }
+        return f0;
+    }
+};
+
+BendModel::BendModel() : impl_(new Impl) {}
+BendModel::~BendModel() = default;
+BendModel::BendModel(const BendModel &) : impl_(new Impl) {}
+BendModel &BendModel::operator=(const BendModel &)
+{
+    impl_.reset(new Impl);
+    return *this;
+}
+
+bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &window,
+                       const std::vector<Pt> &others, double half_width_px, double max_rms_over_noise,
+                       std::vector<Pt> &out, BendFitInfo *info)
+{
+    Impl &m = *impl_;
+    out.clear();
+    if (info)
+        *info = BendFitInfo{};
+    if (window.size() < 8 || img.empty())
+        return false;
+    // Base: the window resampled every 1 px and lightly smoothed, with normals.
+    std::vector<double> cum;
+    std::vector<Pt> rs, sm;
+    double len = 0;
+    resample(window, 1.0, &len, cum, rs);
+    if (rs.size() < 8)
+        return false;
+    smooth(rs, 2, sm);
+    m.c0 = sm;
+    const size_t n = m.c0.size();
+    m.n0.resize(n);
+    m.u.resize(n);
+    for (size_t k = 0; k < n; k++) {
+        const Pt t = m.c0[std::min(k + 2, n - 1)] - m.c0[k >= 2 ? k - 2 : 0];
+        const double tl = cv::norm(t);
+        m.n0[k] = tl > 0 ? Pt(-t.y / tl, t.x / tl) : Pt(0, 0);
+        m.u[k] = -1.0 + 2.0 * (double)k / (double)(n - 1);
+    }
+    // The patch: the window's box, grown by the band's half-width, the blur and a margin.
+    const double grow = half_width_px + 5.0;
+    double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+    for (const Pt &q : m.c0) {
+        x0 = std::min(x0, q.x);
+        y0 = std::min(y0, q.y);
+        x1 = std::max(x1, q.x);
+        y1 = std::max(y1, q.y);
+    }
+    const cv::Rect box((int)std::floor(x0 - grow), (int)std::floor(y0 - grow),
+                       (int)std::ceil(x1 - x0 + 2 * grow) + 1, (int)std::ceil(y1 - y0 + 2 * grow) + 1);
+    m.patch.r = box & cv::Rect(0, 0, img.cols, img.rows);
+    if (m.patch.r.width < 8 || m.patch.r.height < 8)
+        return false;
+    img(m.patch.r).convertTo(m.patch.data, CV_32F);
+    if (invert)
+        m.patch.data = 255.0f - m.patch.data;
+    // Counted pixels: within reach of the window's inner part (|u| <= 0.8), nearer to it than to
+    // the rest of the ribbon.
+    m.patch.idx.clear();
+    const double reach = half_width_px + 3.5;
+    for (int y = 0; y < m.patch.r.height; y++)
+        for (int x = 0; x < m.patch.r.width; x++) {
+            const Pt q(x + m.patch.r.x, y + m.patch.r.y);
+            double dw = 1e18, du = 0;
+            for (size_t k = 0; k < n; k++) {
+                const double d = (q - m.c0[k]).dot(q - m.c0[k]);
+                if (d < dw) {
+                    dw = d;
+                    du = m.u[k];
+                }
+            }
+            if (std::fabs(du) > 0.8 || dw > reach * reach)
+                continue;
+            bool nearer_other = false;
+            for (const Pt &o : others)
+                if ((q - o).dot(q - o) < dw) {
+                    nearer_other = true;
+                    break;
+                }
+            if (!nearer_other)
+                m.patch.idx.push_back(y * m.patch.r.width + x);
+        }
+    if (m.patch.idx.size() < 40)
+        return false;
+    // Starts: the segment across the curve (the half-width), then tilted either way along it.
+    const Pt nm = m.n0[n / 2], tm(nm.y, -nm.x);
+    const double hw0 = std::max(0.5, half_width_px - 1.0);
+    const Pt v_start[3] = {hw0 * nm, hw0 * (0.6 * nm + 0.8 * tm), hw0 * (0.6 * nm - 0.8 * tm)};
+    // The bend's outside: away from the middle of the window's chord. The traced apex lies inside
+    // the true one (the centroids slide inward), so half the starts put it half a band outward.
+    const Pt chord_mid = 0.5 * (m.c0.front() + m.c0.back());
+    const double out_sign = (m.c0[n / 2] - chord_mid).dot(nm) >= 0 ? 1.0 : -1.0;
+    double best_p[NP] = {0}, best_f = INFINITY;
+    m.broken = false;
+    for (int start = 0; start < 6; start++) {
+        double p[NP] = {0};
+        p[IV] = p[IVR] = v_start[start % 3].x;
+        p[IV + 2] = p[IVR + 2] = v_start[start % 3].y;
+        p[ISIG] = std::log(1.0);
+        if (start >= 3)
+            for (int j = 0; j < KNOTS; j++) {
+                const double uj = -1.0 + 2.0 * j / (KNOTS - 1);
+                p[j] = out_sign * 0.5 * hw0 * std::max(0.0, 1.0 - 2.0 * std::fabs(uj));
+            }
+        const double f = m.fit(p, 8);
+        if (f < best_f) {
+            best_f = f;
+            std::copy(p, p + NP, best_p);
+        }
+    }
+    if (!std::isfinite(best_f))
+        return false;
+    best_f = m.fit(best_p, MAX_ITERS);
+    double rms = 0, noise = 0, contrast = 0;
+    if (!std::isfinite(best_f) || !m.quality(best_p, &rms, &noise, &contrast))
+        return false;
+    if (rms > max_rms_over_noise * noise) {
+        // A crease: the cross-section turns abruptly where the ribbon is folded, so its two
+        // halves get a segment each (from the smooth fit's, and from the three starts on either side).
+        m.broken = true;
+        double bp[NP], bf = INFINITY;
+        for (int start = 0; start < 7; start++) {
+            double p[NP];
+            std::copy(best_p, best_p + NP, p);
+            for (int k = 0; k < 4; k++)
+                p[IVR + k] = p[IV + k];
+            if (start > 0) {
+                const int half = start <= 3 ? IV : IVR;
+                const Pt v0 = v_start[(start - 1) % 3];
+                p[half] = v0.x;
+                p[half + 1] = 0;
+                p[half + 2] = v0.y;
+                p[half + 3] = 0;
+            }
+            const double f = m.fit(p, 8);
+            if (f < bf) {
+                bf = f;
+                std::copy(p, p + NP, bp);
+            }
+        }
+        if (!std::isfinite(bf))
+            return false;
+        bf = m.fit(bp, MAX_ITERS);
+        double rms2 = 0, noise2 = 0, contrast2 = 0;
+        if (!std::isfinite(bf) || !m.quality(bp, &rms2, &noise2, &contrast2))
+            return false;
+        std::copy(bp, bp + NP, best_p);
+        rms = rms2;
+        noise = noise2;
+        contrast = contrast2;
+    }
+    out.resize(n);
+    for (size_t k = 0; k < n; k++) {
+        const double x = (m.u[k] + 1.0) * 0.5 * (KNOTS - 1);
+        const int j = std::min(KNOTS - 2, std::max(0, (int)std::floor(x)));
+        const double f = x - j;
+        out[k] = m.c0[k] + ((1 - f) * best_p[j] + f * best_p[j + 1]) * m.n0[k];
+    }
+    if (info) {
+        info->rms = rms;
+        info->noise = noise;
+        info->contrast = contrast;
+        info->sigma = std::exp(best_p[ISIG]);
+        info->pixels = (int)m.patch.idx.size();
+        info->v[0] = best_p[IV];
+        info->v[1] = best_p[IV + 2];
+        info->broken = m.broken;
+        double dmax = 0;
+        for (int j = 0; j < KNOTS; j++)
+            dmax = std::max(dmax, std::fabs(best_p[j]));
+        info->delta_max = dmax;
+    }
+    return true;
+}
+
+}  // namespace vis
