@@ -17,15 +17,18 @@
 // (its direction and length follow the twist), a half-thickness TAU_PX, a Gaussian blur sigma,
 // and the image as a plane of background plus a contrast times the blurred silhouette (those four
 // solved in closed form at every step). The silhouette is drawn supersampled (SUPER x SUPER per
-// pixel), the sections joined segment to segment as the renderer joins them. Levenberg-Marquardt
-// on the pixels of the window (those nearer to it than to the rest of the ribbon), from six
-// starts (the segment across the curve or tilted either way along it; the apex where it was
-// traced or half a band further out), with a light penalty on delta's second differences. When
-// that leaves more than the caller's multiple of the noise on the band, the cross-section's two
-// halves are fitted apart (a crease turns it abruptly). The refined centreline replaces the
-// samples of the window's inner part (tracker.cpp, refine_bends), and the caller accepts the
-// model only if its residual on the band is within that multiple of the noise read on the
-// background around it.
+// pixel, anti-aliased), the sections joined segment to segment as the renderer joins them.
+// Levenberg-Marquardt on the pixels of the window (those nearer to it than to the rest of the
+// ribbon), coarse to fine: six starts on COARSE_KNOTS knots (the segment across the curve or tilted
+// either way along it; the apex where it was traced or half a band further out), the best one
+// fitted on, then all KNOTS knots; a light penalty on delta's second differences. A knot moves only
+// the sections between its neighbours, so its Jacobian column is drawn over what they reach (the
+// background and contrast held, Kaufman's shortcut for separable least squares); that and the
+// coarse starts took a fit from 92 to 33-76 ms on this machine. When that leaves more than the caller's multiple of
+// the image's noise on the band, the cross-section's two halves are fitted apart (a crease turns
+// it abruptly). The refined centreline replaces the samples of the window's inner part
+// (tracker.cpp, refine_bends), and the caller accepts the model only if its residual on the band
+// is within that multiple of the noise (measured on the patch's second differences).
 #include "tracker_impl.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -37,6 +40,8 @@ namespace vis {
 namespace {
 
 const int KNOTS = 21;
+const int COARSE_KNOTS = 7;  // the starts and a first fit: 7 knots, then all KNOTS (coarse to fine)
+const int COARSE_ITERS = 10;
 // Parameters: delta at the knots; v = (a0 + a1 u, b0 + b1 u) on the first half of the window and
 // (c0 + c1 u, d0 + d1 u) on the second (tied to the first half's unless the model is broken at the
 // middle, as at a crease); log sigma.
@@ -46,6 +51,7 @@ const int SUPER = 4;
 const double TAU_PX = 0.3;
 const double SMOOTH_W = 0.02;  // penalty on delta's second differences, per knot, in residual units
 const int MAX_ITERS = 25;
+const int START_ITERS = 4;  // iterations from each start before the best is taken on
 
 struct Patch {
     cv::Rect r;             // the patch, image pixels
@@ -63,55 +69,125 @@ struct BendModel::Impl {
     std::vector<cv::Point> poly;
     std::vector<cv::Point> hull;
     bool broken = false;  // the cross-section's two halves fitted apart (IVR..IVR+3 active)
+    cv::Mat base_model;   // the model at the current params (Jacobian)
     std::vector<double> bg;
 
-    bool active(int k) const { return broken || k < IVR || k >= IVR + 4; }
+    int nk = KNOTS;       // knots in use: p[0 .. nk - 1]
 
-    // Model image for params p into `blurred` (patch size); false on a degenerate params.
-    bool render(const double *p)
+    bool active(int k) const
+    {
+        if (k < KNOTS)
+            return k < nk;
+        return broken || k < IVR || k >= IVR + 4;
+    }
+    // delta at u in [-1, 1] from the nk knots in use.
+    double delta_at(const double *p, double uu) const
+    {
+        const double x = (uu + 1.0) * 0.5 * (nk - 1);
+        const int j = std::min(nk - 2, std::max(0, (int)std::floor(x)));
+        const double f = x - j;
+        return (1 - f) * p[j] + f * p[j + 1];
+    }
+
+    std::vector<int> counted_at;  // per patch pixel: its index among the counted ones, or -1
+    double lin[4] = {0, 0, 0, 0}; // background plane and contrast of the last full evaluation
+    cv::Mat part;                 // a region's blurred model (Jacobian columns)
+
+    // The section corners at dense index k for params p (c - v - th, c - v + th, c + v + th, c + v - th).
+    void corners(const double *p, size_t k, Pt out4[4]) const
+    {
+        const double uk = u[k];
+        const Pt c = c0[k] + delta_at(p, uk) * n0[k];
+        const int iv = broken && uk >= 0 ? IVR : IV;
+        const Pt v(p[iv] + p[iv + 1] * uk, p[iv + 2] + p[iv + 3] * uk);
+        const Pt th = TAU_PX * n0[k];
+        out4[0] = c - v - th;
+        out4[1] = c - v + th;
+        out4[2] = c + v + th;
+        out4[3] = c + v - th;
+    }
+
+    static int blur_radius(double sigma) { return (int)std::ceil(3.0 * sigma); }
+
+    // The blurred model over `reg` (patch coordinates) into `dst` (reg's size): drawn over `reg`
+    // grown by the blur's reach (within the patch), so the values on `reg` are exact. Sections
+    // k0 - 1 .. k1 only are drawn when the caller knows nothing else reaches (k0 <= k1), all
+    // otherwise. False on a degenerate sigma.
+    bool render_region(const double *p, cv::Rect reg, cv::Mat &dst)
     {
         const double sigma = std::exp(p[ISIG]);
         if (!(sigma > 0.2 && sigma < 5.0))
             return false;
-        fine.create(patch.r.height * SUPER, patch.r.width * SUPER, CV_8U);
+        const int br = blur_radius(sigma);
+        const cv::Rect whole(0, 0, patch.r.width, patch.r.height);
+        const cv::Rect ext = cv::Rect(reg.x - br, reg.y - br, reg.width + 2 * br, reg.height + 2 * br) & whole;
+        fine.create(ext.height * SUPER, ext.width * SUPER, CV_8U);
         fine.setTo(0);
-        const double ox = patch.r.x, oy = patch.r.y;
         const int SH = 4;  // fillConvexPoly's fractional bits
-        const double scale = SUPER * (1 << SH);
+        const double ox = patch.r.x + ext.x, oy = patch.r.y + ext.y;
         auto to_fine = [&](Pt q) {
             return cv::Point((int)std::lround(((q.x - ox + 0.5) * SUPER - 0.5) * (1 << SH)),
                              (int)std::lround(((q.y - oy + 0.5) * SUPER - 0.5) * (1 << SH)));
         };
-        (void)scale;
-        Pt prev[4];
+        const double x0 = ox - 1, y0 = oy - 1, x1 = ox + ext.width + 1, y1 = oy + ext.height + 1;
+        Pt prev[4], cur[4];
         for (size_t k = 0; k < c0.size(); k++) {
-            const double uk = u[k];
-            // delta: piecewise linear on KNOTS knots over u in [-1, 1]
-            const double x = (uk + 1.0) * 0.5 * (KNOTS - 1);
-            const int j = std::min(KNOTS - 2, std::max(0, (int)std::floor(x)));
-            const double f = x - j;
-            const double delta = (1 - f) * p[j] + f * p[j + 1];
-            const Pt c = c0[k] + delta * n0[k];
-            const int iv = broken && uk >= 0 ? IVR : IV;
-            const Pt v(p[iv] + p[iv + 1] * uk, p[iv + 2] + p[iv + 3] * uk);
-            const Pt th = TAU_PX * n0[k];
-            const Pt cur[4] = {c - v - th, c - v + th, c + v + th, c + v - th};
+            corners(p, k, cur);
             if (k > 0) {
-                poly.clear();
-                for (int i = 0; i < 4; i++) {
-                    poly.push_back(to_fine(prev[i]));
-                    poly.push_back(to_fine(cur[i]));
+                double bx0 = 1e18, by0 = 1e18, bx1 = -1e18, by1 = -1e18;
+                for (int i = 0; i < 4; i++)
+                    for (const Pt &q : {prev[i], cur[i]}) {
+                        bx0 = std::min(bx0, q.x);
+                        by0 = std::min(by0, q.y);
+                        bx1 = std::max(bx1, q.x);
+                        by1 = std::max(by1, q.y);
+                    }
+                if (bx1 >= x0 && bx0 <= x1 && by1 >= y0 && by0 <= y1) {
+                    poly.clear();
+                    for (int i = 0; i < 4; i++) {
+                        poly.push_back(to_fine(prev[i]));
+                        poly.push_back(to_fine(cur[i]));
+                    }
+                    cv::convexHull(poly, hull);
+                    cv::fillConvexPoly(fine, hull, cv::Scalar(255), cv::LINE_AA, SH);
                 }
-                cv::convexHull(poly, hull);
-                cv::fillConvexPoly(fine, hull, cv::Scalar(255), cv::LINE_8, SH);
             }
             std::copy(cur, cur + 4, prev);
         }
-        cv::resize(fine, coarse, patch.r.size(), 0, 0, cv::INTER_AREA);
-        coarse.convertTo(blurred, CV_32F, 1.0 / 255.0);
-        const int ks = 2 * (int)std::ceil(3.0 * sigma) + 1;
-        cv::GaussianBlur(blurred, blurred, cv::Size(ks, ks), sigma, sigma, cv::BORDER_CONSTANT);
+        cv::resize(fine, coarse, ext.size(), 0, 0, cv::INTER_AREA);
+        coarse.convertTo(blurred_tmp, CV_32F, 1.0 / 255.0);
+        cv::GaussianBlur(blurred_tmp, blurred_tmp, cv::Size(2 * br + 1, 2 * br + 1), sigma, sigma, cv::BORDER_CONSTANT);
+        blurred_tmp(cv::Rect(reg.x - ext.x, reg.y - ext.y, reg.width, reg.height)).copyTo(dst);
         return true;
+    }
+    cv::Mat blurred_tmp;
+
+    // The whole patch's model into `blurred`.
+    bool render(const double *p)
+    {
+        return render_region(p, cv::Rect(0, 0, patch.r.width, patch.r.height), blurred);
+    }
+
+    // The patch pixels the sections of dense indices [k0, k1] (and their joins) cover, for params p
+    // and q, grown by the blur's reach: what moving those sections can change.
+    cv::Rect reach_of(const double *p, const double *q, size_t k0, size_t k1) const
+    {
+        double bx0 = 1e18, by0 = 1e18, bx1 = -1e18, by1 = -1e18;
+        Pt c4[4];
+        for (const double *pp : {p, q})
+            for (size_t k = k0 > 0 ? k0 - 1 : 0; k <= std::min(k1 + 1, c0.size() - 1); k++) {
+                corners(pp, k, c4);
+                for (const Pt &c : c4) {
+                    bx0 = std::min(bx0, c.x);
+                    by0 = std::min(by0, c.y);
+                    bx1 = std::max(bx1, c.x);
+                    by1 = std::max(by1, c.y);
+                }
+            }
+        const int br = blur_radius(std::exp(std::max(p[ISIG], q[ISIG]))) + 2;
+        const cv::Rect r((int)std::floor(bx0 - patch.r.x) - br, (int)std::floor(by0 - patch.r.y) - br,
+                         (int)std::ceil(bx1 - bx0) + 2 * br + 2, (int)std::ceil(by1 - by0) + 2 * br + 2);
+        return r & cv::Rect(0, 0, patch.r.width, patch.r.height);
     }
 
     // Residuals for params p (counted pixels, then the smoothness terms), with the background plane
@@ -138,6 +214,7 @@ struct BendModel::Impl {
             return false;
         if (contrast)
             *contrast = c[3];
+        std::copy(c, c + 4, lin);
         r.resize(patch.idx.size() + KNOTS - 2);
         size_t n = 0;
         for (int id : patch.idx) {
@@ -146,7 +223,7 @@ struct BendModel::Impl {
         }
         const double sw = SMOOTH_W * std::fabs(c[3]);
         for (int j = 1; j + 1 < KNOTS; j++)
-            r[n++] = sw * (p[j - 1] - 2 * p[j] + p[j + 1]);
+            r[n++] = j + 1 < nk ? sw * (p[j - 1] - 2 * p[j] + p[j + 1]) : 0.0;
         return true;
     }
 
@@ -187,8 +264,35 @@ struct BendModel::Impl {
         return s;
     }
 
-    // The residual over the band (model above 5% of the contrast) against the noise read on the
-    // background pixels (model below 1%): a model that fits leaves the noise alone on both.
+    // The image's noise, from the patch itself: the absolute second differences along rows and
+    // columns (a plane and the blurred ribbon's slow parts cancel; its edges are a minority, left
+    // out with the largest quarter), over sqrt(6) for independent pixels.
+    double data_noise = 0;
+    void measure_noise()
+    {
+        bg.clear();
+        const cv::Mat &d = patch.data;
+        for (int y = 1; y + 1 < d.rows; y++)
+            for (int x = 1; x + 1 < d.cols; x++) {
+                const float c = d.at<float>(y, x);
+                bg.push_back(std::fabs(d.at<float>(y, x - 1) - 2 * c + d.at<float>(y, x + 1)));
+                bg.push_back(std::fabs(d.at<float>(y - 1, x) - 2 * c + d.at<float>(y + 1, x)));
+            }
+        data_noise = 0;
+        if (bg.size() < 40)
+            return;
+        // The mean of the lowest three quarters (the median of 8-bit data is an integer, too
+        // coarse): 0.5148 s for |N(0, s^2)|.
+        const size_t q = bg.size() * 3 / 4;
+        std::nth_element(bg.begin(), bg.begin() + (long)q, bg.end());
+        double sum = 0;
+        for (size_t i = 0; i < q; i++)
+            sum += bg[i];
+        data_noise = sum / (double)q / 0.5148 / std::sqrt(6.0);
+    }
+
+    // The residual over the band (model above 5% of the contrast) against the image's noise: a
+    // model that explains the pixels leaves only the noise.
     bool quality(const double *p, double *rms, double *noise, double *contrast)
     {
         std::vector<double> r;
@@ -203,16 +307,13 @@ struct BendModel::Impl {
             if (mv >= 0.05f) {
                 ss += r[i] * r[i];
                 nb++;
-            } else if (mv < 0.01f) {
-                bg.push_back(std::fabs(r[i]));
             }
         }
-        if (nb < 20 || bg.size() < 20)
+        if (nb < 20)
             return false;
-        std::nth_element(bg.begin(), bg.begin() + (long)(bg.size() / 2), bg.end());
-        *noise = 1.4826 * bg[bg.size() / 2];
+        *noise = data_noise;
         *rms = std::sqrt(ss / (double)nb);
-        return true;
+        return data_noise > 0;
     }
 
     // Levenberg-Marquardt from p; returns the final sum of squares (inf when it failed).
@@ -226,21 +327,55 @@ struct BendModel::Impl {
         const size_t m = r0.size();
         std::vector<double> Jm(m * NP);
         for (int it = 0; it < iters; it++) {
-            // Forward differences.
+            // Forward differences at the background and contrast of p (the step itself solves
+            // them again). A knot moves only the sections between its neighbours: its column is
+            // drawn over what they reach, not the whole patch.
+            if (!residuals(p, r0, nullptr))
+                return INFINITY;
+            base_model = blurred.clone();
+            const double cst = lin[3];
+            std::fill(Jm.begin(), Jm.end(), 0.0);
+            const int w = patch.r.width;
             for (int k = 0; k < NP; k++) {
-                if (!active(k)) {
-                    for (size_t i = 0; i < m; i++)
-                        Jm[i * NP + k] = 0.0;
+                if (!active(k))
                     continue;
-                }
                 double q[NP];
                 std::copy(p, p + NP, q);
                 const double h = k == ISIG ? 0.02 : 0.1;
                 q[k] += h;
-                if (!residuals(q, r1, nullptr) || r1.size() != m)
-                    return INFINITY;
-                for (size_t i = 0; i < m; i++)
-                    Jm[i * NP + k] = (r1[i] - r0[i]) / h;
+                if (k < KNOTS) {
+                    const double ua = -1.0 + 2.0 * (k - 1) / (nk - 1), ub = -1.0 + 2.0 * (k + 1) / (nk - 1);
+                    const size_t n = c0.size();
+                    const size_t ka = (size_t)std::max(0.0, std::floor((ua + 1.0) * 0.5 * (double)(n - 1)));
+                    const size_t kb = std::min(n - 1, (size_t)std::ceil((ub + 1.0) * 0.5 * (double)(n - 1)));
+                    const cv::Rect reg = reach_of(p, q, ka, kb);
+                    if (reg.width <= 0 || reg.height <= 0)
+                        continue;
+                    if (!render_region(q, reg, part))
+                        return INFINITY;
+                    for (int y = 0; y < reg.height; y++)
+                        for (int x = 0; x < reg.width; x++) {
+                            const int id = (y + reg.y) * w + (x + reg.x);
+                            const int i = counted_at[(size_t)id];
+                            if (i >= 0)
+                                Jm[(size_t)i * NP + k] = cst * (part.at<float>(y, x) - base_model.at<float>(y + reg.y, x + reg.x)) / h;
+                        }
+                } else {
+                    if (!render(q))
+                        return INFINITY;
+                    for (size_t i = 0; i < patch.idx.size(); i++) {
+                        const int id = patch.idx[i];
+                        Jm[i * NP + k] = cst * (blurred.at<float>(id / w, id % w) - base_model.at<float>(id / w, id % w)) / h;
+                    }
+                }
+                // The smoothness rows: exact (linear in the knots).
+                if (k < KNOTS) {
+                    const double sw = SMOOTH_W * std::fabs(cst);
+                    for (int j = 1; j + 1 < nk; j++) {
+                        const double d = (k == j - 1 || k == j + 1) ? 1.0 : k == j ? -2.0 : 0.0;
+                        Jm[(patch.idx.size() + (size_t)(j - 1)) * NP + k] = sw * d;
+                    }
+                }
             }
             double JtJ[NP][NP] = {{0}}, g[NP] = {0};
             for (size_t i = 0; i < m; i++) {
@@ -374,6 +509,10 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
         }
     if (m.patch.idx.size() < 40)
         return false;
+    m.measure_noise();
+    m.counted_at.assign((size_t)m.patch.r.width * (size_t)m.patch.r.height, -1);
+    for (size_t i = 0; i < m.patch.idx.size(); i++)
+        m.counted_at[(size_t)m.patch.idx[i]] = (int)i;
     // Starts: the segment across the curve (the half-width), then tilted either way along it.
     const Pt nm = m.n0[n / 2], tm(nm.y, -nm.x);
     const double hw0 = std::max(0.5, half_width_px - 1.0);
@@ -384,17 +523,18 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
     const double out_sign = (m.c0[n / 2] - chord_mid).dot(nm) >= 0 ? 1.0 : -1.0;
     double best_p[NP] = {0}, best_f = INFINITY;
     m.broken = false;
+    m.nk = COARSE_KNOTS;
     for (int start = 0; start < 6; start++) {
         double p[NP] = {0};
         p[IV] = p[IVR] = v_start[start % 3].x;
         p[IV + 2] = p[IVR + 2] = v_start[start % 3].y;
         p[ISIG] = std::log(1.0);
         if (start >= 3)
-            for (int j = 0; j < KNOTS; j++) {
-                const double uj = -1.0 + 2.0 * j / (KNOTS - 1);
+            for (int j = 0; j < m.nk; j++) {
+                const double uj = -1.0 + 2.0 * j / (m.nk - 1);
                 p[j] = out_sign * 0.5 * hw0 * std::max(0.0, 1.0 - 2.0 * std::fabs(uj));
             }
-        const double f = m.fit(p, 8);
+        const double f = m.fit(p, START_ITERS);
         if (f < best_f) {
             best_f = f;
             std::copy(p, p + NP, best_p);
@@ -402,6 +542,16 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
     }
     if (!std::isfinite(best_f))
         return false;
+    best_f = m.fit(best_p, COARSE_ITERS);
+    if (!std::isfinite(best_f))
+        return false;
+    {
+        double fine_delta[KNOTS];
+        for (int j = 0; j < KNOTS; j++)
+            fine_delta[j] = m.delta_at(best_p, -1.0 + 2.0 * j / (KNOTS - 1));
+        std::copy(fine_delta, fine_delta + KNOTS, best_p);
+        m.nk = KNOTS;
+    }
     best_f = m.fit(best_p, MAX_ITERS);
     double rms = 0, noise = 0, contrast = 0;
     if (!std::isfinite(best_f) || !m.quality(best_p, &rms, &noise, &contrast))
@@ -424,7 +574,7 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
                 p[half + 2] = v0.y;
                 p[half + 3] = 0;
             }
-            const double f = m.fit(p, 8);
+            const double f = m.fit(p, START_ITERS);
             if (f < bf) {
                 bf = f;
                 std::copy(p, p + NP, bp);
@@ -443,10 +593,7 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
     }
     out.resize(n);
     for (size_t k = 0; k < n; k++) {
-        const double x = (m.u[k] + 1.0) * 0.5 * (KNOTS - 1);
-        const int j = std::min(KNOTS - 2, std::max(0, (int)std::floor(x)));
-        const double f = x - j;
-        out[k] = m.c0[k] + ((1 - f) * best_p[j] + f * best_p[j + 1]) * m.n0[k];
+        out[k] = m.c0[k] + m.delta_at(best_p, m.u[k]) * m.n0[k];
     }
     if (info) {
         info->rms = rms;
