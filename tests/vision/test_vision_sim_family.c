@@ -47,6 +47,9 @@
 /* Measured shapes reached (of 208 full, 13 quick), asserted as floors; the issue asks for all. */
 #define FAMILY_MEASURED_FLOOR 191
 #define QUICK_MEASURED_FLOOR 10
+/* Of those, with the whole ribbon in view (alongside_run below): the issue asks for all. */
+#define FAMILY_IN_VIEW_FLOOR 191
+#define QUICK_IN_VIEW_FLOOR 10
 /* Sequences: wrong frames over the six (the issue asks for none; before the followed curve had to
  * agree with the fresh paths' bend, one: the symmetric snap at 500 fps, A off 0.13 rad at quality
  * 0.92 beside the U's bottom). */
@@ -200,16 +203,16 @@ static void scene_camera(const rod_scene *sc, vis_render_params *rp, vis_calib *
     scene_camera_at(sc, getenv("FAM_DIST") ? atof(getenv("FAM_DIST")) : CAMERA_DISTANCE_M, rp, cal, tp);
 }
 
-/* Where the ribbon hides itself. Two stretches of the ribbon far apart along it but closer in the
- * image than their projected half extents plus TOUCH_GAP_PX (two blur sigmas: a gap narrower than
- * that shows no background between them) are not separable. A crossing at an angle does that over
- * a short run (2 D / sin(angle) for a touching distance D); legs that run alongside each other
- * (a loop closing, the two legs of a fold lying over each other) do it over a long one. Returns the
- * longest such run along the projected centreline, in units of its touching distance D: above
- * ALONGSIDE_RUNS (a crossing shallower than about 30 degrees) part of the ribbon lies over or
- * against another part and is not in view. */
+/* Where the ribbon hides itself. Two stretches of the ribbon far apart along it (more than twice
+ * their touching distance D, so a single tight bend does not count) that run alongside each other
+ * (tangents within 30 degrees of parallel either way) closer in the image than their projected
+ * half extents plus TOUCH_GAP_PX (two blur sigmas: a gap narrower than that shows no background
+ * between them) lie over or against each other: part of the ribbon is not in view. A crossing
+ * (tangents further from parallel) hides only a short stretch and does not count. Returns the
+ * longest run of such points along the projected centreline over its touching distance: from
+ * ALONGSIDE_RUNS (1) the whole ribbon is not in view. */
 #define TOUCH_GAP_PX 2.0
-#define ALONGSIDE_RUNS 4.0
+#define ALONGSIDE_RUNS 1.0
 static double alongside_run(const vis_shape *sh, const vis_camera *cam)
 {
     const size_t n = sh->n;
@@ -248,7 +251,12 @@ static double alongside_run(const vis_shape *sh, const vis_camera *cam)
     for (size_t i = 0; i < n; i++)
         for (size_t j = i + 1; j < n; j++) {
             const double D = e[i] + e[j] + TOUCH_GAP_PX;
-            if (a[j] - a[i] > M_PI * D && hypot(c[2 * i] - c[2 * j], c[2 * i + 1] - c[2 * j + 1]) < D) {
+            const size_t i0 = i ? i - 1 : 0, i1 = i + 1 < n ? i + 1 : n - 1;
+            const size_t j0 = j - 1, j1 = j + 1 < n ? j + 1 : n - 1;
+            const double tix = c[2 * i1] - c[2 * i0], tiy = c[2 * i1 + 1] - c[2 * i0 + 1];
+            const double tjx = c[2 * j1] - c[2 * j0], tjy = c[2 * j1 + 1] - c[2 * j0 + 1];
+            const double sn = fabs(tix * tjy - tiy * tjx) / fmax(1e-12, hypot(tix, tiy) * hypot(tjx, tjy));
+            if (a[j] - a[i] > 2.0 * D && sn < 0.5 && hypot(c[2 * i] - c[2 * j], c[2 * i + 1] - c[2 * j + 1]) < D) {
                 hit[i] = hit[j] = 1;
                 dd[i] = fmax(dd[i], D);
                 dd[j] = fmax(dd[j], D);
@@ -277,6 +285,7 @@ static double alongside_run(const vis_shape *sh, const vis_camera *cam)
 
 typedef struct score {
     int frames, measured, wrong;
+    int hidden, hidden_measured;  /* frames where the ribbon lies over or against itself (alongside_run) */
     double sdz, sa, dz_max, a_max;
 } score;
 
@@ -317,6 +326,8 @@ static int render_track(vis_renderer *r, vis_tracker *trk, const trial_states *s
     if (dz_true)
         *dz_true = g->dz_cam;
     const double run = alongside_run(&sh, &st->cam);
+    const int hidden = run >= ALONGSIDE_RUNS;
+    s->hidden += hidden;
     if (getenv("FAM_TRUTH_DIR")) { /* scratch: truth centreline and width ends per state */
         char pth[512];
         snprintf(pth, sizeof pth, "%s/truth_%g_%g_%g_%d.txt", getenv("FAM_TRUTH_DIR"), st->sc.compression, st->sc.fold_angle_deg, st->sc.fold_position, k);
@@ -339,8 +350,8 @@ static int render_track(vis_renderer *r, vis_tracker *trk, const trial_states *s
         if (fo) fclose(fo);
     }
     if (m.reason != VIS_REASON_NONE) {
-        printf("  state %d (t %.3f s, shear %.1f mm): not measured: %s (quality %.3f), alongside %.1f\n", k, st->t[k], shear_mm,
-               vis_reason_str(m.reason), m.quality, run);
+        printf("  state %d (t %.3f s, shear %.1f mm): not measured: %s (quality %.3f)%s\n", k, st->t[k], shear_mm,
+               vis_reason_str(m.reason), m.quality, hidden ? ", not all in view (the ribbon over itself)" : "");
         const char *dump = getenv("FAM_DUMP"); /* a folder: the frames not measured, as rendered */
         if (dump) {
             char path[512];
@@ -352,6 +363,7 @@ static int render_track(vis_renderer *r, vis_tracker *trk, const trial_states *s
     const double edz = (m.dz * st->sc.length - g->dz_cam * g->length_m) * truth.px_per_m;
     const double ea = m.a - g->a_cam;
     s->measured++;
+    s->hidden_measured += hidden;
     s->sdz += edz * edz;
     s->sa += ea * ea;
     s->dz_max = fmax(s->dz_max, fabs(edz));
@@ -460,6 +472,8 @@ static void test_family_from_scratch(void **state)
         tot.frames += s.frames;
         tot.measured += s.measured;
         tot.wrong += s.wrong;
+        tot.hidden += s.hidden;
+        tot.hidden_measured += s.hidden_measured;
         tot.sdz += s.sdz;
         tot.sa += s.sa;
         tot.dz_max = fmax(tot.dz_max, s.dz_max);
@@ -473,17 +487,22 @@ static void test_family_from_scratch(void **state)
            tot.frames, tot.measured, dz_rms, tot.dz_max, a_rms, tot.a_max);
     printf("confident wrong answers: %d of %d measured (rate %.4f)\n", tot.wrong, tot.measured,
            tot.measured ? (double)tot.wrong / tot.measured : 0.0);
+    const int in_view = tot.frames - tot.hidden, in_view_measured = tot.measured - tot.hidden_measured;
+    printf("whole ribbon in view: %d shapes, %d measured (%d not measured); the ribbon over itself: %d, %d measured\n",
+           in_view, in_view_measured, in_view - in_view_measured, tot.hidden, tot.hidden_measured);
     vis_frame_free(f);
     if (getenv("FAM_ONLY"))
         return; /* by hand: a part of the family, no bars */
     if (!quick)
         assert_true(tot.frames >= 200);
     /* The issue's bars that are reached: no confident wrong answer, Delta Z and A within target
-     * over the measured frames. "Every frame measured" is not: the frames whose tightest bend is
-     * within twice the ridge's width (Delta L 0.6-0.7, twisted folds) are reported lost, not
-     * measured (docs/vision-acquisition-and-replay-speed.md); the floor is what is reached. */
+     * over the measured frames. "No frame untracked while the whole ribbon is in view" is not
+     * quite: the in-view frames not measured are the folded apexes whose two legs' bands merge
+     * (Delta L 0.7 with creases: a cusp no walk turns) and two loops
+     * (docs/vision-acquisition-and-replay-speed.md); the floors are what is reached. */
     assert_int_equal(tot.wrong, 0);
     assert_true(tot.measured >= (quick ? QUICK_MEASURED_FLOOR : FAMILY_MEASURED_FLOOR));
+    assert_true(in_view_measured >= (quick ? QUICK_IN_VIEW_FLOOR : FAMILY_IN_VIEW_FLOOR));
     assert_true(dz_rms <= DZ_BAR_PX);
     assert_true(a_rms <= A_BAR_RAD);
 }
