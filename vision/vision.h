@@ -340,10 +340,13 @@ typedef struct vis_track_params {
     double min_quality;        /* below this quality (0..1) a frame is reported LOST (0.3) */
     double min_bend_ratio;     /* a curve whose tightest radius of curvature is below this many
                                   median ridge widths, where the strip shows its face (median
-                                  ridge 2 px wider than its narrowest tenth), is reported LOST,
-                                  not measured, unless it is nearly symmetric (|A| below 0.1 rad)
-                                  at a ratio of 1.25 or more; below 1 always (2, the default;
-                                  0 = off: docs/vision-acquisition-and-replay-speed.md) */
+                                  ridge 2 px wider than its narrowest tenth), is not measured by
+                                  cross-section centroids, unless it is nearly symmetric (|A|
+                                  below 0.1 rad) at a ratio of 1.25 or more; below 1 always. Such
+                                  bends are measured with a model of the band's silhouette when
+                                  no other attempt measures the frame, and the frame is LOST if
+                                  the model does not explain the pixels (2, the default; 0 = off,
+                                  the model never runs: docs/vision-acquisition-and-replay-speed.md) */
     int refresh_frames;        /* every this many frames (counted by vis_tracker_process since the
                                   tracker was made or reset) the previous curve is forgotten and the
                                   frame acquired from scratch, as after vis_tracker_reset: no drift
