@@ -584,12 +584,16 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
             return false;
         bf = m.fit(bp, MAX_ITERS);
         double rms2 = 0, noise2 = 0, contrast2 = 0;
-        if (!std::isfinite(bf) || !m.quality(bp, &rms2, &noise2, &contrast2))
-            return false;
-        std::copy(bp, bp + NP, best_p);
-        rms = rms2;
-        noise = noise2;
-        contrast = contrast2;
+        if (std::isfinite(bf) && m.quality(bp, &rms2, &noise2, &contrast2) && rms2 < rms) {
+            std::copy(bp, bp + NP, best_p);
+            rms = rms2;
+            noise = noise2;
+            contrast = contrast2;
+        } else {
+            m.broken = false;  // the smooth section explains the pixels better
+            if (!m.quality(best_p, &rms, &noise, &contrast))
+                return false;
+        }
     }
     out.resize(n);
     for (size_t k = 0; k < n; k++) {
