@@ -69,6 +69,8 @@ struct BendModel::Impl {
     std::vector<cv::Point> poly;
     std::vector<cv::Point> hull;
     bool broken = false;  // the cross-section's two halves fitted apart (IVR..IVR+3 active)
+    std::vector<Pt> near_pts;               // traced points of the rest of the ribbon near the patch
+    std::vector<unsigned char> clear_px;    // per patch pixel: clear of the ribbon (noise)
     cv::Mat base_model;   // the model at the current params (Jacobian)
     std::vector<double> bg;
 
@@ -109,10 +111,11 @@ struct BendModel::Impl {
 
     static int blur_radius(double sigma) { return (int)std::ceil(3.0 * sigma); }
 
+    cv::Mat blurred_tmp;  // render_region's scratch
+
     // The blurred model over `reg` (patch coordinates) into `dst` (reg's size): drawn over `reg`
-    // grown by the blur's reach (within the patch), so the values on `reg` are exact. Sections
-    // k0 - 1 .. k1 only are drawn when the caller knows nothing else reaches (k0 <= k1), all
-    // otherwise. False on a degenerate sigma.
+    // grown by the blur's reach (within the patch), so the values on `reg` are exact; sections
+    // whose box misses that are skipped. False on a degenerate sigma.
     bool render_region(const double *p, cv::Rect reg, cv::Mat &dst)
     {
         const double sigma = std::exp(p[ISIG]);
@@ -160,7 +163,6 @@ struct BendModel::Impl {
         blurred_tmp(cv::Rect(reg.x - ext.x, reg.y - ext.y, reg.width, reg.height)).copyTo(dst);
         return true;
     }
-    cv::Mat blurred_tmp;
 
     // The whole patch's model into `blurred`.
     bool render(const double *p)
@@ -265,19 +267,26 @@ struct BendModel::Impl {
     }
 
     // The image's noise, from the patch itself: the absolute second differences along rows and
-    // columns (a plane and the blurred ribbon's slow parts cancel; its edges are a minority, left
-    // out with the largest quarter), over sqrt(6) for independent pixels.
+    // columns at the pixels clear of the ribbon (`clear`: farther than its half-width and 4 px
+    // from every traced point; the whole patch when fewer than 100 are), over sqrt(6) for
+    // independent pixels. Read over the whole patch it came out 20-30% high (the band's edges),
+    // 2.9-3.25 clear of it where the renderer's noise was 3.
     double data_noise = 0;
-    void measure_noise()
+    void measure_noise(const std::vector<unsigned char> &clear)
     {
         bg.clear();
         const cv::Mat &d = patch.data;
-        for (int y = 1; y + 1 < d.rows; y++)
-            for (int x = 1; x + 1 < d.cols; x++) {
-                const float c = d.at<float>(y, x);
-                bg.push_back(std::fabs(d.at<float>(y, x - 1) - 2 * c + d.at<float>(y, x + 1)));
-                bg.push_back(std::fabs(d.at<float>(y - 1, x) - 2 * c + d.at<float>(y + 1, x)));
-            }
+        for (int pass = 0; pass < 2 && (pass == 0 || bg.size() < 200); pass++) {
+            bg.clear();
+            for (int y = 1; y + 1 < d.rows; y++)
+                for (int x = 1; x + 1 < d.cols; x++) {
+                    if (pass == 0 && !clear[(size_t)(y * d.cols + x)])
+                        continue;
+                    const float c = d.at<float>(y, x);
+                    bg.push_back(std::fabs(d.at<float>(y, x - 1) - 2 * c + d.at<float>(y, x + 1)));
+                    bg.push_back(std::fabs(d.at<float>(y - 1, x) - 2 * c + d.at<float>(y + 1, x)));
+                }
+        }
         data_noise = 0;
         if (bg.size() < 40)
             return;
@@ -319,7 +328,7 @@ struct BendModel::Impl {
     // Levenberg-Marquardt from p; returns the final sum of squares (inf when it failed).
     double fit(double *p, int iters)
     {
-        std::vector<double> r0, r1, J((size_t)NP * 0);
+        std::vector<double> r0, r1;
         double contrast = 0;
         if (!residuals(p, r0, &contrast))
             return INFINITY;
@@ -341,7 +350,8 @@ struct BendModel::Impl {
                     continue;
                 double q[NP];
                 std::copy(p, p + NP, q);
-                const double h = k == ISIG ? 0.02 : 0.1;
+                // sigma's probe goes down near its upper bound (render refuses sigma >= 5).
+                const double h = k == ISIG ? (p[ISIG] > std::log(4.5) ? -0.02 : 0.02) : 0.1;
                 q[k] += h;
                 if (k < KNOTS) {
                     const double ua = -1.0 + 2.0 * (k - 1) / (nk - 1), ub = -1.0 + 2.0 * (k + 1) / (nk - 1);
@@ -484,7 +494,15 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
     // Counted pixels: within reach of the window's inner part (|u| <= 0.8), nearer to it than to
     // the rest of the ribbon.
     m.patch.idx.clear();
-    const double reach = half_width_px + 3.5;
+    const double reach = half_width_px + 3.5, clear_r = half_width_px + 4.0;
+    // The traced points near the patch (the noise is read clear of all of them).
+    m.near_pts.clear();
+    const cv::Rect grown(m.patch.r.x - (int)clear_r - 1, m.patch.r.y - (int)clear_r - 1,
+                         m.patch.r.width + 2 * (int)clear_r + 2, m.patch.r.height + 2 * (int)clear_r + 2);
+    for (const Pt &o : others)
+        if (grown.contains(cv::Point((int)o.x, (int)o.y)))
+            m.near_pts.push_back(o);
+    m.clear_px.assign((size_t)m.patch.r.width * (size_t)m.patch.r.height, 0);
     for (int y = 0; y < m.patch.r.height; y++)
         for (int x = 0; x < m.patch.r.width; x++) {
             const Pt q(x + m.patch.r.x, y + m.patch.r.y);
@@ -495,6 +513,15 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
                     dw = d;
                     du = m.u[k];
                 }
+            }
+            if (dw > clear_r * clear_r) {
+                bool clear = true;
+                for (const Pt &o : m.near_pts)
+                    if ((q - o).dot(q - o) <= clear_r * clear_r) {
+                        clear = false;
+                        break;
+                    }
+                m.clear_px[(size_t)(y * m.patch.r.width + x)] = clear;
             }
             if (std::fabs(du) > 0.8 || dw > reach * reach)
                 continue;
@@ -509,7 +536,7 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
         }
     if (m.patch.idx.size() < 40)
         return false;
-    m.measure_noise();
+    m.measure_noise(m.clear_px);
     m.counted_at.assign((size_t)m.patch.r.width * (size_t)m.patch.r.height, -1);
     for (size_t i = 0; i < m.patch.idx.size(); i++)
         m.counted_at[(size_t)m.patch.idx[i]] = (int)i;
@@ -609,9 +636,10 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
         info->v[1] = best_p[IV + 2];
         info->broken = m.broken;
         double dmax = 0;
-        for (int j = 0; j < KNOTS; j++)
-            dmax = std::max(dmax, std::fabs(best_p[j]));
-        info->delta_max = dmax;
+        for (size_t k = 0; k < n; k++)
+            if (std::fabs(m.u[k]) <= BEND_INNER)
+                dmax = std::max(dmax, std::fabs(m.delta_at(best_p, m.u[k])));
+        info->delta_max = std::isfinite(dmax) ? dmax : INFINITY;
     }
     return true;
 }

@@ -8,9 +8,9 @@
 // last step's turning, so a tight loop is followed), reads the ridge signal across that direction
 // within +-half_band px, and moves to the nearest ridge centre there (never the strongest one: at
 // a crossing the other branch is as strong, and the nearest keeps the walk going straight through).
-// The direction it leaves a clamp by is the strongest ray in the half plane away from the jaw
-// (the ribbon leaves a clamp along the jaw axis, away from the jaw, but its first millimetres can
-// turn fast). A short gap (noise, a thin occluder) is bridged along the predicted direction; a gap
+// The direction it leaves a clamp by comes from the arc with the most signal among those leaving
+// within 40 deg of the chord (the clamp holds the ribbon along the jaw axis) and turning by up to
+// 180 deg but ending within 90 deg of the chord (its first millimetres can turn fast). A short gap (noise, a thin occluder) is bridged along the predicted direction; a gap
 // longer than `max_gap` px, a walk longer than `max_len` px, or leaving the image ends the walk
 // without a path. The walk succeeds when it comes within reach of the other clamp point.
 // Cost: O(length x band), a small fraction of the geodesic search.
@@ -56,14 +56,18 @@ bool path_walk(const cv::Mat &sig, Pt a, Pt b, const WalkParams &wp, std::vector
     // rays over a wider fan were tried first: at zero shear (the ribbon edge-on and faint) they left
     // along the bright sliver the ridge filter leaves on the jaw's face, at 84 deg from the chord,
     // and the walk came back along it or wandered off (the simulator family's folded ribbons at
-    // Delta L 0.6-0.7 and zero shear).
+    // Delta L 0.6-0.7 and zero shear). An arc may not end heading more than LEAVE_END from the
+    // chord: one that turns back toward the jaw follows clutter or a jaw edge (with clutter and a
+    // 40% light gradient, an arc that ended at 220 deg made a confident wrong answer, A off 0.5).
     const double reach = std::max(6.0, 3.0 * wp.half_band);
-    const double LEAVE_DEV = 40.0 * M_PI / 180.0, LEAVE_TURN = M_PI;
+    const double LEAVE_DEV = 40.0 * M_PI / 180.0, LEAVE_TURN = M_PI, LEAVE_END = 0.5 * M_PI;
     double best = -1, best_ang = 0, best_rate = 0;
     for (int k = -20; k <= 20; k++) {
         const double ang = LEAVE_DEV * k / 20.0;
         for (int j = -18; j <= 18; j++) {
             const double rate = LEAVE_TURN * j / 18.0 / (3.0 + reach);  // radians per px
+            if (std::fabs(ang + rate * (3.0 + reach)) > LEAVE_END + 1e-9)
+                continue;
             double acc = 0, x = a.x, y = a.y, h = ang;
             int cnt = 0;
             for (double r = 0.0; r < 3.0 + reach; r += 1.0) {

@@ -47,6 +47,8 @@ struct Attempt {
     bool bend_refused = false;      // refused by the bend check (bend_rel, the face, A)
     bool ran = false;               // tried on this frame
     bool bends_modelled = false;    // tight bends measured by the silhouette model (bend_model.cpp)
+    bool followed = false;          // traced along the previous frame's curve on the grey frame
+    bool bridged = false;           // refused for bridging a gap off the ridge (bridged_points)
     double len_px = 0;              // the guide's length, px (the samples' arc positions run over it)
     std::vector<vis::TraceSample> samples;  // the tracer's last pass
     vis_measure m{};
@@ -404,6 +406,7 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
 {
     at.ran = true;
     at.bends_modelled = false;
+    at.followed = &at == &t->att[0];
     at.samples.clear();
     at.len_px = 0;
     at.reason = VIS_REASON_LOST;
@@ -470,6 +473,7 @@ void finish_attempt(vis_tracker *t, const Geometry &g, Attempt &at)
     at.length_rel = 0;
     at.bend_rel = 0;
     at.bend_refused = false;
+    at.bridged = false;
     at.m = vis_measure{};
     size_t nv = 0;
     for (const auto &s : samples)
@@ -574,8 +578,11 @@ void finish_attempt(vis_tracker *t, const Geometry &g, Attempt &at)
         }
     // Followed curves only (att[0], on the grey frame): a fresh path comes from the ridge itself,
     // and there a jaw in front of the ribbon reads as no ridge where the ribbon does pass behind it.
-    const bool following = &at == &t->att[0];
-    if (following && bridged_points(t->trace_img, t->trace_invert, at.curve_px, samples, len_px) > 0) {
+    // (A followed attempt measured again by the silhouette model is checked by refine_bends, on
+    // the grey frame, since the tracer's image may be the ridge signal by then.)
+    if (at.followed && !at.bends_modelled &&
+        bridged_points(t->trace_img, t->trace_invert, at.curve_px, samples, len_px) > 0) {
+        at.bridged = true;
         at.reason = VIS_REASON_LOST;
         at.quality *= 0.1;
         at.m.quality = at.quality;
@@ -613,15 +620,20 @@ void finish_attempt(vis_tracker *t, const Geometry &g, Attempt &at)
 // the model's resolution, see bend_model.cpp), or a centreline moved by more than the band's
 // half-width.
 const double BEND_WIDTHS = 4.0;
-const double BEND_INNER = 0.6;
 const double BEND_RMS_NOISE = 2.0;
+// The model tells the centreline from the band's inner edge, whose bulge at a twisted bend is
+// about h_t^2 / 2R (a pixel or so): under a heavier blur it is washed out, and with noise 6 and
+// blur 2 the crease corners came out up to 0.15 rad off at residuals at the noise. Not used there.
+const double BEND_MAX_BLUR_PX = 1.5;
 
 bool refine_bends(vis_tracker *t, const Geometry &g, const cv::Mat &grey, bool dark, const Attempt &src,
                   Attempt &dst)
 {
-    const std::vector<Pt> &cv_ = src.curve_px;
+    dst.ran = false;
+    dst.reason = VIS_REASON_LOST;
+    const std::vector<Pt> &cm = src.curve_mm;
     const std::vector<vis::TraceSample> &smp = src.samples;
-    if (cv_.size() < 8 || smp.size() < 16 || !(src.len_px > 0))
+    if (cm.size() < 8 || smp.size() < 16 || !(src.len_px > 0))
         return false;
     std::vector<double> &w = t->ws.widths;
     w.clear();
@@ -633,20 +645,21 @@ bool refine_bends(vis_tracker *t, const Geometry &g, const cv::Mat &grey, bool d
     std::nth_element(w.begin(), w.begin() + (long)(w.size() / 2), w.end());
     const double wmed = std::max(1.0, w[w.size() / 2]);
     const double rlim = t->p.min_bend_ratio * wmed;
-    // Tight stretches of the smooth curve (pixels), by index; their tightest points.
-    const size_t m = cv_.size();
+    // Tight stretches of the smooth curve, measured as the bend check measures them (the metric
+    // curve's radius in pixels at the calibration's scale), and their tightest points.
+    const size_t m = cm.size();
     std::vector<double> cum(m, 0.0);
     for (size_t j = 1; j < m; j++)
-        cum[j] = cum[j - 1] + cv::norm(cv_[j] - cv_[j - 1]);
+        cum[j] = cum[j - 1] + cv::norm(cm[j] - cm[j - 1]);
     std::vector<double> centres;  // arc positions of the tightest points, as fractions of the arc
     double run_min = 1e18, run_at = -1;
     for (size_t j = 1; j + 1 <= m; j++) {
         double rad = 1e18;
         if (j + 1 < m) {
-            const Pt a = cv_[j] - cv_[j - 1], b = cv_[j + 1] - cv_[j];
+            const Pt a = cm[j] - cm[j - 1], b = cm[j + 1] - cm[j];
             const double ang = std::fabs(std::atan2(a.x * b.y - a.y * b.x, a.dot(b)));
             if (ang > 0)
-                rad = 0.5 * (cv::norm(a) + cv::norm(b)) / ang;
+                rad = 0.5 * (cv::norm(a) + cv::norm(b)) / ang * g.vm.ppmm;
         }
         if (rad < rlim) {
             if (rad < run_min) {
@@ -664,6 +677,7 @@ bool refine_bends(vis_tracker *t, const Geometry &g, const cv::Mat &grey, bool d
     dst.ran = true;
     dst.samples.assign(smp.begin(), smp.end());
     dst.len_px = src.len_px;
+    dst.followed = src.followed;
     const double W = std::min(80.0, std::max(16.0, BEND_WIDTHS * wmed));
     for (double cf : centres) {
         const double sc = cf * src.len_px;
@@ -691,33 +705,36 @@ bool refine_bends(vis_tracker *t, const Geometry &g, const cv::Mat &grey, bool d
         if (win.size() < 16 || !(sb > sa))
             return false;
         vis::BendFitInfo info;
-        if (!t->bend_model.refine(grey, dark, win, oth, hw, BEND_RMS_NOISE, t->bend_out, &info))
-            return false;
-        if (!(info.rms <= BEND_RMS_NOISE * info.noise) || info.delta_max > std::max(1.0, hw))
-            return false;
-        // Replace the inner part of the window with the model's centreline.
-        const std::vector<Pt> &out = t->bend_out;
-        const double ia = sa + 0.5 * (1.0 - BEND_INNER) * (sb - sa), ib = sb - 0.5 * (1.0 - BEND_INNER) * (sb - sa);
-        std::vector<vis::TraceSample> merged;
-        merged.reserve(dst.samples.size() + out.size());
-        bool inserted = false;
-        for (const auto &q : dst.samples) {
-            if (q.s >= ia && q.s <= ib)
-                continue;
-            if (!inserted && q.s > ib) {
-                for (size_t k = 0; k < out.size(); k++) {
-                    const double s = sa + (sb - sa) * (double)k / (double)(out.size() - 1);
-                    if (s >= ia && s <= ib)
-                        merged.push_back(vis::TraceSample{out[k], s, q.peak, true, 2.0 * hw, q.base});
-                }
-                inserted = true;
-            }
-            merged.push_back(q);
+        try {
+            if (!t->bend_model.refine(grey, dark, win, oth, hw, BEND_RMS_NOISE, t->bend_out, &info))
+                return false;
+        } catch (const std::exception &) {
+            return false;  // the model is an extra: its failure leaves the frame as refused
         }
-        dst.samples.swap(merged);
+        if (!(info.rms <= BEND_RMS_NOISE * info.noise) || !(info.sigma <= BEND_MAX_BLUR_PX) ||
+            !(std::fabs(info.contrast) >= t->p.min_contrast) || !(info.delta_max <= std::max(1.0, hw)))
+            return false;
+        // The samples over the window's inner part take the model's centreline at their own arc
+        // positions; their flags stay (a gap the tracer saw stays a gap).
+        const std::vector<Pt> &out = t->bend_out;
+        const double ia = sa + 0.5 * (1.0 - vis::BEND_INNER) * (sb - sa), ib = sb - 0.5 * (1.0 - vis::BEND_INNER) * (sb - sa);
+        for (auto &q : dst.samples)
+            if (q.valid && q.s >= ia && q.s <= ib) {
+                const double k = (q.s - sa) / (sb - sa) * (double)(out.size() - 1);
+                const size_t k0 = std::min(out.size() - 2, (size_t)std::max(0.0, std::floor(k)));
+                const double f = std::min(1.0, std::max(0.0, k - (double)k0));
+                const Pt np = out[k0] + f * (out[k0 + 1] - out[k0]);
+                if (!std::isfinite(np.x) || !std::isfinite(np.y))
+                    return false;
+                q.p = np;
+            }
     }
     dst.bends_modelled = true;
     finish_attempt(t, g, dst);
+    // A followed curve gets the bridging check on the grey frame it was traced on.
+    if (dst.reason == VIS_REASON_NONE && dst.followed &&
+        bridged_points(grey, dark, dst.curve_px, dst.samples, dst.len_px) > 0)
+        dst.reason = VIS_REASON_LOST;
     return dst.reason == VIS_REASON_NONE;
 }
 
@@ -882,13 +899,13 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
         // No attempt measured, and one was refused only for a tight bend with the face showing:
         // measure its bends with the silhouette model (refine_bends). Of such attempts, the one
         // with the most ridge along it and the length nearest the ribbon's.
+        t->bent.ran = false;
         if (best && best->reason != VIS_REASON_NONE && t->p.min_bend_ratio > 0) {
             const Attempt *cand = nullptr;
             for (const Attempt &a : t->att)
-                if (a.ran && a.bend_refused && a.valid_frac >= 0.9 && std::fabs(a.length_rel) <= LENGTH_TOL &&
+                if (a.ran && a.bend_refused && !a.bridged && a.valid_frac >= 0.9 && std::fabs(a.length_rel) <= LENGTH_TOL &&
                     (!cand || a.valid_frac - std::fabs(a.length_rel) > cand->valid_frac - std::fabs(cand->length_rel)))
                     cand = &a;
-            t->bent.ran = false;
             if (cand && refine_bends(t, g, grey, dark, *cand, t->bent))
                 best = pick_better(best, &t->bent);
         }
@@ -900,7 +917,14 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
                                                    : t->library.nearest(shear_mm, best->m.dz, best->m.a);
             if (t->library.use(k, t->depth)) {
                 t->depth.prepare(t->p.length_mm, shear_mm);
-                track_from(t, g, best->curve_px, 2, t->redo);  // redo is never best here
+                if (best == &t->bent) {
+                    // The model's centreline is in pixels: measured again at the new depth as it
+                    // is (traced again, the centroids would slide back into the bend).
+                    t->redo = t->bent;
+                    finish_attempt(t, g, t->redo);
+                } else {
+                    track_from(t, g, best->curve_px, 2, t->redo);  // redo is never best here
+                }
                 if (t->redo.reason == VIS_REASON_NONE)
                     best = &t->redo;
             }

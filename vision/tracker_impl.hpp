@@ -80,14 +80,17 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
                 std::vector<float> &prof, std::vector<float> &tmp);
 
 // --- bend_model.cpp
+// The part of a bend's window (its middle, as a fraction of it) whose centreline the model gives
+// the tracer: the window's ends are held only by the pixels on one side.
+constexpr double BEND_INNER = 0.6;
 struct BendFitInfo {
     double rms = 0;        // residual RMS over the band's pixels, grey levels
-    double noise = 0;      // the noise on the background pixels (robust), grey levels
+    double noise = 0;      // the image's noise, read away from the ribbon, grey levels
     double contrast = 0;   // the silhouette's contrast above the background, grey levels
     double sigma = 0;      // blur, px
     int pixels = 0;        // pixels counted
     double v[2] = {0, 0};  // the cross-section's half-vector at the window's middle, px
-    double delta_max = 0;  // largest move of the centreline, px
+    double delta_max = 0;  // largest move of the centreline over the window's inner part, px
     bool broken = false;   // the cross-section fitted in two halves (a crease)
 };
 // The centreline through a tight bend from a model of the band's silhouette (see bend_model.cpp).

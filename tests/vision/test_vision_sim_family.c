@@ -196,6 +196,15 @@ static void scene_camera_at(const rod_scene *sc, double distance_m, vis_render_p
         tp->min_bend_ratio = 0.0;
     if (getenv("FAM_MINC")) /* by hand: another weakest ridge */
         tp->min_contrast = atof(getenv("FAM_MINC"));
+    /* By hand: harder pictures (the bars are the default look's). */
+    if (getenv("FAM_NOISE"))
+        rp->noise_sigma = atof(getenv("FAM_NOISE"));
+    if (getenv("FAM_BLUR"))
+        rp->blur_sigma_px = atof(getenv("FAM_BLUR"));
+    if (getenv("FAM_CLUTTER"))
+        rp->clutter = atoi(getenv("FAM_CLUTTER"));
+    if (getenv("FAM_GRADIENT"))
+        rp->light_gradient = rp->vignette = atof(getenv("FAM_GRADIENT"));
 }
 
 static void scene_camera(const rod_scene *sc, vis_render_params *rp, vis_calib *cal, vis_track_params *tp)
