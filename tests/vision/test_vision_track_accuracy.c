@@ -81,6 +81,49 @@ static void gen_snap(vt_shape *s, int i, void *ctx)
     vt_arch(s, 401, L_FREE, X_GAP, phi, 0.0015 * i);
 }
 
+/* A twisted strip in a tight apex: a tall asymmetric arch (Delta L 0.5) under 40 mm of shear, the
+ * strip turned about its tangent by psi0 sin(pi s) (edge-on at the clamps, its face toward the
+ * camera between; 5 mm wide, 0.25 mm thick as the lab's PET), psi0 from 40 to 70 degrees over the
+ * frames. The apex's radius is under
+ * twice the face's width and |A| is large, so the bend check refuses the centroids there and the
+ * silhouette model (vision/bend_model.cpp) measures the frame. */
+static void gen_twisted(vt_shape *s, int i, void *ctx)
+{
+    (void)ctx;
+    vt_arch(s, 401, L_FREE, 0.1, 0.5, 0.04);
+    s->view.thickness_m = 0.00025;
+    const size_t n = s->n;
+    const double psi0 = (40.0 + 10.0 * i) * M_PI / 180.0;
+    for (size_t k = 0; k < n; k++) {
+        const double psi = psi0 * sin(M_PI * (double)k / (double)(n - 1)); /* edge-on at the clamps */
+        const size_t a = k ? k - 1 : 0, b = k + 1 < n ? k + 1 : n - 1;
+        double t[3], d0[3] = {0, 1, 0}, m[3], d[3], tl = 0, dl = 0;
+        for (int c = 0; c < 3; c++) {
+            t[c] = s->pos[3 * b + c] - s->pos[3 * a + c];
+            tl += t[c] * t[c];
+        }
+        tl = sqrt(tl);
+        for (int c = 0; c < 3; c++)
+            t[c] /= tl;
+        const double dt = t[1];
+        for (int c = 0; c < 3; c++) {
+            d0[c] -= dt * t[c];
+            dl += d0[c] * d0[c];
+        }
+        dl = sqrt(dl);
+        for (int c = 0; c < 3; c++)
+            d0[c] /= dl;
+        m[0] = t[1] * d0[2] - t[2] * d0[1];
+        m[1] = t[2] * d0[0] - t[0] * d0[2];
+        m[2] = t[0] * d0[1] - t[1] * d0[0];
+        for (int c = 0; c < 3; c++)
+            d[c] = cos(psi) * d0[c] + sin(psi) * m[c];
+        s->normal[3 * k] = t[1] * d[2] - t[2] * d[1];
+        s->normal[3 * k + 1] = t[2] * d[0] - t[0] * d[2];
+        s->normal[3 * k + 2] = t[0] * d[1] - t[1] * d[0];
+    }
+}
+
 static vis_render_params params_for(vt_gen_fn gen, int frames, int width)
 {
     /* A fixed camera framing every frame of the sequence. */
@@ -191,6 +234,38 @@ static void test_tilted_camera(void **state)
     check(&r);
 }
 
+static void test_twisted_tight_apex(void **state)
+{
+    (void)state;
+    static vt_shape s;
+    const int frames = 4;
+    vis_render_params p = params_for(gen_twisted, frames, 640);
+    p.camera.focal_px *= 10.0 / p.camera.distance_m; /* 10 m away, same framing */
+    p.camera.distance_m = 10.0;
+    gen_twisted(&s, 0, NULL);
+    vis_calib c = vt_calib(&p, &s);
+    vis_truth g;
+    assert_int_equal(vis_shape_truth(&s.view, &g, NULL), VIS_OK);
+    vis_track_params tp = vis_track_params_default();
+    tp.length_mm = g.length_m * 1000.0;
+    tp.ribbon_max_px = ceil(s.view.width_m * 1000.0 * c.px_per_mm + 2.0);
+    tp.band_px = fmax(12.0, 1.5 * tp.ribbon_max_px);
+    tp.refresh_frames = 1; /* every frame from scratch */
+    vt_result r;
+    assert_int_equal(vt_run("twisted", gen_twisted, NULL, frames, &p, &c, &tp, &r), 0);
+    printf("twisted tight apex: %d/%d measured, Delta Z error %.3f px RMS (max %.3f), A error %.4f rad RMS (max %.4f)\n",
+           r.measured, r.frames, r.dz_rms_px, r.dz_max_px, r.a_rms, r.a_max);
+    /* Every frame measured (the bend check alone loses all four). Bars: issue 14's 0.02 rad for A;
+     * Delta Z within 1 px, not issue 5's 0.2: the apex's radius (about 20 px) is small against the
+     * local fit's window (8% of the length either side, about 65 px), and the fit cuts it by 0.75 px
+     * whatever traced it (with the bend check off the centroids measure 0.755 px RMS, A 0.0047;
+     * the model 0.82 px, A 0.011: these sections are nearly square to the curve, so the centroids
+     * are not biased here and the model only measures what the check would refuse). */
+    assert_int_equal(r.measured, r.frames);
+    assert_true(r.dz_rms_px <= 1.0);
+    assert_true(r.a_rms <= 0.02);
+}
+
 static void test_snap_sequence(void **state)
 {
     (void)state;
@@ -212,6 +287,7 @@ int main(void)
         cmocka_unit_test(test_clutter_and_uneven_light),
         cmocka_unit_test(test_tilted_camera),
         cmocka_unit_test(test_snap_sequence),
+        cmocka_unit_test(test_twisted_tight_apex),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
