@@ -379,7 +379,7 @@ static int render_track(vis_renderer *r, vis_tracker *trk, const trial_states *s
     s->sa += ea * ea;
     s->dz_max = fmax(s->dz_max, fabs(edz));
     s->a_max = fmax(s->a_max, fabs(ea));
-    if (getenv("FAM_VERBOSE"))
+    if (getenv("FAM_VERBOSE") && !s->quiet)
         printf("  state %d (t %.3f s, shear %.1f mm): dz %.4f (true %.4f, %+.3f px), A %+.4f (true %+.4f, %+.4f), q %.3f\n",
                k, st->t[k], shear_mm, m.dz, g->dz_cam, edz, m.a, g->a_cam, ea, m.quality);
     if (fabs(edz) > WRONG_DZ_PX || fabs(ea) > WRONG_A_RAD) {
