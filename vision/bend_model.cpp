@@ -24,7 +24,8 @@
 // fitted on, then all KNOTS knots; a light penalty on delta's second differences. A knot moves only
 // the sections between its neighbours, so its Jacobian column is drawn over what they reach (the
 // background and contrast held, Kaufman's shortcut for separable least squares); that and the
-// coarse starts took a fit from 92 to 33-76 ms on this machine. When that leaves more than the caller's multiple of
+// coarse starts took a fit from 92 to 33-76 ms on this machine (41-82 ms since the noise is read clear
+// of the ribbon, on the same five bends). When that leaves more than the caller's multiple of
 // the image's noise on the band, the cross-section's two halves are fitted apart (a crease turns
 // it abruptly). The refined centreline replaces the samples of the window's inner part
 // (tracker.cpp, refine_bends), and the caller accepts the model only if its residual on the band
@@ -72,6 +73,12 @@ struct BendModel::Impl {
     std::vector<Pt> near_pts;               // traced points of the rest of the ribbon near the patch
     std::vector<unsigned char> clear_px;    // per patch pixel: clear of the ribbon (noise)
     cv::Mat base_model;   // the model at the current params (Jacobian)
+    // Levenberg-Marquardt's buffers, kept from fit to fit: residuals at p and at a trial step,
+    // the Jacobian (rows: counted pixels, then the smoothness terms), the damped normal equations.
+    std::vector<double> r0, r1, Jm;
+    cv::Mat M, rhs, dx;
+    std::vector<double> cum;
+    std::vector<Pt> rs;
     std::vector<double> bg;
 
     int nk = KNOTS;       // knots in use: p[0 .. nk - 1]
@@ -304,7 +311,7 @@ struct BendModel::Impl {
     // model that explains the pixels leaves only the noise.
     bool quality(const double *p, double *rms, double *noise, double *contrast)
     {
-        std::vector<double> r;
+        std::vector<double> &r = r1;
         if (!residuals(p, r, contrast))
             return false;
         double ss = 0;
@@ -328,20 +335,17 @@ struct BendModel::Impl {
     // Levenberg-Marquardt from p; returns the final sum of squares (inf when it failed).
     double fit(double *p, int iters)
     {
-        std::vector<double> r0, r1;
-        double contrast = 0;
-        if (!residuals(p, r0, &contrast))
+        if (!residuals(p, r0, nullptr))
             return INFINITY;
         double f0 = sumsq(r0), lambda = 1e-2;
         const size_t m = r0.size();
-        std::vector<double> Jm(m * NP);
+        Jm.resize(m * NP);
         for (int it = 0; it < iters; it++) {
             // Forward differences at the background and contrast of p (the step itself solves
             // them again). A knot moves only the sections between its neighbours: its column is
-            // drawn over what they reach, not the whole patch.
-            if (!residuals(p, r0, nullptr))
-                return INFINITY;
-            base_model = blurred.clone();
+            // drawn over what they reach, not the whole patch. `blurred`, `lin` and r0 are p's
+            // here: from the call above, or from the step just taken.
+            blurred.copyTo(base_model);
             const double cst = lin[3];
             std::fill(Jm.begin(), Jm.end(), 0.0);
             const int w = patch.r.width;
@@ -401,7 +405,8 @@ struct BendModel::Impl {
                     JtJ[a][b2] = JtJ[b2][a];
             bool improved = false;
             for (int tries = 0; tries < 6 && !improved; tries++) {
-                cv::Mat M(NP, NP, CV_64F), rhs(NP, 1, CV_64F), dx;
+                M.create(NP, NP, CV_64F);
+                rhs.create(NP, 1, CV_64F);
                 for (int a = 0; a < NP; a++) {
                     for (int b2 = 0; b2 < NP; b2++)
                         M.at<double>(a, b2) = JtJ[a][b2] + (a == b2 ? lambda * (JtJ[a][a] + 1e-9) + (active(a) ? 0.0 : 1.0) : 0.0);
@@ -437,6 +442,17 @@ struct BendModel::Impl {
     }
 };
 
+namespace {
+// Of several starts, the fit with the smaller sum of squares.
+void keep_better(double f, const double *p, double &best_f, double *best_p)
+{
+    if (f < best_f) {
+        best_f = f;
+        std::copy(p, p + NP, best_p);
+    }
+}
+}  // namespace
+
 BendModel::BendModel() : impl_(new Impl) {}
 BendModel::~BendModel() = default;
 BendModel::BendModel(const BendModel &) : impl_(new Impl) {}
@@ -457,14 +473,11 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
     if (window.size() < 8 || img.empty())
         return false;
     // Base: the window resampled every 1 px and lightly smoothed, with normals.
-    std::vector<double> cum;
-    std::vector<Pt> rs, sm;
     double len = 0;
-    resample(window, 1.0, &len, cum, rs);
-    if (rs.size() < 8)
+    resample(window, 1.0, &len, m.cum, m.rs);
+    if (m.rs.size() < 8)
         return false;
-    smooth(rs, 2, sm);
-    m.c0 = sm;
+    smooth(m.rs, 2, m.c0);
     const size_t n = m.c0.size();
     m.n0.resize(n);
     m.u.resize(n);
@@ -561,11 +574,7 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
                 const double uj = -1.0 + 2.0 * j / (m.nk - 1);
                 p[j] = out_sign * 0.5 * hw0 * std::max(0.0, 1.0 - 2.0 * std::fabs(uj));
             }
-        const double f = m.fit(p, START_ITERS);
-        if (f < best_f) {
-            best_f = f;
-            std::copy(p, p + NP, best_p);
-        }
+        keep_better(m.fit(p, START_ITERS), p, best_f, best_p);
     }
     if (!std::isfinite(best_f))
         return false;
@@ -601,11 +610,7 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
                 p[half + 2] = v0.y;
                 p[half + 3] = 0;
             }
-            const double f = m.fit(p, START_ITERS);
-            if (f < bf) {
-                bf = f;
-                std::copy(p, p + NP, bp);
-            }
+            keep_better(m.fit(p, START_ITERS), p, bf, bp);
         }
         if (!std::isfinite(bf))
             return false;
@@ -631,10 +636,6 @@ bool BendModel::refine(const cv::Mat &img, bool invert, const std::vector<Pt> &w
         info->noise = noise;
         info->contrast = contrast;
         info->sigma = std::exp(best_p[ISIG]);
-        info->pixels = (int)m.patch.idx.size();
-        info->v[0] = best_p[IV];
-        info->v[1] = best_p[IV + 2];
-        info->broken = m.broken;
         double dmax = 0;
         for (size_t k = 0; k < n; k++)
             if (std::fabs(m.u[k]) <= BEND_INNER)

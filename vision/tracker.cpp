@@ -72,6 +72,8 @@ struct vis_tracker {
     std::vector<cv::Point2d> img2;
     cv::Mat trace_img;               // what the tracer samples: sig, or the grey frame itself
     bool trace_invert = false;       // sample 255 - value (grey frame, dark ribbon)
+    cv::Mat frame_grey;              // this frame's grey view, what followed curves are traced on
+    bool frame_dark = false;         // its polarity (the ribbon darker than its surroundings)
     cv::Size size;
     vis::DepthProfile depth;         // depth along the arc this frame (the base, or a library's shape)
     vis::DepthProfile base_depth;    // the profile of vis_tracker_set_depth_profile (default cubic)
@@ -199,6 +201,7 @@ vis_tracker *vis::tracker_fresh_copy(const vis_tracker *t)
     c->work = cv::Mat();
     c->sig = cv::Mat();
     c->trace_img = cv::Mat();
+    c->frame_grey = cv::Mat();
     vis_tracker_reset(c);
     return c;
 }
@@ -214,7 +217,11 @@ void vis::tracker_take_state(vis_tracker *into, const vis_tracker *from)
     into->size = from->size;
 }
 
-void vis::tracker_drop_views(vis_tracker *t) { t->trace_img = cv::Mat(); }
+void vis::tracker_drop_views(vis_tracker *t)
+{
+    t->trace_img = cv::Mat();
+    t->frame_grey = cv::Mat();
+}
 
 int vis::tracker_refresh_frames(const vis_tracker *t) { return t->p.refresh_frames; }
 
@@ -576,12 +583,11 @@ void finish_attempt(vis_tracker *t, const Geometry &g, Attempt &at)
             at.reason = VIS_REASON_LOST;  // a point the camera model cannot place
             return;
         }
-    // Followed curves only (att[0], on the grey frame): a fresh path comes from the ridge itself,
-    // and there a jaw in front of the ribbon reads as no ridge where the ribbon does pass behind it.
-    // (A followed attempt measured again by the silhouette model is checked by refine_bends, on
-    // the grey frame, since the tracer's image may be the ridge signal by then.)
-    if (at.followed && !at.bends_modelled &&
-        bridged_points(t->trace_img, t->trace_invert, at.curve_px, samples, len_px) > 0) {
+    // Followed curves only (traced on the grey frame, read there too: by the time a followed
+    // attempt is measured again from the silhouette model the tracer's image is the ridge
+    // signal): a fresh path comes from the ridge itself, and there a jaw in front of the ribbon
+    // reads as no ridge where the ribbon does pass behind it.
+    if (at.followed && bridged_points(t->frame_grey, t->frame_dark, at.curve_px, samples, len_px) > 0) {
         at.bridged = true;
         at.reason = VIS_REASON_LOST;
         at.quality *= 0.1;
@@ -626,8 +632,7 @@ const double BEND_RMS_NOISE = 2.0;
 // blur 2 the crease corners came out up to 0.15 rad off at residuals at the noise. Not used there.
 const double BEND_MAX_BLUR_PX = 1.5;
 
-bool refine_bends(vis_tracker *t, const Geometry &g, const cv::Mat &grey, bool dark, const Attempt &src,
-                  Attempt &dst)
+bool refine_bends(vis_tracker *t, const Geometry &g, const Attempt &src, Attempt &dst)
 {
     dst.ran = false;
     dst.reason = VIS_REASON_LOST;
@@ -706,7 +711,7 @@ bool refine_bends(vis_tracker *t, const Geometry &g, const cv::Mat &grey, bool d
             return false;
         vis::BendFitInfo info;
         try {
-            if (!t->bend_model.refine(grey, dark, win, oth, hw, BEND_RMS_NOISE, t->bend_out, &info))
+            if (!t->bend_model.refine(t->frame_grey, t->frame_dark, win, oth, hw, BEND_RMS_NOISE, t->bend_out, &info))
                 return false;
         } catch (const std::exception &) {
             return false;  // the model is an extra: its failure leaves the frame as refused
@@ -731,10 +736,6 @@ bool refine_bends(vis_tracker *t, const Geometry &g, const cv::Mat &grey, bool d
     }
     dst.bends_modelled = true;
     finish_attempt(t, g, dst);
-    // A followed curve gets the bridging check on the grey frame it was traced on.
-    if (dst.reason == VIS_REASON_NONE && dst.followed &&
-        bridged_points(grey, dark, dst.curve_px, dst.samples, dst.len_px) > 0)
-        dst.reason = VIS_REASON_LOST;
     return dst.reason == VIS_REASON_NONE;
 }
 
@@ -825,6 +826,8 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
             return VIS_OK;
         }
         const bool dark = t->polarity ? t->polarity == 1 : vis::polarity_is_dark(grey);
+        t->frame_grey = grey;
+        t->frame_dark = dark;
         const int r = (int)std::ceil(t->p.ribbon_max_px);
         const cv::Rect full(0, 0, grey.cols, grey.rows);
         Attempt *best = nullptr;
@@ -906,7 +909,7 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
                 if (a.ran && a.bend_refused && !a.bridged && a.valid_frac >= 0.9 && std::fabs(a.length_rel) <= LENGTH_TOL &&
                     (!cand || a.valid_frac - std::fabs(a.length_rel) > cand->valid_frac - std::fabs(cand->length_rel)))
                     cand = &a;
-            if (cand && refine_bends(t, g, grey, dark, *cand, t->bent))
+            if (cand && refine_bends(t, g, *cand, t->bent))
                 best = pick_better(best, &t->bent);
         }
         // With a prediction's shapes: measure again with the depth of the one nearest to what was

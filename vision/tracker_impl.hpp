@@ -88,10 +88,7 @@ struct BendFitInfo {
     double noise = 0;      // the image's noise, read away from the ribbon, grey levels
     double contrast = 0;   // the silhouette's contrast above the background, grey levels
     double sigma = 0;      // blur, px
-    int pixels = 0;        // pixels counted
-    double v[2] = {0, 0};  // the cross-section's half-vector at the window's middle, px
     double delta_max = 0;  // largest move of the centreline over the window's inner part, px
-    bool broken = false;   // the cross-section fitted in two halves (a crease)
 };
 // The centreline through a tight bend from a model of the band's silhouette (see bend_model.cpp).
 class BendModel {

@@ -232,12 +232,9 @@ static double alongside_run(const vis_shape *sh, const vis_camera *cam)
     for (size_t i = 0; i < n; i++) {
         const double *p = sh->pos + 3 * i, *nn = sh->normal + 3 * i;
         const size_t i0 = i ? i - 1 : 0, i1 = i + 1 < n ? i + 1 : n - 1;
-        double t[3], d[3], tl = 0, dl = 0;
-        for (int k = 0; k < 3; k++) {
+        double t[3], d[3], dl = 0;
+        for (int k = 0; k < 3; k++)
             t[k] = sh->pos[3 * i1 + k] - sh->pos[3 * i0 + k];
-            tl += t[k] * t[k];
-        }
-        tl = sqrt(tl);
         d[0] = t[1] * nn[2] - t[2] * nn[1];
         d[1] = t[2] * nn[0] - t[0] * nn[2];
         d[2] = t[0] * nn[1] - t[1] * nn[0];
@@ -255,7 +252,6 @@ static double alongside_run(const vis_shape *sh, const vis_camera *cam)
                 e[i] = fmax(e[i], hypot(uv[0] - c[2 * i], uv[1] - c[2 * i + 1]));
             }
         a[i] = i ? a[i - 1] + hypot(c[2 * i] - c[2 * i - 2], c[2 * i + 1] - c[2 * i - 1]) : 0;
-        (void)tl;
     }
     for (size_t i = 0; i < n; i++)
         for (size_t j = i + 1; j < n; j++) {
@@ -338,27 +334,6 @@ static int render_track(vis_renderer *r, vis_tracker *trk, const trial_states *s
     const double run = alongside_run(&sh, &st->cam);
     const int hidden = run >= ALONGSIDE_RUNS;
     s->hidden += hidden;
-    if (getenv("FAM_TRUTH_DIR")) { /* scratch: truth centreline and width ends per state */
-        char pth[512];
-        snprintf(pth, sizeof pth, "%s/truth_%g_%g_%g_%d.txt", getenv("FAM_TRUTH_DIR"), st->sc.compression, st->sc.fold_angle_deg, st->sc.fold_position, k);
-        FILE *fo = fopen(pth, "w");
-        for (size_t i = 0; fo && i < sh.n; i++) {
-            const double *p = sh.pos + 3 * i, *nn = sh.normal + 3 * i;
-            const size_t i0 = i ? i - 1 : 0, i1 = i + 1 < sh.n ? i + 1 : sh.n - 1;
-            double t[3], d[3], dl = 0, uv[2], u1[2], u2[2], q[3];
-            for (int c = 0; c < 3; c++) t[c] = sh.pos[3 * i1 + c] - sh.pos[3 * i0 + c];
-            d[0] = t[1] * nn[2] - t[2] * nn[1]; d[1] = t[2] * nn[0] - t[0] * nn[2]; d[2] = t[0] * nn[1] - t[1] * nn[0];
-            for (int c = 0; c < 3; c++) dl += d[c] * d[c];
-            dl = sqrt(dl);
-            vis_camera_project(&st->cam, p, uv, NULL);
-            for (int c = 0; c < 3; c++) q[c] = p[c] + 0.5 * sh.width_m * d[c] / dl;
-            vis_camera_project(&st->cam, q, u1, NULL);
-            for (int c = 0; c < 3; c++) q[c] = p[c] - 0.5 * sh.width_m * d[c] / dl;
-            vis_camera_project(&st->cam, q, u2, NULL);
-            fprintf(fo, "%f %f %f %f %f %f\n", uv[0], uv[1], u1[0], u1[1], u2[0], u2[1]);
-        }
-        if (fo) fclose(fo);
-    }
     if (m.reason != VIS_REASON_NONE) {
         if (!s->quiet)
             printf("  state %d (t %.3f s, shear %.1f mm): not measured: %s (quality %.3f)%s\n", k, st->t[k], shear_mm,

@@ -87,41 +87,15 @@ static void gen_snap(vt_shape *s, int i, void *ctx)
  * frames. The apex's radius is under
  * twice the face's width and |A| is large, so the bend check refuses the centroids there and the
  * silhouette model (vision/bend_model.cpp) measures the frame. */
+static double twist_sine(double xi, void *ctx) { return *(const double *)ctx * sin(M_PI * xi); }
+
 static void gen_twisted(vt_shape *s, int i, void *ctx)
 {
     (void)ctx;
     vt_arch(s, 401, L_FREE, 0.1, 0.5, 0.04);
     s->view.thickness_m = 0.00025;
-    const size_t n = s->n;
-    const double psi0 = (40.0 + 10.0 * i) * M_PI / 180.0;
-    for (size_t k = 0; k < n; k++) {
-        const double psi = psi0 * sin(M_PI * (double)k / (double)(n - 1)); /* edge-on at the clamps */
-        const size_t a = k ? k - 1 : 0, b = k + 1 < n ? k + 1 : n - 1;
-        double t[3], d0[3] = {0, 1, 0}, m[3], d[3], tl = 0, dl = 0;
-        for (int c = 0; c < 3; c++) {
-            t[c] = s->pos[3 * b + c] - s->pos[3 * a + c];
-            tl += t[c] * t[c];
-        }
-        tl = sqrt(tl);
-        for (int c = 0; c < 3; c++)
-            t[c] /= tl;
-        const double dt = t[1];
-        for (int c = 0; c < 3; c++) {
-            d0[c] -= dt * t[c];
-            dl += d0[c] * d0[c];
-        }
-        dl = sqrt(dl);
-        for (int c = 0; c < 3; c++)
-            d0[c] /= dl;
-        m[0] = t[1] * d0[2] - t[2] * d0[1];
-        m[1] = t[2] * d0[0] - t[0] * d0[2];
-        m[2] = t[0] * d0[1] - t[1] * d0[0];
-        for (int c = 0; c < 3; c++)
-            d[c] = cos(psi) * d0[c] + sin(psi) * m[c];
-        s->normal[3 * k] = t[1] * d[2] - t[2] * d[1];
-        s->normal[3 * k + 1] = t[2] * d[0] - t[0] * d[2];
-        s->normal[3 * k + 2] = t[0] * d[1] - t[1] * d[0];
-    }
+    double psi0 = (40.0 + 10.0 * i) * M_PI / 180.0; /* edge-on at the clamps */
+    vt_twist(s, twist_sine, &psi0);
 }
 
 static vis_render_params params_for(vt_gen_fn gen, int frames, int width)

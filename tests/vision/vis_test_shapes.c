@@ -115,6 +115,27 @@ void vt_overhang(vt_shape *s, size_t n, double l, double T, double dw)
     vt_from_dense(s, n, xd, zd, DENSE, dw);
 }
 
+void vt_twist(vt_shape *s, double (*psi)(double xi, void *ctx), void *ctx)
+{
+    const size_t n = s->n;
+    for (size_t k = 0; k < n; k++) {
+        const size_t a = k ? k - 1 : 0, b = k + 1 < n ? k + 1 : n - 1;
+        double t[3], tl = 0;
+        for (int c = 0; c < 3; c++) {
+            t[c] = s->pos[3 * b + c] - s->pos[3 * a + c];
+            tl += t[c] * t[c];
+        }
+        tl = sqrt(tl);
+        for (int c = 0; c < 3; c++)
+            t[c] /= tl;
+        double *nn = s->normal + 3 * k;
+        const double tn[3] = {t[1] * nn[2] - t[2] * nn[1], t[2] * nn[0] - t[0] * nn[2], t[0] * nn[1] - t[1] * nn[0]};
+        const double ps = psi((double)k / (double)(n - 1), ctx), cp = cos(ps), sp = sin(ps);
+        for (int c = 0; c < 3; c++)
+            nn[c] = cp * nn[c] + sp * tn[c];
+    }
+}
+
 vis_render_params vt_render_params(const vt_shape *s, int w, int h)
 {
     vis_render_params p = vis_render_params_default();

@@ -34,6 +34,9 @@ void vt_from_dense_depth(vt_shape *s, size_t n, const double *xd, const double *
                          double (*depth)(double xi));
 void vt_arch_depth(vt_shape *s, size_t n, double l, double X, double phi, double dw, double (*depth)(double xi));
 void vt_overhang(vt_shape *s, size_t n, double l, double T, double dw);
+/* Turn the strip about its tangent by psi(xi) radians at arc fraction xi (its face toward the
+ * camera as psi grows from 0, the edge-on default): n' = cos(psi) n + sin(psi) (t x n). */
+void vt_twist(vt_shape *s, double (*psi)(double xi, void *ctx), void *ctx);
 /* Camera fitted around the shape with margin; 320 x 240 unless changed after. */
 vis_render_params vt_render_params(const vt_shape *s, int w, int h);
 /* Calibration matching the renderer's camera for this shape (clamp points at zero shear). */
