@@ -13,6 +13,20 @@ void vt_from_dense(vt_shape *s, size_t n, const double *xd, const double *zd, si
     vt_from_dense_depth(s, n, xd, zd, m, dw, vt_depth_cubic);
 }
 
+/* The unit tangent at point i of s (central difference, one-sided at the ends). */
+static void unit_tangent(const vt_shape *s, size_t i, double t[3])
+{
+    const size_t n = s->n, a = i ? i - 1 : 0, b = i + 1 < n ? i + 1 : n - 1;
+    double tl = 0;
+    for (int k = 0; k < 3; k++) {
+        t[k] = s->pos[3 * b + k] - s->pos[3 * a + k];
+        tl += t[k] * t[k];
+    }
+    tl = sqrt(tl);
+    for (int k = 0; k < 3; k++)
+        t[k] /= tl;
+}
+
 void vt_from_dense_depth(vt_shape *s, size_t n, const double *xd, const double *zd, size_t m, double dw,
                          double (*depth)(double xi))
 {
@@ -33,17 +47,10 @@ void vt_from_dense_depth(vt_shape *s, size_t n, const double *xd, const double *
         s->pos[3 * i + 1] = dw * depth(xi);
         s->pos[3 * i + 2] = zd[j] + w * (zd[j + 1] - zd[j]);
     }
+    s->n = n;
     for (size_t i = 0; i < n; i++) {
-        const size_t a = i ? i - 1 : 0, b = i + 1 < n ? i + 1 : n - 1;
         double t[3], d[3] = {0, 1, 0}, nn[3];
-        double tl = 0;
-        for (int k = 0; k < 3; k++) {
-            t[k] = s->pos[3 * b + k] - s->pos[3 * a + k];
-            tl += t[k] * t[k];
-        }
-        tl = sqrt(tl);
-        for (int k = 0; k < 3; k++)
-            t[k] /= tl;
+        unit_tangent(s, i, t);
         const double dt = d[1] * t[1];
         double dl = 0;
         for (int k = 0; k < 3; k++) {
@@ -58,7 +65,6 @@ void vt_from_dense_depth(vt_shape *s, size_t n, const double *xd, const double *
         nn[2] = t[0] * d[1] - t[1] * d[0];
         memcpy(s->normal + 3 * i, nn, sizeof nn);
     }
-    s->n = n;
     s->view.n = n;
     s->view.pos = s->pos;
     s->view.normal = s->normal;
@@ -119,15 +125,8 @@ void vt_twist(vt_shape *s, double (*psi)(double xi, void *ctx), void *ctx)
 {
     const size_t n = s->n;
     for (size_t k = 0; k < n; k++) {
-        const size_t a = k ? k - 1 : 0, b = k + 1 < n ? k + 1 : n - 1;
-        double t[3], tl = 0;
-        for (int c = 0; c < 3; c++) {
-            t[c] = s->pos[3 * b + c] - s->pos[3 * a + c];
-            tl += t[c] * t[c];
-        }
-        tl = sqrt(tl);
-        for (int c = 0; c < 3; c++)
-            t[c] /= tl;
+        double t[3];
+        unit_tangent(s, k, t);
         double *nn = s->normal + 3 * k;
         const double tn[3] = {t[1] * nn[2] - t[2] * nn[1], t[2] * nn[0] - t[0] * nn[2], t[0] * nn[1] - t[1] * nn[0]};
         const double ps = psi((double)k / (double)(n - 1), ctx), cp = cos(ps), sp = sin(ps);
