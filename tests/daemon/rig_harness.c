@@ -27,6 +27,12 @@
 #define RIG_MAX_CHILDREN 8
 static pid_t children[RIG_MAX_CHILDREN];
 
+/* The directories the current test prepared, and whether it reached its end (rig_passed): the
+ * teardown removes them then, and keeps them (saying where) for a failure's logs. */
+#define RIG_MAX_DIRS 8
+static char dirs[RIG_MAX_DIRS][64];
+static int n_dirs, passed;
+
 static void child_add(pid_t p)
 {
     for (int k = 0; k < RIG_MAX_CHILDREN; k++)
@@ -126,6 +132,7 @@ void rig_prepare(rig_run *r, const char *const *sets)
     r->sim = r->daemon = -1;
     snprintf(r->dir, sizeof r->dir, "/tmp/test_rig.XXXXXX");
     assert_non_null(mkdtemp(r->dir));
+    if (n_dirs < RIG_MAX_DIRS) snprintf(dirs[n_dirs++], sizeof dirs[0], "%s", r->dir);
     char dir[sizeof r->dir];
     snprintf(dir, sizeof dir, "%s", r->dir);
     for (int k = 0; sets && sets[k]; k++) {
@@ -226,10 +233,22 @@ void rig_stop(rig_run *r)
     r->sim = -1;
 }
 
+void rig_passed(void) { passed = 1; }
+
 int rig_teardown(void **state)
 {
     (void)state;
     for (int k = 0; k < RIG_MAX_CHILDREN; k++) child_end(children[k], 5.0);
+    const char *keep = getenv("RIG_KEEP");
+    for (int k = 0; k < n_dirs; k++) {
+        if (passed && !(keep && keep[0] == '1')) {
+            char cmd[sizeof dirs + 16];
+            snprintf(cmd, sizeof cmd, "rm -rf '%s'", dirs[k]); /* mkdtemp's name: no quote in it */
+            if (system(cmd) != 0) printf("# could not remove %s\n", dirs[k]);
+        } else
+            printf("# kept %s (the programs' logs, store and videos)\n", dirs[k]);
+    }
+    n_dirs = passed = 0;
     return 0;
 }
 

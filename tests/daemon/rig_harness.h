@@ -44,6 +44,10 @@ void rig_stop(rig_run *r);
  * keeps their ids itself (not in the test's rig_run, which a failed assertion's longjmp leaves on a
  * dead stack frame), so a failing test never leaves a simulator serving port 3956 to the next. */
 int rig_teardown(void **state);
+/* Called at the end of a test that passed: its teardown then removes the directories it prepared
+ * (a run leaves gigabytes of video otherwise). A failed test's are kept and named, and so are all
+ * with RIG_KEEP=1 in the environment. */
+void rig_passed(void);
 
 /* `ribbonctl start` (with --wait when wait); its exit code. */
 int rig_trial(rig_run *r, int wait);

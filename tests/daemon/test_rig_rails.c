@@ -113,6 +113,7 @@ static void test_grbl_link_lost_mid_shear(void **state)
 {
     (void)state;
     link_lost(RIG_GRBL, grbl_sets, "rail");
+    rig_passed();
 }
 
 static void test_modbus_link_lost_mid_shear(void **state)
@@ -122,6 +123,7 @@ static void test_modbus_link_lost_mid_shear(void **state)
     const char *sets[8] = {0};
     modbus_sets(buf, sets);
     link_lost(RIG_MODBUS, sets, "rail");
+    rig_passed();
 }
 
 /* An alarm on command mid-shear (SIGRTMIN+1): GRBL's ALARM:1 of the controller, or the shear drive's
@@ -143,6 +145,7 @@ static void test_grbl_alarm_mid_shear(void **state)
 {
     (void)state;
     alarm_mid_shear(RIG_GRBL, grbl_sets, "controller alarm", "GRBL alarm 1");
+    rig_passed();
 }
 
 static void test_modbus_drive_fault_mid_shear(void **state)
@@ -152,6 +155,7 @@ static void test_modbus_drive_fault_mid_shear(void **state)
     const char *sets[8] = {0};
     modbus_sets(buf, sets);
     alarm_mid_shear(RIG_MODBUS, sets, "drive alarm", "rail shear");
+    rig_passed();
 }
 
 /* The shear axis stalls 20 mm into the shear (2 s at 10 mm/s, before the snap near 84 mm):
@@ -173,6 +177,7 @@ static void test_grbl_stall_mid_shear(void **state)
 {
     (void)state;
     stall_mid_shear(RIG_GRBL, grbl_sets, "stall");
+    rig_passed();
 }
 
 static void test_modbus_stall_mid_shear(void **state)
@@ -182,6 +187,7 @@ static void test_modbus_stall_mid_shear(void **state)
     const char *sets[8] = {0};
     modbus_sets(buf, sets);
     stall_mid_shear(RIG_MODBUS, sets, "rail shear");
+    rig_passed();
 }
 
 /* ribbond killed mid-shear with Modbus rails: nobody talks to the drives, whose watchdog
@@ -210,6 +216,7 @@ static void test_modbus_sigkill_mid_shear(void **state)
     assert_true(ls - t_kill <= 0.5 + 0.05);
     /* and it did not stop by itself before the watchdog: the shear was running when killed */
     assert_true(ls - t_kill > 0.3);
+    rig_passed();
 }
 
 /* The rig simulator itself killed mid-shear: the GRBL pty hangs up (and the camera goes silent):
@@ -238,6 +245,7 @@ static void test_rigsim_dies_mid_shear(void **state)
     assert_true(stored == counted);
     rig_check_integrity(db);
     sqlite3_close(db);
+    rig_passed();
 }
 
 /* The whole trial with Modbus TCP rails: done, the measured snap within 2% of the prediction at
@@ -333,6 +341,7 @@ static void test_modbus_trial(void **state)
     assert_true(fabs(pc - start_c) < 0.05);
     assert_true(fabs(ps - 50.0) < 0.05);
     assert_true(lc < t_end - 0.5 && ls < t_end - 0.5);
+    rig_passed();
 }
 
 int main(void)

@@ -82,6 +82,7 @@ static void test_gcode_trial(void **state)
     rig_check_integrity(db);
     sqlite3_close(db);
     rig_check_stamps(&r, pl.recorded);
+    rig_passed();
 }
 
 /* From the truth log: the real time of the last image at which either axis had moved since the
@@ -138,6 +139,7 @@ static void test_camera_stops_mid_shear(void **state)
     assert_true(seen - cut < 0.5); /* issue 13: within 0.5 s */
     rig_check_integrity(db);
     sqlite3_close(db);
+    rig_passed();
 }
 
 /* The image freezes mid-shear (SIGRTMIN): failed, naming the frozen image, within 0.5 s; both rails
@@ -166,6 +168,7 @@ static void test_frozen_image_mid_shear(void **state)
     assert_true(rig_q_num(db, "select count(*) from samples where trial_id = 1") > 100);
     rig_check_integrity(db);
     sqlite3_close(db);
+    rig_passed();
 }
 
 /* GVSP packets lost all along (1e-4 of them: a few frames in a hundred damaged): the trial goes on
@@ -197,6 +200,7 @@ static void test_lost_packets_trial_goes_on(void **state)
     assert_true(nfs == rig_q_num(db, "select max(frame) + 1 from samples where trial_id = 1 and kind = 1"));
     rig_check_integrity(db);
     sqlite3_close(db);
+    rig_passed();
 }
 
 /* Packets lost heavily (5e-3: two frames in three damaged): failed with the named quality reason
@@ -222,6 +226,7 @@ static void test_heavy_loss_fails(void **state)
     assert_true(!(moved - seen > 1.0));
     rig_check_integrity(db);
     sqlite3_close(db);
+    rig_passed();
 }
 
 /* Bad camera input, each a named error before anything moves: no compression started (no 'start:'
@@ -265,6 +270,7 @@ static void test_bad_camera_input(void **state)
     bad_input_case("camera.gain_db=50", "Gain 50 dB refused: the camera allows 0..10 dB");
     /* the simulator writes the calibration for 640 x 480; ribbond asks the camera for 320 x 480 */
     bad_input_case("camera.width_px=320", "calibration");
+    rig_passed();
 }
 
 static void test_ribbonctl_cameras_finds_the_simulator(void **state)
@@ -282,6 +288,7 @@ static void test_ribbonctl_cameras_finds_the_simulator(void **state)
     printf("# %s", line);
     assert_non_null(strstr(line, "RIBBONSIM")); /* ribbon-rigsim's serial */
     assert_non_null(strstr(line, "GigEVision"));
+    rig_passed();
 }
 
 static void test_sigkill_mid_shear(void **state)
@@ -306,6 +313,7 @@ static void test_sigkill_mid_shear(void **state)
      * a few queued) plus the deceleration: 1 s bounds it generously at 10 mm/s. */
     assert_true(isfinite(last_move));
     assert_true(last_move - t_kill < 1.0);
+    rig_passed();
 }
 
 int main(void)

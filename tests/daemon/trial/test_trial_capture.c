@@ -531,5 +531,13 @@ int main(void)
         cmocka_unit_test_teardown(test_not_mono8_refused_nothing_written, teardown),
         cmocka_unit_test_teardown(test_named_errors, teardown),
     };
-    return cmocka_run_group_tests(tests, setup, NULL);
+    int failed = cmocka_run_group_tests(tests, setup, NULL);
+    /* The directory goes when every test passed; a failure's recordings are kept for a look. */
+    if (dir[0] && !failed) {
+        char cmd[128];
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir); /* mkdtemp's name: no quote in it */
+        if (system(cmd) != 0) printf("# could not remove %s\n", dir);
+    } else if (dir[0])
+        printf("# kept %s\n", dir);
+    return failed;
 }

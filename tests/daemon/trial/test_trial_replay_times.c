@@ -155,5 +155,13 @@ int main(void)
         cmocka_unit_test(test_replay_uses_stored_times),
         cmocka_unit_test(test_times_going_back_refused),
     };
-    return cmocka_run_group_tests(tests, setup, NULL);
+    int failed = cmocka_run_group_tests(tests, setup, NULL);
+    /* The directory goes when every test passed; a failure's files are kept for a look. */
+    if (dir[0] && !failed) {
+        char cmd[128];
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir); /* mkdtemp's name: no quote in it */
+        if (system(cmd) != 0) printf("# could not remove %s\n", dir);
+    } else if (dir[0])
+        printf("# kept %s\n", dir);
+    return failed;
 }
