@@ -47,9 +47,11 @@
 /* Measured shapes reached (of 208 full, 13 quick), asserted as floors; the issue asks for all. */
 #define FAMILY_MEASURED_FLOOR 191
 #define QUICK_MEASURED_FLOOR 10
-/* Of those, with the whole ribbon in view (alongside_run below): the issue asks for all. */
+/* Of those, with the whole ribbon in view (neither over itself, alongside_run, nor pointing at the
+ * camera, least_foreshortening): the issue asks for all; of 192 in view, one is not measured. */
 #define FAMILY_IN_VIEW_FLOOR 191
 #define QUICK_IN_VIEW_FLOOR 10
+#define FAMILY_IN_VIEW_UNMEASURED_REACHED 1
 /* Sequences: wrong frames over the six (the issue asks for none; before the followed curve had to
  * agree with the fresh paths' bend, one: the symmetric snap at 500 fps, A off 0.13 rad at quality
  * 0.92 beside the U's bottom). */
@@ -288,9 +290,41 @@ static double alongside_run(const vis_shape *sh, const vis_camera *cam)
     return worst;
 }
 
+/* Where the ribbon points at the camera. A stretch whose tangent comes within a few degrees of the
+ * line of sight projects to a fraction of its length, and the side view shows a cusp there: the
+ * centreline's place and tangent along that stretch are not in the picture (its depth is), and
+ * where it is the midpoint, A's theta(1/2) is not defined by the image at all (the truth's own A
+ * at the Delta L 0.7 fold's cusp comes out 2 pi). Returns the least ratio, over the arc, of a
+ * stretch's projected length to its length times the image scale there (the projection of a
+ * displacement along x, which the camera's pitch leaves parallel to the image): 1 for a ribbon
+ * in the image plane, 0 where it points at the camera. Below END_ON_RATIO (a tangent within
+ * 5.7 deg of the line of sight) the whole ribbon is not in view. */
+#define END_ON_RATIO 0.1
+static double least_foreshortening(const vis_shape *sh, const vis_camera *cam)
+{
+    const size_t n = sh->n;
+    double least = 1e9;
+    for (size_t i = 1; i + 1 < n; i++) {
+        const double *p0 = sh->pos + 3 * (i - 1), *p = sh->pos + 3 * i, *p1 = sh->pos + 3 * (i + 1);
+        const double dm = sqrt((p1[0] - p0[0]) * (p1[0] - p0[0]) + (p1[1] - p0[1]) * (p1[1] - p0[1]) +
+                               (p1[2] - p0[2]) * (p1[2] - p0[2]));
+        const double dx = 1e-4, px[3] = {p[0] + dx, p[1], p[2]};
+        double u0[2], u1[2], uc[2], ux[2];
+        assert_int_equal(vis_camera_project(cam, p0, u0, NULL), VIS_OK);
+        assert_int_equal(vis_camera_project(cam, p1, u1, NULL), VIS_OK);
+        assert_int_equal(vis_camera_project(cam, p, uc, NULL), VIS_OK);
+        assert_int_equal(vis_camera_project(cam, px, ux, NULL), VIS_OK);
+        const double scale = hypot(ux[0] - uc[0], ux[1] - uc[1]) / dx;
+        if (dm > 0 && scale > 0)
+            least = fmin(least, hypot(u1[0] - u0[0], u1[1] - u0[1]) / (dm * scale));
+    }
+    return least;
+}
+
 typedef struct score {
     int frames, measured, wrong;
-    int hidden, hidden_measured;  /* frames where the ribbon lies over or against itself (alongside_run) */
+    int hidden, hidden_measured;  /* frames where the whole ribbon is not in view: */
+    int over, end_on;             /* over or against itself (alongside_run), pointing at the camera */
     int quiet;                    /* no line per frame */
     double sdz, sa, dz_max, a_max;
 } score;
@@ -332,12 +366,16 @@ static int render_track(vis_renderer *r, vis_tracker *trk, const trial_states *s
     if (dz_true)
         *dz_true = g->dz_cam;
     const double run = alongside_run(&sh, &st->cam);
-    const int hidden = run >= ALONGSIDE_RUNS;
+    const int over = run >= ALONGSIDE_RUNS, end_on = least_foreshortening(&sh, &st->cam) < END_ON_RATIO;
+    const int hidden = over || end_on;
     s->hidden += hidden;
+    s->over += over;
+    s->end_on += end_on;
     if (m.reason != VIS_REASON_NONE) {
         if (!s->quiet)
             printf("  state %d (t %.3f s, shear %.1f mm): not measured: %s (quality %.3f)%s\n", k, st->t[k], shear_mm,
-               vis_reason_str(m.reason), m.quality, hidden ? ", not all in view (the ribbon over itself)" : "");
+               vis_reason_str(m.reason), m.quality,
+               over ? ", not all in view (the ribbon over itself)" : end_on ? ", not all in view (pointing at the camera)" : "");
         const char *dump = getenv("FAM_DUMP"); /* a folder: the frames not measured, as rendered */
         if (dump) {
             char path[512];
@@ -499,6 +537,8 @@ static void test_family_from_scratch(void **state)
         tot.wrong += s.wrong;
         tot.hidden += s.hidden;
         tot.hidden_measured += s.hidden_measured;
+        tot.over += s.over;
+        tot.end_on += s.end_on;
         tot.sdz += s.sdz;
         tot.sa += s.sa;
         tot.dz_max = fmax(tot.dz_max, s.dz_max);
@@ -513,8 +553,9 @@ static void test_family_from_scratch(void **state)
     printf("confident wrong answers: %d of %d measured (rate %.4f)\n", tot.wrong, tot.measured,
            tot.measured ? (double)tot.wrong / tot.measured : 0.0);
     const int in_view = tot.frames - tot.hidden, in_view_measured = tot.measured - tot.hidden_measured;
-    printf("whole ribbon in view: %d shapes, %d measured (%d not measured); the ribbon over itself: %d, %d measured\n",
-           in_view, in_view_measured, in_view - in_view_measured, tot.hidden, tot.hidden_measured);
+    printf("whole ribbon in view: %d shapes, %d measured (%d not measured); not in view: %d (the ribbon over itself: %d, "
+           "pointing at the camera: %d), %d measured\n",
+           in_view, in_view_measured, in_view - in_view_measured, tot.hidden, tot.over, tot.end_on, tot.hidden_measured);
     vis_frame_free(f);
     if (getenv("FAM_ONLY"))
         return; /* by hand: a part of the family, no bars */
@@ -522,12 +563,13 @@ static void test_family_from_scratch(void **state)
         assert_true(tot.frames >= 200);
     /* The issue's bars that are reached: no confident wrong answer, Delta Z and A within target
      * over the measured frames. "No frame untracked while the whole ribbon is in view" is not
-     * quite: the in-view frames not measured are the folded apexes whose two legs' bands merge
-     * (Delta L 0.7 with creases: a cusp no walk turns) and two loops
+     * quite: the one in-view frame not measured is a narrow loop whose legs run 3-6 px apart
      * (docs/vision-acquisition-and-replay-speed.md); the floors are what is reached. */
     assert_int_equal(tot.wrong, 0);
     assert_true(tot.measured >= (quick ? QUICK_MEASURED_FLOOR : FAMILY_MEASURED_FLOOR));
     assert_true(in_view_measured >= (quick ? QUICK_IN_VIEW_FLOOR : FAMILY_IN_VIEW_FLOOR));
+    if (!quick)
+        assert_true(in_view - in_view_measured <= FAMILY_IN_VIEW_UNMEASURED_REACHED);
     assert_true(dz_rms <= DZ_BAR_PX);
     assert_true(a_rms <= A_BAR_RAD);
     for (int h = 0; h < NHARDER && !quick; h++) {
