@@ -22,6 +22,14 @@
 
 namespace vis {
 
+namespace {
+// The nearest ridge is followed if it stands at least this share of the strongest in the band. An
+// edge-on stretch beside a face-on one reads about half as high: at the narrow loop of the
+// simulator family's Delta L 0.7 trial (state 614) the edge-on leg's dip is 77 grey levels and the
+// face-on leg's beside it 156 (0.49), and with 0.6 the tracer jumped to the face-on leg there.
+const double NEAR_SHARE = 0.4;
+}  // namespace
+
 void resample(const std::vector<Pt> &g, double step, double *len, std::vector<double> &cum,
               std::vector<Pt> &out)
 {
@@ -308,9 +316,9 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
             const Pt nrm = nv[jb];
             const double base = bases[jb];
             const int kmax = first_max(pf, P);
-            // The ridge followed is the local maximum nearest the guide among those at least 60% as
-            // high as the strongest: where another branch of the ribbon (a loop, a crossing) enters the
-            // band, the strongest peak may be the other branch. (Searched outward from the guide, lower
+            // The ridge followed is the local maximum nearest the guide among those at least
+            // NEAR_SHARE as high as the strongest: where another branch of the ribbon (a loop, a
+            // crossing) enters the band, the strongest peak may be the other branch. (Searched outward from the guide, lower
             // side first: the first one found is the one a scan in increasing k keeps, the nearest and,
             // of two as near, the lower; none nearer than the strongest leaves the strongest.)
             const double hmax = pf[(size_t)kmax] - base;
@@ -319,7 +327,7 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
             for (int dk = 0; dk < dmax && kp == kmax; dk++)
                 for (int k = K - dk; k <= K + dk; k += dk > 0 ? 2 * dk : 1) {
                     const float v = pf[(size_t)k];
-                    if (k >= 1 && k < 2 * K && v - base >= 0.6 * hmax && v >= pf[(size_t)k - 1] &&
+                    if (k >= 1 && k < 2 * K && v - base >= NEAR_SHARE * hmax && v >= pf[(size_t)k - 1] &&
                         v > pf[(size_t)k + 1]) {
                         kp = k;
                         break;
@@ -346,9 +354,24 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
                     lo2 = hi2 = -100;
                 }
             } else {
+                // The strongest is the one followed: another branch in the band (the other leg of a
+                // narrow loop) is the highest point outside the ridge's extent.
+                int k2 = -1;
+                for (int k = 0; k < 2 * K + 1; k++)
+                    if ((k < lo - 1 || k > hi + 1) && (k2 < 0 || pf[(size_t)k] > pf[(size_t)k2]))
+                        k2 = k;
                 lo2 = hi2 = -100;
+                if (k2 >= 0 && pf[(size_t)k2] - base >= 0.3 * peak) {
+                    lo2 = hi2 = k2;
+                    while (lo2 > 0 && pf[(size_t)(lo2 - 1)] > thr)
+                        lo2--;
+                    while (hi2 < 2 * K && pf[(size_t)(hi2 + 1)] > thr)
+                        hi2++;
+                }
             }
-            // Noise: spread of the profile outside the peak (1 px clear of it on each side).
+            // Noise: spread of the profile outside the peak (1 px clear of it on each side) and
+            // outside the other branch's (counted as noise, a narrow loop's second leg made every
+            // sample beside it invalid: a third of the arc at the simulator family's state 614).
             // (In increasing k, as one loop with the test would, skipping the excluded stretches.)
             double ss = 0;
             int cnt = 0;

@@ -15,7 +15,8 @@
 //      is refined and measured and the best kept (pick_better: measured, then quality, then the
 //      longer of two comparable ones, since every wrong path is a shortcut);
 //   5. tracer passes (wide band, then narrow; three from a fresh path, two from the previous curve)
-//      refining the centreline to sub-pixel;
+//      refining the centreline to sub-pixel; then the samples in bends are moved back onto the
+//      centreline where the band's cross-sections are oblique to the curve (section_bias.cpp);
 //   6. metric curve: undistortion (if the calibration has intrinsics), then depth correction: the
 //      point at arc fraction xi is assumed at depth y = shear (3 xi^2 - 2 xi^3) (clamped ends keep
 //      their tangent along x, so the shear profile is flat at both clamps), or at the depth of the
@@ -464,6 +465,7 @@ void track_from(vis_tracker *t, const Geometry &g, const std::vector<Pt> &guide_
         }
     }
     at.len_px = len_px;
+    vis::correct_section_bias(samples, ws.section);
     at.samples.assign(samples.begin(), samples.end());
     finish_attempt(t, g, at);
 }

@@ -5,6 +5,7 @@
 //   trace.cpp      image + guide curve -> sub-pixel centreline samples along the arc
 //   view_model.cpp pixels <-> millimetres in the ribbon's plane (depth from the shear, camera pitch)
 //   depth_profile.cpp the centreline's depth along the arc (default cubic, or a prediction's)
+//   section_bias.cpp samples -> the same, moved onto the centreline where the sections are oblique
 //   curve_fit.cpp  samples -> smooth metric curve -> Delta Z, A, midpoint
 //   bend_model.cpp image + samples through a tight twisted bend -> the centreline there, from a
 //                  model of the band's silhouette
@@ -78,6 +79,17 @@ void smooth(const std::vector<Pt> &c, int h, std::vector<Pt> &out);
 void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, double band,
                 double margin, double min_contrast, double max_width, std::vector<TraceSample> &out,
                 std::vector<float> &prof, std::vector<float> &tmp);
+
+// --- section_bias.cpp
+struct SectionScratch {
+    std::vector<size_t> idx;
+    std::vector<double> hw, tmp, th, s;
+    std::vector<Pt> moved;
+};
+// Moves the valid samples in bends back onto the centreline where the band's cross-sections are
+// oblique to the curve (the centroid's bias there, from the samples' own widths; see
+// section_bias.cpp).
+void correct_section_bias(std::vector<TraceSample> &smp, SectionScratch &ws);
 
 // --- bend_model.cpp
 // The part of a bend's window (its middle, as a fraction of it) whose centreline the model gives
@@ -207,6 +219,7 @@ struct Workspace {
     FitInput fin;
     FitResult fr;
     FitScratch fit;
+    SectionScratch section;
 };
 
 // --- tracker.cpp, for track_pipe.cpp

@@ -44,14 +44,14 @@
 #define WRONG_DZ_PX 2.0
 #define WRONG_A_RAD 0.1
 #define MAX_STATES 20000
-/* Measured shapes reached (of 208 full, 13 quick), asserted as floors; the issue asks for all. */
-#define FAMILY_MEASURED_FLOOR 191
+/* Measured shapes (of 208 full, 13 quick): every one with the whole ribbon in view (neither over
+ * itself, alongside_run, nor pointing at the camera, least_foreshortening), asserted, and the
+ * number of those, 192 (10 quick), as a floor (the rule for "in view" must not drift). */
+#define FAMILY_MEASURED_FLOOR 192
 #define QUICK_MEASURED_FLOOR 10
-/* Of those, with the whole ribbon in view (neither over itself, alongside_run, nor pointing at the
- * camera, least_foreshortening): the issue asks for all; of 192 in view, one is not measured. */
-#define FAMILY_IN_VIEW_FLOOR 191
-#define QUICK_IN_VIEW_FLOOR 10
-#define FAMILY_IN_VIEW_UNMEASURED_REACHED 1
+#define FAMILY_IN_VIEW 192
+/* Delta Z over the Delta L 0.7 trial's sheared upper states (see test_family_from_scratch). */
+#define OBLIQUE_DZ_PX 0.6
 /* Sequences: wrong frames over the six (the issue asks for none; before the followed curve had to
  * agree with the fresh paths' bend, one: the symmetric snap at 500 fps, A off 0.13 rad at quality
  * 0.92 beside the U's bottom). */
@@ -460,7 +460,8 @@ static const trial_spec FAMILY[] = {
  * them too, in the full run, and their confident wrong answers may not grow past what is reached
  * (docs/vision-acquisition-and-replay-speed.md, "Harder pictures": before the silhouette model 7
  * and 8 by the review's count; the model's frames with clutter carry the clutter's bias at the
- * ends, as the same trial's frames without a bend do). */
+ * ends, as the same trial's frames without a bend do; the 12th is the narrow loop measured since
+ * (Delta L 0.7, state 614: A 0.139 off there, its measured neighbours 547 and 581 0.156 and 0.124). */
 typedef struct look {
     const char *name;
     double noise, blur, gradient;
@@ -468,8 +469,8 @@ typedef struct look {
     int wrong_reached;
 } look;
 static const look HARDER[] = {
-    {"clutter 8, 40% light gradient and vignetting", 3.0, 1.0, 0.4, 8, 11},
-    {"noise 6, blur 2 px", 6.0, 2.0, -1.0, 0, 8},
+    {"clutter 8, 40% light gradient and vignetting", 3.0, 1.0, 0.4, 8, 12},
+    {"noise 6, blur 2 px", 6.0, 2.0, -1.0, 0, 7},
 };
 #define NHARDER ((int)(sizeof HARDER / sizeof HARDER[0]))
 
@@ -483,6 +484,8 @@ static void test_family_from_scratch(void **state)
     const int nfam = quick ? 2 : (int)(sizeof FAMILY / sizeof FAMILY[0]);
     const int fam_idx_quick[2] = {2, 9};
     score tot = {0};
+    double oblique_sdz = 0;
+    int oblique_n = 0;
     static trial_states st;
     vis_frame *f = vis_frame_alloc(8, 8, 1, NULL);
     assert_non_null(f);
@@ -506,10 +509,17 @@ static void test_family_from_scratch(void **state)
         score s = {0};
         printf("trial Delta L %.2f, creases %g deg at %.2f: %d states, %s snap (%s)\n", sp->dl, sp->fold_deg,
                sp->gamma, st.n, pred.snapped ? "a" : "no", pred.asymmetric ? "asymmetric" : "symmetric");
+        const int oblique = !quick && sp->dl == 0.7 && sp->fold_deg == 0;
         for (int j = 0; j < nk; j++) {
             vis_tracker *trk = vis_tracker_create(&tp, &cal, &err); /* from scratch */
             assert_non_null(trk);
+            const double sdz0 = s.sdz;
+            const int m0 = s.measured;
             render_track(r, trk, &st, ks[j], &s, f, NULL, NULL, NULL, NULL);
+            if (oblique && j >= 1 && j < 6 && s.measured > m0) { /* the sheared upper states */
+                oblique_sdz += s.sdz - sdz0;
+                oblique_n++;
+            }
             vis_tracker_free(trk);
         }
         printf("  %d/%d measured, Delta Z error %.3f px RMS (max %.3f), A error %.4f rad RMS (max %.4f), %d wrong\n",
@@ -556,20 +566,27 @@ static void test_family_from_scratch(void **state)
     printf("whole ribbon in view: %d shapes, %d measured (%d not measured); not in view: %d (the ribbon over itself: %d, "
            "pointing at the camera: %d), %d measured\n",
            in_view, in_view_measured, in_view - in_view_measured, tot.hidden, tot.over, tot.end_on, tot.hidden_measured);
+    if (oblique_n)
+        printf("Delta L 0.7 upper states, sheared (the apex's width along its tangent): %d measured, Delta Z error "
+               "%.3f px RMS\n", oblique_n, sqrt(oblique_sdz / oblique_n));
     vis_frame_free(f);
     if (getenv("FAM_ONLY"))
         return; /* by hand: a part of the family, no bars */
+    /* The tracer's centroids there lie inside the apex, where the strip's width projects along the
+     * tangent (vision/section_bias.cpp): 0.75 px RMS before the samples were moved back, 0.51 after. */
+    if (!quick) {
+        assert_int_equal(oblique_n, 5);
+        assert_true(sqrt(oblique_sdz / oblique_n) <= OBLIQUE_DZ_PX);
+    }
     if (!quick)
         assert_true(tot.frames >= 200);
-    /* The issue's bars that are reached: no confident wrong answer, Delta Z and A within target
-     * over the measured frames. "No frame untracked while the whole ribbon is in view" is not
-     * quite: the one in-view frame not measured is a narrow loop whose legs run 3-6 px apart
-     * (docs/vision-acquisition-and-replay-speed.md); the floors are what is reached. */
+    /* The issue's bars: no confident wrong answer, Delta Z and A within target over the measured
+     * frames, every frame with the whole ribbon in view measured. */
     assert_int_equal(tot.wrong, 0);
     assert_true(tot.measured >= (quick ? QUICK_MEASURED_FLOOR : FAMILY_MEASURED_FLOOR));
-    assert_true(in_view_measured >= (quick ? QUICK_IN_VIEW_FLOOR : FAMILY_IN_VIEW_FLOOR));
+    assert_int_equal(in_view_measured, in_view);
     if (!quick)
-        assert_true(in_view - in_view_measured <= FAMILY_IN_VIEW_UNMEASURED_REACHED);
+        assert_true(in_view >= FAMILY_IN_VIEW);
     assert_true(dz_rms <= DZ_BAR_PX);
     assert_true(a_rms <= A_BAR_RAD);
     for (int h = 0; h < NHARDER && !quick; h++) {
