@@ -26,7 +26,7 @@
 //
 // What it does, measured (simulator family, full run): Delta Z 0.298 -> 0.242 px RMS over the same
 // 191 frames (48 frames better by more than 0.1 px^2, 9 worse, all at Delta L 0.3-0.7), A 0.0138
-// -> 0.0147 rad RMS; the Delta L 0.7 trial's sheared upper states 0.75 -> 0.51 px RMS. Only part of
+// -> 0.0147 rad RMS; the Delta L 0.7 trial's sheared upper states 0.74 -> 0.51 px RMS. Only part of
 // the apex's 0.5 px goes (state 75: 0.72 -> 0.52 px): right at the apex v lies along the tangent,
 // which the widths cannot show, so M there comes from the flanks. Where the width stays along the
 // depth axis (the analytic sheared arches of test_vision_track_accuracy) the widths show no v and
