@@ -24,9 +24,10 @@
 // not determined, and there is no bend), where the fit does not explain the widths, or where the
 // bend is tighter than the section (a fold: the silhouette model's, bend_model.cpp).
 //
-// What it does, measured (simulator family, full run): Delta Z 0.298 -> 0.242 px RMS over the same
-// 191 frames (48 frames better by more than 0.1 px^2, 9 worse, all at Delta L 0.3-0.7), A 0.0138
-// -> 0.0147 rad RMS; the Delta L 0.7 trial's sheared upper states 0.74 -> 0.51 px RMS. Only part of
+// What it does, measured (simulator family, full run, 192 frames with the narrow loop the tracer
+// measures since): Delta Z 0.302 -> 0.244 px RMS (48 frames better by more than 0.1 px^2, 9 worse,
+// all at Delta L 0.3-0.7), A 0.0137 -> 0.0148 rad RMS; the Delta L 0.7 trial's sheared upper states
+// 75-379 0.74 -> 0.51 px RMS. Only part of
 // the apex's 0.5 px goes (state 75: 0.72 -> 0.52 px): right at the apex v lies along the tangent,
 // which the widths cannot show, so M there comes from the flanks. Where the width stays along the
 // depth axis (the analytic sheared arches of test_vision_track_accuracy) the widths show no v and
@@ -54,7 +55,8 @@ const double MAX_KAPPA_V = 0.6;
 const double MAX_MOVE_PX = 1.5;
 // The moves are averaged over this half-window of arc, px.
 const double SMOOTH_PX = 4.0;
-// Nothing is moved within this fraction of the arc from either clamp. There the section turns from
+// Nothing is moved within this fraction of the traced arc (its first and last valid samples) from
+// either end. There the section turns from
 // edge-on at the jaw to the face within a few widths (v's length changes threefold over a window:
 // the constant-v model does not hold), and the end tangents, which carry A, come from there. On the
 // simulator family, moving them too took A from 0.0138 to 0.0152 rad RMS and made the symmetric
@@ -108,6 +110,10 @@ void correct_section_bias(std::vector<TraceSample> &smp, SectionScratch &ws)
     moved.resize(n);
     std::vector<double> &shift = ws.tmp;  // the move toward the centre of curvature, px
     shift.assign(n, 0.0);
+    auto in_end_zone = [&](size_t k) {
+        const double span = s[n - 1] - s[0];
+        return s[k] - s[0] < END_FRACTION * span || s[n - 1] - s[k] < END_FRACTION * span;
+    };
     size_t lo = 0, hi = 0, ca = 0, cb = 0;
     for (size_t k = 0; k < n; k++) {
         while (lo < k && s[k] - s[lo] > WINDOW_PX)
@@ -116,7 +122,7 @@ void correct_section_bias(std::vector<TraceSample> &smp, SectionScratch &ws)
             hi++;
         if (hi - lo < 8 || std::fabs(th[hi] - th[lo]) < MIN_TURN)
             continue;
-        if (s[k] - s[0] < END_FRACTION * (s[n - 1] - s[0]) || s[n - 1] - s[k] < END_FRACTION * (s[n - 1] - s[0]))
+        if (in_end_zone(k))
             continue;
         // Curvature from the tangent's turning over +-TANGENT_PX.
         while (ca < k && s[k] - s[ca] > TANGENT_PX)
@@ -178,12 +184,14 @@ void correct_section_bias(std::vector<TraceSample> &smp, SectionScratch &ws)
             continue;
         const Pt t(std::cos(th[k]), std::sin(th[k]));
         const double ht = std::fabs(v.dot(t)), hn = std::fabs(v.x * -t.y + v.y * t.x);
-        const double top = hn + 0.5 * ak * ht * ht;
-        const double bottom = hn <= ak * ht * ht ? -hn * hn / (2 * ak * ht * ht) : 0.5 * ak * ht * ht - hn;
-        const double inward = std::min(MAX_MOVE_PX, 0.5 * (top + bottom));
-        if (!(inward > 0))
+        const double q = ak * ht * ht;
+        const double top = hn + 0.5 * q;
+        const double bottom = q > 0 && hn <= q ? -hn * hn / (2 * q) : 0.5 * q - hn;
+        const double inward = 0.5 * (top + bottom);
+        if (!(inward > 0) || !std::isfinite(inward))
             continue;
-        shift[k] = kappa > 0 ? inward : -inward;  // signed: toward +n = (-t_y, t_x) when positive
+        const double move = std::min(MAX_MOVE_PX, inward);
+        shift[k] = kappa > 0 ? move : -move;  // signed: toward +n = (-t_y, t_x) when positive
     }
     // The moves smoothed along the arc (the widths are read to a quarter pixel each: unsmoothed,
     // the moves would roughen the curve and its tangents), then made along the normal.
@@ -193,6 +201,9 @@ void correct_section_bias(std::vector<TraceSample> &smp, SectionScratch &ws)
             ma++;
         while (mb + 1 < n && s[mb + 1] - s[k] <= SMOOTH_PX)
             mb++;
+        moved[k] = smp[idx[k]].p;
+        if (in_end_zone(k))
+            continue;  // not even by the smoothing
         double sum = 0;
         for (size_t j = ma; j <= mb; j++)
             sum += shift[j];

@@ -327,20 +327,24 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
             for (int dk = 0; dk < dmax && kp == kmax; dk++)
                 for (int k = K - dk; k <= K + dk; k += dk > 0 ? 2 * dk : 1) {
                     const float v = pf[(size_t)k];
-                    if (k >= 1 && k < 2 * K && v - base >= NEAR_SHARE * hmax && v >= pf[(size_t)k - 1] &&
-                        v > pf[(size_t)k + 1]) {
+                    if (k >= 1 && k < 2 * K && v - base >= std::max(NEAR_SHARE * hmax, min_contrast) &&
+                        v >= pf[(size_t)k - 1] && v > pf[(size_t)k + 1]) {
                         kp = k;
                         break;
                     }
                 }
-            const double peak = pf[(size_t)kp] - base;
-            TraceSample ts{guide[ii], sv[jb], peak, false, 0.0, base};
-            const double thr = base + 0.3 * peak;
+            double peak = pf[(size_t)kp] - base;
+            double thr = base + 0.3 * peak;
             int lo = kp, hi = kp;
-            while (lo > 0 && pf[(size_t)(lo - 1)] > thr)
-                lo--;
-            while (hi < 2 * K && pf[(size_t)(hi + 1)] > thr)
-                hi++;
+            auto extent = [&]() {
+                lo = hi = kp;
+                while (lo > 0 && pf[(size_t)(lo - 1)] > thr)
+                    lo--;
+                while (hi < 2 * K && pf[(size_t)(hi + 1)] > thr)
+                    hi++;
+            };
+            extent();
+            TraceSample ts{guide[ii], sv[jb], peak, false, 0.0, base};
             // The other branch's extent, left out of the noise estimate below.
             int lo2 = kmax, hi2 = kmax;
             if (kmax != kp) {
@@ -355,13 +359,14 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
                 }
             } else {
                 // The strongest is the one followed: another branch in the band (the other leg of a
-                // narrow loop) is the highest point outside the ridge's extent.
+                // narrow loop, which may run on past the band's end) is the highest point outside the
+                // ridge's extent, if it stands out as a ribbon would (at least min_contrast).
                 int k2 = -1;
                 for (int k = 0; k < 2 * K + 1; k++)
                     if ((k < lo - 1 || k > hi + 1) && (k2 < 0 || pf[(size_t)k] > pf[(size_t)k2]))
                         k2 = k;
                 lo2 = hi2 = -100;
-                if (k2 >= 0 && pf[(size_t)k2] - base >= 0.3 * peak) {
+                if (k2 >= 0 && pf[(size_t)k2] - base >= std::max(0.3 * peak, min_contrast)) {
                     lo2 = hi2 = k2;
                     while (lo2 > 0 && pf[(size_t)(lo2 - 1)] > thr)
                         lo2--;
@@ -375,7 +380,12 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
             // (In increasing k, as one loop with the test would, skipping the excluded stretches.)
             double ss = 0;
             int cnt = 0;
-            const int a1 = lo - 4, b1 = hi + 4, a2 = lo2 - 4, b2 = hi2 + 4;
+            const int a1 = lo - 4, b1 = hi + 4;
+            int a2 = lo2 - 4, b2 = hi2 + 4;
+            // Left out, the other branch may leave too little of the profile to read the noise
+            // on (8 values): then it stays in.
+            if (lo2 >= 0 && 2 * K + 1 - (std::min(2 * K, b1) - std::max(0, a1) + 1) - (std::min(2 * K, b2) - std::max(0, a2) + 1) < 8)
+                a2 = b2 = -100;
             for (int k = 0; k < 2 * K + 1;) {
                 if (k >= a1 && k <= b1) {
                     k = b1 + 1;
