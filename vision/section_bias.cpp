@@ -30,7 +30,7 @@
 // 75-379 0.74 -> 0.51 px RMS. Only part of
 // the apex's 0.5 px goes (state 75: 0.72 -> 0.52 px): right at the apex v lies along the tangent,
 // which the widths cannot show, so M there comes from the flanks. Where the width stays along the
-// depth axis (the analytic sheared arches of test_vision_track_accuracy) the widths show no v and
+// depth axis (analytic arches sheared hard, built as test_vision_track_accuracy builds its shapes) the widths show no v and
 // nothing moves. Cost: 0.1 ms a frame (1280 x 720, one core).
 #include "tracker_impl.hpp"
 
