@@ -106,9 +106,14 @@ void correct_section_bias(std::vector<TraceSample> &smp, SectionScratch &ws)
         }
         th[k] = t;
     }
-    std::vector<Pt> &moved = ws.moved;
-    moved.resize(n);
-    std::vector<double> &shift = ws.tmp;  // the move toward the centre of curvature, px
+    // Each sample's unit normal n = (-t_y, t_x), and its half-width above tau (|v . n| to be).
+    std::vector<Pt> &nrm = ws.nrm;
+    nrm.resize(n);
+    for (size_t k = 0; k < n; k++) {
+        nrm[k] = Pt(-std::sin(th[k]), std::cos(th[k]));
+        hw[k] = std::max(0.0, hw[k] - tau);
+    }
+    std::vector<double> &shift = ws.shift;  // the move toward +n, px
     shift.assign(n, 0.0);
     auto in_end_zone = [&](size_t k) {
         const double span = s[n - 1] - s[0];
@@ -136,9 +141,9 @@ void correct_section_bias(std::vector<TraceSample> &smp, SectionScratch &ws)
         // h_n^2 = (v . n)^2 = A n_x^2 + 2 B n_x n_y + C n_y^2.
         double S[3][3] = {{0}}, r[3] = {0};
         for (size_t j = lo; j <= hi; j++) {
-            const double nx = -std::sin(th[j]), ny = std::cos(th[j]);
+            const double nx = nrm[j].x, ny = nrm[j].y;
             const double f[3] = {nx * nx, 2 * nx * ny, ny * ny};
-            const double hn = std::max(0.0, hw[j] - tau);
+            const double hn = hw[j];
             for (int p = 0; p < 3; p++) {
                 for (int q = 0; q < 3; q++)
                     S[p][q] += f[p] * f[q];
@@ -173,7 +178,7 @@ void correct_section_bias(std::vector<TraceSample> &smp, SectionScratch &ws)
         // How well |v . n| explains the half-widths over the window.
         double ss = 0;
         for (size_t j = lo; j <= hi; j++) {
-            const double e = std::fabs(v.x * -std::sin(th[j]) + v.y * std::cos(th[j])) - std::max(0.0, hw[j] - tau);
+            const double e = std::fabs(v.dot(nrm[j])) - hw[j];
             ss += e * e;
         }
         if (!(std::sqrt(ss / (double)(hi - lo + 1)) <= MAX_FIT_RMS))
@@ -182,8 +187,8 @@ void correct_section_bias(std::vector<TraceSample> &smp, SectionScratch &ws)
         const double ak = std::fabs(kappa);
         if (!(ak * vl <= MAX_KAPPA_V) || !(ak > 0))
             continue;
-        const Pt t(std::cos(th[k]), std::sin(th[k]));
-        const double ht = std::fabs(v.dot(t)), hn = std::fabs(v.x * -t.y + v.y * t.x);
+        const Pt t(nrm[k].y, -nrm[k].x);
+        const double ht = std::fabs(v.dot(t)), hn = std::fabs(v.dot(nrm[k]));
         const double q = ak * ht * ht;
         const double top = hn + 0.5 * q;
         const double bottom = q > 0 && hn <= q ? -hn * hn / (2 * q) : 0.5 * q - hn;
@@ -201,18 +206,13 @@ void correct_section_bias(std::vector<TraceSample> &smp, SectionScratch &ws)
             ma++;
         while (mb + 1 < n && s[mb + 1] - s[k] <= SMOOTH_PX)
             mb++;
-        moved[k] = smp[idx[k]].p;
         if (in_end_zone(k))
             continue;  // not even by the smoothing
         double sum = 0;
         for (size_t j = ma; j <= mb; j++)
             sum += shift[j];
-        const double m = sum / (double)(mb - ma + 1);
-        const Pt nrm(-std::sin(th[k]), std::cos(th[k]));
-        moved[k] = smp[idx[k]].p - m * nrm;
+        smp[idx[k]].p -= (sum / (double)(mb - ma + 1)) * nrm[k];  // shift[] holds no position
     }
-    for (size_t k = 0; k < n; k++)
-        smp[idx[k]].p = moved[k];
 }
 
 }  // namespace vis

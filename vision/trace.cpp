@@ -333,26 +333,23 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
                         break;
                     }
                 }
-            double peak = pf[(size_t)kp] - base;
-            double thr = base + 0.3 * peak;
-            int lo = kp, hi = kp;
-            auto extent = [&]() {
-                lo = hi = kp;
-                while (lo > 0 && pf[(size_t)(lo - 1)] > thr)
-                    lo--;
-                while (hi < 2 * K && pf[(size_t)(hi + 1)] > thr)
-                    hi++;
+            // The stretch around k above t (stopping at the band's ends).
+            auto extent = [&](int k, double t, int &a, int &b) {
+                a = b = k;
+                while (a > 0 && pf[(size_t)(a - 1)] > t)
+                    a--;
+                while (b < 2 * K && pf[(size_t)(b + 1)] > t)
+                    b++;
             };
-            extent();
+            const double peak = pf[(size_t)kp] - base;
             TraceSample ts{guide[ii], sv[jb], peak, false, 0.0, base};
+            const double thr = base + 0.3 * peak;
+            int lo, hi;
+            extent(kp, thr, lo, hi);
             // The other branch's extent, left out of the noise estimate below.
-            int lo2 = kmax, hi2 = kmax;
+            int lo2 = -100, hi2 = -100;
             if (kmax != kp) {
-                const double thr2 = base + 0.3 * hmax;
-                while (lo2 > 0 && pf[(size_t)(lo2 - 1)] > thr2)
-                    lo2--;
-                while (hi2 < 2 * K && pf[(size_t)(hi2 + 1)] > thr2)
-                    hi2++;
+                extent(kmax, base + 0.3 * hmax, lo2, hi2);
                 if (lo2 <= hi && hi2 >= lo) {
                     // The two peaks are one blob (a shoulder of one ridge): keep the one peak.
                     lo2 = hi2 = -100;
@@ -365,47 +362,45 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
                 for (int k = 0; k < 2 * K + 1; k++)
                     if ((k < lo - 1 || k > hi + 1) && (k2 < 0 || pf[(size_t)k] > pf[(size_t)k2]))
                         k2 = k;
-                lo2 = hi2 = -100;
-                if (k2 >= 0 && pf[(size_t)k2] - base >= std::max(0.3 * peak, min_contrast)) {
-                    lo2 = hi2 = k2;
-                    while (lo2 > 0 && pf[(size_t)(lo2 - 1)] > thr)
-                        lo2--;
-                    while (hi2 < 2 * K && pf[(size_t)(hi2 + 1)] > thr)
-                        hi2++;
-                }
+                if (k2 >= 0 && pf[(size_t)k2] - base >= std::max(0.3 * peak, min_contrast))
+                    extent(k2, thr, lo2, hi2);
             }
             // Noise: spread of the profile outside the peak (1 px clear of it on each side) and
             // outside the other branch's (counted as noise, a narrow loop's second leg made every
             // sample beside it invalid: a third of the arc at the simulator family's state 614).
             // (In increasing k, as one loop with the test would, skipping the excluded stretches.)
-            double ss = 0;
-            int cnt = 0;
             const int a1 = lo - 4, b1 = hi + 4;
-            int a2 = lo2 - 4, b2 = hi2 + 4;
-            // Left out, the other branch may leave too little of the profile to read the noise
-            // on (8 values): then it stays in.
-            if (lo2 >= 0 && 2 * K + 1 - (std::min(2 * K, b1) - std::max(0, a1) + 1) - (std::min(2 * K, b2) - std::max(0, a2) + 1) < 8)
-                a2 = b2 = -100;
-            for (int k = 0; k < 2 * K + 1;) {
-                if (k >= a1 && k <= b1) {
-                    k = b1 + 1;
-                    continue;
+            auto spread = [&](int a2, int b2, int &cnt) {
+                double ss = 0;
+                cnt = 0;
+                for (int k = 0; k < 2 * K + 1;) {
+                    if (k >= a1 && k <= b1) {
+                        k = b1 + 1;
+                        continue;
+                    }
+                    if (k >= a2 && k <= b2) {
+                        k = b2 + 1;
+                        continue;
+                    }
+                    int end = 2 * K + 1;  // up to the next excluded stretch
+                    if (a1 > k)
+                        end = std::min(end, a1);
+                    if (a2 > k)
+                        end = std::min(end, a2);
+                    cnt += end - k;
+                    for (; k < end; k++) {
+                        const double dv = pf[(size_t)k] - base;
+                        ss += dv * dv;
+                    }
                 }
-                if (k >= a2 && k <= b2) {
-                    k = b2 + 1;
-                    continue;
-                }
-                int end = 2 * K + 1;  // up to the next excluded stretch
-                if (a1 > k)
-                    end = std::min(end, a1);
-                if (a2 > k)
-                    end = std::min(end, a2);
-                cnt += end - k;
-                for (; k < end; k++) {
-                    const double dv = pf[(size_t)k] - base;
-                    ss += dv * dv;
-                }
-            }
+                return ss;
+            };
+            int cnt;
+            double ss = spread(lo2 - 4, hi2 + 4, cnt);
+            // Left out, the other branch may leave too little of the profile to read the noise on
+            // (8 values): then it stays in.
+            if (cnt < 8 && lo2 >= 0)
+                ss = spread(-100, -100, cnt);
             const double noise = cnt >= 8 ? std::sqrt(ss / cnt) : 0.0;
             const double width = (hi - lo) * d;
             if (peak >= min_contrast && peak >= 5.0 * noise && width <= max_width + 2.0 && lo > 0 &&

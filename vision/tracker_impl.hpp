@@ -83,8 +83,8 @@ void trace_pass(const cv::Mat &img, bool invert, const std::vector<Pt> &guide, d
 // --- section_bias.cpp
 struct SectionScratch {
     std::vector<size_t> idx;
-    std::vector<double> hw, tmp, th, s;
-    std::vector<Pt> moved;
+    std::vector<double> hw, tmp, th, s, shift;
+    std::vector<Pt> nrm;
 };
 // Moves the valid samples in bends back onto the centreline where the band's cross-sections are
 // oblique to the curve (the centroid's bias there, from the samples' own widths; see
