@@ -5,6 +5,7 @@
 #include <cmocka.h>
 
 #include "rig_harness.h"
+#include "test_dir.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -132,7 +133,8 @@ void rig_prepare(rig_run *r, const char *const *sets)
     r->sim = r->daemon = -1;
     snprintf(r->dir, sizeof r->dir, "/tmp/test_rig.XXXXXX");
     assert_non_null(mkdtemp(r->dir));
-    if (n_dirs < RIG_MAX_DIRS) snprintf(dirs[n_dirs++], sizeof dirs[0], "%s", r->dir);
+    assert_true(n_dirs < RIG_MAX_DIRS);
+    snprintf(dirs[n_dirs++], sizeof dirs[0], "%s", r->dir);
     char dir[sizeof r->dir];
     snprintf(dir, sizeof dir, "%s", r->dir);
     for (int k = 0; sets && sets[k]; k++) {
@@ -239,15 +241,8 @@ int rig_teardown(void **state)
 {
     (void)state;
     for (int k = 0; k < RIG_MAX_CHILDREN; k++) child_end(children[k], 5.0);
-    const char *keep = getenv("RIG_KEEP");
-    for (int k = 0; k < n_dirs; k++) {
-        if (passed && !(keep && keep[0] == '1')) {
-            char cmd[sizeof dirs + 16];
-            snprintf(cmd, sizeof cmd, "rm -rf '%s'", dirs[k]); /* mkdtemp's name: no quote in it */
-            if (system(cmd) != 0) printf("# could not remove %s\n", dirs[k]);
-        } else
-            printf("# kept %s (the programs' logs, store and videos)\n", dirs[k]);
-    }
+    for (int k = 0; k < n_dirs; k++)
+        test_dir_done(dirs[k], passed, "the programs' logs, store and videos");
     n_dirs = passed = 0;
     return 0;
 }

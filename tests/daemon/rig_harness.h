@@ -45,8 +45,7 @@ void rig_stop(rig_run *r);
  * dead stack frame), so a failing test never leaves a simulator serving port 3956 to the next. */
 int rig_teardown(void **state);
 /* Called at the end of a test that passed: its teardown then removes the directories it prepared
- * (a run leaves gigabytes of video otherwise). A failed test's are kept and named, and so are all
- * with RIG_KEEP=1 in the environment. */
+ * (test_dir.h: a failed test's are kept and named, and every test's with RIBBON_TEST_KEEP=1). */
 void rig_passed(void);
 
 /* `ribbonctl start` (with --wait when wait); its exit code. */

@@ -23,6 +23,7 @@
 #include <unistd.h>
 
 #include "trial_capture.h"
+#include "test_dir.h"
 #include "vision.h"
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -532,12 +533,6 @@ int main(void)
         cmocka_unit_test_teardown(test_named_errors, teardown),
     };
     int failed = cmocka_run_group_tests(tests, setup, NULL);
-    /* The directory goes when every test passed; a failure's recordings are kept for a look. */
-    if (dir[0] && !failed) {
-        char cmd[128];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir); /* mkdtemp's name: no quote in it */
-        if (system(cmd) != 0) printf("# could not remove %s\n", dir);
-    } else if (dir[0])
-        printf("# kept %s\n", dir);
+    test_dir_done(dir, !failed, "the recordings");
     return failed;
 }

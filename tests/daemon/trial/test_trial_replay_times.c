@@ -18,6 +18,7 @@
 #include "rig_config.h"
 #include "store.h"
 #include "trial_replay.h"
+#include "test_dir.h"
 #include "vision.h"
 
 #define NF 30
@@ -156,12 +157,6 @@ int main(void)
         cmocka_unit_test(test_times_going_back_refused),
     };
     int failed = cmocka_run_group_tests(tests, setup, NULL);
-    /* The directory goes when every test passed; a failure's files are kept for a look. */
-    if (dir[0] && !failed) {
-        char cmd[128];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir); /* mkdtemp's name: no quote in it */
-        if (system(cmd) != 0) printf("# could not remove %s\n", dir);
-    } else if (dir[0])
-        printf("# kept %s\n", dir);
+    test_dir_done(dir, !failed, "the recording, calibration and store");
     return failed;
 }
