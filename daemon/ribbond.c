@@ -43,6 +43,9 @@ static void usage(FILE *f)
             "Drive it with ribbonctl (start, abort, status, list, show, report, ...).\n"
             "At start-up, trials left running by a dead daemon are marked interrupted; motion is never\n"
             "resumed. SIGTERM or SIGINT aborts the running trial, stops the rails and exits 0.\n"
+            "One daemon per store and per rail device: ribbond locks STORE.lock beside the store and each\n"
+            "serial port or Modbus drive of the rig file (in $RIBBON_LOCK_DIR, else /run/lock) before it\n"
+            "touches anything; a second one refuses to start, naming the first (pid, since when).\n"
             "\n"
             "bench: prints one JSON line: samples_per_s (batched SQLite writes, target >= 50000) and\n"
             "mock_trial_wall_s (a complete mock trial of config/mock.ini, or --config).\n");

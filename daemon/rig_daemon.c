@@ -25,6 +25,40 @@ static void say(rig_daemon *d, const char *fmt, ...)
     d->log(line);
 }
 
+static void release_locks(rig_daemon *d)
+{
+    rail_locks_release(d->rails_lock);
+    d->rails_lock = NULL;
+    owner_lock_release(d->store_lock);
+    d->store_lock = NULL;
+}
+
+/* The store's lock (STORE_PATH.lock beside it), then the rails' devices (rig and mock modes),
+ * before anything is opened: a second daemon stops here, naming the first. */
+static int take_locks(rig_daemon *d, char *why, size_t why_len)
+{
+    char what[RIG_PATH_MAX + 32], path[RIG_PATH_MAX + 8], w[900];
+    snprintf(what, sizeof what, "ribbond on %s", d->config_path);
+    snprintf(path, sizeof path, "%s.lock", d->cfg.store_path);
+    int held = 0;
+    d->store_lock = owner_lock_take(path, what, &held, w, sizeof w);
+    if (!d->store_lock) {
+        if (held)
+            snprintf(why, why_len, "store %s is in use by another daemon: %s; stop that one first, or give this one "
+                     "another store.path", d->cfg.store_path, w);
+        else
+            snprintf(why, why_len, "store %s: %s", d->cfg.store_path, w);
+        return -1;
+    }
+    if (d->cfg.mode == RIG_MODE_REPLAY) return 0;
+    if (rail_locks_take(&d->cfg.compress, &d->cfg.shear, what, &d->rails_lock, w, sizeof w) != RAIL_OK) {
+        snprintf(why, why_len, "%s", w);
+        release_locks(d);
+        return -1;
+    }
+    return 0;
+}
+
 int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *overrides, int n_overrides,
                     void (*log)(const char *line), char *why, size_t why_len)
 {
@@ -43,7 +77,11 @@ int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *o
         cfg_error_format(&ce, why, why_len);
         return -1;
     }
-    if (store_open(d->cfg.store_path, &d->st, why, why_len) != STORE_OK) return -1;
+    if (take_locks(d, why, why_len)) return -1;
+    if (store_open(d->cfg.store_path, &d->st, why, why_len) != STORE_OK) {
+        release_locks(d);
+        return -1;
+    }
     int interrupted = 0;
     char w[256];
     if (store_trial_mark_interrupted(d->st, store_wall_now(), &interrupted, w, sizeof w) != STORE_OK)
@@ -58,6 +96,7 @@ int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *o
     if (re != RAIL_OK) {
         store_close(d->st);
         d->st = NULL;
+        release_locks(d);
         return -1;
     }
     return 0;
@@ -119,6 +158,7 @@ void rig_daemon_close(rig_daemon *d, const char *reason)
     d->compress = d->shear = NULL;
     store_close(d->st);
     d->st = NULL;
+    release_locks(d); /* after the rails are closed and the store's last write */
     live_bus_free(d->bus); /* after the session: it published until it ended */
     d->bus = NULL;
     live_assets_free(&d->assets);

@@ -5,7 +5,10 @@
  * its session's thread, which owns the rails while it runs; a replay (replay mode) on its job's
  * thread; main() waits for signals. The daemon's mutex guards `session` and `replay`; the store handle `st` is used by the API thread only (each thread has its
  * own connection). At start-up every trial the store still marks running is marked interrupted:
- * a restart never resumes motion. */
+ * a restart never resumes motion. One daemon per store and per rail device: both are locked
+ * (owner_lock.h) for the daemon's life, so a second daemon refuses to start instead of marking
+ * the first one's running trial interrupted or opening its controller (issue 33, item 1).
+ * ribbonctl --db takes no lock: reading the store beside a running daemon is fine. */
 #ifndef RIBBON_DAEMON_RIG_DAEMON_H
 #define RIBBON_DAEMON_RIG_DAEMON_H
 
@@ -14,7 +17,9 @@
 
 #include "api.h"
 #include "live.h"
+#include "owner_lock.h"
 #include "rail.h"
+#include "rail_lock.h"
 #include "rig_config.h"
 #include "trial.h"
 #include "trial_report.h"
@@ -38,10 +43,14 @@ typedef struct rig_daemon {
     live_assets assets;        /* the live page's files */
     phase_map *phase;          /* the predicted phase diagram (GET /phase.png), computed on demand */
     void (*log)(const char *line);
+    owner_lock *store_lock;    /* STORE.lock: this daemon owns the store (rig_daemon_open) */
+    rail_locks *rails_lock;    /* the rails' devices (rig and mock modes) */
 } rig_daemon;
 
-/* Loads the rig file, opens the store (marking interrupted trials) and, in rig and mock modes,
- * both rails. Returns 0, or -1 with why. */
+/* Loads the rig file, takes the locks (the store's, STORE_PATH.lock, and in rig and mock modes
+ * the rails' devices: rail_lock.h) before touching anything, opens the store (marking interrupted
+ * trials) and, in rig and mock modes, both rails. Returns 0, or -1 with why: a store or a device
+ * another daemon holds is refused naming the holder (pid, since when). */
 int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *overrides, int n_overrides,
                     void (*log)(const char *line), char *why, size_t why_len);
 /* Starts the control API; *port gets the bound port. */
