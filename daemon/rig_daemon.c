@@ -268,9 +268,11 @@ static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *ht
         return -1;
     }
     trial_replay *r = NULL;
-    if (trial_replay_prepare(d->st, &d->cfg, id, NULL, &r, why, why_len)) {
+    int prc = trial_replay_prepare(d->st, &d->cfg, id, NULL, &r, why, why_len);
+    if (prc) {
         pthread_mutex_unlock(&d->lock);
-        *http_status = 400; /* the recording named cannot be replayed */
+        /* 409: the source has not ended yet; 400: the recording named cannot be replayed */
+        *http_status = prc == TRIAL_REPLAY_UNFINISHED ? 409 : 400;
         return -1;
     }
     trial_replay_set_bus(r, d->bus); /* the live page follows the replay */

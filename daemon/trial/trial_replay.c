@@ -27,6 +27,7 @@ struct trial_replay {
     char *calib_json;
     char *config_text;
     int64_t source_id;
+    store_trial src;       /* the stored trial replayed (from_trial) */
     double source_snap_dw; /* NaN = none */
     int64_t specimen_id;
     store_specimen specimen; /* files: recorded when the trial is created */
@@ -90,6 +91,16 @@ int trial_replay_from_trial(store *st, int64_t source_id, const char *video, tri
     if (store_trial_get(st, source_id, &src, why, why_len) != STORE_OK ||
         store_trial_texts(st, source_id, &config, &r->calib_json, why, why_len) != STORE_OK)
         goto fail;
+    /* Issue 33, item 4: a trial that has not ended is still writing its video and samples. */
+    if (src.status == STORE_STATUS_CREATED || src.status == STORE_STATUS_RUNNING) {
+        snprintf(why, why_len, "trial %lld is not finished (status %s%s%s): only a finished trial can be replayed; "
+                 "wait for its end or abort it first", (long long)source_id, store_status_name(src.status),
+                 src.state[0] ? ", state " : "", src.state);
+        free(config);
+        trial_replay_free(r);
+        return TRIAL_REPLAY_UNFINISHED;
+    }
+    r->src = src;
     r->source_id = source_id;
     r->specimen_id = src.specimen_id;
     if (src.snapped) r->source_snap_dw = src.snap_dw_measured;
@@ -148,6 +159,13 @@ static int check_video_belongs(trial_replay *r, char *why, size_t why_len)
         snprintf(why, why_len, "video %.300s has %dx%d frames; trial %lld recorded %dx%d: not this trial's video",
                  r->video, vis_frame_width(frame), vis_frame_height(frame), (long long)r->source_id,
                  r->rec.roi.w, r->rec.roi.h);
+    } else if (r->src.mode == STORE_MODE_REPLAY && r->src.source_trial_id > 0 && recorded > 0 &&
+               vis_source_frame_count(vs) > last + 1) {
+        /* A replay that ended early (aborted, failed) measured only the start of its source's video. */
+        snprintf(why, why_len, "trial %lld is a replay of trial %lld that ended %s after %ld of the video's %d frames: "
+                 "it measured only part of %.300s; replay trial %lld instead", (long long)r->source_id,
+                 (long long)r->src.source_trial_id, store_status_name(r->src.status), last + 1,
+                 vis_source_frame_count(vs), r->video, (long long)r->src.source_trial_id);
     } else if (vis_source_frame_count(vs) > 0 && recorded > 0 && vis_source_frame_count(vs) != last + 1) {
         snprintf(why, why_len, "video %.300s has %d frames; trial %lld recorded %ld (frames 0..%ld): %s",
                  r->video, vis_source_frame_count(vs), (long long)r->source_id, recorded, last,

@@ -31,7 +31,12 @@
 
 typedef struct trial_replay trial_replay;
 
-/* A stored trial; video NULL = the trial's own. */
+/* trial_replay_from_trial's (and _prepare's) return for a source trial that has not ended (status
+ * created or running: its video and samples are still being written): the API answers 409. */
+#define TRIAL_REPLAY_UNFINISHED (-2)
+
+/* A stored trial; video NULL = the trial's own. 0, or -1 with why, or TRIAL_REPLAY_UNFINISHED.
+ * A replay that ended before its video's end (aborted, failed) is refused naming its source. */
 int trial_replay_from_trial(store *st, int64_t source_id, const char *video, trial_replay **out, char *why,
                             size_t why_len);
 /* Outside files named by a replay-mode rig file (checks that the video opens and the CSV parses). */

@@ -3,7 +3,8 @@
  *   1. One daemon per store: a second rig_daemon_open on the store of a running one is refused
  *      naming the holder (pid, since when) and leaves the first one's running trial as it is;
  *      the store stays readable beside it (ribbonctl --db's read-only open); once the first has
- *      closed, the second starts. */
+ *      closed, the second starts.
+ *   4. A replay of a trial that is still running is refused with 409 and the reason. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -123,10 +124,47 @@ static void second_daemon_refused(void **state)
     all_passed = 1;
 }
 
+/* Item 4: in replay mode, POST /trials {"source_trial": ID} of a trial still running is 409 with
+ * the reason (it was 201, and the replay read the half-written video). */
+static void replay_of_running_trial_refused(void **state)
+{
+    (void)state;
+    all_passed = 0;
+    char set_store[200], why[1024], db[128];
+    snprintf(db, sizeof db, "%s/replay.db", dir);
+    snprintf(set_store, sizeof set_store, "store.path=%s", db);
+    const char *ov[] = {set_store, "api.port=0"};
+    rig_daemon d;
+    int rc = rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/replay.ini", ov, 2, NULL, why, sizeof why);
+    if (rc) fail_msg("rig_daemon_open: %s", why);
+    store *st = NULL;
+    assert_int_equal(store_open(db, &st, why, sizeof why), STORE_OK);
+    store_trial_def def = store_trial_def_default();
+    int64_t id = 0;
+    assert_int_equal(store_trial_create(st, &def, &id, why, sizeof why), STORE_OK);
+    assert_int_equal(store_trial_set_status(st, id, STORE_STATUS_RUNNING, NULL, store_wall_now(), why, sizeof why),
+                     STORE_OK);
+    assert_int_equal(store_trial_set_state(st, id, "shearing", why, sizeof why), STORE_OK);
+    api_ops ops = rig_daemon_ops();
+    json_t *body = json_pack("{s:I}", "source_trial", (json_int_t)id), *out = NULL;
+    int status = 0;
+    rc = ops.start(&d, body, &out, &status, why, sizeof why);
+    printf("replay of running trial %lld: %d %s\n", (long long)id, status, why);
+    json_decref(body);
+    json_decref(out);
+    assert_int_not_equal(rc, 0);
+    assert_int_equal(status, 409);
+    assert_non_null(strstr(why, "is not finished (status running, state shearing)"));
+    store_close(st);
+    rig_daemon_close(&d, "test done");
+    all_passed = 1;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(second_daemon_refused),
+        cmocka_unit_test(replay_of_running_trial_refused),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

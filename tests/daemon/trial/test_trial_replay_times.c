@@ -3,7 +3,8 @@
  * f / fps: the frames' times here are uneven (a 50 ms period with every other frame 20 ms late and
  * an absolute base on the rails' clock); the rails CSV is a shear ramp, so each sample's time and
  * its shear position both tell which time was used. Also: a frames file with a time going back is
- * a named error. */
+ * a named error. A replay of a trial that has not ended, or of a replay that ended early, is
+ * refused with a reason that says so (issue 33, item 4). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -150,11 +151,60 @@ static void test_times_going_back_refused(void **state)
     assert_non_null(strstr(why, "frames.csv line 12"));
 }
 
+/* Issue 33, item 4: a replay of a trial that has not ended is refused (it would read a video
+ * still being written), and so is a replay of a replay that ended early, in words that say so
+ * (it was "has 30 frames; trial N recorded 10 (frames 0..9): not this trial's video"). Uses the
+ * store of test_replay_uses_stored_times: trial 1 is a whole replay of the outside recording. */
+static void test_unfinished_and_cut_replays_refused(void **state)
+{
+    (void)state;
+    char p[160], why[600] = "";
+    store *st = NULL;
+    snprintf(p, sizeof p, "%s/trials.db", dir);
+    assert_int_equal(store_open(p, &st, why, sizeof why), STORE_OK);
+    trial_replay *r = NULL;
+    if (trial_replay_from_trial(st, 1, NULL, &r, why, sizeof why)) fail_msg("replay of trial 1: %s", why);
+    int64_t id = 0;
+    assert_int_equal(trial_replay_create(r, st, "running", &id, why, sizeof why), 0); /* status running */
+    trial_replay_free(r);
+    r = NULL;
+    int rc = trial_replay_prepare(st, NULL, id, NULL, &r, why, sizeof why);
+    printf("# replay of running trial %lld: %d: %s\n", (long long)id, rc, why);
+    assert_int_equal(rc, TRIAL_REPLAY_UNFINISHED);
+    assert_null(r);
+    assert_non_null(strstr(why, "is not finished (status running"));
+
+    /* It ends aborted after 10 of the video's 30 frames. */
+    store_sample *smp = NULL;
+    size_t ns = 0;
+    assert_int_equal(store_samples_get(st, 1, &smp, &ns, why, sizeof why), STORE_OK);
+    store_samples *w = NULL;
+    assert_int_equal(store_samples_begin(st, id, NULL, &w, why, sizeof why), STORE_OK);
+    for (size_t k = 0; k < ns; k++)
+        if (smp[k].kind == STORE_SAMPLE_FRAME && smp[k].frame < 10)
+            assert_int_equal(store_samples_add(w, &smp[k], why, sizeof why), STORE_OK);
+    assert_int_equal(store_samples_end(w, why, sizeof why), STORE_OK);
+    free(smp);
+    assert_int_equal(store_trial_set_status(st, id, STORE_STATUS_ABORTED, "abort requested", store_wall_now(), why,
+                                            sizeof why),
+                     STORE_OK);
+    rc = trial_replay_prepare(st, NULL, id, NULL, &r, why, sizeof why);
+    printf("# replay of the aborted replay %lld: %s\n", (long long)id, why);
+    assert_int_equal(rc, -1);
+    char want[160];
+    snprintf(want, sizeof want, "trial %lld is a replay of trial 1 that ended aborted after 10 of the video's %d frames",
+             (long long)id, NF);
+    assert_non_null(strstr(why, want));
+    assert_non_null(strstr(why, "replay trial 1 instead"));
+    store_close(st);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_replay_uses_stored_times),
         cmocka_unit_test(test_times_going_back_refused),
+        cmocka_unit_test(test_unfinished_and_cut_replays_refused),
     };
     int failed = cmocka_run_group_tests(tests, setup, NULL);
     test_dir_done(dir, !failed, "the recording, calibration and store");
