@@ -25,6 +25,9 @@ static void say(rig_daemon *d, const char *fmt, ...)
     d->log(line);
 }
 
+static void unstored_add(rig_daemon *d, const session_status *ss);
+static void unstored_write(rig_daemon *d);
+
 static void release_locks(rig_daemon *d)
 {
     rail_locks_release(d->rails_lock);
@@ -148,9 +151,16 @@ void rig_daemon_close(rig_daemon *d, const char *reason)
     if (s) {
         trial_session_abort(s, reason);
         trial_result r;
-        trial_session_join(s, &r);
+        session_status ss;
+        trial_session_join_status(s, &r, &ss);
         say(d, "trial ended %s%s%s", trial_state_name(r.final), r.reason[0] ? ": " : "", r.reason);
+        unstored_add(d, &ss);
     }
+    if (d->st && d->n_unstored) unstored_write(d);
+    for (int k = 0; k < d->n_unstored; k++)
+        say(d, "trial %lld: final status %s not stored (%s): the next start-up marks it interrupted",
+            (long long)d->unstored[k].id, trial_state_name(d->unstored[k].final), d->unstored[k].why);
+    d->n_unstored = 0;
     if (d->compress) rail_stop(d->compress);
     if (d->shear) rail_stop(d->shear);
     rail_close(d->compress);
@@ -165,15 +175,75 @@ void rig_daemon_close(rig_daemon *d, const char *reason)
     pthread_mutex_destroy(&d->lock);
 }
 
-/* The session if it still runs; reaps a finished one. Caller holds the lock. */
+/* Keeps a finished session's final status that the store refused (rig_unstored). */
+static void unstored_add(rig_daemon *d, const session_status *ss)
+{
+    if (!ss->final_unstored) return;
+    if (d->n_unstored >= RIG_DAEMON_MAX_UNSTORED) {
+        say(d, "trial %lld: its final status (%s) could not be stored (%s) and %d others wait: the next start-up "
+            "marks it interrupted", (long long)ss->trial_id, trial_state_name(ss->final_state), ss->final_why,
+            d->n_unstored);
+        return;
+    }
+    rig_unstored *u = &d->unstored[d->n_unstored++];
+    u->id = ss->trial_id;
+    u->final = ss->final_state;
+    snprintf(u->reason, sizeof u->reason, "%s", ss->final_reason);
+    u->wall_s = ss->final_wall_s;
+    snprintf(u->why, sizeof u->why, "%s", ss->final_why);
+}
+
+/* Writes the final statuses the store refused, now that it may take them (state, status with the
+ * trial's own end time, and an event saying it was written late); keeps those it still refuses.
+ * On the API thread's connection; caller holds the lock (or the API has stopped). */
+static void unstored_write(rig_daemon *d)
+{
+    int kept = 0;
+    for (int k = 0; k < d->n_unstored; k++) {
+        rig_unstored *u = &d->unstored[k];
+        store_status fin = u->final == TRIAL_DONE      ? STORE_STATUS_DONE
+                           : u->final == TRIAL_ABORTED ? STORE_STATUS_ABORTED
+                                                       : STORE_STATUS_FAILED;
+        char w[256];
+        store_err e = store_trial_set_state(d->st, u->id, trial_state_name(u->final), w, sizeof w);
+        if (e == STORE_OK) e = store_trial_set_status(d->st, u->id, fin, u->reason[0] ? u->reason : NULL, u->wall_s, w,
+                                                      sizeof w);
+        if (e == STORE_OK) {
+            store_event ev;
+            memset(&ev, 0, sizeof ev);
+            ev.trial_id = u->id;
+            ev.t_s = NAN;
+            ev.wall_s = store_wall_now();
+            snprintf(ev.state, sizeof ev.state, "%s", trial_state_name(u->final));
+            ev.kind = STORE_EVENT_WARNING;
+            snprintf(ev.message, sizeof ev.message,
+                     "final status %s stored late: the store refused it when the trial ended (%.300s)",
+                     store_status_name(fin), u->why);
+            store_event_append(d->st, &ev, w, sizeof w);
+            say(d, "trial %lld: final status %s stored (the store had refused it: %s)", (long long)u->id,
+                store_status_name(fin), u->why);
+            continue;
+        }
+        if (e == STORE_E_STATE || e == STORE_E_NOTFOUND) continue; /* already final, or gone */
+        if (kept != k) d->unstored[kept] = *u;
+        kept++;
+    }
+    d->n_unstored = kept;
+}
+
+/* The session if it still runs; reaps a finished one (keeping a final status the store refused).
+ * Writes the refused final statuses first. Caller holds the lock. */
 static trial_session *running_session(rig_daemon *d)
 {
+    if (d->n_unstored) unstored_write(d);
     if (!d->session) return NULL;
     session_status ss;
     trial_session_status(d->session, &ss);
     if (!ss.finished) return d->session;
-    trial_session_join(d->session, NULL);
+    trial_session_join_status(d->session, NULL, &ss);
     d->session = NULL;
+    unstored_add(d, &ss);
+    if (d->n_unstored) unstored_write(d);
     return NULL;
 }
 
@@ -240,6 +310,13 @@ static int op_status(void *user, json_t **out, char *why, size_t why_len)
                                           rail_state_name(sc.state), "position_mm", sc.position_mm, "shear",
                                           "state", rail_state_name(sh.state), "position_mm", sh.position_mm));
         }
+    }
+    if (d->n_unstored) {
+        json_t *a = json_array();
+        for (int k = 0; k < d->n_unstored; k++)
+            json_array_append_new(a, json_pack("{s:I, s:s, s:s}", "id", (json_int_t)d->unstored[k].id, "status",
+                                               trial_state_name(d->unstored[k].final), "why", d->unstored[k].why));
+        json_object_set_new(o, "unstored", a);
     }
     pthread_mutex_unlock(&d->lock);
     *out = o;
@@ -379,12 +456,18 @@ static int op_abort(void *user, json_t **out, int *http_status, char *why, size_
 static int op_list(void *user, json_t **out, char *why, size_t why_len)
 {
     rig_daemon *d = user;
+    pthread_mutex_lock(&d->lock);
+    running_session(d);
+    pthread_mutex_unlock(&d->lock);
     return store_trials_json(d->st, out, why, why_len) == STORE_OK ? 0 : -1;
 }
 
 static int op_show(void *user, int64_t id, json_t **out, int *http_status, char *why, size_t why_len)
 {
     rig_daemon *d = user;
+    pthread_mutex_lock(&d->lock);
+    running_session(d);
+    pthread_mutex_unlock(&d->lock);
     store_err e = store_trial_json(d->st, id, out, why, why_len);
     if (e == STORE_OK) return 0;
     *http_status = e == STORE_E_NOTFOUND ? 404 : 500;

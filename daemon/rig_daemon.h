@@ -8,7 +8,10 @@
  * a restart never resumes motion. One daemon per store and per rail device: both are locked
  * (owner_lock.h) for the daemon's life, so a second daemon refuses to start instead of marking
  * the first one's running trial interrupted or opening its controller (issue 33, item 1).
- * ribbonctl --db takes no lock: reading the store beside a running daemon is fine. */
+ * ribbonctl --db takes no lock: reading the store beside a running daemon is fine.
+ * A trial's final status the store refused (a full disk) is kept and written on the API thread's
+ * next operation that finds the store writable again (issue 33, item 3); never "running" for an
+ * idle daemon longer than that, and at the latest the next start-up marks it interrupted. */
 #ifndef RIBBON_DAEMON_RIG_DAEMON_H
 #define RIBBON_DAEMON_RIG_DAEMON_H
 
@@ -26,6 +29,17 @@
 #include "store.h"
 
 #define RIG_DAEMON_MAX_OVERRIDES 64
+#define RIG_DAEMON_MAX_UNSTORED 16 /* ended trials whose final status waits for the store */
+
+/* A trial's final status the store refused when it ended (a full disk), written by the API
+ * thread on its next operation once the store takes writes again. */
+typedef struct rig_unstored {
+    int64_t id;
+    trial_state final;
+    char reason[256];
+    double wall_s;   /* when it ended (its ended_at) */
+    char why[256];   /* why the store refused it */
+} rig_unstored;
 
 typedef struct rig_daemon {
     rig_config cfg;
@@ -45,6 +59,8 @@ typedef struct rig_daemon {
     void (*log)(const char *line);
     owner_lock *store_lock;    /* STORE.lock: this daemon owns the store (rig_daemon_open) */
     rail_locks *rails_lock;    /* the rails' devices (rig and mock modes) */
+    rig_unstored unstored[RIG_DAEMON_MAX_UNSTORED]; /* under lock */
+    int n_unstored;
 } rig_daemon;
 
 /* Loads the rig file, takes the locks (the store's, STORE_PATH.lock, and in rig and mock modes

@@ -303,13 +303,35 @@ static void session_live_close(trial_session *s)
     if (rc) session_event(s, NAN, STORE_EVENT_FAULT, w);
 }
 
+/* The final state and status into the store. When the store refuses them (issue 33, item 3: a
+ * full disk left trials "running" forever), the session's status carries what to write, and the
+ * daemon writes it when the store takes writes again. */
+static void session_store_final(trial_session *s, trial_state final, const char *reason)
+{
+    char w[256] = "";
+    double wall = store_wall_now();
+    store_status fin = final == TRIAL_DONE      ? STORE_STATUS_DONE
+                       : final == TRIAL_ABORTED ? STORE_STATUS_ABORTED
+                                                : STORE_STATUS_FAILED;
+    store_err e = store_trial_set_state(s->st, s->trial_id, trial_state_name(final), w, sizeof w);
+    if (e == STORE_OK) e = store_trial_set_status(s->st, s->trial_id, fin, reason, wall, w, sizeof w);
+    if (e == STORE_OK || e == STORE_E_STATE) return; /* STATE: already final */
+    pthread_mutex_lock(&s->lock);
+    s->status.final_unstored = 1;
+    s->status.final_state = final;
+    snprintf(s->status.final_reason, sizeof s->status.final_reason, "%s", reason ? reason : "");
+    s->status.final_wall_s = wall;
+    snprintf(s->status.final_why, sizeof s->status.final_why, "%s", w);
+    pthread_mutex_unlock(&s->lock);
+    logf_(s, "the store refused the final status %s: %s (written when it takes writes again)", store_status_name(fin),
+          w);
+}
+
 static void fail_early(trial_session *s, const char *why)
 {
-    char w[256];
     int aborted = strncmp(why, "aborted", 7) == 0;
     session_event(s, NAN, aborted ? STORE_EVENT_INFO : STORE_EVENT_FAULT, why);
-    store_trial_set_status(s->st, s->trial_id, aborted ? STORE_STATUS_ABORTED : STORE_STATUS_FAILED, why,
-                           store_wall_now(), w, sizeof w);
+    session_store_final(s, aborted ? TRIAL_ABORTED : TRIAL_FAILED, why);
     s->result.final = aborted ? TRIAL_ABORTED : TRIAL_FAILED;
     snprintf(s->result.reason, sizeof s->result.reason, "%s", why);
     trial_publish_stored(s->bus, s->trial_id, s->result.final);
@@ -506,11 +528,7 @@ static void session_store_result(trial_session *s)
         store_trial_set_latency(s->st, s->trial_id, s->result.stop_cmd_latency_s, s->result.stop_stand_latency_s, w,
                                 sizeof w) != STORE_OK)
         session_event(s, NAN, STORE_EVENT_FAULT, w);
-    store_status fin = s->result.final == TRIAL_DONE      ? STORE_STATUS_DONE
-                       : s->result.final == TRIAL_ABORTED ? STORE_STATUS_ABORTED
-                                                          : STORE_STATUS_FAILED;
-    store_trial_set_status(s->st, s->trial_id, fin, s->result.reason[0] ? s->result.reason : NULL, store_wall_now(), w,
-                           sizeof w);
+    session_store_final(s, s->result.final, s->result.reason[0] ? s->result.reason : NULL);
     trial_publish_stored(s->bus, s->trial_id, s->result.final);
     logf_(s, "%s%s%s; measured %s at Delta W = %.5f", trial_state_name(s->result.final),
           s->result.reason[0] ? ": " : "", s->result.reason, s->result.regime, s->result.snap_dw);
@@ -666,11 +684,14 @@ void trial_session_status(trial_session *s, session_status *out)
     pthread_mutex_unlock(&s->lock);
 }
 
-void trial_session_join(trial_session *s, trial_result *result)
+void trial_session_join(trial_session *s, trial_result *result) { trial_session_join_status(s, result, NULL); }
+
+void trial_session_join_status(trial_session *s, trial_result *result, session_status *status)
 {
     if (!s) return;
     pthread_join(s->thread, NULL);
     if (result) *result = s->result;
+    if (status) *status = s->status;
     store_close(s->st);
     pthread_mutex_destroy(&s->lock);
     free(s);

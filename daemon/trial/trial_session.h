@@ -51,6 +51,14 @@ typedef struct session_status {
     int nodes;               /* prediction resolution */
     double dt;
     char message[256];       /* last event */
+    /* The store refused the trial's final status (a full disk): what to write once it takes
+     * writes again (the daemon does, rig_daemon.c; at the latest the next start-up marks the
+     * trial interrupted). */
+    int final_unstored;
+    trial_state final_state;  /* done, aborted or failed */
+    char final_reason[256];
+    double final_wall_s;      /* s since the Unix epoch: when it ended */
+    char final_why[256];      /* why the store refused it */
 } session_status;
 
 /* cfg is copied. The rails stay the caller's and must not be used by anyone else until the
@@ -64,7 +72,9 @@ trial_err trial_session_start(const rig_config *cfg, rail *compress, rail *shear
                               char *why, size_t why_len);
 void trial_session_abort(trial_session *s, const char *reason);
 void trial_session_status(trial_session *s, session_status *out);
-/* Waits for the thread and frees. The result is in the store. */
+/* Waits for the thread and frees. The result is in the store (unless status->final_unstored). */
 void trial_session_join(trial_session *s, trial_result *result);
+/* The same, with the session's last status (may be NULL). */
+void trial_session_join_status(trial_session *s, trial_result *result, session_status *status);
 
 #endif

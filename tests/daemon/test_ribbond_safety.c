@@ -4,6 +4,9 @@
  *      naming the holder (pid, since when) and leaves the first one's running trial as it is;
  *      the store stays readable beside it (ribbonctl --db's read-only open); once the first has
  *      closed, the second starts.
+ *   3. A full store disk mid-trial (an SQLite VFS shim refusing writes: store_full_vfs.h): the
+ *      trial's final status is written by the daemon's first operation after the disk has room
+ *      again, and a daemon closed before that leaves it to the next start-up (interrupted).
  *   4. A replay of a trial that is still running is refused with 409 and the reason. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -21,6 +24,7 @@
 
 #include "rig_daemon.h"
 #include "store.h"
+#include "store_full_vfs.h"
 #include "test_dir.h"
 #include "trial.h"
 
@@ -44,7 +48,7 @@ static int teardown(void **state)
     return 0;
 }
 
-__attribute__((unused)) static void sleep_s(double s)
+static void sleep_s(double s)
 {
     struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
     nanosleep(&ts, NULL);
@@ -160,11 +164,110 @@ static void replay_of_running_trial_refused(void **state)
     all_passed = 1;
 }
 
+/* The daemon's status: "idle" or the running trial's state. */
+static void daemon_state(rig_daemon *d, char *out, size_t n)
+{
+    api_ops ops = rig_daemon_ops();
+    json_t *o = NULL;
+    char why[256];
+    assert_int_equal(ops.status(d, &o, why, sizeof why), 0);
+    json_t *t = json_object_get(o, "trial");
+    const char *st = json_is_object(t) ? json_string_value(json_object_get(t, "state")) : "idle";
+    snprintf(out, n, "%s", st ? st : "?");
+    json_decref(o);
+}
+
+/* Polls the daemon's status until its state is (want_idle) or is not (!want_idle) "idle". */
+static int wait_state(rig_daemon *d, int want_idle, double max_s)
+{
+    char st[32];
+    for (double t = 0; t < max_s; t += 0.05) {
+        daemon_state(d, st, sizeof st);
+        if ((strcmp(st, "idle") == 0) == want_idle) return 1;
+        sleep_s(0.05);
+    }
+    return 0;
+}
+
+static int64_t start_trial(rig_daemon *d)
+{
+    api_ops ops = rig_daemon_ops();
+    json_t *body = json_object(), *out = NULL;
+    int status = 0;
+    char why[512];
+    int rc = ops.start(d, body, &out, &status, why, sizeof why);
+    json_decref(body);
+    if (rc) fail_msg("start: %d %s", status, why);
+    int64_t id = json_integer_value(json_object_get(out, "id"));
+    json_decref(out);
+    return id;
+}
+
+/* Item 3: the store's disk fills in the middle of a trial (the VFS shim refuses every write): the
+ * trial fails (rails stopped), its final status cannot be written, and the row says running; the
+ * first operation after the disk has room again writes it (failed, with the reason and its own
+ * end time, and an event saying it came late). A daemon closed while the disk is still full
+ * leaves the row to the next start-up, which marks it interrupted. */
+static void full_disk_final_status_written_later(void **state)
+{
+    (void)state;
+    all_passed = 0;
+    assert_int_equal(store_full_vfs_install(), 0);
+    daemon_sets s;
+    sets_for(&s, "full.db");
+    rig_daemon d;
+    open_daemon(&d, &s);
+    int64_t id = start_trial(&d);
+    assert_true(wait_state(&d, 0, 60.0));
+    store_full_vfs_set(1);
+    assert_true(wait_state(&d, 1, 120.0)); /* the trial ended */
+    long refused = store_full_vfs_refused();
+    char why[512], st[32];
+    store_trial tr;
+    assert_int_equal(store_trial_get(d.st, id, &tr, why, sizeof why), STORE_OK);
+    printf("disk full: %ld writes refused; trial %lld reads %s / %s\n", refused, (long long)id,
+           store_status_name(tr.status), tr.state);
+    assert_true(refused > 0);
+    assert_int_equal(tr.status, STORE_STATUS_RUNNING); /* the store could not take the end */
+    store_full_vfs_set(0);
+    daemon_state(&d, st, sizeof st); /* the next operation */
+    assert_string_equal(st, "idle");
+    assert_int_equal(store_trial_get(d.st, id, &tr, why, sizeof why), STORE_OK);
+    printf("after the disk has room: trial %lld reads %s / %s: %s (ended %s)\n", (long long)id,
+           store_status_name(tr.status), tr.state, tr.reason, tr.ended_at);
+    assert_int_equal(tr.status, STORE_STATUS_FAILED);
+    assert_string_equal(tr.state, "failed");
+    assert_non_null(strstr(tr.reason, "full"));
+    assert_true(tr.ended_at[0] != '\0');
+    store_event *ev = NULL;
+    size_t n = 0;
+    assert_int_equal(store_events_get(d.st, id, &ev, &n, why, sizeof why), STORE_OK);
+    assert_true(n > 0);
+    assert_non_null(strstr(ev[n - 1].message, "stored late"));
+    free(ev);
+
+    /* Full again; the daemon is closed before the disk has room: the next start-up. */
+    id = start_trial(&d);
+    assert_true(wait_state(&d, 0, 60.0));
+    store_full_vfs_set(1);
+    assert_true(wait_state(&d, 1, 120.0));
+    rig_daemon_close(&d, "test done");
+    store_full_vfs_set(0);
+    open_daemon(&d, &s);
+    assert_int_equal(store_trial_get(d.st, id, &tr, why, sizeof why), STORE_OK);
+    printf("closed while full, then restarted: trial %lld reads %s: %s\n", (long long)id, store_status_name(tr.status),
+           tr.reason);
+    assert_int_equal(tr.status, STORE_STATUS_INTERRUPTED);
+    rig_daemon_close(&d, "test done");
+    all_passed = 1;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(second_daemon_refused),
         cmocka_unit_test(replay_of_running_trial_refused),
+        cmocka_unit_test(full_disk_final_status_written_later),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
