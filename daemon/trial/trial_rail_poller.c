@@ -25,7 +25,33 @@ struct trial_rail_poller {
     double max_poll_s;
     double max_gap_s;        /* longest time from the end of one poll to the start of the next */
     long polls;
+    int polling;             /* a poll is in flight, since t_poll_start */
+    double t_poll_start;
 };
+
+/* A frozen daemon: both rails emergency-stopped first, then the fault published (every later read
+ * returns it). gap: s the clock ran (bound: s it may); what: where it was seen. Call
+ * without either lock. Returns 1 when this call stopped them (0: a fault was already out). */
+static int clock_jumped(trial_rail_poller *p, double gap, double bound, const char *what)
+{
+    pthread_mutex_lock(&p->rails);
+    pthread_mutex_lock(&p->lock);
+    int first = p->err == RAIL_OK;
+    pthread_mutex_unlock(&p->lock);
+    if (first) rail_pair_estop(p->compress, p->shear);
+    pthread_mutex_unlock(&p->rails);
+    if (!first) return 0;
+    pthread_mutex_lock(&p->lock);
+    p->err = RAIL_E_STATE;
+    snprintf(p->why, sizeof p->why,
+             "the monotonic clock jumped %.2f s %s (at most %.2f s expected): the daemon was frozen (SIGSTOP, a "
+             "suspended machine or a stalled scheduler); both rails stopped before anything resumed",
+             gap, what, bound);
+    p->have = 1;
+    pthread_cond_broadcast(&p->first);
+    pthread_mutex_unlock(&p->lock);
+    return 1;
+}
 
 static void *poll_main(void *arg)
 {
@@ -33,9 +59,15 @@ static void *poll_main(void *arg)
     double prev_end = NAN;
     for (;;) {
         pthread_mutex_lock(&p->lock);
-        int stop = p->stop;
+        int stop = p->stop || p->err != RAIL_OK;
         pthread_mutex_unlock(&p->lock);
         if (stop) break;
+        /* Woken more than the bound after the last poll: frozen; nothing is sent but the stops. */
+        double t_wake = rail_clock_now(p->clock);
+        if (t_wake - prev_end > p->period_s + TRIAL_CLOCK_JUMP_S) {
+            clock_jumped(p, t_wake - prev_end, p->period_s + TRIAL_CLOCK_JUMP_S, "between two rail polls");
+            break;
+        }
         rail_status sc, ss;
         char why[256] = "";
         /* The rails one at a time (rail_pair_judge), so a fault is published after its own round
@@ -43,6 +75,10 @@ static void *poll_main(void *arg)
          * then stopped at once (rail_pair_poll's rule). */
         pthread_mutex_lock(&p->rails);
         double t0 = rail_clock_now(p->clock);
+        pthread_mutex_lock(&p->lock);
+        p->polling = 1;
+        p->t_poll_start = t0;
+        pthread_mutex_unlock(&p->lock);
         memset(&sc, 0, sizeof sc);
         memset(&ss, 0, sizeof ss);
         rail *other = NULL;
@@ -55,9 +91,23 @@ static void *poll_main(void *arg)
             if (e != RAIL_OK) other = p->compress;
         }
         double t1 = rail_clock_now(p->clock);
+        pthread_mutex_lock(&p->lock);
+        p->polling = 0;
+        pthread_mutex_unlock(&p->lock);
         pthread_mutex_unlock(&p->rails);
+        if (e == RAIL_OK && t1 - t0 > 2.0 * TRIAL_CLOCK_JUMP_S) {
+            /* A poll answers within its drivers' reply timeouts or fails: frozen inside it. */
+            clock_jumped(p, t1 - t0, 2.0 * TRIAL_CLOCK_JUMP_S, "inside a rail poll");
+            break;
+        }
+        int published = 0;
         if (e != RAIL_OK) {
             pthread_mutex_lock(&p->lock);
+            if (p->err != RAIL_OK) { /* a freeze was seen first: that is the fault */
+                pthread_mutex_unlock(&p->lock);
+                break;
+            }
+            published = 1;
             p->sc = sc;
             p->ss = ss;
             p->t_poll = t1;
@@ -71,6 +121,10 @@ static void *poll_main(void *arg)
             pthread_mutex_unlock(&p->rails);
         }
         pthread_mutex_lock(&p->lock);
+        if (p->err != RAIL_OK && !published) { /* the reader saw a freeze meanwhile (clock_jumped) */
+            pthread_mutex_unlock(&p->lock);
+            break;
+        }
         p->sc = sc;
         p->ss = ss;
         p->t_poll = t1;
@@ -127,6 +181,17 @@ rail_err trial_rail_poller_latest(trial_rail_poller *p, rail_status *sc, rail_st
 {
     pthread_mutex_lock(&p->lock);
     while (!p->have) pthread_cond_wait(&p->first, &p->lock);
+    /* The poller's last poll ended longer ago than it may have: this thread woke first from a
+     * freeze, and stops the rails itself before the poller can send anything. */
+    double now = rail_clock_now(p->clock);
+    double gap = p->polling ? now - p->t_poll_start : now - p->t_poll;
+    double bound = p->polling ? 2.0 * TRIAL_CLOCK_JUMP_S : p->period_s + TRIAL_CLOCK_JUMP_S;
+    if (p->err == RAIL_OK && p->polls > 0 && gap > bound) {
+        int in_poll = p->polling;
+        pthread_mutex_unlock(&p->lock);
+        clock_jumped(p, gap, bound, in_poll ? "inside a rail poll" : "since the last rail poll");
+        pthread_mutex_lock(&p->lock);
+    }
     *sc = p->sc;
     *ss = p->ss;
     *t_poll = p->t_poll;

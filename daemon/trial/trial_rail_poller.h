@@ -9,7 +9,17 @@
  * The rails are not thread-safe: every other call on them (moves, stops) goes through
  * trial_rail_poller_lock/unlock, which waits at most for one poll in flight.
  * After a fault the thread stops polling (rail_pair_poll has already stopped the other rail) and
- * the fault is what every later read returns. */
+ * the fault is what every later read returns.
+ *
+ * A frozen daemon (issue 33, item 2: SIGSTOP / SIGCONT mid-shear; also a suspended machine or a
+ * stalled scheduler): while it is frozen a GRBL controller runs out of segments and stops, and on
+ * waking the next poll would top them up and carry the move on by itself. So every poll first
+ * compares the monotonic clock with the end of the previous poll: more than the period plus
+ * TRIAL_CLOCK_JUMP_S since then (or a poll that answered after more than 2 TRIAL_CLOCK_JUMP_S: a
+ * freeze inside the poll), and both rails are emergency-stopped before anything else is sent, and
+ * the fault "the monotonic clock jumped X s ..." is what every read returns. The reader
+ * (trial_rail_poller_latest, the trial's thread) makes the same check against the poller's last
+ * poll, so whichever thread wakes first stops the rails. */
 #ifndef RIBBON_DAEMON_TRIAL_RAIL_POLLER_H
 #define RIBBON_DAEMON_TRIAL_RAIL_POLLER_H
 
@@ -18,6 +28,10 @@
 #include "rail.h"
 
 typedef struct trial_rail_poller trial_rail_poller;
+
+/* s: the longest the clock may run past the poll period between two polls before the daemon
+ * counts as having been frozen (the bound on detecting a lost rail link is 0.5 s too). */
+#define TRIAL_CLOCK_JUMP_S 0.5
 
 /* Starts polling (the rails stay the caller's; nothing else may call them unlocked). */
 trial_rail_poller *trial_rail_poller_start(rail *compress, rail *shear, double period_s, char *why, size_t why_len);

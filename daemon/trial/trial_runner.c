@@ -17,8 +17,21 @@ static void rails_unlock(trial_runner *tr)
 {
     if (tr->poller) trial_rail_poller_unlock(tr->poller);
 }
+/* 0 when the poller of a live trial has a fault (a frozen daemon's clock jump included: the check
+ * is made here too, trial_rail_poller.h), with its reason; 1 otherwise. */
+static int poller_ok(trial_runner *tr, char *why, size_t why_len)
+{
+    if (!tr->poller) return 1;
+    rail_status a, b;
+    double t;
+    return trial_rail_poller_latest(tr->poller, &a, &b, &t, why, why_len) == RAIL_OK;
+}
+/* A live trial sends a move only while the poller sees no fault: after a freeze this thread may
+ * wake before the poller, and a move from stale statuses would carry the trial on by itself. */
 static rail_err r_move(trial_runner *tr, rail *r, double target, double speed)
 {
+    char w[256];
+    if (!poller_ok(tr, w, sizeof w)) return RAIL_E_STATE;
     rails_lock(tr);
     rail_err e = rail_move_abs(r, target, speed);
     rails_unlock(tr);
@@ -249,7 +262,11 @@ static double position_at(const rail_status *st, double t_poll, double t)
 static int command(run_ctx *c, rail *r, rail_err e, const char *what)
 {
     if (e == RAIL_OK) return 0;
-    finish(c, TRIAL_FAILED, "%s refused: %s", what, rail_last_error(r));
+    char w[256];
+    if (!poller_ok(c->tr, w, sizeof w))
+        finish(c, TRIAL_FAILED, "%s not sent: rail fault in %s: %s", what, trial_state_name(c->st), w);
+    else
+        finish(c, TRIAL_FAILED, "%s refused: %s", what, rail_last_error(r));
     return -1;
 }
 

@@ -1,0 +1,196 @@
+/* test_trial_rail_poller: the rails' polling thread of a live trial against a frozen daemon
+ * (issue 33, item 2: after SIGSTOP / SIGCONT mid-shear the shear rail moved on by itself). Mock
+ * rails on the real monotonic clock, the shear moving at 5 mm/s; the test's thread reads the
+ * poller as the trial's thread does.
+ *   - an injected clock jump (the rails' clock steps 2 s ahead, as the monotonic clock does
+ *     across a freeze; the mock rails move on with it as a drive would): the poller's next read
+ *     is the fault "the monotonic clock jumped", both rails are stopped, and they stand still
+ *     afterwards;
+ *   - a real freeze: a child process with its poller is stopped with SIGSTOP for 1.5 s while its
+ *     shear moves, then continued: on waking it reports the clock jump, its rails stopped and
+ *     standing, and the jump it names covers the freeze (real time, about 3 s). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <signal.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "rail_mock.h"
+#include "trial_rail_poller.h"
+
+static double mono(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void sleep_s(double s)
+{
+    struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
+    while (nanosleep(&ts, &ts) != 0) {
+    }
+}
+
+/* The real clock plus an offset the test can step. */
+static _Atomic double jump_s;
+static double jumpy_now(void *ctx)
+{
+    (void)ctx;
+    return mono() + atomic_load(&jump_s);
+}
+static void jumpy_sleep(void *ctx, double s)
+{
+    (void)ctx;
+    if (s > 0) sleep_s(s);
+}
+
+/* Two mock rails on clk, the shear moving from 10 mm toward 90 mm at 5 mm/s; poll at 50 Hz. */
+static void open_rails(rail_clock clk, rail **c, rail **s)
+{
+    char why[256];
+    rail_params p = rail_params_default();
+    p.poll_hz = 50.0;
+    rail_mock_params m = rail_mock_params_default();
+    m.start_mm = 10.0;
+    snprintf(p.name, sizeof p.name, "compress");
+    if (rail_mock_open(c, &p, &m, clk, why, sizeof why) != RAIL_OK) fail_msg("%s", why);
+    snprintf(p.name, sizeof p.name, "shear");
+    if (rail_mock_open(s, &p, &m, clk, why, sizeof why) != RAIL_OK) fail_msg("%s", why);
+    assert_int_equal(rail_move_abs(*s, 90.0, 5.0), RAIL_OK);
+}
+
+/* The shear's position and state read through the poller's lock, now and 0.3 s later: 0 when it
+ * stood (not moving, same position). */
+static int moved_after(trial_rail_poller *p, rail *s, double *pos)
+{
+    rail_status a, b;
+    trial_rail_poller_lock(p);
+    rail_status_poll(s, &a);
+    trial_rail_poller_unlock(p);
+    sleep_s(0.3);
+    trial_rail_poller_lock(p);
+    rail_status_poll(s, &b);
+    trial_rail_poller_unlock(p);
+    *pos = b.position_mm;
+    printf("# shear after the stop: %s at %.4f mm, 0.3 s later %s at %.4f mm\n", rail_state_name(a.state),
+           a.position_mm, rail_state_name(b.state), b.position_mm);
+    return a.state == RAIL_STATE_MOVING || b.state == RAIL_STATE_MOVING || fabs(a.position_mm - b.position_mm) > 1e-9;
+}
+
+static void injected_clock_jump_stops_rails(void **state)
+{
+    (void)state;
+    atomic_store(&jump_s, 0.0);
+    rail_clock clk = {jumpy_now, jumpy_sleep, NULL};
+    rail *c = NULL, *s = NULL;
+    open_rails(clk, &c, &s);
+    char why[512] = "";
+    trial_rail_poller *p = trial_rail_poller_start(c, s, 0.01, why, sizeof why);
+    assert_non_null(p);
+    rail_status sc, ss;
+    double tp;
+    sleep_s(0.3);
+    assert_int_equal(trial_rail_poller_latest(p, &sc, &ss, &tp, why, sizeof why), RAIL_OK);
+    assert_int_equal(ss.state, RAIL_STATE_MOVING);
+    atomic_store(&jump_s, 2.0); /* the freeze: 2 s gone at once */
+    rail_err e = RAIL_OK;
+    double t0 = mono();
+    while (mono() - t0 < 1.0 && (e = trial_rail_poller_latest(p, &sc, &ss, &tp, why, sizeof why)) == RAIL_OK)
+        sleep_s(0.005);
+    printf("# after a 2 s jump: %s\n", why);
+    assert_int_not_equal(e, RAIL_OK);
+    assert_non_null(strstr(why, "the monotonic clock jumped"));
+    assert_non_null(strstr(why, "both rails stopped"));
+    double pos;
+    assert_int_equal(moved_after(p, s, &pos), 0);
+    assert_true(pos < 90.0 - 1.0); /* stopped on its way, not carried on to its target */
+    trial_rail_poller_stop(p);
+    rail_close(c);
+    rail_close(s);
+}
+
+static void sigstop_freeze_stops_rails(void **state)
+{
+    (void)state;
+    int ready[2];
+    assert_int_equal(pipe(ready), 0);
+    pid_t child = fork();
+    assert_true(child >= 0);
+    if (child == 0) {
+        rail *c = NULL, *s = NULL;
+        char why[512] = "";
+        rail_params pp = rail_params_default();
+        pp.poll_hz = 50.0;
+        rail_mock_params m = rail_mock_params_default();
+        m.start_mm = 10.0;
+        if (rail_mock_open(&c, &pp, &m, rail_clock_real(), why, sizeof why) ||
+            rail_mock_open(&s, &pp, &m, rail_clock_real(), why, sizeof why) || rail_move_abs(s, 90.0, 5.0))
+            _exit(10);
+        trial_rail_poller *p = trial_rail_poller_start(c, s, 0.01, why, sizeof why);
+        if (!p) _exit(11);
+        if (write(ready[1], "y", 1) != 1) _exit(12);
+        rail_status sc, ss;
+        double tp, t0 = mono();
+        rail_err e;
+        while ((e = trial_rail_poller_latest(p, &sc, &ss, &tp, why, sizeof why)) == RAIL_OK && mono() - t0 < 8.0)
+            sleep_s(0.005);
+        printf("# child after the freeze: %s\n", why);
+        fflush(stdout);
+        if (e == RAIL_OK || !strstr(why, "the monotonic clock jumped")) _exit(13);
+        double gap = strtod(strstr(why, "jumped ") + 7, NULL);
+        if (!(gap >= 1.0)) _exit(14); /* the freeze, not a load stall before it */
+        rail_status a, b;
+        trial_rail_poller_lock(p);
+        rail_status_poll(s, &a);
+        trial_rail_poller_unlock(p);
+        sleep_s(0.3);
+        trial_rail_poller_lock(p);
+        rail_status_poll(s, &b);
+        trial_rail_poller_unlock(p);
+        printf("# child: shear %s at %.4f mm, 0.3 s later %s at %.4f mm\n", rail_state_name(a.state), a.position_mm,
+               rail_state_name(b.state), b.position_mm);
+        fflush(stdout);
+        if (a.state == RAIL_STATE_MOVING || b.state == RAIL_STATE_MOVING || a.position_mm != b.position_mm) _exit(15);
+        trial_rail_poller_stop(p);
+        _exit(0);
+    }
+    char y = 0;
+    assert_int_equal(read(ready[0], &y, 1), 1);
+    sleep_s(0.4); /* shearing */
+    kill(child, SIGSTOP);
+    sleep_s(1.5);
+    kill(child, SIGCONT);
+    int ws = 0;
+    double t0 = mono();
+    pid_t w;
+    while ((w = waitpid(child, &ws, WNOHANG)) == 0 && mono() - t0 < 15.0) sleep_s(0.05);
+    if (w == 0) {
+        kill(child, SIGKILL);
+        waitpid(child, &ws, 0);
+        fail_msg("the frozen child did not report within 15 s");
+    }
+    close(ready[0]);
+    close(ready[1]);
+    assert_true(WIFEXITED(ws));
+    printf("# child exit %d\n", WEXITSTATUS(ws));
+    assert_int_equal(WEXITSTATUS(ws), 0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(injected_clock_jump_stops_rails),
+        cmocka_unit_test(sigstop_freeze_stops_rails),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
