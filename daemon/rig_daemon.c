@@ -446,6 +446,14 @@ static int op_abort(void *user, json_t **out, int *http_status, char *why, size_
     }
     session_status ss;
     trial_session_status(s, &ss);
+    if (trial_state_final(ss.state)) {
+        /* Ended (its rails stopped); the session is still closing its camera, video or prediction. */
+        pthread_mutex_unlock(&d->lock);
+        *http_status = 409;
+        snprintf(why, why_len, "trial %lld has already ended %s (its rails are stopped; it is closing its camera, "
+                 "video and prediction): nothing to abort", (long long)ss.trial_id, trial_state_name(ss.state));
+        return -1;
+    }
     trial_session_abort(s, "abort requested through the API");
     pthread_mutex_unlock(&d->lock);
     *out = json_pack("{s:I, s:s, s:s}", "id", (json_int_t)ss.trial_id, "state", trial_state_name(ss.state),

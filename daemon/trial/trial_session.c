@@ -506,8 +506,8 @@ static int session_run(trial_session *s, session_parts *p, char *why, size_t why
     return 0;
 }
 
-/* Step 5: the measured result and the final status. Samples first, so a stored result always has
- * its samples. */
+/* Step 5: the measured result and the final status, then (rig mode) the live pipeline closed.
+ * Samples first, so a stored result always has its samples. */
 static void session_store_result(trial_session *s)
 {
     char w[256];
@@ -519,7 +519,6 @@ static void session_store_result(trial_session *s)
         if (!s->result.reason[0]) snprintf(s->result.reason, sizeof s->result.reason, "%s", w);
     }
     s->video = NULL;
-    if (s->live) session_live_close(s);
     store_regime reg = trial_regime_of(s->result.snapped, s->result.vision_snapped, s->result.asymmetric);
     if (s->result.final == TRIAL_DONE || s->result.snapped)
         store_trial_set_result(s->st, s->trial_id, s->result.snapped, s->result.snapped ? s->result.snap_dw : NAN, reg,
@@ -532,6 +531,10 @@ static void session_store_result(trial_session *s)
     trial_publish_stored(s->bus, s->trial_id, s->result.final);
     logf_(s, "%s%s%s; measured %s at Delta W = %.5f", trial_state_name(s->result.final),
           s->result.reason[0] ? ": " : "", s->result.reason, s->result.regime, s->result.snap_dw);
+    /* Rig mode: the camera and the pipeline after the final status (issue 33, item 13): closing a
+     * camera that died with its rig waits out its link's timeouts, seconds in which the store
+     * said "running" for a trial that had failed. Its counts and a video failure follow as events. */
+    if (s->live) session_live_close(s);
 }
 
 /* Whatever the steps opened, closed; the prediction waited for (it stops at once when the trial

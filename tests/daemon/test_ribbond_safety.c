@@ -7,7 +7,8 @@
  *   3. A full store disk mid-trial (an SQLite VFS shim refusing writes: store_full_vfs.h): the
  *      trial's final status is written by the daemon's first operation after the disk has room
  *      again, and a daemon closed before that leaves it to the next start-up (interrupted).
- *   4. A replay of a trial that is still running is refused with 409 and the reason. */
+ *   4. A replay of a trial that is still running is refused with 409 and the reason.
+ *  13. An abort of a trial that has ended while its session still closes is 409, not 200. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -164,7 +165,7 @@ static void replay_of_running_trial_refused(void **state)
     all_passed = 1;
 }
 
-/* The daemon's status: "idle" or the running trial's state. */
+/* The daemon's status: "no trial" when idle, else the running trial's state. */
 static void daemon_state(rig_daemon *d, char *out, size_t n)
 {
     api_ops ops = rig_daemon_ops();
@@ -172,18 +173,18 @@ static void daemon_state(rig_daemon *d, char *out, size_t n)
     char why[256];
     assert_int_equal(ops.status(d, &o, why, sizeof why), 0);
     json_t *t = json_object_get(o, "trial");
-    const char *st = json_is_object(t) ? json_string_value(json_object_get(t, "state")) : "idle";
+    const char *st = json_is_object(t) ? json_string_value(json_object_get(t, "state")) : "no trial";
     snprintf(out, n, "%s", st ? st : "?");
     json_decref(o);
 }
 
-/* Polls the daemon's status until its state is (want_idle) or is not (!want_idle) "idle". */
+/* Polls the daemon's status until it is idle (want_idle) or a trial has begun moving. */
 static int wait_state(rig_daemon *d, int want_idle, double max_s)
 {
     char st[32];
     for (double t = 0; t < max_s; t += 0.05) {
         daemon_state(d, st, sizeof st);
-        if ((strcmp(st, "idle") == 0) == want_idle) return 1;
+        if (want_idle ? !strcmp(st, "no trial") : strcmp(st, "no trial") && strcmp(st, "idle")) return 1;
         sleep_s(0.05);
     }
     return 0;
@@ -231,7 +232,7 @@ static void full_disk_final_status_written_later(void **state)
     assert_int_equal(tr.status, STORE_STATUS_RUNNING); /* the store could not take the end */
     store_full_vfs_set(0);
     daemon_state(&d, st, sizeof st); /* the next operation */
-    assert_string_equal(st, "idle");
+    assert_string_equal(st, "no trial");
     assert_int_equal(store_trial_get(d.st, id, &tr, why, sizeof why), STORE_OK);
     printf("after the disk has room: trial %lld reads %s / %s: %s (ended %s)\n", (long long)id,
            store_status_name(tr.status), tr.state, tr.reason, tr.ended_at);
@@ -262,12 +263,54 @@ static void full_disk_final_status_written_later(void **state)
     all_passed = 1;
 }
 
+/* Item 13 (its last part): a trial that has ended but whose session is still closing (here: its
+ * prediction still computing; in rig mode a dead camera's close) is not aborted with 200
+ * "requested": 409, it has already ended. The shear rail left off its zero fails the trial at
+ * once; the prediction beside it runs on at fixed steps of 0.2 ms. */
+static void abort_of_an_ended_trial_refused(void **state)
+{
+    (void)state;
+    all_passed = 0;
+    daemon_sets s;
+    sets_for(&s, "ended.db");
+    s.ov[s.n++] = "rail.shear.start_mm=60";
+    s.ov[s.n++] = "sim.fast=off";
+    s.ov[s.n++] = "solver.dt=2e-4";
+    rig_daemon d;
+    open_daemon(&d, &s);
+    int64_t id = start_trial(&d);
+    api_ops ops = rig_daemon_ops();
+    char st[32] = "", why[512] = "";
+    double waited = 0;
+    for (; waited < 60.0; waited += 0.02) {
+        daemon_state(&d, st, sizeof st);
+        if (!strcmp(st, "failed") || !strcmp(st, "no trial")) break;
+        sleep_s(0.02);
+    }
+    printf("trial %lld: %s after %.2f s\n", (long long)id, st, waited);
+    assert_string_equal(st, "failed"); /* ended, the session still closing */
+    json_t *out = NULL;
+    int status = 0;
+    int rc = ops.abort_current(&d, &out, &status, why, sizeof why);
+    printf("abort: %d %s\n", rc ? status : 200, rc ? why : "requested");
+    json_decref(out);
+    assert_int_not_equal(rc, 0);
+    assert_int_equal(status, 409);
+    assert_non_null(strstr(why, "has already ended failed"));
+    store_trial tr;
+    assert_int_equal(store_trial_get(d.st, id, &tr, why, sizeof why), STORE_OK);
+    assert_int_equal(tr.status, STORE_STATUS_FAILED);
+    rig_daemon_close(&d, "test done");
+    all_passed = 1;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(second_daemon_refused),
         cmocka_unit_test(replay_of_running_trial_refused),
         cmocka_unit_test(full_disk_final_status_written_later),
+        cmocka_unit_test(abort_of_an_ended_trial_refused),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -14,7 +14,8 @@
  *   - the whole trial with Modbus rails: measured snap within 2% of the prediction, regimes agree,
  *     no frame lost or dropped, every frame's stamp within 1 ms of the simulator's send time, both
  *     rails standing at their start at the end;
- *   - the rig simulator killed mid-shear: the trial fails naming the rail, nothing half-written.
+ *   - the rig simulator killed mid-shear: the trial fails naming the rail, nothing half-written; the
+ *     store reads it failed within 3 s of the kill and an abort then is refused (issue 33).
  * Heavy (real time, about 20-40 s each): normal build only. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -226,10 +227,23 @@ static void test_rigsim_dies_mid_shear(void **state)
     (void)state;
     rig_run r;
     start_to_shear(&r, RIG_GRBL, grbl_sets, NULL);
+    double t_kill = rig_now_real();
     kill(r.sim, SIGKILL);
     waitpid(r.sim, NULL, 0);
     r.sim = -1;
     assert_int_equal(rig_wait_end(&r, 30.0), 0);
+    double t_ended = rig_now_real();
+    /* Issue 33, item 13: the trial read "running" 12 s after the fault was seen (the dead camera's
+     * close came before the final status), and an abort then answered 200 "requested". */
+    char cmd[600], out[600] = "";
+    snprintf(cmd, sizeof cmd, "%s/ribbonctl abort --url %s > %s/abort.txt 2>&1", RIBBON_BIN_DIR, r.url, r.dir);
+    int abort_rc = system(cmd);
+    snprintf(cmd, sizeof cmd, "%s/abort.txt", r.dir);
+    rig_file_has(cmd, "", out, sizeof out);
+    printf("# rig simulator killed: the store read the trial ended %.2f s after the kill; abort then: exit %d, %s\n",
+           t_ended - t_kill, WIFEXITED(abort_rc) ? WEXITSTATUS(abort_rc) : -1, out);
+    assert_true(t_ended - t_kill < 3.0);
+    assert_true(WIFEXITED(abort_rc) && WEXITSTATUS(abort_rc) != 0);
     rig_stop(&r);
     sqlite3 *db = rig_db_open(&r);
     char status[64], why[512];
