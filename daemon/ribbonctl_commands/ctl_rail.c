@@ -10,7 +10,8 @@
  * Moves and homing wait until the rail is at rest (polling at the rail's rate keeps GRBL jog
  * segments flowing and the Modbus watchdog fed), then print the final status. A jog runs for
  * --duration seconds (default 1) and then stops: a one-shot command never leaves a rail running.
- * Ctrl-C stops the rail (the handler only sets a flag). Exit status: 0 done, 1 the rail refused
+ * Ctrl-C stops the rail (the handler only sets a flag). The rail's device is locked as ribbond
+ * locks it (rail_lock.h): a rail a running daemon drives is refused, naming the daemon. Exit status: 0 done, 1 the rail refused
  * or failed (reason printed; with --json also in the JSON object), 2 usage. */
 #include <jansson.h>
 #include <math.h>
@@ -24,6 +25,7 @@
 #include "rail_config.h"
 #include "rig_config.h"
 #include "rail_gcode.h"
+#include "rail_lock.h"
 #include "rail_mock.h"
 #include "rail_modbus.h"
 
@@ -310,6 +312,18 @@ static rail_err wait_rest(rail *r, double timeout_s, rail_status *st)
                           st->position_mm);
 }
 
+/* The lock of the device the rail names (rail_lock.h), held from the open to the close: a rail a
+ * running ribbond drives is refused, naming it (issue 33, item 1). */
+static rail_locks *held;
+static rail_err open_rail_unlocked(rail_cli *c, rail_clock ck, rail **r, char *why, size_t why_len);
+
+static void close_rail(rail *r)
+{
+    rail_close(r);
+    rail_locks_release(held);
+    held = NULL;
+}
+
 static rail_err open_rail(rail_cli *c, rail **r, char *why, size_t why_len)
 {
     rail_clock ck = rail_clock_real();
@@ -317,6 +331,25 @@ static rail_err open_rail(rail_cli *c, rail **r, char *why, size_t why_len)
         snprintf(why, why_len, "no driver: give --driver mock|gcode|modbus or --config F --rail NAME");
         return RAIL_E_INVALID;
     }
+    rail_open_spec spec;
+    memset(&spec, 0, sizeof spec);
+    snprintf(spec.driver, sizeof spec.driver, "%s", c->driver);
+    spec.params = c->p;
+    spec.gcode = c->g;
+    spec.modbus = c->m;
+    spec.mock = c->k;
+    rail_err le = rail_locks_take(&spec, NULL, "ribbonctl rail", &held, why, why_len);
+    if (le != RAIL_OK) return le;
+    rail_err e = open_rail_unlocked(c, ck, r, why, why_len);
+    if (e != RAIL_OK) {
+        rail_locks_release(held);
+        held = NULL;
+    }
+    return e;
+}
+
+static rail_err open_rail_unlocked(rail_cli *c, rail_clock ck, rail **r, char *why, size_t why_len)
+{
     if (!strcmp(c->driver, "mock"))
         return rail_mock_open(r, &c->p, &c->k, ck, why, why_len);
     if (!strcmp(c->driver, "gcode")) {
@@ -496,7 +529,7 @@ int ctl_rail_main(int argc, char **argv)
     int rc = 0;
     if (!strcmp(A, "bench")) {
         rc = bench(&c, r);
-        rail_close(r);
+        close_rail(r);
         return rc;
     }
     if (!strcmp(A, "status")) {
@@ -561,6 +594,6 @@ int ctl_rail_main(int argc, char **argv)
         }
     }
     print_status(&c, r, &st, e, why);
-    rail_close(r);
+    close_rail(r);
     return rc;
 }

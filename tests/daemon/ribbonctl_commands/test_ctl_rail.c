@@ -17,6 +17,7 @@
 
 #include "grblsim_spawn.h"
 #include "mbsim_spawn.h"
+#include "rail_lock.h"
 
 /* Run ribbonctl with args (stderr folded into the output); returns the exit status. */
 static int run(const char *args, char *out, size_t n)
@@ -151,6 +152,35 @@ static void test_refusals_and_usage(void **s)
     json_decref(a);
 }
 
+/* A rail whose device another owner holds (ribbond: rail_lock.h) is refused before it is opened,
+ * naming the holder (issue 33, item 1). */
+static void test_rail_in_use_refused(void **s)
+{
+    (void)s;
+    char dir[] = "/tmp/ctl-rail-lock-XXXXXX", out[4096], why[512], pid[32];
+    assert_non_null(mkdtemp(dir));
+    setenv("RIBBON_LOCK_DIR", dir, 1);
+    rail_open_spec spec;
+    memset(&spec, 0, sizeof spec);
+    snprintf(spec.driver, sizeof spec.driver, "modbus");
+    spec.params = rail_params_default();
+    snprintf(spec.params.name, sizeof spec.params.name, "shear");
+    spec.modbus = rail_modbus_params_default();
+    snprintf(spec.modbus.address, sizeof spec.modbus.address, "127.0.0.1:9");
+    rail_locks *held = NULL;
+    assert_int_equal(rail_locks_take(&spec, NULL, "ribbond on test.ini", &held, why, sizeof why), RAIL_OK);
+    assert_int_equal(run("rail --driver modbus --address 127.0.0.1:9 --allow-unverified status", out, sizeof out), 1);
+    printf("%s", out);
+    snprintf(pid, sizeof pid, "pid %ld since", (long)getpid());
+    assert_non_null(strstr(out, "Modbus drive 127.0.0.1:9 is in use"));
+    assert_non_null(strstr(out, pid));
+    rail_locks_release(held);
+    unsetenv("RIBBON_LOCK_DIR");
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    assert_int_equal(system(cmd), 0);
+}
+
 static void test_gcode_and_modbus(void **s)
 {
     (void)s;
@@ -270,6 +300,7 @@ int main(void)
         cmocka_unit_test(test_config_rail),
         cmocka_unit_test(test_rig_file_rail),
         cmocka_unit_test(test_refusals_and_usage),
+        cmocka_unit_test(test_rail_in_use_refused),
         cmocka_unit_test(test_gcode_and_modbus),
         cmocka_unit_test(test_faults_mid_move_stop_the_rail),
     };
