@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "live.h"
@@ -44,8 +45,12 @@ static int take_locks(rig_daemon *d, char *why, size_t why_len)
     snprintf(what, sizeof what, "ribbond on %s", d->config_path);
     snprintf(path, sizeof path, "%s.lock", d->cfg.store_path);
     int held = 0;
-    d->store_lock = owner_lock_take(path, what, &held, w, sizeof w);
-    if (!d->store_lock) {
+    /* A store path that is not a regular file (/dev/full, a directory) gets no lock file beside it:
+     * store_open refuses it next, naming what it is. */
+    struct stat sb;
+    int special = stat(d->cfg.store_path, &sb) == 0 && !S_ISREG(sb.st_mode);
+    d->store_lock = special ? NULL : owner_lock_take(path, what, &held, w, sizeof w);
+    if (!d->store_lock && !special) {
         if (held)
             snprintf(why, why_len, "store %s is in use by another daemon: %s; stop that one first, or give this one "
                      "another store.path", d->cfg.store_path, w);
