@@ -11,7 +11,10 @@
  * Checked beyond memory safety: the token rule against an independent reading of it (a request
  * passes the token check exactly when its first Authorization header is "Bearer" and the token),
  * every refusal has a status and a reason, a 405 an Allow value, and no request the guard sorted
- * ever reaches the wrong pool (500). */
+ * ever reaches the wrong pool (500). Issue 33: empty lines before the request line are no
+ * request (a head of blank lines only is never complete, and they are skipped before the split,
+ * as libmicrohttpd skips them); no request with two Content-Length headers of different numbers
+ * passes; an accepted "set" holds only keys a trial may change (fuzz_api_set.h). */
 #include <jansson.h>
 #include <stdbool.h>
 #include <stdlib.h>
@@ -21,6 +24,7 @@
 #include "api_head.h"
 #include "api_server.h"
 #include "api_start_body.h"
+#include "fuzz_api_set.h"
 #include "fuzz_inputs.h"
 
 #define MAX_HEADERS 128
@@ -131,8 +135,37 @@ static void check_body(const char *body, size_t len)
             fail("a note over the limit");
         if (b.n_set < 0 || b.n_set > API_START_MAX_SET)
             fail("too many overrides kept");
+        for (int k = 0; k < b.n_set; k++)
+            fuzz_check_api_override("api_headers", b.set[k]);
     }
     json_decref(j);
+}
+
+/* Two Content-Length headers whose values are not the same number (digits only, else the same
+ * text), read independently of api_head.c. */
+static bool lengths_conflict(const api_header *h, size_t n)
+{
+    const char *first = NULL;
+    for (size_t i = 0; i < n; i++) {
+        if (strcasecmp(h[i].name, "content-length") != 0)
+            continue;
+        if (!first) {
+            first = h[i].value;
+            continue;
+        }
+        const char *a = first, *b = h[i].value;
+        size_t da = strspn(a, "0123456789"), db = strspn(b, "0123456789");
+        if (da == 0 || a[da] != '\0' || db == 0 || b[db] != '\0') { /* not both numbers */
+            if (strcmp(a, b) != 0)
+                return true;
+            continue;
+        }
+        while (*a == '0' && a[1]) a++; /* the same number: the same digits past leading zeros */
+        while (*b == '0' && b[1]) b++;
+        if (strcmp(a, b) != 0)
+            return true;
+    }
+    return false;
 }
 
 static void check_head(const api_head_sort *sort, const char *method, const char *url, const api_header *h,
@@ -157,6 +190,8 @@ static void check_head(const api_head_sort *sort, const char *method, const char
             fail("the token check disagrees with the token rule");
         if (s == 413 && !api_header_find(h, n, "content-length"))
             fail("a 413 without a Content-Length");
+        if (s == 0 && lengths_conflict(h, n))
+            fail("a request with two Content-Length headers that disagree passed");
         if (s != 0)
             continue;
         if (v.route == API_ROUTE_NONE || v.route == API_ROUTE_BAD_ID || v.route == API_ROUTE_BAD_PATH)
@@ -184,6 +219,11 @@ int fuzz_api_headers_one(const uint8_t *data, size_t size)
         return 0;
     if (end < 2 || end > peek || raw[end - 1] != '\n')
         fail("a head that does not end with its blank line");
+    size_t start = 0; /* empty lines before the request line, read independently */
+    while (start < end && (raw[start] == '\n' || (raw[start] == '\r' && start + 1 < end && raw[start + 1] == '\n')))
+        start += raw[start] == '\n' ? 1 : 2;
+    if (start >= end || raw[start] == '\n')
+        fail("a head of empty lines only taken as complete");
     api_head_sort sort;
     api_head_sort_raw(raw, end, &sort);
     if (sort.stream && (strcmp(sort.method, "GET") != 0 || strcmp(sort.path, "/live/events") != 0))
@@ -194,8 +234,8 @@ int fuzz_api_headers_one(const uint8_t *data, size_t size)
     char *text = malloc(end + 1);
     if (!text)
         return 0;
-    memcpy(text, raw, end);
-    text[end] = '\0'; /* a NUL inside the head ends it here, as a C string */
+    memcpy(text, raw + start, end - start); /* the empty lines skipped, as libmicrohttpd does */
+    text[end - start] = '\0'; /* a NUL inside the head ends it here, as a C string */
     char *eol = strchr(text, '\n');
     char *rest = "";
     if (eol) {

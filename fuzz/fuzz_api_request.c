@@ -3,13 +3,16 @@
  * id, allowed methods), and the rest of the input as the body the server would parse (JSON, with
  * the server's flags) and POST /trials's checks of it in both modes (api_start_body.c); a body
  * that passes, with overrides, then goes through the real rig loader as ribbond would load it
- * (the shipped config/mock.ini). The server's HTTP framing and headers are libmicrohttpd's. */
+ * (the shipped config/mock.ini), each of its overrides first checked to be of a key a trial may
+ * change (fuzz_api_set.h: no path, API, rail limit or twin key gets through, issue 33). The
+ * server's HTTP framing and headers are libmicrohttpd's. */
 #include <jansson.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "api_route.h"
 #include "api_start_body.h"
+#include "fuzz_api_set.h"
 #include "fuzz_config.h"
 #include "fuzz_inputs.h"
 
@@ -64,6 +67,7 @@ int fuzz_api_request_one(const uint8_t *data, size_t size)
         if (b.note && strlen(b.note) > API_START_NOTE_MAX) fuzz_fail("api_request", "a note over the limit");
         if (b.n_set < 0 || b.n_set > API_START_MAX_SET) fuzz_fail("api_request", "too many overrides kept");
         if (!replay && b.n_set > 0) {
+            for (int k = 0; k < b.n_set; k++) fuzz_check_api_override("api_request", b.set[k]);
             size_t len;
             const char *rig = fuzz_shipped_text("config/mock.ini", &len);
             fuzz_rig_text("api_request", rig, len, b.set, b.n_set);

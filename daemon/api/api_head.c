@@ -4,6 +4,7 @@
 #include "api_head.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,10 +12,28 @@
 
 /* ---------------------------------------------------------------- raw bytes (the guard) */
 
-/* Where the headers end in buf[0..len): index past the blank line, or 0. */
-static size_t head_end(const char *buf, size_t len)
+/* How many bytes of buf[0..len) are whole empty lines ("\r\n" or "\n") before the request line.
+ * They are no request (RFC 9112, 2.2: a server ignores them), so a head of blank lines only is
+ * never complete: such a connection waits in the guard until its header timeout, never in a pool
+ * (issue 33, item 6). */
+static size_t blank_lines(const char *buf, size_t len)
 {
-    for (size_t i = 0; i + 1 < len; i++) {
+    size_t i = 0;
+    for (;;) {
+        if (i < len && buf[i] == '\n')
+            i += 1;
+        else if (i + 1 < len && buf[i] == '\r' && buf[i + 1] == '\n')
+            i += 2;
+        else
+            return i;
+    }
+}
+
+/* Where the headers end in buf[0..len): index past the blank line that follows the request line
+ * (which starts at `start`, after the leading empty lines), or 0. */
+static size_t head_end(const char *buf, size_t len, size_t start)
+{
+    for (size_t i = start; i + 1 < len; i++) {
         if (buf[i] != '\n')
             continue;
         if (buf[i + 1] == '\n')
@@ -27,12 +46,14 @@ static size_t head_end(const char *buf, size_t len)
 
 int api_head_scan(const char *buf, size_t len, size_t line_max, size_t head_max, size_t *end)
 {
-    *end = head_end(buf, len);
-    size_t look = len < line_max + 2 ? len : line_max + 2;
-    const char *nl = memchr(buf, '\n', look);
-    if (nl && (size_t)(nl - buf) > line_max + 1)
+    size_t start = blank_lines(buf, len);
+    *end = head_end(buf, len, start);
+    size_t rest = len - start;
+    size_t look = rest < line_max + 2 ? rest : line_max + 2;
+    const char *nl = memchr(buf + start, '\n', look);
+    if (nl && (size_t)(nl - (buf + start)) > line_max + 1)
         nl = NULL;
-    if (!nl && len > line_max + 1)
+    if (!nl && rest > line_max + 1)
         return 414;
     if (*end == 0)
         return len > head_max ? 431 : 0;
@@ -86,7 +107,8 @@ static bool has_header(const char *head, size_t len, const char *name)
 
 void api_head_sort_raw(const char *head, size_t len, api_head_sort *out)
 {
-    request_line(head, len, out->method, sizeof out->method, out->path, sizeof out->path);
+    size_t start = blank_lines(head, len); /* as api_head_scan: the request line follows them */
+    request_line(head + start, len - start, out->method, sizeof out->method, out->path, sizeof out->path);
     bool get = strcmp(out->method, "GET") == 0, post = strcmp(out->method, "POST") == 0;
     out->stream = get && strcmp(out->path, "/live/events") == 0;
     out->control = ((get && strcmp(out->path, "/status") == 0) ||
@@ -158,6 +180,48 @@ static int check_token(const api_head_policy *p, const api_header *h, size_t n, 
     return 0;
 }
 
+/* A Content-Length value as a number: decimal digits only (libmicrohttpd has trimmed the blanks
+ * around it). 0 and *out, or -1 when it is not such a number or too large. */
+static int length_value(const char *text, unsigned long long *out)
+{
+    unsigned long long v = 0;
+    if (*text == '\0')
+        return -1;
+    for (const char *c = text; *c; c++) {
+        if (*c < '0' || *c > '9' || v > (ULLONG_MAX - 9) / 10)
+            return -1;
+        v = 10 * v + (unsigned long long)(*c - '0');
+    }
+    *out = v;
+    return 0;
+}
+
+/* 1 with a reason when two Content-Length headers disagree (issue 33, item 8: the first used to
+ * win, and a body framed by one length was read by another). Two that give the same number are
+ * one length (RFC 9110, 8.6); two that are not both numbers disagree unless they are the same
+ * text. */
+static int conflicting_lengths(const api_header *h, size_t n, char *why, size_t why_len)
+{
+    const char *first = NULL;
+    for (size_t i = 0; i < n; i++) {
+        if (h[i].name == NULL || strcasecmp(h[i].name, "Content-Length") != 0)
+            continue;
+        const char *val = h[i].value ? h[i].value : "";
+        if (first == NULL) {
+            first = val;
+            continue;
+        }
+        unsigned long long a, b;
+        bool same = (length_value(first, &a) == 0 && length_value(val, &b) == 0) ? a == b : strcmp(first, val) == 0;
+        if (!same) {
+            snprintf(why, why_len, "two Content-Length headers that disagree (%.24s and %.24s): a request has one length",
+                     first, val);
+            return 1;
+        }
+    }
+    return 0;
+}
+
 void api_head_check(const api_head_policy *p, bool stream_pool, const char *method, const char *url,
                     const api_header *h, size_t n, api_head_verdict *v, char *why, size_t why_len)
 {
@@ -192,6 +256,10 @@ void api_head_check(const api_head_policy *p, bool stream_pool, const char *meth
     if ((v->route == API_ROUTE_EVENTS) != stream_pool) { /* the guard sorts by the same path */
         v->status = 500;
         snprintf(why, why_len, "internal error: request reached the wrong connection pool");
+        return;
+    }
+    if (conflicting_lengths(h, n, why, why_len)) {
+        v->status = 400;
         return;
     }
     const char *cl = api_header_find(h, n, "Content-Length");

@@ -21,10 +21,12 @@
 /* What the raw bytes buf[0..len) that have arrived so far say, against the limits: 0 (not
  * complete: wait for more), 414 (no end of the request line within line_max + 1 bytes), 431 (no
  * blank line within head_max bytes), or 1 with *end the index just past the blank line ("\n\n" or
- * "\n\r\n") that ends the head. */
+ * "\n\r\n") that ends the head. Empty lines before the request line are skipped (RFC 9112, 2.2):
+ * they neither start nor end a head, so blank lines alone are never complete. */
 int api_head_scan(const char *buf, size_t len, size_t line_max, size_t head_max, size_t *end);
 
-/* Where a complete head (head[0..len), up to and including its blank line) goes. */
+/* Where a complete head (head[0..len), up to and including its blank line, empty lines before
+ * its request line skipped) goes. */
 typedef struct api_head_sort {
     char method[16];  /* the request line's method, cut to 15 bytes */
     char path[64];    /* its target up to '?', cut to 63 bytes */
@@ -63,7 +65,8 @@ typedef struct api_head_verdict {
 /* The checks that need no body, in the server's order: token (when p->token_len > 0, the
  * request needs "Authorization: Bearer TOKEN"; "Bearer" in any case, spaces around the token
  * ignored), path grammar and route, method, pool (stream_pool: the request came through the
- * stream pool, which only GET /live/events may), Content-Length over p->max_body. url is the
+ * stream pool, which only GET /live/events may), two Content-Length headers that disagree (400),
+ * Content-Length over p->max_body. url is the
  * path without its query; method, url and the headers are NUL-terminated strings. */
 void api_head_check(const api_head_policy *p, bool stream_pool, const char *method, const char *url,
                     const api_header *h, size_t n, api_head_verdict *v, char *why, size_t why_len);

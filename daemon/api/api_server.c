@@ -4,10 +4,12 @@
  * Request life cycle. libmicrohttpd calls on_request() several times per request:
  *   1. once when the headers are in (no body yet): we allocate the per-request state and run
  *      every check that needs no body, in this order: token (401), path (404, 400 bad id),
- *      method (405), Content-Length against the limit (413). A failed check answers at once,
- *      before any body is read; a client that sent "Expect: 100-continue" never uploads it.
+ *      method (405), two Content-Length headers that disagree (400), Content-Length against the
+ *      limit (413). A failed check answers at once, before any body is read; a client that sent
+ *      "Expect: 100-continue" never uploads it. Otherwise the body's deadline is armed.
  *   2. zero or more times with a chunk of body: appended to the request's buffer, which never
  *      grows past max_body_bytes (a chunked upload that goes past it is drained and answered 413).
+ *      A chunk after the deadline, or none before it, is answered 408 (body_deadline_arm).
  *   3. once with no data: the body is complete; parse it, call the op, queue the reply.
  * The per-request state is freed in on_completed(), which libmicrohttpd calls for every request
  * however it ended (reply sent, client gone, timeout, shutdown).
@@ -50,10 +52,12 @@
 #include <unistd.h>
 
 #define API_WHY_MAX 512
+#define API_STREAM_IDLE_S 60 /* a stream client that reads nothing for this long is dropped, s */
 
 typedef struct api_pool {
     struct api_server *s;
     int stream;                /* 1: the stream pool */
+    unsigned idle_s;           /* libmicrohttpd's idle timeout of this pool's connections, s */
     atomic_int open;           /* connections handed over and not yet closed */
 } api_pool;
 
@@ -70,6 +74,7 @@ struct api_server {
     char token[API_TOKEN_MAX + 1]; /* "" = no token */
     size_t token_len;
     size_t max_body;
+    unsigned body_timeout_ms;
     unsigned port;
 
     /* libmicrohttpd log capture during start-up only (see the file comment). The polling thread
@@ -83,7 +88,8 @@ struct api_server {
 typedef struct api_request {
     api_route route;
     int64_t id;
-    bool answered;  /* a reply was queued before the body was read */
+    bool answered;  /* a reply was queued (before the body was read, or after all of it), or the
+                       408 of a late body was written */
     bool too_big;   /* the body went past max_body: drained, answered 413 */
     uint64_t started_ms; /* headers in (monotonic), for the body deadline */
     char *body;
@@ -102,6 +108,7 @@ api_server_config api_server_config_default(void)
         .max_streams = 32,
         .header_timeout_ms = 5000,
         .pending_max = 256,
+        .body_timeout_ms = API_BODY_TIMEOUT_MS,
     };
     return c;
 }
@@ -539,6 +546,45 @@ static enum MHD_Result dispatch(api_server *s, struct MHD_Connection *c, const c
     return reply_error(c, MHD_HTTP_NOT_IMPLEMENTED, "this daemon does not serve that request yet", NULL);
 }
 
+/* ---------------------------------------------------------------- the body's deadline */
+
+/* The body must be in body_timeout_ms after the headers (issue 33, item 7: the deadline used to
+ * be checked only when more data arrived, so a body that stopped coming held its slot until
+ * libmicrohttpd's idle timeout, 30 s, and was closed without a word). libmicrohttpd's per-
+ * connection timeout counts idle seconds from the last data received; set to the whole seconds
+ * left before the deadline at the headers and again at every chunk, it fires at the deadline
+ * (at most a second after it) whether or not data keeps coming. Returns 0 while the deadline is
+ * ahead, -1 once it has passed. */
+static int body_deadline_arm(const api_server *s, struct MHD_Connection *c, const api_request *req)
+{
+    uint64_t now = mono_ms(), end = req->started_ms + s->body_timeout_ms;
+    if (now > end)
+        return -1;
+    unsigned left_s = (unsigned)((end - now + 999) / 1000);
+    MHD_set_connection_option(c, MHD_CONNECTION_OPTION_TIMEOUT, left_s ? left_s : 1u);
+    return 0;
+}
+
+/* Answer a body that missed its deadline with 408, as the guard answers a late head. The bytes
+ * are written on the socket itself: libmicrohttpd queues a reply only before a body is read or
+ * after all of it, and this request has neither. Nothing was sent on the connection before
+ * (but perhaps "100 Continue"), and it is closed right after (on a timeout, libmicrohttpd calls
+ * on_completed before it shuts the socket down). */
+static void reply_body_late(const api_server *s, struct MHD_Connection *c, api_request *req)
+{
+    req->answered = true;
+    const union MHD_ConnectionInfo *ci = MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD);
+    if (ci == NULL)
+        return;
+    char msg[160], reply[1024];
+    snprintf(msg, sizeof msg, "request body not complete within %u ms of the headers", s->body_timeout_ms);
+    size_t len = api_guard_reply(reply, sizeof reply, 408, msg);
+    if (len > 0) {
+        ssize_t w = send(ci->connect_fd, reply, len, MSG_NOSIGNAL | MSG_DONTWAIT);
+        (void)w; /* a small reply fits the socket buffer; a client that cannot take it loses it */
+    }
+}
+
 /* ---------------------------------------------------------------- libmicrohttpd callbacks */
 
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const char *url, const char *method,
@@ -555,12 +601,16 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
             return MHD_NO;
         *con_cls = req;
         enum MHD_Result ok = on_headers(s, pool->stream, c, url, method, req);
+        if (ok == MHD_YES && !req->answered)
+            body_deadline_arm(s, c, req);
         if (ok != MHD_YES || req->answered || *upload_data_size == 0)
             return ok;
     }
     if (*upload_data_size != 0) {
-        if (mono_ms() - req->started_ms > API_BODY_TIMEOUT_MS)
-            return MHD_NO; /* a body trickled in slowly: the slot goes back to the pool */
+        if (!req->answered && body_deadline_arm(s, c, req) != 0) {
+            reply_body_late(s, c, req); /* a body trickled in past its deadline */
+            return MHD_NO;              /* the slot goes back to the pool */
+        }
         if (!req->answered)
             body_append(s, req, upload_data, *upload_data_size);
         *upload_data_size = 0;
@@ -569,6 +619,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
     if (req->answered)
         return MHD_YES;
     req->answered = true;
+    MHD_set_connection_option(c, MHD_CONNECTION_OPTION_TIMEOUT, pool->idle_s); /* the reply's own time */
     if (req->too_big)
         return reply_errorf(c, MHD_HTTP_CONTENT_TOO_LARGE, NULL, "request body is larger than the limit of %zu bytes",
                             s->max_body);
@@ -577,10 +628,10 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
 
 static void on_completed(void *cls, struct MHD_Connection *c, void **con_cls, enum MHD_RequestTerminationCode toe)
 {
-    (void)cls;
-    (void)c;
-    (void)toe;
+    api_server *s = cls;
     api_request *req = *con_cls;
+    if (req != NULL && !req->answered && toe == MHD_REQUEST_TERMINATED_TIMEOUT_REACHED)
+        reply_body_late(s, c, req); /* nothing more came before the body's deadline */
     if (req != NULL) {
         free(req->body);
         free(req);
@@ -709,6 +760,10 @@ static int check_config(const api_server_config *cfg, char *why, size_t why_len)
         snprintf(why, why_len, "api pending_max %u is out of range (16 .. 4096)", cfg->pending_max);
         return -1;
     }
+    if (cfg->body_timeout_ms < 1000 || cfg->body_timeout_ms > 60000) {
+        snprintf(why, why_len, "api body_timeout_ms %u is out of range (1000 .. 60000)", cfg->body_timeout_ms);
+        return -1;
+    }
     if (cfg->token != NULL) {
         size_t len = strlen(cfg->token);
         if (len > API_TOKEN_MAX) {
@@ -768,6 +823,7 @@ int api_server_start(const api_server_config *cfg_in, const api_ops *ops, void *
         memcpy(s->token, cfg.token, s->token_len + 1);
     }
     s->max_body = cfg.max_body_bytes;
+    s->body_timeout_ms = cfg.body_timeout_ms;
     if (pthread_mutex_init(&s->log_lock, NULL) != 0) {
         free(s);
         snprintf(why, why_len, "could not create a mutex");
@@ -777,6 +833,8 @@ int api_server_start(const api_server_config *cfg_in, const api_ops *ops, void *
 
     s->pool[0].s = s->pool[1].s = s;
     s->pool[1].stream = 1;
+    s->pool[0].idle_s = cfg.connection_timeout_s;
+    s->pool[1].idle_s = API_STREAM_IDLE_S;
     s->max_control = cfg.max_connections;
     s->max_streams = cfg.max_streams;
     if (cfg.n_assets > 0) {
@@ -835,7 +893,7 @@ int api_server_start(const api_server_config *cfg_in, const api_ops *ops, void *
                                    MHD_OPTION_UNESCAPE_CALLBACK, keep_escapes, NULL,
                                    MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)(4 * API_HEAD_MAX),
                                    /* a client that reads nothing for this long is dropped */
-                                   MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)60,
+                                   MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)API_STREAM_IDLE_S,
                                    MHD_OPTION_CONNECTION_LIMIT, cfg.max_streams + 16,
                                    MHD_OPTION_END);
     int err = errno;

@@ -27,14 +27,16 @@
  * stream, at most max_streams, else 503), everything else to the control pool (max_connections,
  * else 503). The control pool keeps RESERVED_CONTROL more slots for bodiless GET /status and
  * POST /trials/current/abort, so that stopping a trial never waits for a free slot. Control
- * replies close their connection (no keep-alive), and a request body must arrive within
- * API_BODY_TIMEOUT_MS, so a control slot is held for one request's time only. A request line
+ * replies close their connection (no keep-alive), and a request body must be complete within
+ * body_timeout_ms of its headers (else 408, whether or not data still arrives), so a control
+ * slot is held for one request's time only. A request line
  * over API_LINE_MAX bytes gets 414, a head over API_HEAD_MAX bytes 431, as JSON.
  *
  * Errors found by the server itself: 400 (a path byte outside the routes' grammar [A-Za-z0-9._/-]:
  * percent-escapes are not decoded, so "%00" is refused, never truncates; {id} not a positive integer, malformed JSON body with
- * line and column, body not an object), 401 (token missing or wrong), 404 (unknown path),
- * 405 (known path, wrong method; the reply carries an Allow header), 413 (body larger than
+ * line and column, body not an object, two Content-Length headers that disagree), 401 (token
+ * missing or wrong), 404 (unknown path),
+ * 405 (known path, wrong method; the reply carries an Allow header), 408 (head or body late), 413 (body larger than
  * max_body_bytes), 500 (an op broke its contract), 501 (op left NULL). Every error reply is
  * application/json: {"error": "human message", "status": N}.
  *
@@ -64,7 +66,8 @@
 
 #define API_LINE_MAX 8192          /* request line, bytes: longer is 414 */
 #define API_HEAD_MAX 16384         /* request line and headers, bytes: longer is 431 */
-#define API_BODY_TIMEOUT_MS 10000  /* from the headers to the end of the body */
+#define API_BODY_TIMEOUT_MS 10000  /* from the headers to the end of the body: the default of
+                                      api_server_config's body_timeout_ms */
 #define API_RESERVED_CONTROL 8     /* control slots only bodiless /status and abort may use */
 
 /* A file of the page, served as is to GET path (no token). data is borrowed: it must outlive
@@ -106,6 +109,9 @@ typedef struct api_server_config {
     unsigned header_timeout_ms;  /* accept to complete headers (100..60000); default 5000 */
     unsigned pending_max;        /* connections waiting for their headers (16..4096); the oldest
                                     is closed when a new one comes and this many wait; default 256 */
+    unsigned body_timeout_ms;    /* from the end of the headers to the end of the body
+                                    (1000..60000, whole seconds count: libmicrohttpd's timer is in
+                                    seconds); later is 408; default API_BODY_TIMEOUT_MS */
     const api_asset *assets;     /* the page's files (array copied, data borrowed); may be NULL */
     size_t n_assets;
 } api_server_config;

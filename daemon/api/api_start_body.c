@@ -1,6 +1,8 @@
 /* api_start_body.c: the checks of POST /trials's body (see api_start_body.h). */
 #include "api_start_body.h"
 
+#include "api_overrides.h"
+
 #include <stdio.h>
 #include <string.h>
 
@@ -78,6 +80,11 @@ int api_start_body_parse(const json_t *body, int replay, api_start_body *out, ch
         }
         if (strlen(json_string_value(s)) != json_string_length(s)) {
             snprintf(why, why_len, "\"set\"[%zu] contains a NUL character", k);
+            return -1;
+        }
+        char not_allowed[400];
+        if (api_override_check(json_string_value(s), not_allowed, sizeof not_allowed) != 0) {
+            snprintf(why, why_len, "\"set\"[%zu]: %s", k, not_allowed);
             return -1;
         }
         out->set[out->n_set++] = json_string_value(s);

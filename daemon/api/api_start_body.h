@@ -5,8 +5,9 @@
  *
  * Any other field, a "set" that is not an array of at most API_START_MAX_SET strings, a
  * "source_trial" that is not an integer >= 1, a "note" that is not a string of at most
- * API_START_NOTE_MAX bytes (refused, never cut) is a 400 with the reason. The overrides are only
- * split out here; the rig loader checks them (rig_config_load). Kept apart from the daemon's ops
+ * API_START_NOTE_MAX bytes (refused, never cut) is a 400 with the reason, and so is an override
+ * of a key an API client may not change (api_overrides.h: paths, the API, the rails, the store
+ * ...); the rig loader checks the values (rig_config_load). Kept apart from the daemon's ops
  * so the parsing can be tested and fuzzed without a rig (fuzz/fuzz_api_request.c). The strings
  * point into body, which must outlive the result. */
 #ifndef RIBBON_DAEMON_API_START_BODY_H

@@ -1,7 +1,9 @@
 /* test_api_connections.c: the API under hostile connections (issue 17, defects 1, 10 and 12): slow
  * and silent sockets by the thousand, bodies that never come, oversized request lines and heads,
- * percent-escaped NULs in paths, and the stream pool's budget. A server on 127.0.0.1 port 0 with
- * small fake ops; every exchange is a raw socket with a receive timeout, so nothing here can hang. */
+ * percent-escaped NULs in paths, and the stream pool's budget; issue 33, items 6-8: heads of
+ * blank lines only, the body deadline answered 408 when nothing more arrives, two conflicting
+ * Content-Length headers. A server on 127.0.0.1 port 0 with small fake ops; every exchange is a
+ * raw socket with a receive timeout, so nothing here can hang. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -16,6 +18,7 @@
 #include <errno.h>
 #include <jansson.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -73,7 +76,15 @@ static int f_events(void *user, api_stream *out, char *why, size_t why_len)
     return 0;
 }
 
-static const api_ops ops = {.status = f_status, .start = f_start, .abort_current = f_abort, .events = f_events};
+static int f_list(void *user, json_t **out, char *why, size_t why_len)
+{
+    (void)user, (void)why, (void)why_len;
+    *out = json_array();
+    return 0;
+}
+
+static const api_ops ops = {
+    .status = f_status, .start = f_start, .abort_current = f_abort, .events = f_events, .list = f_list};
 
 typedef struct fixture {
     fake m;
@@ -82,13 +93,16 @@ typedef struct fixture {
     const char *token;
 } fixture;
 
-static int up(void **state, const char *token, unsigned max_streams)
+static int up_with(void **state, const char *token, unsigned max_streams, unsigned header_timeout_ms,
+                   unsigned body_timeout_ms)
 {
     fixture *f = calloc(1, sizeof *f);
     api_server_config cfg = api_server_config_default();
     cfg.port = 0;
     cfg.token = token;
     cfg.max_streams = max_streams;
+    if (header_timeout_ms) cfg.header_timeout_ms = header_timeout_ms;
+    if (body_timeout_ms) cfg.body_timeout_ms = body_timeout_ms;
     char why[512] = "";
     if (api_server_start(&cfg, &ops, &f->m, &f->srv, why, sizeof why) != 0) fail_msg("start: %s", why);
     f->port = api_server_port(f->srv);
@@ -96,7 +110,13 @@ static int up(void **state, const char *token, unsigned max_streams)
     *state = f;
     return 0;
 }
+static int up(void **state, const char *token, unsigned max_streams)
+{
+    return up_with(state, token, max_streams, 0, 0);
+}
 static int setup(void **state) { return up(state, NULL, 32); }
+/* Short deadlines, so that the tests of what happens at them wait about a second. */
+static int setup_short_deadlines(void **state) { return up_with(state, NULL, 32, 1000, 1000); }
 static int setup_token(void **state) { return up(state, TOKEN, 32); }
 static int setup_streams4(void **state) { return up(state, NULL, 4); }
 static int teardown(void **state)
@@ -396,6 +416,140 @@ static void test_token_equal(void **state)
     assert_true(api_token_equal(longer, API_TOKEN_MAX, longer, API_TOKEN_MAX));
 }
 
+/* ---------------------------------------------------------------- issue 33 item 6: blank lines */
+
+/* The status of the reply waiting on fd (read until the server closes, or the 5 s timeout). */
+static int reply_status(int fd, char *buf, size_t cap)
+{
+    read_reply(fd, buf, cap);
+    int status = 0;
+    if (sscanf(buf, "HTTP/1.%*d %d", &status) != 1) return -1;
+    return status;
+}
+
+/* 70 connections that send "\r\n\r\n" and nothing else (more than the 64 control slots) are no
+ * request: the guard holds them until its header timeout (1 s here) and answers 408, and /trials
+ * answers meanwhile. Blank lines before a real request are skipped, and the request goes to its
+ * pool (a stream after blank lines is still a stream). */
+static void test_blank_lines_hold_no_slot(void **state)
+{
+    fixture *f = *state; /* header_timeout_ms = 1000, max_connections = 64 */
+    enum { N = 70 };
+    int fds[N];
+    double t0 = now_s();
+    for (int i = 0; i < N; i++) {
+        fds[i] = dial(f->port);
+        assert_true(fds[i] >= 0);
+        send_all(fds[i], "\r\n\r\n", 4);
+    }
+    struct timespec ts = {0, 200 * 1000000L}; /* let the server take them, as it would a request */
+    nanosleep(&ts, NULL);
+    double t = 0;
+    int st = simple(f, "GET", "/trials", &t);
+    if (st != 200) fail_msg("GET /trials answered %d behind %d blank-line connections", st, N);
+    assert_true(t < 1.0);
+    static const char post[] = "POST /trials HTTP/1.1\r\nHost: x\r\nContent-Length: 2\r\nConnection: close\r\n\r\n{}";
+    char buf[4096];
+    const char *body;
+    assert_int_equal(exchange(f->port, post, sizeof post - 1, buf, sizeof buf, &body), 201);
+    /* Blank lines before a request line are not a request of their own (RFC 9112, 2.2). */
+    static const char lead[] = "\r\n\n\r\nGET /status HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n";
+    assert_int_equal(exchange(f->port, lead, sizeof lead - 1, buf, sizeof buf, &body), 200);
+    int sfd = dial(f->port);
+    assert_true(sfd >= 0);
+    static const char lead_stream[] = "\r\nGET /live/events HTTP/1.1\r\nHost: x\r\n\r\n";
+    send_all(sfd, lead_stream, sizeof lead_stream - 1);
+    ssize_t r = recv(sfd, buf, sizeof buf - 1, 0);
+    buf[r > 0 ? r : 0] = '\0';
+    close(sfd);
+    if (strncmp(buf, "HTTP/1.1 200", 12) != 0) fail_msg("a stream after a blank line: %.80s", buf);
+    /* The silent ones are answered 408 by the guard at its header timeout. */
+    int timed_out = 0;
+    for (int i = 0; i < N; i++) {
+        if (reply_status(fds[i], buf, sizeof buf) == 408) timed_out++;
+        close(fds[i]);
+    }
+    double waited = now_s() - t0;
+    printf("# %d blank-line connections: /trials in %.3f s, %d answered 408, all within %.2f s\n", N, t, timed_out,
+           waited);
+    assert_int_equal(timed_out, N);
+    assert_true(waited < 4.0);
+}
+
+/* ---------------------------------------------------------------- issue 33 item 7: body deadline */
+
+/* A body that stops coming is answered 408 at the body deadline (1 s here), as JSON, whether
+ * nothing more arrives (a Content-Length larger than what was sent, an unfinished chunked body)
+ * or bytes keep trickling in. */
+static void test_body_deadline_is_408(void **state)
+{
+    fixture *f = *state; /* body_timeout_ms = 1000 */
+    static const char *const heads[] = {
+        "POST /trials HTTP/1.1\r\nHost: x\r\nContent-Length: 100\r\n\r\n{\"note\":",
+        "POST /trials HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n8\r\n{\"note\":",
+    };
+    char buf[4096];
+    for (size_t k = 0; k < 3; k++) {
+        int fd = dial(f->port);
+        assert_true(fd >= 0);
+        double t0 = now_s();
+        if (k < 2) {
+            send_all(fd, heads[k], strlen(heads[k]));
+        } else { /* a byte every 200 ms, for longer than the deadline */
+            static const char head[] = "POST /trials HTTP/1.1\r\nHost: x\r\nContent-Length: 50\r\n\r\n";
+            send_all(fd, head, sizeof head - 1);
+            for (int i = 0; i < 12; i++) {
+                send_all(fd, " ", 1);
+                nanosleep(&(struct timespec){0, 200 * 1000000L}, NULL);
+                struct pollfd p = {.fd = fd, .events = POLLIN};
+                if (poll(&p, 1, 0) > 0) break; /* answered */
+            }
+        }
+        int st = reply_status(fd, buf, sizeof buf);
+        double t = now_s() - t0;
+        close(fd);
+        printf("# body case %zu: %d after %.2f s\n", k, st, t);
+        if (st != 408) fail_msg("body case %zu answered %d after %.2f s, expected 408", k, st, t);
+        const char *body = strstr(buf, "\r\n\r\n");
+        assert_non_null(body);
+        assert_json_error(buf, body + 4, 408);
+        assert_non_null(strstr(body, "1000 ms"));
+        assert_true(t >= 0.9 && t < 3.5);
+    }
+    assert_int_equal(atomic_load(&f->m.starts), 0);
+    /* A body in time still starts. */
+    static const char post[] = "POST /trials HTTP/1.1\r\nHost: x\r\nContent-Length: 2\r\nConnection: close\r\n\r\n{}";
+    const char *body;
+    assert_int_equal(exchange(f->port, post, sizeof post - 1, buf, sizeof buf, &body), 201);
+}
+
+/* ---------------------------------------------------------------- issue 33 item 8: Content-Length */
+
+/* Two Content-Length headers that disagree are a malformed request: 400, nothing started. Two
+ * that agree are one length (RFC 9110, 8.6). */
+static void test_conflicting_content_length_is_400(void **state)
+{
+    fixture *f = *state;
+    static const char *const rq[] = {
+        "POST /trials HTTP/1.1\r\nHost: x\r\nContent-Length: 2\r\nContent-Length: 30\r\n\r\n{}",
+        "POST /trials HTTP/1.1\r\nHost: x\r\nContent-Length: 30\r\ncontent-length: 2\r\n\r\n{}",
+        "POST /trials HTTP/1.1\r\nHost: x\r\nContent-Length: 2\r\nX-A: b\r\nContent-Length: 3\r\n\r\n{}",
+    };
+    char buf[4096];
+    const char *body;
+    for (size_t k = 0; k < sizeof rq / sizeof rq[0]; k++) {
+        int st = exchange(f->port, rq[k], strlen(rq[k]), buf, sizeof buf, &body);
+        if (st != 400) fail_msg("request %zu answered %d, expected 400", k, st);
+        assert_json_error(buf, body, 400);
+        assert_non_null(strstr(body, "Content-Length"));
+    }
+    assert_int_equal(atomic_load(&f->m.starts), 0);
+    static const char same[] =
+        "POST /trials HTTP/1.1\r\nHost: x\r\nContent-Length: 2\r\nContent-Length: 2\r\nConnection: close\r\n\r\n{}";
+    assert_int_equal(exchange(f->port, same, sizeof same - 1, buf, sizeof buf, &body), 201);
+    assert_int_equal(atomic_load(&f->m.starts), 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -406,6 +560,9 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_bodies_that_never_come, setup, teardown),
         cmocka_unit_test_setup_teardown(test_stream_budget, setup_streams4, teardown),
         cmocka_unit_test(test_token_equal),
+        cmocka_unit_test_setup_teardown(test_blank_lines_hold_no_slot, setup_short_deadlines, teardown),
+        cmocka_unit_test_setup_teardown(test_body_deadline_is_408, setup_short_deadlines, teardown),
+        cmocka_unit_test_setup_teardown(test_conflicting_content_length_is_400, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
