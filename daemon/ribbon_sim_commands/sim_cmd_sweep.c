@@ -85,8 +85,13 @@ static double now(void)
 
 static int parse_range(const char *flag, const char *v, double *a, double *b, int *n)
 {
-    if (cfg_number_range(v, a, b, n, 1000) != 0) {
-        fprintf(stderr, "ribbon-sim sweep: %s needs A:B:n with finite A, B and 1 <= n <= 1000, got '%s'\n", flag,
+    int rc = cfg_number_range(v, a, b, n, 1000);
+    if (rc == -2) {
+        fprintf(stderr, "ribbon-sim sweep: %s '%s' runs from high to low; write it low to high (A <= B)\n", flag, v);
+        return 0;
+    }
+    if (rc != 0) {
+        fprintf(stderr, "ribbon-sim sweep: %s needs A:B:n with finite A <= B and 1 <= n <= 1000, got '%s'\n", flag,
                 v ? v : "");
         return 0;
     }
@@ -354,6 +359,7 @@ int sim_cmd_sweep(int argc, char **argv)
     test_hook(&fo);
     sweep sw;
     memset(&sw, 0, sizeof sw);
+    char err0[512];
     interrupted = 0;
     sw.spec.seed_route = x.seed && !strcmp(x.seed, "route");
     if (parse_gamma_tol(x.tol, &sw.spec.gamma_tol)) return 2;
@@ -368,6 +374,14 @@ int sim_cmd_sweep(int argc, char **argv)
     sw.ndl = nd;
     sw.spec.gamma = sw.gamma;
     sw.spec.ngamma = ng;
+    if (sw.phi && sw.gamma && sw.dl && sweep_grid_check(&sw.spec, sw.phi, np, sw.dl, nd, err0, sizeof err0) != 0) {
+        /* A point the mesh cannot hold, refused before anything runs (issue 33, item 10). */
+        fprintf(stderr, "ribbon-sim sweep: the grid has a point the scene cannot take: %s\n", err0);
+        free(sw.phi);
+        free(sw.gamma);
+        free(sw.dl);
+        return 2;
+    }
     int status = 1, rank = 0, ranks = 1, mu_init = 0, sig_set = 0;
     char err[256] = "";
     struct sigaction sa, old;

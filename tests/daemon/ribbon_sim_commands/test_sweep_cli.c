@@ -17,8 +17,10 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "scene_file.h"
 #include "sim_cmd.h"
 #include "sim_sweep_row.h"
+#include "sim_sweep_task.h"
 
 static char csv_path[256];
 
@@ -259,6 +261,99 @@ static void test_bad_axes_and_shards(void **state)
     assert_int_equal(access(path, F_OK), -1); /* nothing written */
 }
 
+/* Issue 33, item 9: a reversed range (high to low) once gave boundaries with inverted brackets and
+ * no bisection; now every range option refuses it, before anything is written. */
+static void test_reversed_ranges_refused(void **state)
+{
+    (void)state;
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/test_sweep_reversed_%d.csv", (int)getpid());
+    unlink(path);
+    assert_int_equal(run_grid("90:90:1", "0.30:0.05:6", path, NULL, NULL), 2);
+    assert_int_equal(run_grid("120:60:2", "0.12:0.22:2", path, NULL, NULL), 2);
+    assert_int_equal(run_grid("90:90:1", "0.12:0.22:2", path, "--dl", "0.5:0.4:2"), 2);
+    assert_int_equal(access(path, F_OK), -1); /* nothing written */
+}
+
+/* sweep at N nodes (mesh.nodes=N) on the grid phi x gamma into out. */
+static int run_nodes(const char *nodes_set, const char *gamma, const char *out)
+{
+    char scene[512];
+    snprintf(scene, sizeof scene, "%s/config/scenes/paper-gamma013.ini", RIBBON_SOURCE_DIR);
+    char *argv[] = {"sweep", "--scene", scene, "--set", (char *)nodes_set, "--phi", "90:90:1", "--gamma",
+                    (char *)gamma, "--out", (char *)out, "--jobs", "1", NULL};
+    fflush(stdout);
+    return sim_cmd_sweep((int)(sizeof argv / sizeof argv[0]) - 1, argv);
+}
+
+/* Issue 33, item 10: a Gamma the mesh cannot hold (a crease inside the clamp: closer than one
+ * edge, 1/(N-3)) made every point of the row "failed" with "out of memory allocating the row
+ * task". The grid is now refused before anything runs, naming the point; nothing is written. */
+static void test_grid_point_inside_the_clamp_refused(void **state)
+{
+    (void)state;
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/test_sweep_clamp_%d.csv", (int)getpid());
+    unlink(path);
+    assert_int_equal(run_nodes("mesh.nodes=21", "0.05:0.2:2", path), 2); /* 0.05 < 1/18 */
+    assert_int_equal(run_nodes("mesh.nodes=61", "0.01:0.2:2", path), 2); /* 0.01 < 1/58 */
+    assert_int_equal(access(path, F_OK), -1);
+}
+
+typedef struct collected {
+    sweep_row rows[64];
+    int n;
+} collected;
+
+static void collect(void *ctx, const sweep_row *row, int is_new)
+{
+    collected *c = ctx;
+    (void)is_new;
+    if (c->n < 64) c->rows[c->n++] = *row;
+}
+
+/* The row task itself (what a farm or shard runs): the point the mesh cannot hold fails alone
+ * with rod_scene_check's reason; the other point of the row is classified. N = 21. */
+static void test_row_task_fails_only_the_unfit_point(void **state)
+{
+    (void)state;
+    char scene[512];
+    snprintf(scene, sizeof scene, "%s/config/scenes/paper-gamma013.ini", RIBBON_SOURCE_DIR);
+    const char *sets[] = {"mesh.nodes=21"};
+    sweep_spec sp;
+    memset(&sp, 0, sizeof sp);
+    cfg_error ce;
+    assert_int_equal(cfg_scene_load(scene, sets, 1, &sp.base, &ce), CFG_OK);
+    const double gamma[] = {0.03, 0.15};
+    sp.sign = sp.base.fold_angle_deg < 0.0 ? -1.0 : 1.0;
+    sp.gamma = gamma;
+    sp.ngamma = 2;
+    sp.gamma_tol = 0.05;
+    char why[512];
+    const double phi = 90.0, dl = 0.5;
+    assert_int_equal(sweep_grid_check(&sp, &phi, 1, &dl, 1, why, sizeof why), -1);
+    print_message("refused: %s\n", why);
+    assert_non_null(strstr(why, "Gamma 0.03"));
+    assert_non_null(strstr(why, "inside the clamp"));
+    collected c = {.n = 0};
+    sweep_table known = {0};
+    sweep_run_row(&sp, phi, dl, &known, collect, &c, NULL);
+    int points = 0;
+    for (int k = 0; k < c.n; k++) {
+        if (c.rows[k].kind != 'p') continue;
+        points++;
+        print_message("Gamma %.2f: %s (%s)\n", c.rows[k].gamma, c.rows[k].regime, c.rows[k].note);
+        if (c.rows[k].gamma == 0.03) {
+            assert_string_equal(c.rows[k].regime, "failed");
+            assert_non_null(strstr(c.rows[k].note, "inside the clamp"));
+        } else {
+            assert_true(sweep_is_regime(&c.rows[k]));
+        }
+        assert_null(strstr(c.rows[k].note, "out of memory"));
+    }
+    assert_int_equal(points, 2);
+}
+
 int main(void)
 {
     gsl_set_error_handler_off();
@@ -270,6 +365,9 @@ int main(void)
         cmocka_unit_test(test_continued_upper_states_classify_like_routes),
         cmocka_unit_test(test_no_upper_state_between_two_folds),
         cmocka_unit_test(test_bad_axes_and_shards),
+        cmocka_unit_test(test_reversed_ranges_refused),
+        cmocka_unit_test(test_grid_point_inside_the_clamp_refused),
+        cmocka_unit_test(test_row_task_fails_only_the_unfit_point),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
