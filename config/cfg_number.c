@@ -100,6 +100,7 @@ int cfg_number_range(const char *s, double *a, double *b, int *n, int n_max)
         if (*q < '0' || *q > '9') return -1; /* N: digits only */
     if (!*p || strlen(p) > 9 || cfg_number_parse(p, &k)) return -1;
     if (k < 1 || k > n_max) return -1;
+    if (x > y) return -2; /* high to low: the callers' grids and brackets assume A <= B */
     *a = x;
     *b = y;
     *n = (int)k;

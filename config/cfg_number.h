@@ -45,7 +45,8 @@ cfg_number_status cfg_number_parse(const char *s, double *out);
 double cfg_number_strtod(const char *s, char **end);
 
 /* Split "A:B:N" (a range of N points, N a decimal integer in [1, n_max]) into *a, *b, *n; both
- * numbers by this grammar. 0 on success, -1 otherwise. */
+ * numbers by this grammar. 0 on success, -2 for a range written high to low (A > B: refused, not
+ * sorted, so a grid never runs backwards; issue 33), -1 otherwise. */
 int cfg_number_range(const char *s, double *a, double *b, int *n, int n_max);
 
 /* A short phrase for a status, e.g. "is not a plain decimal number". */

@@ -1,6 +1,6 @@
 /* fuzz_replay_rails.c: fuzz target for the outside replay's rails CSV (daemon/trial/
  * replay_rails_csv.c, read from memory): an accepted file gives at least two readings, all
- * finite, t strictly increasing; a refusal says why. */
+ * finite and within REPLAY_RAILS_MAX_MM of zero, t strictly increasing; a refusal says why. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -21,6 +21,8 @@ int fuzz_replay_rails_one(const uint8_t *data, size_t size)
         for (size_t k = 0; k < n; k++) {
             if (!isfinite(r[k].t) || !isfinite(r[k].compress_mm) || !isfinite(r[k].shear_mm))
                 fuzz_fail("replay_rails", "a non-finite reading accepted");
+            if (!(fabs(r[k].compress_mm) <= REPLAY_RAILS_MAX_MM) || !(fabs(r[k].shear_mm) <= REPLAY_RAILS_MAX_MM))
+                fuzz_fail("replay_rails", "a position beyond any rail accepted");
             if (k > 0 && !(r[k].t > r[k - 1].t)) fuzz_fail("replay_rails", "t not increasing");
         }
     } else if (why[0] == '\0' || r != NULL || n != 0) {

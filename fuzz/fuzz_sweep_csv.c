@@ -1,6 +1,7 @@
 /* fuzz_sweep_csv.c: fuzz target for the sweep CSV that `ribbon-sim sweep --resume` reads back
  * (daemon/ribbon_sim_commands/sim_sweep_row.c, read from memory): rows kept are of a known kind
- * with finite numbers and terminated text; a refusal says why and keeps nothing. */
+ * with finite numbers and terminated text, the made-by line terminated; a refusal says why and
+ * keeps nothing. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -26,6 +27,7 @@ int fuzz_sweep_csv_one(const uint8_t *data, size_t size)
                 fuzz_fail("sweep_csv", "unterminated text kept");
             (void)sweep_table_find(&t, r->phi, r->gamma, r->dl);
         }
+        if (!memchr(t.origin, '\0', sizeof t.origin)) fuzz_fail("sweep_csv", "unterminated made-by line kept");
         sweep_table_free(&t);
     } else if (err[0] == '\0' || t.n != 0) {
         fuzz_fail("sweep_csv", "a refusal without a reason, or with rows left");

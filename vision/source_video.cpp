@@ -190,6 +190,10 @@ Source *source_video_open(const char *path, vis_error *err)
                                     : "a socket or other special file");
         return nullptr;
     }
+    if (st.st_size == 0) {
+        fail(err, VIS_ERR_FORMAT, "video %s: an empty file (0 bytes)", path);
+        return nullptr;
+    }
     // A still image opened as a one-frame video: its size from the header, before decoding.
     if (image_size_check(path, err) != VIS_OK)
         return nullptr;

@@ -19,6 +19,7 @@
 #include "sim_opts.h"
 #include "sim_plot_sweep.h"
 #include "sim_sweep_farm.h"
+#include "sim_sweep_origin.h"
 #include "sim_sweep_row.h"
 #include "sim_sweep_task.h"
 
@@ -85,8 +86,13 @@ static double now(void)
 
 static int parse_range(const char *flag, const char *v, double *a, double *b, int *n)
 {
-    if (cfg_number_range(v, a, b, n, 1000) != 0) {
-        fprintf(stderr, "ribbon-sim sweep: %s needs A:B:n with finite A, B and 1 <= n <= 1000, got '%s'\n", flag,
+    int rc = cfg_number_range(v, a, b, n, 1000);
+    if (rc == -2) {
+        fprintf(stderr, "ribbon-sim sweep: %s '%s' runs from high to low; write it low to high (A <= B)\n", flag, v);
+        return 0;
+    }
+    if (rc != 0) {
+        fprintf(stderr, "ribbon-sim sweep: %s needs A:B:n with finite A <= B and 1 <= n <= 1000, got '%s'\n", flag,
                 v ? v : "");
         return 0;
     }
@@ -354,6 +360,7 @@ int sim_cmd_sweep(int argc, char **argv)
     test_hook(&fo);
     sweep sw;
     memset(&sw, 0, sizeof sw);
+    char err0[512];
     interrupted = 0;
     sw.spec.seed_route = x.seed && !strcmp(x.seed, "route");
     if (parse_gamma_tol(x.tol, &sw.spec.gamma_tol)) return 2;
@@ -368,6 +375,16 @@ int sim_cmd_sweep(int argc, char **argv)
     sw.ndl = nd;
     sw.spec.gamma = sw.gamma;
     sw.spec.ngamma = ng;
+    char origin[SWEEP_ORIGIN_MAX];
+    sweep_origin_format(&sw.spec, pa, pb, np, ga, gb, ng, da, db, nd, origin, sizeof origin);
+    if (sw.phi && sw.gamma && sw.dl && sweep_grid_check(&sw.spec, sw.phi, np, sw.dl, nd, err0, sizeof err0) != 0) {
+        /* A point the mesh cannot hold, refused before anything runs (issue 33, item 10). */
+        fprintf(stderr, "ribbon-sim sweep: the grid has a point the scene cannot take: %s\n", err0);
+        free(sw.phi);
+        free(sw.gamma);
+        free(sw.dl);
+        return 2;
+    }
     int status = 1, rank = 0, ranks = 1, mu_init = 0, sig_set = 0;
     char err[256] = "";
     struct sigaction sa, old;
@@ -379,6 +396,26 @@ int sim_cmd_sweep(int argc, char **argv)
     if (loaded != 0) {
         if (rank == 0) fprintf(stderr, "ribbon-sim sweep: %s\n", err);
         goto done;
+    }
+    /* A file to resume must come from this sweep (sim_sweep_origin.h): the same program, scene,
+     * N, tolerance and seed, the same Gamma grid, and phi and Delta L on its grid. */
+    int fresh = access(o.out, F_OK) != 0;
+    if (!fresh) {
+        char what[400];
+        if (!sw.table.origin[0]) {
+            if (rank == 0)
+                fprintf(stderr,
+                        "ribbon-sim sweep: %s does not say what made it (no '# made by:' line: an earlier ribbon-sim "
+                        "wrote it); start a new file\n",
+                        o.out);
+            goto done;
+        }
+        if (sweep_origin_resumable(sw.table.origin, origin, what, sizeof what) != 0) {
+            if (rank == 0)
+                fprintf(stderr, "ribbon-sim sweep: %s was made by another sweep (%s); name another file\n", o.out,
+                        what);
+            goto done;
+        }
     }
     for (size_t k = 0; k < sw.table.n; k++)
         if (!sweep_table_add(&sw.known, &sw.table.rows[k])) goto done;
@@ -401,14 +438,17 @@ int sim_cmd_sweep(int argc, char **argv)
     pthread_mutex_init(&sw.mu, NULL);
     mu_init = 1;
     if (rank == 0) {
-        int fresh = access(o.out, F_OK) != 0;
+        /* A row cut by a kill is cut off, so the file holds whole rows only. */
+        if (!fresh && sweep_table_fix_tail(o.out) != 0) {
+            fprintf(stderr, "ribbon-sim sweep: cannot cut the unfinished last row off %s: %s\n", o.out, strerror(errno));
+            goto done;
+        }
         sw.out = fopen(o.out, "a");
         if (!sw.out) {
             fprintf(stderr, "ribbon-sim sweep: cannot open %s: %s\n", o.out, strerror(errno));
             goto done;
         }
-        if (fresh) sweep_row_write_header(sw.out);
-        else sweep_table_fix_tail(o.out, sw.out);
+        if (fresh) sweep_row_write_header(sw.out, origin);
         fflush(sw.out); /* a job killed before its first row still leaves a sweep file to resume */
         sw.tty = isatty(2);
         if (sw.table.n) fprintf(stderr, "ribbon-sim sweep: resuming %s (%zu rows kept)\n", o.out, sw.table.n);

@@ -7,12 +7,19 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static const char header[] = "kind,phi_deg,gamma,gamma_lo,gamma_hi,dl,regime,first_type,first_dw,first_dz,upper,wall_s,note";
 
 static const char *kind_name(char k) { return k == 'p' ? "point" : k == 'q' ? "probe" : "boundary"; }
 
-void sweep_row_write_header(FILE *f) { fprintf(f, "%s\n", header); }
+static const char origin_tag[] = "# made by: ";
+
+void sweep_row_write_header(FILE *f, const char *origin)
+{
+    fprintf(f, "%s\n", header);
+    if (origin && origin[0]) fprintf(f, "%s%s\n", origin_tag, origin);
+}
 
 void sweep_row_write(FILE *f, const sweep_row *r)
 {
@@ -57,9 +64,13 @@ static int parse_double(const char *s, double *out)
 
 #define NFIELDS 13
 
-/* Splits line in place into at most NFIELDS fields (the last takes the rest). */
-static int parse_row(char *line, sweep_row *r)
+/* Splits line in place into NFIELDS fields (the last, the note, takes the rest) and reads them
+ * into r: 1, or 0 with what is wrong in why. */
+static int parse_row(char *line, sweep_row *r, char *why, size_t why_len)
 {
+    static const char *const names[NFIELDS] = {"kind",   "phi_deg",    "gamma",    "gamma_lo", "gamma_hi",
+                                               "dl",     "regime",     "first_type", "first_dw", "first_dz",
+                                               "upper",  "wall_s",     "note"};
     char *f[NFIELDS];
     int n = 0;
     char *p = line;
@@ -71,18 +82,32 @@ static int parse_row(char *line, sweep_row *r)
         *c = '\0';
         p = c + 1;
     }
-    if (n != NFIELDS) return 0;
+    if (n != NFIELDS) {
+        snprintf(why, why_len, "%d fields, not %d (%s)", n, NFIELDS, header);
+        return 0;
+    }
     memset(r, 0, sizeof *r);
     if (!strcmp(f[0], "point")) r->kind = 'p';
     else if (!strcmp(f[0], "probe")) r->kind = 'q';
     else if (!strcmp(f[0], "boundary")) r->kind = 'b';
-    else return 0;
-    if (!parse_double(f[1], &r->phi) || !parse_double(f[2], &r->gamma) || !parse_double(f[3], &r->gamma_lo) ||
-        !parse_double(f[4], &r->gamma_hi) || !parse_double(f[5], &r->dl) || !parse_double(f[8], &r->first_dw) ||
-        !parse_double(f[9], &r->first_dz) || !parse_double(f[11], &r->wall_s))
+    else {
+        snprintf(why, why_len, "kind '%.20s' is not point, probe or boundary", f[0]);
         return 0;
-    if (strlen(f[6]) >= sizeof r->regime || strlen(f[7]) >= sizeof r->first_type || strlen(f[10]) >= sizeof r->upper)
-        return 0;
+    }
+    const int numeric[] = {1, 2, 3, 4, 5, 8, 9, 11};
+    double *dst[] = {&r->phi, &r->gamma, &r->gamma_lo, &r->gamma_hi, &r->dl, &r->first_dw, &r->first_dz, &r->wall_s};
+    for (size_t k = 0; k < sizeof numeric / sizeof numeric[0]; k++)
+        if (!parse_double(f[numeric[k]], dst[k])) {
+            snprintf(why, why_len, "%s '%.40s' is not a finite number", names[numeric[k]], f[numeric[k]]);
+            return 0;
+        }
+    const int text[] = {6, 7, 10};
+    const size_t cap[] = {sizeof r->regime, sizeof r->first_type, sizeof r->upper};
+    for (size_t k = 0; k < 3; k++)
+        if (strlen(f[text[k]]) >= cap[k]) {
+            snprintf(why, why_len, "%s '%.40s' is longer than %zu bytes", names[text[k]], f[text[k]], cap[k] - 1);
+            return 0;
+        }
     strcpy(r->regime, f[6]);
     strcpy(r->first_type, f[7]);
     strcpy(r->upper, f[10]);
@@ -110,15 +135,16 @@ int sweep_table_read(FILE *f, const char *path, sweep_table *t, char *why, size_
 {
     memset(t, 0, sizeof *t);
     char line[1024];
-    int lineno = 0, rc = 0, continued = 0;
+    int lineno = 0, rc = 0;
     while (fgets(line, sizeof line, f)) {
         size_t len = strlen(line);
         int complete = len > 0 && line[len - 1] == '\n';
-        /* The rest of a line longer than the buffer is not a row of its own. */
-        int tail = continued;
-        continued = !complete;
-        if (tail) continue;
         lineno++;
+        if (!complete && len == sizeof line - 1) {
+            snprintf(why, why_len, "%s line %d: longer than %zu bytes; not a sweep row", path, lineno, sizeof line - 2);
+            rc = -1;
+            break;
+        }
         while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r')) line[--len] = '\0';
         if (lineno == 1) {
             if (strcmp(line, header) != 0) {
@@ -128,13 +154,39 @@ int sweep_table_read(FILE *f, const char *path, sweep_table *t, char *why, size_
             }
             continue;
         }
+        if (!complete) {
+            /* The last line, cut by a kill while it was written: not a row. */
+            t->cut_line = lineno;
+            break;
+        }
+        if (lineno == 2 && !strncmp(line, origin_tag, strlen(origin_tag))) {
+            const char *o = line + strlen(origin_tag);
+            size_t ol = strlen(o);
+            if (ol >= sizeof t->origin) {
+                snprintf(why, why_len, "%s line 2: the made-by line is longer than %zu bytes", path,
+                         sizeof t->origin - 1);
+                rc = -1;
+                break;
+            }
+            memcpy(t->origin, o, ol + 1);
+            continue;
+        }
         sweep_row r;
-        if (!complete || !parse_row(line, &r)) continue;
+        char sub[200];
+        if (!parse_row(line, &r, sub, sizeof sub)) {
+            snprintf(why, why_len, "%s line %d: %s", path, lineno, sub);
+            rc = -1;
+            break;
+        }
         if (!sweep_table_add(t, &r)) {
             snprintf(why, why_len, "out of memory reading %s", path);
             rc = -1;
             break;
         }
+    }
+    if (rc == 0 && ferror(f)) {
+        snprintf(why, why_len, "%s: read error", path);
+        rc = -1;
     }
     if (rc == 0 && lineno == 0) {
         /* An empty file: treated as new (the header is written by the caller only for a new file,
@@ -196,15 +248,53 @@ int sweep_row_compare(const void *a, const void *b)
     return c;
 }
 
-void sweep_table_fix_tail(const char *path, FILE *f)
+int sweep_row_same_result(const sweep_row *a, const sweep_row *b, char *what, size_t what_len)
+{
+    char x[48], y[48];
+    const char *name = NULL;
+    if (strcmp(a->regime, b->regime)) {
+        name = "regime";
+        snprintf(x, sizeof x, "%s", a->regime);
+        snprintf(y, sizeof y, "%s", b->regime);
+    } else if (strcmp(a->first_type, b->first_type)) {
+        name = "first_type";
+        snprintf(x, sizeof x, "%s", a->first_type);
+        snprintf(y, sizeof y, "%s", b->first_type);
+    } else if (a->first_dw != b->first_dw) {
+        name = "first_dw";
+        snprintf(x, sizeof x, "%.10g", a->first_dw);
+        snprintf(y, sizeof y, "%.10g", b->first_dw);
+    } else if (a->first_dz != b->first_dz) {
+        name = "first_dz";
+        snprintf(x, sizeof x, "%.10g", a->first_dz);
+        snprintf(y, sizeof y, "%.10g", b->first_dz);
+    } else if (strcmp(a->upper, b->upper)) {
+        name = "upper";
+        snprintf(x, sizeof x, "%s", a->upper);
+        snprintf(y, sizeof y, "%s", b->upper);
+    } else if (strcmp(a->note, b->note)) {
+        name = "note";
+        snprintf(x, sizeof x, "%.40s", a->note);
+        snprintf(y, sizeof y, "%.40s", b->note);
+    }
+    if (!name) return 1;
+    snprintf(what, what_len, "%s %s against %s", name, x, y);
+    return 0;
+}
+
+int sweep_table_fix_tail(const char *path)
 {
     FILE *r = fopen(path, "rb");
-    if (!r) return;
-    int last = EOF;
-    if (fseek(r, -1, SEEK_END) == 0) last = fgetc(r);
-    fclose(r);
-    if (last != EOF && last != '\n') {
-        fputc('\n', f);
-        fflush(f);
+    if (!r) return 0;
+    /* The offset just past the last newline: everything after it is a cut row. */
+    long keep = 0, pos = 0;
+    int c, last = EOF;
+    while ((c = fgetc(r)) != EOF) {
+        pos++;
+        if (c == '\n') keep = pos;
+        last = c;
     }
+    fclose(r);
+    if (last == EOF || last == '\n') return 0;
+    return truncate(path, (off_t)keep);
 }

@@ -8,7 +8,14 @@
  * says how the upper state was reached (route, continued: from the neighbouring Gamma's, -: none);
  * note is free text without commas (the reason of a failure, the regimes either side of a
  * boundary). Numbers are printed with 17 significant digits so a resumed sweep finds its grid
- * points again exactly. Files of the earlier 11-column layout (no dl, no upper) are refused. */
+ * points again exactly. Files of the earlier 11-column layout (no dl, no upper) are refused.
+ *
+ * Line 2 says what made the file (issue 33, item 11; sim_sweep_origin.h builds and compares it):
+ *     # made by: ribbon-sim 1.2.0; scene 0123456789abcdef; nodes 41; phi 60:120:2; ...
+ * Every other line is a whole row: a line that does not parse (a nan, a missing field, an unknown
+ * kind, a line past 1023 bytes) is an error naming the file and the line, never skipped. The one
+ * exception is a last line without its newline, a row cut by a kill: left out and counted
+ * (sweep_table.cut_line), and cut off the file when a sweep resumes it. */
 #ifndef RIBBON_DAEMON_SIM_SWEEP_ROW_H
 #define RIBBON_DAEMON_SIM_SWEEP_ROW_H
 
@@ -28,19 +35,24 @@ typedef struct sweep_row {
     char note[160];
 } sweep_row;
 
+#define SWEEP_ORIGIN_MAX 512
+
 typedef struct sweep_table {
     sweep_row *rows;
     size_t n, cap;
+    char origin[SWEEP_ORIGIN_MAX]; /* line 2 after "# made by: ", "" when the file has none */
+    long cut_line;                 /* the number of a last line cut short (left out), else 0 */
 } sweep_table;
 
-/* Reads the rows of an existing sweep file into t (an absent file is an empty table). Lines that
- * do not parse (a row cut by a kill) are skipped. Fails (returns -1 with err) when the file is
- * not a sweep file (wrong header) or memory runs out. */
+/* Reads the rows of an existing sweep file into t (an absent file is an empty table). A last line
+ * without its newline (a row cut by a kill) is left out (t->cut_line). Fails (returns -1 with
+ * err) when the file is not a sweep file (wrong header), a line is not a row ("FILE line N: why")
+ * or memory runs out. */
 int sweep_table_load(const char *path, sweep_table *t, char *why, size_t why_len);
 
 /* The same on an open file (path names it in messages): the parser itself, fuzzed on its own
- * (fuzz/fuzz_sweep_csv.c). A line longer than 1023 bytes is skipped whole, never read as a row
- * from its middle. */
+ * (fuzz/fuzz_sweep_csv.c). A line longer than 1023 bytes is refused, never read as a row from its
+ * middle. */
 int sweep_table_read(FILE *f, const char *path, sweep_table *t, char *why, size_t why_len);
 int sweep_table_add(sweep_table *t, const sweep_row *r);
 void sweep_table_free(sweep_table *t);
@@ -57,11 +69,17 @@ const sweep_row *sweep_table_find_same(const sweep_table *t, const sweep_row *r)
  * sweep-merge writes, so files of differently split runs compare line by line. */
 int sweep_row_compare(const void *a, const void *b);
 
-void sweep_row_write_header(FILE *f);
+/* The header line, then "# made by: origin" when origin is not empty. */
+void sweep_row_write_header(FILE *f, const char *origin);
 void sweep_row_write(FILE *f, const sweep_row *r);
 
-/* When the file at path does not end with a newline (a row cut by a kill), writes one to f (the
- * same file opened for appending) so the next row starts on its own line. */
-void sweep_table_fix_tail(const char *path, FILE *f);
+/* Whether two rows at the same place say the same (every field but wall_s, a measurement):
+ * 1 same, 0 not, with the first field that differs and both values in what. */
+int sweep_row_same_result(const sweep_row *a, const sweep_row *b, char *what, size_t what_len);
+
+/* When the file at path does not end with a newline (a row cut by a kill), cuts that last part
+ * line off, so the next row appended starts on its own line and the file holds whole rows only.
+ * 0, or -1 when the file could not be cut (errno). */
+int sweep_table_fix_tail(const char *path);
 
 #endif

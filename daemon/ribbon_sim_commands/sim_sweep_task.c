@@ -53,20 +53,51 @@ typedef struct row_task {
     rod_solver *s;       /* shared by every rod of the task (same node count) */
 } row_task;
 
-static rod_scene scene_at(const row_task *t, double gamma)
+rod_scene sweep_scene_at(const sweep_spec *sp, double phi, double gamma, double dl)
 {
-    rod_scene sc = t->sp->base;
+    rod_scene sc = sp->base;
     sc.fold_angle_rel = 0.0; /* the analysis traces the perfect scene (rod_bifurcation.h) */
-    sc.fold_angle_deg = t->sp->sign * t->phi;
+    sc.fold_angle_deg = sp->sign * phi;
     sc.fold_position = gamma;
-    sc.compression = t->dl;
+    sc.compression = dl;
     return sc;
+}
+
+static rod_scene scene_at(const row_task *t, double gamma) { return sweep_scene_at(t->sp, t->phi, gamma, t->dl); }
+
+int sweep_grid_check(const sweep_spec *sp, const double *phi, int nphi, const double *dl, int ndl, char *why,
+                     size_t why_len)
+{
+    for (int k = 0; k < ndl; k++)
+        for (int i = 0; i < nphi; i++)
+            for (int j = 0; j < sp->ngamma; j++) {
+                rod_scene sc = sweep_scene_at(sp, phi[i], sp->gamma[j], dl[k]);
+                char msg[256] = "", key[64] = "";
+                if (rod_scene_check(&sc, msg, sizeof msg, key, sizeof key) != 0) {
+                    snprintf(why, why_len, "phi %g deg, Gamma %g, Delta L %g: %s: %s", phi[i], sp->gamma[j], dl[k],
+                             key, msg);
+                    return -1;
+                }
+            }
+    return 0;
+}
+
+/* A point the mesh cannot hold (rod_scene_check on u->sc): 1 with its own reason in u->why (not
+ * a path that failed, and not "lost"), else 0. */
+static int unfit(upper *u)
+{
+    char msg[160], key[64];
+    if (rod_scene_check(&u->sc, msg, sizeof msg, key, sizeof key) == 0) return 0;
+    snprintf(u->why, sizeof u->why, "%s: %s", key, msg);
+    u->lost = 0;
+    return 1;
 }
 
 static void by_route(row_task *t, upper *u, double gamma)
 {
     double t0 = now();
     u->sc = scene_at(t, gamma);
+    if (unfit(u)) return;
     u->r = NULL;
     rod *r = NULL;
     char err[160] = "";
@@ -99,6 +130,7 @@ static void by_continuation(row_task *t, const upper *from, upper *u, double gam
 {
     double t0 = now();
     u->sc = scene_at(t, gamma);
+    if (unfit(u)) return;
     rod_seed_report rep;
     rod *last = NULL;
     rod_scene last_sc;
@@ -169,7 +201,8 @@ static void chain(row_task *t, upper *ups)
     /* Another path to the points still unreached: continuation back from the next solved point
      * beyond them (away from the anchor), when there is one. */
     for (int j = 0; j < ng && !*t->cancel; j++) {
-        if (ups[j].r) continue;
+        rod_scene sc = scene_at(t, t->sp->gamma[j]);
+        if (ups[j].r || rod_scene_check(&sc, NULL, 0, NULL, 0) != 0) continue;
         int dir = j < anchor ? -1 : 1, k = j + dir;
         while (k >= 0 && k < ng && !ups[k].r) k += dir;
         if (k < 0 || k >= ng) continue;
@@ -362,16 +395,31 @@ void sweep_run_row(const sweep_spec *sp, double phi, double dl, const sweep_tabl
     int ng = sp->ngamma;
     upper *ups = calloc((size_t)ng, sizeof *ups);
     sweep_row *rows = calloc((size_t)ng, sizeof *rows);
-    rod_scene sc = scene_at(&t, sp->gamma[0]);
     rod *probe_rod = NULL;
-    if (!ups || !rows || rod_alloc(&sc, &probe_rod, NULL, 0) != ROD_OK || !(t.s = rod_solver_alloc(probe_rod))) {
-        /* Out of memory: every point failed, with the reason (never a half-written row). */
+    /* The solver is sized on the first grid point the mesh can hold (every Gamma gives the same
+     * node count); a point it cannot hold fails alone, with rod_scene_check's reason (issue 33,
+     * item 10: one such point made every point of the row "out of memory"). */
+    char bad[160] = "";
+    int first_ok = -1;
+    for (int j = 0; j < ng && first_ok < 0; j++) {
+        rod_scene sc = scene_at(&t, sp->gamma[j]);
+        if (rod_scene_check(&sc, NULL, 0, NULL, 0) == 0) first_ok = j;
+    }
+    if (first_ok >= 0) {
+        rod_scene sc = scene_at(&t, sp->gamma[first_ok]);
+        if (rod_alloc(&sc, &probe_rod, bad, sizeof bad) == ROD_OK) t.s = rod_solver_alloc(probe_rod);
+    }
+    if (!ups || !rows || !t.s) {
+        /* Every point failed, with the reason (never a half-written row). */
         for (int j = 0; j < ng; j++) {
             sweep_row r;
+            rod_scene sc = scene_at(&t, sp->gamma[j]);
+            char msg[160] = "";
             row_init(&t, &r, 'p', sp->gamma[j]);
             snprintf(r.regime, sizeof r.regime, "failed");
             snprintf(r.first_type, sizeof r.first_type, "none");
-            snprintf(r.note, sizeof r.note, "out of memory allocating the row task");
+            if (rod_scene_check(&sc, msg, sizeof msg, NULL, 0) != 0) snprintf(r.note, sizeof r.note, "%s", msg);
+            else snprintf(r.note, sizeof r.note, "%s", bad[0] ? bad : "out of memory allocating the row task");
             emit_fn(ctx, &r, 1);
         }
         goto done;

@@ -44,6 +44,17 @@ typedef void (*sweep_emit_fn)(void *ctx, const sweep_row *row, int is_new);
 void sweep_run_row(const sweep_spec *sp, double phi, double dl, const sweep_table *known, sweep_emit_fn emit,
                    void *ctx, const volatile sig_atomic_t *cancel);
 
+/* The scene a task solves at (phi, gamma, dl): the base scene with the crease magnitude phi (deg,
+ * the base's sign), position gamma, Delta L dl and no imperfection. */
+rod_scene sweep_scene_at(const sweep_spec *sp, double phi, double gamma, double dl);
+
+/* rod_scene_check on every grid point (each phi, each of sp->gamma, each dl): 0 when all hold,
+ * else -1 with the first point that does not and its reason ("phi 90 deg, Gamma 0.05, Delta L
+ * 0.5: folds.position: the crease ... lies inside the clamp ...") in why. A sweep refuses such a
+ * grid before it computes anything (issue 33, item 10). */
+int sweep_grid_check(const sweep_spec *sp, const double *phi, int nphi, const double *dl, int ndl, char *why,
+                     size_t why_len);
+
 /* Regimes a boundary may separate: asymmetric, symmetric and none (no snap). */
 int sweep_is_regime(const sweep_row *r);
 

@@ -482,7 +482,7 @@ static int cmd_phase_report(const ctl_opts *o)
     double p0 = 30, p1 = 150, g0 = 0.08, g1 = 0.28;
     size_t np = 5, ng = 6;
     if (parse_range(o->phi, &p0, &p1, &np) || parse_range(o->gamma, &g0, &g1, &ng))
-        return usage_error("phase-report", "--phi and --gamma take FROM:TO:COUNT (count 1..64)");
+        return usage_error("phase-report", "--phi and --gamma take FROM:TO:COUNT (FROM <= TO, count 1..64)");
     rod_scene sc;
     cfg_error ce;
     char why[512];

@@ -1,6 +1,7 @@
 /* store.c: opening and closing the store: the file's identity and schema (store_schema.c), its
  * pragmas (WAL, synchronous NORMAL, foreign keys), read-only opens; the wall clock the records
  * use. The public face of the room is store.h. */
+#include "store_open_ro.h"
 #include "store_schema.h"
 #include "store_sql.h"
 
@@ -71,7 +72,14 @@ store_err store_open_ex(const char *path, const store_open_params *p, store **ou
         return store_fail(why, why_len, STORE_E_NOMEM, "out of memory opening %s", path);
     st->read_only = p->read_only;
     int flags = p->read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
-    int rc = sqlite3_open_v2(path, &st->db, flags, NULL);
+    /* Read-only: a WAL store in a directory this user cannot write (store_open_ro.h). */
+    char target[2048];
+    int uri = 0;
+    if (p->read_only && store_open_ro_target(path, target, sizeof target, &uri, why, why_len) != 0) {
+        store_close(st);
+        return STORE_E_IO;
+    }
+    int rc = sqlite3_open_v2(p->read_only ? target : path, &st->db, flags | (uri ? SQLITE_OPEN_URI : 0), NULL);
     store_err e = STORE_OK;
     if (rc != SQLITE_OK) {
         e = store_fail(why, why_len, store_err_of_rc(rc) == STORE_OK ? STORE_E_IO : store_err_of_rc(rc),

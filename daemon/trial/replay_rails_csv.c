@@ -50,6 +50,14 @@ int replay_rails_csv_read(FILE *f, const char *name, rail_reading **rails, size_
                      name, lineno);
             goto out;
         }
+        for (int c = 1; c <= 2; c++)
+            if (!(fabs(v[c]) <= REPLAY_RAILS_MAX_MM)) {
+                snprintf(why, why_len,
+                         "rails CSV %.300s line %ld: %s %.6g is beyond any rail (|position| <= %.0e mm, the "
+                         "bound of a rig file's soft limits)",
+                         name, lineno, c == 1 ? "compress_mm" : "shear_mm", v[c], REPLAY_RAILS_MAX_MM);
+                goto out;
+            }
         if (nr > 0 && !(v[0] > r[nr - 1].t)) {
             snprintf(why, why_len, "rails CSV %.300s line %ld: t_s must increase (%.9g after %.9g)", name,
                      lineno, v[0], r[nr - 1].t);

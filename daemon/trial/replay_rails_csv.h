@@ -6,7 +6,9 @@
  * optional header line (before any reading), '#' comments and blank lines anywhere, spaces and
  * tabs around the numbers, numbers plain decimal (config/cfg_number.h), t strictly increasing,
  * at least two readings, at most REPLAY_RAILS_MAX; a line longer than REPLAY_RAILS_LINE_MAX is
- * refused (never split into two readings). */
+ * refused (never split into two readings). A position beyond REPLAY_RAILS_MAX_MM either way is
+ * refused with its line (issue 33, item 12: 1e300 mm once became a "done" trial with Delta L =
+ * 5e297). */
 #ifndef RIBBON_DAEMON_TRIAL_REPLAY_RAILS_CSV_H
 #define RIBBON_DAEMON_TRIAL_REPLAY_RAILS_CSV_H
 
@@ -15,6 +17,10 @@
 
 #define REPLAY_RAILS_MAX 10000000  /* readings in a rails CSV */
 #define REPLAY_RAILS_LINE_MAX 510  /* bytes of one line, without its newline */
+/* mm, the largest |position| of either rail: the bound a rig file's soft limits may take
+ * (config/rail_config.c, soft_min_mm and soft_max_mm in [-1e6, 1e6]), so no rig that could have
+ * recorded the file reaches beyond it. */
+#define REPLAY_RAILS_MAX_MM 1e6
 
 typedef struct rail_reading {
     double t, compress_mm, shear_mm;

@@ -78,6 +78,14 @@ static trial_replay *replay_new(char *why, size_t why_len)
     return r;
 }
 
+/* "video PATH: reason" from a vision error: its message as it is when it names the video already,
+ * and never an empty reason (issue 33). */
+static void video_why(char *why, size_t why_len, const char *path, const char *msg)
+{
+    if (!strncmp(msg, "video ", 6)) snprintf(why, why_len, "%s", msg);
+    else snprintf(why, why_len, "video %.300s: %s", path, msg[0] ? msg : "cannot be read (no reason given)");
+}
+
 static int check_video_belongs(trial_replay *r, char *why, size_t why_len);
 
 int trial_replay_from_trial(store *st, int64_t source_id, const char *video, trial_replay **out, char *why,
@@ -151,7 +159,7 @@ static int check_video_belongs(trial_replay *r, char *why, size_t why_len)
     vis_frame *frame = vs ? vis_frame_alloc(16, 16, 1, &ve) : NULL;
     int rc = -1;
     if (!vs || !frame) {
-        snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
+        video_why(why, why_len, r->video, ve.message);
     } else if (vis_source_read(vs, frame, NULL, &ve) != VIS_OK) {
         snprintf(why, why_len, "video %.300s: no first frame: %s", r->video, ve.message);
     } else if (r->rec.roi.w > 0 && r->rec.roi.h > 0 &&
@@ -285,9 +293,11 @@ int trial_replay_from_files(const rig_config *cfg, trial_replay **out, char *why
     }
     snprintf(r->video, sizeof r->video, "%s", cfg->replay.video);
     vs = vis_source_open_video_prefetch(r->video, &ve);
-    frame = vis_frame_alloc(16, 16, 1, &ve);
+    /* Only after a source opened: a frame allocated regardless cleared the open's reason (issue
+     * 33: "video PATH: " with nothing after for a text file, /dev/zero, a FIFO, a directory). */
+    frame = vs ? vis_frame_alloc(16, 16, 1, &ve) : NULL;
     if (!vs || !frame) {
-        snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
+        video_why(why, why_len, r->video, ve.message);
         goto fail;
     }
     if (vis_source_read(vs, frame, NULL, &ve) != VIS_OK) {
@@ -574,7 +584,7 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
     vis_error ve = {0};
     vs = vis_source_open_video_prefetch(r->video, &ve);
     if (!vs) {
-        snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
+        video_why(why, why_len, r->video, ve.message);
         goto fail;
     }
     const trial_record *rec = &r->rec;
@@ -640,7 +650,7 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
         vis_status s = vis_source_read(vs, frame, NULL, &ve);
         if (s == VIS_ERR_END) break;
         if (s != VIS_OK) {
-            snprintf(why, why_len, "video %.300s: %s", r->video, ve.message);
+            video_why(why, why_len, r->video, ve.message);
             goto drain_and_fail;
         }
         store_sample x = store_sample_default();

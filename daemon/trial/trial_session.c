@@ -17,6 +17,7 @@
 #include "store.h"
 #include "trial_camera_setup.h"
 #include "trial_config_text.h"
+#include "trial_disk_words.h"
 #include "trial_live.h"
 #include "trial_prediction.h"
 #include "trial_publish.h"
@@ -353,10 +354,9 @@ static int session_check_disk(trial_session *s, char *why, size_t why_len)
         snprintf(why, why_len, "video directory %.300s cannot be read: %m", cfg->camera.video_dir);
         return -1;
     }
-    double free_mb = (double)fs.f_bavail * (double)fs.f_frsize / 1e6;
-    if (free_mb < cfg->trial.min_free_disk_mb) {
-        snprintf(why, why_len, "only %.0f MB free in %.300s; a trial needs %.0f MB (trial.min_free_disk_mb)", free_mb,
-                 cfg->camera.video_dir, cfg->trial.min_free_disk_mb);
+    double free_bytes = (double)fs.f_bavail * (double)fs.f_frsize;
+    if (free_bytes / 1e6 < cfg->trial.min_free_disk_mb) {
+        trial_disk_words(why, why_len, free_bytes, cfg->trial.min_free_disk_mb, cfg->camera.video_dir);
         return -1;
     }
     return 0;

@@ -71,6 +71,9 @@ static void test_strtod_shape_and_range(void **s)
     assert_int_equal(cfg_number_range("1:2:3x", &a, &b, &n, 64), -1);
     assert_int_equal(cfg_number_range("1:2:3.0", &a, &b, &n, 64), -1);
     assert_int_equal(cfg_number_range("1:inf:3", &a, &b, &n, 64), -1);
+    /* A reversed range (issue 33, item 9) is its own refusal, so callers can say so. */
+    assert_int_equal(cfg_number_range("0.30:0.05:6", &a, &b, &n, 64), -2);
+    assert_int_equal(cfg_number_range("0.05:0.05:1", &a, &b, &n, 64), 0);
 }
 
 int main(void)

@@ -17,8 +17,10 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "scene_file.h"
 #include "sim_cmd.h"
 #include "sim_sweep_row.h"
+#include "sim_sweep_task.h"
 
 static char csv_path[256];
 
@@ -259,6 +261,262 @@ static void test_bad_axes_and_shards(void **state)
     assert_int_equal(access(path, F_OK), -1); /* nothing written */
 }
 
+/* Issue 33, item 9: a reversed range (high to low) once gave boundaries with inverted brackets and
+ * no bisection; now every range option refuses it, before anything is written. */
+static void test_reversed_ranges_refused(void **state)
+{
+    (void)state;
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/test_sweep_reversed_%d.csv", (int)getpid());
+    unlink(path);
+    assert_int_equal(run_grid("90:90:1", "0.30:0.05:6", path, NULL, NULL), 2);
+    assert_int_equal(run_grid("120:60:2", "0.12:0.22:2", path, NULL, NULL), 2);
+    assert_int_equal(run_grid("90:90:1", "0.12:0.22:2", path, "--dl", "0.5:0.4:2"), 2);
+    assert_int_equal(access(path, F_OK), -1); /* nothing written */
+}
+
+/* sweep at N nodes (mesh.nodes=N) on the grid phi x gamma into out. */
+static int run_nodes(const char *nodes_set, const char *gamma, const char *out)
+{
+    char scene[512];
+    snprintf(scene, sizeof scene, "%s/config/scenes/paper-gamma013.ini", RIBBON_SOURCE_DIR);
+    char *argv[] = {"sweep", "--scene", scene, "--set", (char *)nodes_set, "--phi", "90:90:1", "--gamma",
+                    (char *)gamma, "--out", (char *)out, "--jobs", "1", NULL};
+    fflush(stdout);
+    return sim_cmd_sweep((int)(sizeof argv / sizeof argv[0]) - 1, argv);
+}
+
+/* Issue 33, item 10: a Gamma the mesh cannot hold (a crease inside the clamp: closer than one
+ * edge, 1/(N-3)) made every point of the row "failed" with "out of memory allocating the row
+ * task". The grid is now refused before anything runs, naming the point; nothing is written. */
+static void test_grid_point_inside_the_clamp_refused(void **state)
+{
+    (void)state;
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/test_sweep_clamp_%d.csv", (int)getpid());
+    unlink(path);
+    assert_int_equal(run_nodes("mesh.nodes=21", "0.05:0.2:2", path), 2); /* 0.05 < 1/18 */
+    assert_int_equal(run_nodes("mesh.nodes=61", "0.01:0.2:2", path), 2); /* 0.01 < 1/58 */
+    assert_int_equal(access(path, F_OK), -1);
+}
+
+typedef struct collected {
+    sweep_row rows[64];
+    int n;
+} collected;
+
+static void collect(void *ctx, const sweep_row *row, int is_new)
+{
+    collected *c = ctx;
+    (void)is_new;
+    if (c->n < 64) c->rows[c->n++] = *row;
+}
+
+/* The row task itself (what a farm or shard runs): the point the mesh cannot hold fails alone
+ * with rod_scene_check's reason; the other point of the row is classified. N = 21. */
+static void test_row_task_fails_only_the_unfit_point(void **state)
+{
+    (void)state;
+    char scene[512];
+    snprintf(scene, sizeof scene, "%s/config/scenes/paper-gamma013.ini", RIBBON_SOURCE_DIR);
+    const char *sets[] = {"mesh.nodes=21"};
+    sweep_spec sp;
+    memset(&sp, 0, sizeof sp);
+    cfg_error ce;
+    assert_int_equal(cfg_scene_load(scene, sets, 1, &sp.base, &ce), CFG_OK);
+    const double gamma[] = {0.03, 0.15};
+    sp.sign = sp.base.fold_angle_deg < 0.0 ? -1.0 : 1.0;
+    sp.gamma = gamma;
+    sp.ngamma = 2;
+    sp.gamma_tol = 0.05;
+    char why[512];
+    const double phi = 90.0, dl = 0.5;
+    assert_int_equal(sweep_grid_check(&sp, &phi, 1, &dl, 1, why, sizeof why), -1);
+    print_message("refused: %s\n", why);
+    assert_non_null(strstr(why, "Gamma 0.03"));
+    assert_non_null(strstr(why, "inside the clamp"));
+    collected c = {.n = 0};
+    sweep_table known = {0};
+    sweep_run_row(&sp, phi, dl, &known, collect, &c, NULL);
+    int points = 0;
+    for (int k = 0; k < c.n; k++) {
+        if (c.rows[k].kind != 'p') continue;
+        points++;
+        print_message("Gamma %.2f: %s (%s)\n", c.rows[k].gamma, c.rows[k].regime, c.rows[k].note);
+        if (c.rows[k].gamma == 0.03) {
+            assert_string_equal(c.rows[k].regime, "failed");
+            assert_non_null(strstr(c.rows[k].note, "inside the clamp"));
+        } else {
+            assert_true(sweep_is_regime(&c.rows[k]));
+        }
+        assert_null(strstr(c.rows[k].note, "out of memory"));
+    }
+    assert_int_equal(points, 2);
+}
+
+/* ---- issue 33, item 11: what made a shard, and rows that are not rows --------------------- */
+
+static char *slurp(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    static char buf[1 << 16];
+    size_t n = fread(buf, 1, sizeof buf - 1, f);
+    fclose(f);
+    buf[n] = '\0';
+    return buf;
+}
+
+/* dst = src with the first `from` replaced by `to` (which must be there). */
+static void copy_edit(const char *src, const char *dst, const char *from, const char *to)
+{
+    const char *text = slurp(src);
+    const char *at = strstr(text, from);
+    if (!at) fail_msg("'%s' not in %s", from, src);
+    FILE *f = fopen(dst, "wb");
+    assert_non_null(f);
+    fwrite(text, 1, (size_t)(at - text), f);
+    fputs(to, f);
+    fputs(at + strlen(from), f);
+    fclose(f);
+}
+
+static int merge2(const char *out, const char *a, const char *b)
+{
+    char *argv[] = {"sweep-merge", "--out", (char *)out, (char *)a, (char *)b, NULL};
+    unlink(out);
+    fflush(stdout);
+    return sim_cmd_sweep_merge(b ? 5 : 4, argv);
+}
+
+static char shard[256], other[256], merged_out[256];
+
+/* One small sweep (N = 41, Gamma 0.12 and 0.22, --gamma-tol 0.05): the file the cases edit. */
+static int sweep_file_setup(void **state)
+{
+    (void)state;
+    int pid = (int)getpid();
+    snprintf(shard, sizeof shard, "/tmp/test_sweep_origin_a_%d.csv", pid);
+    snprintf(other, sizeof other, "/tmp/test_sweep_origin_b_%d.csv", pid);
+    snprintf(merged_out, sizeof merged_out, "/tmp/test_sweep_origin_m_%d.csv", pid);
+    unlink(shard);
+    return run_grid("90:90:1", "0.12:0.22:2", shard, "--gamma-tol", "0.05");
+}
+
+static int sweep_file_teardown(void **state)
+{
+    (void)state;
+    unlink(shard);
+    unlink(other);
+    unlink(merged_out);
+    return 0;
+}
+
+/* The file says what made it, and the merge refuses shards of another N, another grid, or none. */
+static void test_merge_refuses_shards_of_different_sweeps(void **state)
+{
+    (void)state;
+    const char *text = slurp(shard);
+    const char *made = strstr(text, "\n# made by: ribbon-sim ");
+    assert_non_null(made);
+    print_message("%.200s\n", made + 1);
+    assert_non_null(strstr(made, "; nodes 41; phi 90:90:1; gamma 0.12:0.22:2; dl 0.5:0.5:1; gamma-tol 0.05; seed continue"));
+    copy_edit(shard, other, "; nodes 41;", "; nodes 61;");
+    assert_int_equal(merge2(merged_out, shard, other), 1);
+    assert_int_equal(access(merged_out, F_OK), -1);
+    copy_edit(shard, other, "; gamma 0.12:0.22:2;", "; gamma 0.12:0.22:3;");
+    assert_int_equal(merge2(merged_out, shard, other), 1);
+    copy_edit(shard, other, "; scene ", "; scene 0");
+    assert_int_equal(merge2(merged_out, shard, other), 1);
+    const char *t = slurp(shard);
+    const char *nl = strchr(strstr(t, "# made by:"), '\n');
+    char line2[600];
+    snprintf(line2, sizeof line2, "%.*s", (int)(nl - strstr(t, "# made by:") + 1), strstr(t, "# made by:"));
+    copy_edit(shard, other, line2, ""); /* an earlier ribbon-sim's file */
+    assert_int_equal(merge2(merged_out, other, NULL), 1);
+    /* The same file twice: rows that agree are kept once. */
+    assert_int_equal(merge2(merged_out, shard, shard), 0);
+    sweep_table a = load_sorted(shard), m = load_sorted(merged_out);
+    assert_int_equal(a.n, m.n);
+    assert_string_equal(a.origin, m.origin);
+    sweep_table_free(&a);
+    sweep_table_free(&m);
+}
+
+/* Two rows at one place that differ are an error naming the row; so is a row with nan, in the
+ * merge and in a resume (it was dropped: "0 rows from 1 files", exit 0). */
+static void test_merge_refuses_conflicts_and_rows_that_are_not_rows(void **state)
+{
+    (void)state;
+    const char *text = slurp(shard);
+    const char *p = strstr(text, "\npoint,");
+    assert_non_null(p);
+    char row[1100];
+    snprintf(row, sizeof row, "%.*s", (int)(strchr(p + 1, '\n') - p), p);
+    /* The same point, another regime. */
+    char changed[1100];
+    snprintf(changed, sizeof changed, "%s", row);
+    char *reg = strstr(changed, ",asymmetric,") ? strstr(changed, ",asymmetric,") : strstr(changed, ",symmetric,");
+    assert_non_null(reg);
+    const char *swap = strstr(changed, ",asymmetric,") ? ",symmetric," : ",asymmetric,";
+    char rebuilt[1100];
+    snprintf(rebuilt, sizeof rebuilt, "%.*s%s%s", (int)(reg - changed), changed, swap,
+             reg + (strstr(changed, ",asymmetric,") ? strlen(",asymmetric,") : strlen(",symmetric,")));
+    copy_edit(shard, other, row, rebuilt);
+    assert_int_equal(merge2(merged_out, shard, other), 1);
+    assert_int_equal(access(merged_out, F_OK), -1);
+    /* A nan in the row's first_dw (field 9). */
+    char *f = rebuilt;
+    snprintf(rebuilt, sizeof rebuilt, "%s", row);
+    for (int k = 0; k < 8; k++) f = strchr(f + 1, ',');
+    char *end = strchr(f + 1, ',');
+    char nanrow[1100];
+    snprintf(nanrow, sizeof nanrow, "%.*s,nan%s", (int)(f - rebuilt), rebuilt, end);
+    copy_edit(shard, other, row, nanrow);
+    assert_int_equal(merge2(merged_out, other, NULL), 1);
+    sweep_table t;
+    char err[512];
+    assert_int_equal(sweep_table_load(other, &t, err, sizeof err), -1);
+    print_message("%s\n", err);
+    assert_non_null(strstr(err, "line 3"));
+    assert_non_null(strstr(err, "first_dw 'nan'"));
+    assert_int_equal(run_grid("90:90:1", "0.12:0.22:2", other, "--gamma-tol", "0.05"), 1); /* no resume over it */
+}
+
+/* A resume refuses a file another sweep made (another N); one of its Delta L's alone is fine. A
+ * last row cut by a kill is cut off the file on resume, not left as a broken line. */
+static void test_resume_checks_origin_and_cuts_a_cut_row(void **state)
+{
+    (void)state;
+    char scene[512];
+    snprintf(scene, sizeof scene, "%s/config/scenes/paper-gamma013.ini", RIBBON_SOURCE_DIR);
+    char *argv[] = {"sweep", "--scene", scene, "--set", "mesh.nodes=31", "--phi", "90:90:1", "--gamma", "0.12:0.22:2",
+                    "--gamma-tol", "0.05", "--out", shard, NULL};
+    fflush(stdout);
+    assert_int_equal(sim_cmd_sweep((int)(sizeof argv / sizeof argv[0]) - 1, argv), 1); /* N 31 on an N 41 file */
+    assert_int_equal(run_grid("90:90:1", "0.12:0.22:2", shard, "--gamma-tol", "0.05"), 0); /* the same: resumes */
+    sweep_table before = load_sorted(shard);
+    FILE *f = fopen(shard, "ab");
+    assert_non_null(f);
+    fputs("point,90,0.17,0.17,0.17,0.5,asym", f); /* a row cut by a kill */
+    fclose(f);
+    sweep_table cut;
+    char err[512];
+    assert_int_equal(sweep_table_load(shard, &cut, err, sizeof err), 0);
+    assert_int_equal(cut.n, before.n);
+    assert_true(cut.cut_line > 0);
+    sweep_table_free(&cut);
+    assert_int_equal(run_grid("90:90:1", "0.12:0.22:2", shard, "--gamma-tol", "0.05"), 0);
+    const char *text = slurp(shard);
+    assert_null(strstr(text, "asym\n"));
+    assert_int_equal(text[strlen(text) - 1], '\n');
+    sweep_table after = load_sorted(shard);
+    assert_int_equal(after.n, before.n);
+    assert_int_equal(after.cut_line, 0);
+    sweep_table_free(&before);
+    sweep_table_free(&after);
+}
+
 int main(void)
 {
     gsl_set_error_handler_off();
@@ -270,6 +528,15 @@ int main(void)
         cmocka_unit_test(test_continued_upper_states_classify_like_routes),
         cmocka_unit_test(test_no_upper_state_between_two_folds),
         cmocka_unit_test(test_bad_axes_and_shards),
+        cmocka_unit_test(test_reversed_ranges_refused),
+        cmocka_unit_test(test_grid_point_inside_the_clamp_refused),
+        cmocka_unit_test(test_row_task_fails_only_the_unfit_point),
+        cmocka_unit_test_setup_teardown(test_merge_refuses_shards_of_different_sweeps, sweep_file_setup,
+                                        sweep_file_teardown),
+        cmocka_unit_test_setup_teardown(test_merge_refuses_conflicts_and_rows_that_are_not_rows, sweep_file_setup,
+                                        sweep_file_teardown),
+        cmocka_unit_test_setup_teardown(test_resume_checks_origin_and_cuts_a_cut_row, sweep_file_setup,
+                                        sweep_file_teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
