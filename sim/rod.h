@@ -181,6 +181,11 @@ void rod_hessian_add(rod *r, double s, double *H);
  * unless NULL and adds s * Hessian into H as rod_hessian_add unless H is NULL. */
 void rod_gradient_hessian(rod *r, double *g, double s, double *H);
 
+/* Share of a compliant crease node's turn beyond its rest angle, psi - phi, that the hinge itself
+ * takes (the rest is the strip's own bending over the node's Voronoi length): k_eff / k
+ * (rod_hinge.c). The hinge's own turn is phi + (psi - phi) rod_hinge_share(r, i). */
+double rod_hinge_share(const rod *r, int i);
+
 /* Integrated curvature kappa1 at each interior node (N values, 0 at the ends). */
 void rod_kappa1(const rod *r, double *k1);
 

@@ -42,3 +42,8 @@ double rod_hinge_stiffness_eff(const rod *r, int i)
 {
     return 1.0 / (1.0 / r->hinge_k + r->vor0[i] / r->EI1[i]);
 }
+
+double rod_hinge_share(const rod *r, int i)
+{
+    return rod_hinge_stiffness_eff(r, i) / r->hinge_k;
+}
