@@ -33,7 +33,13 @@
  *    the equations). The DER's critical load is where the straight state's free Hessian stops
  *    being positive definite (Sylvester inertia of its L D L^T factors, bisected in Delta L as in
  *    test_euler_buckling), with the axial force read from the edge strain. k = 5 EI / l at
- *    a = 0.15 l (at a = 0.25 l the first mode has no moment at the hinges), N = 21 .. 161. */
+ *    a = 0.15 l (at a = 0.25 l the first mode has no moment at the hinges), N = 21 .. 161.
+ *
+ * 3. Unequal creases in the prediction. A strip like the shipped rig's specimen (creases of 88
+ *    and 91 deg at 0.12 and 0.85 of the free length, compliant hinges) is predicted end to end
+ *    (the mock scene at N = 31, fast): nodes sit on both creases, the run snaps, Delta Z is read at
+ *    arc length 1/2 between nodes. The analyses that need the C2-symmetric scene (continuation's
+ *    classification, sweeps, the boundary) refuse it with a reason naming the key. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -48,6 +54,8 @@
 #include <gsl/gsl_permutation.h>
 
 #include "rod.h"
+#include "rod_bifurcation.h"
+#include "rod_protocol.h"
 #include "rod_solver.h"
 
 #define MOMENT_FINE_TOL 1e-5   /* finest mesh (N = 161): hinge turn error over phi + M/k, moment
@@ -370,9 +378,66 @@ static void test_column_with_springs(void **state)
     assert_true(order(err[N_MESHES - 2], err[N_MESHES - 1]) > ORDER_MIN);
 }
 
+/* ---- 3. unequal creases ------------------------------------------------------------------- */
+
+static void test_unequal_creases_predicted(void **state)
+{
+    (void)state;
+    rod_scene sc = rod_scene_default();
+    /* The mock rig's PET strip (config/scenes/mock-gamma013.ini), coarse. */
+    sc.length = 0.2;
+    sc.width = 5e-3;
+    sc.thickness = 0.25e-3;
+    sc.youngs_modulus = 4e9;
+    sc.shear_modulus = 4e9 / 2.76;
+    sc.density = 1380.0;
+    sc.nodes = 31;
+    sc.dt = 2e-3;
+    sc.shear_rate = 0.01;
+    sc.shear_max = 0.6;
+    sc.fold_angle_deg = -90.0;
+    sc.fold_angle_left_deg = -88.0;
+    sc.fold_angle_right_deg = -91.0;
+    sc.fold_position_left = 0.12;
+    sc.fold_position_right = 0.85;
+    sc.fold_hinge_stiffness = 2.5e-3;
+    rod *r = NULL;
+    char why[512];
+    assert_int_equal(rod_alloc(&sc, &r, why, sizeof why), ROD_OK);
+    assert_true(r->s_node[r->fold_node[0]] == 0.12 && r->s_node[r->fold_node[1]] == 0.85);
+    assert_true(r->mid_node < 0 && r->mid_w > 0.0 && r->mid_w < 1.0);
+    assert_true(r->s_node[r->mid_edge] < 0.5 && r->s_node[r->mid_edge + 1] > 0.5);
+    print_message("mesh: creases at nodes %d and %d, %d and %d outer edges; Delta Z between nodes %d and %d "
+                  "(weight %.3f)\n",
+                  r->fold_node[0], r->fold_node[1], r->fold_outer_edges, r->fold_outer_right, r->mid_edge,
+                  r->mid_edge + 1, r->mid_w);
+    rod_free(r);
+    rod_predict_opts o = rod_predict_opts_fast(&sc);
+    rod_prediction p;
+    assert_int_equal(rod_predict(&sc, &o, &p, why, sizeof why), ROD_OK);
+    print_message("88 / 91 deg at 0.12 / 0.85, k = 2.5e-3 N m/rad: snap Delta W %.4f, %s, peak |A| %.3f, "
+                  "upper Delta Z %.4f, %llu hinge evaluations\n",
+                  p.snap_dw, p.asymmetric ? "asymmetric" : "symmetric", p.peak_abs_a, p.dz_upper,
+                  (unsigned long long)p.count.hinge_evals);
+    assert_true(p.snapped && isfinite(p.snap_dw) && p.snap_dw > 0.0);
+    assert_true(p.count.hinge_evals > 0 && p.count.fold_evals == 0);
+
+    /* The symmetric analyses refuse it, naming the key. */
+    rod_analysis_opts ao = rod_analysis_opts_classify();
+    rod_analysis a;
+    assert_int_equal(rod_bifurcation_analyse(&sc, &ao, &a, why, sizeof why), ROD_ERR_SCENE);
+    print_message("continue: %s\n", why);
+    assert_non_null(strstr(why, "folds.angle_right_deg"));
+    sc.fold_angle_left_deg = sc.fold_angle_right_deg = NAN;
+    assert_int_equal(rod_bifurcation_analyse(&sc, &ao, &a, why, sizeof why), ROD_ERR_SCENE);
+    print_message("continue: %s\n", why);
+    assert_non_null(strstr(why, "folds.position_right"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_unequal_creases_predicted),
         cmocka_unit_test(test_end_moment),
         cmocka_unit_test(test_column_with_springs),
     };
