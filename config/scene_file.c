@@ -34,6 +34,7 @@ _Static_assert(sizeof(rod_route) == sizeof(int), "rod_route is stored as an int"
 #define MAXO CFG_KEY_MAX_OPEN
 
 static const char *const route_names[] = {"compress-then-fold", "together", NULL};
+static const char *const rigid_word[] = {"rigid", NULL};
 
 /* The key table. Bounds are the single-field physics limits (positive lengths, moduli, density;
  * Gamma in (0, 0.5); |phi| < 180), plus generous upper limits that only catch typos of many
@@ -61,8 +62,26 @@ static const cfg_scene_key scene_keys[] = {
      "the surface normal (up); 180 would fold the ribbon flat onto itself"},
     {"folds", "position", CFG_TYPE_DOUBLE, OFF(fold_position), 0.0, 0.5, REQ | MINO | MAXO, NULL,
      "1", "Gamma: the creases sit at Gamma and 1 - Gamma of the free length"},
+    {"folds", "angle_left_deg", CFG_TYPE_DOUBLE, OFF(fold_angle_left_deg), -180.0, 180.0, MINO | MAXO,
+     NULL, "deg",
+     "the left crease's own angle (the crease near the x = 0 clamp), same sign convention; default "
+     "angle_deg"},
+    {"folds", "angle_right_deg", CFG_TYPE_DOUBLE, OFF(fold_angle_right_deg), -180.0, 180.0,
+     MINO | MAXO, NULL, "deg", "the right crease's own angle; default angle_deg"},
+    {"folds", "position_left", CFG_TYPE_DOUBLE, OFF(fold_position_left), 0.0, 1.0, MINO | MAXO, NULL,
+     "1", "the left crease's position, from the left clamp point over the free length; default position"},
+    {"folds", "position_right", CFG_TYPE_DOUBLE, OFF(fold_position_right), 0.0, 1.0, MINO | MAXO,
+     NULL, "1",
+     "the right crease's position, from the left clamp point over the free length; default "
+     "1 - position"},
+    {"folds", "hinge_stiffness", CFG_TYPE_DOUBLE_OR_WORD, OFF(fold_hinge_stiffness), 0.0, 1e6, MINO,
+     rigid_word, "N m/rad",
+     "rotational stiffness k of each crease, a hinge whose energy depends on its turning angle "
+     "alone, or rigid (stiffness_factor holds the angle); default rigid"},
     {"folds", "stiffness_factor", CFG_TYPE_DOUBLE, OFF(fold_stiffness_factor), 1.0, 1e12, REQ,
-     NULL, "1", "multiplies the soft bending stiffness at a fold node (the paper gives none)"},
+     NULL, "1",
+     "rigid creases only (required with them, refused with a compliant hinge): multiplies the soft "
+     "bending stiffness at a fold node (the paper gives none)"},
 
     {"imperfection", "fold_angle_rel", CFG_TYPE_DOUBLE, OFF(fold_angle_rel), -1.0, 1.0, 0, NULL,
      "1",
@@ -183,20 +202,34 @@ static cfg_status value_apply(const cfg_scene_key *k, const char *value, rod_sce
                  k->type == CFG_TYPE_VEC3 ? "three numbers, e.g. \"0 0 -9.81\""
                  : k->type == CFG_TYPE_ENUM ? "a name"
                  : k->type == CFG_TYPE_INT  ? "an integer"
+                 : k->type == CFG_TYPE_DOUBLE_OR_WORD ? "a number or rigid"
                                             : "a number");
         return CFG_ERR_VALUE;
     }
     switch (k->type) {
+    case CFG_TYPE_DOUBLE_OR_WORD:
+        if (k->names && strcmp(value, k->names[0]) == 0) {
+            double inf = INFINITY;
+            memcpy(field, &inf, sizeof inf);
+            return CFG_OK;
+        }
+        __attribute__((fallthrough)); /* a number */
     case CFG_TYPE_DOUBLE: {
         const char *p = value;
         double v;
         cfg_status st = parse_number(&p, &v, msg, msglen);
+        if (st && k->type == CFG_TYPE_DOUBLE_OR_WORD) {
+            size_t used = strlen(msg);
+            snprintf(msg + used, msglen - used, " (expected a number of %s or %s)", k->unit, k->names[0]);
+        }
         if (st) return st;
         p = skip_space(p);
         if (*p) return trailing_error(p, value, msg, msglen);
         if (!in_range(k, v)) {
             range_text(k, range, sizeof range);
-            snprintf(msg, msglen, "%.10g is out of range: allowed %s (%s)", v, range, k->doc);
+            snprintf(msg, msglen, "%.10g is out of range: allowed %s%s%s (%s)", v, range,
+                     k->type == CFG_TYPE_DOUBLE_OR_WORD ? " or " : "",
+                     k->type == CFG_TYPE_DOUBLE_OR_WORD ? k->names[0] : "", k->doc);
             return CFG_ERR_RANGE;
         }
         memcpy(field, &v, sizeof v);
@@ -401,9 +434,14 @@ static void override_apply(load_ctx *c, const char *ovr, int index)
  * else at the last line of the file. */
 static void check_required(load_ctx *c)
 {
+    int hinge = cfg_keys_find(&key_table, "folds", "hinge_stiffness");
+    int factor = cfg_keys_find(&key_table, "folds", "stiffness_factor");
+    int file_compliant = c->origin[hinge].line && isfinite(c->scene.fold_hinge_stiffness);
     for (size_t i = 0; i < N_KEYS && !c->failed; i++) {
         const cfg_scene_key *k = &scene_keys[i];
         if (!(k->flags & CFG_KEY_REQUIRED) || c->origin[i].line) continue;
+        /* stiffness_factor is the rigid crease's penalty: not wanted with a compliant hinge. */
+        if ((int)i == factor && file_compliant) continue;
         char dotted[128];
         key_dotted(k, dotted, sizeof dotted);
         int s = find_section(k->section);
@@ -418,6 +456,29 @@ static void check_required(load_ctx *c)
             c->failed = 1;
         }
     }
+}
+
+/* folds.stiffness_factor belongs to rigid creases only. A compliant hinge refuses it when both
+ * come from the same place (both in the file), or when stiffness_factor was given by an
+ * override; an override of hinge_stiffness replaces the crease model of a file that sets
+ * stiffness_factor for its rigid creases (so `--set folds.hinge_stiffness=K` works on the paper's
+ * scenes). */
+static void check_hinge_keys(load_ctx *c, const char *const *overrides)
+{
+    int hinge = cfg_keys_find(&key_table, "folds", "hinge_stiffness");
+    int factor = cfg_keys_find(&key_table, "folds", "stiffness_factor");
+    if (!isfinite(c->scene.fold_hinge_stiffness)) return;
+    const key_origin *of = &c->origin[factor], *oh = &c->origin[hinge];
+    int contradicts = of->override || (of->line && !oh->override);
+    if (!contradicts) return;
+    char msg[sizeof c->err->message];
+    snprintf(msg, sizeof msg,
+             "applies only to rigid creases, but folds.hinge_stiffness = %g N m/rad makes them "
+             "compliant hinges: remove folds.stiffness_factor, or set folds.hinge_stiffness = rigid",
+             c->scene.fold_hinge_stiffness);
+    c->failed = 1;
+    cfg_error_from(c->err, CFG_ERR_CHECK, c->name, of->override ? 0 : of->line,
+                   of->override ? overrides[of->override - 1] : NULL, "folds.stiffness_factor", msg);
 }
 
 /* Cross-field checks, named where the blamed key was last set. */
@@ -460,6 +521,7 @@ cfg_status cfg_scene_parse(const char *name, const char *text, size_t len,
     if (!c->failed && n_overrides > 0 && !overrides)
         fail_override(c, CFG_ERR_SYNTAX, NULL, NULL, "missing override list");
     for (int i = 0; i < n_overrides && !c->failed; i++) override_apply(c, overrides[i], i);
+    if (!c->failed) check_hinge_keys(c, overrides);
     if (!c->failed) check_scene(c, overrides);
 
     cfg_status st = c->failed ? err->status : CFG_OK;

@@ -20,7 +20,9 @@ typedef enum cfg_type {
     CFG_TYPE_DOUBLE, /* one finite decimal number */
     CFG_TYPE_INT,    /* one decimal integer */
     CFG_TYPE_VEC3,   /* three finite numbers separated by spaces or commas: "0 0 -9.81" */
-    CFG_TYPE_ENUM    /* one of the names in `names` (protocol.route) */
+    CFG_TYPE_ENUM,   /* one of the names in `names` (protocol.route) */
+    CFG_TYPE_DOUBLE_OR_WORD /* one finite number in the bounds, or the word names[0], which
+                               stores +infinity (folds.hinge_stiffness = rigid) */
 } cfg_type;
 
 /* Flags of a key. */
@@ -31,7 +33,8 @@ enum {
 };
 
 /* One row of the key table. For VEC3 the bounds apply to each component; for ENUM they are
- * unused and `names` lists the accepted names in the order of the C enum's values 0, 1, ... */
+ * unused and `names` lists the accepted names in the order of the C enum's values 0, 1, ...
+ * For DOUBLE_OR_WORD, names[0] is the word. */
 typedef struct cfg_scene_key {
     const char *section;
     const char *name;

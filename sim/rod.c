@@ -2,10 +2,11 @@
  * boundary conditions.
  *
  * Mesh: the free length l is cut into N - 3 edges between the clamp points (node 1 at s = 0,
- * node N-2 at s = 1). With creases, the three pieces [0, Gamma], [Gamma, 1 - Gamma] and
- * [1 - Gamma, 1] are meshed separately with equal edges inside each piece, so that nodes sit
- * exactly on both creases (DESIGN.md section 3: edges need not be equal). The mesh is symmetric
- * under s -> 1 - s, which keeps the discrete model exactly C2-symmetric. The clamped edges 0
+ * node N-2 at s = 1). With creases at p_L < p_R, the three pieces [0, p_L], [p_L, p_R] and
+ * [p_R, 1] are meshed separately with equal edges inside each piece, so that nodes sit exactly
+ * on both creases wherever they are (DESIGN.md section 3: edges need not be equal). A mirrored
+ * pair (Gamma, 1 - Gamma) gives a mesh symmetric under s -> 1 - s, which keeps the discrete model
+ * exactly C2-symmetric; unequal positions give a mesh without symmetry. The clamped edges 0
  * and N-2 lie outside the free length, with the length of their neighbouring free edge.
  * Masses are lumped: each node carries rho A times half of each adjacent rest edge; each twist
  * angle carries the polar inertia rho (I1 + I2) times its edge's rest length. */
@@ -73,12 +74,22 @@ rod_status rod_alloc(const rod_scene *s, rod **out, char *why, size_t why_len)
         return ROD_ERR_ALLOC;
     }
 
-    int has_folds = s->fold_angle_deg != 0.0;
+    int has_folds = rod_scene_has_creases(s);
+    double p_left = rod_scene_crease_position(s, 0), p_right = rod_scene_crease_position(s, 1);
     double w = s->width, b = s->thickness, E = s->youngs_modulus;
     double A = w * b, I1 = w * b * b * b / 12.0, I2 = b * w * w * w / 12.0;
     r->rho_area = s->density * A;
     r->rho_polar = s->density * (I1 + I2);
-    rod_mesh_set(r, s->fold_position, has_folds ? rod_mesh_outer_edges(n, s->fold_position) : 0);
+    r->fold_node[0] = r->fold_node[1] = -1;
+    if (!has_folds) {
+        rod_mesh_set(r, s->fold_position, 0);
+    } else if (p_left + p_right == 1.0) {
+        rod_mesh_set(r, p_left, rod_mesh_outer_edges(n, p_left));
+    } else {
+        int nl, nr;
+        rod_mesh_crease_edges(n, p_left, p_right, &nl, &nr);
+        rod_mesh_set_creases(r, p_left, p_right, nl, nr);
+    }
     /* Straight rest configuration along +x, normal +z; th = 0. */
     for (int i = 0; i < n; i++) {
         double *x = rod_x(r, i);
@@ -103,11 +114,16 @@ rod_status rod_alloc(const rod_scene *s, rod **out, char *why, size_t why_len)
     r->terms.stretch = 1;
     r->terms.bend = 1;
     r->terms.twist = 1;
-    r->terms.fold = has_folds;
+    r->terms.fold = has_folds && rod_scene_hinge_rigid(s);
+    r->terms.hinge = has_folds && !rod_scene_hinge_rigid(s);
     r->terms.gravity = (s->gravity[0] != 0.0 || s->gravity[1] != 0.0 || s->gravity[2] != 0.0);
     if (has_folds) {
-        r->fold_factor = s->fold_stiffness_factor;
-        rod_set_fold_angle(r, s->fold_angle_deg * M_PI / 180.0, s->fold_angle_rel);
+        r->fold_factor = r->terms.fold ? s->fold_stiffness_factor : 1.0;
+        r->hinge_k = s->fold_hinge_stiffness;
+        /* As rod_set_fold_angle(phi, rel) on a symmetric pair, to the last bit. */
+        double rel = s->fold_angle_rel;
+        rod_set_crease_angles(r, rod_scene_crease_angle_deg(s, 0) * M_PI / 180.0 * (1.0 + 0.5 * rel),
+                              rod_scene_crease_angle_deg(s, 1) * M_PI / 180.0 * (1.0 - 0.5 * rel));
     }
     *out = r;
     return ROD_OK;
@@ -122,40 +138,25 @@ int rod_mesh_outer_edges(int nodes, double gamma)
     return n_out;
 }
 
-void rod_mesh_set(rod *r, double gamma, int n_out)
+void rod_mesh_crease_edges(int nodes, double p_left, double p_right, int *n_left, int *n_right)
 {
-    int n = r->n, ne_free = n - 3;
-    /* Arc-length positions of nodes 1..N-2 (over l). */
-    if (n_out > 0) {
-        int n_mid = ne_free - 2 * n_out;
-        double g = gamma;
-        for (int k = 0; k <= n_out; k++) r->s_node[1 + k] = g * k / n_out;
-        for (int k = 1; k <= n_mid; k++) r->s_node[1 + n_out + k] = g + (1.0 - 2.0 * g) * k / n_mid;
-        for (int k = 1; k <= n_out; k++) r->s_node[1 + n_out + n_mid + k] = 1.0 - g + g * k / n_out;
-        r->fold_node[0] = 1 + n_out;
-        r->fold_node[1] = 1 + n_out + n_mid;
-    } else {
-        for (int k = 0; k <= ne_free; k++) r->s_node[1 + k] = (double)k / ne_free;
-        r->fold_node[0] = r->fold_node[1] = -1;
+    int ne_free = nodes - 3;
+    int nl = (int)lround(p_left * ne_free), nr = (int)lround((1.0 - p_right) * ne_free);
+    if (nl < 1) nl = 1;
+    if (nr < 1) nr = 1;
+    while (ne_free - nl - nr < 1 && (nl > 1 || nr > 1)) {
+        if (nl >= nr) nl--;
+        else nr--;
     }
-    r->fold_position = gamma;
-    r->fold_outer_edges = n_out;
-    r->s_node[n - 2] = 1.0;
-    /* Exact symmetry of the mesh: s_k + s_{N-1-k} = 1. */
-    for (int k = 1; k < n / 2; k++) {
-        double a = r->s_node[k], b = 1.0 - r->s_node[n - 1 - k];
-        double m = 0.5 * (a + b);
-        r->s_node[k] = m;
-        r->s_node[n - 1 - k] = 1.0 - m;
-    }
-    if (n % 2 == 1) {
-        r->s_node[n / 2] = 0.5;
-        r->mid_node = n / 2;
-        r->mid_edge = -1;
-    } else {
-        r->mid_node = -1;
-        r->mid_edge = n / 2 - 1;
-    }
+    *n_left = nl;
+    *n_right = nr;
+}
+
+/* Rest lengths, Voronoi lengths, clamped edges and lumped masses from the arc-length positions
+ * of nodes 1 .. N-2 (s_node[1] = 0, s_node[N-2] = 1). */
+static void mesh_rest(rod *r)
+{
+    int n = r->n;
     double h0 = r->s_node[2] - r->s_node[1];
     r->s_node[0] = -h0;
     r->s_node[n - 1] = 1.0 + h0;
@@ -178,19 +179,109 @@ void rod_mesh_set(rod *r, double gamma, int n_out)
     }
 }
 
+void rod_mesh_set(rod *r, double gamma, int n_out)
+{
+    int n = r->n, ne_free = n - 3;
+    /* Arc-length positions of nodes 1..N-2 (over l). */
+    if (n_out > 0) {
+        int n_mid = ne_free - 2 * n_out;
+        double g = gamma;
+        for (int k = 0; k <= n_out; k++) r->s_node[1 + k] = g * k / n_out;
+        for (int k = 1; k <= n_mid; k++) r->s_node[1 + n_out + k] = g + (1.0 - 2.0 * g) * k / n_mid;
+        for (int k = 1; k <= n_out; k++) r->s_node[1 + n_out + n_mid + k] = 1.0 - g + g * k / n_out;
+        r->fold_node[0] = 1 + n_out;
+        r->fold_node[1] = 1 + n_out + n_mid;
+    } else {
+        for (int k = 0; k <= ne_free; k++) r->s_node[1 + k] = (double)k / ne_free;
+        r->fold_node[0] = r->fold_node[1] = -1;
+    }
+    r->fold_position = gamma;
+    r->fold_position_right = 1.0 - gamma;
+    r->fold_outer_edges = n_out;
+    r->fold_outer_right = n_out;
+    r->s_node[n - 2] = 1.0;
+    /* Exact symmetry of the mesh: s_k + s_{N-1-k} = 1. */
+    for (int k = 1; k < n / 2; k++) {
+        double a = r->s_node[k], b = 1.0 - r->s_node[n - 1 - k];
+        double m = 0.5 * (a + b);
+        r->s_node[k] = m;
+        r->s_node[n - 1 - k] = 1.0 - m;
+    }
+    if (n % 2 == 1) {
+        r->s_node[n / 2] = 0.5;
+        r->mid_node = n / 2;
+        r->mid_edge = -1;
+    } else {
+        r->mid_node = -1;
+        r->mid_edge = n / 2 - 1;
+    }
+    r->mid_w = 0.5;
+    mesh_rest(r);
+}
+
+void rod_mesh_set_creases(rod *r, double p_left, double p_right, int n_left, int n_right)
+{
+    if (n_left == n_right && p_left + p_right == 1.0) {
+        rod_mesh_set(r, p_left, n_left);
+        return;
+    }
+    int n = r->n, ne_free = n - 3, n_mid = ne_free - n_left - n_right;
+    for (int k = 0; k <= n_left; k++) r->s_node[1 + k] = p_left * k / n_left;
+    for (int k = 1; k <= n_mid; k++) r->s_node[1 + n_left + k] = p_left + (p_right - p_left) * k / n_mid;
+    for (int k = 1; k <= n_right; k++) r->s_node[1 + n_left + n_mid + k] = p_right + (1.0 - p_right) * k / n_right;
+    r->s_node[1 + n_left] = p_left;
+    r->s_node[1 + n_left + n_mid] = p_right;
+    r->s_node[n - 2] = 1.0;
+    r->fold_node[0] = 1 + n_left;
+    r->fold_node[1] = 1 + n_left + n_mid;
+    r->fold_position = p_left;
+    r->fold_position_right = p_right;
+    r->fold_outer_edges = n_left;
+    r->fold_outer_right = n_right;
+    /* The arc-length midpoint: a node when one sits there, else the edge around it. */
+    r->mid_node = -1;
+    r->mid_edge = 1;
+    r->mid_w = 0.5;
+    for (int i = 1; i < n - 2; i++) {
+        if (r->s_node[i] == 0.5) {
+            r->mid_node = i;
+            break;
+        }
+        if (r->s_node[i] < 0.5 && 0.5 < r->s_node[i + 1]) {
+            r->mid_edge = i;
+            r->mid_w = (0.5 - r->s_node[i]) / (r->s_node[i + 1] - r->s_node[i]);
+        }
+    }
+    mesh_rest(r);
+}
+
 void rod_set_fold_angle(rod *r, double phi, double rel)
 {
-    if (!r->terms.fold) return;
-    r->fold_kappa[0] = 2.0 * tan(0.5 * phi * (1.0 + 0.5 * rel));
-    r->fold_kappa[1] = 2.0 * tan(0.5 * phi * (1.0 - 0.5 * rel));
+    rod_set_crease_angles(r, phi * (1.0 + 0.5 * rel), phi * (1.0 - 0.5 * rel));
+}
+
+void rod_set_crease_angles(rod *r, double phi_left, double phi_right)
+{
+    if (!r->terms.fold && !r->terms.hinge) return;
+    r->fold_phi[0] = phi_left;
+    r->fold_phi[1] = phi_right;
+    r->fold_kappa[0] = 2.0 * tan(0.5 * phi_left);
+    r->fold_kappa[1] = 2.0 * tan(0.5 * phi_right);
     rod_set_folds(r, 1.0, 1.0);
 }
 
 void rod_set_folds(rod *r, double frac_angle, double frac_stiff)
 {
-    if (!r->terms.fold) return;
+    if (!r->terms.fold && !r->terms.hinge) return;
     for (int k = 0; k < 2; k++) {
         int i = r->fold_node[k];
+        if (r->terms.hinge) {
+            /* The hinge carries the crease (rod_hinge.c); the node's kappa1 term is the hinge's. */
+            r->hinge_phi[k] = frac_angle * r->fold_phi[k];
+            r->kap1_hat[i] = 0.0;
+            r->EI1[i] = r->EI1[0];
+            continue;
+        }
         /* Ramp the crease angle, not its tangent, so a fraction of the route is a real crease. */
         double phi = 2.0 * atan(0.5 * r->fold_kappa[k]);
         r->kap1_hat[i] = 2.0 * tan(0.5 * phi * frac_angle);

@@ -22,8 +22,15 @@
  *     kappa3 = th_f - th_e + m_ref                        twist (G J)
  * and each term's energy is 1/2 K (kappa - kappa_hat)^2 / dl_hat, dl_hat the rest Voronoi length.
  * (These are the paper's projections of the curvature binormal onto the averaged frame, rewritten
- * without kb.) A crease of turning angle phi toward the normal is kappa1_hat = 2 tan(phi/2):
- * DESIGN.md section 3 puts the fold on the soft, out-of-plane component, not the paper's kappa2.
+ * without kb.) A crease of turning angle phi toward the normal acts on the soft, out-of-plane
+ * component (DESIGN.md section 3, not the paper's kappa2), in one of two ways:
+ *   rigid (folds.hinge_stiffness = rigid): kappa1_hat = 2 tan(phi/2) at the crease node with E I1
+ *     raised by folds.stiffness_factor, a penalty whose stiffness factor E I1 / dl_hat grows with N;
+ *   compliant hinge of stiffness k (N m/rad): the crease node's kappa1 term is replaced by
+ *     1/2 k_eff (psi - phi)^2, psi = 2 atan(kappa1 / 2) the node's turning angle and
+ *     1 / k_eff = 1 / k + dl_hat / (E I1), the hinge in series with the strip's own bending over
+ *     the node's Voronoi length (sim/rod_hinge.c derives it): a crease energy that depends on its
+ *     turning angle alone as the mesh refines.
  */
 #ifndef RIBBON_SIM_ROD_H
 #define RIBBON_SIM_ROD_H
@@ -52,15 +59,18 @@ typedef enum rod_status {
 
 const char *rod_status_message(rod_status s);
 
-/* Which energy terms a rod evaluates (a scene pays only for what it uses). */
+/* Which energy terms a rod evaluates (a scene pays only for what it uses). fold: rigid creases
+ * (the bending term's natural curvature and raised stiffness at the crease nodes); hinge:
+ * compliant creases (their own term at the crease nodes, rod_hinge.c). */
 typedef struct rod_terms {
-    int stretch, bend, twist, fold, gravity;
+    int stretch, bend, twist, fold, gravity, hinge;
 } rod_terms;
 
 /* Counters of what was actually evaluated, for "the run reports which terms and stages ran". */
 typedef struct rod_counters {
     uint64_t stretch_evals, bend_evals, twist_evals, fold_evals, gravity_evals;
     uint64_t hessian_assemblies, factorisations, newton_iterations, damping_evals;
+    uint64_t hinge_evals;
 } rod_counters;
 
 typedef struct rod {
@@ -80,15 +90,21 @@ typedef struct rod {
     double GJ;           /* N m^2, twist stiffness */
     double *kap1_hat;    /* natural integrated curvature toward the normal, per node */
     double gravity[3];   /* m/s^2 */
-    int fold_node[2];    /* node indices of the creases at Gamma and 1 - Gamma (-1 if none) */
-    double fold_kappa[2];/* their full natural curvatures 2 tan(phi_k / 2) */
-    double fold_factor;  /* stiffness factor at the creases */
-    double fold_position;/* Gamma the mesh was built for (rod_mesh_set) */
-    int fold_outer_edges;/* edges between a clamp point and its crease, 0 without creases */
+    int fold_node[2];    /* node indices of the left and right creases (-1 if none) */
+    double fold_kappa[2];/* rigid: their full natural curvatures 2 tan(phi_k / 2) */
+    double fold_phi[2];  /* rad, their full angles (imperfection included) */
+    double fold_factor;  /* rigid: stiffness factor at the creases */
+    double hinge_k;      /* N m/rad, compliant hinges' stiffness (terms.hinge) */
+    double hinge_phi[2]; /* rad, the hinges' current rest angles (the route ramps them) */
+    double fold_position;/* left crease position (Gamma) the mesh was built for (rod_mesh_set) */
+    double fold_position_right; /* right crease position, from the left clamp point, over l */
+    int fold_outer_edges;/* edges between the left clamp point and its crease, 0 without creases */
+    int fold_outer_right;/* edges between the right crease and its clamp point */
     double rho_area;     /* kg/m, rho A: lumped node masses per unit rest length */
     double rho_polar;    /* kg m, rho (I1 + I2): twist inertia per unit rest length */
     int mid_node;        /* node at arc length 1/2, or -1 when the midpoint is mid-edge */
-    int mid_edge;        /* edge containing arc length 1/2 at its centre when mid_node < 0 */
+    int mid_edge;        /* edge containing arc length 1/2 when mid_node < 0 */
+    double mid_w;        /* weight of node mid_edge + 1 at arc length 1/2 (0.5 on a symmetric mesh) */
     /* frames */
     double (*d1)[3];     /* reference director 1 per edge (N - 1) */
     double (*d2)[3];     /* reference director 2 per edge */
@@ -99,7 +115,7 @@ typedef struct rod {
     double force_scale;  /* N, EI1 / l^2: scale for residual tolerances */
 } rod;
 
-/* Builds the rod for a scene: mesh with nodes at Gamma and 1 - Gamma, straight along x with the
+/* Builds the rod for a scene: mesh with a node on each crease (rod_mesh_set_creases), straight along x with the
  * surface normal along +z, clamps at Delta L = 0, Delta W = 0, creases present at full angle
  * in the natural curvature (the route ramps them with rod_set_folds). */
 rod_status rod_alloc(const rod_scene *s, rod **out, char *why, size_t why_len);
@@ -113,15 +129,32 @@ int rod_mesh_outer_edges(int nodes, double gamma);
  * uniform): arc-length positions, rest and Voronoi lengths, masses, clamped-edge length and the
  * crease nodes. q and the frames are not touched; call rod_set_clamps after it (the clamped
  * edges take the length of their neighbour). With n_out held, every rest quantity is a smooth
- * function of gamma: what continuation in Gamma differentiates (rod_critical.h). */
+ * function of gamma: what continuation in Gamma differentiates (rod_critical.h). The mesh is
+ * exactly symmetric under s -> 1 - s. */
 void rod_mesh_set(rod *r, double gamma, int n_out);
+
+/* Edge counts of the general mesh for creases at p_left < p_right (from the left clamp point,
+ * over l): *n_left = round(p_left (N - 3)), *n_right = round((1 - p_right) (N - 3)), each at
+ * least 1, the larger one cut until at least one edge is left between the creases. */
+void rod_mesh_crease_edges(int nodes, double p_left, double p_right, int *n_left, int *n_right);
+
+/* Re-meshes with a node on each crease wherever they are: [0, p_left], [p_left, p_right] and
+ * [p_right, 1] meshed with equal edges inside each piece (n_left, the rest, n_right edges). A
+ * mirrored pair (p_right = 1 - p_left, n_left = n_right) is rod_mesh_set's symmetric mesh
+ * exactly; otherwise the mesh has no symmetry and Delta Z is interpolated at arc length 1/2. */
+void rod_mesh_set_creases(rod *r, double p_left, double p_right, int n_left, int n_right);
 
 /* Sets both crease angles to phi (rad) split by the relative imperfection rel as rod_alloc does,
  * at full angle and stiffness. No effect on a rod without creases. */
 void rod_set_fold_angle(rod *r, double phi, double rel);
 
+/* Sets the full angles of the left and right creases (rad, imperfection included), at full
+ * angle and stiffness. No effect on a rod without creases. */
+void rod_set_crease_angles(rod *r, double phi_left, double phi_right);
+
 /* Sets the natural curvature of the two creases to frac_angle times their scene angle and their
- * stiffness factor to 1 + frac_stiff (factor - 1). */
+ * stiffness factor to 1 + frac_stiff (factor - 1). Compliant hinges: their rest angles to
+ * frac_angle times the scene's; their stiffness is a property of the strip and stays k. */
 void rod_set_folds(rod *r, double frac_angle, double frac_stiff);
 
 /* Places the clamps: left clamp point at (0, -dw l / 2, 0), right clamp point at
@@ -147,6 +180,11 @@ void rod_hessian_add(rod *r, double s, double *H);
 /* Both in one pass over the elements (they share the geometry): overwrites g (ndof values)
  * unless NULL and adds s * Hessian into H as rod_hessian_add unless H is NULL. */
 void rod_gradient_hessian(rod *r, double *g, double s, double *H);
+
+/* Share of a compliant crease node's turn beyond its rest angle, psi - phi, that the hinge itself
+ * takes (the rest is the strip's own bending over the node's Voronoi length): k_eff / k
+ * (rod_hinge.c). The hinge's own turn is phi + (psi - phi) rod_hinge_share(r, i). */
+double rod_hinge_share(const rod *r, int i);
 
 /* Integrated curvature kappa1 at each interior node (N values, 0 at the ends). */
 void rod_kappa1(const rod *r, double *k1);

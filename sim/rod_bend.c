@@ -155,6 +155,23 @@ static void node_geometry(const rod *r, int i, double te[3], double tf[3], doubl
     v3_scale(f, 1.0 / *nf, tf);
 }
 
+/* The kappa1 term at node i: a compliant hinge's (rod_hinge.c) or the strip's
+ * 1/2 K1 (kappa1 - kappa1_hat)^2 when the rod bends; energy, and the first and second
+ * derivatives in kappa1 into *w and *c. */
+static double kappa1_term(const rod *r, int i, double k1, double K1, double *w, double *c)
+{
+    double e;
+    if (rod_hinge_kappa1(r, i, k1, &e, w, c)) return e;
+    if (!r->terms.bend) {
+        *w = *c = 0.0;
+        return 0.0;
+    }
+    double d1 = k1 - r->kap1_hat[i];
+    *w = K1 * d1;
+    *c = K1;
+    return 0.5 * K1 * d1 * d1;
+}
+
 double rod_bend_element(const rod *r, int i, double g[11], double H[11][11])
 {
     double te[3], tf[3], ne, nf, m1e[3], m2e[3], m1f[3], m2f[3], nm1e[3], nm1f[3];
@@ -164,19 +181,19 @@ double rod_bend_element(const rod *r, int i, double g[11], double H[11][11])
     v3_scale(m1e, -1.0, nm1e);
     v3_scale(m1f, -1.0, nm1f);
     double w = 1.0 / r->vor0[i];
-    double K1 = r->EI1[i] * w, K2 = r->EI2 * w;
+    double K1 = r->EI1[i] * w, K2 = r->terms.bend ? r->EI2 * w : 0.0;
     double g1[8], g2[8], H1[8][8], H2[8][8];
     double k1 = curvature_derivs(te, tf, ne, nf, m1e, m2e, m1f, m2f, g ? g1 : NULL, H ? H1 : NULL);
     double k2 = curvature_derivs(te, tf, ne, nf, m2e, nm1e, m2f, nm1f, g ? g2 : NULL, H ? H2 : NULL);
-    double d1 = k1 - r->kap1_hat[i];
-    double energy = 0.5 * K1 * d1 * d1 + 0.5 * K2 * k2 * k2;
+    double w1, c1;
+    double energy = kappa1_term(r, i, k1, K1, &w1, &c1) + 0.5 * K2 * k2 * k2;
     if (!g) return energy;
     double G8[8], HH[8][8];
-    for (int a = 0; a < 8; a++) G8[a] = K1 * d1 * g1[a] + K2 * k2 * g2[a];
+    for (int a = 0; a < 8; a++) G8[a] = w1 * g1[a] + K2 * k2 * g2[a];
     if (H)
         for (int a = 0; a < 8; a++)
             for (int b = 0; b < 8; b++)
-                HH[a][b] = K1 * (g1[a] * g1[b] + d1 * H1[a][b]) + K2 * (g2[a] * g2[b] + k2 * H2[a][b]);
+                HH[a][b] = c1 * g1[a] * g1[b] + w1 * H1[a][b] + K2 * (g2[a] * g2[b] + k2 * H2[a][b]);
     memset(g, 0, sizeof(double) * 11);
     if (H) memset(H, 0, sizeof(double) * 121);
     rod_local_from_ef(1.0, G8, H ? HH : NULL, g, H);
@@ -274,6 +291,8 @@ static double curvature_grad(const double te[3], const double tf[3], double c, d
  * w1 Hess kappa1 + w2 Hess kappa2 is Hess kappa evaluated with the combined directors
  * a = w1 m1e + w2 m2e, a' = w1 m2e - w2 m1e (and the same for b): the same numbers as
  * rod_bend_element up to round-off, at about half the cost. Its gradient is w1 g1 + w2 g2.
+ * At a compliant crease (rod_hinge.c) the kappa1 term is the hinge's, E(kappa1): w1 = E' and
+ * the g1 g1^T coefficient K1 becomes E''.
  * Returns the energy; g8 and H8 (may be NULL) are overwritten. */
 double rod_node_ef(const rod *r, int i, const double mf_e[6], const double mf_f[6], double g8[8],
                    double H8[8][8])
@@ -296,7 +315,8 @@ double rod_node_ef(const rod *r, int i, const double mf_e[6], const double mf_f[
         }
     }
 
-    if (r->terms.bend) {
+    int hinge = r->terms.hinge && (i == r->fold_node[0] || i == r->fold_node[1]);
+    if (r->terms.bend || hinge) {
         double m1e[3], m2e[3], m1f[3], m2f[3], nm1e[3], nm1f[3];
         if (mf_e) {
             for (int k = 0; k < 3; k++) {
@@ -310,13 +330,22 @@ double rod_node_ef(const rod *r, int i, const double mf_e[6], const double mf_f[
         v3_scale(m1e, -1.0, nm1e);
         v3_scale(m1f, -1.0, nm1f);
         double w = 1.0 / r->vor0[i];
-        double K1 = r->EI1[i] * w, K2 = r->EI2 * w;
+        double K1 = r->EI1[i] * w, K2 = r->terms.bend ? r->EI2 * w : 0.0;
         double g1[8], g2[8];
         double k1 = curvature_grad(te, tf, c, ne, nf, m1e, m2e, m1f, m2f, g1);
         double k2 = curvature_grad(te, tf, c, ne, nf, m2e, nm1e, m2f, nm1f, g2);
-        double d1 = k1 - r->kap1_hat[i];
-        energy += 0.5 * K1 * d1 * d1 + 0.5 * K2 * k2 * k2;
-        double w1 = K1 * d1, w2 = K2 * k2;
+        double w1, c1;
+        if (hinge) {
+            double e1;
+            rod_hinge_kappa1(r, i, k1, &e1, &w1, &c1);
+            energy += e1 + 0.5 * K2 * k2 * k2;
+        } else {
+            double d1 = k1 - r->kap1_hat[i];
+            energy += 0.5 * K1 * d1 * d1 + 0.5 * K2 * k2 * k2;
+            w1 = K1 * d1;
+            c1 = K1;
+        }
+        double w2 = K2 * k2;
         for (int a = 0; a < 8; a++) g8[a] += w1 * g1[a] + w2 * g2[a];
         if (H8) {
             double A[3], Ap[3], B[3], Bp[3], gc[8], Hc[8][8];
@@ -328,7 +357,7 @@ double rod_node_ef(const rod *r, int i, const double mf_e[6], const double mf_f[
             }
             curvature_derivs(te, tf, ne, nf, A, Ap, B, Bp, gc, Hc);
             for (int a = 0; a < 8; a++)
-                for (int b = 0; b < 8; b++) H8[a][b] += K1 * g1[a] * g1[b] + K2 * g2[a] * g2[b] + Hc[a][b];
+                for (int b = 0; b < 8; b++) H8[a][b] += c1 * g1[a] * g1[b] + K2 * g2[a] * g2[b] + Hc[a][b];
         }
     }
 

@@ -69,6 +69,11 @@ rod_status rod_bifurcation_analyse_from(const rod_scene *scene, const rod_analys
     out->first = -1;
     out->regime = "none";
     rod_scene sc = *scene;
+    char key[64], msg[224];
+    if (rod_scene_require_symmetric(&sc, msg, sizeof msg, key, sizeof key)) {
+        snprintf(why, why_len, "%s: %s", key, msg);
+        return ROD_ERR_SCENE;
+    }
     if (!o->keep_imperfection) sc.fold_angle_rel = 0.0;
     out->fold_angle_rel = sc.fold_angle_rel;
     rod *r = NULL;

@@ -343,6 +343,12 @@ rod_status rod_boundary_start(const rod_scene *scene, const rod_boundary_opts *o
     b->o = o ? *o : rod_boundary_opts_default();
     b->sc = *scene;
     b->sc.fold_angle_rel = 0.0;
+    char key[64], msg[224];
+    if (rod_scene_require_symmetric(&b->sc, msg, sizeof msg, key, sizeof key)) {
+        free(b);
+        snprintf(why, why_len, "%s: %s", key, msg);
+        return ROD_ERR_SCENE;
+    }
     if (b->sc.fold_angle_deg == 0.0) {
         free(b);
         snprintf(why, why_len, "the scene has no creases (folds.angle_deg = 0): there is no fold/pitchfork boundary");

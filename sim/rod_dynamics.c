@@ -30,6 +30,7 @@ rod_status rod_dyn_open(rod_dyn *d, const rod_scene *sc, char *why, size_t why_l
     d->no.q_n = d->q_n;
     d->no.v_n = d->v;
     d->no.positive_definite = 1;
+    d->no.damped = d->mu > 0.0; /* a scene without damping counts none */
     return ROD_OK;
 }
 

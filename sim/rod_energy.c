@@ -4,9 +4,10 @@
  * Assembly is O(N) and allocation-free: each element's local block is a contiguous slice of q
  * (rod_kernels.h), so its Hessian lands inside the band of half-width ROD_BAND. Only the terms
  * the scene uses are evaluated (no gravity work without gravity); counters record what ran.
- * Folds need no separate term: a crease is the natural curvature and raised stiffness of the
- * bending term at its node, so "fold" evaluations are counted as bend evaluations at the two
- * crease nodes. */
+ * Rigid creases need no separate term: a rigid crease is the natural curvature and raised
+ * stiffness of the bending term at its node, so "fold" evaluations are counted as bend
+ * evaluations at the two crease nodes. A compliant crease is its own term (rod_hinge.c), which
+ * replaces the kappa1 part of the bending term at its node and is counted as "hinge". */
 #include "rod_kernels.h"
 #include "vec3.h"
 
@@ -19,7 +20,8 @@ double rod_energy(rod *r)
     if (r->terms.stretch)
         for (int j = 0; j < n - 1; j++) E += rod_stretch_element(r, j, NULL, NULL);
     for (int i = 1; i < n - 1; i++) {
-        if (r->terms.bend) E += rod_bend_element(r, i, NULL, NULL);
+        if (r->terms.bend || (r->terms.hinge && (i == r->fold_node[0] || i == r->fold_node[1])))
+            E += rod_bend_element(r, i, NULL, NULL);
         if (r->terms.twist) E += rod_twist_element(r, i, NULL, NULL);
     }
     if (r->terms.gravity)
@@ -34,6 +36,7 @@ static void count_terms(rod *r)
     if (r->terms.bend) r->count.bend_evals += (uint64_t)(n - 2);
     if (r->terms.twist) r->count.twist_evals += (uint64_t)(n - 2);
     if (r->terms.fold) r->count.fold_evals += 2;
+    if (r->terms.hinge) r->count.hinge_evals += 2;
     if (r->terms.gravity) r->count.gravity_evals += (uint64_t)n;
 }
 

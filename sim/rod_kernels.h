@@ -29,6 +29,14 @@ double rod_twist_element(const rod *r, int i, double g[11], double H[11][11]);
 double rod_node_ef(const rod *r, int i, const double mf_e[6], const double mf_f[6], double g8[8],
                    double H8[8][8]);
 
+/* The kappa1 term of a compliant crease at node i (rod_hinge.c): returns 0 when node i is not a
+ * hinge of this rod (or its creases are rigid); otherwise 1, with the energy *e and its first
+ * and second derivatives in kappa1. */
+int rod_hinge_kappa1(const rod *r, int i, double kappa1, double *e, double *de, double *d2e);
+
+/* k_eff = 1 / (1 / k + dl_hat_i / (E I1)) of the hinge at node i (N m/rad). */
+double rod_hinge_stiffness_eff(const rod *r, int i);
+
 void rod_local_from_ef(double s, const double g8[8], double H8[8][8], double g[11], double H[11][11]);
 
 #endif

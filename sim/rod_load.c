@@ -66,7 +66,8 @@ void rod_load_vector(const rod *r, const rod_load *p, double *f)
         if (!touches || !has_free) continue;
         double g[11], H[11][11];
         for (int term = 0; term < 2; term++) {
-            if (term == 0 && !r->terms.bend) continue;
+            if (term == 0 && !r->terms.bend && !(r->terms.hinge && (i == r->fold_node[0] || i == r->fold_node[1])))
+                continue;
             if (term == 1 && !r->terms.twist) continue;
             if (term == 0) rod_bend_element(r, i, g, H);
             else rod_twist_element(r, i, g, H);

@@ -10,7 +10,7 @@ void rod_observe(const rod *r, double *k1, rod_obs *o)
     /* Delta Z at the arc-length midpoint. */
     double zm;
     if (r->mid_node >= 0) zm = rod_x(r, r->mid_node)[2];
-    else zm = 0.5 * (rod_x(r, r->mid_edge)[2] + rod_x(r, r->mid_edge + 1)[2]);
+    else zm = (1.0 - r->mid_w) * rod_x(r, r->mid_edge)[2] + r->mid_w * rod_x(r, r->mid_edge + 1)[2];
     o->dz = zm / l;
 
     /* Paper's A from the toward-normal curvature. */

@@ -150,7 +150,7 @@ static double residual_h(rod *r, rod_solver *s, const rod_newton_opts *o, double
         mx = fmax(mx, fabs(v));
         ss += v * v;
     }
-    if (o->c1 != 0.0) r->count.damping_evals++;
+    if (o->c1 != 0.0 && o->damped) r->count.damping_evals++;
     *l2 = sqrt(ss);
     return mx;
 }

@@ -22,6 +22,8 @@ typedef struct rod_newton_opts {
     const double *v_n;     /* previous velocities (ndof), used when c2 != 0 */
     double tolerance;      /* converged when max |R| <= tolerance * force scale */
     int max_iterations;    /* iteration cap */
+    int damped;            /* 1: c1 includes a damping term mu / dt (counted as damping_evals;
+                              the damping itself costs nothing beyond the inertia term) */
     int positive_definite; /* 1: minimise the incremental potential (stable states): LDL^T,
                               shifted when indefinite, line search on the potential;
                               0: root finding on R with LU and pivoting (any equilibrium) */

@@ -10,6 +10,7 @@
 #ifndef RIBBON_SIM_SCENE_H
 #define RIBBON_SIM_SCENE_H
 
+#include <math.h>
 #include <stddef.h>
 
 /* How the simulator reaches the upper state at Delta L (DESIGN.md section 3). */
@@ -29,15 +30,26 @@ typedef struct rod_scene {
     double density;         /* kg/m^3 */
     double gravity[3];      /* m/s^2, (x, y, z); default 0 0 0 (off) */
 
-    /* [folds] a symmetric pair of creases at Gamma and 1 - Gamma */
+    /* [folds] two creases, "left" near the x = 0 clamp and "right" near the other. The pair is
+     * symmetric (angle_deg at Gamma and 1 - Gamma) unless the per-crease keys say otherwise;
+     * read them through rod_scene_crease_angle_deg / rod_scene_crease_position. */
     double fold_angle_deg;        /* deg, 0 means no folds; |angle| < 180; positive turns the
                                      tangent toward the surface normal (up when clamped flat) */
     double fold_position;         /* Gamma, in (0, 0.5), fraction of the free length */
-    double fold_stiffness_factor; /* >= 1, multiplies the soft bending stiffness at a fold node */
+    double fold_angle_left_deg;   /* deg, the left crease's own angle; NaN: fold_angle_deg */
+    double fold_angle_right_deg;  /* deg, the right crease's own angle; NaN: fold_angle_deg */
+    double fold_position_left;    /* left crease from the left clamp point, over l; NaN: Gamma */
+    double fold_position_right;   /* right crease from the left clamp point, over l;
+                                     NaN: 1 - Gamma */
+    double fold_hinge_stiffness;  /* N m/rad, the creases' rotational stiffness k (a compliant
+                                     hinge, sim/rod_hinge.c); ROD_HINGE_RIGID: rigid creases */
+    double fold_stiffness_factor; /* >= 1, rigid creases only: multiplies the soft bending
+                                     stiffness at a fold node (the penalty that holds the angle) */
 
     /* [imperfection] */
-    double fold_angle_rel;  /* relative difference between the two crease angles: the crease at
-                               Gamma gets phi (1 + rel/2), the one at 1 - Gamma phi (1 - rel/2) */
+    double fold_angle_rel;  /* relative difference between the two crease angles, applied on top
+                               of each crease's own angle as a symmetry-breaking seed: the left
+                               crease gets phi_L (1 + rel/2), the right one phi_R (1 - rel/2) */
 
     /* [mesh] */
     int nodes;              /* N, total nodes including the two clamped edges, >= 5 */
@@ -60,9 +72,32 @@ typedef struct rod_scene {
     double asym_threshold;  /* rad, peak |A| during the snap above which it is asymmetric */
 } rod_scene;
 
+/* fold_hinge_stiffness of a rigid crease (the default: today's model, EI1 times
+ * fold_stiffness_factor at the crease node). */
+#define ROD_HINGE_RIGID INFINITY
+
 /* The paper's simulation scene (l = 1 m, w = 0.2 m, b = 1 mm, E = 1 GPa, G = E/3,
  * rho = 1000 kg/m^3, N = 201, dt = 1 ms, 0.01 m/s, Delta L = 0.5, phi = 90 deg, Gamma = 0.13). */
 rod_scene rod_scene_default(void);
+
+/* Crease k (0 left, 1 right) as the scene resolves it: its own angle (deg, before the
+ * imperfection) or fold_angle_deg, its position (from the left clamp point, over l) or Gamma /
+ * 1 - Gamma. */
+double rod_scene_crease_angle_deg(const rod_scene *s, int k);
+double rod_scene_crease_position(const rod_scene *s, int k);
+
+/* 1 when the scene has creases (either resolved angle non-zero). */
+int rod_scene_has_creases(const rod_scene *s);
+
+/* 1 when the creases are rigid (fold_hinge_stiffness is ROD_HINGE_RIGID). */
+int rod_scene_hinge_rigid(const rod_scene *s);
+
+/* Tools that rely on the C2 symmetry of the perfect scene (continuation's classification,
+ * sweeps, the boundary) call this: 0 when the resolved creases are a symmetric pair (equal
+ * angles, positions p and 1 - p), after which the per-crease keys are cleared (NaN) so that
+ * later changes of fold_angle_deg / fold_position move both creases; otherwise non-zero with a
+ * message and the key to blame, as rod_scene_check. */
+int rod_scene_require_symmetric(rod_scene *s, char *msg, size_t msglen, char *key, size_t keylen);
 
 /* Most time steps a scene's shear ramp may need (shear_max * length / shear_rate / dt):
  * rod_scene_check refuses more, naming solver.dt or protocol.shear_rate and the count. 10^12 steps

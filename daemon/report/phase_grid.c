@@ -51,6 +51,10 @@ int phase_grid_compute(const rod_scene *base, double phi0, double phi1, size_t n
             rod_scene s = *base;
             s.fold_angle_deg = sign * fabs(out->phi_deg[i]);
             s.fold_position = out->gamma[j];
+            /* The grid is over the symmetric pair (phi, Gamma): a specimen's own crease values
+             * would pin every cell to them. */
+            s.fold_angle_left_deg = s.fold_angle_right_deg = NAN;
+            s.fold_position_left = s.fold_position_right = NAN;
             rod_predict_opts o = rod_predict_opts_default();
             o.adaptive = 1;
             o.on_sample = stop_when_cancelled;

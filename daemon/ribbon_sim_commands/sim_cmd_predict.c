@@ -15,7 +15,8 @@ static const char usage[] =
     "  Prints the snap Delta W, the regime (symmetric / asymmetric), the peak |A| during the snap,\n"
     "  the steps and the wall time. --fast uses adaptive time stepping (README \"Speed\").\n"
     "  --json prints one object: snap_dw (null without a snap), regime (symmetric, asymmetric or\n"
-    "  none), peak_abs_a, steps, wall_s, and what ran (terms, stages).\n";
+    "  none), peak_abs_a, steps, wall_s, and what ran (terms: stretch, bend, twist, fold (rigid\n"
+    "  creases), hinge (compliant creases), gravity, damping; stages).\n";
 
 typedef struct progress {
     int tty;
@@ -73,6 +74,7 @@ int sim_cmd_predict(int argc, char **argv)
         json_object_set_new(terms, "bend", json_integer((json_int_t)p.count.bend_evals));
         json_object_set_new(terms, "twist", json_integer((json_int_t)p.count.twist_evals));
         json_object_set_new(terms, "fold", json_integer((json_int_t)p.count.fold_evals));
+        json_object_set_new(terms, "hinge", json_integer((json_int_t)p.count.hinge_evals));
         json_object_set_new(terms, "gravity", json_integer((json_int_t)p.count.gravity_evals));
         json_object_set_new(terms, "damping", json_integer((json_int_t)p.count.damping_evals));
         json_object_set_new(j, "term_evaluations", terms);
@@ -97,7 +99,7 @@ int sim_cmd_predict(int argc, char **argv)
         printf("snap         none up to Delta W = %g (shear limit reached, no snap)\n", sc.shear_max);
     printf("run          %ld steps (%ld rejected), %.1f s simulated, %.2f s wall\n", p.steps, p.rejected,
            p.sim_time, p.wall_s);
-    printf("evaluated    stretch, bend, twist%s%s%s\n", p.count.fold_evals ? ", folds" : "",
-           p.count.gravity_evals ? ", gravity" : "", p.count.damping_evals && sc.damping > 0 ? ", damping" : "");
+    printf("evaluated    stretch, bend, twist%s%s%s%s\n", p.count.fold_evals ? ", folds" : "",
+           p.count.hinge_evals ? ", hinges" : "", p.count.gravity_evals ? ", gravity" : "", p.count.damping_evals && sc.damping > 0 ? ", damping" : "");
     return 0;
 }

@@ -365,6 +365,14 @@ int sim_cmd_sweep(int argc, char **argv)
     sw.spec.seed_route = x.seed && !strcmp(x.seed, "route");
     if (parse_gamma_tol(x.tol, &sw.spec.gamma_tol)) return 2;
     if (!sim_opts_load_scene(&o, &sw.spec.base)) return 2;
+    {
+        /* The sweep moves the symmetric pair (phi, Gamma): its base must be that pair. */
+        char msg[256], key[64];
+        if (rod_scene_require_symmetric(&sw.spec.base, msg, sizeof msg, key, sizeof key)) {
+            fprintf(stderr, "ribbon-sim sweep: %s: %s: %s\n", o.scene, key, msg);
+            return 2;
+        }
+    }
     if (!x.dl) da = db = sw.spec.base.compression;
     sw.spec.sign = sw.spec.base.fold_angle_deg < 0.0 ? -1.0 : 1.0;
     sw.phi = grid(pa, pb, np);

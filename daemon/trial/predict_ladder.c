@@ -30,6 +30,14 @@ void predict_scene_hash(const rod_scene *sc, char out[17])
              sc->fold_stiffness_factor, sc->fold_angle_rel, sc->compression, sc->shear_rate, sc->shear_max,
              (int)sc->route, sc->dt, sc->damping, sc->tolerance, sc->max_iterations, sc->snap_speed,
              sc->asym_threshold);
+    /* Each crease's own values and a compliant hinge (issue 31), appended only when set, so a
+     * scene without them keeps the hash (and the stored ladders) it had. */
+    if (!isnan(sc->fold_angle_left_deg) || !isnan(sc->fold_angle_right_deg) || !isnan(sc->fold_position_left) ||
+        !isnan(sc->fold_position_right) || !rod_scene_hinge_rigid(sc)) {
+        size_t used = strlen(buf);
+        snprintf(buf + used, sizeof buf - used, "|%a %a %a %a %a", sc->fold_angle_left_deg, sc->fold_angle_right_deg,
+                 sc->fold_position_left, sc->fold_position_right, sc->fold_hinge_stiffness);
+    }
     uint64_t h = fnv(1469598103934665603ull, buf);
     snprintf(out, 17, "%016llx", (unsigned long long)h);
 }

@@ -218,6 +218,8 @@ static void test_pet_scene_loads(void **state)
     assert_true(REL_CLOSE(s.shear_max, 0.5));
     assert_int_equal(s.nodes, 101);
     assert_true(REL_CLOSE(s.dt, 1e-3));
+    /* Compliant creases: k = E I1 / L*, L* = 30 b (the scene file's comment gives the source). */
+    assert_true(REL_CLOSE(s.fold_hinge_stiffness, 3.5e-3));
 }
 
 /* The base scene sets only required keys: the optional ones keep their documented defaults. */
@@ -594,6 +596,111 @@ static void test_readme_documents_every_key(void **state)
     free(readme);
 }
 
+
+/* ---- per-crease keys and hinges (issue 31) ------------------------------------------------ */
+
+static void test_crease_keys(void **state)
+{
+    (void)state;
+    rod_scene s;
+    cfg_error err;
+    char shown[1024];
+    /* Unset per-crease keys follow the pair; a compliant hinge needs no stiffness_factor. */
+    assert_int_equal(parse(scene_edit(0, NULL), NULL, 0, &s, &err), CFG_OK);
+    assert_true(rod_scene_hinge_rigid(&s));
+    assert_true(rod_scene_crease_angle_deg(&s, 0) == 90.0 && rod_scene_crease_angle_deg(&s, 1) == 90.0);
+    assert_true(rod_scene_crease_position(&s, 0) == 0.21 && rod_scene_crease_position(&s, 1) == 1.0 - 0.21);
+    assert_int_equal(parse(scene_edit2(11, "hinge_stiffness = 2.5e-3", 0, NULL,
+                                       "[folds]\nangle_left_deg = 88\nangle_right_deg = 91\n"
+                                       "position_left = 0.2\nposition_right = 0.81\n"),
+                           NULL, 0, &s, &err),
+                     CFG_OK);
+    assert_true(s.fold_hinge_stiffness == 2.5e-3 && !rod_scene_hinge_rigid(&s));
+    assert_true(rod_scene_crease_angle_deg(&s, 0) == 88.0 && rod_scene_crease_angle_deg(&s, 1) == 91.0);
+    assert_true(rod_scene_crease_position(&s, 0) == 0.2 && rod_scene_crease_position(&s, 1) == 0.81);
+    /* `rigid` by name; without it the file's rigid creases need stiffness_factor. */
+    assert_int_equal(parse(scene_edit(0, "x"), NULL, 0, &s, &err), CFG_OK);
+    assert_int_equal(parse(scene_edit2(0, NULL, 0, NULL, "[folds]\nhinge_stiffness = rigid\n"), NULL, 0, &s, &err),
+                     CFG_OK);
+    assert_true(rod_scene_hinge_rigid(&s));
+    expect_line_error(scene_edit2(11, NULL, 0, NULL, "[folds]\nhinge_stiffness = rigid\n"), CFG_ERR_MISSING, 8,
+                      "folds.stiffness_factor", "required");
+    /* Bad hinge stiffnesses, named. */
+    expect_line_error(scene_edit(11, "hinge_stiffness = 0"), CFG_ERR_RANGE, 11, "folds.hinge_stiffness",
+                      "or rigid");
+    expect_line_error(scene_edit(11, "hinge_stiffness = -1e-3"), CFG_ERR_RANGE, 11, "folds.hinge_stiffness",
+                      "out of range");
+    expect_line_error(scene_edit(11, "hinge_stiffness = nan"), CFG_ERR_VALUE, 11, "folds.hinge_stiffness",
+                      "or rigid");
+    expect_line_error(scene_edit(11, "hinge_stiffness = rigidd"), CFG_ERR_VALUE, 11, "folds.hinge_stiffness",
+                      NULL);
+    expect_override_error("folds.hinge_stiffness=0", CFG_ERR_RANGE, "folds.hinge_stiffness", "out of range");
+    expect_override_error("folds.hinge_stiffness=-2", CFG_ERR_RANGE, "folds.hinge_stiffness", NULL);
+    expect_override_error("folds.hinge_stiffness=NaN", CFG_ERR_VALUE, "folds.hinge_stiffness", NULL);
+    /* Contradictory keys: stiffness_factor with a compliant hinge in the same file, or by --set. */
+    expect_line_error(scene_edit2(0, NULL, 0, NULL, "[folds]\nhinge_stiffness = 1e-3\n"), CFG_ERR_CHECK, 11,
+                      "folds.stiffness_factor", "applies only to rigid creases");
+    {
+        const char *list[] = {"folds.stiffness_factor=10"};
+        assert_int_equal(parse(scene_edit(11, "hinge_stiffness = 1e-3"), list, 1, &s, &err), CFG_ERR_CHECK);
+        cfg_error_format(&err, shown, sizeof shown);
+        print_message("  refused: %s\n", shown);
+        assert_string_equal(err.key, "folds.stiffness_factor");
+        assert_int_equal(err.origin, CFG_ORIGIN_OVERRIDE);
+    }
+    /* ... while --set hinge_stiffness over a rigid file replaces the crease model. */
+    {
+        const char *list[] = {"folds.hinge_stiffness=1e-3"};
+        assert_int_equal(parse(scene_edit(0, NULL), list, 1, &s, &err), CFG_OK);
+        assert_true(s.fold_hinge_stiffness == 1e-3);
+    }
+    /* Per-crease angles: range, opposite ways, 180 through the imperfection, the clamp rule with
+     * each crease's own angle (a pair of 10 deg creases clamps at Delta L = 0.05, one of 170 deg
+     * beside a 10 deg one does not). */
+    expect_line_error(scene_edit2(0, NULL, 0, NULL, "[folds]\nangle_left_deg = 180\n"), CFG_ERR_RANGE, 24,
+                      "folds.angle_left_deg", "out of range");
+    expect_line_error(scene_edit2(0, NULL, 0, NULL, "[folds]\nangle_right_deg = -90\n"), CFG_ERR_CHECK, 24,
+                      "folds.angle_right_deg", "opposite ways");
+    expect_line_error(scene_edit2(0, NULL, 0, NULL, "[folds]\nangle_right_deg = 179.99\n[imperfection]\nfold_angle_rel = -0.01\n"),
+                      CFG_ERR_CHECK, 26, "imperfection.fold_angle_rel", "180");
+    assert_int_equal(parse(scene_edit2(9, "angle_deg = 10", 15, "compression = 0.05", NULL), NULL, 0, &s, &err),
+                     CFG_OK);
+    expect_line_error(scene_edit2(9, "angle_deg = 10", 15, "compression = 0.05", "[folds]\nangle_right_deg = 170\n"),
+                      CFG_ERR_CHECK, 15, "protocol.compression", "creases of 10 and 170 deg cannot be clamped");
+    /* Positions: outside (0, 1), crossing, inside a clamp, closer than one edge. */
+    expect_line_error(scene_edit2(0, NULL, 0, NULL, "[folds]\nposition_right = 1\n"), CFG_ERR_RANGE, 24,
+                      "folds.position_right", "out of range");
+    expect_line_error(scene_edit2(0, NULL, 0, NULL, "[folds]\nposition_left = 0.6\nposition_right = 0.4\n"),
+                      CFG_ERR_CHECK, 25, "folds.position_right", "cross");
+    expect_line_error(scene_edit2(0, NULL, 0, NULL, "[folds]\nposition_left = 0.8\n"), CFG_ERR_CHECK, 24,
+                      "folds.position_left", "cross");
+    expect_line_error(scene_edit2(0, NULL, 0, NULL, "[folds]\nposition_left = 0.005\n"), CFG_ERR_CHECK, 24,
+                      "folds.position_left", "inside the clamp");
+    expect_line_error(scene_edit2(0, NULL, 0, NULL, "[folds]\nposition_right = 0.995\n"), CFG_ERR_CHECK, 24,
+                      "folds.position_right", "inside the clamp");
+    expect_line_error(scene_edit2(0, NULL, 0, NULL, "[folds]\nposition_left = 0.5\nposition_right = 0.505\n"),
+                      CFG_ERR_CHECK, 25, "folds.position_right", "closer than one edge");
+    /* A scene built by hand gets the same refusals from rod_scene_check, NaN included. */
+    rod_scene h = rod_scene_default();
+    char msg[256], key[64];
+    const double bad_k[] = {0.0, -1.0, NAN};
+    for (int i = 0; i < 3; i++) {
+        h.fold_hinge_stiffness = bad_k[i];
+        assert_int_equal(rod_scene_check(&h, msg, sizeof msg, key, sizeof key), 1);
+        print_message("  rod_scene_check: %s: %s\n", key, msg);
+        assert_string_equal(key, "folds.hinge_stiffness");
+    }
+    h = rod_scene_default();
+    h.fold_angle_left_deg = INFINITY;
+    assert_int_equal(rod_scene_check(&h, msg, sizeof msg, key, sizeof key), 1);
+    assert_string_equal(key, "folds.angle_left_deg");
+    h = rod_scene_default();
+    h.fold_position_left = 0.9;
+    h.fold_position_right = 0.1;
+    assert_int_equal(rod_scene_check(&h, msg, sizeof msg, key, sizeof key), 1);
+    assert_string_equal(key, "folds.position_right");
+}
+
 /* ---- fuzz --------------------------------------------------------------------------------- */
 
 static uint64_t rng_next(uint64_t *x)
@@ -678,6 +785,11 @@ static void scene_assert_sane(const rod_scene *s)
                          &s->shear_rate, &s->shear_max, &s->dt, &s->damping, &s->tolerance,
                          &s->snap_speed, &s->asym_threshold};
     for (size_t i = 0; i < sizeof d / sizeof d[0]; i++) assert_true(isfinite(*d[i]));
+    /* The per-crease keys are unset (NaN) or finite; the hinge finite and positive, or rigid. */
+    const double *o[] = {&s->fold_angle_left_deg, &s->fold_angle_right_deg, &s->fold_position_left,
+                         &s->fold_position_right};
+    for (size_t i = 0; i < sizeof o / sizeof o[0]; i++) assert_true(isnan(*o[i]) || isfinite(*o[i]));
+    assert_true(rod_scene_hinge_rigid(s) || (isfinite(s->fold_hinge_stiffness) && s->fold_hinge_stiffness > 0));
     assert_true(s->nodes >= 5 && s->nodes <= 100001);
     assert_true(s->max_iterations >= 1);
     assert_true(s->length > 0 && s->width > 0 && s->thickness > 0 && s->dt > 0);
@@ -759,6 +871,7 @@ int main(void)
         cmocka_unit_test(test_io_errors),
         cmocka_unit_test(test_only_regular_files),
         cmocka_unit_test(test_readme_documents_every_key),
+        cmocka_unit_test(test_crease_keys),
         cmocka_unit_test(test_fuzz_mutated_scenes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

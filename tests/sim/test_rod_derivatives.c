@@ -1,5 +1,7 @@
 /* test_rod_derivatives: the analytic gradient and Hessian of every energy term against central
- * finite differences, on random configurations, with and without folds and gravity.
+ * finite differences, on random configurations, with and without folds and gravity, and with
+ * compliant hinges (rod_hinge.c) of unequal angles at unequal positions, the hinge term alone
+ * and with the others.
  *
  * Frames at a perturbed state are parallel-transported from the base state, exactly as inside a
  * Newton iteration; the Hessian is compared with the symmetric part of the finite-difference
@@ -56,6 +58,8 @@ static double urand(unsigned long long *st)
     return (double)(*st >> 11) / 9007199254740992.0;
 }
 
+static rod *random_rod_scene(rod_scene s, unsigned long long seed);
+
 static rod *random_rod(double fold_deg, int gravity, unsigned long long seed)
 {
     rod_scene s = rod_scene_default();
@@ -65,6 +69,11 @@ static rod *random_rod(double fold_deg, int gravity, unsigned long long seed)
     s.fold_stiffness_factor = 10.0;
     s.compression = 0.3;
     if (gravity) s.gravity[2] = -9.81;
+    return random_rod_scene(s, seed);
+}
+
+static rod *random_rod_scene(rod_scene s, unsigned long long seed)
+{
     rod *r = NULL;
     char err[256];
     assert_int_equal(rod_alloc(&s, &r, err, sizeof err), ROD_OK);
@@ -212,9 +221,45 @@ static void test_with_folds_and_gravity(void **state)
     rod_free(r);
 }
 
+/* Compliant hinges: k = 0.05 N m/rad against the strip's E I1 / v = 0.13 N m/rad at N = 11, so
+ * both parts of k_eff matter; unequal angles (60 and 75 deg) at unequal positions (0.2, 0.7);
+ * the random state turns each crease node far from its rest angle. The hinge term alone (every
+ * other term off: the kappa1 part of the crease nodes only), then with everything. */
+static void test_with_hinges(void **state)
+{
+    (void)state;
+    rod_scene s = rod_scene_default();
+    s.nodes = 11;
+    s.fold_angle_deg = 60.0;
+    s.fold_angle_right_deg = 75.0;
+    s.fold_position_left = 0.2;
+    s.fold_position_right = 0.7;
+    s.fold_hinge_stiffness = 0.05;
+    s.compression = 0.3;
+    s.gravity[2] = -9.81;
+    rod *r = random_rod_scene(s, 42424242ULL);
+    assert_true(r->terms.hinge && !r->terms.fold);
+    assert_true(r->fold_node[0] > 1 && r->fold_node[1] > r->fold_node[0] && r->fold_node[1] < r->n - 2);
+    rod_terms all = r->terms;
+    r->terms = (rod_terms){0};
+    r->terms.hinge = 1;
+    print_message("-- hinge alone\n");
+    double e = rod_energy(r);
+    print_message("hinge energy %.6e J\n", e);
+    assert_true(e > 0.0);
+    check_gradient(r);
+    check_hessian(r);
+    r->terms = all;
+    print_message("-- all terms\n");
+    check_gradient(r);
+    check_hessian(r);
+    rod_free(r);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_with_hinges),
         cmocka_unit_test(test_no_folds),
         cmocka_unit_test(test_with_folds),
         cmocka_unit_test(test_with_folds_and_gravity),

@@ -79,6 +79,15 @@ static void hash_ignores_mesh_only(void **state)
     predict_scene_hash(&b, hb);
     assert_string_not_equal(ha, hb);
     assert_int_equal(strlen(ha), 16);
+    /* A compliant hinge or a crease's own angle is another scene (issue 31). */
+    b = a;
+    b.fold_hinge_stiffness = 2.5e-3;
+    predict_scene_hash(&b, hb);
+    assert_string_not_equal(ha, hb);
+    b = a;
+    b.fold_angle_right_deg = -91.0;
+    predict_scene_hash(&b, hb);
+    assert_string_not_equal(ha, hb);
 }
 
 static void real_ladder(void **state)
