@@ -30,6 +30,13 @@ static double shear_at(double t, double rate, double T)
 #define ADAPT_CHANGE_MOVING 0.03 /* the same once Delta Z moves faster than the onset speed */
 #define ADAPT_GROWTH 0.05        /* target relative growth of |A| per step */
 
+/* A target above times the options' adapt_scale (0 counts as 1): the resolution ladder refines
+ * these targets together with dt and the mesh (daemon/trial/predict_ladder.h). */
+static double adapt_target(const rod_predict_opts *o, double base)
+{
+    return o->adapt_scale > 0.0 ? base * o->adapt_scale : base;
+}
+
 static double wall_now(void)
 {
     struct timespec ts;
@@ -127,9 +134,10 @@ static int predict_step_overshot(const rod_predict_opts *o, const rod_obs *ob, d
     } else if (o->adaptive && h > ss->dt_base) {
         /* A long step that overshot the step control's targets (below) twice over is
          * redone shorter. */
-        double target = fabs(ob->dz - ss->dz_prev) / h >= ss->slow ? ADAPT_CHANGE_MOVING : ADAPT_CHANGE;
+        double target =
+            adapt_target(o, fabs(ob->dz - ss->dz_prev) / h >= ss->slow ? ADAPT_CHANGE_MOVING : ADAPT_CHANGE);
         if (fmax(fabs(ob->dz - ss->dz_prev), fabs(ob->a - ss->a_prev)) > 2.0 * target ||
-            fabs(ob->a - ss->a_prev) > 2.0 * ADAPT_GROWTH * fabs(ss->a_prev) + 1e-12) {
+            fabs(ob->a - ss->a_prev) > 2.0 * adapt_target(o, ADAPT_GROWTH) * fabs(ss->a_prev) + 1e-12) {
             ss->dt = fmax(0.25 * ss->dt, ss->dt_base);
             return 1;
         }
@@ -180,8 +188,8 @@ static void predict_next_dt(const rod_predict_opts *o, double change, double gro
          * aimed at is ADAPT_CHANGE_MOVING. The step changes by a factor within [0.5, 1.5],
          * grows only while Newton needs at most 4 iterations, and stays within
          * [dt, 100 dt]. */
-        double ratio = (speed >= ss->slow ? ADAPT_CHANGE_MOVING : ADAPT_CHANGE) / fmax(change, 1e-300);
-        ratio = fmin(ratio, ADAPT_GROWTH / fmax(growth, 1e-300));
+        double ratio = adapt_target(o, speed >= ss->slow ? ADAPT_CHANGE_MOVING : ADAPT_CHANGE) / fmax(change, 1e-300);
+        ratio = fmin(ratio, adapt_target(o, ADAPT_GROWTH) / fmax(growth, 1e-300));
         ratio = fmin(fmax(ratio, 0.5), iterations <= 4 ? 1.5 : 1.0);
         ss->dt = fmin(fmax(ss->dt * ratio, ss->dt_base), ss->dt_max);
     } else if (o->adaptive) {

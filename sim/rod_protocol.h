@@ -47,6 +47,9 @@ typedef struct rod_predict_opts {
     int end_after_swing;   /* 1: stop following the snap when Delta Z turns round at the end of
                               its first swing (the passage to the lower state) instead of after
                               post_snap_time; the peak |A| is then the passage's (fast mode) */
+    double adapt_scale;    /* with adaptive: the step control's targets (2e-3, 0.03, 5%) times
+                              this (0 counts as 1). The resolution ladder scales them with dt, so
+                              a rung's onset is resolved like its dt (daemon/trial/predict_ladder.h) */
     double ramp_time;      /* s over which the shear velocity rises smoothly from 0 to the rate,
                               v = rate (1 - cos(pi t / T)) / 2 (0: starts at full rate) */
     rod_sample_fn on_sample;

@@ -8,7 +8,6 @@
 #include <string.h>
 
 #include "rod_protocol.h"
-#include "rod_richardson.h"
 
 static uint64_t fnv(uint64_t h, const char *s)
 {
@@ -42,25 +41,22 @@ void predict_scene_hash(const rod_scene *sc, char out[17])
     snprintf(out, 17, "%016llx", (unsigned long long)h);
 }
 
-void predict_ladder_estimate_errors(predict_ladder_rung *r, int n)
+double predict_ladder_dt(double dt_finest, int finest_nodes, int nodes)
 {
-    for (int k = 0; k < n; k++) r[k].est_error = -1.0;
-    if (n < 2) return;
-    double s2 = r[n - 1].snap_dw, s1 = r[n - 2].snap_dw;
-    double ratio = (double)(r[n - 1].nodes - 1) / (double)(r[n - 2].nodes - 1); /* mesh refinement */
-    double p = 1.0;
-    if (n >= 3) {
-        double s0 = r[n - 3].snap_dw;
-        double ratio0 = (double)(r[n - 2].nodes - 1) / (double)(r[n - 3].nodes - 1);
-        /* Observed order when the differences shrink monotonically with the same sign. */
-        if (fabs(ratio - ratio0) < 1e-9 * ratio) {
-            double po = rod_observed_order(s0, s1, s2, ratio);
-            if (po > 0.5 && po < 4.0) p = po;
-        }
+    return dt_finest * (double)(finest_nodes - 3) / (double)(nodes - 3);
+}
+
+void predict_ladder_estimate_errors(predict_ladder_rung *r, int n, rod_ladder_verdict *verdict)
+{
+    double h[PREDICT_LADDER_MAX_RUNGS] = {0}, s[PREDICT_LADDER_MAX_RUNGS] = {0}, err[PREDICT_LADDER_MAX_RUNGS];
+    if (n > PREDICT_LADDER_MAX_RUNGS) n = PREDICT_LADDER_MAX_RUNGS;
+    if (n < 0) n = 0;
+    for (int k = 0; k < n; k++) {
+        h[k] = 1.0 / (double)(r[k].nodes - 3); /* edge length over l */
+        s[k] = r[k].snap_dw;
     }
-    double ref = rod_richardson(s1, s2, ratio, p);
-    if (!(fabs(ref) > 0.0) || !isfinite(ref)) return;
-    for (int k = 0; k < n; k++) r[k].est_error = fabs(r[k].snap_dw - ref) / fabs(ref);
+    rod_ladder_estimate(h, s, n, err, verdict);
+    for (int k = 0; k < n; k++) r[k].est_error = err[k];
 }
 
 /* rod_predict's per-step callback: stops the rung once the cancel flag is set. */
@@ -86,12 +82,14 @@ double predict_ladder_estimate_s(const rod_scene *sc, const int *nodes, int n, i
     for (int k = 0; k < n; k++) {
         rod_scene s = *sc;
         s.nodes = nodes[k];
+        s.dt = predict_ladder_dt(sc->dt, nodes[n - 1], nodes[k]);
         total += predict_estimate_s(&s, adaptive);
     }
     return total;
 }
 
 int predict_ladder_compute(const rod_scene *sc, const int *nodes, int n, int adaptive, predict_ladder_rung *out,
+                           rod_ladder_verdict *verdict,
                            void (*progress)(void *user, const predict_ladder_rung *r, int k, int n), void *user,
                            const atomic_int *cancel, char *why, size_t why_len)
 {
@@ -104,10 +102,14 @@ int predict_ladder_compute(const rod_scene *sc, const int *nodes, int n, int ada
             snprintf(why, why_len, "ladder nodes must be increasing and at least 5 (rung %d: %d)", k + 1, nodes[k]);
             return -1;
         }
+    }
+    for (int k = 0; k < n; k++) {
         rod_scene s = *sc;
         s.nodes = nodes[k];
+        s.dt = predict_ladder_dt(sc->dt, nodes[n - 1], nodes[k]);
         rod_predict_opts o = rod_predict_opts_default();
         o.adaptive = adaptive;
+        o.adapt_scale = adaptive ? s.dt / sc->dt : 0.0;
         o.on_sample = stop_if_cancelled;
         o.user = (void *)cancel;
         rod_prediction p;
@@ -131,6 +133,7 @@ int predict_ladder_compute(const rod_scene *sc, const int *nodes, int n, int ada
         r->nodes = nodes[k];
         r->dt = s.dt;
         r->adaptive = adaptive;
+        r->adapt_scale = o.adapt_scale;
         r->snapped = 1;
         r->snap_dw = p.snap_dw;
         r->asymmetric = p.asymmetric;
@@ -138,7 +141,7 @@ int predict_ladder_compute(const rod_scene *sc, const int *nodes, int n, int ada
         r->est_error = -1.0;
         if (progress) progress(user, r, k, n);
     }
-    predict_ladder_estimate_errors(out, n);
+    predict_ladder_estimate_errors(out, n, verdict);
     return 0;
 }
 

@@ -88,10 +88,12 @@ static store_err store_result(trial_prediction *j, store *st, const rod_predicti
     sp.wall_s = p->wall_s;
     char solver[512];
     snprintf(solver, sizeof solver,
-             "{\"nodes\":%d,\"dt\":%.17g,\"adaptive\":%s,\"tolerance\":%.17g,\"max_iterations\":%d,"
+             "{\"nodes\":%d,\"dt\":%.17g,\"adaptive\":%s,\"adapt_scale\":%.17g,\"tolerance\":%.17g,"
+             "\"max_iterations\":%d,"
              "\"damping\":%.17g,\"route\":%d,\"fold_angle_rel\":%.17g,\"snap_speed\":%.17g,"
              "\"asym_threshold\":%.17g,\"steps\":%ld,\"rejected\":%ld}",
-             sc->nodes, sc->dt, j->def.adaptive ? "true" : "false", sc->tolerance, sc->max_iterations, sc->damping,
+             sc->nodes, sc->dt, j->def.adaptive ? "true" : "false", j->def.adapt_scale, sc->tolerance,
+             sc->max_iterations, sc->damping,
              (int)sc->route, sc->fold_angle_rel, sc->snap_speed, sc->asym_threshold, p->steps, p->rejected);
     sp.solver_json = solver;
     sp.curve.n = j->n;
@@ -111,6 +113,7 @@ static void *prediction_main(void *arg)
                                    .regime = STORE_REGIME_UNKNOWN};
     rod_predict_opts o = rod_predict_opts_default();
     o.adaptive = j->def.adaptive;
+    o.adapt_scale = j->def.adapt_scale;
     o.on_sample = on_sample;
     o.user = j;
     rod_prediction p;

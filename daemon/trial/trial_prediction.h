@@ -36,6 +36,7 @@ typedef void (*trial_prediction_done_fn)(void *user, const trial_prediction_repo
 typedef struct trial_prediction_def {
     rod_scene scene;         /* at the chosen resolution */
     int adaptive;            /* fast mode */
+    double adapt_scale;      /* fast mode: rod_predict_opts.adapt_scale of the ladder's rung (0 = 1) */
     double est_error;        /* the ladder's estimate of the snap's relative error; NaN if unknown */
     char hash[72];           /* the scene's hash (predictions.scene_hash) */
     char store_path[RIG_PATH_MAX];

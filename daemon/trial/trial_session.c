@@ -126,15 +126,18 @@ static void prediction_done(void *user, const trial_prediction_report *r)
 
 /* ---- resolution ----------------------------------------------------------------------------- */
 
-/* Picks nodes and dt for the prediction (and the mock twin). Returns 0, or -1 with why. */
-static int choose_resolution(trial_session *s, rod_scene *sc, double *est_error, char *hash, size_t hash_len,
-                             char *why, size_t why_len)
+/* Picks nodes, dt and (fast mode) the step control's scale for the prediction (the mock twin takes
+ * nodes and dt). Returns 0, or -1 with why. */
+static int choose_resolution(trial_session *s, rod_scene *sc, double *adapt_scale, double *est_error, char *hash,
+                             size_t hash_len, char *why, size_t why_len)
 {
     const rig_sim *sim = &s->cfg.sim;
     char h[17];
     predict_scene_hash(sc, h);
-    snprintf(hash, hash_len, "%s-v%s-%s", h, RIBBON_VERSION, sim->fast ? "fast" : "fixed");
+    /* "l2": the ladder refines dt with N (a cache of the N-only ladder is not reused). */
+    snprintf(hash, hash_len, "%s-v%s-%s-l2", h, RIBBON_VERSION, sim->fast ? "fast" : "fixed");
     *est_error = NAN;
+    *adapt_scale = 0.0;
     if (sim->explicit_resolution) {
         if (sim->nodes > 0) sc->nodes = sim->nodes;
         if (sim->dt > 0) sc->dt = sim->dt;
@@ -143,6 +146,7 @@ static int choose_resolution(trial_session *s, rod_scene *sc, double *est_error,
     store_ladder_rung *cached = NULL;
     size_t n = 0;
     predict_ladder_rung r[PREDICT_LADDER_MAX_RUNGS];
+    rod_ladder_verdict v;
     int nr = 0;
     if (store_ladder_get(s->st, hash, &cached, &n, why, why_len) == STORE_OK && n > 0) {
         for (size_t k = 0; k < n && nr < PREDICT_LADDER_MAX_RUNGS; k++) {
@@ -150,20 +154,21 @@ static int choose_resolution(trial_session *s, rod_scene *sc, double *est_error,
             r[nr].nodes = cached[k].nodes;
             r[nr].dt = cached[k].dt;
             r[nr].adaptive = cached[k].adaptive;
+            r[nr].adapt_scale = cached[k].adaptive && sc->dt > 0 ? cached[k].dt / sc->dt : 0.0;
             r[nr].snap_dw = cached[k].snap_dw;
-            r[nr].est_error = isfinite(cached[k].est_error) ? cached[k].est_error : -1.0;
             r[nr].wall_s = cached[k].wall_s;
             nr++;
         }
         free(cached);
+        predict_ladder_estimate_errors(r, nr, &v); /* the same estimate as when it was computed, and its verdict */
         session_event(s, NAN, STORE_EVENT_INFO, "resolution ladder taken from the store's cache");
     } else {
         free(cached);
         char msg[128];
         snprintf(msg, sizeof msg, "computing the resolution ladder (%d rungs), once for this scene", sim->n_ladder);
         session_event(s, NAN, STORE_EVENT_INFO, msg);
-        if (predict_ladder_compute(sc, sim->ladder_nodes, sim->n_ladder, sim->fast, r, NULL, NULL, &s->cancel, why,
-                                   why_len))
+        if (predict_ladder_compute(sc, sim->ladder_nodes, sim->n_ladder, sim->fast, r, &v, NULL, NULL, &s->cancel,
+                                   why, why_len))
             return -1;
         nr = sim->n_ladder;
         store_ladder_rung sr[PREDICT_LADDER_MAX_RUNGS];
@@ -179,8 +184,21 @@ static int choose_resolution(trial_session *s, rod_scene *sc, double *est_error,
         if (store_ladder_put(s->st, hash, sr, (size_t)nr, w2, sizeof w2) != STORE_OK)
             session_event(s, NAN, STORE_EVENT_WARNING, w2);
     }
+    if (v.asymptotic) {
+        char msg[160];
+        snprintf(msg, sizeof msg,
+                 "resolution ladder in the asymptotic range: observed order %.2f (expected %.1f to %.1f)", v.order,
+                 ROD_LADDER_ORDER_LO, ROD_LADDER_ORDER_HI);
+        session_event(s, NAN, STORE_EVENT_INFO, msg);
+    } else {
+        char msg[260];
+        snprintf(msg, sizeof msg, "resolution ladder %s", v.note);
+        session_event(s, NAN, STORE_EVENT_WARNING, msg);
+    }
     int k = predict_ladder_choose(r, nr, sim->target_error);
     sc->nodes = r[k].nodes;
+    sc->dt = r[k].dt;
+    *adapt_scale = r[k].adapt_scale;
     *est_error = r[k].est_error >= 0 ? r[k].est_error : NAN;
     char msg[200];
     snprintf(msg, sizeof msg, "prediction resolution N = %d, dt = %g s: estimated error %.2g (target %.2g)", sc->nodes,
@@ -365,10 +383,10 @@ static int session_check_disk(trial_session *s, char *why, size_t why_len)
 /* Step 2: the prediction's resolution, then the prediction on its own thread beside the trial. */
 static int session_start_prediction(trial_session *s, session_parts *p, char *why, size_t why_len)
 {
-    double est = NAN;
+    double est = NAN, adapt_scale = 0.0;
     char hash[72];
     char w[400];
-    if (choose_resolution(s, &p->sc, &est, hash, sizeof hash, w, sizeof w)) {
+    if (choose_resolution(s, &p->sc, &adapt_scale, &est, hash, sizeof hash, w, sizeof w)) {
         if (atomic_load(&s->cancel))
             aborted_early(s, why, why_len);
         else
@@ -380,7 +398,8 @@ static int session_start_prediction(trial_session *s, session_parts *p, char *wh
     s->status.nodes = p->sc.nodes;
     s->status.dt = p->sc.dt;
     pthread_mutex_unlock(&s->lock);
-    trial_prediction_def def = {.scene = p->sc, .adaptive = s->cfg.sim.fast, .est_error = est,
+    trial_prediction_def def = {.scene = p->sc, .adaptive = s->cfg.sim.fast, .adapt_scale = adapt_scale,
+                                .est_error = est,
                                 .trial_id = s->trial_id, .cancel = &s->cancel, .done = prediction_done, .user = s};
     snprintf(def.hash, sizeof def.hash, "%s", hash);
     snprintf(def.store_path, sizeof def.store_path, "%s", s->cfg.store_path);
