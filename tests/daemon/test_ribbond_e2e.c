@@ -809,6 +809,23 @@ static char *ribbonctl_out(const char *args, int *rc)
     return b;
 }
 
+/* The first prediction message of trial `id` on bus b, as JSON (a new reference), or NULL. */
+static json_t *bus_prediction(live_bus *b, json_int_t id)
+{
+    uint64_t cursor = live_bus_first(b), seq = 0, missed = 0;
+    char buf[1100];
+    int len;
+    json_t *found = NULL;
+    while (!found && (len = live_bus_read(b, &cursor, buf, sizeof buf, 0, &seq, &missed)) > 0) {
+        json_t *m = json_loads(buf, 0, NULL);
+        if (m && !strcmp(json_string_value(json_object_get(m, "type")), "prediction") &&
+            json_integer_value(json_object_get(m, "trial")) == id)
+            found = json_incref(m);
+        json_decref(m);
+    }
+    return found;
+}
+
 /* Issue 31: the specimen in the prediction, and a prediction that fails does not stop the trial.
  * The specimen's creases at 0.03 and 0.97 (symmetric: they become the prediction's Gamma) lie in
  * the clamp of the ladder's first rung (N = 31: one edge is 1/28 of l) but not at the scene's
@@ -894,7 +911,39 @@ static void prediction_fails_trial_runs(void **state)
     }
     assert_true(warned);
     json_decref(t);
+    /* The live page heard it: the prediction not ok, with the reason. */
+    json_t *m = bus_prediction(d.bus, id);
+    assert_non_null(m);
+    assert_true(json_is_false(json_object_get(m, "ok")));
+    assert_non_null(strstr(json_string_value(json_object_get(m, "why")), "ladder rung N = 31"));
+    json_decref(m);
     rig_daemon_close(&d, "test done");
+
+    /* A replay of the trial shows the page the source's prediction as failed, with its reason. */
+    store *st = NULL;
+    assert_int_equal(store_open(db, &st, why, sizeof why), STORE_OK);
+    live_bus *bus = live_bus_create();
+    assert_non_null(bus);
+    trial_replay *rep = NULL;
+    int64_t rid = 0;
+    trial_result r;
+    rc = trial_replay_prepare(st, NULL, id, NULL, &rep, why, sizeof why);
+    if (rc == 0) {
+        trial_replay_set_bus(rep, bus);
+        rc = trial_replay_run(rep, st, NULL, NULL, NULL, &rid, &r, why, sizeof why);
+    }
+    trial_replay_free(rep);
+    if (rc) fprintf(stderr, "replay: %s\n", why);
+    assert_int_equal(rc, 0);
+    m = bus_prediction(bus, rid);
+    assert_non_null(m);
+    printf("replay %lld: source prediction ok %s, why %s\n", (long long)rid,
+           json_is_true(json_object_get(m, "ok")) ? "true" : "false", json_string_value(json_object_get(m, "why")));
+    assert_true(json_is_false(json_object_get(m, "ok")));
+    assert_non_null(strstr(json_string_value(json_object_get(m, "why")), "ladder rung N = 31"));
+    json_decref(m);
+    live_bus_free(bus);
+    store_close(st);
 
     /* ribbonctl show and list say so (from the store file). */
     char args[300];
