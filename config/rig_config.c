@@ -25,8 +25,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
+#include "cfg_datetime.h"
 #include "cfg_ini.h"
 #include "cfg_keys.h"
 #include "cfg_number.h"
@@ -114,10 +116,22 @@ static const rig_key rig_keys[] = {
      0, 0, NULL, "-", "not recorded", "material, e.g. PET"},
     {"specimen", "crease_angle_left_deg", RIG_KEY_DOUBLE, OFF(specimen.crease_angle_left_deg), 0,
      0.0, 180.0, MAXO, 0, NULL, "deg", "not measured",
-     "measured angle of the crease at Gamma (the record; the prediction uses the scene's)"},
+     "measured angle (magnitude) of the crease at Gamma; replaces the scene's in the trial's prediction"},
     {"specimen", "crease_angle_right_deg", RIG_KEY_DOUBLE, OFF(specimen.crease_angle_right_deg),
      0, 0.0, 180.0, MAXO, 0, NULL, "deg", "not measured",
-     "measured angle of the crease at 1 - Gamma"},
+     "measured angle (magnitude) of the crease at 1 - Gamma; replaces the scene's in the trial's prediction"},
+    {"specimen", "crease_position_left", RIG_KEY_DOUBLE, OFF(specimen.crease_position_left), 0, 0.0,
+     1.0, MINO | MAXO, 0, NULL, "1", "not measured",
+     "measured position of the crease near the clamp at x = 0, a fraction of the free length; the "
+     "prediction uses it when the two positions are symmetric (left = 1 - right)"},
+    {"specimen", "crease_position_right", RIG_KEY_DOUBLE, OFF(specimen.crease_position_right), 0,
+     0.0, 1.0, MINO | MAXO, 0, NULL, "1", "not measured",
+     "measured position of the other crease, a fraction of the free length (more than "
+     "crease_position_left)"},
+    {"specimen", "folded_at", RIG_KEY_TEXT, OFF(specimen.folded_at), SZ(specimen.folded_at), 1, 63,
+     0, 0, NULL, "-", "not recorded",
+     "when the creases were folded: ISO 8601 date-time with a zone (2026-11-30T14:05Z, "
+     "2026-11-30T15:05+01:00), not in the future; each trial stores the creases' age"},
     {"specimen", "crease_orientation", RIG_KEY_ENUM, OFF(specimen.crease_orientation), 0, 0, 0,
      ENUM1, 0, crease_names, "-", "not recorded",
      "up or down (toward or away from the surface normal); must match the sign of the scene's "
@@ -1138,6 +1152,33 @@ static cfg_status check_mode(load_ctx *c)
     return CFG_OK;
 }
 
+/* The specimen's own measurements: crease positions in order, folded_at a date-time not in the
+ * future (read against this computer's clock at load). Whether the measured creases can be
+ * clamped is the prediction's check (daemon/trial/trial_specimen.c), where they meet the scene. */
+static cfg_status check_specimen(load_ctx *c)
+{
+    rig_specimen *sp = &c->cfg.specimen;
+    if (isfinite(sp->crease_position_left) && isfinite(sp->crease_position_right) &&
+        !(sp->crease_position_left < sp->crease_position_right))
+        return fail_key(c, CFG_ERR_CHECK, "specimen.crease_position_right",
+                        "the creases cross: crease_position_right = %g is not beyond crease_position_left = %g",
+                        sp->crease_position_right, sp->crease_position_left);
+    sp->folded_at_s = NAN;
+    if (!sp->folded_at[0]) return CFG_OK;
+    char why[160];
+    double t = NAN;
+    if (cfg_datetime_parse(sp->folded_at, &t, why, sizeof why) != CFG_DATETIME_OK)
+        return fail_key(c, CFG_ERR_VALUE, "specimen.folded_at", "'%s' is not an ISO 8601 date-time: %s",
+                        sp->folded_at, why);
+    double now = (double)time(NULL);
+    if (t > now + 60.0) /* a minute's grace for clocks set by hand */
+        return fail_key(c, CFG_ERR_CHECK, "specimen.folded_at",
+                        "'%s' lies in the future (%.3g h after this computer's clock): the creases' age "
+                        "would be negative", sp->folded_at, (t - now) / 3600.0);
+    sp->folded_at_s = t;
+    return CFG_OK;
+}
+
 /* Checks that involve the scene: specimen record, gap, soft limits, speeds. */
 static cfg_status check_scene(load_ctx *c)
 {
@@ -1161,6 +1202,9 @@ static cfg_status check_scene(load_ctx *c)
                         o == RIG_CREASE_UP ? "up" : "down", s->fold_angle_deg,
                         s->fold_angle_deg > 0 ? "a positive angle" : "a negative angle",
                         s->fold_angle_deg > 0 ? "up" : "down");
+
+    cfg_status fst = check_specimen(c);
+    if (fst) return fst;
 
     rig_trial *t = &cfg->trial;
     t->shear_speed_mm_s = 1000.0 * s->shear_rate;
@@ -1273,6 +1317,9 @@ static void config_defaults(rig_config *cfg)
     cfg->calib.camera_side = RIG_CAMERA_FRONT;
     cfg->specimen.crease_angle_left_deg = NAN;
     cfg->specimen.crease_angle_right_deg = NAN;
+    cfg->specimen.crease_position_left = NAN;
+    cfg->specimen.crease_position_right = NAN;
+    cfg->specimen.folded_at_s = NAN;
     cfg->camera.fps = 30.0;
     cfg->camera.roi = RIG_ROI_AUTO;
     cfg->camera.margin_px = 20;
@@ -1437,6 +1484,9 @@ char *rig_specimen_json(const rig_config *c)
     bad |= json_object_set_new(o, "material", sp->material[0] ? json_string(sp->material) : json_null());
     bad |= json_object_set_new(o, "crease_angle_left_deg", json_num(sp->crease_angle_left_deg));
     bad |= json_object_set_new(o, "crease_angle_right_deg", json_num(sp->crease_angle_right_deg));
+    bad |= json_object_set_new(o, "crease_position_left", json_num(sp->crease_position_left));
+    bad |= json_object_set_new(o, "crease_position_right", json_num(sp->crease_position_right));
+    bad |= json_object_set_new(o, "folded_at", sp->folded_at[0] ? json_string(sp->folded_at) : json_null());
     bad |= json_object_set_new(o, "crease_orientation",
                                sp->crease_orientation == RIG_CREASE_UP     ? json_string("up")
                                : sp->crease_orientation == RIG_CREASE_DOWN ? json_string("down")

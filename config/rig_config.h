@@ -78,6 +78,11 @@ typedef struct rig_specimen {
     char material[RIG_NAME_MAX];   /* e.g. "PET"; "" = not recorded */
     double crease_angle_left_deg;  /* deg, measured angle of the crease at Gamma; NaN = not measured */
     double crease_angle_right_deg; /* deg, measured angle of the crease at 1 - Gamma; NaN = not measured */
+    double crease_position_left;   /* measured position of the left crease (near the clamp at x = 0),
+                                      a fraction of the free length in (0, 1); NaN = not measured */
+    double crease_position_right;  /* the right crease's, > crease_position_left; NaN = not measured */
+    char folded_at[RIG_NAME_MAX];  /* ISO 8601 date-time with a zone, as written; "" = not recorded */
+    double folded_at_s;            /* derived: folded_at in s since the Unix epoch; NaN = not recorded */
     rig_crease crease_orientation; /* must match the sign of the scene's folds.angle_deg when set */
     double min_clamp_gap_mm;       /* mm, the clamps never come closer (0 = no specimen limit) */
 } rig_specimen;
@@ -245,7 +250,7 @@ cfg_status rig_config_parse(const char *name, const char *dir, const char *text,
 char *rig_calibration_json(const rig_config *c);
 
 /* The specimen record as compact JSON (malloc'd, free() it): name, material, measured crease
- * angles (null when not measured), crease_orientation ("up", "down" or null), min_clamp_gap_mm,
+ * angles and positions and folded_at (null when not measured), crease_orientation ("up", "down" or null), min_clamp_gap_mm,
  * and the scene's geometry and material (length_m, width_m, thickness_m, youngs_modulus_pa,
  * density_kg_m3, fold_angle_deg, fold_position). */
 char *rig_specimen_json(const rig_config *c);

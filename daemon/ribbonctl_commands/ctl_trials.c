@@ -172,6 +172,16 @@ static void fmt_num(char *buf, size_t n, const json_t *v)
         snprintf(buf, n, "-");
 }
 
+/* The reason of a trial's failed prediction, or NULL when it has none or it did not fail. */
+static const char *prediction_failure(const json_t *t)
+{
+    const json_t *pr = json_object_get(t, "prediction");
+    const char *st = json_string_value(json_object_get(pr, "status"));
+    if (!st || strcmp(st, "failed")) return NULL;
+    const char *why = json_string_value(json_object_get(pr, "failure"));
+    return why ? why : "no reason stored";
+}
+
 static void print_trial_row(const json_t *t)
 {
     char m[32], p[32];
@@ -179,8 +189,24 @@ static void print_trial_row(const json_t *t)
     fmt_num(p, sizeof p, json_object_get(t, "snap_dw_predicted"));
     printf("%5lld  %-6s  %-11s  %9s  %-10s  %9s  %-10s  %8lld\n",
            (long long)json_integer_value(json_object_get(t, "id")), jstr(t, "mode"), jstr(t, "status"), m,
-           jstr(t, "regime_measured"), p, jstr(t, "regime_predicted"),
+           jstr(t, "regime_measured"), p, prediction_failure(t) ? "failed" : jstr(t, "regime_predicted"),
            (long long)json_integer_value(json_object_get(t, "samples")));
+}
+
+/* What the prediction used of the specimen: each crease's angle and position and where each came
+ * from (scene or specimen), and the creases' age at the trial. */
+static void print_creases(const json_t *t)
+{
+    const json_t *c = json_object_get(json_object_get(t, "prediction"), "creases");
+    if (json_is_number(json_object_get(c, "angle_left_deg")))
+        printf("  prediction's creases: left %g deg (%s) at %g (%s), right %g deg (%s) at %g (%s)\n",
+               json_number_value(json_object_get(c, "angle_left_deg")), jstr(c, "angle_left_from"),
+               json_number_value(json_object_get(c, "position_left")), jstr(c, "position_left_from"),
+               json_number_value(json_object_get(c, "angle_right_deg")), jstr(c, "angle_right_from"),
+               json_number_value(json_object_get(c, "position_right")), jstr(c, "position_right_from"));
+    const json_t *age = json_object_get(t, "crease_age_s");
+    if (json_is_number(age))
+        printf("  creases folded %.2f days before the trial\n", json_number_value(age) / 86400.0);
 }
 
 static void print_header(void)
@@ -200,9 +226,12 @@ static void print_comparison(const json_t *t)
     fmt_num(ms, sizeof ms, m);
     fmt_num(ps, sizeof ps, p);
     printf("  measured   snap Delta W = %s  regime %s\n", ms, jstr(t, "regime_measured"));
-    printf("  predicted  snap Delta W = %s  regime %s", ps, jstr(t, "regime_predicted"));
     json_t *pr = json_object_get(t, "prediction");
-    if (json_is_object(pr))
+    if (prediction_failure(t)) /* the trial ran; its prediction did not */
+        printf("  predicted  failed: %s", prediction_failure(t));
+    else
+        printf("  predicted  snap Delta W = %s  regime %s", ps, jstr(t, "regime_predicted"));
+    if (json_is_object(pr) && !prediction_failure(t))
         printf("  (N = %lld, dt = %g s, %.2f s wall)", (long long)json_integer_value(json_object_get(pr, "nodes")),
                json_number_value(json_object_get(pr, "dt")), json_number_value(json_object_get(pr, "wall_s")));
     printf("\n");
@@ -393,6 +422,7 @@ static int cmd_show(const ctl_opts *o)
         print_comparison(t);
         printf("  mode %s, samples %lld, video %s, specimen %s\n", jstr(t, "mode"),
                (long long)json_integer_value(json_object_get(t, "samples")), jstr(t, "video_path"), jstr(t, "specimen"));
+        print_creases(t);
         json_t *ev = json_object_get(t, "events");
         for (size_t k = 0; k < json_array_size(ev); k++) {
             json_t *e = json_array_get(ev, k);

@@ -33,7 +33,7 @@
 #include <jansson.h>
 
 /* The schema version this program creates and understands (see the migration list in store.c). */
-#define STORE_SCHEMA_VERSION 4
+#define STORE_SCHEMA_VERSION 5
 
 /* Errors of the store layer; store_err_message() gives the generic text, why the specific one. */
 typedef enum store_err {
@@ -140,6 +140,9 @@ typedef struct store_specimen {
     double fold_position;          /* Gamma, fraction of the free length in (0, 0.5]; NaN = unknown */
     char crease_orientation[16];   /* "up", "down", ...; "" = unknown */
     int64_t trials_count;          /* read only: trials the specimen has been through */
+    double crease_position_left;   /* measured, fraction of the free length in (0, 1); NaN = not measured */
+    double crease_position_right;  /* measured, in (0, 1); NaN = not measured */
+    char folded_at[40];            /* when the creases were folded, ISO 8601 as written; "" = unknown */
 } store_specimen;
 
 store_specimen store_specimen_default(void); /* every optional number NaN, texts empty */
@@ -164,6 +167,7 @@ typedef struct store_trial_def {
     const char *video_path;       /* NULL = none yet */
     const char *software_version; /* NULL = this program's RIBBON_VERSION */
     double created_wall_s;        /* s since the Unix epoch, required */
+    double crease_age_s;          /* s from the specimen's folding to the trial, >= 0; NaN = unknown */
 } store_trial_def;
 
 store_trial_def store_trial_def_default(void); /* mock, config "", created now */
@@ -188,6 +192,7 @@ typedef struct store_trial {
     int64_t samples;            /* samples stored for the trial */
     double stop_cmd_latency_s;  /* s, snap detection frame -> shear stop command returned; NaN = none */
     double stop_stand_latency_s; /* s, snap detection frame -> shear rail read standing; NaN = none */
+    double crease_age_s;        /* s from the specimen's folding to the trial; NaN = unknown */
 } store_trial;
 
 store_err store_trial_create(store *st, const store_trial_def *def, int64_t *id, char *why, size_t why_len);
@@ -306,8 +311,38 @@ store_err store_trial_curve(store *st, int64_t trial_id, store_curve *out, char 
 
 /* ---- predictions (store_predictions.c) and the ladder (store_ladder.c) ----------------------------------------- */
 
+/* Where a value a prediction used came from. */
+typedef enum store_source {
+    STORE_SOURCE_UNKNOWN = 0, /* not recorded (rows from before schema 5): SQL NULL, JSON null */
+    STORE_SOURCE_SCENE,       /* "scene": the scene file (with its --set overrides) */
+    STORE_SOURCE_SPECIMEN,    /* "specimen": the rig file's [specimen] measurement */
+    STORE_SOURCE_COUNT
+} store_source;
+
+const char *store_source_name(store_source s); /* "scene", "specimen"; NULL for unknown */
+bool store_source_parse(const char *s, store_source *out);
+
+/* The creases a prediction used, [0] the left one (at Gamma, near the clamp at x = 0), [1] the
+ * right one: angles in deg signed as the scene's folds.angle_deg, positions as fractions of the
+ * free length. NaN with STORE_SOURCE_UNKNOWN = not recorded. */
+typedef struct store_creases {
+    double angle_deg[2];
+    store_source angle_from[2];
+    double position[2];
+    store_source position_from[2];
+} store_creases;
+
+store_creases store_creases_unknown(void); /* every value NaN, every source unknown */
+
+typedef enum store_prediction_status {
+    STORE_PREDICTION_DONE = 0, /* "done": it ran (snapped or not) */
+    STORE_PREDICTION_FAILED    /* "failed": no prediction; failure says why (the trial ran anyway) */
+} store_prediction_status;
+
 typedef struct store_prediction {
     int64_t id;                 /* set by the store */
+    store_prediction_status status;
+    char failure[512];          /* FAILED: the reason, required; DONE: "" */
     int64_t trial_id;           /* 0 = not tied to a trial */
     char scene_hash[72];        /* required, non-empty: hash of the scene text it was made for */
     bool snapped;
@@ -324,11 +359,14 @@ typedef struct store_prediction {
     char *solver_json;          /* solver settings, JSON text; NULL = none; must parse */
     store_curve curve;          /* t_s and dw required, dz and a may be NaN */
     char created_at[32];        /* read back: ISO-8601 UTC */
+    store_creases creases;      /* the creases it used and where each came from */
 } store_prediction;
 
 store_prediction store_prediction_default(void);
 
-/* Insert with its curve, in one transaction. */
+/* Insert with its curve, in one transaction. A FAILED prediction has snapped false, snap_dw
+ * NaN, regime unknown, no curve and a non-empty failure; nodes, dt and wall_s are those it was
+ * attempted at (wall_s: what it cost before it failed). */
 store_err store_prediction_insert(store *st, const store_prediction *p, int64_t *id, char *why, size_t why_len);
 /* Read back (curve and solver_json allocated: release with store_prediction_free). */
 store_err store_prediction_get(store *st, int64_t id, store_prediction *out, char *why, size_t why_len);
@@ -363,7 +401,12 @@ store_err store_ladder_get(store *st, const char *scene_hash, store_ladder_rung 
  *   id, mode, status, state, reason, snapped, snap_dw_measured, snap_dw_predicted,
  *   regime_measured, regime_predicted, samples, video_path, source_trial, specimen,
  *   created, started, ended, software_version,
- *   prediction: null or {id, nodes, dt, adaptive, est_error, wall_s, imperfection, scene_hash}
+ *   crease_age_s,
+ *   prediction: null or {id, status ("done" | "failed"), failure, nodes, dt, adaptive, est_error,
+ *                        wall_s, imperfection, scene_hash,
+ *                        creases: {angle_left_deg, angle_left_from, angle_right_deg,
+ *                                  angle_right_from, position_left, position_left_from,
+ *                                  position_right, position_right_from}}
  * store_trial_json adds events: [{t_s, wall_time, state, kind, message}] and calibration
  * (the parsed calibration record or null). *out is a new reference. */
 store_err store_trial_json(store *st, int64_t id, json_t **out, char *why, size_t why_len);

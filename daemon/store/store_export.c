@@ -117,10 +117,10 @@ store_err store_export_trial_csv_text(store *st, int64_t id, char **text, size_t
 static const char *const trial_keys[] = {
     "id", "mode", "status", "state", "reason", "snapped", "snap_dw_measured", "snap_dw_predicted",
     "regime_measured", "regime_predicted", "samples", "video_path", "source_trial", "specimen",
-    "created", "started", "ended", "software_version",
+    "created", "started", "ended", "software_version", "crease_age_s",
 };
 static const char *const prediction_keys[] = {"id", "nodes", "dt", "adaptive", "est_error", "wall_s",
-                                              "imperfection", "scene_hash"};
+                                              "imperfection", "scene_hash", "status", "failure"};
 
 static void put_json(FILE *f, const json_t *v)
 {

@@ -14,14 +14,17 @@
     " t.video_path, t.source_trial_id, s.name, t.created_at, t.started_at, t.ended_at,"                     \
     " t.software_version, t.samples_count,"                                                                 \
     " p.id, p.snap_dw, p.regime, p.nodes, p.dt, p.adaptive, p.est_error, p.wall_s, p.imperfection,"          \
-    " p.scene_hash, t.calibration_json, t.stop_cmd_latency_s, t.stop_stand_latency_s"                                                                     \
+    " p.scene_hash, t.calibration_json, t.stop_cmd_latency_s, t.stop_stand_latency_s, t.crease_age_s,"     \
+    " p.status, p.failure, p.crease_angle_left_deg, p.crease_angle_left_from, p.crease_angle_right_deg,"    \
+    " p.crease_angle_right_from, p.crease_position_left, p.crease_position_left_from,"                     \
+    " p.crease_position_right, p.crease_position_right_from"                                               \
     " FROM trials t LEFT JOIN specimens s ON s.id = t.specimen_id"                                          \
     " LEFT JOIN predictions p ON p.id = (SELECT max(id) FROM predictions WHERE trial_id = t.id) "
 
 enum { C_ID, C_MODE, C_STATUS, C_STATE, C_REASON, C_SNAPPED, C_SNAP_DW, C_REGIME, C_VIDEO, C_SOURCE, C_SPECIMEN,
        C_CREATED, C_STARTED, C_ENDED, C_VERSION, C_SAMPLES, C_P_ID, C_P_SNAP_DW, C_P_REGIME, C_P_NODES, C_P_DT,
        C_P_ADAPTIVE, C_P_EST_ERROR, C_P_WALL_S, C_P_IMPERFECTION, C_P_HASH, C_CALIBRATION, C_STOP_CMD,
-       C_STOP_STAND };
+       C_STOP_STAND, C_CREASE_AGE, C_P_STATUS, C_P_FAILURE, C_P_CREASES /* 8 columns: value, source */ };
 
 static json_t *jreal(double v)
 {
@@ -74,6 +77,24 @@ static bool set(json_t *o, const char *key, json_t *v)
     return v && json_object_set_new(o, key, v) == 0;
 }
 
+/* The creases a prediction used: {angle_left_deg, angle_left_from, ...}; null values and
+ * sources for rows from before schema 5. */
+static json_t *creases_object(sqlite3_stmt *s)
+{
+    static const char *const keys[8] = {"angle_left_deg", "angle_left_from",  "angle_right_deg",
+                                        "angle_right_from", "position_left", "position_left_from",
+                                        "position_right", "position_right_from"};
+    json_t *c = json_object();
+    bool ok = c != NULL;
+    for (int k = 0; ok && k < 8; k += 2)
+        ok = set(c, keys[k], jcol_real(s, C_P_CREASES + k)) && set(c, keys[k + 1], jcol_text(s, C_P_CREASES + k + 1));
+    if (!ok) {
+        json_decref(c);
+        return NULL;
+    }
+    return c;
+}
+
 static json_t *trial_object(sqlite3_stmt *s)
 {
     json_t *o = json_object();
@@ -91,12 +112,15 @@ static json_t *trial_object(sqlite3_stmt *s)
               set(o, "started", jcol_text(s, C_STARTED)) && set(o, "ended", jcol_text(s, C_ENDED)) &&
               set(o, "software_version", jcol_text(s, C_VERSION)) &&
               set(o, "stop_cmd_latency_s", jcol_real(s, C_STOP_CMD)) &&
-              set(o, "stop_stand_latency_s", jcol_real(s, C_STOP_STAND));
+              set(o, "stop_stand_latency_s", jcol_real(s, C_STOP_STAND)) &&
+              set(o, "crease_age_s", jcol_real(s, C_CREASE_AGE));
     if (ok && sqlite3_column_type(s, C_P_ID) == SQLITE_NULL) {
         ok = set(o, "prediction", json_null());
     } else if (ok) {
         json_t *p = json_object();
-        ok = p && set(p, "id", jcol_int(s, C_P_ID)) && set(p, "nodes", jcol_int(s, C_P_NODES)) &&
+        ok = p && set(p, "id", jcol_int(s, C_P_ID)) && set(p, "status", jcol_text(s, C_P_STATUS)) &&
+             set(p, "failure", jcol_text(s, C_P_FAILURE)) && set(p, "creases", creases_object(s)) &&
+             set(p, "nodes", jcol_int(s, C_P_NODES)) &&
              set(p, "dt", jcol_real(s, C_P_DT)) && set(p, "adaptive", jcol_bool(s, C_P_ADAPTIVE)) &&
              set(p, "est_error", jcol_real(s, C_P_EST_ERROR)) && set(p, "wall_s", jcol_real(s, C_P_WALL_S)) &&
              set(p, "imperfection", jcol_real(s, C_P_IMPERFECTION)) && set(p, "scene_hash", jcol_text(s, C_P_HASH));

@@ -10,6 +10,7 @@ static const char *const status_names[STORE_STATUS_COUNT] = {"created", "running
                                                              "failed",  "aborted", "interrupted"};
 static const char *const regime_names[STORE_REGIME_COUNT] = {NULL, "symmetric", "asymmetric", "no snap"};
 static const char *const event_names[STORE_EVENT_COUNT] = {"state", "info", "warning", "fault"};
+static const char *const source_names[STORE_SOURCE_COUNT] = {NULL, "scene", "specimen"};
 
 static const char *const err_names[STORE_E_COUNT] = {
     "ok",
@@ -90,5 +91,18 @@ bool store_event_kind_parse(const char *s, store_event_kind *out)
     int i = find(event_names, STORE_EVENT_COUNT, s);
     if (i >= 0)
         *out = (store_event_kind)i;
+    return i >= 0;
+}
+
+const char *store_source_name(store_source s)
+{
+    return (unsigned)s < STORE_SOURCE_COUNT ? source_names[s] : NULL;
+}
+
+bool store_source_parse(const char *s, store_source *out)
+{
+    int i = find(source_names, STORE_SOURCE_COUNT, s);
+    if (i >= 0)
+        *out = (store_source)i;
     return i >= 0;
 }

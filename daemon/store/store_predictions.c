@@ -2,7 +2,9 @@
  * needed to reproduce it (scene hash, resolution, imperfection, solver settings, software
  * version) beside what it predicted (snap, regime, peak |A|, curve) and what it cost (wall_s,
  * estimated error). A row and its curve go in one transaction and are never changed afterwards;
- * a trial's prediction is its latest row. */
+ * a trial's prediction is its latest row. A failed prediction is a row too (status 'failed', its
+ * reason in failure, no snap and no curve), so a trial says why it has no prediction. Each row
+ * records the creases it used (angles and positions) and where each came from (scene, specimen). */
 #include "store_curve.h"
 
 #include <math.h>
@@ -15,7 +17,32 @@ store_prediction store_prediction_default(void)
     memset(&p, 0, sizeof p);
     p.snap_dw = p.peak_abs_a = p.dt = p.imperfection = p.est_error = p.wall_s = NAN;
     p.regime = STORE_REGIME_UNKNOWN;
+    p.creases = store_creases_unknown();
     return p;
+}
+
+store_creases store_creases_unknown(void)
+{
+    store_creases c;
+    memset(&c, 0, sizeof c);
+    for (int k = 0; k < 2; k++) c.angle_deg[k] = c.position[k] = NAN;
+    return c;
+}
+
+/* A recorded crease value has a source, and a source a finite value. */
+static store_err check_creases(const store_creases *c, char *why, size_t why_len)
+{
+    for (int k = 0; k < 2; k++) {
+        const char *side = k ? "right" : "left";
+        if ((unsigned)c->angle_from[k] >= STORE_SOURCE_COUNT || (unsigned)c->position_from[k] >= STORE_SOURCE_COUNT)
+            return store_fail(why, why_len, STORE_E_INVALID, "prediction crease %s: unknown source", side);
+        if (isinf(c->angle_deg[k]) || isinf(c->position[k]) ||
+            isnan(c->angle_deg[k]) != (c->angle_from[k] == STORE_SOURCE_UNKNOWN) ||
+            isnan(c->position[k]) != (c->position_from[k] == STORE_SOURCE_UNKNOWN))
+            return store_fail(why, why_len, STORE_E_INVALID,
+                              "prediction crease %s: a value needs its source and a source its finite value", side);
+    }
+    return STORE_OK;
 }
 
 static store_err check(const store_prediction *p, char *why, size_t why_len)
@@ -28,7 +55,21 @@ static store_err check(const store_prediction *p, char *why, size_t why_len)
         return store_fail(why, why_len, STORE_E_INVALID, "prediction scene_hash is empty");
     if (p->trial_id < 0)
         return store_fail(why, why_len, STORE_E_INVALID, "prediction trial_id must be >= 0 (0 = none)");
-    if (p->snapped) {
+    if (!memchr(p->failure, '\0', sizeof p->failure))
+        return store_fail(why, why_len, STORE_E_INVALID, "prediction failure text not NUL-terminated");
+    if ((e = check_creases(&p->creases, why, why_len)))
+        return e;
+    if (p->status == STORE_PREDICTION_FAILED) {
+        if (!p->failure[0])
+            return store_fail(why, why_len, STORE_E_INVALID, "a failed prediction needs its reason (failure)");
+        if (p->snapped || !isnan(p->snap_dw) || p->regime != STORE_REGIME_UNKNOWN || p->curve.n > 0)
+            return store_fail(why, why_len, STORE_E_INVALID,
+                              "a failed prediction has no snap, snap_dw, regime or curve");
+    } else if (p->status != STORE_PREDICTION_DONE) {
+        return store_fail(why, why_len, STORE_E_INVALID, "prediction status %d is not done or failed", (int)p->status);
+    } else if (p->failure[0]) {
+        return store_fail(why, why_len, STORE_E_INVALID, "a prediction that is done has no failure text");
+    } else if (p->snapped) {
         if ((e = store_need_finite(p->snap_dw, "predicted snap_dw", why, why_len)))
             return e;
         if (p->regime != STORE_REGIME_SYMMETRIC && p->regime != STORE_REGIME_ASYMMETRIC)
@@ -102,8 +143,11 @@ store_err store_prediction_insert(store *st, const store_prediction *p, int64_t 
     sqlite3_stmt *s;
     e = store_prepare(st,
                       "INSERT INTO predictions (trial_id, scene_hash, snapped, snap_dw, regime, peak_abs_a,"
-                      " nodes, dt, adaptive, imperfection, est_error, wall_s, software_version, solver_json)"
-                      " VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14)",
+                      " nodes, dt, adaptive, imperfection, est_error, wall_s, software_version, solver_json,"
+                      " status, failure, crease_angle_left_deg, crease_angle_left_from, crease_angle_right_deg,"
+                      " crease_angle_right_from, crease_position_left, crease_position_left_from,"
+                      " crease_position_right, crease_position_right_from)"
+                      " VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,?15,?16,?17,?18,?19,?20,?21,?22,?23,?24)",
                       &s, why, why_len);
     int64_t pid = 0;
     if (e == STORE_OK) {
@@ -121,6 +165,15 @@ store_err store_prediction_insert(store *st, const store_prediction *p, int64_t 
         sqlite3_bind_double(s, 12, p->wall_s);
         sqlite3_bind_text(s, 13, p->software_version[0] ? p->software_version : RIBBON_VERSION, -1, SQLITE_TRANSIENT);
         store_bind_text(s, 14, p->solver_json);
+        sqlite3_bind_text(s, 15, p->status == STORE_PREDICTION_FAILED ? "failed" : "done", -1, SQLITE_STATIC);
+        store_bind_text(s, 16, p->failure);
+        for (int k = 0; k < 2; k++) {
+            const store_creases *c = &p->creases;
+            store_bind_real(s, 17 + 2 * k, c->angle_deg[k]);
+            store_bind_text(s, 18 + 2 * k, store_source_name(c->angle_from[k]));
+            store_bind_real(s, 21 + 2 * k, c->position[k]);
+            store_bind_text(s, 22 + 2 * k, store_source_name(c->position_from[k]));
+        }
         int rc = sqlite3_step(s);
         if (rc == SQLITE_CONSTRAINT_FOREIGNKEY)
             e = store_fail(why, why_len, STORE_E_NOTFOUND, "prediction for trial %lld: no such trial",
@@ -162,7 +215,10 @@ store_err store_prediction_get(store *st, int64_t id, store_prediction *out, cha
     store_err e = store_prepare(st,
                                 "SELECT id, trial_id, scene_hash, snapped, snap_dw, regime, peak_abs_a, nodes, dt,"
                                 " adaptive, imperfection, est_error, wall_s, software_version, solver_json,"
-                                " created_at FROM predictions WHERE id = ?1",
+                                " created_at, status, failure, crease_angle_left_deg, crease_angle_left_from,"
+                                " crease_angle_right_deg, crease_angle_right_from, crease_position_left,"
+                                " crease_position_left_from, crease_position_right, crease_position_right_from"
+                                " FROM predictions WHERE id = ?1",
                                 &s, why, why_len);
     if (e != STORE_OK)
         return e;
@@ -189,6 +245,19 @@ store_err store_prediction_get(store *st, int64_t id, store_prediction *out, cha
         if (!out->solver_json && sqlite3_column_type(s, 14) != SQLITE_NULL)
             e = store_fail(why, why_len, STORE_E_NOMEM, "out of memory reading prediction %lld", (long long)id);
         store_col_text(s, 15, out->created_at, sizeof out->created_at);
+        const char *status = (const char *)sqlite3_column_text(s, 16);
+        out->status = status && !strcmp(status, "failed") ? STORE_PREDICTION_FAILED : STORE_PREDICTION_DONE;
+        store_col_text(s, 17, out->failure, sizeof out->failure);
+        for (int k = 0; k < 2; k++) {
+            store_creases *c = &out->creases;
+            c->angle_deg[k] = store_col_real(s, 18 + 2 * k);
+            c->position[k] = store_col_real(s, 22 + 2 * k);
+            const char *af = (const char *)sqlite3_column_text(s, 19 + 2 * k);
+            const char *pf = (const char *)sqlite3_column_text(s, 23 + 2 * k);
+            if ((af && !store_source_parse(af, &c->angle_from[k])) || (pf && !store_source_parse(pf, &c->position_from[k])))
+                e = store_fail(why, why_len, STORE_E_CORRUPT, "prediction %lld has an unknown crease source",
+                               (long long)id);
+        }
     } else if (rc == SQLITE_DONE) {
         e = store_fail(why, why_len, STORE_E_NOTFOUND, "prediction %lld does not exist", (long long)id);
     } else {

@@ -14,18 +14,22 @@
  * Layout (units in the column names; NULL = missing, never NaN; times ISO-8601 UTC text):
  *   specimens        id | name UNIQUE | length_m width_m thickness_m | youngs_modulus_pa
  *                    density_kg_m3 material | crease_angle_left_deg crease_angle_right_deg
- *                    fold_position crease_orientation | trials_count
+ *                    fold_position crease_orientation | trials_count |
+ *                    crease_position_left crease_position_right folded_at (v5)
  *   trials           id | mode status state reason | config_text calibration_json |
  *                    specimen_id -> specimens | source_trial_id -> trials | video_path |
  *                    created_at started_at ended_at | snapped snap_dw_measured regime_measured |
  *                    software_version | samples_count (v3, kept by the sample writer) |
- *                    stop_cmd_latency_s stop_stand_latency_s (v4: snap-to-stop latency)
+ *                    stop_cmd_latency_s stop_stand_latency_s (v4: snap-to-stop latency) |
+ *                    crease_age_s (v5: the creases' age at the trial)
  *   samples          (trial_id -> trials, seq) | t_s kind frame | compress_mm shear_mm |
  *                    dl dw dz a quality reason                              (WITHOUT ROWID)
  *   events           id | trial_id -> trials | t_s wall_time state kind message
  *   predictions      id | trial_id -> trials | scene_hash | snapped snap_dw regime peak_abs_a |
  *                    nodes dt adaptive imperfection | est_error wall_s | software_version
- *                    solver_json created_at
+ *                    solver_json created_at | status failure (v5) | crease_angle_left_deg _from
+ *                    crease_angle_right_deg _from crease_position_left _from crease_position_right
+ *                    _from (v5: what the prediction used, and 'scene' or 'specimen')
  *   prediction_curve (prediction_id -> predictions, seq) | t_s dw dz a       (WITHOUT ROWID)
  *   ladder (v2)      (scene_hash, nodes, dt, adaptive) | snap_dw est_error wall_s */
 #include "store_schema.h"
@@ -122,6 +126,29 @@ static const char schema_v4[] =
     "ALTER TABLE trials ADD COLUMN stop_stand_latency_s REAL CHECK (stop_stand_latency_s >= 0);"
     "PRAGMA user_version = 4;";
 
+/* v5: the specimen in the prediction (issue 31). specimens: the measured crease positions and
+ * when the creases were folded. trials: the creases' age at the trial. predictions: its status
+ * ('done', or 'failed' with the reason: a failed prediction no longer stops its trial), and the
+ * crease angles (deg, signed as the scene's folds.angle_deg) and positions (fraction of the free
+ * length) it used, each with where it came from ('scene' or 'specimen'). Rows from before keep
+ * NULL inputs and status 'done'. */
+static const char schema_v5[] =
+    "ALTER TABLE specimens ADD COLUMN crease_position_left REAL;"
+    "ALTER TABLE specimens ADD COLUMN crease_position_right REAL;"
+    "ALTER TABLE specimens ADD COLUMN folded_at TEXT;"
+    "ALTER TABLE trials ADD COLUMN crease_age_s REAL CHECK (crease_age_s >= 0);"
+    "ALTER TABLE predictions ADD COLUMN status TEXT NOT NULL DEFAULT 'done' CHECK (status IN ('done','failed'));"
+    "ALTER TABLE predictions ADD COLUMN failure TEXT;"
+    "ALTER TABLE predictions ADD COLUMN crease_angle_left_deg REAL;"
+    "ALTER TABLE predictions ADD COLUMN crease_angle_left_from TEXT CHECK (crease_angle_left_from IN ('scene','specimen'));"
+    "ALTER TABLE predictions ADD COLUMN crease_angle_right_deg REAL;"
+    "ALTER TABLE predictions ADD COLUMN crease_angle_right_from TEXT CHECK (crease_angle_right_from IN ('scene','specimen'));"
+    "ALTER TABLE predictions ADD COLUMN crease_position_left REAL;"
+    "ALTER TABLE predictions ADD COLUMN crease_position_left_from TEXT CHECK (crease_position_left_from IN ('scene','specimen'));"
+    "ALTER TABLE predictions ADD COLUMN crease_position_right REAL;"
+    "ALTER TABLE predictions ADD COLUMN crease_position_right_from TEXT CHECK (crease_position_right_from IN ('scene','specimen'));"
+    "PRAGMA user_version = 5;";
+
 typedef struct store_migration {
     int version;      /* user_version after the step */
     const char *what; /* for reasons */
@@ -133,6 +160,7 @@ static const store_migration migrations[] = {
     {2, "ladder cache and indexes", schema_v2},
     {3, "sample count per trial", schema_v3},
     {4, "snap-to-stop latency per trial", schema_v4},
+    {5, "the specimen in the prediction, failed predictions", schema_v5},
 };
 #define N_MIGRATIONS (sizeof migrations / sizeof migrations[0])
 _Static_assert(sizeof migrations / sizeof migrations[0] == STORE_SCHEMA_VERSION,

@@ -14,6 +14,7 @@ store_specimen store_specimen_default(void)
     s.youngs_modulus_pa = s.density_kg_m3 = NAN;
     s.crease_angle_left_deg = s.crease_angle_right_deg = NAN;
     s.fold_position = NAN;
+    s.crease_position_left = s.crease_position_right = NAN;
     return s;
 }
 
@@ -30,7 +31,8 @@ static store_err check(const store_specimen *sp, char *why, size_t why_len)
     if (!sp->name[0])
         return store_fail(why, why_len, STORE_E_INVALID, "specimen name is empty");
     if (!memchr(sp->name, '\0', sizeof sp->name) || !memchr(sp->material, '\0', sizeof sp->material) ||
-        !memchr(sp->crease_orientation, '\0', sizeof sp->crease_orientation))
+        !memchr(sp->crease_orientation, '\0', sizeof sp->crease_orientation) ||
+        !memchr(sp->folded_at, '\0', sizeof sp->folded_at))
         return store_fail(why, why_len, STORE_E_INVALID, "specimen text field not NUL-terminated");
     if ((e = store_need_positive(sp->length_m, "specimen length_m", why, why_len)) ||
         (e = store_need_positive(sp->width_m, "specimen width_m", why, why_len)) ||
@@ -40,6 +42,12 @@ static store_err check(const store_specimen *sp, char *why, size_t why_len)
         (e = store_need_not_inf(sp->crease_angle_left_deg, "specimen crease_angle_left_deg", why, why_len)) ||
         (e = store_need_not_inf(sp->crease_angle_right_deg, "specimen crease_angle_right_deg", why, why_len)))
         return e;
+    for (int k = 0; k < 2; k++) {
+        double v = k ? sp->crease_position_right : sp->crease_position_left;
+        if (!isnan(v) && !(v > 0.0 && v < 1.0))
+            return store_fail(why, why_len, STORE_E_INVALID, "specimen crease_position_%s must be in (0, 1) (got %g)",
+                              k ? "right" : "left", v);
+    }
     if (!isnan(sp->fold_position) && !(sp->fold_position > 0.0 && sp->fold_position < 1.0))
         return store_fail(why, why_len, STORE_E_INVALID, "specimen fold_position must be in (0, 1) (got %g)",
                           sp->fold_position);
@@ -57,13 +65,16 @@ store_err store_specimen_upsert(store *st, const store_specimen *sp, int64_t *id
     e = store_prepare(st,
                       "INSERT INTO specimens (name, length_m, width_m, thickness_m, youngs_modulus_pa,"
                       " density_kg_m3, material, crease_angle_left_deg, crease_angle_right_deg,"
-                      " fold_position, crease_orientation) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11)"
+                      " fold_position, crease_orientation, crease_position_left, crease_position_right,"
+                      " folded_at) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14)"
                       " ON CONFLICT(name) DO UPDATE SET length_m=excluded.length_m,"
                       " width_m=excluded.width_m, thickness_m=excluded.thickness_m,"
                       " youngs_modulus_pa=excluded.youngs_modulus_pa, density_kg_m3=excluded.density_kg_m3,"
                       " material=excluded.material, crease_angle_left_deg=excluded.crease_angle_left_deg,"
                       " crease_angle_right_deg=excluded.crease_angle_right_deg,"
-                      " fold_position=excluded.fold_position, crease_orientation=excluded.crease_orientation"
+                      " fold_position=excluded.fold_position, crease_orientation=excluded.crease_orientation,"
+                      " crease_position_left=excluded.crease_position_left,"
+                      " crease_position_right=excluded.crease_position_right, folded_at=excluded.folded_at"
                       " RETURNING id",
                       &s, why, why_len);
     if (e != STORE_OK)
@@ -79,6 +90,9 @@ store_err store_specimen_upsert(store *st, const store_specimen *sp, int64_t *id
     store_bind_real(s, 9, sp->crease_angle_right_deg);
     store_bind_real(s, 10, sp->fold_position);
     store_bind_text(s, 11, sp->crease_orientation);
+    store_bind_real(s, 12, sp->crease_position_left);
+    store_bind_real(s, 13, sp->crease_position_right);
+    store_bind_text(s, 14, sp->folded_at);
     int rc = sqlite3_step(s);
     if (rc == SQLITE_ROW) {
         if (id)
@@ -93,7 +107,8 @@ store_err store_specimen_upsert(store *st, const store_specimen *sp, int64_t *id
 
 #define SPECIMEN_COLUMNS                                                                                    \
     "SELECT id, name, length_m, width_m, thickness_m, youngs_modulus_pa, density_kg_m3, material,"          \
-    " crease_angle_left_deg, crease_angle_right_deg, fold_position, crease_orientation, trials_count"       \
+    " crease_angle_left_deg, crease_angle_right_deg, fold_position, crease_orientation, trials_count,"      \
+    " crease_position_left, crease_position_right, folded_at"                                              \
     " FROM specimens "
 
 static store_err read_one(store *st, sqlite3_stmt *s, store_specimen *out, const char *what, char *why,
@@ -116,6 +131,9 @@ static store_err read_one(store *st, sqlite3_stmt *s, store_specimen *out, const
         out->fold_position = store_col_real(s, 10);
         store_col_text(s, 11, out->crease_orientation, sizeof out->crease_orientation);
         out->trials_count = sqlite3_column_int64(s, 12);
+        out->crease_position_left = store_col_real(s, 13);
+        out->crease_position_right = store_col_real(s, 14);
+        store_col_text(s, 15, out->folded_at, sizeof out->folded_at);
     } else if (rc == SQLITE_DONE) {
         e = store_fail(why, why_len, STORE_E_NOTFOUND, "no specimen %s", what);
     } else {

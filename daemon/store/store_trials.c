@@ -16,7 +16,8 @@
 
 store_trial_def store_trial_def_default(void)
 {
-    return (store_trial_def){.mode = STORE_MODE_MOCK, .config_text = "", .created_wall_s = store_wall_now()};
+    return (store_trial_def){.mode = STORE_MODE_MOCK, .config_text = "", .created_wall_s = store_wall_now(),
+                             .crease_age_s = NAN};
 }
 
 store_err store_trial_create(store *st, const store_trial_def *def, int64_t *id, char *why, size_t why_len)
@@ -38,6 +39,10 @@ store_err store_trial_create(store *st, const store_trial_def *def, int64_t *id,
         (e = store_need_fits(def->software_version, sizeof((store_trial *)0)->software_version,
                              "trial software_version", why, why_len)))
         return e;
+    if (isinf(def->crease_age_s) || def->crease_age_s < 0.0) /* NaN compares false: unknown */
+        return store_fail(why, why_len, STORE_E_INVALID,
+                          "trial crease_age_s must be finite and >= 0 (got %g): the specimen folded after the trial?",
+                          def->crease_age_s);
     if (def->specimen_id < 0 || def->source_trial_id < 0)
         return store_fail(why, why_len, STORE_E_INVALID, "trial specimen_id and source_trial_id must be >= 0");
     if (def->specimen_id && (e = store_lookup_id(st, "SELECT 1 FROM specimens WHERE id = ?1", def->specimen_id,
@@ -49,8 +54,8 @@ store_err store_trial_create(store *st, const store_trial_def *def, int64_t *id,
     sqlite3_stmt *s;
     e = store_prepare(st,
                       "INSERT INTO trials (mode, status, config_text, calibration_json, specimen_id,"
-                      " source_trial_id, video_path, created_at, software_version)"
-                      " VALUES (?1, 'created', ?2, ?3, ?4, ?5, ?6, ?7, ?8)",
+                      " source_trial_id, video_path, created_at, software_version, crease_age_s)"
+                      " VALUES (?1, 'created', ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
                       &s, why, why_len);
     if (e != STORE_OK)
         return e;
@@ -63,6 +68,7 @@ store_err store_trial_create(store *st, const store_trial_def *def, int64_t *id,
     sqlite3_bind_text(s, 7, created, -1, SQLITE_TRANSIENT);
     sqlite3_bind_text(s, 8, def->software_version && *def->software_version ? def->software_version : RIBBON_VERSION,
                       -1, SQLITE_TRANSIENT);
+    store_bind_real(s, 9, def->crease_age_s);
     int rc = sqlite3_step(s);
     if (rc != SQLITE_DONE)
         e = store_sql_fail(st->db, rc, why, why_len, "creating the trial");
@@ -304,7 +310,8 @@ store_err store_trial_mark_interrupted(store *st, double wall_s, int *count, cha
 #define TRIAL_COLUMNS                                                                                       \
     "SELECT t.id, t.mode, t.status, t.state, t.reason, t.specimen_id, s.name, t.source_trial_id,"           \
     " t.video_path, t.created_at, t.started_at, t.ended_at, t.snapped, t.snap_dw_measured,"                 \
-    " t.regime_measured, t.software_version, t.samples_count, t.stop_cmd_latency_s, t.stop_stand_latency_s"                                               \
+    " t.regime_measured, t.software_version, t.samples_count, t.stop_cmd_latency_s, t.stop_stand_latency_s,"                                              \
+    " t.crease_age_s"                                                                                       \
     " FROM trials t LEFT JOIN specimens s ON s.id = t.specimen_id "
 
 /* The shared trial row behind store_trial_get/_list. */
@@ -334,6 +341,7 @@ static store_err store_trial_read_row(sqlite3_stmt *s, store_trial *out)
     out->samples = sqlite3_column_int64(s, 16);
     out->stop_cmd_latency_s = store_col_real(s, 17);
     out->stop_stand_latency_s = store_col_real(s, 18);
+    out->crease_age_s = store_col_real(s, 19);
     return STORE_OK;
 }
 

@@ -68,23 +68,47 @@ static void store_failure(store *st, int64_t trial_id, const char *msg)
     store_event_append(st, &ev, why, sizeof why);
 }
 
+/* The row's fields every prediction has, done or failed: trial, hash, resolution, creases. */
+static store_prediction row_of(const trial_prediction_def *def)
+{
+    const rod_scene *sc = &def->scene;
+    store_prediction sp = store_prediction_default();
+    sp.trial_id = def->trial_id;
+    snprintf(sp.scene_hash, sizeof sp.scene_hash, "%s", def->hash);
+    sp.nodes = sc->nodes;
+    sp.dt = sc->dt;
+    sp.adaptive = def->adaptive;
+    sp.imperfection = sc->fold_angle_rel;
+    sp.est_error = def->est_error;
+    sp.creases = def->creases;
+    return sp;
+}
+
+int trial_prediction_store_failed(store *st, const trial_prediction_def *def, const char *reason, double wall_s,
+                                  char *why, size_t why_len)
+{
+    char msg[512];
+    snprintf(msg, sizeof msg, "prediction failed: %s", reason);
+    store_failure(st, def->trial_id, msg);
+    store_prediction sp = row_of(def);
+    sp.status = STORE_PREDICTION_FAILED;
+    snprintf(sp.failure, sizeof sp.failure, "%s", reason);
+    sp.regime = STORE_REGIME_UNKNOWN;
+    sp.wall_s = isfinite(wall_s) && wall_s >= 0.0 ? wall_s : 0.0;
+    int64_t pid = 0;
+    return store_prediction_insert(st, &sp, &pid, why, why_len) == STORE_OK ? 0 : -1;
+}
+
 /* The stored prediction: outcome, resolution and the solver's settings as JSON, the curve. */
 static store_err store_result(trial_prediction *j, store *st, const rod_prediction *p, store_regime regime,
                               char *why, size_t why_len)
 {
     const rod_scene *sc = &j->def.scene;
-    store_prediction sp = store_prediction_default();
-    sp.trial_id = j->def.trial_id;
-    snprintf(sp.scene_hash, sizeof sp.scene_hash, "%s", j->def.hash);
+    store_prediction sp = row_of(&j->def);
     sp.snapped = p->snapped;
     sp.snap_dw = p->snapped ? p->snap_dw : NAN;
     sp.regime = regime;
     sp.peak_abs_a = p->peak_abs_a;
-    sp.nodes = sc->nodes;
-    sp.dt = sc->dt;
-    sp.adaptive = j->def.adaptive;
-    sp.imperfection = sc->fold_angle_rel;
-    sp.est_error = j->def.est_error;
     sp.wall_s = p->wall_s;
     char solver[512];
     snprintf(solver, sizeof solver,
@@ -127,7 +151,8 @@ static void *prediction_main(void *arg)
     } else if (rs != ROD_OK) {
         rep.outcome = TRIAL_PREDICTION_FAILED;
         snprintf(rep.message, sizeof rep.message, "prediction failed: %s", err);
-        store_failure(st, j->def.trial_id, rep.message);
+        if (trial_prediction_store_failed(st, &j->def, err, p.wall_s, why, sizeof why))
+            snprintf(rep.message, sizeof rep.message, "prediction failed: %.200s (not stored: %.200s)", err, why);
     } else {
         store_regime regime = trial_regime_of(p.snapped, p.snapped, p.asymmetric);
         if (store_result(j, st, &p, regime, why, sizeof why) != STORE_OK) {

@@ -17,7 +17,8 @@
 
 typedef enum trial_prediction_outcome {
     TRIAL_PREDICTION_STORED = 0, /* predicted and stored: snap_dw, regime */
-    TRIAL_PREDICTION_FAILED,     /* the simulation failed or was cancelled (a warning event is stored) */
+    TRIAL_PREDICTION_FAILED,     /* the simulation failed or was cancelled (a warning event and a
+                                    failed prediction row with the reason are stored) */
     TRIAL_PREDICTION_NOT_STORED  /* the store refused it (the message says why) */
 } trial_prediction_outcome;
 
@@ -39,6 +40,7 @@ typedef struct trial_prediction_def {
     double adapt_scale;      /* fast mode: rod_predict_opts.adapt_scale of the ladder's rung (0 = 1) */
     double est_error;        /* the ladder's estimate of the snap's relative error; NaN if unknown */
     char hash[72];           /* the scene's hash (predictions.scene_hash) */
+    store_creases creases;   /* the creases the scene holds and where each came from (trial_specimen.h) */
     char store_path[RIG_PATH_MAX];
     int64_t trial_id;
     const atomic_int *cancel; /* non-zero: stop (may be NULL) */
@@ -50,6 +52,13 @@ typedef struct trial_prediction trial_prediction;
 
 /* Starts the thread. Returns 0, or -1 with why (no thread started, done is not called). */
 int trial_prediction_start(const trial_prediction_def *def, trial_prediction **out, char *why, size_t why_len);
+/* A prediction that failed before or without its thread (the resolution ladder found no snap,
+ * the simulator refused the scene, the thread could not start): the failed prediction row of
+ * def's trial, with def's resolution and creases and the reason, and the warning event saying
+ * "prediction failed: REASON", on st (the caller's connection). wall_s: what it cost. Returns 0,
+ * or -1 with why when the store refused. */
+int trial_prediction_store_failed(store *st, const trial_prediction_def *def, const char *reason, double wall_s,
+                                  char *why, size_t why_len);
 /* Waits for the thread and frees. NULL is a no-op. */
 void trial_prediction_join(trial_prediction *p);
 

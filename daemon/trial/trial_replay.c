@@ -440,8 +440,9 @@ static void publish_source_prediction(trial_replay *r, store *st)
     store_prediction p = store_prediction_default();
     char w[256];
     if (store_prediction_get_by_trial(st, r->source_id, &p, w, sizeof w) != STORE_OK) return;
-    trial_publish_prediction(r->bus, r->new_id, 1, p.snapped, p.snap_dw, store_regime_name(p.regime), p.curve.n,
-                             p.curve.dw, p.curve.dz, p.curve.a, NULL);
+    int ok = p.status != STORE_PREDICTION_FAILED; /* a failed one is published with its reason */
+    trial_publish_prediction(r->bus, r->new_id, ok, p.snapped, p.snap_dw, store_regime_name(p.regime), p.curve.n,
+                             p.curve.dw, p.curve.dz, p.curve.a, ok ? NULL : p.failure);
     store_prediction_free(&p);
 }
 

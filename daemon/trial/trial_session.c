@@ -54,6 +54,8 @@ struct trial_session {
     trial_roi roi;          /* the saved video's region */
     int width, height;      /* frame size */
     live_bus *bus;          /* the live page's (may be NULL): published into, never waited on */
+    rod_scene pred_scene;   /* the prediction's scene: the rig's with the specimen's creases */
+    trial_specimen_use use; /* which crease values it uses, where each came from */
 };
 
 /* 1 when an abort arrived before the runner took over (the trial then ends before moving). */
@@ -304,7 +306,8 @@ static vis_status live_grab(void *ctx, double t_s, double dl, double dw, vis_fra
 
 /* What the trial thread opens; session_release closes whatever is open. */
 typedef struct session_parts {
-    rod_scene sc;           /* the scene at the prediction's resolution (and the mock twin's) */
+    rod_scene sc;           /* the mock twin's scene: the rig's, at the prediction's resolution */
+    rod_scene pred;         /* the prediction's: the specimen's creases in the rig's scene */
     mock_camera *mock;
     live_camera live;
     trial_camera cam;
@@ -380,31 +383,75 @@ static int session_check_disk(trial_session *s, char *why, size_t why_len)
     return 0;
 }
 
-/* Step 2: the prediction's resolution, then the prediction on its own thread beside the trial. */
+/* One event saying which crease values the prediction uses and where each came from, and the
+ * specimen's warning (a measurement recorded but not used), if any. */
+static void note_specimen_use(trial_session *s)
+{
+    const store_creases *c = &s->use.creases;
+    char msg[400];
+    snprintf(msg, sizeof msg,
+             "prediction's creases: left %g deg (%s) at %g (%s), right %g deg (%s) at %g (%s)", c->angle_deg[0],
+             store_source_name(c->angle_from[0]), c->position[0], store_source_name(c->position_from[0]),
+             c->angle_deg[1], store_source_name(c->angle_from[1]), c->position[1],
+             store_source_name(c->position_from[1]));
+    session_event(s, NAN, STORE_EVENT_INFO, msg);
+    if (s->use.warning[0]) session_event(s, NAN, STORE_EVENT_WARNING, s->use.warning);
+}
+
+/* A prediction that cannot run: stored as failed with its reason (a warning event and the
+ * prediction row); the trial goes on, the strip on the rig being the ground truth. */
+static void prediction_failed_early(trial_session *s, const trial_prediction_def *def, const char *reason)
+{
+    char w[256];
+    if (trial_prediction_store_failed(s->st, def, reason, 0.0, w, sizeof w))
+        session_event(s, NAN, STORE_EVENT_FAULT, w);
+    pthread_mutex_lock(&s->lock);
+    s->status.prediction_failed = 1;
+    snprintf(s->status.message, sizeof s->status.message, "prediction failed: %.230s", reason);
+    pthread_mutex_unlock(&s->lock);
+    trial_publish_prediction(s->bus, s->trial_id, 0, 0, NAN, NULL, 0, NULL, NULL, NULL, reason);
+}
+
+/* Step 2: the prediction's resolution, then the prediction on its own thread beside the trial.
+ * Only an abort stops the trial here: a prediction that cannot be made (the ladder found no snap,
+ * the simulator refused the scene) is stored as failed and the trial runs without it; the mock
+ * twin then runs at the scene's own mesh.nodes. */
 static int session_start_prediction(trial_session *s, session_parts *p, char *why, size_t why_len)
 {
     double est = NAN, adapt_scale = 0.0;
-    char hash[72];
+    char hash[72] = "";
     char w[400];
-    if (choose_resolution(s, &p->sc, &adapt_scale, &est, hash, sizeof hash, w, sizeof w)) {
-        if (atomic_load(&s->cancel))
-            aborted_early(s, why, why_len);
-        else
-            snprintf(why, why_len, "no prediction resolution: %s", w);
+    note_specimen_use(s);
+    trial_prediction_def def = {.adaptive = s->cfg.sim.fast, .trial_id = s->trial_id, .cancel = &s->cancel,
+                                .done = prediction_done, .user = s, .creases = s->use.creases};
+    snprintf(def.store_path, sizeof def.store_path, "%s", s->cfg.store_path);
+    int failed = choose_resolution(s, &p->pred, &adapt_scale, &est, hash, sizeof hash, w, sizeof w);
+    if (failed && atomic_load(&s->cancel)) {
+        aborted_early(s, why, why_len);
         return -1;
     }
     if (aborted_early(s, why, why_len)) return -1;
-    pthread_mutex_lock(&s->lock);
-    s->status.nodes = p->sc.nodes;
-    s->status.dt = p->sc.dt;
-    pthread_mutex_unlock(&s->lock);
-    trial_prediction_def def = {.scene = p->sc, .adaptive = s->cfg.sim.fast, .adapt_scale = adapt_scale,
-                                .est_error = est,
-                                .trial_id = s->trial_id, .cancel = &s->cancel, .done = prediction_done, .user = s};
+    def.scene = p->pred;
+    def.est_error = est;
+    def.adapt_scale = adapt_scale;
     snprintf(def.hash, sizeof def.hash, "%s", hash);
-    snprintf(def.store_path, sizeof def.store_path, "%s", s->cfg.store_path);
-    if (trial_prediction_start(&def, &s->prediction, w, sizeof w))
-        session_event(s, NAN, STORE_EVENT_WARNING, "prediction thread could not start: no prediction for this trial");
+    if (failed) {
+        char reason[480];
+        snprintf(reason, sizeof reason, "no prediction resolution: %s", w);
+        prediction_failed_early(s, &def, reason);
+        return 0;
+    }
+    p->sc.nodes = p->pred.nodes; /* the twin at the prediction's resolution */
+    p->sc.dt = p->pred.dt;
+    pthread_mutex_lock(&s->lock);
+    s->status.nodes = p->pred.nodes;
+    s->status.dt = p->pred.dt;
+    pthread_mutex_unlock(&s->lock);
+    if (trial_prediction_start(&def, &s->prediction, w, sizeof w)) {
+        char reason[480];
+        snprintf(reason, sizeof reason, "the prediction's thread could not start: %s", w);
+        prediction_failed_early(s, &def, reason);
+    }
     return 0;
 }
 
@@ -585,7 +632,7 @@ static void session_release(trial_session *s, session_parts *p)
 static void *session_main(void *arg)
 {
     trial_session *s = arg;
-    session_parts p = {.sc = s->cfg.scene};
+    session_parts p = {.sc = s->cfg.scene, .pred = s->pred_scene};
     char why[512] = "";
     if (session_check_disk(s, why, sizeof why) || session_start_prediction(s, &p, why, sizeof why) ||
         session_open_camera(s, &p, why, sizeof why) || session_open_tracker_and_video(s, &p, why, sizeof why) ||
@@ -630,11 +677,19 @@ trial_err trial_session_start(const rig_config *cfg, rail *compress, rail *shear
     *out = NULL;
     trial_err te = check_prediction_cost(cfg, why, why_len);
     if (te != TRIAL_OK) return te;
+    rod_scene pred_scene;
+    trial_specimen_use use;
+    double created = store_wall_now(), crease_age = NAN;
+    if (trial_specimen_scene(cfg, &pred_scene, &use, why, why_len) ||
+        trial_specimen_crease_age(cfg, created, &crease_age, why, why_len))
+        return TRIAL_E_REFUSED; /* the specimen's measurements are bad input: nothing recorded */
     trial_session *s = calloc(1, sizeof *s);
     if (!s) {
         snprintf(why, why_len, "out of memory");
         return TRIAL_E_FAILED;
     }
+    s->pred_scene = pred_scene;
+    s->use = use;
     s->cfg = *cfg;
     s->compress = compress;
     s->shear = shear;
@@ -662,7 +717,8 @@ trial_err trial_session_start(const rig_config *cfg, rail *compress, rail *shear
     def.config_text = config_text ? config_text : "";
     def.calibration_json = calib;
     def.specimen_id = spid;
-    def.created_wall_s = store_wall_now();
+    def.created_wall_s = created;
+    def.crease_age_s = crease_age;
     store_err se = store_trial_create(s->st, &def, &s->trial_id, why, why_len);
     free(config_text);
     free(calib);

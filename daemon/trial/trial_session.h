@@ -2,7 +2,8 @@
  *
  * trial_session_start (called from the API thread while no trial runs) refuses a start whose
  * prediction would take longer than TRIAL_PREDICTION_MAX_S (estimated, with the estimate in the
- * reason), records the trial in the store (status created, the rig and scene texts, the
+ * reason), or whose specimen measurements cannot be simulated (trial_specimen.h), puts the
+ * specimen's creases into the prediction's scene, records the trial in the store (status created, the rig and scene texts, the
  * calibration record, the specimen) and starts the trial's thread, whose steps are functions of
  * trial_session.c:
  *   session_check_disk             the free disk space for the video;
@@ -10,7 +11,10 @@
  *                                  rung of the scene's error-against-run-time ladder meeting [sim]
  *                                  target_error (computed once per scene and cached in the store);
  *                                  then the prediction on a thread of its own beside the trial
- *                                  (trial_prediction.h), which never blocks the rails;
+ *                                  (trial_prediction.h), which never blocks the rails. A
+ *                                  prediction that cannot be made (no snap on a ladder rung,
+ *                                  the simulator refusing the scene) is stored as failed with
+ *                                  its reason, and the trial runs without it;
  *   session_open_camera            mock mode: the digital twin at the prediction's resolution,
  *                                  mounted at the compression rail's current position; rig: the camera;
  *   session_open_tracker_and_video the tracker and the cropped video;
@@ -65,7 +69,8 @@ typedef struct session_status {
  * session has finished. log (may be NULL) receives one line per event. bus (may be NULL) is the
  * live page's: the session publishes every state, event, sample, frame (at most 10/s), the
  * prediction and the result into it, and never waits on it; it must outlive the session.
- * TRIAL_E_REFUSED: the prediction's estimate exceeds the bound (nothing recorded);
+ * TRIAL_E_REFUSED: the prediction's estimate exceeds the bound, or the specimen's measurements
+ * are bad input (named: specimen.KEY ...; nothing recorded);
  * TRIAL_E_FAILED: the store or the thread failed. */
 trial_err trial_session_start(const rig_config *cfg, rail *compress, rail *shear, const char *note,
                               void (*log)(const char *line), live_bus *bus, trial_session **out, int64_t *trial_id,

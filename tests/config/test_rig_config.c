@@ -571,6 +571,69 @@ static void test_scene_errors_unchanged(void **state)
                   "--set mesh.nodes=4: mesh.nodes:");
 }
 
+/* Issue 31: the specimen's own measurements. folded_at is an ISO 8601 date-time with a zone
+ * (checked against closed forms: seconds since the epoch counted by hand), not in the future;
+ * crease positions in (0, 1) and in order; each may come from --set specimen.* as from the file. */
+static void test_specimen_measurements(void **state)
+{
+    (void)state;
+    cfg_error err;
+    /* Closed forms: 2000-03-01 is day 11017 after 1970-01-01 (30 years, 7 of them leap, plus
+     * Jan and the 29 days of the leap February 2000); an offset moves the instant the other way. */
+    struct {
+        const char *text;
+        double want;
+    } good[] = {{"1970-01-01T00:00Z", 0.0},
+                {"2000-03-01T00:00:00Z", 11017.0 * 86400.0},
+                {"2000-02-29T23:59:59.5Z", 11017.0 * 86400.0 - 0.5},
+                {"2000-03-01T01:30+01:30", 11017.0 * 86400.0},
+                {"2000-02-29 22:00-02:00", 11017.0 * 86400.0},
+                {"1969-12-31T23:00Z", -3600.0}};
+    for (size_t k = 0; k < sizeof good / sizeof good[0]; k++) {
+        char line[96];
+        snprintf(line, sizeof line, "folded_at = %s", good[k].text);
+        assert_int_equal(parse(make1(20, line), &cfg, &err), CFG_OK);
+        if (cfg.specimen.folded_at_s != good[k].want) {
+            print_error("%s: %.3f s, expected %.3f s\n", good[k].text, cfg.specimen.folded_at_s, good[k].want);
+            fail();
+        }
+        assert_string_equal(cfg.specimen.folded_at, good[k].text);
+    }
+    assert_int_equal(parse(make(NULL, 0, NULL), &cfg, &err), CFG_OK);
+    assert_true(isnan(cfg.specimen.folded_at_s));
+    assert_true(isnan(cfg.specimen.crease_position_left) && isnan(cfg.specimen.crease_position_right));
+    expect_line(make1(20, "folded_at = 2026-11-30"), CFG_ERR_VALUE, 20, "specimen.folded_at", "without a time");
+    expect_line(make1(20, "folded_at = 2026-11-30T14:05"), CFG_ERR_VALUE, 20, "specimen.folded_at", "no time zone");
+    expect_line(make1(20, "folded_at = yesterday"), CFG_ERR_VALUE, 20, "specimen.folded_at",
+                "not an ISO 8601 date-time");
+    expect_line(make1(20, "folded_at = 2026-02-29T10:00Z"), CFG_ERR_VALUE, 20, "specimen.folded_at",
+                "out of range");
+    expect_line(make1(20, "folded_at = 2026-11-30T24:00Z"), CFG_ERR_VALUE, 20, "specimen.folded_at",
+                "out of range");
+    expect_line(make1(20, "folded_at = 2026-11-30T10:00Zoo"), CFG_ERR_VALUE, 20, "specimen.folded_at",
+                "text after");
+    expect_line(make1(20, "folded_at = 2999-01-01T00:00Z"), CFG_ERR_CHECK, 20, "specimen.folded_at",
+                "lies in the future");
+    expect_line(make1(20, "crease_position_left = 0"), CFG_ERR_RANGE, 20, "specimen.crease_position_left", NULL);
+    expect_line(make1(20, "crease_position_right = 1"), CFG_ERR_RANGE, 20, "specimen.crease_position_right",
+                NULL);
+    /* --set specimen.* as from the file; crossing creases named at the override that set them. */
+    const char *ok[] = {"specimen.crease_angle_left_deg=88", "specimen.crease_angle_right_deg=91",
+                        "specimen.crease_position_left=0.12", "specimen.crease_position_right=0.88",
+                        "specimen.folded_at=2026-11-30T14:05+01:00"};
+    assert_int_equal(parse_ovr(make(NULL, 0, NULL), ok, 5, &cfg, &err), CFG_OK);
+    assert_true(cfg.specimen.crease_angle_left_deg == 88.0 && cfg.specimen.crease_angle_right_deg == 91.0);
+    assert_true(cfg.specimen.crease_position_left == 0.12 && cfg.specimen.crease_position_right == 0.88);
+    /* 2026-11-30 is day 20787 of the epoch; 14:05 at +01:00 is 13:05 UTC. */
+    assert_true(cfg.specimen.folded_at_s == 20787.0 * 86400.0 + 13.0 * 3600.0 + 5.0 * 60.0);
+    const char *cross[] = {"specimen.crease_position_left=0.6", "specimen.crease_position_right=0.4"};
+    expect_origin(make(NULL, 0, NULL), cross, 2, CFG_ERR_CHECK, CFG_ORIGIN_OVERRIDE, "specimen.crease_position_right",
+                  "the creases cross");
+    const char *future[] = {"specimen.folded_at=2999-01-01T00:00Z"};
+    expect_origin(make(NULL, 0, NULL), future, 1, CFG_ERR_CHECK, CFG_ORIGIN_OVERRIDE, "specimen.folded_at",
+                  "future");
+}
+
 static void test_overrides(void **state)
 {
     (void)state;
@@ -841,6 +904,7 @@ int main(void)
         cmocka_unit_test(test_mode_rules_exact),
         cmocka_unit_test(test_cross_checks),
         cmocka_unit_test(test_scene_errors_unchanged),
+        cmocka_unit_test(test_specimen_measurements),
         cmocka_unit_test(test_overrides),
         cmocka_unit_test(test_conversions),
         cmocka_unit_test(test_calibration_json),

@@ -366,6 +366,12 @@ static void test_names_round_trip(void **state)
         assert_true(store_event_kind_parse(store_event_kind_name((store_event_kind)k), &x));
         assert_int_equal(x, k);
     }
+    for (int k = 1; k < STORE_SOURCE_COUNT; k++) {
+        store_source x;
+        assert_true(store_source_parse(store_source_name((store_source)k), &x));
+        assert_int_equal(x, k);
+    }
+    assert_null(store_source_name(STORE_SOURCE_UNKNOWN));
     store_regime r;
     assert_true(store_regime_parse("none", &r));
     assert_int_equal(r, STORE_REGIME_NO_SNAP);
@@ -783,6 +789,117 @@ static void test_prediction_round_trip(void **state)
     int64_t other = new_trial(st, STORE_MODE_MOCK);
     assert_int_equal(store_prediction_curve(st, other, &c, why, sizeof why), STORE_E_NOTFOUND);
     assert_int_equal(store_prediction_get_by_trial(st, other, &back, why, sizeof why), STORE_E_NOTFOUND);
+    store_close(st);
+}
+
+/* v5 (issue 31): the specimen's measured positions and fold date; the creases' age of a trial;
+ * a failed prediction (its status and reason, no snap, no curve) and the creases a prediction
+ * used with their sources, in the record and in the JSON; refusals of rows that say less. */
+static void test_specimen_in_prediction(void **state)
+{
+    fixture *f = *state;
+    store *st;
+    OK(store_open(f->db, &st, why, sizeof why));
+    store_specimen sp = store_specimen_default();
+    snprintf(sp.name, sizeof sp.name, "PET-B");
+    sp.length_m = 0.2;
+    sp.width_m = 0.005;
+    sp.thickness_m = 0.00025;
+    sp.crease_position_left = 0.12;
+    sp.crease_position_right = 0.86;
+    snprintf(sp.folded_at, sizeof sp.folded_at, "2026-11-30T14:05+01:00");
+    int64_t spid = 0;
+    OK(store_specimen_upsert(st, &sp, &spid, why, sizeof why));
+    store_specimen back;
+    OK(store_specimen_get(st, spid, &back, why, sizeof why));
+    assert_true(back.crease_position_left == 0.12 && back.crease_position_right == 0.86);
+    assert_string_equal(back.folded_at, "2026-11-30T14:05+01:00");
+    sp.crease_position_right = 1.5;
+    assert_int_equal(store_specimen_upsert(st, &sp, NULL, why, sizeof why), STORE_E_INVALID);
+    assert_non_null(strstr(why, "crease_position_right"));
+
+    store_trial_def d = store_trial_def_default();
+    assert_true(isnan(d.crease_age_s));
+    d.config_text = "";
+    d.created_wall_s = T0;
+    d.specimen_id = spid;
+    d.crease_age_s = 3.5 * 86400.0;
+    int64_t trial = 0;
+    OK(store_trial_create(st, &d, &trial, why, sizeof why));
+    d.crease_age_s = -1.0;
+    assert_int_equal(store_trial_create(st, &d, NULL, why, sizeof why), STORE_E_INVALID);
+    assert_non_null(strstr(why, "crease_age_s"));
+    store_trial tr;
+    OK(store_trial_get(st, trial, &tr, why, sizeof why));
+    assert_true(tr.crease_age_s == 3.5 * 86400.0);
+
+    /* A failed prediction with the creases it was to use. */
+    store_prediction p = store_prediction_default();
+    p.trial_id = trial;
+    snprintf(p.scene_hash, sizeof p.scene_hash, "h1");
+    p.status = STORE_PREDICTION_FAILED;
+    snprintf(p.failure, sizeof p.failure, "ladder rung N = 31: no snap up to Delta W = 0.6");
+    p.nodes = 61;
+    p.dt = 2e-3;
+    p.imperfection = -3.0 / 89.5;
+    p.wall_s = 0.0;
+    p.creases.angle_deg[0] = -88.0;
+    p.creases.angle_from[0] = STORE_SOURCE_SPECIMEN;
+    p.creases.angle_deg[1] = -90.0;
+    p.creases.angle_from[1] = STORE_SOURCE_SCENE;
+    p.creases.position[0] = 0.13;
+    p.creases.position_from[0] = STORE_SOURCE_SCENE;
+    p.creases.position[1] = 0.87;
+    p.creases.position_from[1] = STORE_SOURCE_SCENE;
+    int64_t pid = 0;
+    OK(store_prediction_insert(st, &p, &pid, why, sizeof why));
+    store_prediction pb;
+    OK(store_prediction_get_by_trial(st, trial, &pb, why, sizeof why));
+    assert_int_equal(pb.status, STORE_PREDICTION_FAILED);
+    assert_string_equal(pb.failure, p.failure);
+    assert_false(pb.snapped);
+    assert_true(isnan(pb.snap_dw) && pb.regime == STORE_REGIME_UNKNOWN && pb.curve.n == 0);
+    assert_true(pb.creases.angle_deg[0] == -88.0 && pb.creases.angle_from[0] == STORE_SOURCE_SPECIMEN);
+    assert_true(pb.creases.angle_deg[1] == -90.0 && pb.creases.angle_from[1] == STORE_SOURCE_SCENE);
+    assert_true(pb.creases.position[1] == 0.87 && pb.creases.position_from[1] == STORE_SOURCE_SCENE);
+    store_prediction_free(&pb);
+
+    json_t *j = NULL;
+    OK(store_trial_json(st, trial, &j, why, sizeof why));
+    json_t *jp = json_object_get(j, "prediction");
+    assert_string_equal(json_string_value(json_object_get(jp, "status")), "failed");
+    assert_string_equal(json_string_value(json_object_get(jp, "failure")), p.failure);
+    assert_true(json_is_null(json_object_get(j, "snap_dw_predicted")));
+    assert_true(json_is_null(json_object_get(j, "regime_predicted")));
+    assert_true(json_number_value(json_object_get(j, "crease_age_s")) == 3.5 * 86400.0);
+    json_t *jc = json_object_get(jp, "creases");
+    assert_true(json_number_value(json_object_get(jc, "angle_left_deg")) == -88.0);
+    assert_string_equal(json_string_value(json_object_get(jc, "angle_left_from")), "specimen");
+    assert_string_equal(json_string_value(json_object_get(jc, "angle_right_from")), "scene");
+    assert_true(json_number_value(json_object_get(jc, "position_right")) == 0.87);
+    json_decref(j);
+
+    /* Refused, nothing written: a failed row without its reason, or with a snap; a done row with
+     * a failure text; a value without its source. */
+    long long rows = q_int(store_handle(st), "SELECT count(*) FROM predictions");
+    store_prediction bad = p;
+    bad.failure[0] = '\0';
+    assert_int_equal(store_prediction_insert(st, &bad, NULL, why, sizeof why), STORE_E_INVALID);
+    assert_non_null(strstr(why, "reason"));
+    bad = p;
+    bad.snapped = true;
+    bad.snap_dw = 0.4;
+    bad.regime = STORE_REGIME_SYMMETRIC;
+    assert_int_equal(store_prediction_insert(st, &bad, NULL, why, sizeof why), STORE_E_INVALID);
+    bad = p;
+    bad.status = STORE_PREDICTION_DONE;
+    bad.regime = STORE_REGIME_NO_SNAP;
+    assert_int_equal(store_prediction_insert(st, &bad, NULL, why, sizeof why), STORE_E_INVALID);
+    bad = p;
+    bad.creases.angle_from[0] = STORE_SOURCE_UNKNOWN;
+    assert_int_equal(store_prediction_insert(st, &bad, NULL, why, sizeof why), STORE_E_INVALID);
+    assert_non_null(strstr(why, "source"));
+    assert_int_equal(q_int(store_handle(st), "SELECT count(*) FROM predictions"), rows);
     store_close(st);
 }
 
@@ -1319,6 +1436,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_mark_interrupted, setup, teardown),
         cmocka_unit_test_setup_teardown(test_events_round_trip, setup, teardown),
         cmocka_unit_test_setup_teardown(test_prediction_round_trip, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_specimen_in_prediction, setup, teardown),
         cmocka_unit_test_setup_teardown(test_ladder, setup, teardown),
         cmocka_unit_test_setup_teardown(test_writer_commit_triggers, setup, teardown),
         cmocka_unit_test_setup_teardown(test_writer_disk_full, setup, teardown),
