@@ -16,12 +16,16 @@
  * (32, 64, 128 edges) has equal edges with nodes on the creases (at 0.13 the edges beside a crease
  * change irregularly from rung to rung and the ladder reads "not in the asymptotic range",
  * docs/simulator.md). Coarser ladders (24, 48, 96 edges) observe an order near 3 there: not yet
- * in the asymptotic range. Another scene (a compliant hinge) is one more row.
+ * in the asymptotic range. And config/mock.ini's own ladder (31, 61, 121 nodes at Gamma 0.13):
+ * flagged "not in the asymptotic range" (observed order 2.74), so its estimates carry the
+ * safety factor 3 and the test asserts that they bound the true error from above (the former
+ * N-only ladder put N = 121 at 0.045% against a true 0.34%). Another scene (a compliant hinge) is
+ * one more row.
  *
- * Usage: test_ladder_reference [short|full]. short (default, ctest test_ladder_reference): the two
- * coarser rungs against a reference at 256 edges, dt / 4 of the middle rung (about 5 s in
- * Release). full (ctest test_ladder_reference_full, heavy): all three rungs against 512 edges at
- * dt / 4 of the finest (about 15 s in Release, minutes under the sanitizers). */
+ * Usage: test_ladder_reference [short|full]. short (default, ctest test_ladder_reference): Gamma
+ * 0.125's two coarser rungs against a reference 4x finer than the middle one (256 edges at 1 ms),
+ * about 6 s in Release. full (ctest test_ladder_reference_full, heavy): both rows, all three rungs
+ * against 4x the finest (512 edges at 0.5 ms; 472 edges at 0.5 ms), about 20 s in Release. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -47,11 +51,14 @@ typedef struct ref_row {
     int nodes[PREDICT_LADDER_MAX_RUNGS];
     int n;                     /* rungs of the ladder */
     int judged;                /* the first `judged` rungs are judged against the reference */
+    int asymptotic;            /* 1: in the asymptotic range, true <= est <= 3 true; 0: flagged "not in
+                                  the asymptotic range", and est >= true (the safety factor's bound) */
 } ref_row;
 
 static const ref_row rows[] = {
-    {"rigid creases, Gamma 0.125", "short", "mock-gamma013.ini", {"folds.position=0.125"}, {35, 67, 131}, 3, 2},
-    {"rigid creases, Gamma 0.125", "full", "mock-gamma013.ini", {"folds.position=0.125"}, {35, 67, 131}, 3, 3},
+    {"rigid creases, Gamma 0.125", "short", "mock-gamma013.ini", {"folds.position=0.125"}, {35, 67, 131}, 3, 2, 1},
+    {"rigid creases, Gamma 0.125", "full", "mock-gamma013.ini", {"folds.position=0.125"}, {35, 67, 131}, 3, 3, 1},
+    {"config/mock.ini's ladder, Gamma 0.13", "full", "mock-gamma013.ini", {NULL}, {31, 61, 121}, 3, 3, 0},
 };
 
 static const char *family = "short";
@@ -104,12 +111,14 @@ static void check_row(const ref_row *row)
         int judged = k < row->judged;
         printf("  %6d %9.4g %11.6f %11.3e %11.3e %7.2f %8.2f%s\n", r[k].nodes, r[k].dt, r[k].snap_dw, r[k].est_error,
                truth, r[k].est_error / truth, r[k].wall_s, judged ? "" : "  (not judged)");
-        if (judged && !(r[k].est_error >= truth && r[k].est_error <= 3.0 * truth)) bad++;
+        if (judged && !(r[k].est_error >= truth && (!row->asymptotic || r[k].est_error <= 3.0 * truth))) bad++;
     }
     printf("  %6d %9.4g %11.6f %11s %11s %7s %8.2f  reference\n", ref.nodes, ref.dt, s_ref, "", "", "", p.wall_s);
-    if (!v.asymptotic) fail_msg("%s: %s", row->name, v.note);
-    if (bad) fail_msg("%s: %d judged rung(s) whose estimate does not bound the true error within a factor of 3",
-                      row->name, bad);
+    if (row->asymptotic && !v.asymptotic) fail_msg("%s: %s", row->name, v.note);
+    if (!row->asymptotic && v.asymptotic) fail_msg("%s: expected not in the asymptotic range", row->name);
+    if (bad)
+        fail_msg("%s: %d judged rung(s) whose estimate does not bound the true error%s", row->name, bad,
+                 row->asymptotic ? " within a factor of 3" : "");
 }
 
 static void test_rows(void **state)
