@@ -16,6 +16,8 @@
 
 #include "api_overrides.h"
 #include "api_start_body.h"
+#include "rig_config.h"
+#include "scene_file.h"
 
 static void allowed(const char *ovr)
 {
@@ -133,6 +135,36 @@ static void test_table(void **s)
     }
 }
 
+/* Against the loaders' own key tables, so a key added later is judged too: every scene key is
+ * allowed (the scene is a trial's, by section), and every rig key that names a file, a directory
+ * or a device (PATH, the camera's SOURCE), the API's, the store's, the rails' limits via the
+ * specimen, is refused. A path key added to an allowed section fails here. */
+static void test_loader_tables(void **s)
+{
+    (void)s;
+    char ovr[160], why[512];
+    size_t n = 0;
+    const cfg_scene_key *sk = cfg_scene_keys(&n);
+    for (size_t i = 0; i < n; i++) {
+        snprintf(ovr, sizeof ovr, "%s.%s=1", sk[i].section, sk[i].name);
+        allowed(ovr);
+    }
+    const rig_key *rk = rig_config_keys(&n);
+    int paths = 0;
+    for (size_t i = 0; i < n; i++) {
+        snprintf(ovr, sizeof ovr, "%s.%s=/etc/passwd", rk[i].section, rk[i].name);
+        int ok = api_override_check(ovr, why, sizeof why) == 0;
+        if (rk[i].type == RIG_KEY_PATH || rk[i].type == RIG_KEY_SOURCE) {
+            paths++;
+            if (ok) fail_msg("%s (a path) allowed through the API", ovr);
+        }
+        if (ok && (!strcmp(rk[i].section, "api") || !strcmp(rk[i].section, "store") || !strcmp(rk[i].section, "rig")))
+            fail_msg("%s allowed through the API", ovr);
+    }
+    printf("# %zu rig keys, %d of them paths or devices, all refused\n", n, paths);
+    assert_true(paths >= 6); /* rig.scene, camera.source, camera.calibration, camera.video_dir, store.path, replay.* */
+}
+
 /* Through POST /trials's body check: the first refused override is named by its index. */
 static void test_start_body_refuses(void **s)
 {
@@ -156,6 +188,7 @@ int main(void)
         cmocka_unit_test(test_what_a_trial_may_change),
         cmocka_unit_test(test_what_is_the_rig_files),
         cmocka_unit_test(test_table),
+        cmocka_unit_test(test_loader_tables),
         cmocka_unit_test(test_start_body_refuses),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
