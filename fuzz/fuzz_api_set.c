@@ -16,7 +16,8 @@ static int one_of(const char *s, size_t len, const char *const *names)
 
 void fuzz_check_api_override(const char *who, const char *ovr)
 {
-    static const char *const whole[] = {"ribbon", "folds", "imperfection", "protocol", "snap", "specimen", NULL};
+    static const char *const whole[] = {"ribbon", "folds", "imperfection", "protocol", "snap", "mesh", "solver",
+                                       "specimen", NULL};
     static const char *const timing[] = {"hold_s", "post_snap_s", "compress_speed_mm_s", "return_speed_mm_s", NULL};
     const char *eq = strchr(ovr, '=');
     if (!eq) fuzz_fail(who, "an override without '=' accepted");

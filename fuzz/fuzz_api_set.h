@@ -7,8 +7,8 @@
 #define RIBBON_FUZZ_API_SET_H
 
 /* abort()s (fuzz_fail, as who) unless ovr's key is ribbon.*, folds.*, imperfection.*,
- * protocol.*, snap.*, specimen.* but min_clamp_gap_mm, or trial.hold_s, post_snap_s,
- * compress_speed_mm_s, return_speed_mm_s. */
+ * protocol.*, snap.*, mesh.*, solver.*, specimen.* but min_clamp_gap_mm, or trial.hold_s,
+ * post_snap_s, compress_speed_mm_s, return_speed_mm_s. */
 void fuzz_check_api_override(const char *who, const char *ovr);
 
 #endif

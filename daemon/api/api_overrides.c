@@ -12,12 +12,15 @@
 static const api_override_rule rules[] = {
     /* a limit of the rails, though the specimen's record holds it */
     {"specimen", "min_clamp_gap_mm", false, "a limit of the rails: the clamps never come closer"},
-    /* the scene: physics and protocol, whole sections */
+    /* the scene, whole sections: physics, protocol, the simulator's settings (a start's
+     * prediction is bounded: trial_session_start refuses one estimated too long) */
     {"ribbon", "*", true, "the ribbon's size, material and gravity"},
     {"folds", "*", true, "the creases: angles, positions, stiffness"},
     {"imperfection", "*", true, "the difference between the two creases"},
     {"protocol", "*", true, "compression, shear rate and range, route"},
     {"snap", "*", true, "what the simulator counts as the snap"},
+    {"mesh", "*", true, "the simulator's mesh (a start whose prediction would take too long is refused)"},
+    {"solver", "*", true, "the simulator's time step, damping and tolerances (the same cost bound)"},
     /* the rig file: the specimen's record and the trial's timing */
     {"specimen", "*", true, "the specimen's name, material and measured creases"},
     {"trial", "hold_s", true, "the hold before the shear"},
@@ -33,8 +36,6 @@ static const api_override_rule rules[] = {
     {"camera", "*", false, "the camera, its calibration file and its video directory are the rig file's"},
     {"detect", "*", false, "the snap detector's thresholds are the rig file's"},
     {"sim", "*", false, "the prediction's resolution (its cost) is the rig file's"},
-    {"mesh", "*", false, "the simulator's mesh is the rig file's (its [sim] sets the prediction's)"},
-    {"solver", "*", false, "the simulator's solver settings are the rig file's"},
     {"store", "*", false, "the store is the rig file's"},
     {"api", "*", false, "the API's address, port and token are the rig file's"},
     {"replay", "*", false, "replay sources are the rig file's"},

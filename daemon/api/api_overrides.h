@@ -2,8 +2,9 @@
  *
  * POST /trials may carry "set" overrides ("section.key=value") applied to the rig file for that
  * trial only. ribbond's own --set is the operator's and may change anything; an API client
- * (without a token, on loopback, any local user) may change only what a trial may: the scene's
- * physics and protocol, the specimen's record, the trial's timing. Paths (the scene file, the
+ * (without a token, on loopback, any local user) may change only what a trial may: its scene
+ * (physics, protocol and the simulator's settings), the specimen's record, the trial's timing.
+ * Paths (the scene file, the
  * camera's calibration file and video directory, the store, replay sources), the API itself, the
  * rails (drivers, ports, speeds, limits), the calibration, the camera, snap detection, the
  * prediction's resolution and the twin are the rig file's: an override of one is refused (400)

@@ -58,7 +58,7 @@ static void help(const char *cmd)
            "common: --url URL (default $RIBBON_URL or http://127.0.0.1:8377), --token T (default $RIBBON_TOKEN)\n"
            "\n"
            "start asks ribbond to run one trial of its rig file (with --set overrides of the keys a trial\n"
-           "may change: the scene's physics and protocol, the specimen, the trial's timing; docs/api.md);\n"
+           "may change: its scene, the specimen, the trial's timing; docs/api.md);\n"
            "--wait follows it on stderr and prints the measured and predicted snap when it ends (with --out,\n"
            "also its report) and the store's path on a line `database: PATH`.\n"
            "report draws Delta Z and A against Delta W, measured and predicted, snaps marked.\n"

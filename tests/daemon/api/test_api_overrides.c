@@ -1,8 +1,9 @@
 /* test_api_overrides.c: what an API client may change in a trial (daemon/api/api_overrides.h),
  * issue 33 item 5: POST /trials's "set" reached every key of the rig file, so any local user could
  * point the scene at any file (and read it back in the error), move the video directory, change
- * the API's token or the rails' limits. Now a table allows the scene's physics and protocol, the
- * specimen and the trial's timing; the rest is refused naming the key, however it is spelled. */
+ * the API's token or the rails' limits. Now a table allows the scene (physics, protocol, the
+ * simulator's settings), the specimen and the trial's timing; the rest is refused naming the key,
+ * however it is spelled. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -15,6 +16,8 @@
 
 #include "api_overrides.h"
 #include "api_start_body.h"
+#include "rig_config.h"
+#include "scene_file.h"
 
 static void allowed(const char *ovr)
 {
@@ -43,6 +46,8 @@ static void test_what_a_trial_may_change(void **s)
     allowed("protocol.compression=0.4");
     allowed("protocol.shear_rate=0.001");
     allowed("snap.speed=2");
+    allowed("mesh.nodes=61");   /* the simulator's settings: a start's prediction cost is bounded */
+    allowed("solver.dt=5e-4");
     /* ... and keys another branch adds to those sections: no change needed here. */
     allowed("folds.angle_left_deg=88");
     allowed("folds.angle_right_deg=92");
@@ -90,8 +95,6 @@ static void test_what_is_the_rig_files(void **s)
     /* The measurement's and the prediction's settings, the disk margin, the twin. */
     refused("detect.dz_jump=0.5", "detect.dz_jump");
     refused("sim.nodes=100001", "sim.nodes");
-    refused("mesh.nodes=100001", "mesh.nodes");
-    refused("solver.dt=1e-9", "solver.dt");
     refused("trial.min_free_disk_mb=0", "trial.min_free_disk_mb");
     refused("trial.upper_dz_min=0.001", "trial.upper_dz_min");
     refused("twin.folds_angle_deg=80", "the twin is the bench's");
@@ -132,6 +135,36 @@ static void test_table(void **s)
     }
 }
 
+/* Against the loaders' own key tables, so a key added later is judged too: every scene key is
+ * allowed (the scene is a trial's, by section), and every rig key that names a file, a directory
+ * or a device (PATH, the camera's SOURCE), the API's, the store's, the rails' limits via the
+ * specimen, is refused. A path key added to an allowed section fails here. */
+static void test_loader_tables(void **s)
+{
+    (void)s;
+    char ovr[160], why[512];
+    size_t n = 0;
+    const cfg_scene_key *sk = cfg_scene_keys(&n);
+    for (size_t i = 0; i < n; i++) {
+        snprintf(ovr, sizeof ovr, "%s.%s=1", sk[i].section, sk[i].name);
+        allowed(ovr);
+    }
+    const rig_key *rk = rig_config_keys(&n);
+    int paths = 0;
+    for (size_t i = 0; i < n; i++) {
+        snprintf(ovr, sizeof ovr, "%s.%s=/etc/passwd", rk[i].section, rk[i].name);
+        int ok = api_override_check(ovr, why, sizeof why) == 0;
+        if (rk[i].type == RIG_KEY_PATH || rk[i].type == RIG_KEY_SOURCE) {
+            paths++;
+            if (ok) fail_msg("%s (a path) allowed through the API", ovr);
+        }
+        if (ok && (!strcmp(rk[i].section, "api") || !strcmp(rk[i].section, "store") || !strcmp(rk[i].section, "rig")))
+            fail_msg("%s allowed through the API", ovr);
+    }
+    printf("# %zu rig keys, %d of them paths or devices, all refused\n", n, paths);
+    assert_true(paths >= 6); /* rig.scene, camera.source, camera.calibration, camera.video_dir, store.path, replay.* */
+}
+
 /* Through POST /trials's body check: the first refused override is named by its index. */
 static void test_start_body_refuses(void **s)
 {
@@ -155,6 +188,7 @@ int main(void)
         cmocka_unit_test(test_what_a_trial_may_change),
         cmocka_unit_test(test_what_is_the_rig_files),
         cmocka_unit_test(test_table),
+        cmocka_unit_test(test_loader_tables),
         cmocka_unit_test(test_start_body_refuses),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
