@@ -4,6 +4,7 @@
  * table, which knows file lines; the checks here are the ones that involve several fields or the
  * mesh, so any caller that builds a scene by hand gets them too. */
 #include "scene.h"
+#include "rod_regime.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -33,7 +34,7 @@ rod_scene rod_scene_default(void)
     s.tolerance = 1e-6;
     s.max_iterations = 50;
     s.snap_speed = 1.0;
-    s.asym_threshold = 0.05;
+    s.asym_threshold = ROD_REGIME_ASYM_THRESHOLD;
     return s;
 }
 
