@@ -113,7 +113,7 @@ static const cfg_scene_key scene_keys[] = {
     {"snap", "speed", CFG_TYPE_DOUBLE, OFF(snap_speed), 0.0, 1e6, MINO, NULL, "1/s",
      "|d(Delta Z)/dt| above which the ribbon counts as snapping; default 1"},
     {"snap", "asym_threshold", CFG_TYPE_DOUBLE, OFF(asym_threshold), 0.0, 10.0, MINO, NULL, "rad",
-     "peak |A| during the snap above which the snap is asymmetric; default 0.05"},
+     "peak |A| during the snap above which the snap is asymmetric; default 0.5 (docs/simulator.md \"The regime rule\")"},
 };
 
 #define N_KEYS (sizeof scene_keys / sizeof scene_keys[0])

@@ -8,6 +8,7 @@
 #include "rod_dynamics.h"
 #include "rod_observe.h"
 #include "rod_quasi.h"
+#include "rod_regime.h"
 #include "rod_route.h"
 
 #include <limits.h>
@@ -300,7 +301,7 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
         predict_next_dt(o, change, growth, speed, nr.iterations, &ss);
     }
     out->peak_abs_a = ss.peak;
-    out->asymmetric = out->snapped && ss.peak > sc->asym_threshold;
+    out->asymmetric = out->snapped && rod_regime_asymmetric(ss.peak, sc->asym_threshold);
     out->dz_final = ob.dz;
     out->sim_time = ss.t;
 

@@ -7,7 +7,8 @@
  * snap.speed (1/s). The snap Delta W is the shear at the last step before that where
  * |d(Delta Z)/dt| was still below a tenth of snap.speed (the onset). The pathway is asymmetric
  * when the peak |A| from the onset until post_snap_time (2 s) of simulated time after detection
- * exceeds snap.asym_threshold, symmetric otherwise. A run that reaches
+ * exceeds snap.asym_threshold (the rule of rod_regime.h, shared with the trial's detector),
+ * symmetric otherwise. A run that reaches
  * protocol.shear_max without a snap reports "no snap".
  *
  * Adaptive time stepping: before the snap is detected each step aims at a change of 2e-3 in

@@ -6,6 +6,7 @@
  * position) are resolved here from their own keys or the symmetric pair's, and every crease
  * check uses each crease's own values. */
 #include "scene.h"
+#include "rod_regime.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -40,7 +41,7 @@ rod_scene rod_scene_default(void)
     s.tolerance = 1e-6;
     s.max_iterations = 50;
     s.snap_speed = 1.0;
-    s.asym_threshold = 0.05;
+    s.asym_threshold = ROD_REGIME_ASYM_THRESHOLD;
     return s;
 }
 

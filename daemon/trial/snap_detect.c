@@ -1,6 +1,8 @@
 /* snap_detect.c: online snap detection on measured frames (see snap_detect.h). */
 #include "snap_detect.h"
 
+#include "rod_regime.h"
+
 #include <math.h>
 #include <string.h>
 
@@ -9,7 +11,7 @@ snap_params snap_params_default(void)
     snap_params p;
     p.snap_speed = 1.0;
     p.dz_jump = 0.005;
-    p.asym_threshold = 0.05;
+    p.asym_threshold = ROD_REGIME_ASYM_THRESHOLD;
     p.post_snap_s = 2.0;
     p.settle_frames = 5;
     return p;
@@ -70,7 +72,7 @@ int snap_detect_snapped(const snap_detect *d) { return d->phase != SNAP_WAITING;
 double snap_detect_dw(const snap_detect *d) { return d->onset_dw; }
 int snap_detect_asymmetric(const snap_detect *d)
 {
-    return snap_detect_snapped(d) && d->peak_abs_a > d->p.asym_threshold;
+    return snap_detect_snapped(d) && rod_regime_asymmetric(d->peak_abs_a, d->p.asym_threshold);
 }
 
 const char *snap_detect_regime(const snap_detect *d)

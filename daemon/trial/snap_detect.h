@@ -8,7 +8,9 @@
  *     still below a tenth of snap_speed (the onset);
  *   - the pathway is asymmetric when the peak |A| from the onset until the ribbon settles (speed
  *     below a tenth of snap_speed for settle_frames frames) or post_snap_s after detection exceeds
- *     asym_threshold.
+ *     asym_threshold (the simulator's own rule, sim/rod_regime.h: 0.5 rad by default, derived
+ *     from creases up to 5% apart with the tracker's noise; the camera must resolve the snap's
+ *     passage, docs/trials.md "Snap detection").
  * Frames the tracker could not measure are skipped (they neither start nor end anything). */
 #ifndef RIBBON_DAEMON_SNAP_DETECT_H
 #define RIBBON_DAEMON_SNAP_DETECT_H
