@@ -83,8 +83,10 @@ rod_status rod_alloc(const rod_scene *s, rod **out, char *why, size_t why_len)
     r->fold_node[0] = r->fold_node[1] = -1;
     if (!has_folds) {
         rod_mesh_set(r, s->fold_position, 0);
-    } else if (p_left + p_right == 1.0) {
-        rod_mesh_set(r, p_left, rod_mesh_outer_edges(n, p_left));
+    } else if (isnan(s->fold_position_left) && isnan(s->fold_position_right)) {
+        rod_mesh_set(r, s->fold_position, rod_mesh_outer_edges(n, s->fold_position)); /* the pair */
+    } else if (fabs(p_left + p_right - 1.0) <= 1e-12) {
+        rod_mesh_set(r, p_left, rod_mesh_outer_edges(n, p_left)); /* a mirrored pair given by hand */
     } else {
         int nl, nr;
         rod_mesh_crease_edges(n, p_left, p_right, &nl, &nr);
@@ -221,7 +223,7 @@ void rod_mesh_set(rod *r, double gamma, int n_out)
 
 void rod_mesh_set_creases(rod *r, double p_left, double p_right, int n_left, int n_right)
 {
-    if (n_left == n_right && p_left + p_right == 1.0) {
+    if (n_left == n_right && fabs(p_left + p_right - 1.0) <= 1e-12) {
         rod_mesh_set(r, p_left, n_left);
         return;
     }

@@ -140,7 +140,7 @@ void rod_mesh_crease_edges(int nodes, double p_left, double p_right, int *n_left
 
 /* Re-meshes with a node on each crease wherever they are: [0, p_left], [p_left, p_right] and
  * [p_right, 1] meshed with equal edges inside each piece (n_left, the rest, n_right edges). A
- * mirrored pair (p_right = 1 - p_left, n_left = n_right) is rod_mesh_set's symmetric mesh
+ * mirrored pair (p_left + p_right = 1 within 1e-12, n_left = n_right) is rod_mesh_set's symmetric mesh
  * exactly; otherwise the mesh has no symmetry and Delta Z is interpolated at arc length 1/2. */
 void rod_mesh_set_creases(rod *r, double p_left, double p_right, int n_left, int n_right);
 
