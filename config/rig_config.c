@@ -800,6 +800,21 @@ static int twin_keep(load_ctx *c, origin from, const char *name, const char *val
                   "folds.angle_deg = -86 (docs/config.md \"Scene files\")");
         return 1;
     }
+    if (!strcmp(name, "ribbon.length")) {
+        /* The runner turns rail positions into Delta L and Delta W with the scene's free length;
+         * a twin of another length would be clamped where no rail puts it. */
+        fail_from(c, CFG_ERR_CHECK, from, dotted,
+                  "the twin's free length is the trial's (the rails' positions become Delta L and Delta W "
+                  "with the scene's ribbon.length); set it in the scene");
+        return 1;
+    }
+    if (!strncmp(name, "protocol.", 9)) {
+        /* The rails move the twin; the camera and its calibration frame the trial's protocol. */
+        fail_from(c, CFG_ERR_CHECK, from, dotted,
+                  "the rails drive the twin: its protocol is the trial's (set protocol.* in the scene or "
+                  "with --set %s)", name);
+        return 1;
+    }
     rig_twin *tw = &c->cfg.twin;
     size_t ln = strlen(name);
     if (from.line) {

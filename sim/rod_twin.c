@@ -125,6 +125,7 @@ rod_status rod_twin_advance(rod_twin *tw, double t_to, double dl, double dw, cha
 }
 
 double rod_twin_time(const rod_twin *tw) { return tw->t; }
+double rod_twin_dw(const rod_twin *tw) { return tw->dyn.dw; }
 const rod *rod_twin_rod(const rod_twin *tw) { return tw->dyn.r; }
 double rod_twin_shear_force(const rod_twin *tw)
 {

@@ -25,6 +25,8 @@ void rod_twin_close(rod_twin *tw);
 rod_status rod_twin_advance(rod_twin *tw, double t_to, double dl, double dw, char *why, size_t why_len);
 
 double rod_twin_time(const rod_twin *tw);
+/* The clamps' Delta W of the current state. */
+double rod_twin_dw(const rod_twin *tw);
 /* Delta Z, A, ... of the current state (rod_observe.h). */
 void rod_twin_observe(rod_twin *tw, rod_obs *o);
 /* The current state, for rendering. */

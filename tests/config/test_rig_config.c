@@ -689,6 +689,10 @@ static void test_twin_section(void **state)
                 "not a scene key");
     expect_line(make(NULL, 0, "[twin]\ncamera.fps = 60\n"), CFG_ERR_UNKNOWN, 36, "twin.camera.fps",
                 "not a scene key");
+    expect_line(make(NULL, 0, "[twin]\nribbon.length = 0.21\n"), CFG_ERR_CHECK, 36, "twin.ribbon.length",
+                "free length is the trial's");
+    expect_line(make(NULL, 0, "[twin]\nprotocol.shear_rate = 0.02\n"), CFG_ERR_CHECK, 36,
+                "twin.protocol.shear_rate", "the rails drive the twin");
     expect_line(make(NULL, 0, TWIN_TAIL "mesh.nodes = 61\n"), CFG_ERR_DUPLICATE, 40, "twin.mesh.nodes",
                 "first on line 38");
     /* A value the scene loader refuses, at its line, with the scene loader's reason. */
