@@ -5,7 +5,8 @@
  * camera calibration file the rig file names, a truth log of every image sent (time, axis
  * positions) and optionally an axes log. The twin is the rig file's [twin] strip when it has one
  * (else the scene); its parameters are printed at start ("twin: ...") and its own snap once final
- * ("twin truth: ...", twin_truth.h). Prints "ready" once ribbond may start, then serves until
+ * ("twin truth: ...", twin_truth.h), also into PATH.twin beside the truth log. Prints "ready"
+ * once ribbond may start, then serves until
  * SIGINT/SIGTERM or --duration. Faults on a schedule (seconds after start) or on signals. */
 #include <math.h>
 #include <stdio.h>
@@ -40,10 +41,12 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: ribbon-rigsim RIG.INI [options]\n"
-            "  --set SECTION.KEY=VALUE  override a rig file key (as ribbond --set)\n"
+            "  --set SECTION.KEY=VALUE  override a rig file key (as ribbond --set; twin.SECTION.KEY=VALUE\n"
+            "                        a key of the twin, the strip the camera films)\n"
             "  --start-dl DL         compression the specimen is mounted at (default 0.2)\n"
             "  --serial S            the camera's serial number (default RIBBONSIM)\n"
-            "  --truth PATH          truth log of every image sent (CSV)\n"
+            "  --truth PATH          truth log of every image sent (CSV); PATH.twin: the twin's\n"
+            "                        parameters and its own snap\n"
             "  --axes-log PATH       both axes' actual positions every 5 ms (CSV)\n"
             "  --duration S          exit after S seconds (default: until signalled)\n"
             "  --alarm-after S       the controller raises ALARM:1 (Modbus: the shear drive an alarm)\n"
@@ -62,7 +65,7 @@ static void usage(FILE *f)
 
 /* The twin's own snap on stdout ("twin truth: ...", twin_truth.h) once it is final (2 s of its
  * pathway after the detection), or at exit whatever it is. 1 when said. */
-static int say_truth(rigsim_camera *cam, const rod_scene *sc, int at_exit)
+static int say_truth(rigsim_camera *cam, const rod_scene *sc, FILE *side, int at_exit)
 {
     rod_snap_report r;
     double dw_now = NAN;
@@ -72,6 +75,10 @@ static int say_truth(rigsim_camera *cam, const rod_scene *sc, int at_exit)
     twin_truth_snap(&r, sc->shear_rate / sc->length, dw_now, line, sizeof line);
     printf("%s\n", line);
     fflush(stdout);
+    if (side) {
+        fprintf(side, "%s\n", line);
+        fflush(side);
+    }
     return 1;
 }
 
@@ -179,6 +186,15 @@ int main(int argc, char **argv)
     for (int i = 0; i < cfg.twin.n; i++) keys[i] = cfg.twin.keys[i];
     char params[sizeof cfg.twin.keys + 128];
     twin_truth_params(&sc, keys, cfg.twin.present ? cfg.twin.n : 0, params, sizeof params);
+    /* Beside the truth log, what the twin is and (later) its own snap: PATH.twin. */
+    FILE *side = NULL;
+    if (truth) {
+        char side_path[1100];
+        snprintf(side_path, sizeof side_path, "%s.twin", truth);
+        side = fopen(side_path, "w");
+        if (!side) fprintf(stderr, PROG ": %s cannot be written: the twin's truth goes to stdout only\n", side_path);
+        else fprintf(side, "%s\n", params);
+    }
     printf("rails: %s\ncamera: aravis:127.0.0.1 (serial %s)\ncalibration: %s\n%s\nready\n",
            rigsim_rails_port(rails), serial, cfg.camera.calibration, params);
     fflush(stdout);
@@ -214,13 +230,14 @@ int main(int argc, char **argv)
             rigsim_camera_freeze(cam);
         }
         rigsim_camera_tick(cam);
-        if (!truth_said) truth_said = say_truth(cam, &sc, 0);
+        if (!truth_said) truth_said = say_truth(cam, &sc, side, 0);
         struct timespec t;
         clock_gettime(CLOCK_MONOTONIC, &t);
         double el = (double)(t.tv_sec - t0.tv_sec) + 1e-9 * (double)(t.tv_nsec - t0.tv_nsec);
         if (duration >= 0.0 && el >= duration) break;
     }
-    if (!truth_said) say_truth(cam, &sc, 1);
+    if (!truth_said) say_truth(cam, &sc, side, 1);
+    if (side) fclose(side);
     char rep[400];
     rigsim_camera_report(cam, rep, sizeof rep);
     printf("%s\n", rep);

@@ -79,6 +79,11 @@ static void score_against_twin(rig_run *r, double meas, double pred, const char 
     assert_string_equal(rm, want_regime);
     assert_true(fabs(pred - truth) > 3.0 * rig_onset_bound(0.01 / 0.2, 60.0, 1.5e-3, 0.0));
     assert_true(fabs(pred - truth) < 0.10 * truth);
+    /* The same two lines beside the truth log: what the twin is, and its own snap. */
+    char side[160], line[1024];
+    snprintf(side, sizeof side, "%s/truth.csv.twin", r->dir);
+    assert_true(rig_file_has(side, "twin: N = 91, dt = 0.0015 s; [twin] folds.angle_deg=-86", line, sizeof line));
+    assert_true(rig_file_has(side, "twin truth: snap Delta W = ", line, sizeof line));
 }
 
 static void test_gcode_trial(void **state)
