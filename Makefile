@@ -111,7 +111,7 @@ rehearsal: build
 	if [ -n "$$id" ] && [ -n "$$db" ]; then \
 	  ./$(BUILD)/bin/ribbonctl show $$id --db $$db | sed -n 's/.*info *\(pipeline: .*\)/  \1/p; s/.*warning *\(pipeline: .*\)/  \1/p; s/.*info *\(snap-to-stop latency: .*\)/  \1/p'; fi; \
 	kill -TERM $$pid; wait $$pid; kill -TERM $$sim; wait $$sim; \
-	sed -n 's/^twin: \(.*\)/  twin       (ribbon-rigsim) \1/p' $$dir/rigsim.log; \
+	sed -n 's/^twin: \(N = .*\)/  twin       (ribbon-rigsim) \1/p' $$dir/rigsim.log; \
 	awk -v m="$$(sed -n 's/.*measured   snap Delta W = \([0-9.]*\).*/\1/p' $$dir/trial.txt)" \
 	    -v p="$$(sed -n 's/.*predicted  snap Delta W = \([0-9.]*\).*/\1/p' $$dir/trial.txt)" \
 	  '/^twin truth: snap Delta W = / { t = $$7 + 0; r = $$9; \
