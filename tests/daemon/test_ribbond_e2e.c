@@ -54,7 +54,11 @@ static void overrides(const char **ov, int *n)
     ov[1] = set_video;
     ov[2] = "api.port=0";
     ov[3] = "sim.nodes=61"; /* the prediction's resolution; the twin has its own (mock.ini [twin]) */
-    *n = 4;
+    /* The twin at the rehearsal's resolution, still finer than the prediction's: 2.5 times cheaper
+     * than mock.ini's N = 121, dt = 1 ms, which counts under the sanitizers (a trial 112 s there). */
+    ov[4] = "twin.mesh.nodes=91";
+    ov[5] = "twin.solver.dt=1.5e-3";
+    *n = 6;
 }
 
 static int setup(void **state)
@@ -440,7 +444,8 @@ static void twin_truth_of(const json_t *t, double *dw, char *regime, size_t regi
 
 /* The prediction against the twin's truth: the twin is a different strip (mock.ini [twin]:
  * creases relaxed to 86 deg and 2.5% unequal, N = 121, dt = 1 ms, against the scene's 90 deg,
- * equal creases, N = 61), so the prediction is off by more than the measurement's error, by a few
+ * equal creases, N = 61; the tests run the twin at N = 91, dt = 1.5 ms), so the prediction is off
+ * by more than the measurement's error, by a few
  * percent (issue 31: 4 deg of relaxation and a few percent of inequality move the snap by 5-10%). */
 static void score_prediction(double pred, double truth, double bound)
 {
@@ -453,7 +458,7 @@ static void score_prediction(double pred, double truth, double bound)
 static void mock_trial_then_replay(void **state)
 {
     (void)state;
-    const char *ov[8];
+    const char *ov[10];
     int nov;
     overrides(ov, &nov);
     ov[nov++] = "detect.torque_witness=on"; /* the twin's shear force as the second witness */
@@ -506,8 +511,8 @@ static void mock_trial_then_replay(void **state)
     double truth = NAN;
     char treg[16] = "", tparams[512];
     twin_truth_of(t, &truth, treg, sizeof treg, tparams, sizeof tparams);
-    assert_non_null(strstr(tparams, "N = 121, dt = 0.001 s; [twin] folds.angle_deg=-86"));
-    double bound = onset_error_bound(30.0, 1e-3);
+    assert_non_null(strstr(tparams, "N = 91, dt = 0.0015 s; [twin] folds.angle_deg=-86"));
+    double bound = onset_error_bound(30.0, 1.5e-3);
     printf("measured - twin truth: %+.5f (%.2f frames; bound %.5f)\n", meas - truth, (meas - truth) / (0.05 / 30.0),
            bound);
     assert_true(fabs(meas - truth) <= bound);
@@ -695,7 +700,7 @@ static void mock_trial_gamma021(void **state)
     double truth = NAN;
     char treg[16] = "", tparams[512];
     twin_truth_of(t, &truth, treg, sizeof treg, tparams, sizeof tparams);
-    double bound = onset_error_bound(30.0, 1e-3);
+    double bound = onset_error_bound(30.0, 1.5e-3);
     printf("measured - twin truth: %+.5f (%.2f frames; bound %.5f)\n", meas - truth, (meas - truth) / (0.05 / 30.0),
            bound);
     assert_true(fabs(meas - truth) <= bound);
