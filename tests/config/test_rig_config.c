@@ -206,6 +206,30 @@ static void test_mock_ini(void **state)
     assert_string_equal(cfg.scene_path, CONFIG_DIR "/scenes/mock-gamma013.ini");
     assert_string_equal(cfg.path, CONFIG_DIR "/mock.ini");
     assert_string_equal(cfg.dir, CONFIG_DIR);
+    /* The twin is a different strip from the scene: relaxed, unequal creases, a finer mesh and
+     * step than the scene's (and the prediction's). */
+    assert_true(cfg.twin.present);
+    assert_true(NEAR(cfg.scene.fold_angle_deg, -90.0));
+    assert_true(NEAR(cfg.twin.scene.fold_angle_deg, -86.0));
+    assert_true(fabs(cfg.twin.scene.fold_angle_rel) >= 0.02 && fabs(cfg.twin.scene.fold_angle_rel) <= 0.03);
+    assert_true(cfg.twin.scene.nodes > cfg.scene.nodes);
+    assert_true(cfg.twin.scene.dt < cfg.scene.dt);
+}
+
+/* The rehearsal files' twin (ribbon-rigsim's) differs from their scene the same way. */
+static void test_rehearsal_twins(void **state)
+{
+    (void)state;
+    const char *files[] = {"rig-rehearsal.ini", "rig-rehearsal-modbus.ini"};
+    for (int i = 0; i < 2; i++) {
+        load_ok(files[i], NULL, 0);
+        assert_int_equal(cfg.mode, RIG_MODE_RIG);
+        assert_true(cfg.twin.present);
+        assert_true(NEAR(cfg.twin.scene.fold_angle_deg, -86.0));
+        assert_true(NEAR(cfg.twin.scene.fold_angle_rel, 0.025));
+        assert_int_equal(cfg.twin.scene.nodes, 91);
+        assert_true(cfg.twin.scene.nodes > cfg.sim.nodes && cfg.twin.scene.dt < cfg.sim.dt);
+    }
 }
 
 static void test_rig_gcode_ini(void **state)
@@ -944,6 +968,7 @@ int main(void)
         cmocka_unit_test(test_scene_errors_unchanged),
         cmocka_unit_test(test_overrides),
         cmocka_unit_test(test_twin_section),
+        cmocka_unit_test(test_rehearsal_twins),
         cmocka_unit_test(test_conversions),
         cmocka_unit_test(test_calibration_json),
         cmocka_unit_test(test_readme_documents_every_key),
