@@ -57,7 +57,8 @@ build-asan: deps
 
 # The main job: ribbond on config/mock.ini (mock rails, the simulator as the ribbon, synthetic frames
 # measured by the real tracker), one complete trial through the API, measured and predicted snap side
-# by side, the report PNG, the store's path; then ribbond is stopped with SIGTERM. The store and the
+# by side with the twin's own snap (its truth: the strip of mock.ini's [twin]) and the differences,
+# the report PNG, the store's path; then ribbond is stopped with SIGTERM. The store and the
 # videos go to the working directory (ribbon-mock.db, ribbon-mock-videos/).
 DEMO_REPORT ?= ribbon-mock-report.png
 # The libFuzzer targets, with clang (fuzz/CMakeLists.txt): the drivers' (drivers/fuzz/) and the
@@ -82,7 +83,9 @@ demo: build
 # Rig mode rehearsed on loopback (docs/rig-realtime.md): ribbon-rigsim is the rig (GRBL controller
 # on a pty, the twin filmed by a GigE Vision camera on 127.0.0.1), ribbond runs one trial on
 # config/rig-rehearsal.ini in real time (about 80 s), then the pipeline's counts and the
-# snap-to-stop latency are printed from the trial's events. The store and videos go to the working
+# snap-to-stop latency are printed from the trial's events, and the twin's own snap (ribbon-rigsim's
+# "twin truth" line: the strip of the rig file's [twin]) beside the measured and predicted one, with
+# their differences. The store and videos go to the working
 # directory (ribbon-rehearsal.db, ribbon-rehearsal-videos/); the pty, calibration and truth log to
 # a temporary directory.
 REHEARSAL_RIG ?= config/rig-rehearsal.ini
@@ -107,7 +110,16 @@ rehearsal: build
 	db=$$(sed -n 's/^database: //p' $$dir/trial.txt); \
 	if [ -n "$$id" ] && [ -n "$$db" ]; then \
 	  ./$(BUILD)/bin/ribbonctl show $$id --db $$db | sed -n 's/.*info *\(pipeline: .*\)/  \1/p; s/.*warning *\(pipeline: .*\)/  \1/p; s/.*info *\(snap-to-stop latency: .*\)/  \1/p'; fi; \
-	kill -TERM $$pid; wait $$pid; kill -TERM $$sim; wait $$sim; tail -1 $$dir/rigsim.log; exit $$rc
+	kill -TERM $$pid; wait $$pid; kill -TERM $$sim; wait $$sim; \
+	sed -n 's/^twin: \(N = .*\)/  twin       (ribbon-rigsim) \1/p' $$dir/rigsim.log; \
+	awk -v m="$$(sed -n 's/.*measured   snap Delta W = \([0-9.]*\).*/\1/p' $$dir/trial.txt)" \
+	    -v p="$$(sed -n 's/.*predicted  snap Delta W = \([0-9.]*\).*/\1/p' $$dir/trial.txt)" \
+	  '/^twin truth: snap Delta W = / { t = $$7 + 0; r = $$9; \
+	    printf "  twin truth snap Delta W = %.5f  regime %s\n", t, r; \
+	    if (m != "") printf "  measured - twin truth   %+.5f (%+.2f%%)\n", m - t, 100 * (m - t) / t; \
+	    if (p != "") printf "  predicted - twin truth  %+.5f (%+.2f%%)\n", p - t, 100 * (p - t) / t } \
+	   /^twin truth: no snap/ { print "  " $$0 }' $$dir/rigsim.log; \
+	tail -1 $$dir/rigsim.log; exit $$rc
 
 test-normal: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

@@ -236,10 +236,11 @@ static const rig_key rig_keys[] = {
 static const char *const section_list[] = {"rig",      "rail.compress", "rail.shear", "trial",
                                            "calibration", "specimen",   "camera",     "detect",
                                            "sim",      "store",         "api",        "replay",
-                                           NULL};
+                                           "twin",     NULL};
 #define N_SECTIONS (sizeof section_list / sizeof section_list[0] - 1)
 #define SEC_RAIL_COMPRESS 1
 #define SEC_RAIL_SHEAR 2
+#define SEC_TWIN 12
 
 static const cfg_key_table key_table = CFG_KEY_TABLE(rig_keys, rig_key);
 
@@ -292,6 +293,7 @@ typedef struct load_ctx {
     rail_lines rails[2]; /* compress, shear */
     const char *scene_ovr[64];
     int n_scene_ovr;
+    origin twin_from[RIG_TWIN_KEYS_MAX]; /* where each cfg.twin.keys[i] came from */
     cfg_error *err;
 } load_ctx;
 
@@ -737,7 +739,7 @@ static int on_section(void *user, int line, const char *section)
         cfg_text_printable(shown, sizeof shown, section, strlen(section));
         cfg_error_set(c->err, CFG_ERR_UNKNOWN, CFG_ORIGIN_LINE, c->name, line, NULL, NULL,
                       "unknown section [%s] (known: rig rail.compress rail.shear trial "
-                      "calibration specimen camera detect sim store api replay)",
+                      "calibration specimen camera detect sim store api replay twin)",
                       shown);
         return 1;
     }
@@ -786,6 +788,72 @@ static int rail_keep(load_ctx *c, int r, origin from, const char *key, const cha
     return 0;
 }
 
+/* Whether "section.key" is a scene key (the scene loader's table). */
+static int is_scene_key(const char *dotted)
+{
+    size_t n;
+    const cfg_scene_key *k = cfg_scene_keys(&n);
+    for (size_t i = 0; i < n; i++) {
+        size_t ls = strlen(k[i].section);
+        if (!strncmp(dotted, k[i].section, ls) && dotted[ls] == '.' && !strcmp(dotted + ls + 1, k[i].name))
+            return 1;
+    }
+    return 0;
+}
+
+/* Keep one twin key ("folds.angle_deg", "-86") as "folds.angle_deg=-86", to be applied to the
+ * scene once it is loaded (twin_build). Only the name is checked here; the value is the scene
+ * loader's to check. Returns 0, or 1 with the error set. */
+static int twin_keep(load_ctx *c, origin from, const char *name, const char *value)
+{
+    char dotted[160];
+    snprintf(dotted, sizeof dotted, "twin.%s", name);
+    if (!is_scene_key(name)) {
+        fail_from(c, CFG_ERR_UNKNOWN, from, dotted,
+                  "not a scene key: [twin] takes the scene's keys as SECTION.KEY = VALUE, e.g. "
+                  "folds.angle_deg = -86 (docs/config.md \"Scene files\")");
+        return 1;
+    }
+    if (!strcmp(name, "ribbon.length")) {
+        /* The runner turns rail positions into Delta L and Delta W with the scene's free length;
+         * a twin of another length would be clamped where no rail puts it. */
+        fail_from(c, CFG_ERR_CHECK, from, dotted,
+                  "the twin's free length is the trial's (the rails' positions become Delta L and Delta W "
+                  "with the scene's ribbon.length); set it in the scene");
+        return 1;
+    }
+    if (!strncmp(name, "protocol.", 9)) {
+        /* The rails move the twin; the camera and its calibration frame the trial's protocol. */
+        fail_from(c, CFG_ERR_CHECK, from, dotted,
+                  "the rails drive the twin: its protocol is the trial's (set protocol.* in the scene or "
+                  "with --set %s)", name);
+        return 1;
+    }
+    rig_twin *tw = &c->cfg.twin;
+    size_t ln = strlen(name);
+    if (from.line) {
+        for (int i = 0; i < tw->n; i++) {
+            if (!strncmp(tw->keys[i], name, ln) && tw->keys[i][ln] == '=') {
+                fail_from(c, CFG_ERR_DUPLICATE, from, dotted, "set twice (first on line %d)",
+                          c->twin_from[i].line);
+                return 1;
+            }
+        }
+    }
+    if (tw->n == RIG_TWIN_KEYS_MAX || ln + strlen(value) + 2 > RIG_TWIN_KEY_LEN) {
+        fail_from(c, CFG_ERR_RANGE, from, dotted, "too many twin keys (at most %d) or too long a value",
+                  RIG_TWIN_KEYS_MAX);
+        return 1;
+    }
+    size_t lv = strlen(value); /* ln + 1 + lv + 1 <= RIG_TWIN_KEY_LEN, checked above */
+    memcpy(tw->keys[tw->n], name, ln);
+    tw->keys[tw->n][ln] = '=';
+    memcpy(tw->keys[tw->n] + ln + 1, value, lv + 1);
+    c->twin_from[tw->n++] = from;
+    tw->present = true;
+    return 0;
+}
+
 static int on_key(void *user, int line, const char *section, const char *name, const char *value)
 {
     load_ctx *c = user;
@@ -799,6 +867,7 @@ static int on_key(void *user, int line, const char *section, const char *name, c
     }
     if (s == SEC_RAIL_COMPRESS || s == SEC_RAIL_SHEAR)
         return rail_keep(c, s == SEC_RAIL_COMPRESS ? 0 : 1, from, name, value);
+    if (s == SEC_TWIN) return twin_keep(c, from, name, value);
     int k = cfg_keys_find(&key_table, section, name);
     if (k < 0) {
         char known[320];
@@ -834,6 +903,7 @@ static cfg_status override_apply(load_ctx *c, int index)
         return fail_from(c, CFG_ERR_SYNTAX, from, NULL, "expected section.key=value");
     if (sp == CFG_SPLIT_VALUE_TOO_LONG)
         return fail_from(c, CFG_ERR_VALUE, from, key, "value too long");
+    if (!strncmp(key, "twin.", 5)) return twin_keep(c, from, key + 5, value) ? c->err->status : CFG_OK;
     char *dot = strrchr(key, '.');
     if (!dot || dot == key || !dot[1])
         return fail_from(c, CFG_ERR_SYNTAX, from, key, "expected section.key=value");
@@ -977,6 +1047,36 @@ static cfg_status resolve_paths(load_ctx *c, const char *dir)
                             k->size - 1);
     }
     return CFG_OK;
+}
+
+/* ---- the twin -------------------------------------------------------------------------------- */
+
+/* The twin's scene: the trial's scene with the [twin] keys applied in order (file lines, then
+ * overrides). An error of a key is named at its line or --set as "twin.section.key"; a check of the
+ * whole twin that blames a value it took from the scene is named at the [twin] header. */
+static cfg_status twin_build(load_ctx *c)
+{
+    rig_twin *tw = &c->cfg.twin;
+    if (!tw->present) return CFG_OK;
+    if (c->cfg.mode == RIG_MODE_REPLAY) {
+        origin from = c->twin_from[0];
+        return fail_from(c, CFG_ERR_CHECK, from, "twin", "replay mode films no twin (a recorded video and "
+                         "rail positions): remove [twin] or use mode = mock");
+    }
+    const char *texts[RIG_TWIN_KEYS_MAX];
+    for (int i = 0; i < tw->n; i++) texts[i] = tw->keys[i];
+    cfg_error e;
+    if (cfg_scene_apply(&c->cfg.scene, "twin", texts, tw->n, &tw->scene, &e) == CFG_OK) return CFG_OK;
+    char dotted[sizeof e.key + 8];
+    snprintf(dotted, sizeof dotted, "twin.%s", e.key[0] ? e.key : "?");
+    if (e.origin == CFG_ORIGIN_OVERRIDE) {
+        for (int i = tw->n - 1; i >= 0; i--)
+            if (!strcmp(e.where, tw->keys[i])) return fail_from(c, e.status, c->twin_from[i], dotted, "%s", e.message);
+    }
+    origin at = {c->section_line[SEC_TWIN], 0};
+    if (!at.line) at = c->twin_from[0];
+    return fail_from(c, e.status, at, dotted, "the twin's scene (the trial's scene with [twin] applied): %s",
+                     e.message);
 }
 
 /* ---- rails ----------------------------------------------------------------------------------- */
@@ -1362,6 +1462,7 @@ static cfg_status load_all(load_ctx *c, const char *dir, const char *text, size_
     /* The scene: its own errors, unchanged. */
     st = cfg_scene_load(c->cfg.scene_path, c->scene_ovr, c->n_scene_ovr, &c->cfg.scene, c->err);
     if (st) return st;
+    if ((st = twin_build(c))) return st;
     if ((st = rails_build(c))) return st;
     if ((st = check_mode(c))) return st;
     if ((st = check_scene(c))) return st;

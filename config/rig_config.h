@@ -159,6 +159,22 @@ typedef struct rig_replay {
     int64_t source_trial;     /* trial id in the store, 0 = none */
 } rig_replay;
 
+/* [twin]: the strip in front of the simulated camera, when it is not the scene (mock mode's twin,
+ * ribbon-rigsim's). Its keys are scene keys written SECTION.KEY = VALUE (folds.angle_deg = -86,
+ * mesh.nodes = 121), also `--set twin.SECTION.KEY=VALUE`; they are applied in order (file lines,
+ * then overrides: a later one wins) to a copy of the trial's scene (cfg_scene_apply), so every
+ * scene key is a twin key. Mock mode uses it; rig mode checks it and leaves it to ribbon-rigsim
+ * (ribbond's rig mode films a real strip); replay mode refuses it (a recorded video has no twin). */
+#define RIG_TWIN_KEYS_MAX 32
+#define RIG_TWIN_KEY_LEN 200   /* bytes of one "section.key=value", with the terminator */
+
+typedef struct rig_twin {
+    bool present;              /* a [twin] section or a twin.* override was given */
+    int n;                     /* keys applied */
+    char keys[RIG_TWIN_KEYS_MAX][RIG_TWIN_KEY_LEN]; /* "section.key=value" in the order applied */
+    rod_scene scene;           /* the trial's scene with the keys applied, checked (present only) */
+} rig_twin;
+
 typedef struct rig_config {
     char path[RIG_PATH_MAX];   /* the rig file, absolute */
     char dir[RIG_PATH_MAX];    /* its directory, absolute */
@@ -180,6 +196,7 @@ typedef struct rig_config {
     char store_path[RIG_PATH_MAX];
     rig_api api;
     rig_replay replay;
+    rig_twin twin;             /* [twin] (see above); twin.present false: the twin is the scene */
 } rig_config;
 
 /* ---- the key table ---------------------------------------------------------------------- */

@@ -530,6 +530,29 @@ cfg_status cfg_scene_parse(const char *name, const char *text, size_t len,
     return st;
 }
 
+cfg_status cfg_scene_apply(const rod_scene *base, const char *name, const char *const *overrides,
+                           int n_overrides, rod_scene *out, cfg_error *err)
+{
+    cfg_error local;
+    if (!err) err = &local;
+    cfg_error_clear(err);
+    if (!name) name = "(scene)";
+    if (!base)
+        return cfg_error_set(err, CFG_ERR_IO, CFG_ORIGIN_FILE, name, 0, NULL, NULL, "no base scene");
+    load_ctx *c = calloc(1, sizeof *c);
+    if (!c) return cfg_error_set(err, CFG_ERR_IO, CFG_ORIGIN_FILE, name, 0, NULL, NULL, "out of memory");
+    c->name = name;
+    c->scene = *base;
+    c->err = err;
+    if (n_overrides > 0 && !overrides) fail_override(c, CFG_ERR_SYNTAX, NULL, NULL, "missing override list");
+    for (int i = 0; i < n_overrides && !c->failed; i++) override_apply(c, overrides[i], i);
+    if (!c->failed) check_scene(c, overrides);
+    cfg_status st = c->failed ? err->status : CFG_OK;
+    if (st == CFG_OK && out) *out = c->scene;
+    free(c);
+    return st;
+}
+
 cfg_status cfg_scene_load(const char *path, const char *const *overrides, int n_overrides,
                           rod_scene *out, cfg_error *err)
 {

@@ -67,4 +67,14 @@ cfg_status cfg_scene_parse(const char *name, const char *text, size_t len,
                            const char *const *overrides, int n_overrides,
                            rod_scene *out, cfg_error *err);
 
+/* Apply the n_overrides strings "section.key=value" in order to a copy of `base` (a scene already
+ * loaded and checked) through the same key table and value rules as a file's --set, then check the
+ * result as a load does (rod_scene_check). `name` names the result in errors that blame a value of
+ * `base` (a cross-field check), e.g. "twin". On success the result goes to *out (which may be
+ * base); on failure *out is untouched and *err says why: an override's error names the override
+ * text (CFG_ORIGIN_OVERRIDE, its text in err->where). Mock mode's twin is built with this
+ * (rig_config.h [twin]), so every scene key is a twin key without a second table. */
+cfg_status cfg_scene_apply(const rod_scene *base, const char *name, const char *const *overrides,
+                           int n_overrides, rod_scene *out, cfg_error *err);
+
 #endif

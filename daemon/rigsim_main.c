@@ -3,7 +3,10 @@
  * Modbus TCP drives on the 127.0.0.1 addresses they name), the ribbon as the digital twin stepped
  * with the axes' actual positions, and a GigE Vision camera on 127.0.0.1 filming it. Writes the
  * camera calibration file the rig file names, a truth log of every image sent (time, axis
- * positions) and optionally an axes log. Prints "ready" once ribbond may start, then serves until
+ * positions) and optionally an axes log. The twin is the rig file's [twin] strip when it has one
+ * (else the scene); its parameters are printed at start ("twin: ...") and its own snap once final
+ * ("twin truth: ...", twin_truth.h), also into PATH.twin beside the truth log. Prints "ready"
+ * once ribbond may start, then serves until
  * SIGINT/SIGTERM or --duration. Faults on a schedule (seconds after start) or on signals. */
 #include <math.h>
 #include <stdio.h>
@@ -17,6 +20,7 @@
 #include "cli.h"
 #include "rig_config.h"
 #include "rigsim.h"
+#include "twin.h"
 
 #define PROG "ribbon-rigsim"
 
@@ -37,10 +41,12 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: ribbon-rigsim RIG.INI [options]\n"
-            "  --set SECTION.KEY=VALUE  override a rig file key (as ribbond --set)\n"
+            "  --set SECTION.KEY=VALUE  override a rig file key (as ribbond --set; twin.SECTION.KEY=VALUE\n"
+            "                        a key of the twin, the strip the camera films)\n"
             "  --start-dl DL         compression the specimen is mounted at (default 0.2)\n"
             "  --serial S            the camera's serial number (default RIBBONSIM)\n"
-            "  --truth PATH          truth log of every image sent (CSV)\n"
+            "  --truth PATH          truth log of every image sent (CSV); PATH.twin: the twin's\n"
+            "                        parameters and its own snap\n"
             "  --axes-log PATH       both axes' actual positions every 5 ms (CSV)\n"
             "  --duration S          exit after S seconds (default: until signalled)\n"
             "  --alarm-after S       the controller raises ALARM:1 (Modbus: the shear drive an alarm)\n"
@@ -55,6 +61,25 @@ static void usage(FILE *f)
             "signals: SIGUSR1 cuts the rails' link now, SIGUSR2 stops the camera now,\n"
             "         SIGRTMIN freezes the image now, SIGRTMIN+1 raises the alarm now\n"
             "         (GRBL ALARM:1; Modbus: the shear drive's alarm 0x30)\n");
+}
+
+/* The twin's own snap on stdout ("twin truth: ...", twin_truth.h) once it is final (2 s of its
+ * pathway after the detection), or at exit whatever it is. 1 when said. */
+static int say_truth(rigsim_camera *cam, const rod_scene *sc, FILE *side, int at_exit)
+{
+    rod_snap_report r;
+    double dw_now = NAN;
+    rigsim_camera_twin_truth(cam, &r, &dw_now);
+    if (!at_exit && !(r.snapped && r.final)) return 0;
+    char line[400];
+    twin_truth_snap(&r, sc->shear_rate / sc->length, dw_now, line, sizeof line);
+    printf("%s\n", line);
+    fflush(stdout);
+    if (side) {
+        fprintf(side, "%s\n", line);
+        fflush(side);
+    }
+    return 1;
 }
 
 static int num(const char *opt, const char *v, double lo, double hi, double *out)
@@ -133,8 +158,12 @@ int main(int argc, char **argv)
         fprintf(stderr, PROG ": %s is not a rig-mode file (rig.mode = rig)\n", rig_path);
         return 1;
     }
+    /* The strip on the bench: [twin]'s (the scene with its keys, at its own mesh and step), or
+     * without [twin] the scene at the prediction's explicit resolution (sim.nodes, sim.dt). */
     rod_scene sc = cfg.scene;
-    if (cfg.sim.explicit_resolution) {
+    if (cfg.twin.present) {
+        sc = cfg.twin.scene;
+    } else if (cfg.sim.explicit_resolution) {
         if (cfg.sim.nodes > 0) sc.nodes = cfg.sim.nodes;
         if (cfg.sim.dt > 0) sc.dt = cfg.sim.dt;
     }
@@ -153,8 +182,21 @@ int main(int argc, char **argv)
     }
     printf("rails thread: %s\n", rigsim_rails_realtime(rails) ? "real-time priority" : "normal priority");
     printf("twin thread: %s\n", rigsim_camera_twin_realtime(cam) ? "real-time priority" : "normal priority");
-    printf("rails: %s\ncamera: aravis:127.0.0.1 (serial %s)\ncalibration: %s\ntwin: N = %d, dt = %g s\nready\n",
-           rigsim_rails_port(rails), serial, cfg.camera.calibration, sc.nodes, sc.dt);
+    const char *keys[RIG_TWIN_KEYS_MAX];
+    for (int i = 0; i < cfg.twin.n; i++) keys[i] = cfg.twin.keys[i];
+    char params[sizeof cfg.twin.keys + 128];
+    twin_truth_params(&sc, keys, cfg.twin.present ? cfg.twin.n : 0, params, sizeof params);
+    /* Beside the truth log, what the twin is and (later) its own snap: PATH.twin. */
+    FILE *side = NULL;
+    if (truth) {
+        char side_path[1100];
+        snprintf(side_path, sizeof side_path, "%s.twin", truth);
+        side = fopen(side_path, "w");
+        if (!side) fprintf(stderr, PROG ": %s cannot be written: the twin's truth goes to stdout only\n", side_path);
+        else fprintf(side, "%s\n", params);
+    }
+    printf("rails: %s\ncamera: aravis:127.0.0.1 (serial %s)\ncalibration: %s\n%s\nready\n",
+           rigsim_rails_port(rails), serial, cfg.camera.calibration, params);
     fflush(stdout);
     volatile sig_atomic_t *stop = railsim_cli_catch_stop();
     struct sigaction sa;
@@ -166,6 +208,7 @@ int main(int argc, char **argv)
     sigaction(SIGRTMIN + 1, &sa, NULL);
     struct timespec t0;
     clock_gettime(CLOCK_MONOTONIC, &t0);
+    int truth_said = 0;
     while (!*stop) {
         struct timespec ts = {0, 10000000};
         nanosleep(&ts, NULL);
@@ -187,11 +230,14 @@ int main(int argc, char **argv)
             rigsim_camera_freeze(cam);
         }
         rigsim_camera_tick(cam);
+        if (!truth_said) truth_said = say_truth(cam, &sc, side, 0);
         struct timespec t;
         clock_gettime(CLOCK_MONOTONIC, &t);
         double el = (double)(t.tv_sec - t0.tv_sec) + 1e-9 * (double)(t.tv_nsec - t0.tv_nsec);
         if (duration >= 0.0 && el >= duration) break;
     }
+    if (!truth_said) say_truth(cam, &sc, side, 1);
+    if (side) fclose(side);
     char rep[400];
     rigsim_camera_report(cam, rep, sizeof rep);
     printf("%s\n", rep);

@@ -14,7 +14,16 @@ struct rod_twin {
     double dt;        /* s, largest step */
     double *k1;       /* scratch for rod_observe */
     long halvings;
+    rod_snap_watch watch; /* the twin's own snap, fed every accepted step */
 };
+
+/* After every accepted state: the snap watch sees it (an O(N) observation). */
+static void twin_watch(rod_twin *tw)
+{
+    rod_obs o;
+    rod_observe(tw->dyn.r, tw->k1, &o);
+    rod_snap_watch_add(&tw->watch, tw->t, tw->dyn.dw, &o);
+}
 
 rod_status rod_twin_open(const rod_scene *sc, double dl_start, rod_twin **out, char *why, size_t why_len)
 {
@@ -52,6 +61,8 @@ rod_status rod_twin_open(const rod_scene *sc, double dl_start, rod_twin **out, c
         return st;
     }
     rod_dyn_start(&tw->dyn, dl_start, 0.0);
+    rod_snap_watch_init(&tw->watch, sc->snap_speed, sc->asym_threshold, 2.0);
+    twin_watch(tw);
     *out = tw;
     return ROD_OK;
 }
@@ -103,6 +114,7 @@ rod_status rod_twin_advance(rod_twin *tw, double t_to, double dl, double dw, cha
         rod_dyn_accept(&tw->dyn);
         done += h;
         tw->t = t0 + done;
+        twin_watch(tw);
         if (level > 0) {
             level--;
             h = fmin(2.0 * h, h_full);
@@ -113,6 +125,7 @@ rod_status rod_twin_advance(rod_twin *tw, double t_to, double dl, double dw, cha
 }
 
 double rod_twin_time(const rod_twin *tw) { return tw->t; }
+double rod_twin_dw(const rod_twin *tw) { return tw->dyn.dw; }
 const rod *rod_twin_rod(const rod_twin *tw) { return tw->dyn.r; }
 double rod_twin_shear_force(const rod_twin *tw)
 {
@@ -124,6 +137,8 @@ double rod_twin_shear_force(const rod_twin *tw)
     double f = 0.5 * (g[4 * (n - 2) + 1] + g[4 * (n - 1) + 1] - g[1] - g[4 + 1]);
     return isfinite(f) ? f : 0.0;
 }
+
+void rod_twin_snap(const rod_twin *tw, rod_snap_report *out) { *out = tw->watch.r; }
 
 double rod_twin_kinetic(const rod_twin *tw) { return tw->dyn.kinetic; }
 long rod_twin_halvings(const rod_twin *tw) { return tw->halvings; }

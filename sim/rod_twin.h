@@ -11,6 +11,7 @@
 
 #include "rod.h"
 #include "rod_observe.h"
+#include "rod_snap_watch.h"
 
 typedef struct rod_twin rod_twin;
 
@@ -24,6 +25,8 @@ void rod_twin_close(rod_twin *tw);
 rod_status rod_twin_advance(rod_twin *tw, double t_to, double dl, double dw, char *why, size_t why_len);
 
 double rod_twin_time(const rod_twin *tw);
+/* The clamps' Delta W of the current state. */
+double rod_twin_dw(const rod_twin *tw);
 /* Delta Z, A, ... of the current state (rod_observe.h). */
 void rod_twin_observe(rod_twin *tw, rod_obs *o);
 /* The current state, for rendering. */
@@ -34,6 +37,11 @@ const rod *rod_twin_rod(const rod_twin *tw);
  * rod_set_clamps). It is what a force sensor in series with a position-controlled shear rail
  * reads (the rod's elastic reaction; the clamps' own inertia excluded), and it drops at the snap. */
 double rod_twin_shear_force(const rod_twin *tw);
+/* The twin's own snap so far (rod_snap_watch.h), from every accepted step since the open: its
+ * onset Delta W, the peak |A| and the pathway, with the scene's snap.speed and
+ * snap.asym_threshold and 2 s of pathway (the prediction's post_snap_time). The truth a trial's
+ * measurement is scored against. */
+void rod_twin_snap(const rod_twin *tw, rod_snap_report *out);
 /* Kinetic energy (J) of the last step and the total count of Newton failures recovered by halving. */
 double rod_twin_kinetic(const rod_twin *tw);
 long rod_twin_halvings(const rod_twin *tw);

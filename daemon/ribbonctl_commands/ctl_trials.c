@@ -23,6 +23,7 @@
 #include "rig_config.h"
 #include "trial.h"
 #include "trial_report.h"
+#include "twin.h"
 
 #define MAX_SET 64
 
@@ -215,6 +216,45 @@ static void print_header(void)
            "snap_pred", "predicted", "samples");
 }
 
+/* Mock mode: the twin's own snap (its "twin truth" event) and what it is (its "twin" event),
+ * with the measurement's and the prediction's differences from it. Nothing for other trials. */
+static void print_twin_truth(const json_t *t, const json_t *m, const json_t *p)
+{
+    json_t *evs = json_object_get(t, "events");
+    const char *params = NULL, *truth = NULL;
+    for (size_t k = 0; k < json_array_size(evs); k++) {
+        const char *msg = json_string_value(json_object_get(json_array_get(evs, k), "message"));
+        if (!msg) continue;
+        if (!strncmp(msg, TWIN_TRUTH_PREFIX, strlen(TWIN_TRUTH_PREFIX))) truth = msg;
+        else if (!strncmp(msg, TWIN_PARAMS_PREFIX, strlen(TWIN_PARAMS_PREFIX))) params = msg;
+    }
+    if (!truth) return;
+    double dw = NAN;
+    char regime[16] = "-";
+    if (!twin_truth_parse(truth, &dw, regime, sizeof regime)) {
+        printf("  twin truth %s\n", truth + strlen(TWIN_TRUTH_PREFIX));
+        return;
+    }
+    printf("  twin truth snap Delta W = %.5f  regime %s", dw, regime);
+    if (params) {
+        /* "twin: N = 121, dt = 0.001 s; ...": the resolution, as the prediction's is shown. */
+        int n = 0;
+        double dt = NAN;
+        if (sscanf(params, TWIN_PARAMS_PREFIX "N = %d, dt = %lf", &n, &dt) == 2) printf("  (N = %d, dt = %g s)", n, dt);
+    }
+    printf("\n");
+    if (params) {
+        const char *semi = strchr(params, ';');
+        if (semi) printf("  twin       %s\n", semi + 2);
+    }
+    if (json_is_number(m))
+        printf("  measured - twin truth   %+.5f (%+.2f%%)\n", json_number_value(m) - dw,
+               100.0 * (json_number_value(m) - dw) / dw);
+    if (json_is_number(p))
+        printf("  predicted - twin truth  %+.5f (%+.2f%%)\n", json_number_value(p) - dw,
+               100.0 * (json_number_value(p) - dw) / dw);
+}
+
 /* Measured against predicted, the line make demo shows. */
 static void print_comparison(const json_t *t)
 {
@@ -237,6 +277,7 @@ static void print_comparison(const json_t *t)
     printf("\n");
     if (json_is_number(m) && json_is_number(p) && json_number_value(p) != 0.0)
         printf("  difference %.2f%%\n", 100.0 * (json_number_value(m) - json_number_value(p)) / json_number_value(p));
+    print_twin_truth(t, m, p);
     json_t *lc = json_object_get(t, "stop_cmd_latency_s"), *ls = json_object_get(t, "stop_stand_latency_s");
     if (json_is_number(lc)) {
         printf("  snap-to-stop latency %.1f ms to the stop command", 1e3 * json_number_value(lc));

@@ -57,6 +57,8 @@ struct rigsim_camera {
     double t_paused;            /* the last time the twin's clock was paused */
     double last_fill_mono;      /* the last image's send time */
     double img_twin_t, img_dz, img_dl, img_dw; /* what the latest image shows */
+    rod_snap_report snap;       /* the twin's own snap so far (mock_camera_truth), under the lock */
+    double snap_dw_now;         /* the twin's Delta W at the last render */
     /* Images sent older than half a frame period (the instant they show is nearer the previous
      * send than their own): counted, the worst kept, noted by rigsim_camera_tick. */
     long behind, behind_noted;
@@ -232,7 +234,13 @@ static void *twin_main(void *arg)
             const int drawn = mock_camera_grab(c->twin, t_twin, dl, dw, c->back, &tf, &ve) == VIS_OK;
             t_drawn = clock_s(CLOCK_MONOTONIC);
             if (drawn) {
-                double dz = mock_camera_true_dz(c->twin);
+                double dz = mock_camera_true_dz(c->twin), dw_now;
+                rod_snap_report snap;
+                mock_camera_truth(c->twin, &snap, &dw_now);
+                pthread_mutex_lock(&c->lock);
+                c->snap = snap;
+                c->snap_dw_now = dw_now;
+                pthread_mutex_unlock(&c->lock);
                 /* Swapped in once the send before its own has gone (that one shows its own image),
                  * or when that send is a period late. */
                 for (;;) {
@@ -368,6 +376,7 @@ int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_st
     if (!c->frame || !c->back || mock_camera_open(sc, dl_start, &cp, 0.0, cfg->camera.blur_sigma_px, 1u,
                                       &c->twin, why, why_len))
         goto fail;
+    mock_camera_truth(c->twin, &c->snap, &c->snap_dw_now);
     if (calib_path) {
         vis_render_params rp;
         vis_calib cal;
@@ -541,4 +550,12 @@ void rigsim_camera_stop(rigsim_camera *c)
     free(c->noise);
     pthread_mutex_destroy(&c->lock);
     free(c);
+}
+
+void rigsim_camera_twin_truth(rigsim_camera *c, rod_snap_report *snap, double *dw_now)
+{
+    pthread_mutex_lock(&c->lock);
+    if (snap) *snap = c->snap;
+    if (dw_now) *dw_now = c->snap_dw_now;
+    pthread_mutex_unlock(&c->lock);
 }

@@ -26,6 +26,7 @@
 
 #include "rig_config.h"
 #include "rigsim_rails.h"
+#include "rod_snap_watch.h"
 
 typedef struct rigsim_camera rigsim_camera;
 
@@ -57,5 +58,8 @@ int rigsim_camera_twin_realtime(const rigsim_camera *c);
  * many images were sent older than half a frame period and the oldest. */
 void rigsim_camera_report(rigsim_camera *c, char *out, size_t n);
 void rigsim_camera_stop(rigsim_camera *c);
+/* The twin's own snap so far (rod_twin_snap, as of the last render) and its Delta W then: the
+ * truth a rehearsal trial's measurement is scored against (twin_truth.h prints it). */
+void rigsim_camera_twin_truth(rigsim_camera *c, rod_snap_report *snap, double *dw_now);
 
 #endif

@@ -470,7 +470,15 @@ static int session_open_camera(trial_session *s, session_parts *p, char *why, si
         cp.width_px = s->width;
         cp.height_px = s->height;
         double dl0 = rig_calib_dl(&cfg->calib, p->sc.length, rs.position_mm);
-        if (mock_camera_open(&p->sc, dl0, &cp, cfg->camera.noise_sigma, cfg->camera.blur_sigma_px,
+        /* The strip on the bench: [twin]'s own (the trial's scene with its keys, at its own mesh
+         * and step), or without [twin] the prediction's scene at the prediction's resolution. */
+        const rod_scene *tsc = cfg->twin.present ? &cfg->twin.scene : &p->sc;
+        const char *keys[RIG_TWIN_KEYS_MAX];
+        for (int i = 0; i < cfg->twin.n; i++) keys[i] = cfg->twin.keys[i];
+        char msg[sizeof cfg->twin.keys + 128];
+        twin_truth_params(tsc, keys, cfg->twin.present ? cfg->twin.n : 0, msg, sizeof msg);
+        session_event(s, NAN, STORE_EVENT_INFO, msg);
+        if (mock_camera_open(tsc, dl0, &cp, cfg->camera.noise_sigma, cfg->camera.blur_sigma_px,
                              (uint64_t)s->trial_id, &p->mock, why, why_len))
             return -1;
         p->cam.grab = mock_camera_grab;
@@ -514,6 +522,20 @@ static int session_open_tracker_and_video(trial_session *s, session_parts *p, ch
     char w[256];
     store_trial_set_video(s->st, s->trial_id, video_path, w, sizeof w);
     return 0;
+}
+
+/* Mock mode: the twin's own snap (from its own states, rod_twin_snap), stored beside the measured
+ * one as an event before the result, so whoever reads the finished trial finds it. */
+static void session_twin_truth(trial_session *s, session_parts *p)
+{
+    if (!p->mock) return;
+    rod_snap_report r;
+    double dw_now = NAN;
+    mock_camera_truth(p->mock, &r, &dw_now);
+    const rod_scene *sc = &s->cfg.scene;
+    char msg[400];
+    twin_truth_snap(&r, sc->shear_rate / sc->length, dw_now, msg, sizeof msg);
+    session_event(s, NAN, STORE_EVENT_INFO, msg);
 }
 
 /* The runner's plan: the rig file's trial, detection and camera settings. */
@@ -634,9 +656,11 @@ static void *session_main(void *arg)
     trial_session *s = arg;
     session_parts p = {.sc = s->cfg.scene, .pred = s->pred_scene};
     char why[512] = "";
-    if (session_check_disk(s, why, sizeof why) || session_start_prediction(s, &p, why, sizeof why) ||
-        session_open_camera(s, &p, why, sizeof why) || session_open_tracker_and_video(s, &p, why, sizeof why) ||
-        session_run(s, &p, why, sizeof why))
+    int failed = session_check_disk(s, why, sizeof why) || session_start_prediction(s, &p, why, sizeof why) ||
+                 session_open_camera(s, &p, why, sizeof why) ||
+                 session_open_tracker_and_video(s, &p, why, sizeof why) || session_run(s, &p, why, sizeof why);
+    session_twin_truth(s, &p);
+    if (failed)
         fail_early(s, why);
     else
         session_store_result(s);

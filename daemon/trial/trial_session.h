@@ -15,10 +15,13 @@
  *                                  prediction that cannot be made (no snap on a ladder rung,
  *                                  the simulator refusing the scene) is stored as failed with
  *                                  its reason, and the trial runs without it;
- *   session_open_camera            mock mode: the digital twin at the prediction's resolution,
- *                                  mounted at the compression rail's current position; rig: the camera;
+ *   session_open_camera            mock mode: the digital twin ([twin]'s strip at its own mesh and
+ *                                  step, or without [twin] the scene at the prediction's resolution),
+ *                                  mounted at the compression rail's current position, its
+ *                                  parameters an event ("twin: ..."); rig: the camera;
  *   session_open_tracker_and_video the tracker and the cropped video;
  *   session_run                    the trial runner, storing every sample (batched), event and state;
+ *   session_twin_truth             mock mode: the twin's own snap as an event ("twin truth: ...");
  *   session_store_result           the measured result and the final status;
  *   session_release                closes what was opened and waits for the prediction.
  * Every failure ends in the store as a failed trial with the reason, and in the log. An abort

@@ -115,3 +115,9 @@ double mock_camera_true_dz(mock_camera *mc)
     rod_twin_observe(mc->twin, &o);
     return o.dz_cam;
 }
+
+void mock_camera_truth(mock_camera *mc, rod_snap_report *snap, double *dw_now)
+{
+    if (snap) rod_twin_snap(mc->twin, snap);
+    if (dw_now) *dw_now = rod_twin_dw(mc->twin);
+}

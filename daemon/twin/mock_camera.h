@@ -14,6 +14,7 @@
 #include <stdint.h>
 
 #include "rail.h"
+#include "rod_snap_watch.h"
 #include "scene.h"
 #include "twin_camera.h"
 #include "vision.h"
@@ -41,5 +42,9 @@ int mock_camera_feed_load(mock_camera *mc, rail *shear, char *why, size_t why_le
 
 /* The twin's current Delta Z (the truth the tracker should find), for tests and logs. */
 double mock_camera_true_dz(mock_camera *mc);
+
+/* The twin's own snap so far (rod_twin_snap: from its own states, every solver step) and its
+ * Delta W now (either pointer may be NULL): the truth a trial's measurement is scored against. */
+void mock_camera_truth(mock_camera *mc, rod_snap_report *snap, double *dw_now);
 
 #endif

@@ -206,6 +206,30 @@ static void test_mock_ini(void **state)
     assert_string_equal(cfg.scene_path, CONFIG_DIR "/scenes/mock-gamma013.ini");
     assert_string_equal(cfg.path, CONFIG_DIR "/mock.ini");
     assert_string_equal(cfg.dir, CONFIG_DIR);
+    /* The twin is a different strip from the scene: relaxed, unequal creases, a finer mesh and
+     * step than the scene's (and the prediction's). */
+    assert_true(cfg.twin.present);
+    assert_true(NEAR(cfg.scene.fold_angle_deg, -90.0));
+    assert_true(NEAR(cfg.twin.scene.fold_angle_deg, -86.0));
+    assert_true(fabs(cfg.twin.scene.fold_angle_rel) >= 0.02 && fabs(cfg.twin.scene.fold_angle_rel) <= 0.03);
+    assert_true(cfg.twin.scene.nodes > cfg.scene.nodes);
+    assert_true(cfg.twin.scene.dt < cfg.scene.dt);
+}
+
+/* The rehearsal files' twin (ribbon-rigsim's) differs from their scene the same way. */
+static void test_rehearsal_twins(void **state)
+{
+    (void)state;
+    const char *files[] = {"rig-rehearsal.ini", "rig-rehearsal-modbus.ini"};
+    for (int i = 0; i < 2; i++) {
+        load_ok(files[i], NULL, 0);
+        assert_int_equal(cfg.mode, RIG_MODE_RIG);
+        assert_true(cfg.twin.present);
+        assert_true(NEAR(cfg.twin.scene.fold_angle_deg, -86.0));
+        assert_true(NEAR(cfg.twin.scene.fold_angle_rel, 0.025));
+        assert_int_equal(cfg.twin.scene.nodes, 91);
+        assert_true(cfg.twin.scene.nodes > cfg.sim.nodes && cfg.twin.scene.dt < cfg.sim.dt);
+    }
 }
 
 static void test_rig_gcode_ini(void **state)
@@ -685,6 +709,107 @@ static void test_overrides(void **state)
                   "specimen.name", "rig mode");
 }
 
+/* ---- [twin] ------------------------------------------------------------------------------------ */
+
+/* BASE ends on line 34; the [twin] tail starts at line 35. */
+#define TWIN_TAIL                                                                                  \
+    "[twin]\n"                            /* 35 */                                                 \
+    "folds.angle_deg = -86\n"             /* 36 */                                                 \
+    "imperfection.fold_angle_rel = 0.03\n" /* 37 */                                                \
+    "mesh.nodes = 121\n"                  /* 38 */                                                 \
+    "solver.dt = 1e-3\n"                  /* 39 */
+
+/* The twin is the trial's scene with the [twin] keys applied through the scene loader: every
+ * scene key, in order (file, then --set twin.*, a later one wins), checked as a scene; the trial's
+ * own scene is untouched; errors name "twin.section.key" at its line or --set; replay mode refuses
+ * it, rig mode keeps it for ribbon-rigsim. */
+static void test_twin_section(void **state)
+{
+    (void)state;
+    cfg_error err;
+    char buf[1024];
+    /* Without [twin] there is no twin of its own. */
+    assert_int_equal(parse(make(NULL, 0, NULL), &cfg, &err), CFG_OK);
+    assert_false(cfg.twin.present);
+    assert_int_equal(cfg.twin.n, 0);
+
+    cfg_status st = parse(make(NULL, 0, TWIN_TAIL), &cfg, &err);
+    if (st) print_error("%s\n", cfg_error_format(&err, buf, sizeof buf));
+    assert_int_equal(st, CFG_OK);
+    assert_true(cfg.twin.present);
+    assert_int_equal(cfg.twin.n, 4);
+    assert_string_equal(cfg.twin.keys[0], "folds.angle_deg=-86");
+    assert_string_equal(cfg.twin.keys[3], "solver.dt=1e-3");
+    assert_true(NEAR(cfg.twin.scene.fold_angle_deg, -86.0));
+    assert_true(NEAR(cfg.twin.scene.fold_angle_rel, 0.03));
+    assert_int_equal(cfg.twin.scene.nodes, 121);
+    assert_true(NEAR(cfg.twin.scene.dt, 1e-3));
+    /* What [twin] does not set is the trial's scene's; the trial's scene is untouched. */
+    assert_true(NEAR(cfg.scene.fold_angle_deg, -90.0));
+    assert_int_equal(cfg.scene.nodes, 201);
+    assert_true(NEAR(cfg.twin.scene.fold_position, cfg.scene.fold_position));
+    assert_true(NEAR(cfg.twin.scene.length, cfg.scene.length));
+    assert_true(NEAR(cfg.twin.scene.damping, cfg.scene.damping));
+
+    /* --set twin.SECTION.KEY wins over the file; a scene --set reaches the twin too (it is a copy
+     * of the trial's scene); a twin.* --set alone makes a twin. */
+    const char *ovr[] = {"twin.folds.angle_deg=-84", "protocol.compression=0.4", "twin.ribbon.gravity=0 0 -9.81",
+                         "twin.solver.damping = 2"};
+    st = parse_ovr(make(NULL, 0, TWIN_TAIL), ovr, 4, &cfg, &err);
+    if (st) print_error("%s\n", cfg_error_format(&err, buf, sizeof buf));
+    assert_int_equal(st, CFG_OK);
+    assert_true(NEAR(cfg.twin.scene.fold_angle_deg, -84.0));
+    assert_true(NEAR(cfg.twin.scene.compression, 0.4));
+    assert_true(NEAR(cfg.scene.compression, 0.4));
+    assert_true(NEAR(cfg.twin.scene.gravity[2], -9.81));
+    assert_true(NEAR(cfg.scene.gravity[2], 0.0));
+    assert_true(NEAR(cfg.twin.scene.damping, 2.0));
+    assert_int_equal(cfg.twin.n, 7);
+    assert_int_equal(parse_ovr(make(NULL, 0, NULL), ovr, 1, &cfg, &err), CFG_OK);
+    assert_true(cfg.twin.present);
+    assert_true(NEAR(cfg.twin.scene.fold_angle_deg, -84.0));
+
+    /* Named errors. A key that is not a scene key, at its line. */
+    expect_line(make(NULL, 0, "[twin]\nfolds.angel_deg = -86\n"), CFG_ERR_UNKNOWN, 36,
+                "twin.folds.angel_deg", "not a scene key");
+    expect_line(make(NULL, 0, "[twin]\nangle_deg = -86\n"), CFG_ERR_UNKNOWN, 36, "twin.angle_deg",
+                "not a scene key");
+    expect_line(make(NULL, 0, "[twin]\ncamera.fps = 60\n"), CFG_ERR_UNKNOWN, 36, "twin.camera.fps",
+                "not a scene key");
+    expect_line(make(NULL, 0, "[twin]\nribbon.length = 0.21\n"), CFG_ERR_CHECK, 36, "twin.ribbon.length",
+                "free length is the trial's");
+    expect_line(make(NULL, 0, "[twin]\nprotocol.shear_rate = 0.02\n"), CFG_ERR_CHECK, 36,
+                "twin.protocol.shear_rate", "the rails drive the twin");
+    expect_line(make(NULL, 0, TWIN_TAIL "mesh.nodes = 61\n"), CFG_ERR_DUPLICATE, 40, "twin.mesh.nodes",
+                "first on line 38");
+    /* A value the scene loader refuses, at its line, with the scene loader's reason. */
+    expect_line(make(NULL, 0, "[twin]\nfolds.angle_deg = -86\nmesh.nodes = 2\n"), CFG_ERR_RANGE, 37,
+                "twin.mesh.nodes", "out of range");
+    expect_line(make(NULL, 0, "[twin]\nsolver.dt = fast\n"), CFG_ERR_VALUE, 36, "twin.solver.dt", NULL);
+    /* A cross-field check blaming a key the twin set: at its line. */
+    expect_line(make(NULL, 0, "[twin]\nmesh.nodes = 121\nfolds.position = 0.005\n"), CFG_ERR_CHECK, 37,
+                "twin.folds.position", "inside the clamp");
+    /* ... blaming a value the twin took from the scene: at the [twin] header, saying so. */
+    expect_line(make(NULL, 0, "[twin]\nmesh.nodes = 9\n"), CFG_ERR_CHECK, 35, "twin.folds.position",
+                "the twin's scene");
+    /* Overrides: an unknown key and a bad value name the --set. */
+    const char *bad1[] = {"twin.folds.bogus=1"};
+    expect_origin(make(NULL, 0, TWIN_TAIL), bad1, 1, CFG_ERR_UNKNOWN, CFG_ORIGIN_OVERRIDE, "twin.folds.bogus",
+                  "--set twin.folds.bogus=1");
+    const char *bad2[] = {"twin.solver.dt=-1"};
+    expect_origin(make(NULL, 0, TWIN_TAIL), bad2, 1, CFG_ERR_RANGE, CFG_ORIGIN_OVERRIDE, "twin.solver.dt",
+                  "--set twin.solver.dt=-1");
+    /* Replay mode films no twin; rig mode keeps it (ribbon-rigsim reads the same file). */
+    edit rep[2] = {{2, "mode = replay"}, {3, "scene = scenes/paper-gamma013.ini"}};
+    expect_line(make(rep, 1, TWIN_TAIL), CFG_ERR_CHECK, 36, "twin", "replay mode films no twin");
+    edit rig[3] = {{2, "mode = rig"}, {5, "driver = gcode"}, {10, "driver = gcode"}};
+    st = parse(make(rig, 3, TWIN_TAIL RIG_TAIL), &cfg, &err);
+    if (st) print_error("%s\n", cfg_error_format(&err, buf, sizeof buf));
+    assert_int_equal(st, CFG_OK);
+    assert_true(cfg.twin.present);
+    assert_int_equal(cfg.twin.scene.nodes, 121);
+}
+
 /* ---- conversions and the calibration record ---------------------------------------------------- */
 
 static void test_conversions(void **state)
@@ -906,6 +1031,8 @@ int main(void)
         cmocka_unit_test(test_scene_errors_unchanged),
         cmocka_unit_test(test_specimen_measurements),
         cmocka_unit_test(test_overrides),
+        cmocka_unit_test(test_twin_section),
+        cmocka_unit_test(test_rehearsal_twins),
         cmocka_unit_test(test_conversions),
         cmocka_unit_test(test_calibration_json),
         cmocka_unit_test(test_readme_documents_every_key),

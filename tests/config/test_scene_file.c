@@ -508,6 +508,40 @@ static void test_overrides_apply(void **state)
     assert_true(s.fold_position == 0.21 && s.dt == 2e-3);
 }
 
+/* cfg_scene_apply: overrides on a scene already loaded, with the loader's rules; a refused one
+ * leaves *out untouched and names the override. */
+static void test_apply_to_loaded_scene(void **state)
+{
+    (void)state;
+    rod_scene base, s;
+    cfg_error err;
+    assert_int_equal(cfg_scene_load(RIBBON_SOURCE_DIR "/config/scenes/paper-gamma013.ini", NULL, 0, &base, &err),
+                     CFG_OK);
+    const char *ovr[] = {"folds.angle_deg=-86", "mesh.nodes = 121", "folds.angle_deg=-85"};
+    assert_int_equal(cfg_scene_apply(&base, "twin", ovr, 3, &s, &err), CFG_OK);
+    assert_true(REL_CLOSE(s.fold_angle_deg, -85.0));
+    assert_int_equal(s.nodes, 121);
+    assert_true(REL_CLOSE(s.length, base.length));
+    assert_true(REL_CLOSE(base.fold_angle_deg, -90.0));
+    rod_scene keep = s;
+    const char *bad[] = {"mesh.nodes=61", "folds.nope=1"};
+    assert_int_equal(cfg_scene_apply(&base, "twin", bad, 2, &s, &err), CFG_ERR_UNKNOWN);
+    assert_int_equal(err.origin, CFG_ORIGIN_OVERRIDE);
+    assert_string_equal(err.where, "folds.nope=1");
+    assert_int_equal(s.nodes, keep.nodes);
+    assert_true(REL_CLOSE(s.fold_angle_deg, keep.fold_angle_deg));
+    const char *clamp[] = {"folds.position=0.001"};
+    assert_int_equal(cfg_scene_apply(&base, "twin", clamp, 1, &s, &err), CFG_ERR_CHECK);
+    assert_string_equal(err.key, "folds.position");
+    assert_string_equal(err.where, "folds.position=0.001");
+    const char *coarse[] = {"mesh.nodes=9"}; /* blames folds.position, which base set */
+    assert_int_equal(cfg_scene_apply(&base, "twin", coarse, 1, &s, &err), CFG_ERR_CHECK);
+    assert_string_equal(err.key, "folds.position");
+    assert_int_equal(cfg_scene_apply(&base, "twin", NULL, 0, &s, &err), CFG_OK);
+    assert_int_equal(s.nodes, base.nodes);
+    assert_true(REL_CLOSE(s.fold_angle_deg, base.fold_angle_deg));
+}
+
 static void test_overrides_refused(void **state)
 {
     (void)state;
@@ -868,6 +902,7 @@ int main(void)
         cmocka_unit_test(test_refuses_impossible_scenes),
         cmocka_unit_test(test_overrides_apply),
         cmocka_unit_test(test_overrides_refused),
+        cmocka_unit_test(test_apply_to_loaded_scene),
         cmocka_unit_test(test_io_errors),
         cmocka_unit_test(test_only_regular_files),
         cmocka_unit_test(test_readme_documents_every_key),

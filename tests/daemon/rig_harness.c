@@ -433,3 +433,43 @@ double rig_truth_last_move(rig_run *r, int col)
     fclose(t);
     return last_move;
 }
+
+double rig_twin_truth(rig_run *r, char *regime, size_t n)
+{
+    char out[128], line[1024];
+    snprintf(out, sizeof out, "%s/rigsim.out", r->dir);
+    if (regime && n) regime[0] = '\0';
+    if (!rig_file_has(out, "twin truth: ", line, sizeof line)) return NAN;
+    double dw = NAN;
+    char reg[16] = "";
+    const char *p = strstr(line, "twin truth: ");
+    if (sscanf(p, "twin truth: snap Delta W = %lf, regime %15[a-z]", &dw, reg) != 2) {
+        if (regime && n) snprintf(regime, n, "%s", strstr(p, "no snap") ? "no snap" : "");
+        return NAN;
+    }
+    if (regime && n) snprintf(regime, n, "%s", reg);
+    return dw;
+}
+
+double rig_truth_image_age(rig_run *r, double dw, double span)
+{
+    char path[160], line[512];
+    snprintf(path, sizeof path, "%s/truth.csv", r->dir);
+    FILE *t = fopen(path, "r");
+    assert_non_null(t);
+    double age_max = 0.0;
+    while (fgets(line, sizeof line, t)) {
+        double v[11];
+        if (sscanf(line, "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5],
+                   &v[6], &v[7], &v[8], &v[9], &v[10]) == 11 &&
+            fabs(v[6] - dw) < span)
+            age_max = fmax(age_max, v[10]);
+    }
+    fclose(t);
+    return age_max;
+}
+
+double rig_onset_bound(double rate, double fps, double twin_dt, double image_age_s)
+{
+    return rate * (1.0 / fps + twin_dt + 1e-3 + fmax(0.0, image_age_s)) + 1e-9;
+}

@@ -81,4 +81,16 @@ void rig_check_stamps(rig_run *r, long recorded);
  * moved by more than 1e-4 mm between two images; NaN if it never did. */
 double rig_truth_last_move(rig_run *r, int col);
 
+/* The twin's own snap from ribbon-rigsim's "twin truth: snap Delta W = X, regime R (...)" line
+ * (twin_truth.h; printed once final, or at exit: call after rig_stop): X, with R in regime; NaN
+ * (regime "no snap" or "") when it did not snap or said nothing. */
+double rig_twin_truth(rig_run *r, char *regime, size_t n);
+/* From the truth log: the oldest image (s, column image_age_s) the simulator sent while Delta W
+ * was within span of dw; 0 if none. */
+double rig_truth_image_age(rig_run *r, double dw, double span);
+/* How far the measured snap may lie from the twin's own (docs/trials.md "The twin and its truth"):
+ * one frame period of shear, one twin step, the frame stamps' 1 ms and the oldest image sent near
+ * the snap, all times the shear rate (Delta W per second). */
+double rig_onset_bound(double rate, double fps, double twin_dt, double image_age_s);
+
 #endif

@@ -46,6 +46,7 @@
 #include "rig_daemon.h"
 #include "store.h"
 #include "trial.h"
+#include "twin.h"
 #include "vision.h"
 
 static char dir[64];
@@ -56,8 +57,12 @@ static void overrides(const char **ov, int *n)
     ov[0] = set_store;
     ov[1] = set_video;
     ov[2] = "api.port=0";
-    ov[3] = "sim.nodes=61"; /* explicit resolution: the prediction and the twin share it */
-    *n = 4;
+    ov[3] = "sim.nodes=61"; /* the prediction's resolution; the twin has its own (mock.ini [twin]) */
+    /* The twin at the rehearsal's resolution, still finer than the prediction's: 2.5 times cheaper
+     * than mock.ini's N = 121, dt = 1 ms, which counts under the sanitizers (a trial 112 s there). */
+    ov[4] = "twin.mesh.nodes=91";
+    ov[5] = "twin.solver.dt=1.5e-3";
+    *n = 6;
 }
 
 static int setup(void **state)
@@ -411,10 +416,53 @@ static void none_measured_off_compression(store *st, int64_t id)
     assert_true(untracked > 0);
 }
 
+/* The measurement's own error against the twin's truth (docs/trials.md "The twin and its truth"):
+ * the camera's onset is the last FRAME whose frame-to-frame Delta Z speed was below a tenth of
+ * snap.speed, the twin's the last solver STEP; with the speed rising through the threshold the two
+ * differ by less than one frame period of shear (rate / fps: 0.00167 of Delta W at 30 fps) plus one
+ * twin step (1 ms: 0.00005); the tracker's noise on Delta Z (sigma 1e-5 during the hold, a speed
+ * noise of 4e-4 /s against the 0.1 /s threshold) adds nothing measurable. */
+static double onset_error_bound(double fps, double twin_dt)
+{
+    const double rate = 0.01 / 0.2; /* Delta W per second: 10 mm/s on the 200 mm strip */
+    return rate / fps + rate * twin_dt + 1e-9;
+}
+
+/* The twin's own snap from the trial's "twin truth" event, and its parameters ("twin: ...").
+ * Fails the test when absent. */
+static void twin_truth_of(const json_t *t, double *dw, char *regime, size_t regime_len, char *params, size_t plen)
+{
+    json_t *evs = json_object_get(t, "events");
+    int found = 0;
+    params[0] = '\0';
+    for (size_t k = 0; k < json_array_size(evs); k++) {
+        const char *m = json_string_value(json_object_get(json_array_get(evs, k), "message"));
+        if (m && !strncmp(m, TWIN_PARAMS_PREFIX, strlen(TWIN_PARAMS_PREFIX))) snprintf(params, plen, "%s", m);
+        if (m && twin_truth_parse(m, dw, regime, regime_len)) {
+            printf("%s\n", m);
+            found = 1;
+        }
+    }
+    assert_true(found);
+}
+
+/* The prediction against the twin's truth: the twin is a different strip (mock.ini [twin]:
+ * creases relaxed to 86 deg and 2.5% unequal, N = 121, dt = 1 ms, against the scene's 90 deg,
+ * equal creases, N = 61; the tests run the twin at N = 91, dt = 1.5 ms), so the prediction is off
+ * by more than the measurement's error, by a few
+ * percent (issue 31: 4 deg of relaxation and a few percent of inequality move the snap by 5-10%). */
+static void score_prediction(double pred, double truth, double bound)
+{
+    printf("prediction - twin truth: %+.5f (%+.2f%%; the measurement's error bound %.5f)\n", pred - truth,
+           100.0 * (pred - truth) / truth, bound);
+    assert_true(fabs(pred - truth) > 3.0 * bound);
+    assert_true(fabs(pred - truth) < 0.10 * truth);
+}
+
 static void mock_trial_then_replay(void **state)
 {
     (void)state;
-    const char *ov[8];
+    const char *ov[10];
     int nov;
     overrides(ov, &nov);
     ov[nov++] = "detect.torque_witness=on"; /* the twin's shear force as the second witness */
@@ -461,10 +509,21 @@ static void mock_trial_then_replay(void **state)
            (long long)json_integer_value(json_object_get(pr, "nodes")), 100.0 * (meas - pred) / pred,
            (long long)samples);
     assert_string_equal(status, "done");
-    assert_true(pred > 0.0 && fabs(meas - pred) / pred < 0.02);
     assert_non_null(rm);
     assert_non_null(rp);
-    assert_string_equal(rm, rp);
+    /* Scored against the twin's truth (its own snap), not against the prediction. */
+    double truth = NAN;
+    char treg[16] = "", tparams[512];
+    twin_truth_of(t, &truth, treg, sizeof treg, tparams, sizeof tparams);
+    assert_non_null(strstr(tparams, "N = 91, dt = 0.0015 s; [twin] folds.angle_deg=-86"));
+    double bound = onset_error_bound(30.0, 1.5e-3);
+    printf("measured - twin truth: %+.5f (%.2f frames; bound %.5f)\n", meas - truth, (meas - truth) / (0.05 / 30.0),
+           bound);
+    assert_true(fabs(meas - truth) <= bound);
+    assert_string_equal(treg, "asymmetric"); /* Gamma 0.13: the pitchfork first */
+    assert_string_equal(rm, treg);
+    assert_string_equal(rp, treg);
+    score_prediction(pred, truth, bound);
     assert_int_equal(json_integer_value(json_object_get(pr, "nodes")), 61);
     assert_true(samples > 100);
     assert_true(json_array_size(json_object_get(t, "events")) >= 7);
@@ -596,6 +655,66 @@ static void mock_trial_then_replay(void **state)
     replay_outside_recording(st, id, meas, frame_dw);
     replay_refuses_wrong_or_cut_video(st, id, dir);
     store_close(st);
+}
+
+/* Gamma 0.21 end to end: the symmetric case (saddle-node first) with the twin's unequal creases.
+ * The twin's truth must read symmetric, the prediction (equal creases) too, and the measured snap
+ * lies within the measurement's error of the twin's. Mounted at 100 mm (Delta L 0.25): at Gamma
+ * 0.21 the route to the upper state does not converge at the shipped 90 mm (Delta L 0.2). */
+/* The measured regime: the tracker measures the camera's projected A, which peaks near 0.13 rad
+ * here (the twin's own camera's A 0.126) while the twin's 3D A peaks at 0.043 rad; under the old
+ * fixed 0.05 rad rule this read "asymmetric". The pathway rule (sim/rod_regime.h, 0.5 rad, derived
+ * from symmetric snaps peaking at <= 0.38 and asymmetric ones at >= 0.72) reads it symmetric. */
+#define GAMMA021_MEASURED_REGIME "symmetric"
+
+static void mock_trial_gamma021(void **state)
+{
+    (void)state;
+    const char *ov[12];
+    int nov;
+    overrides(ov, &nov);
+    ov[nov++] = "folds.position=0.21";
+    ov[nov++] = "rail.compress.start_mm=100";
+    rig_daemon d;
+    char why[512] = "";
+    int rc = rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, nov, NULL, why, sizeof why);
+    if (rc) fprintf(stderr, "open: %s\n", why);
+    assert_int_equal(rc, 0);
+    unsigned port = 0;
+    assert_int_equal(rig_daemon_serve(&d, &port, why, sizeof why), 0);
+    json_t *t = NULL;
+    assert_int_equal(http(port, "POST", "/trials", "{\"note\": \"e2e gamma 0.21\"}", &t, why, sizeof why), 201);
+    json_int_t id = json_integer_value(json_object_get(t, "id"));
+    json_decref(t);
+    assert_int_equal(wait_idle(port, 600.0), 1);
+    char path[64];
+    snprintf(path, sizeof path, "/trials/%lld", (long long)id);
+    t = NULL;
+    assert_int_equal(http(port, "GET", path, NULL, &t, why, sizeof why), 200);
+    const char *status = json_string_value(json_object_get(t, "status"));
+    double meas = json_number_value(json_object_get(t, "snap_dw_measured"));
+    double pred = json_number_value(json_object_get(t, "snap_dw_predicted"));
+    const char *rm = json_string_value(json_object_get(t, "regime_measured"));
+    const char *rp = json_string_value(json_object_get(t, "regime_predicted"));
+    printf("Gamma 0.21 trial %lld %s: measured %.5f %s, predicted %.5f %s\n", (long long)id, status ? status : "-",
+           meas, rm ? rm : "-", pred, rp ? rp : "-");
+    assert_non_null(status);
+    assert_string_equal(status, "done");
+    double truth = NAN;
+    char treg[16] = "", tparams[512];
+    twin_truth_of(t, &truth, treg, sizeof treg, tparams, sizeof tparams);
+    double bound = onset_error_bound(30.0, 1.5e-3);
+    printf("measured - twin truth: %+.5f (%.2f frames; bound %.5f)\n", meas - truth, (meas - truth) / (0.05 / 30.0),
+           bound);
+    assert_true(fabs(meas - truth) <= bound);
+    assert_string_equal(treg, "symmetric"); /* Gamma 0.21: the saddle-node first */
+    assert_non_null(rp);
+    assert_string_equal(rp, "symmetric");
+    assert_non_null(rm);
+    assert_string_equal(rm, GAMMA021_MEASURED_REGIME);
+    score_prediction(pred, truth, bound);
+    json_decref(t);
+    rig_daemon_close(&d, "test done");
 }
 
 static void kill9_then_restart(void **state)
@@ -963,8 +1082,14 @@ static void prediction_fails_trial_runs(void **state)
     free(out);
 }
 
-int main(void)
+/* `test_ribbond_e2e gamma021` runs only the Gamma 0.21 trial (its own ctest, so the two mock trials
+ * run side by side); without an argument, everything else. */
+int main(int argc, char **argv)
 {
+    if (argc > 1 && !strcmp(argv[1], "gamma021")) {
+        const struct CMUnitTest only[] = {cmocka_unit_test(mock_trial_gamma021)};
+        return cmocka_run_group_tests(only, setup, teardown);
+    }
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(mock_trial_then_replay),
         cmocka_unit_test(kill9_then_restart),

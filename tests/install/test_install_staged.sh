@@ -9,9 +9,9 @@
 # source and build trees hidden under empty tmpfs mounts, so a read from either fails.
 #
 # usage: test_install_staged.sh BUILD_DIR SOURCE_DIR [LSAN_SUPPRESSIONS]
-# The trial is cut short to stay quick in both builds: N = 31 (the twin and the prediction), 60
-# frames per second at 320 x 240 (the asymmetric passage of the snap lasts 20-25 ms: at 10 fps the
-# measured regime missed it), short hold and post-snap times.
+# The trial is cut short to stay quick in both builds: N = 31 (the twin's [twin] strip and the
+# prediction), 60 frames per second at 320 x 240 (the asymmetric passage of the snap lasts
+# 20-25 ms: at 10 fps the measured regime missed it), short hold and post-snap times.
 set -u
 
 if [ "${1:-}" = --trial ]; then
@@ -20,7 +20,8 @@ if [ "${1:-}" = --trial ]; then
   cd "$run" || exit 1
   bin="$stage/usr/bin"
   "$bin/ribbond" --config "$stage/usr/share/ribbon/mock.ini" --set api.port=0 \
-    --set sim.nodes=31 --set sim.dt=0.004 --set camera.fps=60 --set camera.width_px=320 \
+    --set sim.nodes=31 --set sim.dt=0.004 --set twin.mesh.nodes=31 --set twin.solver.dt=0.004 \
+    --set camera.fps=60 --set camera.width_px=320 \
     --set camera.height_px=240 --set trial.hold_s=0.5 --set trial.post_snap_s=0.5 \
     2> ribbond.log &
   pid=$!
@@ -119,12 +120,13 @@ fi
 cat "$tmp/trial.out"
 [ $rc -eq 0 ] || fail "the mock trial from the installed files failed (trees hidden: $hidden)"
 out=$(cat "$tmp/trial.out")
-for want in "trial 1: done" "measured   snap Delta W = 0.4" "predicted  snap Delta W = 0.4" \
+for want in "trial 1: done" "measured   snap Delta W = 0." "predicted  snap Delta W = 0.4" \
+            "twin truth snap Delta W = 0." \
             "report: report.png" "database: $run/ribbon-mock.db"; do
   case "$out" in *"$want"*) ;; *) fail "ribbonctl's output lacks '$want'" ;; esac
 done
-[ "$(grep -c 'regime asymmetric' "$tmp/trial.out")" -eq 2 ] ||
-  fail "measured and predicted regimes are not both asymmetric"
+[ "$(grep -c 'regime asymmetric' "$tmp/trial.out")" -eq 3 ] ||
+  fail "measured, predicted and the twin's true regimes are not all asymmetric"
 [ "$(head -c 4 "$run/report.png" 2>/dev/null | tail -c 3)" = PNG ] || fail "no report PNG"
 [ -d "$run/ribbon-mock-videos" ] || fail "no video directory in the working directory"
 

@@ -5,6 +5,7 @@
  * 2. Shearing the twin at the scene's constant rate, one advance per time step, snaps at the
  *    Delta W rod_predict finds (fixed step), with the same pathway: the twin's stepping, clamp
  *    interpolation and energy books add nothing of their own.
+ *    The twin's own snap watch (rod_twin_snap) reports that same snap.
  * 3. Bad input is refused with a reason; halving recovers from a too-long advance. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -105,6 +106,17 @@ static void shear_snaps_as_predicted(void **state)
     assert_true(snap > 0.0);
     assert_true(fabs(snap - p.snap_dw) < 1e-6 * p.snap_dw + 1e-9);
     assert_int_equal(peak > s.asym_threshold, p.asymmetric);
+    /* The twin's own watch (rod_twin_snap, fed every accepted step since the open) finds the same
+     * snap and the same peak over 2 s; its regime is decided over the first swing. */
+    rod_snap_report tr;
+    rod_twin_snap(tw, &tr);
+    printf("twin's own watch: Delta W %.6f, peak |A| %.3f over the passage, %.3f over 2 s, %s\n", tr.snap_dw,
+           tr.peak_abs_a, tr.peak_abs_a_post, rod_snap_report_regime(&tr));
+    assert_true(tr.snapped && tr.final);
+    assert_true(fabs(tr.snap_dw - p.snap_dw) < 1e-6 * p.snap_dw + 1e-9);
+    assert_true(fabs(tr.peak_abs_a_post - p.peak_abs_a) < 1e-6);
+    assert_int_equal(tr.peak_abs_a_post > s.asym_threshold, p.asymmetric);
+    assert_true(tr.peak_abs_a <= tr.peak_abs_a_post);
     rod_twin_close(tw);
 }
 
