@@ -412,7 +412,8 @@ rail_err rail_modbus_open(rail **out, const rail_params *p, const rail_modbus_pa
     k->accel_scale = m->accel_per_mm_s2 > 0.0 ? m->accel_per_mm_s2 : m->counts_per_mm;
     k->accel_mm_s2 = p->accel_mm_s2;
     k->prev_t = rail_clock_now(clock);
-    e = rail_modbus_link_open(&k->ctx, mp, why, why_len);
+    e = rail_modbus_link_open(&k->ctx, mp->address, mp->rtu, mp->baud, mp->parity, mp->slave, mp->timeout_s,
+                              why, why_len);
     if (e != RAIL_OK) {
         free(k);
         return e;

@@ -197,7 +197,8 @@ rail_err rail_modbus_probe(const rail_modbus_params *mp, rail_mb_probe_row *rows
         return RAIL_E_INVALID;
     }
     modbus_t *ctx = NULL;
-    e = rail_modbus_link_open(&ctx, mp, why, why_len);
+    e = rail_modbus_link_open(&ctx, mp->address, mp->rtu, mp->baud, mp->parity, mp->slave, mp->timeout_s, why,
+                              why_len);
     if (e != RAIL_OK)
         return e;
     *n = rail_modbus_probe_rows(m, rows, max);

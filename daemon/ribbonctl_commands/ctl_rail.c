@@ -517,6 +517,7 @@ static int probe_main(rail_cli *c)
         if (!m->verified)
             printf("warning: map %s is not verified on a real drive: compare each row with the drive's "
                    "manual before setting allow_unverified\n", m->name);
+        fflush(stdout); /* the table before the verdict, when both go to one pipe */
         if (e != RAIL_OK)
             fprintf(stderr, "ribbonctl rail: probe: %s\n", why);
     }
