@@ -247,6 +247,19 @@ rail_err rail_modbus_map_check(const rail_modbus_map *m, char *why, size_t why_l
     return RAIL_OK;
 }
 
+int rail_modbus_map_warning(const rail_modbus_map *m, char *out, size_t n)
+{
+    if (n)
+        out[0] = 0;
+    if (m->verified)
+        return 0;
+    snprintf(out, n,
+             "Modbus map %s (%.160s) is not verified on a real drive (source: %.160s): compare every "
+             "register with the drive's manual (ribbonctl rail --config RIG --rail NAME probe)",
+             m->name, m->file[0] ? m->file : "built-in", m->source[0] ? m->source : "none given");
+    return 1;
+}
+
 void rail_mb_put32(uint16_t *w, int32_t v, rail_mb_word_order o)
 {
     uint32_t u = (uint32_t)v;

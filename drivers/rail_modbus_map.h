@@ -90,6 +90,10 @@ const char *rail_mb_kind_name(rail_mb_kind k);
 
 /* Fill a preset by name ("ribbon-sim", "oriental-az"); RAIL_E_INVALID for an unknown name. */
 rail_err rail_modbus_preset(const char *name, rail_modbus_map *out);
+/* The warning an unverified map carries ("" for a verified one): its name, its file (or
+ * "built-in") and its source, for the probe and for ribbond's log when allow_unverified lets it
+ * drive. Returns 1 when there is one. */
+int rail_modbus_map_warning(const rail_modbus_map *m, char *out, size_t n);
 /* Cross-field checks of a map; names the field. */
 rail_err rail_modbus_map_check(const rail_modbus_map *m, char *why, size_t why_len);
 

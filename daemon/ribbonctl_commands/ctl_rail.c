@@ -514,9 +514,9 @@ static int probe_main(rail_cli *c)
             printf("%-20s %7d %-8s %-4s %12s  %-26s %s\n", r->name, r->reg.addr, rail_mb_kind_name(r->reg.kind),
                    bits, raw, val, r->reg.meaning);
         }
-        if (!m->verified)
-            printf("warning: map %s is not verified on a real drive: compare each row with the drive's "
-                   "manual before setting allow_unverified\n", m->name);
+        char warn[600];
+        if (rail_modbus_map_warning(m, warn, sizeof warn))
+            printf("warning: %s; then set verified = yes in the map file, or allow_unverified = on\n", warn);
         fflush(stdout); /* the table before the verdict, when both go to one pipe */
         if (e != RAIL_OK)
             fprintf(stderr, "ribbonctl rail: probe: %s\n", why);

@@ -282,6 +282,24 @@ static void test_decode(void **state)
     assert_non_null(strstr(id.text, "MISMATCH"));
 }
 
+/* An unverified map carries a warning naming it, its file and its source; a verified one none. */
+static void test_unverified_warning(void **state)
+{
+    (void)state;
+    rail_modbus_map m;
+    char w[600];
+    assert_int_equal(rail_modbus_preset("ribbon-sim", &m), RAIL_OK);
+    assert_int_equal(rail_modbus_map_warning(&m, w, sizeof w), 0);
+    assert_string_equal(w, "");
+    assert_int_equal(rail_modbus_preset("oriental-az", &m), RAIL_OK);
+    assert_int_equal(rail_modbus_map_warning(&m, w, sizeof w), 1);
+    assert_non_null(strstr(w, "Modbus map oriental-az (built-in) is not verified"));
+    assert_non_null(strstr(w, "HM-60262E"));
+    snprintf(m.file, sizeof m.file, "maps/oriental-az.ini");
+    assert_int_equal(rail_modbus_map_warning(&m, w, sizeof w), 1);
+    assert_non_null(strstr(w, "(maps/oriental-az.ini)"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -293,6 +311,7 @@ int main(void)
         cmocka_unit_test(test_driver_honours_sign),
         cmocka_unit_test(test_map_check_tables),
         cmocka_unit_test(test_decode),
+        cmocka_unit_test(test_unverified_warning),
     };
     return cmocka_run_group_tests(tests, start_sim, stop_sim);
 }

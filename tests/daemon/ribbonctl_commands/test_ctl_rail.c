@@ -295,7 +295,7 @@ static void test_modbus_probe(void **s)
     printf("%s", out);
     assert_int_equal(rc, 1);
     assert_non_null(strstr(out, "NOT verified"));
-    assert_non_null(strstr(out, "warning: map ribbon-sim is not verified"));
+    assert_non_null(strstr(out, "warning: Modbus map ribbon-sim ("));
     assert_non_null(strstr(out, "UNREADABLE: Illegal data address"));
     assert_non_null(strstr(out, "1 of 14 registers did not answer"));
     assert_non_null(strstr(out, "12500  12.5 mm")); /* the other rows still read */
