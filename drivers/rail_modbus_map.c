@@ -1,4 +1,6 @@
-/* rail_modbus_map.c: register map presets and their checks.
+/* rail_modbus_map.c: register map presets and their checks, the roles by name, and the warning an
+ * unverified map carries. The presets are also shipped as map files (config/maps/NAME.ini, read by
+ * config/modbus_map_file.c); test_modbus_map_file keeps each file equal to its preset.
  *
  * "ribbon-sim": the simulated drive served by ribbon-mbsim (drivers/mb_sim.c), holding registers
  * (32-bit values high word first, counts = 1 um):
