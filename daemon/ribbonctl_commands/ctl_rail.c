@@ -491,7 +491,7 @@ static int probe_main(rail_cli *c)
                    "meaning");
         for (int i = 0; i < n; i++) {
             const rail_mb_probe_row *r = &rows[i];
-            char bits[8], raw[24], val[64];
+            char bits[8], raw[24], val[128];
             snprintf(bits, sizeof bits, "%d%s", 16 * r->reg.words,
                      r->reg.kind >= RAIL_MB_COIL ? "" : r->is_signed ? "s" : "u");
             if (r->reg.kind >= RAIL_MB_COIL)
