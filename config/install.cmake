@@ -4,8 +4,9 @@
 #
 #   PREFIX/bin/                        ribbond ribbonctl ribbon-sim ribbon-grblsim ribbon-mbsim
 #                                      ribbon-store-bench
-#   PREFIX/share/ribbon/               the example rig files; scenes/ beside them (rig files find
-#                                      their scene relative to their own directory)
+#   PREFIX/share/ribbon/               the example rig files; scenes/ and maps/ (Modbus register
+#                                      maps) beside them (rig files find both relative to their
+#                                      own directory)
 #   PREFIX/lib/systemd/system/         ribbond.service, its ExecStart and Documentation pointed at
 #                                      PREFIX (installed, never enabled)
 #   PREFIX/lib/sysusers.d/ribbon.conf  the unit's user `ribbon` (groups dialout, video)
@@ -31,6 +32,8 @@ install(FILES
   ${CMAKE_SOURCE_DIR}/config/rig-modbus.ini
   DESTINATION ${RIBBON_SHARE_DIR})
 install(DIRECTORY ${CMAKE_SOURCE_DIR}/config/scenes DESTINATION ${RIBBON_SHARE_DIR}
+        FILES_MATCHING PATTERN "*.ini")
+install(DIRECTORY ${CMAKE_SOURCE_DIR}/config/maps DESTINATION ${RIBBON_SHARE_DIR}
         FILES_MATCHING PATTERN "*.ini")
 
 install(FILES ${CMAKE_SOURCE_DIR}/README.md DESTINATION ${RIBBON_DOC_DIR})

@@ -17,6 +17,7 @@
 
 #include "cfg_ini.h"
 #include "cfg_keys.h"
+#include "modbus_map_file.h"
 
 #define F(field) offsetof(rail_config, field)
 #define D(key, field, lo, hi, unit, doc) {"rail", key, RAIL_KEY_DOUBLE, F(field), 0, lo, hi, unit, doc}
@@ -61,7 +62,7 @@ static const rail_key rail_keys[] = {
     B("watchdog_external", modbus.watchdog_external,
       "modbus: on = the drive's own communication timeout is configured (map without a watchdog)"),
     {"rail", "map", RAIL_KEY_PRESET, 0, 0, 0, 0, "-",
-     "modbus: register map preset (ribbon-sim, oriental-az), applied before the reg_ keys"},
+     "modbus: register map: a preset (ribbon-sim, oriental-az) or a map file NAME.ini (relative to the rig file), applied before the reg_ keys"},
     {"rail", "word_order", RAIL_KEY_WORD_ORDER, 0, 0, 0, 0, "-",
      "modbus: high_first | low_first, word order of 32-bit values"},
     D("counts_per_mm", modbus.map.counts_per_mm, 1e-9, 1e9, "1/mm", "modbus: position counts per mm"),
@@ -181,9 +182,41 @@ static cfg_status set_number(const rail_key *k, char *field, const char *value, 
     return CFG_OK;
 }
 
-/* Apply one key, with the reason (without the key) in why. */
-static cfg_status set_key(rail_config *out, const char *name, const char *value, char *why,
-                          size_t why_len)
+/* 1 when a map value names a file (maps/NAME.ini) rather than a built-in preset. */
+static int map_is_file(const char *v)
+{
+    size_t n = strlen(v);
+    return n > 4 && !strcmp(v + n - 4, ".ini");
+}
+
+/* map = FILE: read the map file, relative to base_dir unless absolute. */
+static cfg_status set_map_file(rail_config *out, const char *value, const char *base_dir, char *why,
+                               size_t why_len)
+{
+    char path[512];
+    int n = value[0] == '/' || !base_dir ? snprintf(path, sizeof path, "%s", value)
+                                         : snprintf(path, sizeof path, "%s/%s", base_dir, value);
+    if (n < 0 || (size_t)n >= sizeof path) {
+        snprintf(why, why_len, "map file path too long");
+        return CFG_ERR_VALUE;
+    }
+    cfg_error err;
+    rail_modbus_map m;
+    cfg_status st = modbus_map_file_load(path, &m, &err);
+    if (st != CFG_OK) {
+        char msg[600];
+        cfg_error_format(&err, msg, sizeof msg);
+        snprintf(why, why_len, "%s", msg);
+        return st == CFG_ERR_IO ? CFG_ERR_VALUE : st;
+    }
+    out->modbus.map = m;
+    return CFG_OK;
+}
+
+/* Apply one key, with the reason (without the key) in why. base_dir: where a relative map file
+ * is found; NULL = do not read map files (the name is only checked). */
+static cfg_status set_key(rail_config *out, const char *name, const char *value, const char *base_dir,
+                          char *why, size_t why_len)
 {
     int i = cfg_keys_find(&key_table, "rail", name);
     if (i < 0) {
@@ -194,8 +227,11 @@ static cfg_status set_key(rail_config *out, const char *name, const char *value,
     char *field = (char *)out + k->offset;
     switch (k->kind) {
     case RAIL_KEY_PRESET:
+        if (map_is_file(value))
+            return base_dir ? set_map_file(out, value, base_dir, why, why_len) : CFG_OK;
         if (rail_modbus_preset(value, &out->modbus.map) != RAIL_OK) {
-            snprintf(why, why_len, "unknown preset '%s' (ribbon-sim, oriental-az)", value);
+            snprintf(why, why_len, "unknown preset '%s' (ribbon-sim, oriental-az, or a map file NAME.ini)",
+                     value);
             return CFG_ERR_VALUE;
         }
         return CFG_OK;
@@ -248,6 +284,12 @@ static cfg_status set_key(rail_config *out, const char *name, const char *value,
 cfg_status rail_config_set(rail_config *c, const char *key, const char *value, char *why,
                            size_t why_len)
 {
+    return rail_config_set_in(c, key, value, NULL, why, why_len);
+}
+
+cfg_status rail_config_set_in(rail_config *c, const char *key, const char *value, const char *base_dir,
+                              char *why, size_t why_len)
+{
     char local[8];
     if (!why || why_len == 0) {
         why = local;
@@ -257,7 +299,7 @@ cfg_status rail_config_set(rail_config *c, const char *key, const char *value, c
         snprintf(why, why_len, "missing argument");
         return CFG_ERR_VALUE;
     }
-    return set_key(c, key, value, why, why_len);
+    return set_key(c, key, value, base_dir, why, why_len);
 }
 
 void rail_config_init(rail_config *out, const char *rail_name)
@@ -274,12 +316,13 @@ void rail_config_init(rail_config *out, const char *rail_name)
 /* One read of the file: the section this load is for, what it has seen, the first failure. */
 typedef struct load_ctx {
     const char *file;
+    char dir[512];      /* the file's directory: where a relative map file is found */
     char section[64];   /* "rail.compress" or "rail.shear" */
     rail_config *out;
     bool seen;          /* a key of the section was read */
     bool pass_map;      /* first pass: only "map" */
     cfg_error *err;     /* where a failing key leaves its status and line for cfg_ini */
-    char detail[300];   /* "key: reason" of the first failure */
+    char detail[800];   /* "key: reason" of the first failure */
 } load_ctx;
 
 static int on_section(void *user, int line, const char *section)
@@ -299,8 +342,8 @@ static int on_key(void *user, int line, const char *section, const char *name, c
     /* The preset goes first (pass 1), every other key on top of it (pass 2). */
     if (c->pass_map != (strcmp(name, "map") == 0))
         return 0;
-    char why[200];
-    cfg_status st = set_key(c->out, name, value, why, sizeof why);
+    char why[700];
+    cfg_status st = set_key(c->out, name, value, c->dir, why, sizeof why);
     if (st != CFG_OK) {
         snprintf(c->detail, sizeof c->detail, "%s: %s", name, why);
         cfg_error_set(c->err, st, CFG_ORIGIN_LINE, c->file, line, NULL, NULL, "%s", c->detail);
@@ -388,6 +431,11 @@ static cfg_status load(const char *name, const char *text, size_t len, const cha
     load_ctx c;
     memset(&c, 0, sizeof c);
     c.file = name;
+    const char *slash = name ? strrchr(name, '/') : NULL;
+    if (slash)
+        snprintf(c.dir, sizeof c.dir, "%.*s", (int)(slash == name ? 1 : slash - name), name);
+    else
+        snprintf(c.dir, sizeof c.dir, ".");
     snprintf(c.section, sizeof c.section, "rail.%s", rail_name);
     c.out = out;
     c.err = &err;

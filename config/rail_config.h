@@ -6,7 +6,8 @@
  *   min_gap_mm, gap_at_zero_mm, gap_per_mm                      (all drivers; rail_params)
  *   port, baud, axis, segment_s, segments_ahead, reply_timeout_s, stall_timeout_s,
  *   min_segment_mm                                                  (gcode)
- *   address, rtu (on | off), parity, slave, timeout_s, watchdog_s, map,
+ *   address, rtu (on | off), parity, slave, timeout_s, watchdog_s,
+ *   map (a preset name, or a map file NAME.ini relative to the rig file: modbus_map_file.h),
  *   allow_unverified (on | off),
  *   watchdog_external (on | off), counts_per_mm, speed_per_mm_s, accel_per_mm_s2, word_order,
  *   reg_<name> = ADDR[/WORDS] for target_pos speed accel decel op_type trigger control
@@ -86,6 +87,10 @@ cfg_status rail_config_load_string(const char *text, const char *name, const cha
 void rail_config_init(rail_config *out, const char *rail_name);
 cfg_status rail_config_set(rail_config *c, const char *key, const char *value, char *why,
                            size_t why_len);
+/* The same, reading a map file (map = NAME.ini, modbus_map_file.h) relative to base_dir;
+ * rail_config_set (base_dir NULL) only accepts the name, without reading the file. */
+cfg_status rail_config_set_in(rail_config *c, const char *key, const char *value, const char *base_dir,
+                              char *why, size_t why_len);
 cfg_status rail_config_check(const rail_config *c, char *why, size_t why_len, char *key,
                              size_t key_len);
 const char *rail_config_key_name(size_t i);

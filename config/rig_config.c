@@ -1092,13 +1092,14 @@ static cfg_status rails_build(load_ctx *c)
         rail_config *rc = r == 0 ? &cfg->compress : &cfg->shear;
         rail_lines *rl = &c->rails[r];
         rail_config_init(rc, rail_name(r));
-        char why[300], key[48];
-        /* The preset first, then everything else in order: file lines, then overrides. */
+        char why[700], key[48];
+        /* The preset (or map file) first, then everything else in order: file lines, then
+           overrides. */
         for (int pass = 0; pass < 2; pass++) {
             for (int i = 0; i < rl->n; i++) {
                 int is_map = strcmp(rl->e[i].key, "map") == 0;
                 if (is_map != (pass == 0)) continue;
-                if (rail_config_set(rc, rl->e[i].key, rl->e[i].value, why, sizeof why) != 0)
+                if (rail_config_set_in(rc, rl->e[i].key, rl->e[i].value, cfg->dir, why, sizeof why) != 0)
                     return fail_rail(c, CFG_ERR_VALUE, r, rl->e[i].key, "%s", why);
             }
         }

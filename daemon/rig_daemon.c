@@ -107,6 +107,12 @@ int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *o
         release_locks(d);
         return -1;
     }
+    for (int r = 0; r < 2; r++) { /* a map let through by allow_unverified is said at every start */
+        const rail_config *rc = r == 0 ? &d->cfg.compress : &d->cfg.shear;
+        char warn[600];
+        if (!strcmp(rc->driver, "modbus") && rail_modbus_map_warning(&rc->modbus.map, warn, sizeof warn))
+            say(d, "warning: rail %s: %s; driven because allow_unverified = on", rc->params.name, warn);
+    }
     return 0;
 }
 

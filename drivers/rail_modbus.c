@@ -15,7 +15,7 @@
 #include <string.h>
 
 #include "rail_modbus.h"
-#include "rail_serial.h"
+#include "rail_modbus_link.h"
 
 typedef struct mb {
     modbus_t *ctx;
@@ -65,19 +65,28 @@ static rail_err mb_fail(rail *r, mb *k, const char *what)
     return rail_set_error(r, e, "%s: %s", what, modbus_strerror(err));
 }
 
-static rail_err read_regs(rail *r, mb *k, int addr, int n, uint16_t *dst, const char *what)
+/* n registers from addr of the table `kind` (holding: function 3, input: function 4; the map
+ * check keeps coils and discrete inputs off the driver's roles). */
+static rail_err read_regs(rail *r, mb *k, rail_mb_kind kind, int addr, int n, uint16_t *dst, const char *what)
 {
-    if (modbus_read_registers(k->ctx, addr, n, dst) != n)
+    int got = kind == RAIL_MB_INPUT ? modbus_read_input_registers(k->ctx, addr, n, dst)
+                                    : modbus_read_registers(k->ctx, addr, n, dst);
+    if (got != n)
         return mb_fail(r, k, what);
     return RAIL_OK;
 }
 
-/* Value of reg from a block read starting at base. */
+/* Value of reg from a block read starting at base; is_signed is the role's own reading, which
+ * the map's sign (a map file's `signed`) overrides. */
 static long reg_get(const mb *k, rail_mb_reg g, const uint16_t *blk, int base, bool is_signed)
 {
     const uint16_t *w = blk + (g.addr - base);
-    if (g.words == 2)
-        return (long)rail_mb_get32(w, k->m.map.word_order);
+    if (g.sign != RAIL_MB_SIGN_ROLE)
+        is_signed = g.sign == RAIL_MB_SIGNED;
+    if (g.words == 2) {
+        int32_t v = rail_mb_get32(w, k->m.map.word_order);
+        return g.sign == RAIL_MB_UNSIGNED ? (long)(uint32_t)v : (long)v;
+    }
     return is_signed ? (long)(int16_t)w[0] : (long)w[0];
 }
 
@@ -137,19 +146,20 @@ static rail_err probe(rail *r, mb *k)
     const rail_modbus_map *m = &k->m.map;
     uint16_t w[2];
     if (m->ident.addr >= 0) {
-        rail_err e = read_regs(r, k, m->ident.addr, m->ident.words, w, "probe: identity register");
+        rail_err e = read_regs(r, k, m->ident.kind, m->ident.addr, m->ident.words, w, "probe: identity register");
         if (e != RAIL_OK)
             return e;
-        long id = m->ident.words == 2 ? (long)rail_mb_get32(w, m->word_order) : (long)w[0];
+        long id = reg_get(k, m->ident, w, m->ident.addr, false);
         if (m->ident_value >= 0 && id != m->ident_value)
             return rail_set_error(r, RAIL_E_PROTOCOL,
                                   "probe: identity register %d reads 0x%lx, map %s expects 0x%lx; "
                                   "wrong drive or wrong map, nothing written",
                                   m->ident.addr, id, m->name, m->ident_value);
     }
-    rail_err e = read_regs(r, k, m->status.addr, m->status.words, w, "probe: status register");
+    rail_err e = read_regs(r, k, m->status.kind, m->status.addr, m->status.words, w, "probe: status register");
     if (e == RAIL_OK)
-        e = read_regs(r, k, m->actual_pos.addr, m->actual_pos.words, w, "probe: position register");
+        e = read_regs(r, k, m->actual_pos.kind, m->actual_pos.addr, m->actual_pos.words, w,
+                      "probe: position register");
     return e;
 }
 
@@ -210,21 +220,23 @@ static rail_err mb_poll(rail *r, void *impl, rail_status *out)
         }
     }
     /* Position, velocity, status, alarm and load: one block read when they lie within 64
-     * registers of each other, else one read each. */
+     * registers of each other in one table, else one read each. */
     rail_mb_reg regs[5] = {m->actual_pos, m->actual_vel, m->status, m->alarm, m->load};
     const bool is_signed[5] = {true, true, false, false, true};
     int lo = 65536, hi = -1;
+    bool one_table = true;
     for (int i = 0; i < 5; i++)
         if (regs[i].addr >= 0) {
             lo = regs[i].addr < lo ? regs[i].addr : lo;
             hi = regs[i].addr + regs[i].words - 1 > hi ? regs[i].addr + regs[i].words - 1 : hi;
+            one_table = one_table && regs[i].kind == m->actual_pos.kind;
         }
     uint16_t blk[64];
     long val[5] = {0, 0, 0, 0, 0};
     rail_err e = RAIL_E_TIMEOUT;
     for (int attempt = 0; attempt < 2; attempt++) { /* one retry for a single bad reply */
-        if (hi - lo + 1 <= 64) {
-            e = read_regs(r, k, lo, hi - lo + 1, blk, "reading status");
+        if (hi - lo + 1 <= 64 && one_table) {
+            e = read_regs(r, k, m->actual_pos.kind, lo, hi - lo + 1, blk, "reading status");
             for (int i = 0; i < 5 && e == RAIL_OK; i++)
                 val[i] = regs[i].addr >= 0 ? reg_get(k, regs[i], blk, lo, is_signed[i]) : 0;
         } else {
@@ -232,7 +244,8 @@ static rail_err mb_poll(rail *r, void *impl, rail_status *out)
             for (int i = 0; i < 5 && e == RAIL_OK; i++) {
                 if (regs[i].addr < 0)
                     continue;
-                e = read_regs(r, k, regs[i].addr, regs[i].words, blk, i == 4 ? "reading the load" : "reading status");
+                e = read_regs(r, k, regs[i].kind, regs[i].addr, regs[i].words, blk,
+                              i == 4 ? "reading the load" : "reading status");
                 val[i] = e == RAIL_OK ? reg_get(k, regs[i], blk, regs[i].addr, is_signed[i]) : 0;
             }
         }
@@ -330,10 +343,7 @@ static rail_err mb_reset(rail *r, void *impl)
 static void mb_close(void *impl)
 {
     mb *k = impl;
-    if (k->ctx) {
-        modbus_close(k->ctx);
-        modbus_free(k->ctx);
-    }
+    rail_modbus_link_close(k->ctx);
     free(k);
 }
 
@@ -348,21 +358,6 @@ static const rail_ops mb_ops = {
     .reset = mb_reset,
     .close = mb_close,
 };
-
-static rail_err parse_host_port(const char *a, char *host, size_t hn, int *port)
-{
-    const char *c = strrchr(a, ':');
-    if (!c || c == a || (size_t)(c - a) >= hn)
-        return RAIL_E_INVALID;
-    memcpy(host, a, (size_t)(c - a));
-    host[c - a] = 0;
-    char *end = NULL;
-    long p = strtol(c + 1, &end, 10);
-    if (!*(c + 1) || *end || p < 1 || p > 65535)
-        return RAIL_E_INVALID;
-    *port = (int)p;
-    return RAIL_OK;
-}
 
 rail_err rail_modbus_open(rail **out, const rail_params *p, const rail_modbus_params *mp,
                           rail_clock clock, char *why, size_t why_len)
@@ -417,46 +412,11 @@ rail_err rail_modbus_open(rail **out, const rail_params *p, const rail_modbus_pa
     k->accel_scale = m->accel_per_mm_s2 > 0.0 ? m->accel_per_mm_s2 : m->counts_per_mm;
     k->accel_mm_s2 = p->accel_mm_s2;
     k->prev_t = rail_clock_now(clock);
-    if (mp->rtu) {
-        char par = mp->parity;
-        if (par != 'N' && par != 'E' && par != 'O') {
-            free(k);
-            snprintf(why, why_len, "modbus: parity must be N, E or O");
-            return RAIL_E_INVALID;
-        }
-        /* The line may be named like a G-code port: a path or usb:VID:PID[:SERIAL]. */
-        char dev[256];
-        rail_err re = rail_serial_resolve(mp->address, dev, sizeof dev, why, why_len);
-        if (re != RAIL_OK) {
-            free(k);
-            return re;
-        }
-        k->ctx = modbus_new_rtu(dev, mp->baud, par, 8, par == 'N' ? 2 : 1);
-    } else {
-        char host[128];
-        int port = 0;
-        if (parse_host_port(mp->address, host, sizeof host, &port) != RAIL_OK) {
-            free(k);
-            snprintf(why, why_len, "modbus: address '%.100s' is not HOST:PORT", mp->address);
-            return RAIL_E_INVALID;
-        }
-        k->ctx = modbus_new_tcp(host, port);
-    }
-    if (!k->ctx) {
-        snprintf(why, why_len, "modbus: cannot create a context for %.100s: %s", mp->address,
-                 modbus_strerror(errno));
+    e = rail_modbus_link_open(&k->ctx, mp->address, mp->rtu, mp->baud, mp->parity, mp->slave, mp->timeout_s,
+                              why, why_len);
+    if (e != RAIL_OK) {
         free(k);
-        return RAIL_E_INVALID;
-    }
-    modbus_set_slave(k->ctx, mp->slave);
-    uint32_t sec = (uint32_t)mp->timeout_s, usec = (uint32_t)((mp->timeout_s - sec) * 1e6);
-    modbus_set_response_timeout(k->ctx, sec, usec);
-    modbus_set_byte_timeout(k->ctx, sec, usec);
-    modbus_set_error_recovery(k->ctx, MODBUS_ERROR_RECOVERY_NONE);
-    if (modbus_connect(k->ctx) != 0) {
-        snprintf(why, why_len, "modbus: cannot connect to %.100s: %s", mp->address, modbus_strerror(errno));
-        mb_close(k);
-        return RAIL_E_IO;
+        return e;
     }
     /* Create the rail first so the probe's failures have a rail to carry their reason. */
     rail *r = NULL;

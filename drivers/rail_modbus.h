@@ -3,7 +3,9 @@
  * The map says where the drive keeps its target position, speed, acceleration, start trigger,
  * control word (stop, home, alarm reset), actual position and velocity, status bits, alarm
  * code, communication watchdog and identity, how wide each value is (16 or 32 bits) and in which
- * word order 32-bit values travel (rail_modbus_map.h). Maps come from config or from presets
+ * word order 32-bit values travel, and in which table each lives: holding registers are read
+ * with function 3 and written with 16, input registers read with 4 (rail_modbus_map.h). Maps come
+ * from map files (config/maps/, read by the config layer), from config keys or from presets
  * (rail_modbus_map.c): "ribbon-sim" (the simulated drive of ribbon-mbsim, verified by the tests) and "oriental-az"
  * (Oriental Motor AZ series, from its published manual, NOT verified on hardware: needs
  * allow_unverified). Opening a drive probes it read-only first (identity, status, position);

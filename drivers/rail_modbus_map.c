@@ -1,4 +1,6 @@
-/* rail_modbus_map.c: register map presets and their checks.
+/* rail_modbus_map.c: register map presets and their checks, the roles by name, and the warning an
+ * unverified map carries. The presets are also shipped as map files (config/maps/NAME.ini, read by
+ * config/modbus_map_file.c); test_modbus_map_file keeps each file equal to its preset.
  *
  * "ribbon-sim": the simulated drive served by ribbon-mbsim (drivers/mb_sim.c), holding registers
  * (32-bit values high word first, counts = 1 um):
@@ -34,11 +36,11 @@
 
 static rail_mb_reg R(int addr, int words)
 {
-    rail_mb_reg r = {addr, words};
+    rail_mb_reg r = {.addr = addr, .words = words};
     return r;
 }
 
-static const rail_mb_reg NONE = {-1, 1};
+static const rail_mb_reg NONE = {.addr = -1, .words = 1};
 
 static void map_sim(rail_modbus_map *m)
 {
@@ -132,34 +134,92 @@ rail_err rail_modbus_preset(const char *name, rail_modbus_map *out)
     return RAIL_E_INVALID;
 }
 
+static const char *const role_names[RAIL_MB_ROLES] = {
+    "target_pos", "speed",  "accel",  "decel",    "op_type", "trigger", "control",
+    "actual_pos", "actual_vel", "status", "alarm", "watchdog", "ident", "load"};
+
+const char *rail_modbus_role_name(int i)
+{
+    return i >= 0 && i < RAIL_MB_ROLES ? role_names[i] : NULL;
+}
+
+rail_mb_reg *rail_modbus_role(rail_modbus_map *m, int i)
+{
+    rail_mb_reg *const regs[RAIL_MB_ROLES] = {
+        &m->target_pos, &m->speed,      &m->accel,  &m->decel, &m->op_type,   &m->trigger, &m->control,
+        &m->actual_pos, &m->actual_vel, &m->status, &m->alarm, &m->watchdog, &m->ident,   &m->load};
+    return i >= 0 && i < RAIL_MB_ROLES ? regs[i] : NULL;
+}
+
+const rail_mb_reg *rail_modbus_role_c(const rail_modbus_map *m, int i)
+{
+    return rail_modbus_role((rail_modbus_map *)m, i);
+}
+
+int rail_modbus_role_written(int i)
+{
+    /* target_pos speed accel decel op_type trigger control are written to move and stop;
+       watchdog is written once at open. */
+    return (i >= 0 && i <= 6) || i == 11;
+}
+
+const char *rail_mb_kind_name(rail_mb_kind k)
+{
+    switch (k) {
+    case RAIL_MB_HOLDING: return "holding";
+    case RAIL_MB_INPUT: return "input";
+    case RAIL_MB_COIL: return "coil";
+    case RAIL_MB_DISCRETE: return "discrete";
+    }
+    return "?";
+}
+
 static bool reg_ok(rail_mb_reg r)
 {
-    return r.addr < 0 || (r.addr <= 65534 && (r.words == 1 || r.words == 2) && r.addr + r.words <= 65536);
+    return r.addr < 0 || (r.addr <= 65534 && (r.words == 1 || r.words == 2) && r.addr + r.words <= 65536 &&
+                          (int)r.kind >= RAIL_MB_HOLDING && (int)r.kind <= RAIL_MB_DISCRETE &&
+                          (int)r.sign >= RAIL_MB_SIGN_ROLE && (int)r.sign <= RAIL_MB_UNSIGNED &&
+                          ((r.kind != RAIL_MB_COIL && r.kind != RAIL_MB_DISCRETE) || r.words == 1));
 }
 
 rail_err rail_modbus_map_check(const rail_modbus_map *m, char *why, size_t why_len)
 {
-    struct {
-        const char *name;
-        rail_mb_reg r;
-        bool required;
-    } regs[] = {
-        {"target_pos", m->target_pos, true}, {"speed", m->speed, true},
-        {"accel", m->accel, false},          {"decel", m->decel, false},
-        {"op_type", m->op_type, false},      {"trigger", m->trigger, true},
-        {"control", m->control, true},       {"actual_pos", m->actual_pos, true},
-        {"actual_vel", m->actual_vel, false}, {"status", m->status, true},
-        {"alarm", m->alarm, false},          {"watchdog", m->watchdog, false},
-        {"ident", m->ident, false},          {"load", m->load, false},
-    };
-    for (size_t i = 0; i < sizeof regs / sizeof regs[0]; i++) {
-        if (!reg_ok(regs[i].r)) {
-            snprintf(why, why_len, "modbus map %s: register %s: address %d / width %d words invalid", m->name,
-                     regs[i].name, regs[i].r.addr, regs[i].r.words);
+    /* target_pos speed trigger control actual_pos status are required. */
+    static const bool required[RAIL_MB_ROLES] = {true, true, false, false, false, true, true,
+                                                 true, false, true, false, false, false, false};
+    for (int i = 0; i < RAIL_MB_ROLES; i++) {
+        const rail_mb_reg *r = rail_modbus_role_c(m, i);
+        const char *name = rail_modbus_role_name(i);
+        if (!reg_ok(*r)) {
+            snprintf(why, why_len, "modbus map %s: register %s: address %d / width %d words / type %d invalid",
+                     m->name, name, r->addr, r->words, (int)r->kind);
             return RAIL_E_INVALID;
         }
-        if (regs[i].required && regs[i].r.addr < 0) {
-            snprintf(why, why_len, "modbus map %s: register %s is required", m->name, regs[i].name);
+        if (required[i] && r->addr < 0) {
+            snprintf(why, why_len, "modbus map %s: register %s is required", m->name, name);
+            return RAIL_E_INVALID;
+        }
+        if (r->addr >= 0 && (r->kind == RAIL_MB_COIL || r->kind == RAIL_MB_DISCRETE)) {
+            snprintf(why, why_len, "modbus map %s: register %s: type %s is one bit; the driver reads "
+                     "it as a holding or input register", m->name, name, rail_mb_kind_name(r->kind));
+            return RAIL_E_INVALID;
+        }
+        if (r->addr >= 0 && r->kind != RAIL_MB_HOLDING && rail_modbus_role_written(i)) {
+            snprintf(why, why_len, "modbus map %s: register %s: type %s is read-only; the driver "
+                     "writes this one (holding)", m->name, name, rail_mb_kind_name(r->kind));
+            return RAIL_E_INVALID;
+        }
+    }
+    if (m->n_info < 0 || m->n_info > RAIL_MB_INFO_MAX) {
+        snprintf(why, why_len, "modbus map %s: %d information registers (at most %d)", m->name, m->n_info,
+                 RAIL_MB_INFO_MAX);
+        return RAIL_E_INVALID;
+    }
+    for (int i = 0; i < m->n_info; i++) {
+        if (m->info[i].reg.addr < 0 || !reg_ok(m->info[i].reg) || !isfinite(m->info[i].scale)) {
+            snprintf(why, why_len, "modbus map %s: information register %.32s: address %d / width %d "
+                     "words / scale invalid", m->name, m->info[i].name, m->info[i].reg.addr,
+                     m->info[i].reg.words);
             return RAIL_E_INVALID;
         }
     }
@@ -187,6 +247,19 @@ rail_err rail_modbus_map_check(const rail_modbus_map *m, char *why, size_t why_l
         return RAIL_E_INVALID;
     }
     return RAIL_OK;
+}
+
+int rail_modbus_map_warning(const rail_modbus_map *m, char *out, size_t n)
+{
+    if (n)
+        out[0] = 0;
+    if (m->verified)
+        return 0;
+    snprintf(out, n,
+             "Modbus map %s (%.160s) is not verified on a real drive (source: %.160s): compare every "
+             "register with the drive's manual (ribbonctl rail --config RIG --rail NAME probe)",
+             m->name, m->file[0] ? m->file : "built-in", m->source[0] ? m->source : "none given");
+    return 1;
 }
 
 void rail_mb_put32(uint16_t *w, int32_t v, rail_mb_word_order o)

@@ -1,5 +1,5 @@
 /* fuzz_inputs.h: fuzz entry points for every parser that reads input from outside the program:
- * the scene and rig INI files (through their real loaders), `--set` overrides, the API's request
+ * the scene and rig INI files and Modbus map files (through their real loaders), `--set` overrides, the API's request
  * line and JSON bodies (router and body checks, no socket), whole API requests with headers (the
  * guard's and the server's reading of a head, api_head.c), the camera calibration file, the
  * replay rails CSV and the sweep CSV a resumed sweep reads. Each takes arbitrary bytes and must
@@ -24,6 +24,7 @@ extern "C" {
 
 int fuzz_scene_ini_one(const uint8_t *data, size_t size);
 int fuzz_rig_ini_one(const uint8_t *data, size_t size);
+int fuzz_map_ini_one(const uint8_t *data, size_t size);
 int fuzz_set_override_one(const uint8_t *data, size_t size);
 int fuzz_api_request_one(const uint8_t *data, size_t size);
 int fuzz_api_headers_one(const uint8_t *data, size_t size);

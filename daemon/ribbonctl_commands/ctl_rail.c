@@ -4,8 +4,10 @@
  *   ribbonctl rail (--config F --rail compress|shear | --driver mock|gcode|modbus [--port PATH]
  *                  [--address HOST:PORT] [--axis X|Y] ...) ACTION [--json]
  *   ACTION: status | home --confirm | move-abs MM | move-rel MM | jog MM_S [--duration S] | stop
- *           | estop | reset | bench
- * (reset clears a device alarm, e.g. GRBL's "$X" unlock; it never moves the rail.)
+ *           | estop | reset | bench | probe
+ * (reset clears a device alarm, e.g. GRBL's "$X" unlock; it never moves the rail. probe reads
+ * every register of a Modbus rail's map once and prints it with its meaning and units: it writes
+ * nothing, so the map can be checked against the drive's manual before anything moves.)
  *
  * Moves and homing wait until the rail is at rest (polling at the rail's rate keeps GRBL jog
  * segments flowing and the Modbus watchdog fed), then print the final status. A jog runs for
@@ -22,12 +24,14 @@
 
 #include "ctl.h"
 #include "cfg_number.h"
+#include "modbus_map_file.h"
 #include "rail_config.h"
 #include "rig_config.h"
 #include "rail_gcode.h"
 #include "rail_lock.h"
 #include "rail_mock.h"
 #include "rail_modbus.h"
+#include "rail_modbus_probe.h"
 
 static volatile sig_atomic_t g_interrupted; /* set by SIGINT/SIGTERM only */
 
@@ -63,13 +67,14 @@ static void usage(FILE *f)
             "SOURCE: --config RIG.ini --rail compress|shear\n"
             "     or --driver mock|gcode|modbus with:\n"
             "        --port PATH|usb:VID:PID[:SERIAL] --baud N --axis X|Y|Z      (gcode)\n"
-            "        --address HOST:PORT | --rtu DEVICE --slave N --map NAME\n"
+            "        --address HOST:PORT | --rtu DEVICE --slave N --map NAME|FILE.ini\n"
             "        --counts-per-mm C --allow-unverified --watchdog-external    (modbus)\n"
             "        --start MM                                                   (mock)\n"
             "limits: --soft-min MM --soft-max MM --max-speed MM_S --accel MM_S2 --poll-hz HZ\n"
             "        --min-gap MM --gap-at-zero MM --gap-per-mm 1|-1\n"
             "ACTION: status | home --confirm | move-abs MM | move-rel MM | jog MM_S | stop | estop\n"
             "        | reset (clear a device alarm; never moves) | bench\n"
+            "        | probe (modbus: read every mapped register once, print it; writes nothing)\n"
             "options: --speed MM_S  --timeout S  --duration S (jog)  --polls N (bench)  --json\n");
 }
 
@@ -135,9 +140,20 @@ static int parse(rail_cli *c, int argc, char **argv)
             bad = num(a, v, &x);
             c->m.slave = (int)x;
         } else if (OPT("--map")) {
-            bad = !v || rail_modbus_preset(v, &c->m.map) != RAIL_OK;
-            if (bad)
-                fprintf(stderr, "ribbonctl rail: unknown --map '%s' (ribbon-sim, oriental-az)\n", v ? v : "");
+            size_t vn = v ? strlen(v) : 0;
+            if (vn > 4 && !strcmp(v + vn - 4, ".ini")) { /* a map file (modbus_map_file.h) */
+                cfg_error ce;
+                bad = modbus_map_file_load(v, &c->m.map, &ce) != CFG_OK;
+                if (bad) {
+                    char msg[600];
+                    fprintf(stderr, "ribbonctl rail: --map: %s\n", cfg_error_format(&ce, msg, sizeof msg));
+                }
+            } else {
+                bad = !v || rail_modbus_preset(v, &c->m.map) != RAIL_OK;
+                if (bad)
+                    fprintf(stderr, "ribbonctl rail: unknown --map '%s' (ribbon-sim, oriental-az, or a "
+                                    "map file NAME.ini)\n", v ? v : "");
+            }
         } else if (OPT("--counts-per-mm")) {
             bad = num(a, v, &c->counts_per_mm); /* applied after --map, whatever the order */
         } else if (OPT("--start")) {
@@ -404,6 +420,110 @@ static int bench(rail_cli *c, rail *r)
     return fails ? 1 : 0;
 }
 
+/* `probe`: every register of the map read once, printed with its meaning and units. Writes
+ * nothing (no watchdog, no stop); the rail's device lock is held as for any other action. */
+static int probe_main(rail_cli *c)
+{
+    char why[512] = "";
+    if (!c->driver || strcmp(c->driver, "modbus")) {
+        fprintf(stderr, "ribbonctl rail: probe reads a Modbus drive's register map; rail '%s' has driver %s\n",
+                c->p.name, c->driver ? c->driver : "(none)");
+        return 2;
+    }
+    const rail_modbus_map *m = &c->m.map;
+    rail_open_spec spec;
+    memset(&spec, 0, sizeof spec);
+    snprintf(spec.driver, sizeof spec.driver, "modbus");
+    spec.params = c->p;
+    spec.modbus = c->m;
+    if (rail_locks_take(&spec, NULL, "ribbonctl rail probe", &held, why, sizeof why) != RAIL_OK) {
+        fprintf(stderr, "ribbonctl rail: %s\n", why);
+        return 1;
+    }
+    rail_mb_probe_row rows[RAIL_MB_PROBE_MAX];
+    int n = 0;
+    rail_err e = rail_modbus_probe(&c->m, rows, RAIL_MB_PROBE_MAX, &n, why, sizeof why);
+    rail_locks_release(held);
+    held = NULL;
+    if (c->json) {
+        json_t *o = json_object();
+        json_object_set_new(o, "rail", json_string(c->p.name));
+        json_object_set_new(o, "map", json_string(m->name));
+        json_object_set_new(o, "map_file", json_string(m->file));
+        json_object_set_new(o, "verified", json_boolean(m->verified));
+        json_object_set_new(o, "address", json_string(c->m.address));
+        json_object_set_new(o, "slave", json_integer(c->m.slave));
+        json_t *a = json_array();
+        for (int i = 0; i < n; i++) {
+            const rail_mb_probe_row *r = &rows[i];
+            json_t *x = json_object();
+            json_object_set_new(x, "name", json_string(r->name));
+            json_object_set_new(x, "address", json_integer(r->reg.addr));
+            json_object_set_new(x, "type", json_string(rail_mb_kind_name(r->reg.kind)));
+            json_object_set_new(x, "bits", json_integer(16 * r->reg.words));
+            json_object_set_new(x, "signed", json_boolean(r->is_signed));
+            json_object_set_new(x, "meaning", json_string(r->reg.meaning));
+            json_object_set_new(x, "ok", json_boolean(r->ok));
+            if (r->ok) {
+                json_object_set_new(x, "raw", json_integer(r->raw));
+                json_object_set_new(x, "value", isnan(r->value) ? json_null() : json_real(r->value));
+                json_object_set_new(x, "unit", json_string(r->unit));
+                json_object_set_new(x, "text", json_string(r->text));
+            } else {
+                json_object_set_new(x, "error", json_string(r->error));
+            }
+            json_array_append_new(a, x);
+        }
+        json_object_set_new(o, "registers", a);
+        json_object_set_new(o, "ok", json_boolean(e == RAIL_OK));
+        if (e != RAIL_OK)
+            json_object_set_new(o, "error", json_string(why));
+        char *s = json_dumps(o, JSON_COMPACT | JSON_REAL_PRECISION(10));
+        printf("%s\n", s ? s : "{}");
+        free(s);
+        json_decref(o);
+    } else {
+        printf("%s: map %s%s%s%s, %s, drive %s slave %d\n", c->p.name, m->name, m->file[0] ? " (" : "",
+               m->file, m->file[0] ? ")" : "", m->verified ? "verified" : "NOT verified on a real drive",
+               c->m.address, c->m.slave);
+        if (n)
+            printf("%-20s %7s %-8s %-4s %12s  %-26s %s\n", "register", "address", "type", "bits", "raw", "value",
+                   "meaning");
+        for (int i = 0; i < n; i++) {
+            const rail_mb_probe_row *r = &rows[i];
+            char bits[8], raw[24], val[128];
+            snprintf(bits, sizeof bits, "%d%s", 16 * r->reg.words,
+                     r->reg.kind >= RAIL_MB_COIL ? "" : r->is_signed ? "s" : "u");
+            if (r->reg.kind >= RAIL_MB_COIL)
+                snprintf(bits, sizeof bits, "1");
+            if (!r->ok) {
+                snprintf(raw, sizeof raw, "-");
+                snprintf(val, sizeof val, "UNREADABLE: %.48s", r->error);
+            } else {
+                if (r->is_signed || r->reg.kind >= RAIL_MB_COIL)
+                    snprintf(raw, sizeof raw, "%ld", r->raw);
+                else
+                    snprintf(raw, sizeof raw, "0x%0*lx", 4 * r->reg.words, (unsigned long)r->raw);
+                if (!isnan(r->value) && r->text[0])
+                    snprintf(val, sizeof val, "%.6g %s (%.40s)", r->value, r->unit, r->text);
+                else if (!isnan(r->value))
+                    snprintf(val, sizeof val, "%.6g %s", r->value, r->unit);
+                else
+                    snprintf(val, sizeof val, "%.60s", r->text[0] ? r->text : "");
+            }
+            printf("%-20s %7d %-8s %-4s %12s  %-26s %s\n", r->name, r->reg.addr, rail_mb_kind_name(r->reg.kind),
+                   bits, raw, val, r->reg.meaning);
+        }
+        char warn[600];
+        if (rail_modbus_map_warning(m, warn, sizeof warn))
+            printf("warning: %s; then set verified = yes in the map file, or allow_unverified = on\n", warn);
+        fflush(stdout); /* the table before the verdict, when both go to one pipe */
+        if (e != RAIL_OK)
+            fprintf(stderr, "ribbonctl rail: probe: %s\n", why);
+    }
+    return e == RAIL_OK ? 0 : 1;
+}
+
 /* 1 when the file has a [rig] section (a whole rig file), 0 for a file of rail sections only. */
 static int rail_file_is_rig(const char *path)
 {
@@ -499,7 +619,7 @@ int ctl_rail_main(int argc, char **argv)
     const char *A = c.action;
     int needs_value = !strcmp(A, "move-abs") || !strcmp(A, "move-rel") || !strcmp(A, "jog");
     if (strcmp(A, "status") && strcmp(A, "home") && strcmp(A, "stop") && strcmp(A, "estop") &&
-        strcmp(A, "reset") && strcmp(A, "bench") && !needs_value) {
+        strcmp(A, "reset") && strcmp(A, "bench") && strcmp(A, "probe") && !needs_value) {
         fprintf(stderr, "ribbonctl rail: unknown action '%s'\n", A);
         usage(stderr);
         return 2;
@@ -508,6 +628,8 @@ int ctl_rail_main(int argc, char **argv)
         fprintf(stderr, "ribbonctl rail: %s %s\n", A, needs_value ? "needs a value" : "takes no value");
         return 2;
     }
+    if (!strcmp(A, "probe"))
+        return probe_main(&c);
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_signal;

@@ -359,7 +359,7 @@ static void test_load_register_read_and_scaled(void **s)
 
     rail_params p = params("shear");
     rail_modbus_params m = mparams(port);
-    m.map.load = (rail_mb_reg){18, 1};
+    m.map.load = (rail_mb_reg){.addr = 18, .words = 1};
     m.map.load_scale = 0.1; /* 0.1 % of rated torque per count */
     rail *r = NULL;
     char why[300];

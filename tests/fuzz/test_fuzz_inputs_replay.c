@@ -1,6 +1,6 @@
 /* test_fuzz_inputs_replay.c: a short, deterministic run of the input parsers' fuzz targets
  * (fuzz/fuzz_inputs.h) in every build: each target's seeds (fuzz/corpus/<target>/, plus the
- * shipped scene and rig files for the loaders), then a fixed stream of byte mutations of them
+ * shipped scene, rig and Modbus map files for the loaders), then a fixed stream of byte mutations of them
  * (flips, truncations, splices, inserted hex floats and NULs). The targets abort on a broken
  * invariant and the sanitizers catch memory errors, so this fails on anything the fuzzers would
  * report; the inputs the fuzzers found are seeds here once fixed. */
@@ -133,6 +133,12 @@ static void test_rig_ini(void **st)
     replay(fuzz_rig_ini_one, "rig_ini", RIBBON_SOURCE_DIR "/config", ".ini", 2000);
 }
 
+static void test_map_ini(void **st)
+{
+    (void)st;
+    replay(fuzz_map_ini_one, "map_ini", RIBBON_SOURCE_DIR "/config/maps", ".ini", 3000);
+}
+
 static void test_set_override(void **st)
 {
     (void)st;
@@ -173,6 +179,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_scene_ini),   cmocka_unit_test(test_rig_ini),
+        cmocka_unit_test(test_map_ini),
         cmocka_unit_test(test_set_override), cmocka_unit_test(test_api_request),
         cmocka_unit_test(test_api_headers),
         cmocka_unit_test(test_calib_file),  cmocka_unit_test(test_replay_rails),

@@ -68,7 +68,8 @@ for p in ribbond ribbonctl ribbon-sim ribbon-grblsim ribbon-mbsim ribbon-store-b
   [ -x "$stage/usr/bin/$p" ] || fail "usr/bin/$p not installed"
 done
 for f in mock.ini replay.ini rig-gcode.ini rig-modbus.ini scenes/mock-gamma013.ini \
-         scenes/paper-gamma013.ini scenes/paper-gamma021.ini scenes/pet-200x5.ini; do
+         scenes/paper-gamma013.ini scenes/paper-gamma021.ini scenes/pet-200x5.ini \
+         maps/ribbon-sim.ini maps/oriental-az.ini; do
   [ -f "$stage/usr/share/ribbon/$f" ] || fail "usr/share/ribbon/$f not installed"
 done
 unit="$stage/usr/lib/systemd/system/ribbond.service"

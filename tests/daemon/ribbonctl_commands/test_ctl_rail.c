@@ -1,7 +1,7 @@
 /* test_ctl_rail.c: `ribbonctl rail` and `ribbonctl ports` as a user runs them: the real program
  * against the mock, the GRBL simulator on a pty and the Modbus simulator on 127.0.0.1; --json
  * output parsed (state, position_mm, velocity_mm_s, code, message); refusals exit 1 with the
- * reason, usage errors exit 2. */
+ * reason, usage errors exit 2; `probe` reads a Modbus map's registers without writing. */
 #include <jansson.h>
 #include <math.h>
 #include <setjmp.h>
@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <cmocka.h>
@@ -224,6 +225,88 @@ static void test_gcode_and_modbus(void **s)
     mbsim_kill(m);
 }
 
+/* `rail --config RIG --rail NAME probe` against the simulated drive: every register of the shipped
+ * map file (config/maps/ribbon-sim.ini, named relative to the rig file's copy of it) read once and
+ * printed with its meaning, value and unit; the drive's watchdog stays unarmed (the probe wrote
+ * nothing: a status afterwards finds no comm-timeout alarm after 1.5 s of silence); an unverified
+ * map is probed with a warning; a register the drive lacks makes its row UNREADABLE and exit 1;
+ * a non-Modbus rail is a usage error. */
+static void test_modbus_probe(void **s)
+{
+    (void)s;
+    char dir[] = "/tmp/ribbon-test-probe-XXXXXX", out[16384], args[900], rig[200], maps[200], map[300];
+    assert_non_null(mkdtemp(dir));
+    snprintf(maps, sizeof maps, "%s/maps", dir);
+    assert_int_equal(mkdir(maps, 0700), 0);
+    snprintf(map, sizeof map, "%s/ribbon-sim.ini", maps);
+    snprintf(args, sizeof args, "cp %s/config/maps/ribbon-sim.ini %s", RIBBON_SOURCE_DIR, map);
+    assert_int_equal(system(args), 0);
+    mb_sim_params mp = mb_sim_params_default();
+    mp.start_mm = 12.5;
+    mp.load_counts = -42;
+    int port = 0;
+    pid_t m = mbsim_spawn(mp, &port);
+    snprintf(rig, sizeof rig, "%s/rig.ini", dir);
+    FILE *f = fopen(rig, "w");
+    assert_non_null(f);
+    fprintf(f, "[rail.shear]\ndriver = modbus\naddress = 127.0.0.1:%d\nmap = maps/ribbon-sim.ini\n"
+               "soft_min_mm = 0\nsoft_max_mm = 150\n[rail.compress]\ndriver = mock\n", port);
+    fclose(f);
+    snprintf(args, sizeof args, "rail --config %s --rail shear probe", rig);
+    int rc = run(args, out, sizeof out);
+    printf("%s", out);
+    assert_int_equal(rc, 0);
+    assert_non_null(strstr(out, "map ribbon-sim ("));
+    assert_non_null(strstr(out, "verified"));
+    const char *want[] = {"actual_pos", "12500  12.5 mm", "actual position (counts)", "ready in-position",
+                          "0x5242  as the map expects", "info.external_load", "-42  -42"};
+    for (size_t i = 0; i < sizeof want / sizeof want[0]; i++)
+        if (!strstr(out, want[i])) {
+            print_error("probe output lacks '%s'\n", want[i]);
+            fail();
+        }
+    snprintf(args, sizeof args, "rail --config %s --rail shear probe --json", rig);
+    assert_int_equal(run(args, out, sizeof out), 0);
+    json_error_t jerr;
+    json_t *o = json_loads(strchr(out, '{'), JSON_DISABLE_EOF_CHECK, &jerr);
+    assert_non_null(o);
+    json_t *regs = json_object_get(o, "registers");
+    assert_int_equal(json_array_size(regs), 13);
+    json_t *pos = json_array_get(regs, 5);
+    assert_string_equal(json_string_value(json_object_get(pos, "name")), "actual_pos");
+    assert_true(json_real_value(json_object_get(pos, "value")) == 12.5);
+    assert_string_equal(json_string_value(json_object_get(pos, "unit")), "mm");
+    json_decref(o);
+    /* Nothing was written: an armed watchdog would alarm the drive after 1 s without polls. */
+    usleep(1500 * 1000);
+    snprintf(args, sizeof args, "rail --config %s --rail shear --json status", rig);
+    assert_int_equal(run(args, out, sizeof out), 0);
+    o = parse_json_line(out);
+    assert_string_equal(json_string_value(json_object_get(o, "state")), "idle");
+    json_decref(o);
+    /* Unverified, with a register the drive does not have (an input register). */
+    f = fopen(map, "a");
+    fputs("[info.temperature]\naddress = 40\ntype = input\nunit = degC\n", f);
+    fclose(f);
+    snprintf(args, sizeof args, "sed -i 's/^verified = yes.*/verified = no/' %s", map);
+    assert_int_equal(system(args), 0);
+    snprintf(args, sizeof args, "rail --config %s --rail shear probe", rig);
+    rc = run(args, out, sizeof out);
+    printf("%s", out);
+    assert_int_equal(rc, 1);
+    assert_non_null(strstr(out, "NOT verified"));
+    assert_non_null(strstr(out, "warning: Modbus map ribbon-sim ("));
+    assert_non_null(strstr(out, "UNREADABLE: Illegal data address"));
+    assert_non_null(strstr(out, "1 of 14 registers did not answer"));
+    assert_non_null(strstr(out, "12500  12.5 mm")); /* the other rows still read */
+    snprintf(args, sizeof args, "rail --config %s --rail compress probe", rig);
+    assert_int_equal(run(args, out, sizeof out), 2);
+    assert_non_null(strstr(out, "driver mock"));
+    mbsim_kill(m);
+    snprintf(args, sizeof args, "rm -r %s", dir);
+    assert_int_equal(system(args), 0);
+}
+
 /* A reading of the rail through ribbonctl that succeeded (the simulators inject faults into every
  * request, status reads included): its JSON, or NULL after 20 tries. */
 static json_t *status_ok(const char *common)
@@ -302,6 +385,7 @@ int main(void)
         cmocka_unit_test(test_refusals_and_usage),
         cmocka_unit_test(test_rail_in_use_refused),
         cmocka_unit_test(test_gcode_and_modbus),
+        cmocka_unit_test(test_modbus_probe),
         cmocka_unit_test(test_faults_mid_move_stop_the_rail),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
