@@ -117,6 +117,7 @@ rod_status rod_fit_model_alloc(const rod_scene *sc, const rod_fit_obs *obs, int 
     path_order(obs, nobs, m->order);
     rod_fit_base_init(&m->base, m->r, sc);
     m->nopt = rod_newton_opts_static(sc);
+    m->nopt.positive_definite = 1; /* the upper states are stable: minimise */
     *out = m;
     return ROD_OK;
 oom:
@@ -187,11 +188,20 @@ rod_status rod_fit_model_eval(rod_fit_model *m, const double u[ROD_FIT_NKEYS], c
         }
         if (st != ROD_OK) {
             if (!prev) {
+                /* The route to the scene's own Delta L (the protocol's hold, where its scenes are
+                   known to reach the upper state), then along Delta L and Delta W to the first
+                   state; the route at the first state's Delta L if that fails. */
                 rod_scene sc = m->sc;
-                sc.compression = ob->dl;
                 rod_route_report rep = {0};
                 st = rod_route_to_state(r, m->s, &sc, +1, &rep);
-                if (st == ROD_OK) st = step_to(m, &m->state[kk], ob->dl, 0.0, ob->dl, ob->dw, &solves);
+                if (st == ROD_OK) st = step_to(m, &m->state[kk], sc.compression, 0.0, ob->dl, ob->dw, &solves);
+                if (st != ROD_OK && sc.compression != ob->dl) {
+                    rod_route_report rep2 = {0};
+                    rod_fit_apply(r, &m->base, u);
+                    sc.compression = ob->dl;
+                    st = rod_route_to_state(r, m->s, &sc, +1, &rep2);
+                    if (st == ROD_OK) st = step_to(m, &m->state[kk], ob->dl, 0.0, ob->dl, ob->dw, &solves);
+                }
                 if (st != ROD_OK) {
                     snprintf(why, why_len, "no upper state at Delta L %.4g, Delta W %.4g for these parameters: %s",
                              ob->dl, ob->dw, rod_status_message(st));
@@ -405,6 +415,8 @@ static int covariance(fit_ctx *c, const double *Jw, rod_fit_result *res)
     for (int a = 0; a < p; a++) {
         int k = c->key[a];
         int has_prior = isfinite(c->o->prior_sigma[k]);
+        /* Also a standard error wider than the parameter's whole range. */
+        if (!(sqrt(res->cov[k][k]) <= c->hi[k] - c->lo[k])) bad[a] = 1;
         res->determined[k] = !bad[a];
         res->se[k] = (bad[a] && !has_prior) ? INFINITY : sqrt(res->cov[k][k]);
     }

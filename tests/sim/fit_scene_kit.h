@@ -29,12 +29,13 @@ static inline rod_scene fit_kit_pet(int nodes)
     return sc;
 }
 
-/* Compression at Delta L 0.2 .. 0.3 (n_c states at Delta W 0), then the shear at Delta L 0.3 to
+/* Compression at Delta L 0.25 .. 0.3 (n_c states at Delta W 0; below about 0.235 this strip at N = 31
+ * has no upper state: gravity takes it), then the shear at Delta L 0.3 to
  * Delta W dw_max (n_s states). */
 static inline int fit_kit_states(rod_fit_obs *obs, int n_c, int n_s, double dw_max)
 {
     int n = 0;
-    for (int k = 0; k < n_c; k++) obs[n++] = (rod_fit_obs){0.2 + 0.1 * k / (n_c - 1), 0.0, 0.0, 0.0};
+    for (int k = 0; k < n_c; k++) obs[n++] = (rod_fit_obs){0.25 + 0.05 * k / (n_c - 1), 0.0, 0.0, 0.0};
     for (int k = 1; k <= n_s; k++) obs[n++] = (rod_fit_obs){0.3, dw_max * k / n_s, 0.0, 0.0};
     return n;
 }
