@@ -466,6 +466,7 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
         c.lo[k] = lo;
         c.hi[k] = hi;
         c.scale[k] = (k == ROD_FIT_POSITION_LEFT || k == ROD_FIT_POSITION_RIGHT) ? 0.01 : 1.0;
+        res->fitted[k] = 1;
         c.key[c.nfit++] = k;
     }
     memcpy(res->lo, c.lo, sizeof c.lo);

@@ -53,6 +53,7 @@ typedef struct rod_fit_result {
     double u[ROD_FIT_NKEYS];         /* fitted values (held ones: the scene's), fit units */
     double u0[ROD_FIT_NKEYS];        /* the scene's */
     double lo[ROD_FIT_NKEYS], hi[ROD_FIT_NKEYS]; /* the bounds used */
+    int fitted[ROD_FIT_NKEYS];       /* 1: fitted, 0: held */
     double se[ROD_FIT_NKEYS];        /* standard errors, fit units; INFINITY: not determined */
     int determined[ROD_FIT_NKEYS];   /* fitted and determined by the data */
     int at_bound[ROD_FIT_NKEYS];     /* ended at (within 1e-9 of the range of) a bound */
