@@ -547,7 +547,9 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
         st = ROD_ERR_BRANCH_LOST;
         goto done;
     }
-    if (gs != GSL_SUCCESS && gs != GSL_EMAXITER) {
+    /* GSL_ENOPROG: no step reduced the cost any more, the position is the best found. */
+    res->capped = gs == GSL_EMAXITER;
+    if (gs != GSL_SUCCESS && gs != GSL_EMAXITER && gs != GSL_ENOPROG) {
         snprintf(why, why_len, "Levenberg-Marquardt stopped: %s", gsl_strerror(gs));
         st = ROD_ERR_SINGULAR;
         goto done;

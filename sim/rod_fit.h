@@ -64,6 +64,7 @@ typedef struct rod_fit_result {
     double rms;                      /* sqrt(chi2 / nres): residual in units of the noise */
     double rms_start;                /* the same at the scene's values */
     int iterations, evaluations, model_failures;
+    int capped;                      /* LM stopped at max_iterations before converging */
     int misfit;                      /* rms above opts.misfit */
     double sv_min, sv_max;           /* singular values of the range-scaled data Jacobian */
     double wall_s;

@@ -34,7 +34,7 @@ static const char usage[] =
     "             folds.hinge_stiffness (compliant creases), ribbon.youngs_modulus (G with it);\n"
     "             default: both crease angles, and the hinge stiffness when the creases are compliant\n"
     "  --sigma-dz, --sigma-a   noise of Delta Z and of A (rad) that weights each residual\n"
-    "             (defaults 0.002 and 0.015, the tracker's)\n"
+    "             (defaults 0.002 and 0.015: the tracker's order, docs/vision.md)\n"
     "  --dw-max   leave out samples beyond this Delta W (the fit's cut-off before the snap)\n"
     "  --scale-covariance  standard errors scaled by the residual (chi2 / (n - p))\n"
     "  --no-snap  skip the fitted strip's snap prediction and its band\n"
@@ -281,6 +281,7 @@ int sim_cmd_fit(int argc, char **argv)
         json_object_set_new(j, "rms_start", json_real(r.rms_start));
         json_object_set_new(j, "misfit", json_boolean(r.misfit));
         json_object_set_new(j, "iterations", json_integer(r.iterations));
+        json_object_set_new(j, "iterations_capped", json_boolean(r.capped));
         json_object_set_new(j, "evaluations", json_integer(r.evaluations));
         json_object_set_new(j, "fit_wall_s", json_real(r.wall_s));
         for (int i = 0; i < m; i++) {
@@ -358,6 +359,9 @@ int sim_cmd_fit(int argc, char **argv)
                        snap.note);
         }
     }
+    if (r.capped)
+        fprintf(stderr, "ribbon-sim fit: Levenberg-Marquardt stopped at its cap of %d iterations before converging: "
+                        "the values printed are the best found\n", o.max_iterations);
     for (int i = 0; i < m; i++)
         if (r.at_bound[keys[i]])
             fprintf(stderr, "ribbon-sim fit: %s ran to its %s bound %g: the data ask for a value outside the bounds\n",
