@@ -22,7 +22,8 @@
 
 static const char usage[] =
     "usage: ribbon-sim fit --scene FILE --csv SAMPLES.csv [--fit KEY,KEY,...] [--sigma-dz X]\n"
-    "                      [--sigma-a X] [--paper] [--dw-max X] [--scale-covariance] [--no-snap]\n"
+    "                      [--sigma-a X] [--bound KEY=LO:HI ...] [--prior KEY=SIGMA ...] [--paper]\n"
+    "                      [--dw-max X] [--scale-covariance] [--no-snap]\n"
     "                      [--out-scene FILE] [--set section.key=value ...] [--json]\n"
     "  Fits the scene's strip to observed static states: a CSV with a header naming the columns\n"
     "  dl, dw, dz and a (Delta L, Delta W, Delta Z, A; other columns are ignored, so `ribbonctl\n"
@@ -35,6 +36,10 @@ static const char usage[] =
     "             default: both crease angles, and the hinge stiffness when the creases are compliant\n"
     "  --sigma-dz, --sigma-a   noise of Delta Z and of A (rad) that weights each residual\n"
     "             (defaults 0.002 and 0.015: the tracker's order, docs/vision.md)\n"
+    "  --bound    KEY=LO:HI in the scene key's units (default: scene -+ 20 deg, -+ 0.05 l,\n"
+    "             k / 100 .. x 100, E / 10 .. x 10)\n"
+    "  --prior    KEY=SIGMA: a prior centred on the scene's value, SIGMA in the key's units\n"
+    "             (relative for folds.hinge_stiffness and ribbon.youngs_modulus: 0.2 is 20%)\n"
     "  --dw-max   leave out samples beyond this Delta W (the fit's cut-off before the snap)\n"
     "  --scale-covariance  standard errors scaled by the residual (chi2 / (n - p))\n"
     "  --no-snap  skip the fitted strip's snap prediction and its band\n"
@@ -45,8 +50,12 @@ static const char usage[] =
     "  of the other regime. Exit 1 when no parameter set fits (residual above 5 noise units RMS)\n"
     "  or the fit fails (the reason is printed), 2 on bad input. docs/calibration.md.\n";
 
+#define FIT_MAX_SPECS 16
+
 typedef struct fit_args {
     const char *csv, *fit, *out_scene;
+    const char *bound[FIT_MAX_SPECS], *prior[FIT_MAX_SPECS];
+    int nbound, nprior;
     double sigma_dz, sigma_a, dw_max;
     int paper, scale_cov, no_snap;
 } fit_args;
@@ -81,6 +90,16 @@ static int take_flags(int *argc, char **argv, fit_args *a)
             }
             if (str) *str = argv[++i];
             else if (parse_num(f, argv[++i], num)) return -1;
+            continue;
+        }
+        if (!strcmp(f, "--bound") || !strcmp(f, "--prior")) {
+            int bound = !strcmp(f, "--bound");
+            int *cnt = bound ? &a->nbound : &a->nprior;
+            if (i + 1 >= *argc || *cnt >= FIT_MAX_SPECS) {
+                fprintf(stderr, "ribbon-sim fit: %s needs a value (at most %d of them; see --help)\n", f, FIT_MAX_SPECS);
+                return -1;
+            }
+            (bound ? a->bound : a->prior)[(*cnt)++] = argv[++i];
             continue;
         }
         if (!strcmp(f, "--paper")) a->paper = 1;
@@ -218,6 +237,57 @@ static int parse_keys(const char *list, const rod_scene *sc, rod_fit_opts *o)
     return 0;
 }
 
+/* --bound KEY=LO:HI and --prior KEY=SIGMA into the options (fit units). */
+static int parse_specs(const fit_args *a, rod_fit_opts *o)
+{
+    for (int b = 0; b < 2; b++) {
+        int n = b ? a->nprior : a->nbound;
+        for (int i = 0; i < n; i++) {
+            const char *spec = b ? a->prior[i] : a->bound[i];
+            const char *flag = b ? "--prior" : "--bound";
+            char buf[256];
+            snprintf(buf, sizeof buf, "%s", spec);
+            char *eq = strchr(buf, '=');
+            if (!eq) {
+                fprintf(stderr, "ribbon-sim fit: %s %s: expected %s\n", flag, spec, b ? "KEY=SIGMA" : "KEY=LO:HI");
+                return -1;
+            }
+            *eq = '\0';
+            int k = rod_fit_key_parse(buf);
+            if (k < 0) {
+                fprintf(stderr, "ribbon-sim fit: %s %s: %s is not a fit parameter\n", flag, spec, buf);
+                return -1;
+            }
+            int lg = rod_fit_key_log(k);
+            if (b) {
+                double sg;
+                if (parse_num(flag, eq + 1, &sg)) return -1;
+                if (!(sg > 0.0)) {
+                    fprintf(stderr, "ribbon-sim fit: %s %s: the width must be positive\n", flag, spec);
+                    return -1;
+                }
+                o->prior_sigma[k] = lg ? log1p(sg) : sg;
+            } else {
+                char *colon = strchr(eq + 1, ':');
+                double lo, hi;
+                if (!colon) {
+                    fprintf(stderr, "ribbon-sim fit: %s %s: expected KEY=LO:HI\n", flag, spec);
+                    return -1;
+                }
+                *colon = '\0';
+                if (parse_num(flag, eq + 1, &lo) || parse_num(flag, colon + 1, &hi)) return -1;
+                if (lg && !(lo > 0.0 && hi > 0.0)) {
+                    fprintf(stderr, "ribbon-sim fit: %s %s: the bounds of %s must be positive\n", flag, spec, buf);
+                    return -1;
+                }
+                o->lo[k] = lg ? log(lo) : lo;
+                o->hi[k] = lg ? log(hi) : hi;
+            }
+        }
+    }
+    return 0;
+}
+
 /* A value in the units the scene file uses. */
 static double natural(int k, double u)
 {
@@ -245,7 +315,7 @@ int sim_cmd_fit(int argc, char **argv)
     }
     rod_scene sc;
     if (!sim_opts_load_scene(&so, &sc)) return 2;
-    if (parse_keys(a.fit, &sc, &o)) return 2;
+    if (parse_keys(a.fit, &sc, &o) || parse_specs(&a, &o)) return 2;
     o.sigma_dz = a.sigma_dz;
     o.sigma_a = a.sigma_a;
     o.paper = a.paper;

@@ -119,8 +119,9 @@ static void fits_and_writes_the_scene(void **state)
     assert_int_equal(f.nodes, 31);
 
     char *jv[] = {"fit", "--scene", SCENE, "--set", "mesh.nodes=31", "--csv", csv, "--json", "--no-snap",
-                  "--fit", "folds.angle_left_deg,ribbon.youngs_modulus"};
-    run(&r, 11, jv);
+                  "--fit", "folds.angle_left_deg,ribbon.youngs_modulus", "--bound", "ribbon.youngs_modulus=1e9:2e10",
+                  "--prior", "folds.angle_left_deg=30"};
+    run(&r, 15, jv);
     assert_int_equal(r.status, 0);
     json_error_t je;
     json_t *j = json_loads(r.out, 0, &je);
@@ -166,6 +167,14 @@ static void bad_input_is_named(void **state)
     run(&r, 9, a4);
     assert_int_equal(r.status, 2);
     assert_non_null(strstr(r.err, "creases are rigid"));
+    char *a7[] = {"fit", "--scene", SCENE, "--csv", csv, "--bound", "folds.angle_left_deg=-80:-70"};
+    run(&r, 7, a7);
+    assert_int_equal(r.status, 2);
+    assert_non_null(strstr(r.err, "do not hold the scene's value"));
+    char *a8[] = {"fit", "--scene", SCENE, "--csv", csv, "--prior", "folds.hinge_stiffness=-1"};
+    run(&r, 7, a8);
+    assert_int_equal(r.status, 2);
+    assert_non_null(strstr(r.err, "must be positive"));
     write_samples(few, 2, 0, 0.0);
     char *a5[] = {"fit", "--scene", SCENE, "--set", "mesh.nodes=31", "--csv", few};
     run(&r, 7, a5);
