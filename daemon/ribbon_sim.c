@@ -16,6 +16,7 @@ static const cli_command commands[] = {
     {"sweep", sim_cmd_sweep, "phase diagram over (phi, Gamma): regime per point, boundary Gamma*(phi)"},
     {"sweep-merge", sim_cmd_sweep_merge, "join the shard files of `sweep --shard i/N` into one sweep file"},
     {"boundary", sim_cmd_boundary, "regime boundary Gamma*(phi) traced directly (pitchfork meets saddle-node)"},
+    {"fit", sim_cmd_fit, "fit a scene's strip to observed (Delta L, Delta W, Delta Z, A) samples, with errors"},
     {"bench", sim_cmd_bench, "speed and memory on a scene, one machine-readable line"},
     {"truss", sim_cmd_truss, "the reduced double-mass von Mises truss model (paper section 4)"},
 };

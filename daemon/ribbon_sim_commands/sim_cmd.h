@@ -15,5 +15,6 @@ int sim_cmd_continue(int argc, char **argv);
 int sim_cmd_sweep(int argc, char **argv);
 int sim_cmd_sweep_merge(int argc, char **argv);
 int sim_cmd_boundary(int argc, char **argv);
+int sim_cmd_fit(int argc, char **argv);
 
 #endif

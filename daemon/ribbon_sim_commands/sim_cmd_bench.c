@@ -25,6 +25,7 @@
 #include "sim_cmd.h"
 #include "sim_opts.h"
 #include "sim_bench_boundary.h"
+#include "sim_bench_fit.h"
 
 #include <gsl/gsl_linalg.h>
 #include <jansson.h>
@@ -36,7 +37,7 @@
 #include <time.h>
 
 static const char usage[] =
-    "usage: ribbon-sim bench --scene FILE [--set section.key=value ...] [--sweep] [--json]\n"
+    "usage: ribbon-sim bench --scene FILE [--set section.key=value ...] [--sweep | --boundary | --fit] [--json]\n"
     "  Measures the scene (the paper's Gamma = 0.13 scene is the reference:\n"
     "  config/scenes/paper-gamma013.ini): banded vs dense Newton iteration, the fixed-step and\n"
     "  fast predictions, the continuation (continue_wall_s), peak memory. Prints one line (one JSON object with --json). Takes about\n"
@@ -44,7 +45,10 @@ static const char usage[] =
     "  (sweep_mpi_efficiency) and with a route per point against continued upper states\n"
     "  (sweep_seed_saving); several minutes (--set mesh.nodes=61 for the README's mesh).\n"
     "  --boundary instead: only boundary_vs_sweep and its parts (traced boundary at 20 phi\n"
-    "  against the sweep's bisection), one line.\n";
+    "  against the sweep's bisection), one line.\n"
+    "  --fit instead: the fit from a compression and hold (sim_bench_fit.h; fit_wall_s, fit_cpu_s)\n"
+    "  and the sensitivities' Jacobian against central differences of whole paths\n"
+    "  (sens_speedup), one line; seconds (--set mesh.nodes=61 on config/scenes/pet-200x5.ini).\n";
 
 static double now(void)
 {
@@ -150,12 +154,36 @@ static int bench_boundary_only(const rod_scene *sc, int json)
     return 0;
 }
 
+/* --fit: only the fit part. */
+static int bench_fit_only(const rod_scene *sc, int json)
+{
+    sim_bench_fit_result b;
+    char cerr[512] = "";
+    if (sim_bench_fit(sc, &b, cerr, sizeof cerr) != 0) {
+        fprintf(stderr, "ribbon-sim bench: fit: %s\n", cerr);
+        return 1;
+    }
+    if (json)
+        printf("{\"nodes\":%d,\"fit_samples\":%d,\"fit_parameters\":%d,\"fit_wall_s\":%.6g,\"fit_cpu_s\":%.6g,"
+               "\"fit_iterations\":%d,\"fit_evaluations\":%d,\"fit_rms\":%.6g,\"sens_jacobian_s\":%.6g,"
+               "\"fd_jacobian_s\":%.6g,\"sens_speedup\":%.6g}\n",
+               b.nodes, b.samples, b.parameters, b.fit_wall_s, b.fit_cpu_s, b.iterations, b.evaluations, b.rms,
+               b.sens_jacobian_s, b.fd_jacobian_s, b.sens_speedup);
+    else
+        printf("bench-fit nodes=%d samples=%d parameters=%d fit_wall_s=%.3f fit_cpu_s=%.3f iterations=%d "
+               "evaluations=%d rms=%.3f sens_jacobian_s=%.4f fd_jacobian_s=%.4f sens_speedup=%.1f\n",
+               b.nodes, b.samples, b.parameters, b.fit_wall_s, b.fit_cpu_s, b.iterations, b.evaluations, b.rms,
+               b.sens_jacobian_s, b.fd_jacobian_s, b.sens_speedup);
+    return 0;
+}
+
 int sim_cmd_bench(int argc, char **argv)
 {
-    int sweep = 0, boundary_only = 0, out = 1;
+    int sweep = 0, boundary_only = 0, fit_only = 0, out = 1;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--sweep")) sweep = 1;
         else if (!strcmp(argv[i], "--boundary")) boundary_only = 1;
+        else if (!strcmp(argv[i], "--fit")) fit_only = 1;
         else argv[out++] = argv[i];
     }
     argc = out;
@@ -166,6 +194,7 @@ int sim_cmd_bench(int argc, char **argv)
     if (!sim_opts_load_scene(&o, &sc)) return 2;
     if (sweep) return sim_bench_sweep(o.scene, o.sets, o.nsets, o.json);
     if (boundary_only) return bench_boundary_only(&sc, o.json);
+    if (fit_only) return bench_fit_only(&sc, o.json);
     double banded = 0, dense = 0, dense_ldlt = 0;
     rod_prediction fixed, fast;
     if (!time_newton(&sc, &banded, &dense, &dense_ldlt)) return 1;

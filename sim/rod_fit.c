@@ -1,0 +1,594 @@
+/* rod_fit.c: the strip fitted to observed equilibria: the model followed along the observed
+ * states, Levenberg-Marquardt, covariance and unidentified directions (rod_fit.h). */
+#include "rod_fit.h"
+
+#include "rod_observe.h"
+#include "rod_route.h"
+#include "rod_sensitivity.h"
+#include "rod_snapshot.h"
+#include "rod_solver.h"
+
+#include <gsl/gsl_blas.h>
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_linalg.h>
+#include <gsl/gsl_matrix.h>
+#include <gsl/gsl_multifit_nlinear.h>
+#include <gsl/gsl_vector.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define STEP_MAX 0.02      /* largest step in Delta L or Delta W between static solves */
+#define STEP_HALVINGS 8    /* a step halves at most this many times */
+#define PATH_SOLVES 4000   /* cap on static solves per evaluation */
+#define FAIL_CAP 30        /* cap on failed model evaluations in one fit */
+
+struct rod_fit_model {
+    rod_scene sc;
+    rod *r;
+    rod_solver *s;
+    rod_sens_ws *sens;
+    rod_fit_base base;
+    rod_newton_opts nopt;
+    int nobs, paper;
+    const rod_fit_obs *obs;
+    int *order;              /* observation indices in path order */
+    rod_snapshot *state;     /* last equilibrium of each (path order) */
+    int *have;
+    double *k1;
+};
+
+rod_fit_opts rod_fit_opts_default(void)
+{
+    rod_fit_opts o;
+    memset(&o, 0, sizeof o);
+    for (int k = 0; k < ROD_FIT_NKEYS; k++) {
+        o.lo[k] = o.hi[k] = NAN;
+        o.prior_sigma[k] = INFINITY;
+    }
+    o.sigma_dz = 0.002;
+    o.sigma_a = 0.015;
+    o.max_iterations = 50;
+    o.min_obs = 3;
+    o.misfit = 5.0;
+    return o;
+}
+
+/* Path order: by Delta W, then Delta L, then as given (insertion sort: stable, no state). */
+static void path_order(const rod_fit_obs *obs, int n, int *order)
+{
+    for (int k = 0; k < n; k++) {
+        int v = order[k] = k, i = k;
+        while (i > 0 && (obs[order[i - 1]].dw > obs[v].dw ||
+                         (obs[order[i - 1]].dw == obs[v].dw && obs[order[i - 1]].dl > obs[v].dl))) {
+            order[i] = order[i - 1];
+            i--;
+        }
+        order[i] = v;
+    }
+}
+
+void rod_fit_model_free(rod_fit_model *m)
+{
+    if (!m) return;
+    if (m->state)
+        for (int k = 0; k < m->nobs; k++) rod_snapshot_free(&m->state[k]);
+    free(m->state);
+    free(m->have);
+    free(m->order);
+    free(m->k1);
+    rod_sens_free(m->sens);
+    rod_solver_free(m->s);
+    rod_free(m->r);
+    free(m);
+}
+
+void rod_fit_model_reset(rod_fit_model *m)
+{
+    memset(m->have, 0, sizeof(int) * (size_t)m->nobs);
+}
+
+rod_status rod_fit_model_alloc(const rod_scene *sc, const rod_fit_obs *obs, int nobs, int paper,
+                               rod_fit_model **out, char *why, size_t why_len)
+{
+    *out = NULL;
+    rod_fit_model *m = calloc(1, sizeof *m);
+    if (!m) return ROD_ERR_ALLOC;
+    m->sc = *sc;
+    m->obs = obs;
+    m->nobs = nobs;
+    m->paper = paper;
+    rod_status st = rod_alloc(sc, &m->r, why, why_len);
+    if (st != ROD_OK) {
+        free(m);
+        return st;
+    }
+    m->s = rod_solver_alloc(m->r);
+    m->sens = rod_sens_alloc(m->r);
+    m->order = malloc(sizeof(int) * (size_t)nobs);
+    m->state = calloc((size_t)nobs, sizeof *m->state);
+    m->have = calloc((size_t)nobs, sizeof(int));
+    m->k1 = malloc(sizeof(double) * (size_t)m->r->n);
+    if (!m->s || !m->sens || !m->order || !m->state || !m->have || !m->k1) goto oom;
+    for (int k = 0; k < nobs; k++)
+        if (!rod_snapshot_alloc(m->r, &m->state[k])) goto oom;
+    path_order(obs, nobs, m->order);
+    rod_fit_base_init(&m->base, m->r, sc);
+    m->nopt = rod_newton_opts_static(sc);
+    m->nopt.positive_definite = 1; /* the upper states are stable: minimise */
+    *out = m;
+    return ROD_OK;
+oom:
+    rod_fit_model_free(m);
+    snprintf(why, why_len, "out of memory");
+    return ROD_ERR_ALLOC;
+}
+
+/* Newton at the current state with the clamps at (dl, dw); the state must stay on the upper
+   branch (Delta Z > 0). */
+static rod_status solve_at(rod_fit_model *m, double dl, double dw)
+{
+    rod_set_clamps(m->r, dl, dw);
+    rod_frames_update(m->r);
+    rod_newton_report rep;
+    rod_status st = rod_newton_solve(m->r, m->s, &m->nopt, &rep);
+    if (st != ROD_OK) return st;
+    rod_obs o;
+    rod_observe(m->r, m->k1, &o);
+    if (!(o.dz > 0.0)) return ROD_ERR_BRANCH_LOST;
+    return ROD_OK;
+}
+
+/* From the equilibrium in the rod at (dl0, dw0) to (dl1, dw1) by static solves, steps halved on
+   failure. */
+static rod_status step_to(rod_fit_model *m, rod_snapshot *tmp, double dl0, double dw0, double dl1, double dw1,
+                          int *solves)
+{
+    double t = 0.0;
+    double span = fmax(fabs(dl1 - dl0), fabs(dw1 - dw0));
+    double dt = span > STEP_MAX ? STEP_MAX / span : 1.0;
+    int halvings = 0;
+    rod_status last = ROD_OK;
+    if (span == 0.0) return solve_at(m, dl1, dw1);
+    while (t < 1.0) {
+        double tn = fmin(1.0, t + dt);
+        rod_snapshot_save(m->r, tmp);
+        if (++*solves > PATH_SOLVES) return ROD_ERR_ROUTE_CAP;
+        last = solve_at(m, dl0 + tn * (dl1 - dl0), dw0 + tn * (dw1 - dw0));
+        if (last == ROD_OK) {
+            t = tn;
+            continue;
+        }
+        rod_snapshot_load(m->r, tmp);
+        if (++halvings > STEP_HALVINGS) return last;
+        dt *= 0.5;
+    }
+    return ROD_OK;
+}
+
+rod_status rod_fit_model_eval(rod_fit_model *m, const double u[ROD_FIT_NKEYS], const int *use, double *y,
+                              double *jac, char *why, size_t why_len)
+{
+    rod *r = m->r;
+    int solves = 0;
+    rod_snapshot *prev = NULL;
+    double *dq[ROD_FIT_NKEYS] = {0};
+    int none[ROD_FIT_NKEYS] = {0};
+    if (!use) use = none;
+    rod_fit_apply(r, &m->base, u);
+    for (int kk = 0; kk < m->nobs; kk++) {
+        int k = m->order[kk];
+        const rod_fit_obs *ob = &m->obs[k];
+        rod_status st = ROD_ERR_BRANCH_LOST;
+        if (m->have[kk]) {
+            rod_snapshot_load(r, &m->state[kk]);
+            st = solve_at(m, ob->dl, ob->dw);
+        }
+        if (st != ROD_OK) {
+            if (!prev) {
+                /* The route to the scene's own Delta L (the protocol's hold, where its scenes are
+                   known to reach the upper state), then along Delta L and Delta W to the first
+                   state; the route at the first state's Delta L if that fails. */
+                rod_scene sc = m->sc;
+                rod_route_report rep = {0};
+                st = rod_route_to_state(r, m->s, &sc, +1, &rep);
+                if (st == ROD_OK) st = step_to(m, &m->state[kk], sc.compression, 0.0, ob->dl, ob->dw, &solves);
+                if (st != ROD_OK && sc.compression != ob->dl) {
+                    rod_route_report rep2 = {0};
+                    rod_fit_apply(r, &m->base, u);
+                    sc.compression = ob->dl;
+                    st = rod_route_to_state(r, m->s, &sc, +1, &rep2);
+                    if (st == ROD_OK) st = step_to(m, &m->state[kk], ob->dl, 0.0, ob->dl, ob->dw, &solves);
+                }
+                if (st != ROD_OK) {
+                    snprintf(why, why_len, "no upper state at Delta L %.4g, Delta W %.4g for these parameters: %s",
+                             ob->dl, ob->dw, rod_status_message(st));
+                    return st;
+                }
+            } else {
+                const rod_fit_obs *po = &m->obs[m->order[kk - 1]];
+                rod_snapshot_load(r, prev);
+                st = step_to(m, &m->state[kk], po->dl, po->dw, ob->dl, ob->dw, &solves);
+                if (st != ROD_OK) {
+                    snprintf(why, why_len, "the upper state could not be followed from (Delta L %.4g, Delta W %.4g) "
+                             "to (%.4g, %.4g) for these parameters: %s", po->dl, po->dw, ob->dl, ob->dw,
+                             rod_status_message(st));
+                    return st;
+                }
+            }
+        }
+        rod_snapshot_save(r, &m->state[kk]);
+        m->have[kk] = 1;
+        prev = &m->state[kk];
+        rod_obs o;
+        rod_observe(r, m->k1, &o);
+        y[2 * k] = m->paper ? o.dz : o.dz_cam;
+        y[2 * k + 1] = m->paper ? o.a : o.a_cam;
+        if (!isfinite(y[2 * k]) || !isfinite(y[2 * k + 1])) {
+            snprintf(why, why_len, "non-finite observable at Delta L %.4g, Delta W %.4g", ob->dl, ob->dw);
+            return ROD_ERR_NAN;
+        }
+        if (jac) {
+            rod_obs d[ROD_FIT_NKEYS];
+            int neg = 0;
+            st = rod_sens_eval(m->sens, r, &m->base, u, use, ob->dl, ob->dw, dq, d, &neg);
+            if (st != ROD_OK) {
+                snprintf(why, why_len, "the equilibrium at Delta L %.4g, Delta W %.4g is %s", ob->dl, ob->dw,
+                         st == ROD_ERR_BRANCH_LOST ? "not stable (its Hessian is not positive definite)"
+                                                   : "without finite sensitivities");
+                return st;
+            }
+            for (int j = 0; j < ROD_FIT_NKEYS; j++) {
+                jac[(2 * k) * ROD_FIT_NKEYS + j] = use[j] ? (m->paper ? d[j].dz : d[j].dz_cam) : 0.0;
+                jac[(2 * k + 1) * ROD_FIT_NKEYS + j] = use[j] ? (m->paper ? d[j].a : d[j].a_cam) : 0.0;
+            }
+        }
+    }
+    return ROD_OK;
+}
+
+/* ---- the fit ---- */
+
+typedef struct fit_ctx {
+    rod_fit_model *m;
+    const rod_fit_opts *o;
+    const rod_fit_obs *obs;
+    int nobs, nfit, nres;
+    int key[ROD_FIT_NKEYS];      /* fitted parameter i is key[i] */
+    double u0[ROD_FIT_NKEYS], lo[ROD_FIT_NKEYS], hi[ROD_FIT_NKEYS], scale[ROD_FIT_NKEYS];
+    double *y, *jac;             /* model at the last evaluation */
+    double *last_f;              /* last good residuals */
+    double *cache_x, *cache_J;   /* x of the cached Jacobian, its weighted rows */
+    int cached, evaluations, failures;
+    char why[256];
+} fit_ctx;
+
+static void x_to_u(const fit_ctx *c, const gsl_vector *x, double u[ROD_FIT_NKEYS])
+{
+    memcpy(u, c->u0, sizeof(double) * ROD_FIT_NKEYS);
+    for (int i = 0; i < c->nfit; i++) {
+        int k = c->key[i];
+        double v = c->u0[k] + c->scale[k] * gsl_vector_get(x, (size_t)i);
+        u[k] = fmin(c->hi[k], fmax(c->lo[k], v));
+    }
+}
+
+static int eval_fj(const gsl_vector *x, fit_ctx *c, gsl_vector *f, gsl_matrix *J)
+{
+    double u[ROD_FIT_NKEYS];
+    x_to_u(c, x, u);
+    int use[ROD_FIT_NKEYS] = {0};
+    for (int i = 0; i < c->nfit; i++) use[c->key[i]] = 1;
+    c->evaluations++;
+    char why[256];
+    rod_status st = rod_fit_model_eval(c->m, u, use, c->y, c->jac, why, sizeof why);
+    if (st != ROD_OK) {
+        c->failures++;
+        snprintf(c->why, sizeof c->why, "%s", why);
+        /* A step into parameters without an upper state: a cost far above the last one, so the
+           trust region shrinks. */
+        for (int i = 0; i < c->nres; i++) {
+            double v = 1e3 * (fabs(c->last_f[i]) + 1.0);
+            if (f) gsl_vector_set(f, (size_t)i, v);
+        }
+        if (J) gsl_matrix_set_zero(J);
+        c->cached = 0;
+        return GSL_SUCCESS;
+    }
+    for (int k = 0; k < c->nobs; k++) {
+        const rod_fit_obs *ob = &c->obs[k];
+        double w[2] = {1.0 / c->o->sigma_dz, 1.0 / c->o->sigma_a};
+        double obsv[2] = {ob->dz, ob->a};
+        for (int a = 0; a < 2; a++) {
+            int row = 2 * k + a;
+            c->last_f[row] = (c->y[row] - obsv[a]) * w[a];
+            for (int i = 0; i < c->nfit; i++)
+                c->cache_J[row * c->nfit + i] = c->jac[row * ROD_FIT_NKEYS + c->key[i]] * w[a] * c->scale[c->key[i]];
+        }
+    }
+    int row = 2 * c->nobs;
+    for (int i = 0; i < c->nfit; i++) {
+        int k = c->key[i];
+        if (!isfinite(c->o->prior_sigma[k])) continue;
+        c->last_f[row] = (u[k] - c->u0[k]) / c->o->prior_sigma[k];
+        for (int ii = 0; ii < c->nfit; ii++)
+            c->cache_J[row * c->nfit + ii] = ii == i ? c->scale[k] / c->o->prior_sigma[k] : 0.0;
+        row++;
+    }
+    for (int i = 0; i < c->nfit; i++) c->cache_x[i] = gsl_vector_get(x, (size_t)i);
+    c->cached = 1;
+    for (int i = 0; i < c->nres; i++) {
+        if (f) gsl_vector_set(f, (size_t)i, c->last_f[i]);
+        if (J)
+            for (int j = 0; j < c->nfit; j++) gsl_matrix_set(J, (size_t)i, (size_t)j, c->cache_J[i * c->nfit + j]);
+    }
+    return GSL_SUCCESS;
+}
+
+static int cb_f(const gsl_vector *x, void *p, gsl_vector *f)
+{
+    fit_ctx *c = p;
+    if (c->failures > FAIL_CAP) return GSL_EMAXITER;
+    return eval_fj(x, c, f, NULL);
+}
+
+static int cb_df(const gsl_vector *x, void *p, gsl_matrix *J)
+{
+    fit_ctx *c = p;
+    int same = c->cached;
+    for (int i = 0; same && i < c->nfit; i++) same = c->cache_x[i] == gsl_vector_get(x, (size_t)i);
+    if (!same) return eval_fj(x, c, NULL, J);
+    for (int i = 0; i < c->nres; i++)
+        for (int j = 0; j < c->nfit; j++) gsl_matrix_set(J, (size_t)i, (size_t)j, c->cache_J[i * c->nfit + j]);
+    return GSL_SUCCESS;
+}
+
+static double now_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static void default_bounds(const rod_scene *sc, int k, double u0, double *lo, double *hi)
+{
+    (void)sc;
+    switch (k) {
+    case ROD_FIT_ANGLE_LEFT:
+    case ROD_FIT_ANGLE_RIGHT: *lo = u0 - 20.0; *hi = u0 + 20.0; break;
+    case ROD_FIT_POSITION_LEFT:
+    case ROD_FIT_POSITION_RIGHT: *lo = fmax(u0 - 0.05, 1e-3); *hi = fmin(u0 + 0.05, 1.0 - 1e-3); break;
+    case ROD_FIT_HINGE: *lo = u0 - log(100.0); *hi = u0 + log(100.0); break;
+    default: *lo = u0 - log(10.0); *hi = u0 + log(10.0); break;
+    }
+}
+
+/* Covariance, standard errors, correlations and the undetermined directions from the weighted
+   Jacobian Jw (nres x nfit, data rows first) at the solution. */
+static int covariance(fit_ctx *c, const double *Jw, rod_fit_result *res)
+{
+    int n = c->nres, p = c->nfit;
+    int nd = 2 * c->nobs;
+    gsl_matrix *A = gsl_matrix_alloc((size_t)(n > p ? n : p), (size_t)p);
+    gsl_matrix *V = gsl_matrix_alloc((size_t)p, (size_t)p);
+    gsl_vector *S = gsl_vector_alloc((size_t)p), *work = gsl_vector_alloc((size_t)p);
+    int bad[ROD_FIT_NKEYS] = {0};
+    if (!A || !V || !S || !work) {
+        gsl_matrix_free(A); gsl_matrix_free(V); gsl_vector_free(S); gsl_vector_free(work);
+        return -1;
+    }
+    /* Data rows only, in units of each parameter's range: what the data determine. */
+    gsl_matrix_set_zero(A);
+    for (int i = 0; i < nd; i++)
+        for (int j = 0; j < p; j++) {
+            int k = c->key[j];
+            gsl_matrix_set(A, (size_t)i, (size_t)j, Jw[i * p + j] * (c->hi[k] - c->lo[k]) / c->scale[k]);
+        }
+    gsl_linalg_SV_decomp(A, V, S, work);
+    res->sv_max = gsl_vector_get(S, 0);
+    res->sv_min = gsl_vector_get(S, (size_t)p - 1);
+    for (int d = 0; d < p; d++) {
+        if (gsl_vector_get(S, (size_t)d) >= 1.0) continue;
+        for (int j = 0; j < p; j++)
+            if (fabs(gsl_matrix_get(V, (size_t)j, (size_t)d)) > 0.3) bad[j] = 1;
+    }
+    /* The covariance with the priors, in fit units (x scaled by c->scale). */
+    gsl_matrix_set_zero(A);
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < p; j++) gsl_matrix_set(A, (size_t)i, (size_t)j, Jw[i * p + j]);
+    gsl_linalg_SV_decomp(A, V, S, work);
+    double smax = gsl_vector_get(S, 0);
+    double factor = 1.0;
+    if (c->o->scale_covariance && n > p) factor = res->chi2 / (double)(n - p);
+    for (int a = 0; a < p; a++)
+        for (int b = 0; b < p; b++) {
+            double s = 0.0;
+            for (int d = 0; d < p; d++) {
+                double sv = gsl_vector_get(S, (size_t)d);
+                if (!(sv > 1e-12 * smax)) continue;
+                s += gsl_matrix_get(V, (size_t)a, (size_t)d) * gsl_matrix_get(V, (size_t)b, (size_t)d) / (sv * sv);
+            }
+            res->cov[c->key[a]][c->key[b]] = factor * s * c->scale[c->key[a]] * c->scale[c->key[b]];
+        }
+    for (int a = 0; a < p; a++) {
+        int k = c->key[a];
+        int has_prior = isfinite(c->o->prior_sigma[k]);
+        /* Also a standard error wider than the parameter's whole range. */
+        if (!(sqrt(res->cov[k][k]) <= c->hi[k] - c->lo[k])) bad[a] = 1;
+        res->determined[k] = !bad[a];
+        res->se[k] = (bad[a] && !has_prior) ? INFINITY : sqrt(res->cov[k][k]);
+    }
+    for (int a = 0; a < p; a++)
+        for (int b = 0; b < p; b++) {
+            int ka = c->key[a], kb = c->key[b];
+            double d = sqrt(res->cov[ka][ka] * res->cov[kb][kb]);
+            res->corr[ka][kb] = (res->determined[ka] && res->determined[kb] && d > 0.0) ? res->cov[ka][kb] / d : 0.0;
+        }
+    for (int a = 0; a < p; a++) /* nothing about an undetermined parameter is a number */
+        if (!res->determined[c->key[a]] && !isfinite(res->se[c->key[a]]))
+            for (int b = 0; b < p; b++) res->cov[c->key[a]][c->key[b]] = res->cov[c->key[b]][c->key[a]] = 0.0;
+    gsl_matrix_free(A); gsl_matrix_free(V); gsl_vector_free(S); gsl_vector_free(work);
+    return 0;
+}
+
+rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, const rod_fit_opts *o,
+                       rod_fit_result *res, char *why, size_t why_len)
+{
+    double t0 = now_s();
+    memset(res, 0, sizeof *res);
+    fit_ctx c;
+    memset(&c, 0, sizeof c);
+    c.o = o;
+    c.obs = obs;
+    c.nobs = nobs;
+    rod_fit_scene_values(sc, c.u0);
+    memcpy(res->u0, c.u0, sizeof c.u0);
+    memcpy(res->u, c.u0, sizeof c.u0);
+    for (int k = 0; k < ROD_FIT_NKEYS; k++) {
+        res->se[k] = 0.0;
+        if (!o->fit[k]) continue;
+        if (rod_fit_key_usable(sc, (rod_fit_key)k, why, why_len)) return ROD_ERR_SCENE;
+        double lo, hi;
+        default_bounds(sc, k, c.u0[k], &lo, &hi);
+        if (!isnan(o->lo[k])) lo = o->lo[k];
+        if (!isnan(o->hi[k])) hi = o->hi[k];
+        if (!(lo < hi) || !(lo <= c.u0[k] && c.u0[k] <= hi)) {
+            snprintf(why, why_len, "%s: the bounds [%g, %g] do not hold the scene's value %g", rod_fit_key_name(k),
+                     lo, hi, c.u0[k]);
+            return ROD_ERR_SCENE;
+        }
+        if (!(o->prior_sigma[k] > 0.0)) {
+            snprintf(why, why_len, "%s: the prior's width must be positive", rod_fit_key_name(k));
+            return ROD_ERR_SCENE;
+        }
+        c.lo[k] = lo;
+        c.hi[k] = hi;
+        c.scale[k] = (k == ROD_FIT_POSITION_LEFT || k == ROD_FIT_POSITION_RIGHT) ? 0.01 : 1.0;
+        res->fitted[k] = 1;
+        c.key[c.nfit++] = k;
+    }
+    memcpy(res->lo, c.lo, sizeof c.lo);
+    memcpy(res->hi, c.hi, sizeof c.hi);
+    if (c.nfit == 0) {
+        snprintf(why, why_len, "no parameter to fit (--fit names them: folds.angle_left_deg, ...)");
+        return ROD_ERR_SCENE;
+    }
+    if (!(o->sigma_dz > 0.0) || !(o->sigma_a > 0.0) || !isfinite(o->sigma_dz) || !isfinite(o->sigma_a)) {
+        snprintf(why, why_len, "the noise of Delta Z and of A must be positive and finite");
+        return ROD_ERR_SCENE;
+    }
+    int need = c.nfit + 1 > o->min_obs ? c.nfit + 1 : o->min_obs;
+    if (nobs < need) {
+        snprintf(why, why_len, "too few observations: %d for %d fitted parameter%s (at least %d needed)", nobs,
+                 c.nfit, c.nfit == 1 ? "" : "s", need);
+        return ROD_ERR_SCENE;
+    }
+    for (int k = 0; k < nobs; k++)
+        if (!isfinite(obs[k].dl) || !isfinite(obs[k].dw) || !isfinite(obs[k].dz) || !isfinite(obs[k].a) ||
+            obs[k].dl <= 0.0 || obs[k].dl >= 1.0) {
+            snprintf(why, why_len, "observation %d: Delta L must be in (0, 1) and every value finite", k + 1);
+            return ROD_ERR_SCENE;
+        }
+    int npri = 0;
+    for (int i = 0; i < c.nfit; i++) npri += isfinite(o->prior_sigma[c.key[i]]);
+    c.nres = 2 * nobs + npri;
+    res->nobs = nobs;
+    res->nres = 2 * nobs;
+    res->nfit = c.nfit;
+    rod_status st = rod_fit_model_alloc(sc, obs, nobs, o->paper, &c.m, why, why_len);
+    if (st != ROD_OK) return st;
+    c.y = malloc(sizeof(double) * 2 * (size_t)nobs);
+    c.jac = malloc(sizeof(double) * 2 * (size_t)nobs * ROD_FIT_NKEYS);
+    c.last_f = calloc((size_t)c.nres, sizeof(double));
+    c.cache_x = calloc((size_t)c.nfit, sizeof(double));
+    c.cache_J = calloc((size_t)c.nres * (size_t)c.nfit, sizeof(double));
+    gsl_vector *x = gsl_vector_calloc((size_t)c.nfit);
+    gsl_multifit_nlinear_workspace *w = NULL;
+    if (!c.y || !c.jac || !c.last_f || !c.cache_x || !c.cache_J || !x) {
+        snprintf(why, why_len, "out of memory");
+        st = ROD_ERR_ALLOC;
+        goto done;
+    }
+    /* At the scene's values first: a model that fails there is the caller's to know. */
+    if (eval_fj(x, &c, NULL, NULL) != GSL_SUCCESS || c.failures) {
+        snprintf(why, why_len, "the scene's own strip: %s", c.why);
+        st = ROD_ERR_BRANCH_LOST;
+        goto done;
+    }
+    {
+        double s = 0.0;
+        for (int i = 0; i < 2 * nobs; i++) s += c.last_f[i] * c.last_f[i];
+        res->rms_start = sqrt(s / (2.0 * nobs));
+    }
+    gsl_multifit_nlinear_parameters par = gsl_multifit_nlinear_default_parameters();
+    par.trs = gsl_multifit_nlinear_trs_lm;
+    w = gsl_multifit_nlinear_alloc(gsl_multifit_nlinear_trust, &par, (size_t)c.nres, (size_t)c.nfit);
+    if (!w) {
+        snprintf(why, why_len, "out of memory");
+        st = ROD_ERR_ALLOC;
+        goto done;
+    }
+    gsl_multifit_nlinear_fdf fdf;
+    memset(&fdf, 0, sizeof fdf);
+    fdf.f = cb_f;
+    fdf.df = cb_df;
+    fdf.n = (size_t)c.nres;
+    fdf.p = (size_t)c.nfit;
+    fdf.params = &c;
+    int info = 0;
+    int gs = gsl_multifit_nlinear_init(x, &fdf, w);
+    if (gs == GSL_SUCCESS) gs = gsl_multifit_nlinear_driver((size_t)o->max_iterations, 1e-8, 1e-10, 1e-10, NULL, NULL,
+                                                            &info, w);
+    res->iterations = (int)gsl_multifit_nlinear_niter(w);
+    if (c.failures > FAIL_CAP) {
+        snprintf(why, why_len, "the model failed at %d trial parameter sets (last: %s)", c.failures, c.why);
+        st = ROD_ERR_BRANCH_LOST;
+        goto done;
+    }
+    /* GSL_ENOPROG: no step reduced the cost any more, the position is the best found. */
+    res->capped = gs == GSL_EMAXITER;
+    if (gs != GSL_SUCCESS && gs != GSL_EMAXITER && gs != GSL_ENOPROG) {
+        snprintf(why, why_len, "Levenberg-Marquardt stopped: %s", gsl_strerror(gs));
+        st = ROD_ERR_SINGULAR;
+        goto done;
+    }
+    /* The solution, evaluated again so residual, Jacobian and values belong together. */
+    gsl_vector_memcpy(x, gsl_multifit_nlinear_position(w));
+    int fails = c.failures;
+    eval_fj(x, &c, NULL, NULL);
+    if (c.failures != fails) {
+        snprintf(why, why_len, "the fitted strip: %s", c.why);
+        st = ROD_ERR_BRANCH_LOST;
+        goto done;
+    }
+    x_to_u(&c, x, res->u);
+    for (int i = 0; i < 2 * nobs; i++) res->chi2 += c.last_f[i] * c.last_f[i];
+    res->rms = sqrt(res->chi2 / (2.0 * nobs));
+    res->misfit = res->rms > o->misfit;
+    for (int i = 0; i < c.nfit; i++) {
+        int k = c.key[i];
+        double tol = 1e-9 * (c.hi[k] - c.lo[k]);
+        res->at_bound[k] = res->u[k] <= c.lo[k] + tol ? -1 : res->u[k] >= c.hi[k] - tol ? 1 : 0;
+    }
+    if (covariance(&c, c.cache_J, res)) {
+        snprintf(why, why_len, "out of memory");
+        st = ROD_ERR_ALLOC;
+        goto done;
+    }
+    res->model_failures = c.failures;
+    st = ROD_OK;
+done:
+    res->evaluations = c.evaluations;
+    res->wall_s = now_s() - t0;
+    gsl_multifit_nlinear_free(w);
+    gsl_vector_free(x);
+    free(c.y);
+    free(c.jac);
+    free(c.last_f);
+    free(c.cache_x);
+    free(c.cache_J);
+    rod_fit_model_free(c.m);
+    return st;
+}
