@@ -214,9 +214,11 @@ store_err store_trial_set_latency(store *st, int64_t id, double stop_cmd_s, doub
                                   size_t why_len);
 store_err store_trial_set_video(store *st, int64_t id, const char *video_path, char *why, size_t why_len);
 /* The trial's video file and its size in bytes (>= 0): the raw recording at the trial's end, then
- * the transcoded file once it is verified (trial_transcoder.h). */
-store_err store_trial_set_video_file(store *st, int64_t id, const char *video_path, int64_t bytes, char *why,
-                                     size_t why_len);
+ * the transcoded file once it is verified (trial_transcoder.h). roi (NULL: unchanged): the new
+ * file's region x, y, w, h inside the full frame, written into the calibration record's "roi" in
+ * the same statement (a transcode that kept only part of the recorded region). */
+store_err store_trial_set_video_file(store *st, int64_t id, const char *video_path, int64_t bytes, const int roi[4],
+                                     char *why, size_t why_len);
 /* At daemon start-up: every unfinished trial ('running', or 'created': killed before it started
  * moving) becomes 'interrupted' (ended at wall_s, a reason and a fault event added). *count gets
  * how many. One transaction. */

@@ -259,8 +259,8 @@ store_err store_trial_set_video(store *st, int64_t id, const char *video_path, c
     return update_one(st, s, id, "saving a trial's video path", why, why_len);
 }
 
-store_err store_trial_set_video_file(store *st, int64_t id, const char *video_path, int64_t bytes, char *why,
-                                     size_t why_len)
+store_err store_trial_set_video_file(store *st, int64_t id, const char *video_path, int64_t bytes, const int roi[4],
+                                     char *why, size_t why_len)
 {
     store_err e = store_check_writable(st, why, why_len);
     if (e == STORE_OK && (!video_path || !*video_path || bytes < 0))
@@ -271,12 +271,21 @@ store_err store_trial_set_video_file(store *st, int64_t id, const char *video_pa
     if (e != STORE_OK)
         return e;
     sqlite3_stmt *s;
-    e = store_prepare(st, "UPDATE trials SET video_path = ?1, video_bytes = ?2 WHERE id = ?3", &s, why, why_len);
+    e = store_prepare(st,
+                      "UPDATE trials SET video_path = ?1, video_bytes = ?2, calibration_json = CASE WHEN ?4 IS NULL"
+                      " OR calibration_json IS NULL THEN calibration_json"
+                      " ELSE json_set(calibration_json, '$.roi', json(?4)) END WHERE id = ?3",
+                      &s, why, why_len);
     if (e != STORE_OK)
         return e;
     store_bind_text(s, 1, video_path);
     sqlite3_bind_int64(s, 2, bytes);
     sqlite3_bind_int64(s, 3, id);
+    char r[96];
+    if (roi) {
+        snprintf(r, sizeof r, "[%d,%d,%d,%d]", roi[0], roi[1], roi[2], roi[3]);
+        store_bind_text(s, 4, r);
+    }
     return update_one(st, s, id, "saving a trial's video file", why, why_len);
 }
 

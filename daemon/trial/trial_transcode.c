@@ -296,6 +296,9 @@ static int writer_put(av_writer *w, AVFrame *frame, char *why, size_t why_len)
             av_why(why, why_len, "FFV1 encoder failed for", w->path, e);
             return -1;
         }
+        /* One frame period each: Matroska's duration then covers the last frame too, and readers
+           that count frames from it (OpenCV) find them all. */
+        if (w->pkt->duration <= 0) w->pkt->duration = 1;
         av_packet_rescale_ts(w->pkt, w->enc->time_base, w->st->time_base);
         w->pkt->stream_index = w->st->index;
         if ((e = av_interleaved_write_frame(w->oc, w->pkt)) < 0) {

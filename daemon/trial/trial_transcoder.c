@@ -22,6 +22,7 @@ typedef struct tx_job {
     int64_t trial_id;
     char raw[1024];
     int crop[4];
+    int rec_roi[4];
     int has_crop;
 } tx_job;
 
@@ -103,7 +104,8 @@ static void run_job(trial_transcoder *t, const tx_job *j)
     trial_transcode_result r;
     char msg[2400];
     if (trial_transcode_run(j->raw, out, &cp, &r, why, sizeof why) == 0) {
-        if (st && store_trial_set_video_file(st, j->trial_id, out, r.out_bytes, w, sizeof w) != STORE_OK)
+        if (st && store_trial_set_video_file(st, j->trial_id, out, r.out_bytes, j->has_crop ? j->rec_roi : NULL, w,
+                                                sizeof w) != STORE_OK)
             tx_log(t, "trial %lld: the transcoded video %s not stored as the trial's: %s", (long long)j->trial_id, out,
                    w);
         snprintf(msg, sizeof msg,
@@ -170,10 +172,10 @@ trial_transcoder *trial_transcoder_start(const trial_transcoder_params *p, char 
     return t;
 }
 
-int trial_transcoder_submit(trial_transcoder *t, int64_t trial_id, const char *raw_path, const int crop[4], char *why,
-                            size_t why_len)
+int trial_transcoder_submit(trial_transcoder *t, int64_t trial_id, const char *raw_path, const int crop[4],
+                            const int rec_roi[4], char *why, size_t why_len)
 {
-    if (!t || !raw_path || strlen(raw_path) >= sizeof((tx_job *)0)->raw) {
+    if (!t || !raw_path || strlen(raw_path) >= sizeof((tx_job *)0)->raw || (crop && !rec_roi)) {
         snprintf(why, why_len, "video transcode not queued: no transcoder, or the path is too long");
         return -1;
     }
@@ -190,6 +192,7 @@ int trial_transcoder_submit(trial_transcoder *t, int64_t trial_id, const char *r
         snprintf(j->raw, sizeof j->raw, "%s", raw_path);
         if (crop) {
             memcpy(j->crop, crop, sizeof j->crop);
+            memcpy(j->rec_roi, rec_roi, sizeof j->rec_roi);
             j->has_crop = 1;
         }
         t->count++;

@@ -31,11 +31,13 @@ trial_transcoder_params trial_transcoder_params_default(void);
 typedef struct trial_transcoder trial_transcoder;
 
 trial_transcoder *trial_transcoder_start(const trial_transcoder_params *p, char *why, size_t why_len);
-/* Queues trial_id's raw video raw_path (…avi; the output is the same name with .mkv). crop (may be
- * NULL): x, y, w, h of the raw frame to keep. Never waits for a transcode. -1 (why) when the queue
- * is full or the worker has stopped: the raw file stays the trial's video. */
-int trial_transcoder_submit(trial_transcoder *t, int64_t trial_id, const char *raw_path, const int crop[4], char *why,
-                            size_t why_len);
+/* Queues trial_id's raw video raw_path (...avi; the output is the same name with .mkv). crop (may
+ * be NULL): x, y, w, h of the raw frame to keep, and rec_roi the kept region inside the full
+ * frame, stored into the trial's calibration record with the new file (so a replay places the
+ * clamps). Never waits for a transcode. -1 (why) when the queue is full or the worker has
+ * stopped: the raw file stays the trial's video. */
+int trial_transcoder_submit(trial_transcoder *t, int64_t trial_id, const char *raw_path, const int crop[4],
+                            const int rec_roi[4], char *why, size_t why_len);
 /* Videos queued or in progress. */
 int trial_transcoder_pending(trial_transcoder *t);
 /* Waits until nothing is queued or in progress: 0, or -1 after timeout_s. */

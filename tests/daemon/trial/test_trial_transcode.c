@@ -219,7 +219,7 @@ static int64_t new_trial(const char *db, const char *video)
     d.mode = STORE_MODE_RIG;
     int64_t id = 0;
     assert_int_equal(store_trial_create(st, &d, &id, why, sizeof why), STORE_OK);
-    assert_int_equal(store_trial_set_video_file(st, id, video, fsize(video), why, sizeof why), STORE_OK);
+    assert_int_equal(store_trial_set_video_file(st, id, video, fsize(video), NULL, why, sizeof why), STORE_OK);
     store_close(st);
     return id;
 }
@@ -256,7 +256,7 @@ static void test_worker_next_trial_records_while_transcode_runs(void **s)
     trial_transcoder *t = trial_transcoder_start(&tp, why, sizeof why);
     if (!t) fail_msg("%s", why);
     double t0 = mono();
-    assert_int_equal(trial_transcoder_submit(t, id1, raw1, NULL, why, sizeof why), 0);
+    assert_int_equal(trial_transcoder_submit(t, id1, raw1, NULL, NULL, why, sizeof why), 0);
     double submit_s = mono() - t0;
     /* the transcode is now held in progress at frame 3 */
     pthread_mutex_lock(&g.m);
@@ -268,7 +268,7 @@ static void test_worker_next_trial_records_while_transcode_runs(void **s)
     write_raw(raw2, NF);
     int64_t id2 = new_trial(db, raw2);
     t0 = mono();
-    assert_int_equal(trial_transcoder_submit(t, id2, raw2, NULL, why, sizeof why), 0);
+    assert_int_equal(trial_transcoder_submit(t, id2, raw2, NULL, NULL, why, sizeof why), 0);
     submit_s = submit_s > mono() - t0 ? submit_s : mono() - t0;
     printf("# submit took at most %.6f s while a transcode was in progress\n", submit_s);
     assert_true(submit_s < 0.05);
@@ -303,7 +303,7 @@ static void test_worker_next_trial_records_while_transcode_runs(void **s)
     tp.codec.corrupt_frame = 5;
     t = trial_transcoder_start(&tp, why, sizeof why);
     assert_non_null(t);
-    assert_int_equal(trial_transcoder_submit(t, id3, raw3, NULL, why, sizeof why), 0);
+    assert_int_equal(trial_transcoder_submit(t, id3, raw3, NULL, NULL, why, sizeof why), 0);
     assert_int_equal(trial_transcoder_wait_idle(t, 60.0), 0);
     trial_transcoder_stop(t);
     trial_video_of(db, id3, &tr, ev, sizeof ev);
