@@ -24,6 +24,7 @@ trial_transcode_params trial_transcode_params_default(void)
     memset(&p, 0, sizeof p);
     p.threads = 2;
     p.slices = 4;
+    p.range_coder = 0;
     p.corrupt_frame = -1;
     return p;
 }
@@ -258,7 +259,7 @@ static int writer_open(av_writer *w, const char *path, int width, int height, AV
     snprintf(sl, sizeof sl, "%d", p->slices);
     av_dict_set(&opt, "slices", sl, 0);
     av_dict_set(&opt, "slicecrc", "1", 0);
-    av_dict_set(&opt, "coder", "range_def", 0);
+    av_dict_set(&opt, "coder", p->range_coder ? "range_def" : "rice", 0);
     e = avcodec_open2(w->enc, c, &opt);
     av_dict_free(&opt);
     if (e < 0) {

@@ -2,8 +2,8 @@
  *
  * Rig mode records raw Y800 (8-bit grey) in AVI, because that is a copy per frame and never
  * falls behind the camera (docs/rig-realtime.md); at 640 x 480 and 60 fps it is 1.3 GB a trial.
- * Afterwards, off the real-time path, the file is encoded to FFV1 (version 3, range coder, slice
- * CRCs, slice threads) in Matroska through libavcodec, written as OUT.part, then checked bit for
+ * Afterwards, off the real-time path, the file is encoded to FFV1 (version 3, Golomb-Rice coder,
+ * slice CRCs, slice threads) in Matroska through libavcodec, written as OUT.part, then checked bit for
  * bit: both files are decoded again from disk, frame by frame, and every pixel compared. Only when
  * every frame matches and the counts agree is OUT.part renamed to OUT (and synced) and the raw
  * file removed. Anything else removes OUT.part, keeps the raw file and says why. The frame-time
@@ -21,6 +21,8 @@
 typedef struct trial_transcode_params {
     int threads;        /* encoder slice threads, [1, 16]; default 2 */
     int slices;         /* FFV1 slices per frame (4, 6, 9, 12, 16, 24 or 30); default 4 */
+    int range_coder;    /* 1: FFV1's range coder (0.7% smaller on the twin's frames, twice the
+                           time), 0: Golomb-Rice; default 0 */
     int keep_raw;       /* 1: keep the raw file after a good verify (benchmarks); default 0 */
     /* Crop of the kept video inside the raw frame, pixels; w = 0: the whole raw frame. */
     int crop_x, crop_y, crop_w, crop_h;
