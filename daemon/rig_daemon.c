@@ -115,6 +115,12 @@ int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *o
         tp.log = d->log;
         d->transcoder = trial_transcoder_start(&tp, w, sizeof w);
         if (!d->transcoder) say(d, "%s: trial videos stay raw", w);
+        else if (d->cfg.camera.transcode == RIG_TRANSCODE_FFV1) {
+            int queued = trial_transcoder_queue_left(d->transcoder, d->st, w, sizeof w);
+            if (queued < 0) say(d, "raw videos of earlier trials not looked for: %s", w);
+            else if (queued > 0)
+                say(d, "%d raw trial video(s) an earlier run left queued for their lossless transcode", queued);
+        }
     }
     return 0;
 }

@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <jansson.h>
 
@@ -123,6 +124,14 @@ int trial_replay_from_trial(store *st, int64_t source_id, const char *video, tri
         goto fail;
     }
     snprintf(r->video, sizeof r->video, "%s", video);
+    /* A raw video transcoded by hand (ribbonctl transcode) left the store naming the .avi. */
+    size_t vl = strlen(r->video);
+    if (vl > 4 && strcmp(r->video + vl - 4, ".avi") == 0 && access(r->video, F_OK) != 0 &&
+        vl < sizeof r->video) {
+        char mkv[sizeof r->video];
+        snprintf(mkv, sizeof mkv, "%.*s.mkv", (int)(vl - 4), r->video);
+        if (access(mkv, F_OK) == 0) snprintf(r->video, sizeof r->video, "%s", mkv);
+    }
     size_t tl = (config ? strlen(config) : 0) + 64;
     r->config_text = malloc(tl);
     if (!r->config_text) {

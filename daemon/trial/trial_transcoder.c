@@ -203,6 +203,43 @@ int trial_transcoder_submit(trial_transcoder *t, int64_t trial_id, const char *r
     return rc;
 }
 
+/* 1 when the trial's events say its raw video stays raw on purpose (or cannot be read). */
+static int raw_kept_on_purpose(store *st, int64_t id)
+{
+    store_event *ev = NULL;
+    size_t n = 0;
+    char w[256];
+    if (store_events_get(st, id, &ev, &n, w, sizeof w) != STORE_OK) return 1;
+    int kept = 0;
+    for (size_t k = 0; k < n && !kept; k++)
+        kept = strncmp(ev[k].message, "video not transcoded", 20) == 0 ||
+               strncmp(ev[k].message, "video transcode failed", 22) == 0;
+    free(ev);
+    return kept;
+}
+
+int trial_transcoder_queue_left(trial_transcoder *t, store *st, char *why, size_t why_len)
+{
+    store_trial *all = NULL;
+    size_t n = 0;
+    if (store_trial_list(st, &all, &n, why, why_len) != STORE_OK) return -1;
+    int queued = 0;
+    char w[256];
+    for (size_t k = 0; k < n; k++) {
+        const store_trial *tr = &all[k];
+        size_t l = strlen(tr->video_path);
+        if (tr->mode != STORE_MODE_RIG || l < 5 || strcmp(tr->video_path + l - 4, ".avi") != 0 ||
+            (tr->status != STORE_STATUS_DONE && tr->status != STORE_STATUS_FAILED &&
+             tr->status != STORE_STATUS_ABORTED) ||
+            access(tr->video_path, R_OK) != 0 || raw_kept_on_purpose(st, tr->id))
+            continue;
+        if (trial_transcoder_submit(t, tr->id, tr->video_path, NULL, NULL, w, sizeof w) == 0) queued++;
+        else tx_log(t, "trial %lld: %s", (long long)tr->id, w);
+    }
+    free(all);
+    return queued;
+}
+
 int trial_transcoder_pending(trial_transcoder *t)
 {
     if (!t) return 0;

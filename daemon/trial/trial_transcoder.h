@@ -15,6 +15,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "store.h"
 #include "trial_transcode.h"
 
 #define TRIAL_TRANSCODER_QUEUE 64 /* videos waiting at most; a submit beyond is refused */
@@ -38,6 +39,12 @@ trial_transcoder *trial_transcoder_start(const trial_transcoder_params *p, char 
  * stopped: the raw file stays the trial's video. */
 int trial_transcoder_submit(trial_transcoder *t, int64_t trial_id, const char *raw_path, const int crop[4],
                             const int rec_roi[4], char *why, size_t why_len);
+/* Start-up: queues (whole, uncropped) the raw .avi videos of ended rig trials in st that an earlier
+ * run left (it stopped before their transcode), except those the trial's events keep raw on
+ * purpose (a video not closed complete, a transcode that failed: by hand only, ribbonctl
+ * transcode) and interrupted trials' (their recording may be cut: evidence). Returns how many were
+ * queued, or -1 (why). */
+int trial_transcoder_queue_left(trial_transcoder *t, store *st, char *why, size_t why_len);
 /* Videos queued or in progress. */
 int trial_transcoder_pending(trial_transcoder *t);
 /* Waits until nothing is queued or in progress: 0, or -1 after timeout_s. */

@@ -315,6 +315,7 @@ static void test_both_video_forms_replay_the_same(void **state)
     if (trial_transcode_run(avi, mkv, NULL, &tr, why, sizeof why)) fail_msg("transcode: %s", why);
     assert_true(tr.raw_removed);
     assert_int_equal(access(avi, F_OK), -1);
+    int64_t d0 = replay_stored(st, a); /* the store still names the .avi (a transcode by hand) */
     assert_int_equal(store_trial_set_video_file(st, a, mkv, tr.out_bytes, NULL, why, sizeof why), STORE_OK);
     store_close(st);
     int64_t c = replay_files(mkv); /* the FFV1 form, with the recording's frame times */
@@ -322,6 +323,7 @@ static void test_both_video_forms_replay_the_same(void **state)
     int64_t d = replay_stored(st, a); /* the FFV1 form, as the stored trial's video */
     int tracked = same_samples(st, a, c);
     assert_int_equal(same_samples(st, b, d), tracked);
+    assert_int_equal(same_samples(st, b, d0), tracked);
     printf("# raw %lld bytes, FFV1 %lld; replays %lld = %lld (outside recording) and %lld = %lld (stored trial): "
            "every sample equal, %d frames tracked\n",
            (long long)tr.raw_bytes, (long long)tr.out_bytes, (long long)a, (long long)c, (long long)b, (long long)d,

@@ -6,12 +6,14 @@
  * a crop keeps exactly that region; a stopped transcode keeps the raw file; and the worker:
  * a submit returns at once, the next trial's raw video is written while a transcode is held in
  * progress, the store then names each trial's .mkv with its size, and a failed verify leaves the
- * trial's .avi with an event saying why. */
+ * trial's .avi with an event saying why; at start-up the raw videos an earlier run left are queued
+ * again, except those kept raw on purpose (a failed transcode, an interrupted trial). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <cmocka.h>
 
+#include <math.h>
 #include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -315,6 +317,71 @@ static void test_worker_next_trial_records_while_transcode_runs(void **s)
     assert_true(exists(raw3));
 }
 
+/* A rig trial with raw video path, ended with status (running first), optionally an event. */
+static int64_t ended_trial(const char *db, const char *video, store_status status, const char *event)
+{
+    int64_t id = new_trial(db, video);
+    store *st = NULL;
+    char why[256];
+    assert_int_equal(store_open(db, &st, why, sizeof why), STORE_OK);
+    assert_int_equal(store_trial_set_status(st, id, STORE_STATUS_RUNNING, NULL, store_wall_now(), why, sizeof why),
+                     STORE_OK);
+    if (status == STORE_STATUS_INTERRUPTED) {
+        int count = 0;
+        assert_int_equal(store_trial_mark_interrupted(st, store_wall_now(), &count, why, sizeof why), STORE_OK);
+        assert_int_equal(count, 1);
+    } else {
+        assert_int_equal(store_trial_set_status(st, id, status, NULL, store_wall_now(), why, sizeof why), STORE_OK);
+    }
+    if (event) {
+        store_event ev;
+        memset(&ev, 0, sizeof ev);
+        ev.trial_id = id;
+        ev.t_s = NAN;
+        ev.wall_s = store_wall_now();
+        ev.kind = STORE_EVENT_WARNING;
+        snprintf(ev.message, sizeof ev.message, "%s", event);
+        assert_int_equal(store_event_append(st, &ev, why, sizeof why), STORE_OK);
+    }
+    store_close(st);
+    return id;
+}
+
+static void test_start_up_queues_what_an_earlier_run_left(void **s)
+{
+    (void)s;
+    char db[128], v[4][128], why[512] = "";
+    snprintf(db, sizeof db, "%s/left.db", dir);
+    for (int k = 0; k < 4; k++) {
+        snprintf(v[k], sizeof v[k], "%s/left-%d.avi", dir, k + 1);
+        write_raw(v[k], 4);
+    }
+    int64_t done = ended_trial(db, v[0], STORE_STATUS_DONE, NULL);
+    int64_t failed_tx = ended_trial(db, v[1], STORE_STATUS_DONE, "video transcode failed, raw video kept: verify: x");
+    int64_t interrupted = ended_trial(db, v[2], STORE_STATUS_INTERRUPTED, NULL);
+    int64_t aborted = ended_trial(db, v[3], STORE_STATUS_ABORTED, NULL);
+    trial_transcoder_params tp = trial_transcoder_params_default();
+    tp.store_path = db;
+    trial_transcoder *t = trial_transcoder_start(&tp, why, sizeof why);
+    assert_non_null(t);
+    store *st = NULL;
+    assert_int_equal(store_open(db, &st, why, sizeof why), STORE_OK);
+    assert_int_equal(trial_transcoder_queue_left(t, st, why, sizeof why), 2);
+    store_close(st);
+    assert_int_equal(trial_transcoder_wait_idle(t, 60.0), 0);
+    trial_transcoder_stop(t);
+    char ev[4096];
+    store_trial tr;
+    const int64_t ids[4] = {done, failed_tx, interrupted, aborted};
+    const int transcoded[4] = {1, 0, 0, 1};
+    for (int k = 0; k < 4; k++) {
+        trial_video_of(db, ids[k], &tr, ev, sizeof ev);
+        size_t l = strlen(tr.video_path);
+        assert_string_equal(tr.video_path + l - 4, transcoded[k] ? ".mkv" : ".avi");
+        assert_int_equal(exists(v[k]), !transcoded[k]);
+    }
+}
+
 int main(void)
 {
     if (!mkdtemp(dir)) return 1;
@@ -324,6 +391,7 @@ int main(void)
         cmocka_unit_test(test_crop_keeps_exactly_the_region),
         cmocka_unit_test(test_stopped_transcode_keeps_raw),
         cmocka_unit_test(test_worker_next_trial_records_while_transcode_runs),
+        cmocka_unit_test(test_start_up_queues_what_an_earlier_run_left),
     };
     int failed = cmocka_run_group_tests(tests, NULL, NULL);
     test_dir_done(dir, failed == 0, "transcode");
