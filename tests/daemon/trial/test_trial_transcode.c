@@ -382,6 +382,47 @@ static void test_start_up_queues_what_an_earlier_run_left(void **s)
     }
 }
 
+/* camera.transcode_keep = tracker: the worker keeps the crop, and the trial's record names the
+ * kept region (in the full frame) with the new file, so a replay places the clamps. */
+static void test_worker_crop_moves_the_record_region(void **s)
+{
+    (void)s;
+    char db[128], raw[128], mkv[128], why[512] = "";
+    snprintf(db, sizeof db, "%s/crop.db", dir);
+    snprintf(raw, sizeof raw, "%s/crop-1.avi", dir);
+    snprintf(mkv, sizeof mkv, "%s/crop-1.mkv", dir);
+    write_raw(raw, 6);
+    store *st = NULL;
+    assert_int_equal(store_open(db, &st, why, sizeof why), STORE_OK);
+    store_trial_def d = store_trial_def_default();
+    d.mode = STORE_MODE_RIG;
+    d.calibration_json = "{\"fps\":60,\"roi\":[10,20,160,120]}";
+    int64_t id = 0;
+    assert_int_equal(store_trial_create(st, &d, &id, why, sizeof why), STORE_OK);
+    store_close(st);
+    trial_transcoder_params tp = trial_transcoder_params_default();
+    tp.store_path = db;
+    trial_transcoder *t = trial_transcoder_start(&tp, why, sizeof why);
+    assert_non_null(t);
+    const int crop[4] = {13, 21, 100, 80}, rec[4] = {23, 41, 100, 80};
+    assert_int_equal(trial_transcoder_submit(t, id, raw, crop, rec, why, sizeof why), 0);
+    assert_int_equal(trial_transcoder_wait_idle(t, 60.0), 0);
+    trial_transcoder_stop(t);
+    check_frames(mkv, 13, 21, 100, 80, 6);
+    assert_int_equal(store_open(db, &st, why, sizeof why), STORE_OK);
+    char *cfg = NULL, *cal = NULL;
+    assert_int_equal(store_trial_texts(st, id, &cfg, &cal, why, sizeof why), STORE_OK);
+    printf("# record after the cropped transcode: %s\n", cal);
+    assert_non_null(strstr(cal, "\"roi\":[23,41,100,80]"));
+    assert_non_null(strstr(cal, "\"fps\":60"));
+    free(cfg);
+    free(cal);
+    store_trial tr;
+    assert_int_equal(store_trial_get(st, id, &tr, why, sizeof why), STORE_OK);
+    assert_string_equal(tr.video_path, mkv);
+    store_close(st);
+}
+
 int main(void)
 {
     if (!mkdtemp(dir)) return 1;
@@ -392,6 +433,7 @@ int main(void)
         cmocka_unit_test(test_stopped_transcode_keeps_raw),
         cmocka_unit_test(test_worker_next_trial_records_while_transcode_runs),
         cmocka_unit_test(test_start_up_queues_what_an_earlier_run_left),
+        cmocka_unit_test(test_worker_crop_moves_the_record_region),
     };
     int failed = cmocka_run_group_tests(tests, NULL, NULL);
     test_dir_done(dir, failed == 0, "transcode");
