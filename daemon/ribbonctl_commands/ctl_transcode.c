@@ -271,7 +271,7 @@ int ctl_transcode_main(int argc, char **argv)
     trial_transcode_result r;
     char why[640];
     if (trial_transcode_run(raw, out, &tp, &r, why, sizeof why)) {
-        fprintf(stderr, "ribbonctl transcode: %s (the raw file is kept)\n", why);
+        fprintf(stderr, "ribbonctl %s%s (the raw file is kept)\n", strncmp(why, "transcode", 9) ? "transcode: " : "", why);
         return 1;
     }
     printf("%s: %ld frames %dx%d verified bit for bit; %lld -> %lld bytes (%.3f); encode %.2f s, verify %.2f s; %s\n",
