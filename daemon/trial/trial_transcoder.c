@@ -115,6 +115,11 @@ static void run_job(trial_transcoder *t, const tx_job *j)
                  r.raw_bytes > 0 ? (double)r.out_bytes / (double)r.raw_bytes : 0.0, r.encode_s, r.verify_s,
                  r.raw_removed ? "raw video removed" : "raw video kept (could not be removed)");
         tx_event(t, st, j->trial_id, STORE_EVENT_INFO, msg);
+    } else if (t->cancel) {
+        /* Not a failure: ribbond's next start queues it again (trial_transcoder_queue_left). */
+        snprintf(msg, sizeof msg, "video transcode stopped (the daemon is stopping): raw video %s kept; the next start "
+                 "queues it again", j->raw);
+        tx_event(t, st, j->trial_id, STORE_EVENT_WARNING, msg);
     } else {
         snprintf(msg, sizeof msg, "video transcode failed, raw video %s kept: %s", j->raw, why);
         tx_event(t, st, j->trial_id, STORE_EVENT_WARNING, msg);
@@ -283,7 +288,9 @@ void trial_transcoder_stop(trial_transcoder *t)
         for (int k = 0; k < t->count; k++) {
             const tx_job *j = &t->q[(t->head + k) % TRIAL_TRANSCODER_QUEUE];
             char msg[1200];
-            snprintf(msg, sizeof msg, "video transcode not run (the daemon stopped first): raw video %s kept", j->raw);
+            snprintf(msg, sizeof msg,
+                     "video transcode not run (the daemon stopped first): raw video %s kept; the next start queues it "
+                     "again", j->raw);
             tx_event(t, st, j->trial_id, STORE_EVENT_WARNING, msg);
         }
         store_close(st);

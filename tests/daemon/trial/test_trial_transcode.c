@@ -382,6 +382,70 @@ static void test_start_up_queues_what_an_earlier_run_left(void **s)
     }
 }
 
+static gate g2 = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, 0, 0};
+
+static void *open_gate_later(void *arg)
+{
+    gate *x = arg;
+    struct timespec ts = {0, 100000000};
+    nanosleep(&ts, NULL);
+    pthread_mutex_lock(&x->m);
+    x->open = 1;
+    pthread_cond_broadcast(&x->c);
+    pthread_mutex_unlock(&x->m);
+    return NULL;
+}
+
+/* A daemon stopping mid-transcode: the transcode stops at its next frame, the raw video stays the
+ * trial's with an event that is not a failure, and the next start queues it again. */
+static void test_stop_mid_transcode_then_next_start(void **s)
+{
+    (void)s;
+    char db[128], raw[128], why[512] = "";
+    snprintf(db, sizeof db, "%s/stop.db", dir);
+    snprintf(raw, sizeof raw, "%s/stop-1.avi", dir);
+    write_raw(raw, NF);
+    int64_t id = ended_trial(db, raw, STORE_STATUS_DONE, NULL);
+    trial_transcoder_params tp = trial_transcoder_params_default();
+    tp.store_path = db;
+    tp.codec.on_frame = hold_at_frame_3;
+    tp.codec.on_frame_user = &g2;
+    trial_transcoder *t = trial_transcoder_start(&tp, why, sizeof why);
+    assert_non_null(t);
+    assert_int_equal(trial_transcoder_submit(t, id, raw, NULL, NULL, why, sizeof why), 0);
+    pthread_mutex_lock(&g2.m);
+    while (!g2.held) pthread_cond_wait(&g2.c, &g2.m);
+    pthread_mutex_unlock(&g2.m);
+    pthread_t opener;
+    assert_int_equal(pthread_create(&opener, NULL, open_gate_later, &g2), 0);
+    trial_transcoder_stop(t); /* cancels, then waits for the frame in progress */
+    pthread_join(opener, NULL);
+    char ev[4096];
+    store_trial tr;
+    trial_video_of(db, id, &tr, ev, sizeof ev);
+    printf("# %s", ev);
+    assert_string_equal(tr.video_path, raw);
+    assert_true(exists(raw));
+    assert_non_null(strstr(ev, "video transcode stopped (the daemon is stopping)"));
+    assert_null(strstr(ev, "video transcode failed"));
+    char part[140];
+    snprintf(part, sizeof part, "%s/stop-1.mkv.part", dir);
+    assert_false(exists(part));
+    /* the next start */
+    tp.codec.on_frame = NULL;
+    t = trial_transcoder_start(&tp, why, sizeof why);
+    assert_non_null(t);
+    store *st = NULL;
+    assert_int_equal(store_open(db, &st, why, sizeof why), STORE_OK);
+    assert_int_equal(trial_transcoder_queue_left(t, st, why, sizeof why), 1);
+    store_close(st);
+    assert_int_equal(trial_transcoder_wait_idle(t, 60.0), 0);
+    trial_transcoder_stop(t);
+    trial_video_of(db, id, &tr, ev, sizeof ev);
+    assert_non_null(strstr(tr.video_path, "stop-1.mkv"));
+    assert_false(exists(raw));
+}
+
 /* camera.transcode_keep = tracker: the worker keeps the crop, and the trial's record names the
  * kept region (in the full frame) with the new file, so a replay places the clamps. */
 static void test_worker_crop_moves_the_record_region(void **s)
@@ -434,6 +498,7 @@ int main(void)
         cmocka_unit_test(test_worker_next_trial_records_while_transcode_runs),
         cmocka_unit_test(test_start_up_queues_what_an_earlier_run_left),
         cmocka_unit_test(test_worker_crop_moves_the_record_region),
+        cmocka_unit_test(test_stop_mid_transcode_then_next_start),
     };
     int failed = cmocka_run_group_tests(tests, NULL, NULL);
     test_dir_done(dir, failed == 0, "transcode");
