@@ -13,11 +13,14 @@ DEB_PACKAGES := cmake make gcc g++ pkg-config \
 	libaravis-dev libusb-1.0-0-dev \
 	clang libclang-rt-14-dev \
 	libopenmpi-dev openmpi-bin \
-	libjpeg62-turbo-dev libjs-chart.js chromium chromium-driver
+	libjpeg62-turbo-dev libjs-chart.js chromium chromium-driver \
+	libavcodec-dev libavformat-dev libavutil-dev
 # clang with libclang-rt-14-dev: libFuzzer (libclang_rt.fuzzer-x86_64.a) and clang's sanitizer
 # runtimes for the fuzz build (clang-14 only recommends them, and deps skips recommends).
 # libjpeg62-turbo-dev and libjs-chart.js: the live page's camera JPEG and plots (docs/live-page.md);
 # chromium and chromium-driver: the live page's browser test.
+# libavcodec-dev, libavformat-dev, libavutil-dev: the lossless FFV1 transcode of each rig trial's
+# raw video after the trial (daemon/trial/trial_transcode.c).
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 BUILD ?= build
 ASAN_BUILD ?= build-asan

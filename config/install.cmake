@@ -75,6 +75,6 @@ set(CPACK_DEBIAN_PACKAGE_DEPENDS "libc6, libstdc++6, libgcc-s1, \
 libgsl27, libsqlite3-0, libserialport0, libmodbus5, libinih1, libmicrohttpd12, libjansson4, \
 libcurl4, libsystemd0, libplplot17, plplot-driver-cairo, libjpeg62-turbo, libjs-chart.js, \
 libopencv-core406, libopencv-imgproc406, libopencv-imgcodecs406, libopencv-videoio406, \
-libopencv-calib3d406")
+libopencv-calib3d406, libavcodec59, libavformat59, libavutil57")
 # No maintainer scripts: the unit is installed disabled and nothing is started or enabled.
 include(CPack)

@@ -58,6 +58,8 @@ static const char *const base_names[] = {"file", "cwd", NULL};
 static const char *const side_names[] = {"front", "back", NULL};
 static const char *const crease_names[] = {"up", "down", NULL};
 static const char *const off_on[] = {"off", "on", NULL};
+static const char *const transcode_names[] = {"off", "ffv1", NULL};
+static const char *const keep_names[] = {"recorded", "tracker", NULL};
 
 /* The key table. Bounds catch typos and keep later arithmetic finite; what depends on several
  * keys (limits against the scene, speeds against the rails) is checked after loading. */
@@ -182,6 +184,15 @@ static const rig_key rig_keys[] = {
     {"camera", "frozen_move_mm", RIG_KEY_DOUBLE, OFF(camera.frozen_move_mm), 0, 0.0, 1000.0, MINO, 0, NULL, "mm",
      "0.05", "rig mode: the rail motion during camera.frozen_frames identical frames that makes them a frozen "
              "image (a still scene repeats legitimately)"},
+    {"camera", "transcode", RIG_KEY_ENUM, OFF(camera.transcode), 0, 0, 0, 0, 0, transcode_names, "-", "ffv1",
+     "rig mode: after each trial, in the background, the raw Y800 video (trial-N.avi) is transcoded to "
+     "lossless FFV1 (trial-N.mkv), verified bit for bit, and the raw file removed; off: keep the raw video"},
+    {"camera", "transcode_keep", RIG_KEY_ENUM, OFF(camera.transcode_keep), 0, 0, 0, 0, 0, keep_names, "-",
+     "recorded", "what the transcoded video keeps: recorded (every recorded pixel) or tracker (only the "
+                 "tracker's region: ribbon and clamps at the trial's compression plus margin_px, of a video "
+                 "recorded with roi = full or x,y,w,h)"},
+    {"camera", "transcode_threads", RIG_KEY_INT, OFF(camera.transcode_threads), 0, 1, 16, 0, 0, NULL, "threads",
+     "2", "rig mode: the FFV1 encoder's slice threads (the worker runs at niceness 10 beside the next trial)"},
     {"camera", "noise_sigma", RIG_KEY_DOUBLE, OFF(camera.noise_sigma), 0, 0.0, 255.0, 0, 0, NULL,
      "grey", "2", "mock: additive Gaussian noise of the rendered frames"},
     {"camera", "blur_sigma_px", RIG_KEY_DOUBLE, OFF(camera.blur_sigma_px), 0, 0.0, 100.0, 0, 0,
@@ -1424,6 +1435,9 @@ static void config_defaults(rig_config *cfg)
     cfg->camera.fps = 30.0;
     cfg->camera.roi = RIG_ROI_AUTO;
     cfg->camera.margin_px = 20;
+    cfg->camera.transcode = RIG_TRANSCODE_FFV1;
+    cfg->camera.transcode_keep = RIG_KEEP_RECORDED;
+    cfg->camera.transcode_threads = 2;
     snprintf(cfg->camera.video_dir, sizeof cfg->camera.video_dir, "videos");
     cfg->camera.noise_sigma = 2.0;
     cfg->camera.blur_sigma_px = 0.8;

@@ -124,7 +124,17 @@ typedef struct rig_camera {
     int track_max_lag;          /* frames behind the camera after which tracking skips frames */
     int frozen_frames;          /* identical frames in a row that are a frozen image ... */
     double frozen_move_mm;      /* ... mm: while a rail moved at least this much since the first */
+    /* Rig mode, after each trial (daemon/trial/trial_transcoder.h): the raw Y800 video
+     * transcoded losslessly in the background, verified bit for bit, then the raw file removed. */
+    int transcode;              /* RIG_TRANSCODE_OFF or RIG_TRANSCODE_FFV1 */
+    int transcode_keep;         /* RIG_KEEP_RECORDED (every recorded pixel) or RIG_KEEP_TRACKER */
+    int transcode_threads;      /* the encoder's slice threads */
 } rig_camera;
+
+enum { RIG_TRANSCODE_OFF = 0, RIG_TRANSCODE_FFV1 = 1 };
+/* RIG_KEEP_TRACKER: only the tracker's region (ribbon and clamps at the trial's compression plus
+ * margin_px, the region roi = auto records) of a video recorded larger (roi = full or x,y,w,h). */
+enum { RIG_KEEP_RECORDED = 0, RIG_KEEP_TRACKER = 1 };
 
 typedef struct rig_detect {
     double dz_jump;       /* smallest jump of Delta Z between consecutive frames that is a snap */

@@ -113,6 +113,21 @@ int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *o
         if (!strcmp(rc->driver, "modbus") && rail_modbus_map_warning(&rc->modbus.map, warn, sizeof warn))
             say(d, "warning: rail %s: %s; driven because allow_unverified = on", rc->params.name, warn);
     }
+    if (d->cfg.mode == RIG_MODE_RIG) {
+        /* The worker that transcodes each trial's raw video after the trial (camera.transcode). */
+        trial_transcoder_params tp = trial_transcoder_params_default();
+        tp.store_path = d->cfg.store_path;
+        tp.codec.threads = d->cfg.camera.transcode_threads;
+        tp.log = d->log;
+        d->transcoder = trial_transcoder_start(&tp, w, sizeof w);
+        if (!d->transcoder) say(d, "%s: trial videos stay raw", w);
+        else if (d->cfg.camera.transcode == RIG_TRANSCODE_FFV1) {
+            int queued = trial_transcoder_queue_left(d->transcoder, d->st, w, sizeof w);
+            if (queued < 0) say(d, "raw videos of earlier trials not looked for: %s", w);
+            else if (queued > 0)
+                say(d, "%d raw trial video(s) an earlier run left queued for their lossless transcode", queued);
+        }
+    }
     return 0;
 }
 
@@ -167,6 +182,10 @@ void rig_daemon_close(rig_daemon *d, const char *reason)
         say(d, "trial ended %s%s%s", trial_state_name(r.final), r.reason[0] ? ": " : "", r.reason);
         unstored_add(d, &ss);
     }
+    /* After the session (it may have queued its video), before the store closes: a transcode in
+       progress stops at its next frame; every raw video not yet transcoded is kept (an event each). */
+    trial_transcoder_stop(d->transcoder);
+    d->transcoder = NULL;
     if (d->st && d->n_unstored) unstored_write(d);
     for (int k = 0; k < d->n_unstored; k++)
         say(d, "trial %lld: final status %s not stored (%s): the next start-up marks it interrupted",
@@ -420,8 +439,8 @@ static int op_start(void *user, const json_t *body, json_t **out, int *http_stat
         return -1;
     }
     int64_t id = 0;
-    trial_err te = trial_session_start(&cfg, d->compress, d->shear, req.note, d->log,
-                                       d->bus, &d->session, &id, why, why_len);
+    trial_err te = trial_session_start_tx(&cfg, d->compress, d->shear, req.note, d->log, d->bus, d->transcoder,
+                                          &d->session, &id, why, why_len);
     pthread_mutex_unlock(&d->lock);
     if (te != TRIAL_OK) {
         *http_status = te == TRIAL_E_REFUSED ? 400 : 500;

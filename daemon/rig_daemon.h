@@ -3,7 +3,8 @@
  *
  * Threads: the API's operations run on the API server's thread (api_server.h); a trial runs on
  * its session's thread, which owns the rails while it runs; a replay (replay mode) on its job's
- * thread; main() waits for signals. The daemon's mutex guards `session` and `replay`; the store handle `st` is used by the API thread only (each thread has its
+ * thread; main() waits for signals; in rig mode a transcoder's thread encodes each ended trial's
+ * raw video to lossless FFV1 beside the next trial (trial_transcoder.h). The daemon's mutex guards `session` and `replay`; the store handle `st` is used by the API thread only (each thread has its
  * own connection). At start-up every trial the store still marks running is marked interrupted:
  * a restart never resumes motion. One daemon per store and per rail device: both are locked
  * (owner_lock.h) for the daemon's life, so a second daemon refuses to start instead of marking
@@ -61,6 +62,7 @@ typedef struct rig_daemon {
     rail_locks *rails_lock;    /* the rails' devices (rig and mock modes) */
     rig_unstored unstored[RIG_DAEMON_MAX_UNSTORED]; /* under lock */
     int n_unstored;
+    trial_transcoder *transcoder; /* rig mode: the trials' raw videos to FFV1, in the background */
 } rig_daemon;
 
 /* Loads the rig file, takes the locks (the store's, STORE_PATH.lock, and in rig and mock modes

@@ -33,7 +33,7 @@
 #include <jansson.h>
 
 /* The schema version this program creates and understands (see the migration list in store.c). */
-#define STORE_SCHEMA_VERSION 5
+#define STORE_SCHEMA_VERSION 6
 
 /* Errors of the store layer; store_err_message() gives the generic text, why the specific one. */
 typedef enum store_err {
@@ -193,6 +193,7 @@ typedef struct store_trial {
     double stop_cmd_latency_s;  /* s, snap detection frame -> shear stop command returned; NaN = none */
     double stop_stand_latency_s; /* s, snap detection frame -> shear rail read standing; NaN = none */
     double crease_age_s;        /* s from the specimen's folding to the trial; NaN = unknown */
+    int64_t video_bytes;        /* size of video_path when it was recorded or transcoded; -1 = unknown */
 } store_trial;
 
 store_err store_trial_create(store *st, const store_trial_def *def, int64_t *id, char *why, size_t why_len);
@@ -212,6 +213,12 @@ store_err store_trial_set_result(store *st, int64_t id, bool snapped, double sna
 store_err store_trial_set_latency(store *st, int64_t id, double stop_cmd_s, double stop_stand_s, char *why,
                                   size_t why_len);
 store_err store_trial_set_video(store *st, int64_t id, const char *video_path, char *why, size_t why_len);
+/* The trial's video file and its size in bytes (>= 0): the raw recording at the trial's end, then
+ * the transcoded file once it is verified (trial_transcoder.h). roi (NULL: unchanged): the new
+ * file's region x, y, w, h inside the full frame, written into the calibration record's "roi" in
+ * the same statement (a transcode that kept only part of the recorded region). */
+store_err store_trial_set_video_file(store *st, int64_t id, const char *video_path, int64_t bytes, const int roi[4],
+                                     char *why, size_t why_len);
 /* At daemon start-up: every unfinished trial ('running', or 'created': killed before it started
  * moving) becomes 'interrupted' (ended at wall_s, a reason and a fault event added). *count gets
  * how many. One transaction. */

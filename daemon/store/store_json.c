@@ -17,14 +17,15 @@
     " p.scene_hash, t.calibration_json, t.stop_cmd_latency_s, t.stop_stand_latency_s, t.crease_age_s,"     \
     " p.status, p.failure, p.crease_angle_left_deg, p.crease_angle_left_from, p.crease_angle_right_deg,"    \
     " p.crease_angle_right_from, p.crease_position_left, p.crease_position_left_from,"                     \
-    " p.crease_position_right, p.crease_position_right_from"                                               \
+    " p.crease_position_right, p.crease_position_right_from, t.video_bytes"                                \
     " FROM trials t LEFT JOIN specimens s ON s.id = t.specimen_id"                                          \
     " LEFT JOIN predictions p ON p.id = (SELECT max(id) FROM predictions WHERE trial_id = t.id) "
 
 enum { C_ID, C_MODE, C_STATUS, C_STATE, C_REASON, C_SNAPPED, C_SNAP_DW, C_REGIME, C_VIDEO, C_SOURCE, C_SPECIMEN,
        C_CREATED, C_STARTED, C_ENDED, C_VERSION, C_SAMPLES, C_P_ID, C_P_SNAP_DW, C_P_REGIME, C_P_NODES, C_P_DT,
        C_P_ADAPTIVE, C_P_EST_ERROR, C_P_WALL_S, C_P_IMPERFECTION, C_P_HASH, C_CALIBRATION, C_STOP_CMD,
-       C_STOP_STAND, C_CREASE_AGE, C_P_STATUS, C_P_FAILURE, C_P_CREASES /* 8 columns: value, source */ };
+       C_STOP_STAND, C_CREASE_AGE, C_P_STATUS, C_P_FAILURE, C_P_CREASES /* 8 columns: value, source */,
+       C_VIDEO_BYTES = C_P_CREASES + 8 };
 
 static json_t *jreal(double v)
 {
@@ -107,7 +108,7 @@ static json_t *trial_object(sqlite3_stmt *s)
               set(o, "snap_dw_predicted", jcol_real(s, C_P_SNAP_DW)) &&
               set(o, "regime_measured", jcol_text(s, C_REGIME)) &&
               set(o, "regime_predicted", jcol_text(s, C_P_REGIME)) && set(o, "samples", jcol_int(s, C_SAMPLES)) &&
-              set(o, "video_path", jcol_text(s, C_VIDEO)) && set(o, "source_trial", jcol_int(s, C_SOURCE)) &&
+              set(o, "video_path", jcol_text(s, C_VIDEO)) && set(o, "video_bytes", jcol_int(s, C_VIDEO_BYTES)) && set(o, "source_trial", jcol_int(s, C_SOURCE)) &&
               set(o, "specimen", jcol_text(s, C_SPECIMEN)) && set(o, "created", jcol_text(s, C_CREATED)) &&
               set(o, "started", jcol_text(s, C_STARTED)) && set(o, "ended", jcol_text(s, C_ENDED)) &&
               set(o, "software_version", jcol_text(s, C_VERSION)) &&

@@ -21,6 +21,7 @@
  *                    created_at started_at ended_at | snapped snap_dw_measured regime_measured |
  *                    software_version | samples_count (v3, kept by the sample writer) |
  *                    stop_cmd_latency_s stop_stand_latency_s (v4: snap-to-stop latency) |
+ *                    video_bytes (v6: the size of video_path) |
  *                    crease_age_s (v5: the creases' age at the trial)
  *   samples          (trial_id -> trials, seq) | t_s kind frame | compress_mm shear_mm |
  *                    dl dw dz a quality reason                              (WITHOUT ROWID)
@@ -149,6 +150,12 @@ static const char schema_v5[] =
     "ALTER TABLE predictions ADD COLUMN crease_position_right_from TEXT CHECK (crease_position_right_from IN ('scene','specimen'));"
     "PRAGMA user_version = 5;";
 
+/* v6: the size of a trial's video file (issue 34, part D): the raw recording's at the trial's
+ * end, then the lossless transcode's once verified (video_path names which). NULL = unknown. */
+static const char schema_v6[] =
+    "ALTER TABLE trials ADD COLUMN video_bytes INTEGER CHECK (video_bytes >= 0);"
+    "PRAGMA user_version = 6;";
+
 typedef struct store_migration {
     int version;      /* user_version after the step */
     const char *what; /* for reasons */
@@ -161,6 +168,7 @@ static const store_migration migrations[] = {
     {3, "sample count per trial", schema_v3},
     {4, "snap-to-stop latency per trial", schema_v4},
     {5, "the specimen in the prediction, failed predictions", schema_v5},
+    {6, "video file size per trial", schema_v6},
 };
 #define N_MIGRATIONS (sizeof migrations / sizeof migrations[0])
 _Static_assert(sizeof migrations / sizeof migrations[0] == STORE_SCHEMA_VERSION,

@@ -259,6 +259,36 @@ store_err store_trial_set_video(store *st, int64_t id, const char *video_path, c
     return update_one(st, s, id, "saving a trial's video path", why, why_len);
 }
 
+store_err store_trial_set_video_file(store *st, int64_t id, const char *video_path, int64_t bytes, const int roi[4],
+                                     char *why, size_t why_len)
+{
+    store_err e = store_check_writable(st, why, why_len);
+    if (e == STORE_OK && (!video_path || !*video_path || bytes < 0))
+        e = store_fail(why, why_len, STORE_E_INVALID, "a trial's video file needs a path and a size >= 0 (%lld)",
+                       (long long)bytes);
+    if (e == STORE_OK)
+        e = store_need_fits(video_path, sizeof((store_trial *)0)->video_path, "trial video_path", why, why_len);
+    if (e != STORE_OK)
+        return e;
+    sqlite3_stmt *s;
+    e = store_prepare(st,
+                      "UPDATE trials SET video_path = ?1, video_bytes = ?2, calibration_json = CASE WHEN ?4 IS NULL"
+                      " OR calibration_json IS NULL THEN calibration_json"
+                      " ELSE json_set(calibration_json, '$.roi', json(?4)) END WHERE id = ?3",
+                      &s, why, why_len);
+    if (e != STORE_OK)
+        return e;
+    store_bind_text(s, 1, video_path);
+    sqlite3_bind_int64(s, 2, bytes);
+    sqlite3_bind_int64(s, 3, id);
+    char r[96];
+    if (roi) {
+        snprintf(r, sizeof r, "[%d,%d,%d,%d]", roi[0], roi[1], roi[2], roi[3]);
+        store_bind_text(s, 4, r);
+    }
+    return update_one(st, s, id, "saving a trial's video file", why, why_len);
+}
+
 store_err store_trial_mark_interrupted(store *st, double wall_s, int *count, char *why, size_t why_len)
 {
     char when[32];
@@ -311,7 +341,7 @@ store_err store_trial_mark_interrupted(store *st, double wall_s, int *count, cha
     "SELECT t.id, t.mode, t.status, t.state, t.reason, t.specimen_id, s.name, t.source_trial_id,"           \
     " t.video_path, t.created_at, t.started_at, t.ended_at, t.snapped, t.snap_dw_measured,"                 \
     " t.regime_measured, t.software_version, t.samples_count, t.stop_cmd_latency_s, t.stop_stand_latency_s,"                                              \
-    " t.crease_age_s"                                                                                       \
+    " t.crease_age_s, t.video_bytes"                                                                        \
     " FROM trials t LEFT JOIN specimens s ON s.id = t.specimen_id "
 
 /* The shared trial row behind store_trial_get/_list. */
@@ -342,6 +372,7 @@ static store_err store_trial_read_row(sqlite3_stmt *s, store_trial *out)
     out->stop_cmd_latency_s = store_col_real(s, 17);
     out->stop_stand_latency_s = store_col_real(s, 18);
     out->crease_age_s = store_col_real(s, 19);
+    out->video_bytes = sqlite3_column_type(s, 20) == SQLITE_NULL ? -1 : sqlite3_column_int64(s, 20);
     return STORE_OK;
 }
 

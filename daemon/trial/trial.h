@@ -6,6 +6,8 @@
  *   predict_ladder.h     the resolution ladder of a trial's prediction, its run-time estimate
  *   trial_runner.h       one trial on the rails as a state machine (rails, camera, tracker, sink)
  *   trial_video.h        the lossless, cropped video every trial keeps
+ *   trial_transcode.h    a rig trial's raw video to FFV1 after the trial, verified bit for bit
+ *   trial_transcoder.h   the daemon's background worker doing that, off the real-time path
  *   trial_record.h       the record stored with each trial (calibration, ROI, snap settings) and
  *                        the one mapping of a snap's outcome to a stored regime
  *   trial_err.h          the room's typed status (refused, not found, failed)
@@ -24,6 +26,8 @@
 #include "trial_runner.h"
 #include "trial_capture.h"
 #include "trial_video.h"
+#include "trial_transcode.h"
+#include "trial_transcoder.h"
 #include "trial_record.h"
 #include "trial_session.h"
 #include "trial_replay.h"

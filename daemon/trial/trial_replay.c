@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <jansson.h>
 
@@ -123,6 +124,14 @@ int trial_replay_from_trial(store *st, int64_t source_id, const char *video, tri
         goto fail;
     }
     snprintf(r->video, sizeof r->video, "%s", video);
+    /* A raw video transcoded by hand (ribbonctl transcode) left the store naming the .avi. */
+    size_t vl = strlen(r->video);
+    if (vl > 4 && strcmp(r->video + vl - 4, ".avi") == 0 && access(r->video, F_OK) != 0 &&
+        vl < sizeof r->video) {
+        char mkv[sizeof r->video];
+        snprintf(mkv, sizeof mkv, "%.*s.mkv", (int)(vl - 4), r->video);
+        if (access(mkv, F_OK) == 0) snprintf(r->video, sizeof r->video, "%s", mkv);
+    }
     size_t tl = (config ? strlen(config) : 0) + 64;
     r->config_text = malloc(tl);
     if (!r->config_text) {
@@ -203,12 +212,18 @@ static int read_rails(trial_replay *r, const char *path, char *why, size_t why_l
 
 /* An outside video's frame-times file (VIDEO.frames.csv, as rig mode's recorder writes it:
  * video_frame,capture_index,camera_id,camera_t_s,host_t_s,t_s): each frame's time, taken from its
- * first frame (the video's frame 0 is at t = 0, as f / fps would put it). No file: 0 and f / fps. */
+ * first frame (the video's frame 0 is at t = 0, as f / fps would put it). No file: 0 and f / fps.
+ * A transcoded rig video (NAME.mkv, trial_transcode.h) keeps its recording's file, NAME.avi.frames.csv. */
 static int read_frame_times(trial_replay *r, char *why, size_t why_len)
 {
     char path[RIG_PATH_MAX + 16];
     snprintf(path, sizeof path, "%s.frames.csv", r->video);
     FILE *f = fopen(path, "r");
+    size_t vl = strlen(r->video);
+    if (!f && vl > 4 && strcmp(r->video + vl - 4, ".mkv") == 0) {
+        snprintf(path, sizeof path, "%.*s.avi.frames.csv", (int)(vl - 4), r->video);
+        f = fopen(path, "r");
+    }
     if (!f) return 0;
     char line[512];
     long n = 0, cap = 0, ln = 0;

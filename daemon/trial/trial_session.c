@@ -45,6 +45,8 @@ struct trial_session {
     trial_result result;
     trial_video *video;
     trial_live *live;       /* rig mode: camera, capture pipeline, rail poller (trial_live.h) */
+    char live_video[RIG_PATH_MAX + 64]; /* rig mode: the raw video the live pipeline records */
+    trial_transcoder *tx;   /* may be NULL: takes the raw video after the trial (trial_transcoder.h) */
     pthread_mutex_t lock;
     session_status status;  /* under lock */
     int abort_pending;      /* under lock: an abort that came before the runner existed */
@@ -315,6 +317,42 @@ typedef struct session_parts {
 } session_parts;
 
 /* Rig mode: stops the live pipeline and stores its counts (and a failure of the video) as events. */
+/* Rig mode, after the live pipeline closed: the raw video's size into the store, then the video
+ * handed to the transcoder (which only queues it: the next trial can start at once). A video
+ * that did not close complete is kept raw, as evidence. */
+static void session_video_handover(trial_session *s, int video_ok)
+{
+    struct stat sb;
+    char w[512] = "";
+    if (!s->live_video[0] || stat(s->live_video, &sb) != 0) return; /* no video (removed on an early failure) */
+    if (store_trial_set_video_file(s->st, s->trial_id, s->live_video, (int64_t)sb.st_size, NULL, w, sizeof w) !=
+        STORE_OK)
+        session_event(s, NAN, STORE_EVENT_WARNING, w);
+    if (s->cfg.camera.transcode != RIG_TRANSCODE_FFV1 || !s->tx) return;
+    if (!video_ok) {
+        session_event(s, NAN, STORE_EVENT_WARNING, "video not transcoded: it did not close complete; the raw video is kept");
+        return;
+    }
+    int crop[4], rec[4], *cp = NULL, *rp = NULL;
+    if (s->cfg.camera.transcode_keep == RIG_KEEP_TRACKER) {
+        /* The tracker's region (roi = auto's), inside the recorded one, in the recording's pixels. */
+        trial_roi a = trial_roi_auto(&s->cal, s->width, s->height, s->cfg.scene.length * 1000.0,
+                                     s->cfg.scene.compression, s->cfg.camera.margin_px);
+        int x0 = a.x > s->roi.x ? a.x : s->roi.x, y0 = a.y > s->roi.y ? a.y : s->roi.y;
+        int x1 = a.x + a.w < s->roi.x + s->roi.w ? a.x + a.w : s->roi.x + s->roi.w;
+        int y1 = a.y + a.h < s->roi.y + s->roi.h ? a.y + a.h : s->roi.y + s->roi.h;
+        if (x1 - x0 >= 16 && y1 - y0 >= 16 && (x1 - x0 < s->roi.w || y1 - y0 < s->roi.h)) {
+            crop[0] = x0 - s->roi.x, crop[1] = y0 - s->roi.y, crop[2] = (x1 - x0) & ~1, crop[3] = (y1 - y0) & ~1;
+            rec[0] = x0, rec[1] = y0, rec[2] = crop[2], rec[3] = crop[3];
+            cp = crop, rp = rec;
+        }
+    }
+    if (trial_transcoder_submit(s->tx, s->trial_id, s->live_video, cp, rp, w, sizeof w))
+        session_event(s, NAN, STORE_EVENT_WARNING, w);
+    else
+        logf_(s, "video %s queued for its lossless transcode", s->live_video);
+}
+
 static void session_live_close(trial_session *s)
 {
     char summary[512], w[256] = "";
@@ -323,6 +361,7 @@ static void session_live_close(trial_session *s)
     s->live = NULL;
     session_event(s, NAN, k.lost || k.incomplete || k.dropped ? STORE_EVENT_WARNING : STORE_EVENT_INFO, summary);
     if (rc) session_event(s, NAN, STORE_EVENT_FAULT, w);
+    session_video_handover(s, rc == 0);
 }
 
 /* The final state and status into the store. When the store refuses them (issue 33, item 3: a
@@ -494,6 +533,7 @@ static int session_open_camera(trial_session *s, session_parts *p, char *why, si
     snprintf(vpath, sizeof vpath, "%s/trial-%lld.avi", cfg->camera.video_dir, (long long)s->trial_id);
     if (trial_live_open(cfg, s->compress, s->shear, vpath, s->roi, s->width, s->height, &s->cal, &s->live, why, why_len))
         return -1;
+    snprintf(s->live_video, sizeof s->live_video, "%s", vpath);
     char w[256];
     store_trial_set_video(s->st, s->trial_id, vpath, w, sizeof w);
     p->live.clock = rail_get_clock(s->compress);
@@ -698,6 +738,13 @@ trial_err trial_session_start(const rig_config *cfg, rail *compress, rail *shear
                               void (*log)(const char *line), live_bus *bus, trial_session **out, int64_t *trial_id,
                               char *why, size_t why_len)
 {
+    return trial_session_start_tx(cfg, compress, shear, note, log, bus, NULL, out, trial_id, why, why_len);
+}
+
+trial_err trial_session_start_tx(const rig_config *cfg, rail *compress, rail *shear, const char *note,
+                                 void (*log)(const char *line), live_bus *bus, trial_transcoder *tx,
+                                 trial_session **out, int64_t *trial_id, char *why, size_t why_len)
+{
     *out = NULL;
     trial_err te = check_prediction_cost(cfg, why, why_len);
     if (te != TRIAL_OK) return te;
@@ -719,6 +766,7 @@ trial_err trial_session_start(const rig_config *cfg, rail *compress, rail *shear
     s->shear = shear;
     s->log = log;
     s->bus = bus;
+    s->tx = tx;
     snprintf(s->note, sizeof s->note, "%s", note ? note : "");
     pthread_mutex_init(&s->lock, NULL);
     s->status.snap_dw_predicted = NAN;

@@ -38,6 +38,7 @@
 #include "live.h"
 #include "trial_err.h"
 #include "trial_runner.h"
+#include "trial_transcoder.h"
 
 /* s: the longest estimated prediction (or ladder) a start may ask for (predict_ladder.h). */
 #define TRIAL_PREDICTION_MAX_S 300.0
@@ -78,6 +79,12 @@ typedef struct session_status {
 trial_err trial_session_start(const rig_config *cfg, rail *compress, rail *shear, const char *note,
                               void (*log)(const char *line), live_bus *bus, trial_session **out, int64_t *trial_id,
                               char *why, size_t why_len);
+/* The same, with the daemon's transcoder (may be NULL): in rig mode, with camera.transcode = ffv1,
+ * the trial's raw video is handed to it once the live pipeline has closed it complete (queued
+ * only; the session does not wait for it). The transcoder must outlive the session. */
+trial_err trial_session_start_tx(const rig_config *cfg, rail *compress, rail *shear, const char *note,
+                                 void (*log)(const char *line), live_bus *bus, trial_transcoder *tx,
+                                 trial_session **out, int64_t *trial_id, char *why, size_t why_len);
 void trial_session_abort(trial_session *s, const char *reason);
 void trial_session_status(trial_session *s, session_status *out);
 /* Waits for the thread and frees. The result is in the store (unless status->final_unstored). */

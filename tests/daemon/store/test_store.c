@@ -1144,7 +1144,7 @@ static void assert_keys(const json_t *o)
 {
     static const char *const keys[] = {"id", "mode", "status", "state", "reason", "snapped", "snap_dw_measured",
                                        "snap_dw_predicted", "regime_measured", "regime_predicted", "samples",
-                                       "video_path", "source_trial", "specimen", "created", "started", "ended",
+                                       "video_path", "video_bytes", "source_trial", "specimen", "created", "started", "ended",
                                        "software_version", "prediction"};
     for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++)
         if (!json_object_get(o, keys[i]))
@@ -1185,6 +1185,39 @@ static void test_trial_latency(void **state)
     assert_true(json_is_null(json_object_get(j, "stop_stand_latency_s")));
     json_decref(j);
     assert_int_equal(store_trial_set_latency(st, id + 99, 0.1, 0.1, why, sizeof why), STORE_E_NOTFOUND);
+    store_close(st);
+}
+
+/* v6: a trial's video file and its size: unknown (NULL) until set, set with the path in one
+ * statement, in the JSON; a negative size or no path refused without touching the row. */
+static void test_trial_video_file(void **state)
+{
+    fixture *f = *state;
+    store *st;
+    OK(store_open(f->db, &st, why, sizeof why));
+    store_trial_def d = store_trial_def_default();
+    d.mode = STORE_MODE_RIG;
+    d.created_wall_s = T0;
+    int64_t id;
+    OK(store_trial_create(st, &d, &id, why, sizeof why));
+    store_trial t;
+    OK(store_trial_get(st, id, &t, why, sizeof why));
+    assert_int_equal(t.video_bytes, -1);
+    json_t *j = NULL;
+    OK(store_trial_json(st, id, &j, why, sizeof why));
+    assert_true(json_is_null(json_object_get(j, "video_bytes")));
+    json_decref(j);
+    OK(store_trial_set_video_file(st, id, "videos/trial-1.avi", 1566948531LL, NULL, why, sizeof why));
+    OK(store_trial_set_video_file(st, id, "videos/trial-1.mkv", 670695772LL, NULL, why, sizeof why));
+    assert_int_equal(store_trial_set_video_file(st, id, "videos/x.mkv", -1, NULL, why, sizeof why), STORE_E_INVALID);
+    assert_int_equal(store_trial_set_video_file(st, id, "", 5, NULL, why, sizeof why), STORE_E_INVALID);
+    OK(store_trial_get(st, id, &t, why, sizeof why));
+    assert_string_equal(t.video_path, "videos/trial-1.mkv");
+    assert_int_equal(t.video_bytes, 670695772LL);
+    OK(store_trial_json(st, id, &j, why, sizeof why));
+    assert_int_equal(json_integer_value(json_object_get(j, "video_bytes")), 670695772LL);
+    json_decref(j);
+    assert_int_equal(store_trial_set_video_file(st, id + 99, "v.mkv", 1, NULL, why, sizeof why), STORE_E_NOTFOUND);
     store_close(st);
 }
 
@@ -1442,6 +1475,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_writer_disk_full, setup, teardown),
         cmocka_unit_test_setup_teardown(test_trial_curve, setup, teardown),
         cmocka_unit_test_setup_teardown(test_trial_latency, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_trial_video_file, setup, teardown),
         cmocka_unit_test_setup_teardown(test_json, setup, teardown),
         cmocka_unit_test_setup_teardown(test_csv, setup, teardown),
         cmocka_unit_test_setup_teardown(test_bench_small, setup, teardown),

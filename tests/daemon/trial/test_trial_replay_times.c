@@ -4,7 +4,9 @@
  * an absolute base on the rails' clock); the rails CSV is a shear ramp, so each sample's time and
  * its shear position both tell which time was used. Also: a frames file with a time going back is
  * a named error. A replay of a trial that has not ended, or of a replay that ended early, is
- * refused with a reason that says so (issue 33, item 4). */
+ * refused with a reason that says so (issue 33, item 4). Both forms of a rig video replay to the
+ * same samples: the raw Y800 .avi and its lossless FFV1 transcode (trial_transcode.h), as an
+ * outside recording (the .mkv finds the recording's NAME.avi.frames.csv) and as a stored trial. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -19,6 +21,7 @@
 #include "rig_config.h"
 #include "store.h"
 #include "trial_replay.h"
+#include "trial_transcode.h"
 #include "test_dir.h"
 #include "vision.h"
 
@@ -199,12 +202,143 @@ static void test_unfinished_and_cut_replays_refused(void **state)
     store_close(st);
 }
 
+/* Ribbon-like frames: a dark arc between the calibration's clamp points (40, 120) and (280, 120)
+ * rising a pixel a frame, on a noisy background no lossy codec keeps bit for bit. */
+static void write_ribbon_video(const char *path)
+{
+    vis_error ve = {0};
+    vis_video_writer *vw = vis_video_writer_open_y800(path, W, H, FPS, &ve);
+    if (!vw) fail_msg("video: %s", ve.message);
+    vis_frame *f = vis_frame_alloc(W, H, 1, &ve);
+    assert_non_null(f);
+    uint32_t seed = 12345u;
+    for (int k = 0; k < NF; k++) {
+        uint8_t *d = vis_frame_data(f);
+        double hgt = 80.0 + 0.5 * k; /* arc length about the free length, 320 px at 1.6 px/mm */
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                seed = seed * 1103515245u + 12345u;
+                double u = (x - 160.0) / 120.0;
+                double yc = 120.0 - hgt * (1.0 - u * u);
+                int on = fabs(u) <= 1.0 && fabs(y - yc) < 3.0;
+                d[(size_t)y * vis_frame_stride(f) + (size_t)x] = (uint8_t)((on ? 30 : 200) + (int)(seed >> 29));
+            }
+        assert_int_equal(vis_video_writer_write(vw, f, &ve), VIS_OK);
+    }
+    vis_video_writer_close(vw);
+    vis_frame_free(f);
+}
+
+static int same_num(double a, double b) { return (isnan(a) && isnan(b)) || a == b; }
+
+static void samples_of(store *st, int64_t id, store_sample **smp, size_t *ns)
+{
+    char why[256];
+    assert_int_equal(store_samples_get(st, id, smp, ns, why, sizeof why), STORE_OK);
+}
+
+/* Every sample of trials a and b equal (NaN equals NaN); returns the frames tracked. */
+static int same_samples(store *st, int64_t a, int64_t b)
+{
+    store_sample *x = NULL, *y = NULL;
+    size_t nx = 0, ny = 0;
+    samples_of(st, a, &x, &nx);
+    samples_of(st, b, &y, &ny);
+    assert_int_equal(nx, ny);
+    int tracked = 0;
+    for (size_t k = 0; k < nx; k++) {
+        if (x[k].kind != y[k].kind || x[k].frame != y[k].frame || !same_num(x[k].t_s, y[k].t_s) ||
+            !same_num(x[k].shear_mm, y[k].shear_mm) || !same_num(x[k].compress_mm, y[k].compress_mm) ||
+            !same_num(x[k].dw, y[k].dw) || !same_num(x[k].dz, y[k].dz) || !same_num(x[k].a, y[k].a) ||
+            !same_num(x[k].quality, y[k].quality) || strcmp(x[k].reason, y[k].reason) != 0)
+            fail_msg("trials %lld and %lld differ at sample %zu (frame %lld): dz %.17g / %.17g, quality %g / %g, "
+                     "\"%s\" / \"%s\"",
+                     (long long)a, (long long)b, k, (long long)x[k].frame, x[k].dz, y[k].dz, x[k].quality,
+                     y[k].quality, x[k].reason, y[k].reason);
+        if (x[k].kind == STORE_SAMPLE_FRAME && isfinite(x[k].dz)) tracked++;
+    }
+    free(x);
+    free(y);
+    return tracked;
+}
+
+static int64_t replay_files(const char *video_override)
+{
+    char p[160], ov[200], why[512] = "";
+    snprintf(p, sizeof p, "%s/replay.ini", dir);
+    static rig_config cfg;
+    cfg_error ce;
+    const char *ovs[1] = {ov};
+    if (video_override) snprintf(ov, sizeof ov, "replay.video=%s", video_override);
+    if (rig_config_load(p, video_override ? ovs : NULL, video_override ? 1 : 0, &cfg, &ce) != CFG_OK)
+        fail_msg("%s", cfg_error_format(&ce, why, sizeof why));
+    trial_replay *r = NULL;
+    if (trial_replay_from_files(&cfg, &r, why, sizeof why)) fail_msg("replay: %s", why);
+    store *st = NULL;
+    snprintf(p, sizeof p, "%s/trials.db", dir);
+    assert_int_equal(store_open(p, &st, why, sizeof why), STORE_OK);
+    int64_t id = 0;
+    trial_result res;
+    if (trial_replay_run(r, st, "form", NULL, NULL, &id, &res, why, sizeof why)) fail_msg("replay: %s", why);
+    trial_replay_free(r);
+    store_close(st);
+    return id;
+}
+
+static int64_t replay_stored(store *st, int64_t src)
+{
+    char why[512] = "";
+    trial_replay *r = NULL;
+    if (trial_replay_from_trial(st, src, NULL, &r, why, sizeof why)) fail_msg("replay of %lld: %s", (long long)src, why);
+    int64_t id = 0;
+    trial_result res;
+    if (trial_replay_run(r, st, "form", NULL, NULL, &id, &res, why, sizeof why)) fail_msg("replay: %s", why);
+    trial_replay_free(r);
+    return id;
+}
+
+static void test_both_video_forms_replay_the_same(void **state)
+{
+    (void)state;
+    write_files(0);
+    char avi[160], mkv[160], why[512] = "";
+    snprintf(avi, sizeof avi, "%s/rec.avi", dir);
+    snprintf(mkv, sizeof mkv, "%s/rec.mkv", dir);
+    write_ribbon_video(avi);
+    int64_t a = replay_files(NULL); /* the raw form, as an outside recording */
+    store *st = NULL;
+    char p[160];
+    snprintf(p, sizeof p, "%s/trials.db", dir);
+    assert_int_equal(store_open(p, &st, why, sizeof why), STORE_OK);
+    int64_t b = replay_stored(st, a); /* the raw form, as a stored trial's video */
+    trial_transcode_result tr;
+    if (trial_transcode_run(avi, mkv, NULL, &tr, why, sizeof why)) fail_msg("transcode: %s", why);
+    assert_true(tr.raw_removed);
+    assert_int_equal(access(avi, F_OK), -1);
+    int64_t d0 = replay_stored(st, a); /* the store still names the .avi (a transcode by hand) */
+    assert_int_equal(store_trial_set_video_file(st, a, mkv, tr.out_bytes, NULL, why, sizeof why), STORE_OK);
+    store_close(st);
+    int64_t c = replay_files(mkv); /* the FFV1 form, with the recording's frame times */
+    assert_int_equal(store_open(p, &st, why, sizeof why), STORE_OK);
+    int64_t d = replay_stored(st, a); /* the FFV1 form, as the stored trial's video */
+    int tracked = same_samples(st, a, c);
+    assert_int_equal(same_samples(st, b, d), tracked);
+    assert_int_equal(same_samples(st, b, d0), tracked);
+    printf("# raw %lld bytes, FFV1 %lld; replays %lld = %lld (outside recording) and %lld = %lld (stored trial): "
+           "every sample equal, %d frames tracked\n",
+           (long long)tr.raw_bytes, (long long)tr.out_bytes, (long long)a, (long long)c, (long long)b, (long long)d,
+           tracked);
+    assert_true(tracked > NF / 2);
+    store_close(st);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_replay_uses_stored_times),
         cmocka_unit_test(test_times_going_back_refused),
         cmocka_unit_test(test_unfinished_and_cut_replays_refused),
+        cmocka_unit_test(test_both_video_forms_replay_the_same),
     };
     int failed = cmocka_run_group_tests(tests, setup, NULL);
     test_dir_done(dir, !failed, "the recording, calibration and store");
