@@ -1194,14 +1194,16 @@ static cfg_status check_scene(load_ctx *c)
         memcpy(cfg->specimen.name, base, n);
         cfg->specimen.name[n] = '\0';
     }
+    /* The orientation against each crease's own angle (its per-crease key, else folds.angle_deg). */
     rig_crease o = cfg->specimen.crease_orientation;
-    if (o != RIG_CREASE_UNSET && s->fold_angle_deg != 0.0 &&
-        (o == RIG_CREASE_UP) != (s->fold_angle_deg > 0.0))
-        return fail_key(c, CFG_ERR_CHECK, "specimen.crease_orientation",
-                        "%s does not match the scene's folds.angle_deg = %g (%s is %s)",
-                        o == RIG_CREASE_UP ? "up" : "down", s->fold_angle_deg,
-                        s->fold_angle_deg > 0 ? "a positive angle" : "a negative angle",
-                        s->fold_angle_deg > 0 ? "up" : "down");
+    for (int k = 0; k < 2 && o != RIG_CREASE_UNSET; k++) {
+        double a = rod_scene_crease_angle_deg(s, k), own = k == 0 ? s->fold_angle_left_deg : s->fold_angle_right_deg;
+        const char *key = isnan(own) ? "folds.angle_deg" : k == 0 ? "folds.angle_left_deg" : "folds.angle_right_deg";
+        if (a != 0.0 && (o == RIG_CREASE_UP) != (a > 0.0))
+            return fail_key(c, CFG_ERR_CHECK, "specimen.crease_orientation",
+                            "%s does not match the scene's %s = %g (%s is %s)", o == RIG_CREASE_UP ? "up" : "down",
+                            key, a, a > 0 ? "a positive angle" : "a negative angle", a > 0 ? "up" : "down");
+    }
 
     cfg_status fst = check_specimen(c);
     if (fst) return fst;
