@@ -116,26 +116,28 @@ static const rig_key rig_keys[] = {
      0, 0, NULL, "-", "not recorded", "material, e.g. PET"},
     {"specimen", "crease_angle_left_deg", RIG_KEY_DOUBLE, OFF(specimen.crease_angle_left_deg), 0,
      0.0, 180.0, MAXO, 0, NULL, "deg", "not measured",
-     "measured angle (magnitude) of the crease at Gamma; replaces the scene's in the trial's prediction"},
+     "measured angle (magnitude) of the crease near the clamp at x = 0; replaces the scene's "
+     "(folds.angle_left_deg) in the trial's prediction"},
     {"specimen", "crease_angle_right_deg", RIG_KEY_DOUBLE, OFF(specimen.crease_angle_right_deg),
      0, 0.0, 180.0, MAXO, 0, NULL, "deg", "not measured",
-     "measured angle (magnitude) of the crease at 1 - Gamma; replaces the scene's in the trial's prediction"},
+     "measured angle (magnitude) of the other crease; replaces the scene's (folds.angle_right_deg) in the "
+     "trial's prediction"},
     {"specimen", "crease_position_left", RIG_KEY_DOUBLE, OFF(specimen.crease_position_left), 0, 0.0,
      1.0, MINO | MAXO, 0, NULL, "1", "not measured",
-     "measured position of the crease near the clamp at x = 0, a fraction of the free length; the "
-     "prediction uses it when the two positions are symmetric (left = 1 - right)"},
+     "measured position of the crease near the clamp at x = 0, a fraction of the free length; replaces the "
+     "scene's (folds.position_left) in the trial's prediction"},
     {"specimen", "crease_position_right", RIG_KEY_DOUBLE, OFF(specimen.crease_position_right), 0,
      0.0, 1.0, MINO | MAXO, 0, NULL, "1", "not measured",
      "measured position of the other crease, a fraction of the free length (more than "
-     "crease_position_left)"},
+     "crease_position_left); replaces the scene's (folds.position_right) in the trial's prediction"},
     {"specimen", "folded_at", RIG_KEY_TEXT, OFF(specimen.folded_at), SZ(specimen.folded_at), 1, 63,
      0, 0, NULL, "-", "not recorded",
      "when the creases were folded: ISO 8601 date-time with a zone (2026-11-30T14:05Z, "
      "2026-11-30T15:05+01:00), not in the future; each trial stores the creases' age"},
     {"specimen", "crease_orientation", RIG_KEY_ENUM, OFF(specimen.crease_orientation), 0, 0, 0,
      ENUM1, 0, crease_names, "-", "not recorded",
-     "up or down (toward or away from the surface normal); must match the sign of the scene's "
-     "folds.angle_deg"},
+     "up or down (toward or away from the surface normal); must match the sign of each of the scene's "
+     "creases (folds.angle_left_deg / angle_right_deg, else folds.angle_deg)"},
     {"specimen", "min_clamp_gap_mm", RIG_KEY_DOUBLE, OFF(specimen.min_clamp_gap_mm), 0, 0.0, 1e6,
      0, RIG, NULL, "mm", "0 (mock, replay)",
      "the clamps never come closer; pushed into the compression rail's min_gap_mm"},
