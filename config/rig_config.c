@@ -118,26 +118,28 @@ static const rig_key rig_keys[] = {
      0, 0, NULL, "-", "not recorded", "material, e.g. PET"},
     {"specimen", "crease_angle_left_deg", RIG_KEY_DOUBLE, OFF(specimen.crease_angle_left_deg), 0,
      0.0, 180.0, MAXO, 0, NULL, "deg", "not measured",
-     "measured angle (magnitude) of the crease at Gamma; replaces the scene's in the trial's prediction"},
+     "measured angle (magnitude) of the crease near the clamp at x = 0; replaces the scene's "
+     "(folds.angle_left_deg) in the trial's prediction"},
     {"specimen", "crease_angle_right_deg", RIG_KEY_DOUBLE, OFF(specimen.crease_angle_right_deg),
      0, 0.0, 180.0, MAXO, 0, NULL, "deg", "not measured",
-     "measured angle (magnitude) of the crease at 1 - Gamma; replaces the scene's in the trial's prediction"},
+     "measured angle (magnitude) of the other crease; replaces the scene's (folds.angle_right_deg) in the "
+     "trial's prediction"},
     {"specimen", "crease_position_left", RIG_KEY_DOUBLE, OFF(specimen.crease_position_left), 0, 0.0,
      1.0, MINO | MAXO, 0, NULL, "1", "not measured",
-     "measured position of the crease near the clamp at x = 0, a fraction of the free length; the "
-     "prediction uses it when the two positions are symmetric (left = 1 - right)"},
+     "measured position of the crease near the clamp at x = 0, a fraction of the free length; replaces the "
+     "scene's (folds.position_left) in the trial's prediction"},
     {"specimen", "crease_position_right", RIG_KEY_DOUBLE, OFF(specimen.crease_position_right), 0,
      0.0, 1.0, MINO | MAXO, 0, NULL, "1", "not measured",
      "measured position of the other crease, a fraction of the free length (more than "
-     "crease_position_left)"},
+     "crease_position_left); replaces the scene's (folds.position_right) in the trial's prediction"},
     {"specimen", "folded_at", RIG_KEY_TEXT, OFF(specimen.folded_at), SZ(specimen.folded_at), 1, 63,
      0, 0, NULL, "-", "not recorded",
      "when the creases were folded: ISO 8601 date-time with a zone (2026-11-30T14:05Z, "
      "2026-11-30T15:05+01:00), not in the future; each trial stores the creases' age"},
     {"specimen", "crease_orientation", RIG_KEY_ENUM, OFF(specimen.crease_orientation), 0, 0, 0,
      ENUM1, 0, crease_names, "-", "not recorded",
-     "up or down (toward or away from the surface normal); must match the sign of the scene's "
-     "folds.angle_deg"},
+     "up or down (toward or away from the surface normal); must match the sign of each of the scene's "
+     "creases (folds.angle_left_deg / angle_right_deg, else folds.angle_deg)"},
     {"specimen", "min_clamp_gap_mm", RIG_KEY_DOUBLE, OFF(specimen.min_clamp_gap_mm), 0, 0.0, 1e6,
      0, RIG, NULL, "mm", "0 (mock, replay)",
      "the clamps never come closer; pushed into the compression rail's min_gap_mm"},
@@ -1306,14 +1308,16 @@ static cfg_status check_scene(load_ctx *c)
         memcpy(cfg->specimen.name, base, n);
         cfg->specimen.name[n] = '\0';
     }
+    /* The orientation against each crease's own angle (its per-crease key, else folds.angle_deg). */
     rig_crease o = cfg->specimen.crease_orientation;
-    if (o != RIG_CREASE_UNSET && s->fold_angle_deg != 0.0 &&
-        (o == RIG_CREASE_UP) != (s->fold_angle_deg > 0.0))
-        return fail_key(c, CFG_ERR_CHECK, "specimen.crease_orientation",
-                        "%s does not match the scene's folds.angle_deg = %g (%s is %s)",
-                        o == RIG_CREASE_UP ? "up" : "down", s->fold_angle_deg,
-                        s->fold_angle_deg > 0 ? "a positive angle" : "a negative angle",
-                        s->fold_angle_deg > 0 ? "up" : "down");
+    for (int k = 0; k < 2 && o != RIG_CREASE_UNSET; k++) {
+        double a = rod_scene_crease_angle_deg(s, k), own = k == 0 ? s->fold_angle_left_deg : s->fold_angle_right_deg;
+        const char *key = isnan(own) ? "folds.angle_deg" : k == 0 ? "folds.angle_left_deg" : "folds.angle_right_deg";
+        if (a != 0.0 && (o == RIG_CREASE_UP) != (a > 0.0))
+            return fail_key(c, CFG_ERR_CHECK, "specimen.crease_orientation",
+                            "%s does not match the scene's %s = %g (%s is %s)", o == RIG_CREASE_UP ? "up" : "down",
+                            key, a, a > 0 ? "a positive angle" : "a negative angle", a > 0 ? "up" : "down");
+    }
 
     cfg_status fst = check_specimen(c);
     if (fst) return fst;

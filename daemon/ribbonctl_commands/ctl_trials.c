@@ -195,7 +195,8 @@ static void print_trial_row(const json_t *t)
 }
 
 /* What the prediction used of the specimen: each crease's angle and position and where each came
- * from (scene or specimen), and the creases' age at the trial. */
+ * from (scene or specimen), the crease model (rigid or the hinge's stiffness), and the creases'
+ * age at the trial. */
 static void print_creases(const json_t *t)
 {
     const json_t *c = json_object_get(json_object_get(t, "prediction"), "creases");
@@ -205,6 +206,11 @@ static void print_creases(const json_t *t)
                json_number_value(json_object_get(c, "position_left")), jstr(c, "position_left_from"),
                json_number_value(json_object_get(c, "angle_right_deg")), jstr(c, "angle_right_from"),
                json_number_value(json_object_get(c, "position_right")), jstr(c, "position_right_from"));
+    const json_t *k = json_object_get(c, "hinge_stiffness");
+    if (json_is_number(k))
+        printf("  prediction's crease hinges: %g N m/rad\n", json_number_value(k));
+    else if (json_is_string(k))
+        printf("  prediction's crease hinges: %s\n", json_string_value(k));
     const json_t *age = json_object_get(t, "crease_age_s");
     if (json_is_number(age))
         printf("  creases folded %.2f days before the trial\n", json_number_value(age) / 86400.0);

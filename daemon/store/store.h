@@ -33,7 +33,7 @@
 #include <jansson.h>
 
 /* The schema version this program creates and understands (see the migration list in store.c). */
-#define STORE_SCHEMA_VERSION 6
+#define STORE_SCHEMA_VERSION 7
 
 /* Errors of the store layer; store_err_message() gives the generic text, why the specific one. */
 typedef enum store_err {
@@ -329,14 +329,17 @@ typedef enum store_source {
 const char *store_source_name(store_source s); /* "scene", "specimen"; NULL for unknown */
 bool store_source_parse(const char *s, store_source *out);
 
-/* The creases a prediction used, [0] the left one (at Gamma, near the clamp at x = 0), [1] the
- * right one: angles in deg signed as the scene's folds.angle_deg, positions as fractions of the
- * free length. NaN with STORE_SOURCE_UNKNOWN = not recorded. */
+/* The creases a prediction used, [0] the left one (near the clamp at x = 0), [1] the right one:
+ * each crease's own angle in deg signed as the scene's folds.angle_deg (before the imperfection
+ * seed, which is the prediction's imperfection), positions from the left clamp point as fractions
+ * of the free length. NaN with STORE_SOURCE_UNKNOWN = not recorded. The hinge is the scene's
+ * folds.hinge_stiffness: the crease model the prediction ran. */
 typedef struct store_creases {
     double angle_deg[2];
     store_source angle_from[2];
     double position[2];
     store_source position_from[2];
+    double hinge_stiffness; /* N m/rad, > 0; INFINITY = rigid creases; NaN = not recorded (before v7) */
 } store_creases;
 
 store_creases store_creases_unknown(void); /* every value NaN, every source unknown */

@@ -17,7 +17,8 @@
     " p.scene_hash, t.calibration_json, t.stop_cmd_latency_s, t.stop_stand_latency_s, t.crease_age_s,"     \
     " p.status, p.failure, p.crease_angle_left_deg, p.crease_angle_left_from, p.crease_angle_right_deg,"    \
     " p.crease_angle_right_from, p.crease_position_left, p.crease_position_left_from,"                     \
-    " p.crease_position_right, p.crease_position_right_from, t.video_bytes"                                \
+    " p.crease_position_right, p.crease_position_right_from, t.video_bytes, p.crease_hinge,"               \
+    " p.crease_hinge_stiffness_nm_per_rad"                                                                  \
     " FROM trials t LEFT JOIN specimens s ON s.id = t.specimen_id"                                          \
     " LEFT JOIN predictions p ON p.id = (SELECT max(id) FROM predictions WHERE trial_id = t.id) "
 
@@ -25,7 +26,7 @@ enum { C_ID, C_MODE, C_STATUS, C_STATE, C_REASON, C_SNAPPED, C_SNAP_DW, C_REGIME
        C_CREATED, C_STARTED, C_ENDED, C_VERSION, C_SAMPLES, C_P_ID, C_P_SNAP_DW, C_P_REGIME, C_P_NODES, C_P_DT,
        C_P_ADAPTIVE, C_P_EST_ERROR, C_P_WALL_S, C_P_IMPERFECTION, C_P_HASH, C_CALIBRATION, C_STOP_CMD,
        C_STOP_STAND, C_CREASE_AGE, C_P_STATUS, C_P_FAILURE, C_P_CREASES /* 8 columns: value, source */,
-       C_VIDEO_BYTES = C_P_CREASES + 8 };
+       C_VIDEO_BYTES = C_P_CREASES + 8, C_P_HINGE, C_P_HINGE_K };
 
 static json_t *jreal(double v)
 {
@@ -78,8 +79,9 @@ static bool set(json_t *o, const char *key, json_t *v)
     return v && json_object_set_new(o, key, v) == 0;
 }
 
-/* The creases a prediction used: {angle_left_deg, angle_left_from, ...}; null values and
- * sources for rows from before schema 5. */
+/* The creases a prediction used: {angle_left_deg, angle_left_from, ..., hinge_stiffness}; null
+ * values and sources for rows from before schema 5; hinge_stiffness is the number (N m/rad) of a
+ * compliant hinge, "rigid", or null for rows from before schema 7. */
 static json_t *creases_object(sqlite3_stmt *s)
 {
     static const char *const keys[8] = {"angle_left_deg", "angle_left_from",  "angle_right_deg",
@@ -89,6 +91,10 @@ static json_t *creases_object(sqlite3_stmt *s)
     bool ok = c != NULL;
     for (int k = 0; ok && k < 8; k += 2)
         ok = set(c, keys[k], jcol_real(s, C_P_CREASES + k)) && set(c, keys[k + 1], jcol_text(s, C_P_CREASES + k + 1));
+    const char *hinge = (const char *)sqlite3_column_text(s, C_P_HINGE);
+    if (ok)
+        ok = set(c, "hinge_stiffness",
+                 !hinge ? json_null() : !strcmp(hinge, "rigid") ? json_string("rigid") : jcol_real(s, C_P_HINGE_K));
     if (!ok) {
         json_decref(c);
         return NULL;

@@ -26,12 +26,18 @@ store_creases store_creases_unknown(void)
     store_creases c;
     memset(&c, 0, sizeof c);
     for (int k = 0; k < 2; k++) c.angle_deg[k] = c.position[k] = NAN;
+    c.hinge_stiffness = NAN;
     return c;
 }
 
-/* A recorded crease value has a source, and a source a finite value. */
+/* A recorded crease value has a source, and a source a finite value; a hinge is positive
+ * (infinite: rigid) or not recorded. */
 static store_err check_creases(const store_creases *c, char *why, size_t why_len)
 {
+    if (c->hinge_stiffness <= 0.0)
+        return store_fail(why, why_len, STORE_E_INVALID,
+                          "prediction crease hinge_stiffness %g: must be > 0 N m/rad (infinite: rigid; NaN: not recorded)",
+                          c->hinge_stiffness);
     for (int k = 0; k < 2; k++) {
         const char *side = k ? "right" : "left";
         if ((unsigned)c->angle_from[k] >= STORE_SOURCE_COUNT || (unsigned)c->position_from[k] >= STORE_SOURCE_COUNT)
@@ -146,8 +152,9 @@ store_err store_prediction_insert(store *st, const store_prediction *p, int64_t 
                       " nodes, dt, adaptive, imperfection, est_error, wall_s, software_version, solver_json,"
                       " status, failure, crease_angle_left_deg, crease_angle_left_from, crease_angle_right_deg,"
                       " crease_angle_right_from, crease_position_left, crease_position_left_from,"
-                      " crease_position_right, crease_position_right_from)"
-                      " VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,?15,?16,?17,?18,?19,?20,?21,?22,?23,?24)",
+                      " crease_position_right, crease_position_right_from, crease_hinge, crease_hinge_stiffness_nm_per_rad)"
+                      " VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,?15,?16,?17,?18,?19,?20,?21,?22,?23,?24,"
+                      "?25,?26)",
                       &s, why, why_len);
     int64_t pid = 0;
     if (e == STORE_OK) {
@@ -174,6 +181,9 @@ store_err store_prediction_insert(store *st, const store_prediction *p, int64_t 
             store_bind_real(s, 21 + 2 * k, c->position[k]);
             store_bind_text(s, 22 + 2 * k, store_source_name(c->position_from[k]));
         }
+        double k_h = p->creases.hinge_stiffness;
+        store_bind_text(s, 25, isnan(k_h) ? NULL : isinf(k_h) ? "rigid" : "compliant");
+        store_bind_real(s, 26, isinf(k_h) ? NAN : k_h);
         int rc = sqlite3_step(s);
         if (rc == SQLITE_CONSTRAINT_FOREIGNKEY)
             e = store_fail(why, why_len, STORE_E_NOTFOUND, "prediction for trial %lld: no such trial",
@@ -217,8 +227,8 @@ store_err store_prediction_get(store *st, int64_t id, store_prediction *out, cha
                                 " adaptive, imperfection, est_error, wall_s, software_version, solver_json,"
                                 " created_at, status, failure, crease_angle_left_deg, crease_angle_left_from,"
                                 " crease_angle_right_deg, crease_angle_right_from, crease_position_left,"
-                                " crease_position_left_from, crease_position_right, crease_position_right_from"
-                                " FROM predictions WHERE id = ?1",
+                                " crease_position_left_from, crease_position_right, crease_position_right_from,"
+                                " crease_hinge, crease_hinge_stiffness_nm_per_rad FROM predictions WHERE id = ?1",
                                 &s, why, why_len);
     if (e != STORE_OK)
         return e;
@@ -258,6 +268,10 @@ store_err store_prediction_get(store *st, int64_t id, store_prediction *out, cha
                 e = store_fail(why, why_len, STORE_E_CORRUPT, "prediction %lld has an unknown crease source",
                                (long long)id);
         }
+        const char *hinge = (const char *)sqlite3_column_text(s, 26);
+        out->creases.hinge_stiffness = !hinge                   ? NAN
+                                       : !strcmp(hinge, "rigid") ? INFINITY
+                                                                 : store_col_real(s, 27);
     } else if (rc == SQLITE_DONE) {
         e = store_fail(why, why_len, STORE_E_NOTFOUND, "prediction %lld does not exist", (long long)id);
     } else {

@@ -30,7 +30,9 @@
  *                    nodes dt adaptive imperfection | est_error wall_s | software_version
  *                    solver_json created_at | status failure (v5) | crease_angle_left_deg _from
  *                    crease_angle_right_deg _from crease_position_left _from crease_position_right
- *                    _from (v5: what the prediction used, and 'scene' or 'specimen')
+ *                    _from (v5: what the prediction used, and 'scene' or 'specimen') |
+ *                    crease_hinge crease_hinge_stiffness_nm_per_rad (v7: 'rigid' or 'compliant'
+ *                    and its stiffness: the crease model the prediction ran)
  *   prediction_curve (prediction_id -> predictions, seq) | t_s dw dz a       (WITHOUT ROWID)
  *   ladder (v2)      (scene_hash, nodes, dt, adaptive) | snap_dw est_error wall_s */
 #include "store_schema.h"
@@ -156,6 +158,15 @@ static const char schema_v6[] =
     "ALTER TABLE trials ADD COLUMN video_bytes INTEGER CHECK (video_bytes >= 0);"
     "PRAGMA user_version = 6;";
 
+/* v7: the crease model a prediction ran (issue 31 follow-up): crease_hinge 'rigid' or
+ * 'compliant', and for a compliant hinge its rotational stiffness (the scene's
+ * folds.hinge_stiffness, N m/rad). Rows from before keep NULL (not recorded). */
+static const char schema_v7[] =
+    "ALTER TABLE predictions ADD COLUMN crease_hinge TEXT CHECK (crease_hinge IN ('rigid','compliant'));"
+    "ALTER TABLE predictions ADD COLUMN crease_hinge_stiffness_nm_per_rad REAL"
+    " CHECK (crease_hinge_stiffness_nm_per_rad > 0);"
+    "PRAGMA user_version = 7;";
+
 typedef struct store_migration {
     int version;      /* user_version after the step */
     const char *what; /* for reasons */
@@ -169,6 +180,7 @@ static const store_migration migrations[] = {
     {4, "snap-to-stop latency per trial", schema_v4},
     {5, "the specimen in the prediction, failed predictions", schema_v5},
     {6, "video file size per trial", schema_v6},
+    {7, "the crease model of a prediction", schema_v7},
 };
 #define N_MIGRATIONS (sizeof migrations / sizeof migrations[0])
 _Static_assert(sizeof migrations / sizeof migrations[0] == STORE_SCHEMA_VERSION,

@@ -54,6 +54,11 @@ char *trial_record_json(const rig_config *cfg, const vis_calib *cal, trial_roi r
     json_object_set_new(root, "min_quality", json_real(cfg->detect.min_quality));
     json_object_set_new(root, "fold_angle_deg", json_real(cfg->scene.fold_angle_deg));
     json_object_set_new(root, "fold_position", json_real(cfg->scene.fold_position));
+    /* The crease model (folds.hinge_stiffness, N m/rad, or "rigid"): the trial's prediction ran it
+     * (its row keeps the same beside the creases it used). */
+    json_object_set_new(root, "fold_hinge_stiffness", rod_scene_hinge_rigid(&cfg->scene)
+                                                          ? json_string("rigid")
+                                                          : json_real(cfg->scene.fold_hinge_stiffness));
     char *text = json_dumps(root, JSON_COMPACT | JSON_REAL_PRECISION(17));
     json_decref(root);
     if (!text) snprintf(why, why_len, "calibration record: out of memory");

@@ -1,7 +1,8 @@
 /* trial_record.h: the record kept with each trial so that it can be understood and replayed
  * without the rig file: the rig calibration (rails <-> Delta L, Delta W; camera side; camera time
  * offset), the camera calibration the tracker used, the saved video's region of interest and frame
- * rate, the free length and the snap detection settings. Stored as JSON in the trial row
+ * rate, the free length, the snap detection settings and the scene's creases (pair angle and
+ * position, the hinge: fold_hinge_stiffness in N m/rad or "rigid"). Stored as JSON in the trial row
  * (trials.calibration_json); parsed back by replay (trial_record.c). Also the one mapping of a
  * snap's outcome to the regime the store keeps. */
 #ifndef RIBBON_TRIAL_RECORD_H

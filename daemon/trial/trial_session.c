@@ -422,19 +422,22 @@ static int session_check_disk(trial_session *s, char *why, size_t why_len)
     return 0;
 }
 
-/* One event saying which crease values the prediction uses and where each came from, and the
- * specimen's warning (a measurement recorded but not used), if any. */
+/* One event saying which crease values the prediction uses, where each came from, and the
+ * creases' hinge (rigid or its stiffness). */
 static void note_specimen_use(trial_session *s)
 {
     const store_creases *c = &s->use.creases;
-    char msg[400];
+    char msg[400], hinge[48];
+    if (isinf(c->hinge_stiffness))
+        snprintf(hinge, sizeof hinge, "rigid");
+    else
+        snprintf(hinge, sizeof hinge, "%g N m/rad", c->hinge_stiffness);
     snprintf(msg, sizeof msg,
-             "prediction's creases: left %g deg (%s) at %g (%s), right %g deg (%s) at %g (%s)", c->angle_deg[0],
-             store_source_name(c->angle_from[0]), c->position[0], store_source_name(c->position_from[0]),
-             c->angle_deg[1], store_source_name(c->angle_from[1]), c->position[1],
-             store_source_name(c->position_from[1]));
+             "prediction's creases: left %g deg (%s) at %g (%s), right %g deg (%s) at %g (%s), hinges %s",
+             c->angle_deg[0], store_source_name(c->angle_from[0]), c->position[0],
+             store_source_name(c->position_from[0]), c->angle_deg[1], store_source_name(c->angle_from[1]),
+             c->position[1], store_source_name(c->position_from[1]), hinge);
     session_event(s, NAN, STORE_EVENT_INFO, msg);
-    if (s->use.warning[0]) session_event(s, NAN, STORE_EVENT_WARNING, s->use.warning);
 }
 
 /* A prediction that cannot run: stored as failed with its reason (a warning event and the

@@ -33,96 +33,68 @@ void trial_specimen_from_config(const rig_config *cfg, store_specimen *sp)
                                                                    : "");
 }
 
-/* Positions closer than this to symmetric (left = 1 - right) count as symmetric: far below what
- * a ruler reads, far above the round-off of two decimals written in a file. */
-#define SYMMETRIC_TOL 1e-9
-
 /* The sign the measured creases take in the scene's convention (+1 up, -1 down): the specimen's
- * crease_orientation, else the scene's folds.angle_deg; 0 when neither says. */
+ * crease_orientation, else the scene's creases (folds.angle_deg or the per-crease angles); 0 when
+ * neither says. */
 static int crease_sign(const rig_config *cfg)
 {
     if (cfg->specimen.crease_orientation == RIG_CREASE_UP) return 1;
     if (cfg->specimen.crease_orientation == RIG_CREASE_DOWN) return -1;
-    return cfg->scene.fold_angle_deg > 0.0 ? 1 : cfg->scene.fold_angle_deg < 0.0 ? -1 : 0;
+    double a = rod_scene_crease_angle_deg(&cfg->scene, 0) + rod_scene_crease_angle_deg(&cfg->scene, 1);
+    return a > 0.0 ? 1 : a < 0.0 ? -1 : 0;
 }
 
 /* The specimen -> scene mapping, all of it.
  *
- * Today's scene has one pair of creases: phi = folds.angle_deg (signed: positive turns the
- * tangent toward the surface normal), split by imperfection.fold_angle_rel into
- *     left = phi (1 + rel/2)  at Gamma,   right = phi (1 - rel/2)  at 1 - Gamma   (sim/scene.h),
- * and Gamma = folds.position. Each crease's angle is taken from the specimen when measured, else
- * from the scene; the two angles (L, R, signed) then give the scene's keys exactly:
- *     phi = (L + R) / 2,   rel = (L - R) / phi     (so phi (1 +- rel/2) = L, R),
- * with the sign of the measured magnitudes from specimen.crease_orientation (up = positive), or
- * the scene's when not recorded. Exception: two measured creases exactly equal give rel = 0, a
- * perfectly symmetric scene that crosses a pitchfork late (DESIGN.md section 3: "symmetry breaking
- * needs a seed"); the scene's fold_angle_rel stays then as the seed. Angles neither measured nor
- * changed leave the scene's phi and rel untouched, bit for bit (the ladder's cache key).
- * Positions: the scene has one Gamma, so measured positions are applied only when symmetric
- * (left = 1 - right); otherwise they are recorded, the scene's Gamma is used and a warning says so.
- *
- * TODO(lead, after merging the per-crease scene keys): set folds.angle_left_deg / angle_right_deg
- * and folds.position_left / position_right directly (L, R and each position as measured), leave
- * fold_angle_rel as the seed, and drop the symmetric-positions restriction and its warning. */
+ * The scene holds each crease on its own keys (sim/scene.h): folds.angle_left_deg /
+ * angle_right_deg (signed: positive turns the tangent toward the surface normal) and
+ * folds.position_left / position_right (from the left clamp point, over l). A measured value
+ * goes to its crease's key as measured, the angle signed by specimen.crease_orientation (up =
+ * positive) or, when not recorded, by the scene's creases. imperfection.fold_angle_rel stays the
+ * scene's: a symmetry-breaking seed on top of each crease's own angle (DESIGN.md section 3:
+ * "symmetry breaking needs a seed"), so two equal measured creases still cross the pitchfork.
+ * Positions need not be symmetric: the mesh puts a node on each crease wherever it is
+ * (rod_mesh_set_creases). A crease not measured keeps the scene's value; nothing measured leaves
+ * the scene untouched, bit for bit (the ladder's cache key). The record (use->creases) holds each
+ * crease's own angle before the seed (the prediction row's imperfection) and its position. */
 static void map_creases(const rig_config *cfg, rod_scene *sc, trial_specimen_use *use)
 {
     const rig_specimen *sp = &cfg->specimen;
     store_creases *c = &use->creases;
-    double phi_s = sc->fold_angle_deg, rel_s = sc->fold_angle_rel, gamma_s = sc->fold_position;
-    double measured[2] = {sp->crease_angle_left_deg, sp->crease_angle_right_deg};
-    double scene_angle[2] = {phi_s * (1.0 + 0.5 * rel_s), phi_s * (1.0 - 0.5 * rel_s)};
-    int sign = crease_sign(cfg), any = 0;
+    const double measured[2] = {sp->crease_angle_left_deg, sp->crease_angle_right_deg};
+    const double pos[2] = {sp->crease_position_left, sp->crease_position_right};
+    double *angle_key[2] = {&sc->fold_angle_left_deg, &sc->fold_angle_right_deg};
+    double *pos_key[2] = {&sc->fold_position_left, &sc->fold_position_right};
+    int sign = crease_sign(cfg);
     for (int k = 0; k < 2; k++) {
-        int from_specimen = isfinite(measured[k]);
-        c->angle_deg[k] = from_specimen ? sign * measured[k] : scene_angle[k];
-        c->angle_from[k] = from_specimen ? STORE_SOURCE_SPECIMEN : STORE_SOURCE_SCENE;
-        any |= from_specimen;
-    }
-    if (any) {
-        double l = c->angle_deg[0], r = c->angle_deg[1], phi = 0.5 * (l + r);
-        sc->fold_angle_deg = phi;
-        sc->fold_angle_rel = phi != 0.0 ? (l - r) / phi : 0.0;
-        if (l == r && isfinite(measured[0]) && isfinite(measured[1])) sc->fold_angle_rel = rel_s;
-    }
-
-    double pos[2] = {sp->crease_position_left, sp->crease_position_right};
-    double scene_pos[2] = {gamma_s, 1.0 - gamma_s};
-    double used[2];
-    store_source from[2];
-    for (int k = 0; k < 2; k++) {
-        used[k] = isfinite(pos[k]) ? pos[k] : scene_pos[k];
-        from[k] = isfinite(pos[k]) ? STORE_SOURCE_SPECIMEN : STORE_SOURCE_SCENE;
-    }
-    int measured_pos = isfinite(pos[0]) || isfinite(pos[1]);
-    if (measured_pos && fabs(used[0] - (1.0 - used[1])) <= SYMMETRIC_TOL) {
-        sc->fold_position = used[0];
-    } else if (measured_pos) {
-        snprintf(use->warning, sizeof use->warning,
-                 "specimen crease positions %g and %g are not symmetric (crease_position_left is not 1 - "
-                 "crease_position_right): the prediction keeps the scene's folds.position = %g (unequal "
-                 "positions are not in the model yet)",
-                 used[0], used[1], gamma_s);
-        for (int k = 0; k < 2; k++) {
-            used[k] = scene_pos[k];
-            from[k] = STORE_SOURCE_SCENE;
-        }
+        if (isfinite(measured[k])) *angle_key[k] = sign * measured[k];
+        if (isfinite(pos[k])) *pos_key[k] = pos[k];
     }
     for (int k = 0; k < 2; k++) {
-        c->position[k] = used[k];
-        c->position_from[k] = from[k];
+        c->angle_deg[k] = rod_scene_crease_angle_deg(sc, k);
+        c->angle_from[k] = isfinite(measured[k]) ? STORE_SOURCE_SPECIMEN : STORE_SOURCE_SCENE;
+        c->position[k] = rod_scene_crease_position(sc, k);
+        c->position_from[k] = isfinite(pos[k]) ? STORE_SOURCE_SPECIMEN : STORE_SOURCE_SCENE;
     }
+    c->hinge_stiffness = sc->fold_hinge_stiffness;
 }
 
-/* The specimen key to blame for a scene key rod_scene_check named. */
+/* The specimen key to blame for a scene key rod_scene_check named: the same crease's measurement
+ * of the same kind (a position key blames a position, anything else an angle) when the specimen
+ * gave it, else the other crease's, else a measurement of the other kind. */
 static const char *blame(const trial_specimen_use *use, const char *scene_key)
 {
+    static const char *const angle_name[2] = {"specimen.crease_angle_left_deg", "specimen.crease_angle_right_deg"};
+    static const char *const pos_name[2] = {"specimen.crease_position_left", "specimen.crease_position_right"};
     const store_creases *c = &use->creases;
-    if (!strcmp(scene_key, "folds.position"))
-        return c->position_from[0] == STORE_SOURCE_SPECIMEN ? "specimen.crease_position_left"
-                                                            : "specimen.crease_position_right";
-    return c->angle_from[0] == STORE_SOURCE_SPECIMEN ? "specimen.crease_angle_left_deg"
-                                                     : "specimen.crease_angle_right_deg";
+    int side = strstr(scene_key, "right") != NULL, pos = strstr(scene_key, "position") != NULL;
+    for (int kind = 0; kind < 2; kind++, pos = !pos) {
+        const store_source *from = pos ? c->position_from : c->angle_from;
+        const char *const *name = pos ? pos_name : angle_name;
+        if (from[side] == STORE_SOURCE_SPECIMEN) return name[side];
+        if (from[!side] == STORE_SOURCE_SPECIMEN) return name[!side];
+    }
+    return pos ? pos_name[side] : angle_name[side];
 }
 
 int trial_specimen_scene(const rig_config *cfg, rod_scene *out, trial_specimen_use *use, char *why, size_t why_len)
@@ -134,8 +106,8 @@ int trial_specimen_scene(const rig_config *cfg, rod_scene *out, trial_specimen_u
     int measured = isfinite(sp->crease_angle_left_deg) || isfinite(sp->crease_angle_right_deg);
     if (measured && crease_sign(cfg) == 0) {
         snprintf(why, why_len,
-                 "specimen.crease_orientation: not recorded, and the scene has no creases (folds.angle_deg = 0) to "
-                 "take the measured creases' sign from: set up or down");
+                 "specimen.crease_orientation: not recorded, and the scene has no creases (folds.angle_deg and the "
+                 "per-crease angles 0) to take the measured creases' sign from: set up or down");
         return -1;
     }
     map_creases(cfg, &sc, use);

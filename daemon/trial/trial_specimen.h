@@ -13,8 +13,7 @@ void trial_specimen_from_config(const rig_config *cfg, store_specimen *sp);
 
 /* What the prediction of a trial uses of the specimen. */
 typedef struct trial_specimen_use {
-    store_creases creases; /* each crease's angle and position, and where each came from */
-    char warning[320];     /* "" or why a measurement was recorded but not used (for an event) */
+    store_creases creases; /* each crease's angle and position, where each came from, the hinge */
 } trial_specimen_use;
 
 /* The scene the trial's prediction runs on: cfg->scene with the specimen's measured creases in

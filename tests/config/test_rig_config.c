@@ -566,6 +566,16 @@ static void test_cross_checks(void **state)
     /* Crease orientation against the scene's negative angle. */
     expect_line(make1(20, "min_clamp_gap_mm = 400\ncrease_orientation = up"), CFG_ERR_CHECK, 21,
                 "specimen.crease_orientation", "folds.angle_deg = -90");
+    /* ... and against each crease's own angle: mock.ini's creases down, the scene's per-crease
+     * angles up while its folds.angle_deg stays -90. */
+    const char *own_up[] = {"folds.angle_left_deg=88", "folds.angle_right_deg=91"};
+    cfg_error oerr;
+    assert_int_equal(rig_config_load(CONFIG_DIR "/mock.ini", own_up, 2, &cfg, &oerr), CFG_ERR_CHECK);
+    printf("per-crease angles up, specimen down: %s: %s\n", oerr.key, oerr.message);
+    assert_string_equal(oerr.key, "specimen.crease_orientation");
+    assert_non_null(strstr(oerr.message, "folds.angle_left_deg = 88"));
+    const char *own_down[] = {"folds.angle_left_deg=-88", "folds.angle_right_deg=-91"};
+    assert_int_equal(rig_config_load(CONFIG_DIR "/mock.ini", own_down, 2, &cfg, &oerr), CFG_OK);
     /* Mock rails: soft limits within the simulated travel. */
     expect_line(make1(6, "travel_mm = 600"), CFG_ERR_CHECK, 7, "rail.compress.soft_max_mm",
                 "travel");

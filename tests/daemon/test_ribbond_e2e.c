@@ -19,7 +19,8 @@
  *   6. The specimen in the prediction (issue 31): a prediction that fails (its ladder's first rung
  *      refuses the specimen's creases) is stored as failed with the reason while the trial runs
  *      to done; the record says what the prediction used and where from; creases that cannot be
- *      simulated at all refuse the start, named. */
+ *      simulated at all refuse the start, named. A specimen of unequal creases at unequal
+ *      positions (not mirror images) predicts on its own creases and the trial runs to done. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -259,6 +260,7 @@ static void replay_outside_recording(store *st, int64_t id, double meas, double 
     assert_int_equal(store_trial_texts(st, id, &config, &calib, why, sizeof why), STORE_OK);
     trial_record rec;
     assert_int_equal(trial_record_parse(calib, &rec, why, sizeof why), 0);
+    assert_non_null(strstr(calib, "\"fold_hinge_stiffness\":\"rigid\"")); /* the crease model it ran */
     free(config);
     free(calib);
     store_sample *smp = NULL;
@@ -946,7 +948,7 @@ static json_t *bus_prediction(live_bus *b, json_int_t id)
 }
 
 /* Issue 31: the specimen in the prediction, and a prediction that fails does not stop the trial.
- * The specimen's creases at 0.03 and 0.97 (symmetric: they become the prediction's Gamma) lie in
+ * The specimen's creases at 0.03 and 0.97 (each on its own crease key) lie in
  * the clamp of the ladder's first rung (N = 31: one edge is 1/28 of l) but not at the scene's
  * N = 61: the ladder fails, the prediction is stored as failed with that reason, and the trial
  * (the twin is the scene, Gamma 0.13) runs to done with its measured snap. The record says which
@@ -1018,6 +1020,7 @@ static void prediction_fails_trial_runs(void **state)
     assert_string_equal(json_string_value(json_object_get(cr, "angle_right_from")), "scene");
     assert_true(json_number_value(json_object_get(cr, "position_left")) == 0.03);
     assert_string_equal(json_string_value(json_object_get(cr, "position_left_from")), "specimen");
+    assert_string_equal(json_string_value(json_object_get(cr, "hinge_stiffness")), "rigid");
     assert_true(json_number_value(json_object_get(t, "crease_age_s")) > 6.0 * 365.0 * 86400.0);
     int warned = 0;
     json_t *evs = json_object_get(t, "events");
@@ -1072,6 +1075,7 @@ static void prediction_fails_trial_runs(void **state)
     assert_int_equal(rc, 0);
     assert_non_null(strstr(out, "  predicted  failed: no prediction resolution: ladder rung N = 31"));
     assert_non_null(strstr(out, "prediction's creases: left -88 deg (specimen) at 0.03 (specimen)"));
+    assert_non_null(strstr(out, "prediction's crease hinges: rigid"));
     assert_non_null(strstr(out, "creases folded"));
     free(out);
     snprintf(args, sizeof args, "list --db %s", db);
@@ -1080,6 +1084,72 @@ static void prediction_fails_trial_runs(void **state)
     assert_int_equal(rc, 0);
     assert_non_null(strstr(out, "failed  "));
     free(out);
+}
+
+/* The specimen's unequal creases (88 and 91 deg) at unequal positions (0.12 and 0.86, not mirror
+ * images) are the prediction's own: it runs at sim.nodes = 61 (a node on each crease), snaps, and
+ * the record keeps each value from the specimen and the rigid hinge; the trial (its twin the
+ * scene) runs to done. No warning: unequal positions are used, not set aside. */
+static void specimen_unequal_predicts(void **state)
+{
+    (void)state;
+    char db[128], set_db[200], why[512] = "";
+    snprintf(db, sizeof db, "%s/unequal.db", dir);
+    snprintf(set_db, sizeof set_db, "store.path=%s", db);
+    const char *ov[] = {set_db, set_video, "api.port=0", "sim.nodes=61"};
+    rig_daemon d;
+    int rc = rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, 4, NULL, why, sizeof why);
+    if (rc) fprintf(stderr, "open: %s\n", why);
+    assert_int_equal(rc, 0);
+    unsigned port = 0;
+    assert_int_equal(rig_daemon_serve(&d, &port, why, sizeof why), 0);
+    json_t *t = NULL;
+    assert_int_equal(http(port, "POST", "/trials",
+                          "{\"set\": [\"specimen.crease_angle_left_deg=88\", \"specimen.crease_angle_right_deg=91\","
+                          " \"specimen.crease_position_left=0.12\", \"specimen.crease_position_right=0.86\"]}",
+                          &t, why, sizeof why),
+                     201);
+    json_int_t id = json_integer_value(json_object_get(t, "id"));
+    json_decref(t);
+    assert_true(wait_idle(port, 600));
+    char path[64];
+    snprintf(path, sizeof path, "/trials/%lld", (long long)id);
+    t = NULL;
+    assert_int_equal(http(port, "GET", path, NULL, &t, why, sizeof why), 200);
+    json_t *pr = json_object_get(t, "prediction"), *cr = json_object_get(pr, "creases");
+    double meas = json_number_value(json_object_get(t, "snap_dw_measured"));
+    double pred = json_number_value(json_object_get(t, "snap_dw_predicted"));
+    const char *failure = json_string_value(json_object_get(pr, "failure"));
+    printf("trial %lld %s: measured %.5f %s (twin: the scene); predicted %.5f %s (specimen: 88, 91 deg at 0.12, "
+           "0.86)%s%s\n",
+           (long long)id, json_string_value(json_object_get(t, "status")), meas,
+           json_string_value(json_object_get(t, "regime_measured")), pred,
+           json_string_value(json_object_get(t, "regime_predicted")), failure ? "; failed: " : "",
+           failure ? failure : "");
+    assert_string_equal(json_string_value(json_object_get(t, "status")), "done");
+    assert_true(json_is_true(json_object_get(t, "snapped")) && meas > 0.3 && meas < 0.6);
+    assert_string_equal(json_string_value(json_object_get(pr, "status")), "done");
+    assert_true(json_is_number(json_object_get(t, "snap_dw_predicted")) && pred > 0.2 && pred < 0.6);
+    assert_int_equal(json_integer_value(json_object_get(pr, "nodes")), 61);
+    static const char *const keys[4] = {"angle_left_deg", "angle_right_deg", "position_left", "position_right"};
+    static const double want[4] = {-88.0, -91.0, 0.12, 0.86};
+    for (int k = 0; k < 4; k++) {
+        char from[40];
+        snprintf(from, sizeof from, "%.*s_from", (int)(strlen(keys[k]) - (k < 2 ? 4 : 0)), keys[k]);
+        assert_true(json_number_value(json_object_get(cr, keys[k])) == want[k]);
+        assert_string_equal(json_string_value(json_object_get(cr, from)), "specimen");
+    }
+    assert_string_equal(json_string_value(json_object_get(cr, "hinge_stiffness")), "rigid");
+    json_t *evs = json_object_get(t, "events");
+    for (size_t k = 0; k < json_array_size(evs); k++) {
+        json_t *e = json_array_get(evs, k);
+        const char *kind = json_string_value(json_object_get(e, "kind"));
+        if (kind && (!strcmp(kind, "warning") || !strcmp(kind, "fault")))
+            fprintf(stderr, "unexpected %s: %s\n", kind, json_string_value(json_object_get(e, "message")));
+        assert_false(kind && (!strcmp(kind, "warning") || !strcmp(kind, "fault")));
+    }
+    json_decref(t);
+    rig_daemon_close(&d, "test done");
 }
 
 /* `test_ribbond_e2e gamma021` runs only the Gamma 0.21 trial (its own ctest, so the two mock trials
@@ -1096,6 +1166,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(long_computations_cancel),
         cmocka_unit_test(kill9_during_ladder),
         cmocka_unit_test(prediction_fails_trial_runs),
+        cmocka_unit_test(specimen_unequal_predicts),
     };
     if (getenv("RIBBON_TEST_ONLY")) cmocka_set_test_filter(getenv("RIBBON_TEST_ONLY")); /* one case by name */
     return cmocka_run_group_tests(tests, setup, teardown);

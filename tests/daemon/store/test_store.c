@@ -794,7 +794,9 @@ static void test_prediction_round_trip(void **state)
 
 /* v5 (issue 31): the specimen's measured positions and fold date; the creases' age of a trial;
  * a failed prediction (its status and reason, no snap, no curve) and the creases a prediction
- * used with their sources, in the record and in the JSON; refusals of rows that say less. */
+ * used with their sources, in the record and in the JSON; refusals of rows that say less.
+ * v7: the crease model it ran (a compliant hinge's stiffness, rigid, or not recorded) read back
+ * and in the JSON (a number, "rigid", null); a stiffness of 0 or below refused. */
 static void test_specimen_in_prediction(void **state)
 {
     fixture *f = *state;
@@ -851,6 +853,7 @@ static void test_specimen_in_prediction(void **state)
     p.creases.position_from[0] = STORE_SOURCE_SCENE;
     p.creases.position[1] = 0.87;
     p.creases.position_from[1] = STORE_SOURCE_SCENE;
+    p.creases.hinge_stiffness = 3.5e-3;
     int64_t pid = 0;
     OK(store_prediction_insert(st, &p, &pid, why, sizeof why));
     store_prediction pb;
@@ -862,6 +865,7 @@ static void test_specimen_in_prediction(void **state)
     assert_true(pb.creases.angle_deg[0] == -88.0 && pb.creases.angle_from[0] == STORE_SOURCE_SPECIMEN);
     assert_true(pb.creases.angle_deg[1] == -90.0 && pb.creases.angle_from[1] == STORE_SOURCE_SCENE);
     assert_true(pb.creases.position[1] == 0.87 && pb.creases.position_from[1] == STORE_SOURCE_SCENE);
+    assert_true(pb.creases.hinge_stiffness == 3.5e-3);
     store_prediction_free(&pb);
 
     json_t *j = NULL;
@@ -877,6 +881,29 @@ static void test_specimen_in_prediction(void **state)
     assert_string_equal(json_string_value(json_object_get(jc, "angle_left_from")), "specimen");
     assert_string_equal(json_string_value(json_object_get(jc, "angle_right_from")), "scene");
     assert_true(json_number_value(json_object_get(jc, "position_right")) == 0.87);
+    assert_true(json_number_value(json_object_get(jc, "hinge_stiffness")) == 3.5e-3);
+    json_decref(j);
+
+    /* Rigid creases: INFINITY in, INFINITY out, "rigid" in the JSON; not recorded: NaN, null. */
+    store_prediction rigid = p;
+    rigid.creases.hinge_stiffness = INFINITY;
+    OK(store_prediction_insert(st, &rigid, &pid, why, sizeof why));
+    OK(store_prediction_get(st, pid, &pb, why, sizeof why));
+    assert_true(isinf(pb.creases.hinge_stiffness) && pb.creases.hinge_stiffness > 0.0);
+    store_prediction_free(&pb);
+    OK(store_trial_json(st, trial, &j, why, sizeof why));
+    jc = json_object_get(json_object_get(j, "prediction"), "creases");
+    assert_string_equal(json_string_value(json_object_get(jc, "hinge_stiffness")), "rigid");
+    json_decref(j);
+    store_prediction unknown = p;
+    unknown.creases.hinge_stiffness = NAN;
+    OK(store_prediction_insert(st, &unknown, &pid, why, sizeof why));
+    OK(store_prediction_get(st, pid, &pb, why, sizeof why));
+    assert_true(isnan(pb.creases.hinge_stiffness));
+    store_prediction_free(&pb);
+    OK(store_trial_json(st, trial, &j, why, sizeof why));
+    jc = json_object_get(json_object_get(j, "prediction"), "creases");
+    assert_true(json_is_null(json_object_get(jc, "hinge_stiffness")));
     json_decref(j);
 
     /* Refused, nothing written: a failed row without its reason, or with a snap; a done row with
@@ -899,6 +926,12 @@ static void test_specimen_in_prediction(void **state)
     bad.creases.angle_from[0] = STORE_SOURCE_UNKNOWN;
     assert_int_equal(store_prediction_insert(st, &bad, NULL, why, sizeof why), STORE_E_INVALID);
     assert_non_null(strstr(why, "source"));
+    bad = p;
+    bad.creases.hinge_stiffness = 0.0;
+    assert_int_equal(store_prediction_insert(st, &bad, NULL, why, sizeof why), STORE_E_INVALID);
+    assert_non_null(strstr(why, "hinge_stiffness"));
+    bad.creases.hinge_stiffness = -INFINITY;
+    assert_int_equal(store_prediction_insert(st, &bad, NULL, why, sizeof why), STORE_E_INVALID);
     assert_int_equal(q_int(store_handle(st), "SELECT count(*) FROM predictions"), rows);
     store_close(st);
 }

@@ -1,14 +1,16 @@
 /* test_trial_specimen: the rig file's [specimen] measurements in the trial's prediction
  * (trial_specimen_scene, issue 31). On config/mock.ini (scene folds.angle_deg = -90, Gamma 0.13,
- * fold_angle_rel 1e-6, creases down):
- *   - nothing measured: the scene unchanged bit for bit, every value from the scene;
- *   - two measured angles land exactly on the scene's two creases: phi (1 + rel/2) = -L and
- *     phi (1 - rel/2) = -R (the sign from crease_orientation), from the specimen; one measured,
- *     the other stays the scene's; two equal keep the scene's seed;
- *   - symmetric measured positions become Gamma; unequal ones are recorded, not applied, with a
- *     warning naming why;
+ * fold_angle_rel 1e-6, creases down, rigid):
+ *   - nothing measured: the scene unchanged bit for bit, every value from the scene, the hinge
+ *     recorded (rigid, or the scene's stiffness);
+ *   - each measured angle lands exactly on its crease's own key (folds.angle_left_deg /
+ *     angle_right_deg, signed by crease_orientation), the scene's fold_angle_deg and its seed
+ *     fold_angle_rel untouched; one measured, the other stays the scene's;
+ *   - measured positions land on folds.position_left / position_right, unequal ones included (the
+ *     mesh puts a node on each crease), with no warning; one measured, the other the scene's;
  *   - bad input named: creases that cannot be clamped at Delta L = 0.5, a crease inside the clamp,
- *     no sign to give the measured angles; a fold date after the trial;
+ *     a measured crease that crosses the scene's other one, no sign to give the measured angles;
+ *     a fold date after the trial;
  *   - the crease age is the trial's time minus folded_at. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -35,12 +37,6 @@ static void load(const char *const *ovr, int n)
     }
 }
 
-/* |a - b| within rel of |b| (round-off of the two divisions of the mapping). */
-static int close_to(double a, double b, double rel)
-{
-    return fabs(a - b) <= rel * fabs(b);
-}
-
 static void nothing_measured_keeps_the_scene(void **state)
 {
     (void)state;
@@ -54,10 +50,17 @@ static void nothing_measured_keeps_the_scene(void **state)
         assert_int_equal(use.creases.angle_from[k], STORE_SOURCE_SCENE);
         assert_int_equal(use.creases.position_from[k], STORE_SOURCE_SCENE);
     }
-    assert_true(use.creases.angle_deg[0] == -90.0 * (1.0 + 0.5e-6));
-    assert_true(use.creases.angle_deg[1] == -90.0 * (1.0 - 0.5e-6));
+    /* Each crease's own angle, before the seed (the prediction's imperfection). */
+    assert_true(use.creases.angle_deg[0] == -90.0 && use.creases.angle_deg[1] == -90.0);
     assert_true(use.creases.position[0] == 0.13 && use.creases.position[1] == 1.0 - 0.13);
-    assert_string_equal(use.warning, "");
+    assert_true(isinf(use.creases.hinge_stiffness) && use.creases.hinge_stiffness > 0.0);
+
+    /* A compliant hinge is recorded as the scene's stiffness. */
+    const char *hinge[] = {"folds.hinge_stiffness=2.5e-3"};
+    load(hinge, 1);
+    assert_int_equal(trial_specimen_scene(&cfg, &sc, &use, why, sizeof why), 0);
+    assert_memory_equal(&sc, &cfg.scene, sizeof sc);
+    assert_true(use.creases.hinge_stiffness == 2.5e-3);
 }
 
 static void measured_angles_land_on_the_creases(void **state)
@@ -69,28 +72,26 @@ static void measured_angles_land_on_the_creases(void **state)
     trial_specimen_use use;
     char why[512] = "";
     assert_int_equal(trial_specimen_scene(&cfg, &sc, &use, why, sizeof why), 0);
-    /* The scene's own split (sim/scene.h) gives back the measured creases, signed down. */
-    double l = sc.fold_angle_deg * (1.0 + 0.5 * sc.fold_angle_rel);
-    double r = sc.fold_angle_deg * (1.0 - 0.5 * sc.fold_angle_rel);
-    printf("88, 91 deg down: phi = %.12g, rel = %.12g -> %.15g, %.15g\n", sc.fold_angle_deg, sc.fold_angle_rel, l, r);
-    assert_true(close_to(l, -88.0, 1e-14) && close_to(r, -91.0, 1e-14));
-    assert_true(sc.fold_angle_deg == -89.5);
-    assert_true(close_to(sc.fold_angle_rel, -3.0 / 89.5, 1e-14));
+    /* Exactly the measured creases on their own keys, signed down; the pair's angle and the seed
+     * stay the scene's. */
+    assert_true(sc.fold_angle_left_deg == -88.0 && sc.fold_angle_right_deg == -91.0);
+    assert_true(rod_scene_crease_angle_deg(&sc, 0) == -88.0 && rod_scene_crease_angle_deg(&sc, 1) == -91.0);
+    assert_true(sc.fold_angle_deg == -90.0 && sc.fold_angle_rel == cfg.scene.fold_angle_rel);
     assert_true(use.creases.angle_deg[0] == -88.0 && use.creases.angle_deg[1] == -91.0);
     assert_int_equal(use.creases.angle_from[0], STORE_SOURCE_SPECIMEN);
     assert_int_equal(use.creases.angle_from[1], STORE_SOURCE_SPECIMEN);
     assert_int_equal(use.creases.position_from[0], STORE_SOURCE_SCENE);
     /* The rest of the scene is the scene's. */
-    assert_true(sc.fold_position == cfg.scene.fold_position && sc.compression == cfg.scene.compression &&
+    assert_true(sc.fold_position == cfg.scene.fold_position && isnan(sc.fold_position_left) &&
+                isnan(sc.fold_position_right) && sc.compression == cfg.scene.compression &&
                 sc.nodes == cfg.scene.nodes && sc.dt == cfg.scene.dt);
 
-    /* One measured: the other crease is the scene's, -90 (1 - 5e-7). */
+    /* One measured: the other crease is the scene's (its key left unset: fold_angle_deg). */
     const char *left[] = {"specimen.crease_angle_left_deg=86"};
     load(left, 1);
     assert_int_equal(trial_specimen_scene(&cfg, &sc, &use, why, sizeof why), 0);
-    l = sc.fold_angle_deg * (1.0 + 0.5 * sc.fold_angle_rel);
-    r = sc.fold_angle_deg * (1.0 - 0.5 * sc.fold_angle_rel);
-    assert_true(close_to(l, -86.0, 1e-14) && close_to(r, -90.0 * (1.0 - 0.5e-6), 1e-14));
+    assert_true(sc.fold_angle_left_deg == -86.0 && isnan(sc.fold_angle_right_deg));
+    assert_true(rod_scene_crease_angle_deg(&sc, 1) == -90.0 && use.creases.angle_deg[1] == -90.0);
     assert_int_equal(use.creases.angle_from[0], STORE_SOURCE_SPECIMEN);
     assert_int_equal(use.creases.angle_from[1], STORE_SOURCE_SCENE);
 
@@ -99,39 +100,41 @@ static void measured_angles_land_on_the_creases(void **state)
                         "specimen.crease_angle_right_deg=91"};
     load(up, 4);
     assert_int_equal(trial_specimen_scene(&cfg, &sc, &use, why, sizeof why), 0);
-    assert_true(sc.fold_angle_deg == 89.5);
-    assert_true(close_to(sc.fold_angle_deg * (1.0 + 0.5 * sc.fold_angle_rel), 88.0, 1e-14));
+    assert_true(sc.fold_angle_left_deg == 88.0 && sc.fold_angle_right_deg == 91.0 && sc.fold_angle_deg == 90.0);
 
-    /* Two equal: rel would be 0, a scene without a seed; the scene's seed stays. */
+    /* Two equal: each crease gets it, the scene's seed stays. */
     const char *equal[] = {"specimen.crease_angle_left_deg=87", "specimen.crease_angle_right_deg=87"};
     load(equal, 2);
     assert_int_equal(trial_specimen_scene(&cfg, &sc, &use, why, sizeof why), 0);
-    assert_true(sc.fold_angle_deg == -87.0 && sc.fold_angle_rel == cfg.scene.fold_angle_rel);
+    assert_true(sc.fold_angle_left_deg == -87.0 && sc.fold_angle_right_deg == -87.0);
+    assert_true(sc.fold_angle_rel == cfg.scene.fold_angle_rel);
 }
 
-static void positions_applied_only_when_symmetric(void **state)
+static void positions_land_on_the_creases(void **state)
 {
     (void)state;
-    const char *sym[] = {"specimen.crease_position_left=0.12", "specimen.crease_position_right=0.88"};
-    load(sym, 2);
+    /* Unequal (not mirror images): each on its own key, from the specimen. */
+    const char *asym[] = {"specimen.crease_position_left=0.12", "specimen.crease_position_right=0.86"};
+    load(asym, 2);
     rod_scene sc;
     trial_specimen_use use;
     char why[512] = "";
     assert_int_equal(trial_specimen_scene(&cfg, &sc, &use, why, sizeof why), 0);
-    assert_true(sc.fold_position == 0.12);
+    assert_true(sc.fold_position_left == 0.12 && sc.fold_position_right == 0.86);
+    assert_true(sc.fold_position == cfg.scene.fold_position);
+    assert_true(use.creases.position[0] == 0.12 && use.creases.position[1] == 0.86);
     assert_int_equal(use.creases.position_from[0], STORE_SOURCE_SPECIMEN);
     assert_int_equal(use.creases.position_from[1], STORE_SOURCE_SPECIMEN);
-    assert_string_equal(use.warning, "");
+    assert_int_equal(use.creases.angle_from[0], STORE_SOURCE_SCENE);
 
-    const char *asym[] = {"specimen.crease_position_left=0.12", "specimen.crease_position_right=0.86"};
-    load(asym, 2);
+    /* One measured: the other crease stays where the scene puts it (1 - Gamma). */
+    const char *one[] = {"specimen.crease_position_left=0.15"};
+    load(one, 1);
     assert_int_equal(trial_specimen_scene(&cfg, &sc, &use, why, sizeof why), 0);
-    printf("unequal positions: %s\n", use.warning);
-    assert_true(sc.fold_position == cfg.scene.fold_position);
-    assert_int_equal(use.creases.position_from[0], STORE_SOURCE_SCENE);
-    assert_true(use.creases.position[0] == 0.13);
-    assert_non_null(strstr(use.warning, "not symmetric"));
-    assert_non_null(strstr(use.warning, "folds.position = 0.13"));
+    assert_true(sc.fold_position_left == 0.15 && isnan(sc.fold_position_right));
+    assert_true(use.creases.position[1] == 1.0 - 0.13);
+    assert_int_equal(use.creases.position_from[0], STORE_SOURCE_SPECIMEN);
+    assert_int_equal(use.creases.position_from[1], STORE_SOURCE_SCENE);
 }
 
 static void bad_input_named(void **state)
@@ -156,6 +159,14 @@ static void bad_input_named(void **state)
     printf("inside the clamp: %s\n", why);
     assert_true(strncmp(why, "specimen.crease_position_left:", 30) == 0);
     assert_non_null(strstr(why, "inside the clamp"));
+
+    /* One measured crease beyond the scene's other one: they cross. */
+    const char *cross[] = {"specimen.crease_position_left=0.9"};
+    load(cross, 1);
+    assert_int_equal(trial_specimen_scene(&cfg, &sc, &use, why, sizeof why), -1);
+    printf("crossing: %s\n", why);
+    assert_true(strncmp(why, "specimen.crease_position_left:", 30) == 0);
+    assert_non_null(strstr(why, "cross"));
 
     /* A scene without creases and no crease_orientation: no sign for the measured angles. */
     const char *nosign[] = {"folds.angle_deg=0", "specimen.crease_angle_left_deg=80"};
@@ -188,7 +199,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(nothing_measured_keeps_the_scene),
         cmocka_unit_test(measured_angles_land_on_the_creases),
-        cmocka_unit_test(positions_applied_only_when_symmetric),
+        cmocka_unit_test(positions_land_on_the_creases),
         cmocka_unit_test(bad_input_named),
         cmocka_unit_test(crease_age),
     };
