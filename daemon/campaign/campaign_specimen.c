@@ -97,8 +97,13 @@ int campaign_specimen_measured_from_json(const json_t *body, store_specimen *sp,
     /* An angle of 0 is no crease, and 180 folds the strip back onto itself: neither can be
      * clamped as a folded ribbon. */
     if (number(body, "crease_angle_left_deg", 0.0, 180.0, 1, 1, &sp->crease_angle_left_deg, why, why_len) ||
-        number(body, "crease_angle_right_deg", 0.0, 180.0, 1, 1, &sp->crease_angle_right_deg, why, why_len) ||
-        number(body, "crease_position_left", 0.0, 1.0, 1, 1, &sp->crease_position_left, why, why_len) ||
+        number(body, "crease_angle_right_deg", 0.0, 180.0, 1, 1, &sp->crease_angle_right_deg, why, why_len)) {
+        size_t n = strlen(why);
+        snprintf(why + n, why_len > n ? why_len - n : 0,
+                 ": 0 deg is no crease and 180 folds the strip onto itself; neither can be clamped");
+        return -1;
+    }
+    if (number(body, "crease_position_left", 0.0, 1.0, 1, 1, &sp->crease_position_left, why, why_len) ||
         number(body, "crease_position_right", 0.0, 1.0, 1, 1, &sp->crease_position_right, why, why_len) ||
         string(body, "folded_at", sp->folded_at, sizeof sp->folded_at, why, why_len))
         return -1;

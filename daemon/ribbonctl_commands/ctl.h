@@ -15,4 +15,5 @@ int ctl_cameras_main(int argc, char **argv);      /* ctl_cameras.c: V4L2 and Gen
 
 int ctl_trials_main(int argc, char **argv); /* ctl_trials.c: start abort status list show export report
                                             phase-report replay */
+int ctl_campaign_main(int argc, char **argv); /* ctl_campaign.c: specimen, queue */
 #endif
