@@ -453,8 +453,8 @@ store_err store_queue_recover(store *st, double wall_s, int *count, char *why, s
         char reason[300];
         if (found)
             snprintf(reason, sizeof reason,
-                     "stopped at start-up: item %lld (%s) was found running after ribbond stopped and is now "
-                     "'unknown'; a restart never resumes the queue: check the rig, then start it",
+                     "stopped at start-up: item %lld (%s) was found running (the daemon stopped without ending it) "
+                     "and is now 'unknown'; a restart never resumes the queue: check the rig, then start it",
                      (long long)cur.id, kind_names[cur.kind]);
         else
             snprintf(reason, sizeof reason, "stopped at start-up: ribbond restarted while the queue ran; a restart "
