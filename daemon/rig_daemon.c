@@ -488,7 +488,7 @@ static int queue_trial_running(void *user, int64_t trial_id)
     if (d->session) {
         session_status ss;
         trial_session_status(d->session, &ss);
-        running = ss.trial_id == trial_id && !ss.finished;
+        running = (trial_id == 0 || ss.trial_id == trial_id) && !ss.finished;
     }
     pthread_mutex_unlock(&d->lock);
     return running;

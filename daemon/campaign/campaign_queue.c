@@ -7,7 +7,8 @@
  * started, begins the next one: a pause stops the queue, an operator step waits, a trial starts
  * through the daemon (campaign_queue_ops). A trial that ends failed, aborted or interrupted
  * stops the queue, saying why: the lab looks at the rig before anything moves again. The queue
- * stops too when it runs out of items.
+ * stops too when it runs out of items. A trial started by hand (POST /trials) while the queue runs
+ * makes it wait: its next item begins once that trial has ended.
  *
  * One lock (q->lock) covers the thread's step and every operation, and the queue's own store
  * connection is used under it only, so the queue's rows have one writer. Lock order: q->lock,
@@ -146,6 +147,10 @@ static void step(campaign_queue *q)
         return;
     }
     if (store_queue_state_get(q->st, &running, NULL, 0, NULL, w, sizeof w) != STORE_OK || !running) {
+        free(it);
+        return;
+    }
+    if (q->ops.trial_running(q->user, 0)) { /* a trial started by hand: wait for its end */
         free(it);
         return;
     }

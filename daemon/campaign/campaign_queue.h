@@ -18,7 +18,8 @@ typedef struct campaign_queue_ops {
      * note: 0 and *trial_id, or -1 with why (nothing started). Called on the queue's thread. */
     int (*start_trial)(void *user, const store_specimen *sp, const char *const *set, int n_set, const char *note,
                        int64_t *trial_id, char *why, size_t why_len);
-    /* 1 while trial_id's session runs, 0 once it has ended (or is not the daemon's). */
+    /* 1 while trial_id's session runs, 0 once it has ended (or is not the daemon's); trial_id 0:
+     * 1 while any trial runs (one started by hand: the queue waits for it). */
     int (*trial_running)(void *user, int64_t trial_id);
 } campaign_queue_ops;
 

@@ -7,7 +7,8 @@
  *      removed nor moved (409); the operator step holds the queue until confirmed, and a
  *      confirmation with angles that cannot be clamped is refused naming the field; the pause
  *      stops the queue, saying so, until it is started again; the second trial's prediction
- *      uses the confirmed angles (source 'specimen'); the queue stops when it runs out. Every
+ *      uses the confirmed angles (source 'specimen'); a trial started by hand makes the started
+ *      queue wait for its end; the queue stops when it runs out. Every
  *      item ends done; GET /queue/ID returns the item with its trial.
  *   3. kill -9 of ribbond while a queue item's trial runs: the restart leaves the store intact
  *      (integrity_check), the trial interrupted, the item 'unknown', the queue stopped saying
@@ -282,7 +283,19 @@ static void mixed_queue_runs_through(void **state)
     assert_string_equal(jstr(it, "status"), "queued");
     json_decref(it);
 
+    /* A trial started by hand: the started queue waits for its end instead of failing its item. */
+    json_t *manual = NULL;
+    assert_int_equal(http(port, "POST", "/trials", "{\"note\": \"by hand\"}", &manual, why, sizeof why), 201);
+    json_decref(manual);
     expect(port, "POST", "/queue/start", NULL, 200, why, sizeof why);
+    sleep_s(1.0);
+    it = item(port, t2);
+    assert_string_equal(jstr(it, "status"), "queued");
+    json_decref(it);
+    q = queue_state(port);
+    assert_true(json_is_true(json_object_get(q, "running")));
+    json_decref(q);
+    expect(port, "POST", "/trials/current/abort", NULL, 200, why, sizeof why);
     it = wait_item(port, t2, "done", 240);
     json_int_t tid2 = json_integer_value(json_object_get(it, "trial_id"));
     json_t *sr = json_object_get(it, "specimen_record");
@@ -314,7 +327,7 @@ static void mixed_queue_runs_through(void **state)
     json_t *sp = NULL;
     assert_int_equal(http(port, "GET", "/specimens/S-12", NULL, &sp, why, sizeof why), 200);
     assert_string_equal(jstr(sp, "state"), "in use");
-    assert_int_equal(json_array_size(json_object_get(sp, "trials")), 2);
+    assert_int_equal(json_array_size(json_object_get(sp, "trials")), 2); /* not the one by hand */
     json_decref(sp);
     rig_daemon_close(&d, "test done");
 }
