@@ -8,7 +8,8 @@
  *      confirmation with angles that cannot be clamped is refused naming the field; the pause
  *      stops the queue, saying so, until it is started again; the second trial's prediction
  *      uses the confirmed angles (source 'specimen'); a trial started by hand makes the started
- *      queue wait for its end; the queue stops when it runs out. Every
+ *      queue wait for its end; the queue stops when it runs out, and when a trial of it is
+ *      aborted (the item aborted, the reason given, the next item still queued). Every
  *      item ends done; GET /queue/ID returns the item with its trial.
  *   3. kill -9 of ribbond while a queue item's trial runs: the restart leaves the store intact
  *      (integrity_check), the trial interrupted, the item 'unknown', the queue stopped saying
@@ -329,6 +330,30 @@ static void mixed_queue_runs_through(void **state)
     assert_string_equal(jstr(sp, "state"), "in use");
     assert_int_equal(json_array_size(json_object_get(sp, "trials")), 2); /* not the one by hand */
     json_decref(sp);
+
+    /* A queue trial aborted: the item ends aborted and the queue stops, saying why. */
+    json_int_t t3 = add_item(port, "{\"kind\": \"trial\", \"specimen\": \"S-12\", \"note\": \"third\"}");
+    add_item(port, "{\"kind\": \"pause\"}");
+    expect(port, "POST", "/queue/start", "{}", 200, why, sizeof why);
+    it = wait_item(port, t3, "running", 10);
+    json_decref(it);
+    for (int k = 0; k < 100; k++) { /* its trial may still be starting */
+        json_t *o = NULL;
+        if (http(port, "POST", "/trials/current/abort", NULL, &o, why, sizeof why) == 200) {
+            json_decref(o);
+            break;
+        }
+        json_decref(o);
+        sleep_s(0.1);
+    }
+    it = wait_item(port, t3, "aborted", 60);
+    json_decref(it);
+    assert_true(wait_queue_stopped(port, 10));
+    q = queue_state(port);
+    assert_non_null(strstr(jstr(q, "reason"), "ended aborted"));
+    assert_non_null(strstr(jstr(q, "reason"), "check the rig"));
+    assert_int_equal(json_array_size(json_object_get(q, "queued")), 1); /* the pause after it waits */
+    json_decref(q);
     rig_daemon_close(&d, "test done");
 }
 
