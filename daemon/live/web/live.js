@@ -48,6 +48,7 @@ function setNum(id, v, d) {
 }
 
 let view = null;
+let daemonMode = null; // from GET /status: a replay-mode daemon has no queue, and is not asked
 function resetView(trial) {
   view = { trial, samples: 0, frames: 0, measured: 0, missed: 0, haveFrame: false, predSnap: null, measSnap: null };
   $('trial-id').textContent = trial === null ? '-' : String(trial);
@@ -242,6 +243,7 @@ async function loadStatus() {
   if (!r.ok) return;
   const s = await r.json();
   $('mode').textContent = '(' + s.mode + ')';
+  daemonMode = s.mode;
   $('source-box').hidden = s.mode !== 'replay'; // replay mode: POST /trials {"source_trial": ID}
   $('overrides').disabled = s.mode === 'replay';
   if (s.state === 'idle' && (!view || view.trial === null)) setState('idle');
@@ -358,8 +360,12 @@ $('abort').addEventListener('click', () => control('/trials/current/abort', {}).
 // the operator step the queue waits for gets a form of its fields, sent to POST /queue/ID/confirm.
 let opShown = null; // the operator step whose form is shown (kept while the operator types)
 async function loadQueue() {
+  if (daemonMode === null || daemonMode === 'replay') {
+    $('queue-box').hidden = true;
+    return;
+  }
   const r = await api('/queue');
-  if (!r.ok) { // a replay-mode daemon has no queue
+  if (!r.ok) {
     $('queue-box').hidden = true;
     return;
   }
