@@ -385,9 +385,12 @@ static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *ht
 
 /* Starts a trial of the rig file with overrides: the daemon's, then the specimen's record (sp,
  * may be NULL), then set. 0 and *id, or -1 with why and *http_status (400 the overrides or the
- * start refused, 409 a trial runs, 500). Takes the daemon's lock. */
-static int start_trial(rig_daemon *d, const store_specimen *sp, const char *const *set, int n_set, const char *note,
-                       int64_t *id, int *http_status, char *why, size_t why_len)
+ * start refused, 409 a trial runs or the specimen the trial names is retired or broken, 500).
+ * check (may be NULL: the caller has checked sp) is the connection on which the specimen the
+ * loaded rig file names (specimen.name, from any override) is looked up: a retired or broken one
+ * is refused, whichever way it was named. Takes the daemon's lock. */
+static int start_trial(rig_daemon *d, store *check, const store_specimen *sp, const char *const *set, int n_set,
+                       const char *note, int64_t *id, int *http_status, char *why, size_t why_len)
 {
     const char *ov[RIG_DAEMON_MAX_OVERRIDES + CAMPAIGN_MAX_OVERRIDES + API_START_MAX_SET];
     int nov = 0;
@@ -420,6 +423,16 @@ static int start_trial(rig_daemon *d, const store_specimen *sp, const char *cons
         }
     } else {
         cfg = d->cfg;
+    }
+    store_specimen named;
+    char w[256];
+    if (check && cfg.specimen.name[0] &&
+        store_specimen_get_by_name(check, cfg.specimen.name, &named, w, sizeof w) == STORE_OK &&
+        (named.state == STORE_SPECIMEN_RETIRED || named.state == STORE_SPECIMEN_BROKEN)) {
+        *http_status = 409;
+        snprintf(why, why_len, "specimen '%.63s' is %s (%.120s, since %s): a trial may not use it; nothing started",
+                 named.name, store_specimen_state_name(named.state), named.state_reason, named.state_at);
+        return -1;
     }
     pthread_mutex_lock(&d->lock);
     trial_session *s = running_session(d);
@@ -463,7 +476,8 @@ static int op_start(void *user, const json_t *body, json_t **out, int *http_stat
         }
     }
     int64_t id = 0;
-    if (start_trial(d, req.specimen ? &sp : NULL, req.set, req.n_set, req.note, &id, http_status, why, why_len))
+    if (start_trial(d, d->st, req.specimen ? &sp : NULL, req.set, req.n_set, req.note, &id, http_status, why,
+                    why_len))
         return -1;
     store_err se = store_trial_json(d->st, id, out, why, why_len);
     if (se != STORE_OK) {
@@ -477,7 +491,7 @@ static int queue_start_trial(void *user, const store_specimen *sp, const char *c
                              int64_t *trial_id, char *why, size_t why_len)
 {
     int http = 0;
-    return start_trial(user, sp, set, n_set, note, trial_id, &http, why, why_len);
+    return start_trial(user, NULL, sp, set, n_set, note, trial_id, &http, why, why_len);
 }
 
 static int queue_trial_running(void *user, int64_t trial_id)

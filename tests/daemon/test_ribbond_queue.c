@@ -1,7 +1,8 @@
 /* test_ribbond_queue: the campaign (issue 35, parts A and B) through ribbond's API in mock mode
  * (config/mock.ini, explicit resolution so no ladder is computed).
  *   1. Specimens: added (a second add of the name 409), listed, shown; a start naming an unknown
- *      specimen is 400 and a retired one 409, both named and nothing started.
+ *      specimen is 400 and a retired one 409 (named by --specimen or by its specimen.name key),
+ *      named and nothing started.
  *   2. A mixed queue runs through: a trial of S-12, an operator step asking S-12's measured
  *      crease angles, a pause, a second trial. While the first trial runs it can be neither
  *      removed nor moved (409); the operator step holds the queue until confirmed, and a
@@ -194,6 +195,8 @@ static void specimens(unsigned port)
     assert_non_null(strstr(why, "unknown specimen 'NOPE'"));
     expect(port, "POST", "/trials", "{\"specimen\": \"OLD-1\"}", 409, why, sizeof why);
     assert_non_null(strstr(why, "retired"));
+    expect(port, "POST", "/trials", "{\"set\": [\"specimen.name=OLD-1\"]}", 409, why, sizeof why); /* named by key */
+    assert_non_null(strstr(why, "specimen 'OLD-1' is retired"));
     expect(port, "POST", "/queue", "{\"kind\": \"trial\", \"specimen\": \"OLD-1\"}", 400, why, sizeof why);
     assert_non_null(strstr(why, "retired"));
     assert_int_equal(http(port, "GET", "/trials", NULL, &o, why, sizeof why), 200);
