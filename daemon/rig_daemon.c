@@ -28,6 +28,9 @@ static void say(rig_daemon *d, const char *fmt, ...)
 
 static void unstored_add(rig_daemon *d, const session_status *ss);
 static void unstored_write(rig_daemon *d);
+static int queue_start_trial(void *user, const store_specimen *sp, const char *const *set, int n_set, const char *note,
+                             int64_t *trial_id, char *why, size_t why_len);
+static int queue_trial_running(void *user, int64_t trial_id);
 
 static void release_locks(rig_daemon *d)
 {
@@ -149,6 +152,10 @@ int rig_daemon_serve(rig_daemon *d, unsigned *port, char *why, size_t why_len)
     }
     ac.assets = d->assets.list;
     ac.n_assets = d->assets.n;
+    if (d->cfg.mode != RIG_MODE_REPLAY && !d->queue) {
+        campaign_queue_ops qo = {.start_trial = queue_start_trial, .trial_running = queue_trial_running};
+        if (campaign_queue_open(d->cfg.store_path, &qo, d, d->log, &d->queue, why, why_len)) return -1;
+    }
     api_ops ops = rig_daemon_ops();
     if (api_server_start(&ac, &ops, d, &d->api, why, why_len)) return -1;
     *port = api_server_port(d->api);
@@ -162,6 +169,8 @@ void rig_daemon_close(rig_daemon *d, const char *reason)
     live_bus_close(d->bus);
     api_server_stop(d->api);
     d->api = NULL;
+    campaign_queue_close(d->queue); /* it starts nothing more; a running trial is stopped below */
+    d->queue = NULL;
     phase_map_free(d->phase); /* cancels a map being computed */
     d->phase = NULL;
     pthread_mutex_lock(&d->lock);
@@ -304,6 +313,8 @@ static int op_status(void *user, json_t **out, char *why, size_t why_len)
     json_object_set_new(o, "config", json_string(d->config_path));
     json_object_set_new(o, "store", json_string(d->cfg.store_path));
     json_object_set_new(o, "version", json_string(RIBBON_VERSION));
+    /* The queue's lock comes before the daemon's (rig_daemon.h). */
+    json_object_set_new(o, "queue", d->queue ? campaign_queue_summary(d->queue) : json_null());
     pthread_mutex_lock(&d->lock);
     trial_session *s = running_session(d);
     replay_job *rj = running_replay(d);
@@ -397,22 +408,33 @@ static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *ht
     return store_trial_json(d->st, nid, out, why, why_len) == STORE_OK ? 0 : -1;
 }
 
-static int op_start(void *user, const json_t *body, json_t **out, int *http_status, char *why, size_t why_len)
+/* Starts a trial of the rig file with overrides: the daemon's, then the specimen's record (sp,
+ * may be NULL), then set. 0 and *id, or -1 with why and *http_status (400 the overrides or the
+ * start refused, 409 a trial runs or the specimen the trial names is retired or broken, 500).
+ * check (may be NULL: the caller has checked sp) is the connection on which the specimen the
+ * loaded rig file names (specimen.name, from any override) is looked up: a retired or broken one
+ * is refused, whichever way it was named. Takes the daemon's lock. */
+static int start_trial(rig_daemon *d, store *check, const store_specimen *sp, const char *const *set, int n_set,
+                       const char *note, int64_t *id, int *http_status, char *why, size_t why_len)
 {
-    rig_daemon *d = user;
-    if (d->cfg.mode == RIG_MODE_REPLAY) return replay_start(d, body, out, http_status, why, why_len);
-    /* Body: {"set": ["section.key=value", ...], "note": "..."} (api_start_body.h). */
-    api_start_body req;
-    if (api_start_body_parse(body, 0, &req, why, why_len)) {
+    const char *ov[RIG_DAEMON_MAX_OVERRIDES + CAMPAIGN_MAX_OVERRIDES + API_START_MAX_SET];
+    int nov = 0;
+    campaign_overrides sov;
+    sov.n = 0;
+    if (sp && campaign_specimen_overrides(sp, d->cfg.scene.fold_angle_deg < 0.0 ? -1 : 1, &sov, why, why_len)) {
         *http_status = 400;
         return -1;
     }
-    const char *ov[RIG_DAEMON_MAX_OVERRIDES + API_START_MAX_SET];
-    int nov = 0;
+    if (n_set > API_START_MAX_SET) {
+        *http_status = 400;
+        snprintf(why, why_len, "at most %d overrides", API_START_MAX_SET);
+        return -1;
+    }
     for (int k = 0; k < d->n_overrides; k++) ov[nov++] = d->overrides[k];
-    for (int k = 0; k < req.n_set; k++) ov[nov++] = req.set[k];
+    for (int k = 0; k < sov.n; k++) ov[nov++] = sov.ptr[k];
+    for (int k = 0; k < n_set; k++) ov[nov++] = set[k];
     rig_config cfg;
-    if (req.n_set > 0) {
+    if (nov > d->n_overrides) {
         cfg_error ce;
         if (rig_config_load(d->config_path, ov, nov, &cfg, &ce) != CFG_OK) {
             *http_status = 400;
@@ -427,6 +449,16 @@ static int op_start(void *user, const json_t *body, json_t **out, int *http_stat
     } else {
         cfg = d->cfg;
     }
+    store_specimen named;
+    char w[256];
+    if (check && cfg.specimen.name[0] &&
+        store_specimen_get_by_name(check, cfg.specimen.name, &named, w, sizeof w) == STORE_OK &&
+        (named.state == STORE_SPECIMEN_RETIRED || named.state == STORE_SPECIMEN_BROKEN)) {
+        *http_status = 409;
+        snprintf(why, why_len, "specimen '%.63s' is %s (%.120s, since %s): a trial may not use it; nothing started",
+                 named.name, store_specimen_state_name(named.state), named.state_reason, named.state_at);
+        return -1;
+    }
     pthread_mutex_lock(&d->lock);
     trial_session *s = running_session(d);
     if (s) {
@@ -438,20 +470,88 @@ static int op_start(void *user, const json_t *body, json_t **out, int *http_stat
                  trial_state_name(ss.state));
         return -1;
     }
-    int64_t id = 0;
-    trial_err te = trial_session_start_tx(&cfg, d->compress, d->shear, req.note, d->log, d->bus, d->transcoder,
-                                          &d->session, &id, why, why_len);
+    trial_err te = trial_session_start_tx(&cfg, d->compress, d->shear, note, d->log, d->bus, d->transcoder,
+                                          &d->session, id, why, why_len);
     pthread_mutex_unlock(&d->lock);
     if (te != TRIAL_OK) {
         *http_status = te == TRIAL_E_REFUSED ? 400 : 500;
         return -1;
     }
-    say(d, "trial %lld started (%s mode)", (long long)id, rig_mode_name(cfg.mode));
+    say(d, "trial %lld started (%s mode%s%s)", (long long)*id, rig_mode_name(cfg.mode), sp ? ", specimen " : "",
+        sp ? sp->name : "");
+    return 0;
+}
+
+static int op_start(void *user, const json_t *body, json_t **out, int *http_status, char *why, size_t why_len)
+{
+    rig_daemon *d = user;
+    if (d->cfg.mode == RIG_MODE_REPLAY) return replay_start(d, body, out, http_status, why, why_len);
+    /* Body: {"specimen": NAME, "set": ["section.key=value", ...], "note": "..."} (api_start_body.h). */
+    api_start_body req;
+    if (api_start_body_parse(body, 0, &req, why, why_len)) {
+        *http_status = 400;
+        return -1;
+    }
+    store_specimen sp;
+    if (req.specimen) {
+        int u = campaign_specimen_usable(d->st, req.specimen, &sp, why, why_len);
+        if (u) {
+            *http_status = u == -2 ? 400 : 409;
+            return -1;
+        }
+    }
+    int64_t id = 0;
+    if (start_trial(d, d->st, req.specimen ? &sp : NULL, req.set, req.n_set, req.note, &id, http_status, why,
+                    why_len))
+        return -1;
     store_err se = store_trial_json(d->st, id, out, why, why_len);
     if (se != STORE_OK) {
         *out = json_pack("{s:I, s:s}", "id", (json_int_t)id, "status", "created");
     }
     return 0;
+}
+
+/* The queue's way to start a trial (campaign_queue_ops): on the queue's thread. */
+static int queue_start_trial(void *user, const store_specimen *sp, const char *const *set, int n_set, const char *note,
+                             int64_t *trial_id, char *why, size_t why_len)
+{
+    int http = 0;
+    return start_trial(user, NULL, sp, set, n_set, note, trial_id, &http, why, why_len);
+}
+
+static int queue_trial_running(void *user, int64_t trial_id)
+{
+    rig_daemon *d = user;
+    int running = 0;
+    pthread_mutex_lock(&d->lock);
+    if (d->session) {
+        session_status ss;
+        trial_session_status(d->session, &ss);
+        running = (trial_id == 0 || ss.trial_id == trial_id) && !ss.finished;
+    }
+    pthread_mutex_unlock(&d->lock);
+    return running;
+}
+
+/* /specimens and /queue (campaign_routes.h); a new specimen's size and material default to the
+ * rig file's scene and specimen. */
+static int op_campaign(void *user, const char *method, const char *path, const json_t *body, json_t **out,
+                       int *http_status, char *why, size_t why_len)
+{
+    rig_daemon *d = user;
+    if (!d->queue && !strncmp(path, "/queue", 6)) {
+        *http_status = 409;
+        snprintf(why, why_len, "the queue runs trials on rails: a %s-mode daemon has none", rig_mode_name(d->cfg.mode));
+        return -1;
+    }
+    campaign_ctx c = {.st = d->st, .q = d->queue, .defaults = store_specimen_default()};
+    c.defaults.length_m = d->cfg.scene.length;
+    c.defaults.width_m = d->cfg.scene.width;
+    c.defaults.thickness_m = d->cfg.scene.thickness;
+    c.defaults.youngs_modulus_pa = d->cfg.scene.youngs_modulus;
+    c.defaults.density_kg_m3 = d->cfg.scene.density;
+    snprintf(c.defaults.material, sizeof c.defaults.material, "%.31s", d->cfg.specimen.material);
+    return campaign_route(&c, method, path, body, out, http_status, why, why_len);
 }
 
 static int op_abort(void *user, json_t **out, int *http_status, char *why, size_t why_len)
@@ -583,5 +683,6 @@ api_ops rig_daemon_ops(void)
     o.events = op_events;
     o.camera_jpeg = op_camera;
     o.prediction = op_prediction;
+    o.campaign = op_campaign;
     return o;
 }

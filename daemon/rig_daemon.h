@@ -12,7 +12,9 @@
  * ribbonctl --db takes no lock: reading the store beside a running daemon is fine.
  * A trial's final status the store refused (a full disk) is kept and written on the API thread's
  * next operation that finds the store writable again (issue 33, item 3); never "running" for an
- * idle daemon longer than that, and at the latest the next start-up marks it interrupted. */
+ * idle daemon longer than that, and at the latest the next start-up marks it interrupted.
+ * The campaign's queue (campaign.h) runs on a thread of its own and starts its trials through
+ * the same path as POST /trials; it takes its own lock before the daemon's, never after. */
 #ifndef RIBBON_DAEMON_RIG_DAEMON_H
 #define RIBBON_DAEMON_RIG_DAEMON_H
 
@@ -20,6 +22,7 @@
 #include <stddef.h>
 
 #include "api.h"
+#include "campaign.h"
 #include "live.h"
 #include "owner_lock.h"
 #include "rail.h"
@@ -63,6 +66,7 @@ typedef struct rig_daemon {
     rig_unstored unstored[RIG_DAEMON_MAX_UNSTORED]; /* under lock */
     int n_unstored;
     trial_transcoder *transcoder; /* rig mode: the trials' raw videos to FFV1, in the background */
+    campaign_queue *queue;     /* the campaign's queue (rig and mock modes; rig_daemon_serve) */
 } rig_daemon;
 
 /* Loads the rig file, takes the locks (the store's, STORE_PATH.lock, and in rig and mock modes

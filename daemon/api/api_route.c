@@ -83,6 +83,9 @@ api_route api_route_parse(const char *path, int64_t *id, char *why, size_t why_l
         return API_ROUTE_STATUS;
     if (strcmp(path, "/trials") == 0)
         return API_ROUTE_TRIALS;
+    if ((strcmp(path, "/specimens") == 0 || strncmp(path, "/specimens/", 11) == 0 || strcmp(path, "/queue") == 0 ||
+         strncmp(path, "/queue/", 7) == 0) && strlen(path) < API_CAMPAIGN_PATH_MAX)
+        return API_ROUTE_CAMPAIGN;
     if (strcmp(path, "/trials/current/abort") == 0)
         return API_ROUTE_ABORT;
     if (strncmp(path, prefix, sizeof prefix - 1) != 0)
@@ -125,6 +128,7 @@ const char *api_route_allow(api_route r)
     case API_ROUTE_PHASE:
         return "GET";
     case API_ROUTE_TRIALS:
+    case API_ROUTE_CAMPAIGN:
         return "GET, POST";
     case API_ROUTE_ABORT:
         return "POST";
@@ -153,6 +157,7 @@ int api_route_method_ok(api_route r, const char *method)
     case API_ROUTE_PHASE:
         return get;
     case API_ROUTE_TRIALS:
+    case API_ROUTE_CAMPAIGN:
         return get || post;
     case API_ROUTE_ABORT:
         return post;

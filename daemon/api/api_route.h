@@ -20,9 +20,13 @@ typedef enum api_route {
     API_ROUTE_CAMERA,   /* /live/camera.jpg          GET */
     API_ROUTE_PREDICTION, /* /live/prediction        GET */
     API_ROUTE_PHASE,    /* /phase.png                GET */
+    API_ROUTE_CAMPAIGN, /* /specimens[/...], /queue[/...]  GET, POST (the campaign op sorts them;
+                           a path of at most API_CAMPAIGN_PATH_MAX - 1 bytes) */
     API_ROUTE_BAD_PATH, /* a byte outside the grammar (or not starting with '/'): 400 (keep last:
                            the fuzz target checks routes against it) */
 } api_route;
+
+#define API_CAMPAIGN_PATH_MAX 160 /* bytes of a campaign path, with its NUL */
 
 /* 1 when path is made only of the bytes the routes use, [A-Za-z0-9._/-], and starts with '/';
  * else 0 with the offending byte and its offset in why. libmicrohttpd is told not to decode

@@ -88,6 +88,7 @@ struct api_server {
 typedef struct api_request {
     api_route route;
     int64_t id;
+    char path[API_CAMPAIGN_PATH_MAX]; /* a campaign route's path (the op sorts it) */
     bool answered;  /* a reply was queued (before the body was read, or after all of it), or the
                        408 of a late body was written */
     bool too_big;   /* the body went past max_body: drained, answered 413 */
@@ -327,6 +328,8 @@ static enum MHD_Result on_headers(api_server *s, int stream_pool, struct MHD_Con
     free(headers.h);
     req->route = v.route;
     req->id = v.id;
+    if (v.route == API_ROUTE_CAMPAIGN)
+        snprintf(req->path, sizeof req->path, "%s", url);
     if (v.status == 0)
         return MHD_YES;
     req->answered = true;
@@ -537,6 +540,17 @@ static enum MHD_Result dispatch(api_server *s, struct MHD_Connection *c, const c
             break;
         rc = ops->prediction(s->user, &out, &status, why, sizeof why);
         return finish_op(c, "prediction", rc, out, status, why);
+
+    case API_ROUTE_CAMPAIGN: {
+        if (ops->campaign == NULL)
+            break;
+        json_t *body = NULL;
+        if (strcmp(method, "POST") == 0 && (body = api_body_object(req->body, req->len, why, sizeof why)) == NULL)
+            return reply_error(c, MHD_HTTP_BAD_REQUEST, why, NULL);
+        rc = ops->campaign(s->user, method, req->path, body, &out, &status, why, sizeof why);
+        json_decref(body);
+        return finish_op(c, "campaign", rc, out, status, why);
+    }
 
     case API_ROUTE_NONE:
     case API_ROUTE_BAD_ID:

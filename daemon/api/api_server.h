@@ -16,6 +16,7 @@
  *   GET  /live/events              events                     200 text/event-stream (never ends)
  *   GET  /live/camera.jpg          camera_jpeg                200 JPEG     404 no frame yet
  *   GET  /live/prediction          prediction                 200 object   404 none yet
+ *   GET, POST /specimens[/...], /queue[/...]  campaign(method, path, body)  200/201  400 404 405 409
  *   GET  any path of cfg.assets    (served by the server)     200 the asset, no token needed
  *
  * The live routes feed the live page (docs/live-page.md); the assets are the page itself (HTML,
@@ -157,6 +158,11 @@ typedef struct api_ops {
     int (*camera_jpeg)(void *user, unsigned char **jpg, size_t *len, int *http_status, char *why, size_t why_len);
     /* GET /live/prediction: the current trial's predicted curve; 404 when none yet. */
     int (*prediction)(void *user, json_t **out, int *http_status, char *why, size_t why_len);
+    /* GET or POST on a campaign path (/specimens, /queue and below; docs/campaign.md): path as
+     * requested, body the JSON object of a POST ({} when none), NULL for a GET. The op checks the
+     * method per path (405 naming the allowed one). */
+    int (*campaign)(void *user, const char *method, const char *path, const json_t *body, json_t **out,
+                    int *http_status, char *why, size_t why_len);
 } api_ops;
 
 typedef struct api_server api_server;

@@ -38,7 +38,8 @@ int api_start_body_parse(const json_t *body, int replay, api_start_body *out, ch
     json_t *val;
     json_object_foreach((json_t *)body, key, val)
     {
-        int ok = !strcmp(key, "note") || (replay ? !strcmp(key, "source_trial") : !strcmp(key, "set"));
+        int ok = !strcmp(key, "note") ||
+                 (replay ? !strcmp(key, "source_trial") : !strcmp(key, "set") || !strcmp(key, "specimen"));
         if (!ok) {
             char shown[64];
             size_t k = 0;
@@ -46,7 +47,7 @@ int api_start_body_parse(const json_t *body, int replay, api_start_body *out, ch
                 shown[k] = (key[k] >= 0x20 && key[k] < 0x7f && key[k] != '"') ? key[k] : '?';
             shown[k] = '\0';
             snprintf(why, why_len, replay ? "unknown field \"%s\" in replay mode (allowed: source_trial, note)"
-                                    : "unknown field \"%s\" (allowed: set, note)",
+                                    : "unknown field \"%s\" (allowed: specimen, set, note)",
                      shown);
             return -1;
         }
@@ -60,6 +61,15 @@ int api_start_body_parse(const json_t *body, int replay, api_start_body *out, ch
         }
         out->source_trial = src ? (int64_t)json_integer_value(src) : 0;
         return 0;
+    }
+    json_t *sp = json_object_get(body, "specimen");
+    if (sp) {
+        if (!json_is_string(sp) || json_string_length(sp) == 0 || json_string_length(sp) > 63 ||
+            strlen(json_string_value(sp)) != json_string_length(sp)) {
+            snprintf(why, why_len, "\"specimen\" must be a specimen's name (1 to 63 bytes)");
+            return -1;
+        }
+        out->specimen = json_string_value(sp);
     }
     json_t *set = json_object_get(body, "set");
     if (!set) return 0;

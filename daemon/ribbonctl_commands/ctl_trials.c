@@ -28,7 +28,7 @@
 #define MAX_SET 64
 
 typedef struct ctl_opts {
-    const char *url, *token, *db, *out, *note, *video, *scene, *config;
+    const char *url, *token, *db, *out, *note, *video, *scene, *config, *specimen;
     const char *set[MAX_SET];
     int n_set;
     int json, wait, csv, all;
@@ -45,7 +45,8 @@ static int usage_error(const char *cmd, const char *msg)
 static void help(const char *cmd)
 {
     printf("usage:\n"
-           "  ribbonctl start [--set section.key=value ...] [--note TEXT] [--wait [--out REPORT.png]] [--json]\n"
+           "  ribbonctl start [--specimen NAME] [--set section.key=value ...] [--note TEXT] [--wait [--out REPORT.png]]\n"
+           "      [--json]\n"
            "  ribbonctl abort\n"
            "  ribbonctl status [--json]\n"
            "  ribbonctl list [--json] [--db FILE]\n"
@@ -59,7 +60,9 @@ static void help(const char *cmd)
            "common: --url URL (default $RIBBON_URL or http://127.0.0.1:8377), --token T (default $RIBBON_TOKEN)\n"
            "\n"
            "start asks ribbond to run one trial of its rig file (with --set overrides of the keys a trial\n"
-           "may change: its scene, the specimen, the trial's timing; docs/api.md);\n"
+           "may change: its scene, the specimen, the trial's timing; docs/api.md); --specimen names a specimen\n"
+           "of the store (ribbonctl specimen add): its record sets the trial's specimen and scene keys before\n"
+           "--set, and an unknown, retired or broken specimen is refused with nothing started;\n"
            "--wait follows it on stderr and prints the measured and predicted snap when it ends (with --out,\n"
            "also its report) and the store's path on a line `database: PATH`.\n"
            "report draws Delta Z and A against Delta W, measured and predicted, snaps marked.\n"
@@ -101,6 +104,7 @@ static int parse(const char *cmd, int argc, char **argv, ctl_opts *o, int want_i
         else if (!strcmp(a, "--video")) TAKE(video);
         else if (!strcmp(a, "--scene")) TAKE(scene);
         else if (!strcmp(a, "--config")) TAKE(config);
+        else if (!strcmp(a, "--specimen")) TAKE(specimen);
         else if (!strcmp(a, "--phi")) TAKE(phi);
         else if (!strcmp(a, "--gamma")) TAKE(gamma);
         else if (!strcmp(a, "--set")) {
@@ -391,6 +395,7 @@ static int cmd_start(const ctl_opts *o)
         json_object_set_new(body, "set", a);
     }
     if (o->note) json_object_set_new(body, "note", json_string(o->note));
+    if (o->specimen) json_object_set_new(body, "specimen", json_string(o->specimen));
     json_t *t = NULL;
     int st = request(o, "POST", "/trials", body, &t, NULL, NULL);
     json_decref(body);

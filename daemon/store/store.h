@@ -33,7 +33,7 @@
 #include <jansson.h>
 
 /* The schema version this program creates and understands (see the migration list in store.c). */
-#define STORE_SCHEMA_VERSION 7
+#define STORE_SCHEMA_VERSION 8
 
 /* Errors of the store layer; store_err_message() gives the generic text, why the specific one. */
 typedef enum store_err {
@@ -143,7 +143,23 @@ typedef struct store_specimen {
     double crease_position_left;   /* measured, fraction of the free length in (0, 1); NaN = not measured */
     double crease_position_right;  /* measured, in (0, 1); NaN = not measured */
     char folded_at[40];            /* when the creases were folded, ISO 8601 as written; "" = unknown */
+    double phi_deg;                /* design fold angle (magnitude), deg in (0, 180); NaN = unknown */
+    int state;                     /* store_specimen_state; new on insert, then set by the calls below */
+    char state_reason[128];        /* why retired or broken; "" = none */
+    char state_at[32];             /* when the state last changed, ISO-8601 UTC; "" = never */
 } store_specimen;
+
+/* A specimen's life: new (never trialled), in use (trialled), retired or broken (no more
+ * trials: a start naming it is refused). */
+typedef enum store_specimen_state {
+    STORE_SPECIMEN_NEW = 0,
+    STORE_SPECIMEN_IN_USE,
+    STORE_SPECIMEN_RETIRED,
+    STORE_SPECIMEN_BROKEN,
+    STORE_SPECIMEN_STATE_COUNT
+} store_specimen_state;
+const char *store_specimen_state_name(store_specimen_state s); /* "new", "in use", ...; NULL out of range */
+bool store_specimen_state_parse(const char *s, store_specimen_state *out);
 
 store_specimen store_specimen_default(void); /* every optional number NaN, texts empty */
 
@@ -152,8 +168,88 @@ store_err store_specimen_upsert(store *st, const store_specimen *sp, int64_t *id
 store_err store_specimen_get(store *st, int64_t id, store_specimen *out, char *why, size_t why_len);
 store_err store_specimen_get_by_name(store *st, const char *name, store_specimen *out, char *why,
                                      size_t why_len);
-/* One more trial for the specimen (call when the rails first touch it). */
+/* One more trial for the specimen (call when the rails first touch it); a new specimen becomes
+ * in use. */
 store_err store_specimen_count_trial(store *st, int64_t id, char *why, size_t why_len);
+/* Every specimen, by name. *out malloc'ed (free()); NULL when *n == 0. */
+store_err store_specimen_list(store *st, store_specimen **out, size_t *n, char *why, size_t why_len);
+/* Retire (or mark broken) with a reason (required). Retired and broken are final: a second
+ * retirement is STORE_E_STATE naming the first. */
+store_err store_specimen_retire(store *st, int64_t id, store_specimen_state state, const char *reason,
+                                double wall_s, char *why, size_t why_len);
+
+/* ---- the queue (store_queue.c) -------------------------------------------------------------
+ * Items wait 'queued' in order of position (1 .. n, no gaps); one at a time runs; each ends done,
+ * failed, aborted, skipped (removed before it ran) or unknown (found running at start-up). The
+ * queue's state row says whether it runs and why not. A running item can be neither removed nor
+ * moved (STORE_E_STATE). */
+
+typedef enum store_queue_kind {
+    STORE_QUEUE_TRIAL = 0, /* "trial": a trial of a specimen with overrides and a note */
+    STORE_QUEUE_OPERATOR,  /* "operator": a step the lab does; holds the queue until confirmed */
+    STORE_QUEUE_PAUSE,     /* "pause": stops the queue when reached */
+    STORE_QUEUE_KIND_COUNT
+} store_queue_kind;
+
+typedef enum store_queue_status {
+    STORE_QUEUE_QUEUED = 0, STORE_QUEUE_RUNNING, STORE_QUEUE_DONE, STORE_QUEUE_FAILED, STORE_QUEUE_ABORTED,
+    STORE_QUEUE_SKIPPED, STORE_QUEUE_UNKNOWN, STORE_QUEUE_STATUS_COUNT
+} store_queue_status;
+
+#define STORE_QUEUE_JSON_MAX 4096 /* bytes of an item's set_json, fields_json, values_json */
+
+typedef struct store_queue_item {
+    int64_t id;
+    store_queue_kind kind;
+    store_queue_status status;
+    int64_t position;        /* 1 .. n while queued; 0 otherwise */
+    int64_t specimen_id;     /* 0 = none (required for a trial) */
+    char specimen_name[64];  /* read only */
+    char set_json[STORE_QUEUE_JSON_MAX];    /* a trial's overrides: JSON array of "section.key=value" */
+    char note[256];
+    char prompt[256];        /* an operator step's text */
+    char fields_json[STORE_QUEUE_JSON_MAX]; /* an operator step's fields: JSON array of names */
+    char values_json[STORE_QUEUE_JSON_MAX]; /* the values it was confirmed with (JSON object); "" = none */
+    int64_t trial_id;        /* a trial item's trial once started; 0 = none */
+    char reason[512];        /* why it ended as it did; "" = none */
+    char created_at[32], started_at[32], ended_at[32];
+} store_queue_item;
+
+const char *store_queue_kind_name(store_queue_kind k);
+bool store_queue_kind_parse(const char *s, store_queue_kind *out);
+const char *store_queue_status_name(store_queue_status s);
+
+/* A zeroed item with set_json "[]" and fields_json "[]". */
+store_queue_item store_queue_item_default(void);
+/* Appends a queued item (kind, specimen_id, set_json, note, prompt, fields_json are read). */
+store_err store_queue_add(store *st, const store_queue_item *it, double wall_s, int64_t *id, char *why,
+                          size_t why_len);
+store_err store_queue_get(store *st, int64_t id, store_queue_item *out, char *why, size_t why_len);
+/* Every item: the running one, the queued ones by position, then the history newest first.
+ * *out malloc'ed (free()); NULL when *n == 0. */
+store_err store_queue_list(store *st, store_queue_item **out, size_t *n, char *why, size_t why_len);
+/* The first queued item (NOTFOUND when none), the running one (NOTFOUND when none). */
+store_err store_queue_next(store *st, store_queue_item *out, char *why, size_t why_len);
+store_err store_queue_current(store *st, store_queue_item *out, char *why, size_t why_len);
+/* A queued item leaves the queue as skipped with the reason. */
+store_err store_queue_remove(store *st, int64_t id, const char *reason, double wall_s, char *why, size_t why_len);
+/* A queued item to position (1 .. n; larger means last). */
+store_err store_queue_move(store *st, int64_t id, int64_t position, char *why, size_t why_len);
+/* queued -> running (started now); the item leaves the order. */
+store_err store_queue_item_begin(store *st, int64_t id, double wall_s, char *why, size_t why_len);
+store_err store_queue_item_set_trial(store *st, int64_t id, int64_t trial_id, char *why, size_t why_len);
+/* running -> an end status with a reason; values_json (NULL = keep) is stored with it. */
+store_err store_queue_item_end(store *st, int64_t id, store_queue_status status, const char *reason,
+                               const char *values_json, double wall_s, char *why, size_t why_len);
+/* The queue's state: running or not, and why (reason_len bytes), changed_at (32 bytes, may be NULL). */
+store_err store_queue_state_get(store *st, bool *running, char *reason, size_t reason_len, char *changed_at,
+                                char *why, size_t why_len);
+store_err store_queue_state_set(store *st, bool running, const char *reason, double wall_s, char *why,
+                                size_t why_len);
+/* At daemon start-up, one transaction: every running item becomes unknown, and the queue is
+ * stopped, saying why (the items found running, or that the daemon restarted) if it ran. *count
+ * gets how many items became unknown. A restart never resumes the queue. */
+store_err store_queue_recover(store *st, double wall_s, int *count, char *why, size_t why_len);
 
 /* ---- trials (store_trials.c) ------------------------------------------------------------ */
 

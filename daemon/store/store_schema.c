@@ -34,7 +34,12 @@
  *                    crease_hinge crease_hinge_stiffness_nm_per_rad (v7: 'rigid' or 'compliant'
  *                    and its stiffness: the crease model the prediction ran)
  *   prediction_curve (prediction_id -> predictions, seq) | t_s dw dz a       (WITHOUT ROWID)
- *   ladder (v2)      (scene_hash, nodes, dt, adaptive) | snap_dw est_error wall_s */
+ *   ladder (v2)      (scene_hash, nodes, dt, adaptive) | snap_dw est_error wall_s
+ *   specimens (v8)   + phi_deg (design fold angle) | state state_reason state_at
+ *   queue_items (v8) id | kind | position (queued only) | specimen_id -> specimens | set_json note |
+ *                    prompt fields_json values_json | status trial_id -> trials reason |
+ *                    created_at started_at ended_at
+ *   queue_state (v8) one row: running reason changed_at */
 #include "store_schema.h"
 
 #include <stdio.h>
@@ -167,6 +172,41 @@ static const char schema_v7[] =
     " CHECK (crease_hinge_stiffness_nm_per_rad > 0);"
     "PRAGMA user_version = 7;";
 
+/* v8: the campaign (issue 35). A specimen's design fold angle and its state (new, in use,
+ * retired, broken); the queue's items (a trial, an operator step, a pause) with their history,
+ * and the queue's one state row (running or stopped, and why). Existing specimens read 'new'
+ * (or 'in use' once trialled). At most one item runs (a partial unique index). */
+static const char schema_v8[] =
+    "ALTER TABLE specimens ADD COLUMN phi_deg REAL CHECK (phi_deg > 0 AND phi_deg < 180);"
+    "ALTER TABLE specimens ADD COLUMN state TEXT NOT NULL DEFAULT 'new'"
+    " CHECK (state IN ('new','in use','retired','broken'));"
+    "ALTER TABLE specimens ADD COLUMN state_reason TEXT;"
+    "ALTER TABLE specimens ADD COLUMN state_at TEXT;"
+    "UPDATE specimens SET state = 'in use' WHERE trials_count > 0;"
+    "CREATE TABLE queue_items ("
+    " id INTEGER PRIMARY KEY,"
+    " kind TEXT NOT NULL CHECK (kind IN ('trial','operator','pause')),"
+    " position INTEGER CHECK (position >= 1),"
+    " specimen_id INTEGER REFERENCES specimens(id),"
+    " set_json TEXT NOT NULL DEFAULT '[]' CHECK (json_valid(set_json)),"
+    " note TEXT, prompt TEXT,"
+    " fields_json TEXT NOT NULL DEFAULT '[]' CHECK (json_valid(fields_json)),"
+    " values_json TEXT CHECK (values_json IS NULL OR json_valid(values_json)),"
+    " status TEXT NOT NULL DEFAULT 'queued'"
+    "  CHECK (status IN ('queued','running','done','failed','aborted','skipped','unknown')),"
+    " trial_id INTEGER REFERENCES trials(id),"
+    " reason TEXT,"
+    " created_at TEXT NOT NULL, started_at TEXT, ended_at TEXT,"
+    " CHECK ((status = 'queued') = (position IS NOT NULL)));"
+    "CREATE UNIQUE INDEX queue_one_running ON queue_items(status) WHERE status = 'running';"
+    "CREATE INDEX queue_by_position ON queue_items(position) WHERE position IS NOT NULL;"
+    "CREATE TABLE queue_state ("
+    " id INTEGER PRIMARY KEY CHECK (id = 1),"
+    " running INTEGER NOT NULL CHECK (running IN (0,1)),"
+    " reason TEXT NOT NULL, changed_at TEXT NOT NULL);"
+    "INSERT INTO queue_state VALUES (1, 0, 'never started', strftime('%Y-%m-%dT%H:%M:%fZ','now'));"
+    "PRAGMA user_version = 8;";
+
 typedef struct store_migration {
     int version;      /* user_version after the step */
     const char *what; /* for reasons */
@@ -181,6 +221,7 @@ static const store_migration migrations[] = {
     {5, "the specimen in the prediction, failed predictions", schema_v5},
     {6, "video file size per trial", schema_v6},
     {7, "the crease model of a prediction", schema_v7},
+    {8, "specimen states and the queue", schema_v8},
 };
 #define N_MIGRATIONS (sizeof migrations / sizeof migrations[0])
 _Static_assert(sizeof migrations / sizeof migrations[0] == STORE_SCHEMA_VERSION,

@@ -1,9 +1,12 @@
 /* store_specimens.c: the specimen records. A specimen is known by the name on its label: upsert
  * by name keeps one row per physical ribbon (re-measuring its creases updates the row), and
- * trials_count only ever grows, through store_specimen_count_trial. */
+ * trials_count only ever grows, through store_specimen_count_trial. Its state (v6) moves
+ * new -> in use (its first trial) -> retired | broken (store_specimen_retire), never back; the
+ * design angle phi_deg, once known, is kept by later upserts that do not know it. */
 #include "store_sql.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 store_specimen store_specimen_default(void)
@@ -15,6 +18,8 @@ store_specimen store_specimen_default(void)
     s.crease_angle_left_deg = s.crease_angle_right_deg = NAN;
     s.fold_position = NAN;
     s.crease_position_left = s.crease_position_right = NAN;
+    s.phi_deg = NAN;
+    s.state = STORE_SPECIMEN_NEW;
     return s;
 }
 
@@ -48,6 +53,8 @@ static store_err check(const store_specimen *sp, char *why, size_t why_len)
             return store_fail(why, why_len, STORE_E_INVALID, "specimen crease_position_%s must be in (0, 1) (got %g)",
                               k ? "right" : "left", v);
     }
+    if (!isnan(sp->phi_deg) && !(sp->phi_deg > 0.0 && sp->phi_deg < 180.0))
+        return store_fail(why, why_len, STORE_E_INVALID, "specimen phi_deg must be in (0, 180) (got %g)", sp->phi_deg);
     if (!isnan(sp->fold_position) && !(sp->fold_position > 0.0 && sp->fold_position < 1.0))
         return store_fail(why, why_len, STORE_E_INVALID, "specimen fold_position must be in (0, 1) (got %g)",
                           sp->fold_position);
@@ -66,7 +73,7 @@ store_err store_specimen_upsert(store *st, const store_specimen *sp, int64_t *id
                       "INSERT INTO specimens (name, length_m, width_m, thickness_m, youngs_modulus_pa,"
                       " density_kg_m3, material, crease_angle_left_deg, crease_angle_right_deg,"
                       " fold_position, crease_orientation, crease_position_left, crease_position_right,"
-                      " folded_at) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14)"
+                      " folded_at, phi_deg) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,?15)"
                       " ON CONFLICT(name) DO UPDATE SET length_m=excluded.length_m,"
                       " width_m=excluded.width_m, thickness_m=excluded.thickness_m,"
                       " youngs_modulus_pa=excluded.youngs_modulus_pa, density_kg_m3=excluded.density_kg_m3,"
@@ -74,7 +81,8 @@ store_err store_specimen_upsert(store *st, const store_specimen *sp, int64_t *id
                       " crease_angle_right_deg=excluded.crease_angle_right_deg,"
                       " fold_position=excluded.fold_position, crease_orientation=excluded.crease_orientation,"
                       " crease_position_left=excluded.crease_position_left,"
-                      " crease_position_right=excluded.crease_position_right, folded_at=excluded.folded_at"
+                      " crease_position_right=excluded.crease_position_right, folded_at=excluded.folded_at,"
+                      " phi_deg=COALESCE(excluded.phi_deg, specimens.phi_deg)"
                       " RETURNING id",
                       &s, why, why_len);
     if (e != STORE_OK)
@@ -93,6 +101,7 @@ store_err store_specimen_upsert(store *st, const store_specimen *sp, int64_t *id
     store_bind_real(s, 12, sp->crease_position_left);
     store_bind_real(s, 13, sp->crease_position_right);
     store_bind_text(s, 14, sp->folded_at);
+    store_bind_real(s, 15, sp->phi_deg);
     int rc = sqlite3_step(s);
     if (rc == SQLITE_ROW) {
         if (id)
@@ -108,7 +117,7 @@ store_err store_specimen_upsert(store *st, const store_specimen *sp, int64_t *id
 #define SPECIMEN_COLUMNS                                                                                    \
     "SELECT id, name, length_m, width_m, thickness_m, youngs_modulus_pa, density_kg_m3, material,"          \
     " crease_angle_left_deg, crease_angle_right_deg, fold_position, crease_orientation, trials_count,"      \
-    " crease_position_left, crease_position_right, folded_at"                                              \
+    " crease_position_left, crease_position_right, folded_at, phi_deg, state, state_reason, state_at"      \
     " FROM specimens "
 
 static store_err read_one(store *st, sqlite3_stmt *s, store_specimen *out, const char *what, char *why,
@@ -134,6 +143,12 @@ static store_err read_one(store *st, sqlite3_stmt *s, store_specimen *out, const
         out->crease_position_left = store_col_real(s, 13);
         out->crease_position_right = store_col_real(s, 14);
         store_col_text(s, 15, out->folded_at, sizeof out->folded_at);
+        out->phi_deg = store_col_real(s, 16);
+        store_specimen_state state = STORE_SPECIMEN_NEW;
+        store_specimen_state_parse((const char *)sqlite3_column_text(s, 17), &state);
+        out->state = state;
+        store_col_text(s, 18, out->state_reason, sizeof out->state_reason);
+        store_col_text(s, 19, out->state_at, sizeof out->state_at);
     } else if (rc == SQLITE_DONE) {
         e = store_fail(why, why_len, STORE_E_NOTFOUND, "no specimen %s", what);
     } else {
@@ -175,7 +190,8 @@ store_err store_specimen_count_trial(store *st, int64_t id, char *why, size_t wh
     if (e != STORE_OK)
         return e;
     sqlite3_stmt *s;
-    e = store_prepare(st, "UPDATE specimens SET trials_count = trials_count + 1 WHERE id = ?1", &s, why, why_len);
+    e = store_prepare(st, "UPDATE specimens SET trials_count = trials_count + 1,"
+                      " state = CASE state WHEN 'new' THEN 'in use' ELSE state END WHERE id = ?1", &s, why, why_len);
     if (e != STORE_OK)
         return e;
     sqlite3_bind_int64(s, 1, id);
@@ -184,6 +200,102 @@ store_err store_specimen_count_trial(store *st, int64_t id, char *why, size_t wh
         e = store_sql_fail(st->db, rc, why, why_len, "counting a specimen's trial");
     else if (sqlite3_changes(st->db) == 0)
         e = store_fail(why, why_len, STORE_E_NOTFOUND, "no specimen %lld", (long long)id);
+    sqlite3_finalize(s);
+    return e;
+}
+
+static const char *const state_names[STORE_SPECIMEN_STATE_COUNT] = {"new", "in use", "retired", "broken"};
+
+const char *store_specimen_state_name(store_specimen_state s)
+{
+    return (unsigned)s < STORE_SPECIMEN_STATE_COUNT ? state_names[s] : NULL;
+}
+
+bool store_specimen_state_parse(const char *s, store_specimen_state *out)
+{
+    for (int k = 0; s && k < STORE_SPECIMEN_STATE_COUNT; k++)
+        if (strcmp(s, state_names[k]) == 0) {
+            *out = (store_specimen_state)k;
+            return true;
+        }
+    return false;
+}
+
+store_err store_specimen_list(store *st, store_specimen **out, size_t *n, char *why, size_t why_len)
+{
+    *out = NULL;
+    *n = 0;
+    sqlite3_stmt *s;
+    store_err e = store_prepare(st, "SELECT id FROM specimens ORDER BY name", &s, why, why_len);
+    if (e != STORE_OK)
+        return e;
+    int64_t *ids = NULL;
+    size_t nid = 0, cap = 0;
+    int rc;
+    while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
+        int64_t *g = store_grow(ids, nid + 1, &cap, sizeof *ids, 16);
+        if (!g) {
+            e = store_fail(why, why_len, STORE_E_NOMEM, "out of memory listing specimens");
+            break;
+        }
+        ids = g;
+        ids[nid++] = sqlite3_column_int64(s, 0);
+    }
+    if (e == STORE_OK && rc != SQLITE_DONE)
+        e = store_sql_fail(st->db, rc, why, why_len, "listing specimens");
+    sqlite3_finalize(s);
+    store_specimen *v = NULL;
+    if (e == STORE_OK && nid && !(v = calloc(nid, sizeof *v)))
+        e = store_fail(why, why_len, STORE_E_NOMEM, "out of memory listing specimens");
+    for (size_t k = 0; e == STORE_OK && k < nid; k++)
+        e = store_specimen_get(st, ids[k], &v[k], why, why_len);
+    free(ids);
+    if (e != STORE_OK) {
+        free(v);
+        return e;
+    }
+    *out = v;
+    *n = nid;
+    return STORE_OK;
+}
+
+store_err store_specimen_retire(store *st, int64_t id, store_specimen_state state, const char *reason,
+                                double wall_s, char *why, size_t why_len)
+{
+    char when[32];
+    store_err e = store_check_writable(st, why, why_len);
+    if (e != STORE_OK)
+        return e;
+    if (state != STORE_SPECIMEN_RETIRED && state != STORE_SPECIMEN_BROKEN)
+        return store_fail(why, why_len, STORE_E_INVALID, "a specimen is retired as 'retired' or 'broken'");
+    if (!reason || !*reason)
+        return store_fail(why, why_len, STORE_E_INVALID, "retiring a specimen needs a reason");
+    if ((e = store_need_fits(reason, 128, "retirement reason", why, why_len)))
+        return e;
+    if (!store_wall_format(wall_s, when, sizeof when))
+        return store_fail(why, why_len, STORE_E_INVALID, "wall time %g is not a valid time", wall_s);
+    store_specimen cur;
+    if ((e = store_specimen_get(st, id, &cur, why, why_len)))
+        return e;
+    if (cur.state == STORE_SPECIMEN_RETIRED || cur.state == STORE_SPECIMEN_BROKEN)
+        return store_fail(why, why_len, STORE_E_STATE, "specimen %s is already %s (%s, %s)", cur.name,
+                          store_specimen_state_name(cur.state), cur.state_reason, cur.state_at);
+    sqlite3_stmt *s;
+    e = store_prepare(st,
+                      "UPDATE specimens SET state = ?2, state_reason = ?3, state_at = ?4 WHERE id = ?1"
+                      " AND state IN ('new', 'in use')",
+                      &s, why, why_len);
+    if (e != STORE_OK)
+        return e;
+    sqlite3_bind_int64(s, 1, id);
+    sqlite3_bind_text(s, 2, store_specimen_state_name(state), -1, SQLITE_STATIC);
+    store_bind_text(s, 3, reason);
+    store_bind_text(s, 4, when);
+    int rc = sqlite3_step(s);
+    if (rc != SQLITE_DONE)
+        e = store_sql_fail(st->db, rc, why, why_len, "retiring a specimen");
+    else if (sqlite3_changes(st->db) == 0)
+        e = store_fail(why, why_len, STORE_E_STATE, "specimen %s changed state meanwhile", cur.name);
     sqlite3_finalize(s);
     return e;
 }

@@ -1,8 +1,10 @@
 // live.js: the live page's behaviour (docs/live-page.md). Follows ribbond's event stream
 // (GET /live/events, read with fetch so the token can travel in the Authorization header),
 // draws the measured points against the prediction with Chart.js, refreshes the camera picture
-// and the phase diagram, lists the trials with links to their report and samples CSV, and calls
-// the existing API for start and abort: the page has no power the API does not have. A replay
+// and the phase diagram, lists the trials with links to their report and samples CSV, shows the
+// campaign's queue with the form of the operator step it waits for, and calls the existing API for
+// start and abort, the queue's start and stop and the step's confirmation: the page has no power
+// the API does not have. A replay
 // (replay mode) is followed the same way: it publishes what a trial does.
 'use strict';
 
@@ -46,6 +48,7 @@ function setNum(id, v, d) {
 }
 
 let view = null;
+let daemonMode = null; // from GET /status: a replay-mode daemon has no queue, and is not asked
 function resetView(trial) {
   view = { trial, samples: 0, frames: 0, measured: 0, missed: 0, haveFrame: false, predSnap: null, measSnap: null };
   $('trial-id').textContent = trial === null ? '-' : String(trial);
@@ -240,6 +243,7 @@ async function loadStatus() {
   if (!r.ok) return;
   const s = await r.json();
   $('mode').textContent = '(' + s.mode + ')';
+  daemonMode = s.mode;
   $('source-box').hidden = s.mode !== 'replay'; // replay mode: POST /trials {"source_trial": ID}
   $('overrides').disabled = s.mode === 'replay';
   if (s.state === 'idle' && (!view || view.trial === null)) setState('idle');
@@ -350,6 +354,80 @@ $('start').addEventListener('click', () => {
   control('/trials', body).catch((e) => ($('control-msg').textContent = String(e)));
 });
 $('abort').addEventListener('click', () => control('/trials/current/abort', {}).catch((e) => ($('control-msg').textContent = String(e))));
+
+// ---- the campaign's queue (docs/campaign.md) ----------------------------------------------------
+// GET /queue once a second: its state, the running item, the queued ones and the latest ended;
+// the operator step the queue waits for gets a form of its fields, sent to POST /queue/ID/confirm.
+let opShown = null; // the operator step whose form is shown (kept while the operator types)
+async function loadQueue() {
+  if (daemonMode === null || daemonMode === 'replay') {
+    $('queue-box').hidden = true;
+    return;
+  }
+  const r = await api('/queue');
+  if (!r.ok) {
+    $('queue-box').hidden = true;
+    return;
+  }
+  const q = await r.json();
+  $('queue-box').hidden = false;
+  $('queue-state').textContent = q.running ? 'running' : 'stopped';
+  $('queue-state').dataset.running = q.running ? '1' : '0';
+  $('queue-reason').textContent = q.running ? '' : q.reason || '';
+  const body = $('queue').tBodies[0];
+  body.textContent = '';
+  const rows = [].concat(q.current ? [q.current] : [], q.queued || [], (q.history || []).slice(0, 20));
+  for (const it of rows) {
+    const tr = body.insertRow();
+    tr.dataset.id = String(it.id);
+    tr.dataset.status = it.status;
+    const what = it.kind === 'trial' ? (it.specimen || '') + (it.note ? ' (' + it.note + ')' : '')
+      : it.kind === 'operator' ? it.prompt || '' : it.note || '';
+    for (const c of [it.id, it.status, it.kind, what, it.trial_id || '-', it.reason || ''])
+      tr.insertCell().textContent = String(c);
+  }
+  const op = q.current && q.current.kind === 'operator' ? q.current : null;
+  if (!op) {
+    $('operator-form').hidden = true;
+    opShown = null;
+    return;
+  }
+  if (opShown === op.id) return;
+  opShown = op.id;
+  $('operator-prompt').textContent = 'Step ' + op.id + ': ' + (op.prompt || '') + (op.specimen ? ' (' + op.specimen + ')' : '');
+  const box = $('operator-fields');
+  box.textContent = '';
+  for (const f of op.fields || []) {
+    const l = document.createElement('label');
+    l.textContent = f + ' ';
+    const i = document.createElement('input');
+    i.name = f;
+    i.id = 'field-' + f;
+    i.type = 'text';
+    l.appendChild(i);
+    box.appendChild(l);
+  }
+  $('operator-msg').textContent = '';
+  delete $('operator-msg').dataset.status;
+  $('operator-form').hidden = false;
+}
+$('operator-form').addEventListener('submit', async (e) => {
+  e.preventDefault();
+  const values = {};
+  for (const i of $('operator-fields').querySelectorAll('input')) {
+    const v = i.value.trim();
+    values[i.name] = i.name === 'folded_at' || v === '' || Number.isNaN(Number(v)) ? v : Number(v);
+  }
+  const r = await api('/queue/' + opShown + '/confirm',
+    { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify({ values }) });
+  const j = await r.json().catch(() => ({}));
+  $('operator-msg').textContent = r.ok ? 'confirmed' : 'refused (' + r.status + '): ' + (j.error || '');
+  $('operator-msg').dataset.status = String(r.status);
+  if (r.ok) loadQueue().catch(() => {});
+});
+$('queue-start').addEventListener('click', () => control('/queue/start', {}).then(loadQueue).catch((e) => ($('control-msg').textContent = String(e))));
+$('queue-stop').addEventListener('click', () => control('/queue/stop', {}).then(loadQueue).catch((e) => ($('control-msg').textContent = String(e))));
+setInterval(() => loadQueue().catch(() => {}), 1000);
 
 // ---- start ------------------------------------------------------------------------------------
 const c1 = makeChart('plot-dz', '\u0394Z'), c2 = makeChart('plot-a', 'A (rad)');

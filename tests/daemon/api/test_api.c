@@ -403,6 +403,15 @@ static void test_route_table(void **state)
     assert_int_equal(api_route_parse("/trials/0/samples.csv", &id, why, sizeof why), API_ROUTE_BAD_ID);
     assert_int_equal(api_route_parse("/trials/x/samples.csv", &id, why, sizeof why), API_ROUTE_BAD_ID);
     assert_int_equal(api_route_parse("/phase.png", &id, why, sizeof why), API_ROUTE_PHASE);
+    /* The campaign's paths go to one op, which sorts them (daemon/campaign/campaign_routes.c). */
+    assert_int_equal(api_route_parse("/specimens", &id, why, sizeof why), API_ROUTE_CAMPAIGN);
+    assert_int_equal(api_route_parse("/specimens/S-12/retire", &id, why, sizeof why), API_ROUTE_CAMPAIGN);
+    assert_int_equal(api_route_parse("/queue", &id, why, sizeof why), API_ROUTE_CAMPAIGN);
+    assert_int_equal(api_route_parse("/queue/3/confirm", &id, why, sizeof why), API_ROUTE_CAMPAIGN);
+    assert_int_equal(api_route_parse("/queues", &id, why, sizeof why), API_ROUTE_NONE);
+    assert_int_equal(api_route_parse("/specimensX", &id, why, sizeof why), API_ROUTE_NONE);
+    assert_true(api_route_method_ok(API_ROUTE_CAMPAIGN, "POST") && api_route_method_ok(API_ROUTE_CAMPAIGN, "GET"));
+    assert_false(api_route_method_ok(API_ROUTE_CAMPAIGN, "DELETE"));
     assert_string_equal(api_route_allow(API_ROUTE_SAMPLES_CSV), "GET");
     assert_string_equal(api_route_allow(API_ROUTE_PHASE), "GET");
     assert_false(api_route_method_ok(API_ROUTE_SAMPLES_CSV, "POST"));

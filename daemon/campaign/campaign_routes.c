@@ -1,0 +1,194 @@
+/* campaign_routes.c: the campaign's routes, one table of (method, pattern) -> function:
+ *
+ *   GET  /specimens                 every specimen
+ *   POST /specimens                 add one (campaign_specimen_from_json)       201; 409 exists
+ *   GET  /specimens/NAME            one, with its trials
+ *   POST /specimens/NAME/retire     {"reason": "...", "broken": false}          409 already
+ *   GET  /queue                     {running, reason, current, queued, history}
+ *   POST /queue                     add an item                                 201
+ *   POST /queue/start | /queue/stop
+ *   GET  /queue/ID                  the item's whole status
+ *   POST /queue/ID/remove | /queue/ID/move {"position": N} | /queue/ID/confirm {"values": {...}}
+ *
+ * The API server hands every path under /specimens and /queue here (it checks the path's bytes
+ * and the token; the methods are checked here, 405 naming the allowed one). */
+#include "campaign_routes.h"
+
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "campaign_specimen.h"
+
+int campaign_route_match(const char *path)
+{
+    return path && (!strcmp(path, "/specimens") || !strncmp(path, "/specimens/", 11) || !strcmp(path, "/queue") ||
+                    !strncmp(path, "/queue/", 7));
+}
+
+static int fail(int *http, int status, char *why, size_t why_len, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+static int fail(int *http, int status, char *why, size_t why_len, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(why, why_len, fmt, ap);
+    va_end(ap);
+    *http = status;
+    return -1;
+}
+
+static int need(const char *method, const char *want, int *http, char *why, size_t why_len)
+{
+    if (!strcmp(method, want)) return 0;
+    return fail(http, 405, why, why_len, "method %s not allowed here (allowed: %s)", method, want);
+}
+
+static int specimens_list(const campaign_ctx *c, json_t **out, int *http, char *why, size_t why_len)
+{
+    store_specimen *v = NULL;
+    size_t n = 0;
+    char w[300];
+    if (store_specimen_list(c->st, &v, &n, w, sizeof w) != STORE_OK) return fail(http, 500, why, why_len, "%s", w);
+    json_t *a = json_array();
+    for (size_t k = 0; k < n; k++) json_array_append_new(a, campaign_specimen_json(&v[k]));
+    free(v);
+    *out = a;
+    return 0;
+}
+
+static int specimen_add(const campaign_ctx *c, const json_t *body, json_t **out, int *http, char *why, size_t why_len)
+{
+    store_specimen sp, old;
+    char w[300];
+    if (campaign_specimen_from_json(body, &c->defaults, &sp, why, why_len)) return (*http = 400, -1);
+    if (store_specimen_get_by_name(c->st, sp.name, &old, w, sizeof w) == STORE_OK)
+        return fail(http, 409, why, why_len, "specimen %s exists (id %lld, %s): a specimen is added once", sp.name,
+                    (long long)old.id, store_specimen_state_name(old.state));
+    int64_t id = 0;
+    store_err e = store_specimen_upsert(c->st, &sp, &id, w, sizeof w);
+    if (e == STORE_OK) e = store_specimen_get(c->st, id, &sp, w, sizeof w);
+    if (e != STORE_OK) return fail(http, e == STORE_E_INVALID ? 400 : 500, why, why_len, "%s", w);
+    *out = campaign_specimen_json(&sp);
+    *http = 201;
+    return 0;
+}
+
+static int specimen_get(const campaign_ctx *c, const char *name, store_specimen *sp, int *http, char *why,
+                        size_t why_len)
+{
+    char w[300];
+    if (!campaign_specimen_name_ok(name, why, why_len)) return (*http = 400, -1);
+    store_err e = store_specimen_get_by_name(c->st, name, sp, w, sizeof w);
+    if (e == STORE_E_NOTFOUND) return fail(http, 404, why, why_len, "unknown specimen '%s'", name);
+    if (e != STORE_OK) return fail(http, 500, why, why_len, "%s", w);
+    return 0;
+}
+
+static int specimen_show(const campaign_ctx *c, const char *name, json_t **out, int *http, char *why, size_t why_len)
+{
+    store_specimen sp;
+    if (specimen_get(c, name, &sp, http, why, why_len)) return -1;
+    store_trial *t = NULL;
+    size_t n = 0;
+    char w[300];
+    if (store_trial_list(c->st, &t, &n, w, sizeof w) != STORE_OK) return fail(http, 500, why, why_len, "%s", w);
+    json_t *o = campaign_specimen_json(&sp), *a = json_array();
+    for (size_t k = 0; k < n; k++) {
+        if (t[k].specimen_id != sp.id) continue;
+        const char *reg = store_regime_name(t[k].regime_measured);
+        json_array_append_new(a, json_pack("{s:I, s:s, s:s, s:o, s:o, s:s}", "id", (json_int_t)t[k].id, "mode",
+                                           store_mode_name(t[k].mode), "status", store_status_name(t[k].status),
+                                           "regime_measured", reg ? json_string(reg) : json_null(), "snap_dw_measured",
+                                           t[k].snap_dw_measured == t[k].snap_dw_measured ? json_real(t[k].snap_dw_measured)
+                                                                                          : json_null(),
+                                           "created_at", t[k].created_at));
+    }
+    free(t);
+    json_object_set_new(o, "trials", a);
+    *out = o;
+    return 0;
+}
+
+static int specimen_retire(const campaign_ctx *c, const char *name, const json_t *body, json_t **out, int *http,
+                           char *why, size_t why_len)
+{
+    const char *k;
+    json_t *v;
+    json_object_foreach((json_t *)body, k, v)
+    {
+        if (strcmp(k, "reason") && strcmp(k, "broken"))
+            return fail(http, 400, why, why_len, "unknown field \"%.64s\" (a retirement has: reason, broken)", k);
+    }
+    json_t *reason = json_object_get(body, "reason"), *broken = json_object_get(body, "broken");
+    if (!json_is_string(reason) || !json_string_length(reason))
+        return fail(http, 400, why, why_len, "field \"reason\" (why the specimen is retired) is required");
+    if (broken && !json_is_boolean(broken))
+        return fail(http, 400, why, why_len, "field \"broken\" must be true or false");
+    store_specimen sp;
+    if (specimen_get(c, name, &sp, http, why, why_len)) return -1;
+    char w[300];
+    store_err e = store_specimen_retire(c->st, sp.id, json_is_true(broken) ? STORE_SPECIMEN_BROKEN : STORE_SPECIMEN_RETIRED,
+                                        json_string_value(reason), store_wall_now(), w, sizeof w);
+    if (e == STORE_OK) e = store_specimen_get(c->st, sp.id, &sp, w, sizeof w);
+    if (e != STORE_OK)
+        return fail(http, e == STORE_E_STATE ? 409 : e == STORE_E_INVALID ? 400 : 500, why, why_len, "%s", w);
+    *out = campaign_specimen_json(&sp);
+    return 0;
+}
+
+/* "/queue/ID[/verb]": the id (decimal, >= 1) and the verb ("" when none). */
+static int queue_path(const char *rest, int64_t *id, const char **verb, int *http, char *why, size_t why_len)
+{
+    char *end;
+    errno = 0;
+    long long v = strtoll(rest, &end, 10);
+    if (rest[0] < '0' || rest[0] > '9' || errno || v < 1 || (*end && *end != '/'))
+        return fail(http, 400, why, why_len, "queue item id '%.40s' is not a positive integer", rest);
+    *id = v;
+    *verb = *end ? end + 1 : "";
+    return 0;
+}
+
+int campaign_route(const campaign_ctx *c, const char *method, const char *path, const json_t *body, json_t **out,
+                   int *http, char *why, size_t why_len)
+{
+    *http = 200;
+    int post = !strcmp(method, "POST");
+    if (!strcmp(path, "/specimens"))
+        return post ? specimen_add(c, body, out, http, why, why_len) : specimens_list(c, out, http, why, why_len);
+    if (!strncmp(path, "/specimens/", 11)) {
+        char name[80];
+        const char *seg = path + 11, *slash = strchr(seg, '/');
+        size_t n = slash ? (size_t)(slash - seg) : strlen(seg);
+        if (n >= sizeof name) return fail(http, 400, why, why_len, "specimen name longer than 63 bytes");
+        memcpy(name, seg, n);
+        name[n] = '\0';
+        if (!slash) return need(method, "GET", http, why, why_len) ? -1 : specimen_show(c, name, out, http, why, why_len);
+        if (!strcmp(slash, "/retire"))
+            return need(method, "POST", http, why, why_len) ? -1
+                                                             : specimen_retire(c, name, body, out, http, why, why_len);
+        return fail(http, 404, why, why_len, "no route %s", path);
+    }
+    if (!strcmp(path, "/queue")) {
+        if (!post) return campaign_queue_list(c->q, out, http, why, why_len);
+        int rc = campaign_queue_add(c->q, body, out, http, why, why_len);
+        if (rc == 0) *http = 201;
+        return rc;
+    }
+    if (!strcmp(path, "/queue/start") || !strcmp(path, "/queue/stop"))
+        return need(method, "POST", http, why, why_len)
+                   ? -1
+                   : campaign_queue_set_running(c->q, !strcmp(path, "/queue/start"), out, http, why, why_len);
+    int64_t id = 0;
+    const char *verb = "";
+    if (queue_path(path + 7, &id, &verb, http, why, why_len)) return -1;
+    if (!*verb) return need(method, "GET", http, why, why_len) ? -1 : campaign_queue_show(c->q, id, out, http, why, why_len);
+    if (need(method, "POST", http, why, why_len)) return -1;
+    if (!strcmp(verb, "remove")) return campaign_queue_remove(c->q, id, out, http, why, why_len);
+    if (!strcmp(verb, "move")) return campaign_queue_move(c->q, id, body, out, http, why, why_len);
+    if (!strcmp(verb, "confirm")) return campaign_queue_confirm(c->q, id, body, out, http, why, why_len);
+    return fail(http, 404, why, why_len, "no route %s (a queue item has: remove, move, confirm)", path);
+}

@@ -1,0 +1,24 @@
+/* campaign_routes.h: the API's /specimens and /queue routes (campaign_routes.c). */
+#ifndef RIBBON_CAMPAIGN_ROUTES_H
+#define RIBBON_CAMPAIGN_ROUTES_H
+
+#include <jansson.h>
+#include <stddef.h>
+
+#include "campaign_queue.h"
+#include "store.h"
+
+typedef struct campaign_ctx {
+    store *st;               /* the API thread's connection (specimens) */
+    campaign_queue *q;       /* the queue (its own connection) */
+    store_specimen defaults; /* a new specimen's size and material: the rig file's scene */
+} campaign_ctx;
+
+/* Is path one of the campaign's (/specimens, /specimens/..., /queue, /queue/...)? */
+int campaign_route_match(const char *path);
+/* Serves method ("GET", "POST") on path with body (POST: an object; GET: NULL). 0 with *out and
+ * *http (200, 201 for a new specimen or item), or -1 with why and *http (400, 404, 405, 409, 500). */
+int campaign_route(const campaign_ctx *c, const char *method, const char *path, const json_t *body, json_t **out,
+                   int *http, char *why, size_t why_len);
+
+#endif
