@@ -211,7 +211,7 @@ static rail_err gcode_poll(rail *r, void *impl, rail_status *out)
         rail_text_copy(out->message, sizeof out->message, k->fault);
         return RAIL_OK;
     }
-    if (k->l->zero_lost && !k->stopping && !k->homing) {
+    if (k->l->zero_lost && !k->homing) {
         /* A rail whose controller lost its count is a fault wherever it stands: a trial (through
            rail_pair) stops both rails on it, and nothing moves until homed or confirmed. */
         k->active = false;

@@ -188,6 +188,9 @@ static void test_banner_wait_on_reset_at_open(void **s)
     assert_non_null(strstr(st.message, "confirm-zero --confirm"));
     assert_int_equal(rail_move_abs(r, 5.0, 20.0), RAIL_E_STATE);
     assert_non_null(strstr(rail_last_error(r), "not trusted"));
+    assert_int_equal(rail_stop(r), RAIL_OK); /* a stop after the refusal clears nothing */
+    assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
+    assert_int_equal(st.state, RAIL_STATE_FAULT);
     char d[2000];
     rail_gcode_describe(r, d, sizeof d);
     assert_non_null(strstr(d, "reset on open: yes"));
