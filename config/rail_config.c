@@ -52,6 +52,8 @@ static const rail_key rail_keys[] = {
     D("stall_timeout_s", gcode.stall_timeout_s, 0.05, 60, "s",
       "gcode: time without progress while moving before a stall fault"),
     D("min_segment_mm", gcode.min_segment_mm, 1e-4, 10, "mm", "gcode: shortest jog segment"),
+    D("boot_wait_s", gcode.boot_wait_s, 0, 30, "s",
+      "gcode: longest wait at open for the controller to boot and answer (an Arduino resets when the port opens)"),
     S("address", modbus.address, "modbus: TCP HOST:PORT, or for RTU a device path or usb:VID:PID[:SERIAL]"),
     B("rtu", modbus.rtu, "modbus: on = RTU on a serial line, off = TCP"),
     C("parity", modbus.parity, "modbus RTU: N, E or O"),

@@ -20,8 +20,12 @@ static void usage(FILE *f)
             "  --travel MM          machine travel of every axis (default 200)\n"
             "  --start X[,Y[,Z]]    start positions, mm (default 0)\n"
             "  --accel MM_S2        acceleration (default 200)\n"
-            "  --max-feed MM_MIN    feed clamp (default 3000)\n"
-            "  --require-home       start in alarm until $H or $X\n"
+            "  --max-feed MM_MIN    max rate $110-$112 (default 3000)\n"
+            "  --require-home       homing on ($22=1): start in alarm until $H or $X\n"
+            "  --soft-limits        soft limits on ($20=1; needs --require-home)\n"
+            "  --set '$N=V ...'     settings stored at power-up, e.g. '$13=1' (inches)\n"
+            "  --reset-on-open      a client opening the port resets the board (Arduino DTR)\n"
+            "  --reset-delay S      bootloader time from that reset to the banner (default 1)\n"
             "  --wco X[,Y[,Z]]      report work positions with this offset ($10=0 style)\n"
             "  --drop P             leave a fraction P of requests unanswered\n"
             "  --garble P           garble a fraction P of replies\n"
@@ -91,6 +95,20 @@ int main(int argc, char **argv)
             i++;
         } else if (!strcmp(a, "--require-home")) {
             p.start_in_alarm = true;
+        } else if (!strcmp(a, "--soft-limits")) {
+            p.soft_limits = true;
+        } else if (!strcmp(a, "--reset-on-open")) {
+            p.reset_on_open = true;
+        } else if (!strcmp(a, "--reset-delay")) {
+            bad = parse_double(a, v, 0, 10, &p.reset_delay_s);
+            i++;
+        } else if (!strcmp(a, "--set")) {
+            bad = !v || strlen(v) >= sizeof p.settings;
+            if (!bad)
+                snprintf(p.settings, sizeof p.settings, "%s", v);
+            else
+                fprintf(stderr, PROG ": --set needs '$N=V ...' (under %zu characters)\n", sizeof p.settings);
+            i++;
         } else if (!strcmp(a, "--drop")) {
             bad = parse_double(a, v, 0, 1, &p.drop_prob);
             i++;

@@ -4,7 +4,21 @@
  * Flow control is the simple GRBL "send-response" scheme: one line out, wait for its "ok" or
  * "error:N" before the next, so GRBL's 128-byte receive buffer can never overflow. Realtime
  * bytes ('?', '!', 0x18, 0x85) bypass it. Before every request, bytes already waiting are read
- * and handled, so a reply that arrived late cannot be mistaken for the answer to the next. */
+ * and handled, so a reply that arrived late cannot be mistaken for the answer to the next.
+ *
+ * Opening waits for the controller to boot: an Arduino-based board resets when the port opens
+ * (the DTR line pulses its reset pin) and its bootloader (Optiboot on the Uno) listens for up to
+ * 1 s before GRBL starts and prints "Grbl 1.1h ['$' for help]". The link asks '?' every half
+ * reply timeout meanwhile (a byte that is no STK500 command makes Optiboot start the
+ * application at once) for at most boot_wait_s: a banner first means the board reset, a status
+ * report first means it did not (reset-on-open disabled). Then `$$` is read.
+ *
+ * Trust in the position: a reset loses GRBL's position (it counts from zero wherever the axes
+ * stand), so any banner we did not cause by a soft reset at rest, any alarm whose documented
+ * meaning is a lost position (1 hard limit, 3 reset in motion, 6-9 homing failed), a
+ * "[MSG:Reset to continue]" and a reopened port set zero_lost until a homing cycle ends with
+ * "ok" or the user confirms the zero (rail_gcode.h). */
+#define _GNU_SOURCE /* memmem */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -34,6 +48,29 @@ static const char *printable(const char *line, char *buf, size_t n)
     return buf;
 }
 
+void grbl_link_zero_lost(grbl_link *l, const char *fmt, ...)
+{
+    l->zero_lost = true;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(l->zero_why, sizeof l->zero_why, fmt, ap);
+    va_end(ap);
+}
+
+void grbl_link_zero_trusted(grbl_link *l)
+{
+    l->zero_lost = false;
+    l->zero_why[0] = 0;
+}
+
+/* GRBL 1.1's alarm table: 1 (hard limit) and 3 (reset in motion) say the machine position is
+   likely lost; 6-9 end a homing cycle unfinished; 2 (soft limit) retains the position, 4 and 5
+   (probe) do not move the axes off their count. */
+static bool alarm_loses_position(int code)
+{
+    return code == 1 || code == 3 || (code >= 6 && code <= 9) || code < 0;
+}
+
 /* Handle a line that is not the answer being waited for. */
 static void async_line(grbl_link *l, const char *line, size_t len)
 {
@@ -45,10 +82,22 @@ static void async_line(grbl_link *l, const char *line, size_t len)
             l->home_pending = false;
             l->home_error = -code;
         }
+        if (alarm_loses_position(code))
+            grbl_link_zero_lost(l, "ALARM:%d (%s)", code, grbl_alarm_text(code));
         break;
     case GRBL_LINE_OK:
-        if (l->home_pending)
+        if (l->home_pending) {
             l->home_pending = false;
+            grbl_link_zero_trusted(l); /* homed: the machine zero is the switches' again */
+        }
+        break;
+    case GRBL_LINE_MESSAGE:
+        if (len >= 22 && memmem(line, len, "Reset to continue", 17))
+            l->critical = true;
+        if (l->critical)
+            grbl_link_zero_lost(l, "the controller halted on a critical alarm%s%d "
+                                "([MSG:Reset to continue])", l->alarm_code ? " ALARM:" : "",
+                                l->alarm_code);
         break;
     case GRBL_LINE_ERROR:
         if (l->home_pending) {
@@ -58,6 +107,15 @@ static void async_line(grbl_link *l, const char *line, size_t len)
         break;
     case GRBL_LINE_WELCOME:
         l->resets_seen++;
+        l->critical = false;
+        if (l->own_resets > 0) {
+            l->own_resets--; /* our own reset at rest: GRBL keeps the position */
+        } else {
+            char pb[48];
+            grbl_link_zero_lost(l, "the controller restarted ('%s': power, USB or reset line), "
+                                "counting from zero where it stood",
+                                printable(line, pb, sizeof pb));
+        }
         break;
     default:
         break;
@@ -191,6 +249,7 @@ static rail_err reopen(grbl_link *l, grbl_report *rep)
     l->lost = false;
     l->home_pending = false;
     l->resets_seen++;
+    grbl_link_zero_lost(l, "the port was lost and reopened: the controller may have reset");
     e = grbl_link_status(l, rep);
     if (e == RAIL_OK)
         e = grbl_link_quiesce(l, rep);
@@ -269,6 +328,28 @@ rail_err grbl_link_status(grbl_link *l, grbl_report *rep)
     return lfail(l, RAIL_E_PROTOCOL, "too many lines without a status report");
 }
 
+/* Ask '?' until a status report arrives, at most boot_wait_s (at least three asks). A banner on
+   the way means the board reset when the port opened. */
+static rail_err boot_wait(grbl_link *l, double boot_wait_s, grbl_report *rep)
+{
+    double t0 = rail_clock_now(l->clock);
+    int resets0 = l->resets_seen;
+    rail_err e = RAIL_E_TIMEOUT;
+    for (int i = 0; i < 1000; i++) {
+        e = grbl_link_status(l, rep);
+        if (e == RAIL_OK || (e != RAIL_E_TIMEOUT && e != RAIL_E_PROTOCOL))
+            break;
+        if (i >= 2 && rail_clock_now(l->clock) - t0 >= boot_wait_s)
+            break;
+    }
+    if (l->resets_seen != resets0) {
+        l->reset_on_open = true;
+        grbl_link_zero_lost(l, "the controller reset when the port opened (start-up banner), "
+                            "counting from zero where it stood");
+    }
+    return e;
+}
+
 rail_err grbl_link_open(grbl_link **out, const rail_gcode_params *g, rail_clock clock, char *why,
                         size_t why_len)
 {
@@ -295,20 +376,97 @@ rail_err grbl_link_open(grbl_link **out, const rail_gcode_params *g, rail_clock 
         free(l);
         return e;
     }
-    /* Read whatever the controller printed (banner), then make sure nothing is left moving. */
+    /* Wait for the board to boot (banner) or answer (no reset), then make sure nothing is
+       left moving, then read its settings. */
     grbl_report rep;
-    e = RAIL_E_TIMEOUT;
-    for (int i = 0; i < 3 && e != RAIL_OK; i++)
-        e = grbl_link_status(l, &rep);
+    e = boot_wait(l, g->boot_wait_s, &rep);
     if (e == RAIL_OK)
         e = grbl_link_quiesce(l, &rep);
     if (e != RAIL_OK) {
-        snprintf(why, why_len, "gcode: no usable GRBL status from %.100s: %.200s", l->ser->path, l->why);
+        snprintf(why, why_len, "gcode: no usable GRBL status from %.100s within boot_wait_s = %.2f s: %.200s",
+                 l->ser->path, g->boot_wait_s, l->why);
+        grbl_link_release(l);
+        return e;
+    }
+    if (rep.state == GRBL_ALARM && !l->zero_lost)
+        grbl_link_zero_lost(l, "the controller is in alarm at open (homing required, or an alarm "
+                            "from before)");
+    e = grbl_link_read_settings(l);
+    if (e != RAIL_OK) {
+        snprintf(why, why_len, "gcode: cannot read the settings ($$) of %.100s: %.200s", l->ser->path, l->why);
         grbl_link_release(l);
         return e;
     }
     *out = l;
     return RAIL_OK;
+}
+
+/* One "$$": the lines that parse are added to l->settings (a garbled line never parses: GRBL
+   lines end in a digit), so several rounds add up over a noisy link. */
+static rail_err settings_round(grbl_link *l)
+{
+    rail_err e = grbl_link_drain(l);
+    if (e != RAIL_OK)
+        return e;
+    e = rail_serial_write(l->ser, "$$\n", 3, l->reply_timeout_s);
+    if (e != RAIL_OK)
+        return lfail(l, e, "%s", l->ser->why);
+    /* About 34 lines of up to 16 bytes: 50 ms at 115200 baud, 0.5 s at 9600. */
+    double limit = l->reply_timeout_s + 0.5;
+    double t0 = rail_clock_now(l->clock);
+    char line[300];
+    size_t len;
+    for (int i = 0; i < 200; i++) {
+        double left = limit - (rail_clock_now(l->clock) - t0);
+        e = read_line(l, line, sizeof line, &len, left > 0.0 ? left : 0.0);
+        if (e == RAIL_E_PROTOCOL)
+            continue;
+        if (e == RAIL_E_TIMEOUT)
+            return lfail(l, e, "no 'ok' after '$$' within %.2f s (%d settings read)", limit,
+                         l->settings.count);
+        if (e != RAIL_OK)
+            return e;
+        int code = 0, num = 0;
+        double val = 0.0;
+        grbl_line_kind k = grbl_line_classify(line, len, &code);
+        if (k == GRBL_LINE_OK)
+            return RAIL_OK;
+        if (k == GRBL_LINE_ERROR)
+            return lfail(l, RAIL_E_DEVICE, "GRBL refused '$$': error:%d (%s)", code, grbl_error_text(code));
+        if (k == GRBL_LINE_OTHER && grbl_setting_line_parse(line, len, &num, &val))
+            grbl_settings_set(&l->settings, num, val);
+        else
+            async_line(l, line, len);
+    }
+    return lfail(l, RAIL_E_PROTOCOL, "too many lines after '$$'");
+}
+
+rail_err grbl_link_read_settings(grbl_link *l)
+{
+    /* The settings the driver's check reads (grbl_settings.h). */
+    static const int needed[] = {10, 13, 20, 21, 22, 110, 111, 112, 120, 121, 122, 130, 131, 132};
+    memset(&l->settings, 0, sizeof l->settings);
+    rail_err e = RAIL_OK;
+    for (int round = 0; round < 5; round++) {
+        e = settings_round(l);
+        if (e == RAIL_E_DEVICE || e == RAIL_E_DISCONNECTED || e == RAIL_E_IO)
+            return e;
+        bool all = true;
+        for (size_t i = 0; i < sizeof needed / sizeof needed[0]; i++)
+            all = all && l->settings.have[needed[i]];
+        if (all)
+            return RAIL_OK;
+    }
+    /* Settings still missing: the check names the first one the driver needs. */
+    return e == RAIL_E_TIMEOUT && l->settings.count == 0 ? e : RAIL_OK;
+}
+
+rail_err grbl_link_soft_reset(grbl_link *l)
+{
+    rail_err e = grbl_link_realtime(l, 0x18);
+    if (e == RAIL_OK)
+        l->own_resets++;
+    return e;
 }
 
 rail_err grbl_link_quiesce(grbl_link *l, grbl_report *rep)
@@ -335,7 +493,7 @@ rail_err grbl_link_quiesce(grbl_link *l, grbl_report *rep)
         rail_clock_sleep(l->clock, 0.05);
     }
     if (rep->state == GRBL_HOLD) {
-        rail_err e = grbl_link_realtime(l, 0x18);
+        rail_err e = grbl_link_soft_reset(l);
         if (e != RAIL_OK)
             return e;
         rail_clock_sleep(l->clock, 0.05);

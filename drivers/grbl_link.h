@@ -8,6 +8,7 @@
 #include <stdbool.h>
 
 #include "grbl_proto.h"
+#include "grbl_settings.h"
 #include "rail.h"
 #include "rail_gcode_params.h"
 #include "rail_serial.h"
@@ -25,6 +26,14 @@ struct grbl_link {
     bool home_pending;       /* "$H" sent, its "ok" not yet seen */
     int home_error;          /* error:N (>0) or -ALARM (<0) ending the homing cycle */
     int resets_seen;         /* reset banners seen (and reconnects: both end any move) */
+    int own_resets;          /* soft resets (0x18) we sent at rest whose banner is still due */
+    bool zero_lost;          /* the controller's position is not trusted (a reset or an alarm
+                                that loses it, since the last homing or confirmed zero) */
+    char zero_why[200];      /* what lost it */
+    bool critical;           /* "[MSG:Reset to continue]" seen and no banner since: GRBL serves
+                                nothing but a reset */
+    bool reset_on_open;      /* the controller printed its start-up banner when the port opened */
+    grbl_settings settings;  /* the controller's `$$`, read when the link opened */
     double wco[GRBL_MAX_AXES]; /* mm, last work coordinate offset reported */
     bool have_wco;
     bool lost;               /* the port failed: the next status query tries to reopen it */
@@ -40,6 +49,14 @@ rail_err grbl_link_open(grbl_link **out, const rail_gcode_params *g, rail_clock 
 void grbl_link_release(grbl_link *l);
 
 rail_err grbl_link_drain(grbl_link *l);
+/* Send "$$" and collect the "$N=V" lines into l->settings (needs the controller at rest). */
+rail_err grbl_link_read_settings(grbl_link *l);
+/* A soft reset (0x18) we mean to send with the axes at rest: its banner is not a lost position
+   (GRBL keeps the machine position over a reset at rest; a reset in motion says ALARM:3). */
+rail_err grbl_link_soft_reset(grbl_link *l);
+/* Mark the position untrusted (printf-style reason), and trusted again (homed or confirmed). */
+void grbl_link_zero_lost(grbl_link *l, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+void grbl_link_zero_trusted(grbl_link *l);
 rail_err grbl_link_realtime(grbl_link *l, unsigned char c);
 rail_err grbl_link_send(grbl_link *l, const char *cmd, int *err_code);
 rail_err grbl_link_status(grbl_link *l, grbl_report *rep);

@@ -62,16 +62,17 @@ const char *grbl_error_text(int code)
 
 const char *grbl_alarm_text(int code)
 {
+    /* GRBL 1.1's alarm table (alarm_codes_en_US.csv): its name, then its meaning shortened. */
     switch (code) {
-    case 1: return "hard limit triggered; position lost, re-home";
-    case 2: return "soft limit: motion target beyond machine travel";
-    case 3: return "reset while in motion; position lost, re-home";
-    case 4: return "probe fail: probe not in the expected initial state";
-    case 5: return "probe fail: no contact within the travel";
-    case 6: return "homing fail: reset during the homing cycle";
-    case 7: return "homing fail: safety door opened during homing";
-    case 8: return "homing fail: pull-off did not clear the limit switch";
-    case 9: return "homing fail: limit switch not found within the search distance";
+    case 1: return "Hard limit: a limit switch halted the machine; position likely lost, re-home";
+    case 2: return "Soft limit: motion target beyond machine travel; position retained, unlock";
+    case 3: return "Abort during cycle: reset while in motion; position likely lost, re-home";
+    case 4: return "Probe fail: probe not in the expected initial state";
+    case 5: return "Probe fail: no contact within the programmed travel";
+    case 6: return "Homing fail: the homing cycle was reset";
+    case 7: return "Homing fail: safety door opened during homing";
+    case 8: return "Homing fail: pull-off did not clear the limit switch";
+    case 9: return "Homing fail: limit switch not found within the search distance";
     default: return "unknown GRBL alarm";
     }
 }

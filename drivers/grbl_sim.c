@@ -16,8 +16,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/inotify.h>
 #include <unistd.h>
 
+#include "grbl_settings.h"
 #include "rail_axis.h"
 #include "rail_clock.h"
 #include "rail_sim.h"
@@ -56,7 +58,87 @@ struct grbl_sim {
     bool line_overflow;
     unsigned rng;
     unsigned long reports;  /* status reports sent */
+    grbl_settings set;      /* the "EEPROM" */
+    double origin[GRBL_SIM_AXES]; /* mm, physical position the controller counts as zero */
+    bool critical;          /* hard or soft limit alarm: everything waits for a reset */
+    int ino;                /* inotify watching the slave for opens (reset_on_open), -1 none */
+    double boot_until;      /* controller time the bootloader ends; < 0 = running */
 };
+
+/* GRBL 1.1's settings and their documented defaults (defaults.h generic, settings.md). */
+static const struct { int num; double def; bool integer; } sim_settings[] = {
+    {0, 10, true}, {1, 25, true}, {2, 0, true}, {3, 0, true}, {4, 0, true}, {5, 0, true},
+    {6, 0, true}, {10, 1, true}, {11, 0.010, false}, {12, 0.002, false}, {13, 0, true},
+    {20, 0, true}, {21, 0, true}, {22, 0, true}, {23, 0, true}, {24, 25.0, false},
+    {25, 500.0, false}, {26, 250, true}, {27, 1.0, false}, {30, 1000, true}, {31, 0, true},
+    {32, 0, true}, {100, 250.0, false}, {101, 250.0, false}, {102, 250.0, false},
+    {110, 500.0, false}, {111, 500.0, false}, {112, 500.0, false}, {120, 10.0, false},
+    {121, 10.0, false}, {122, 10.0, false}, {130, 200.0, false}, {131, 200.0, false},
+    {132, 200.0, false},
+};
+#define SIM_N_SETTINGS (int)(sizeof sim_settings / sizeof sim_settings[0])
+
+static int setting_index(int num)
+{
+    for (int i = 0; i < SIM_N_SETTINGS; i++)
+        if (sim_settings[i].num == num)
+            return i;
+    return -1;
+}
+
+/* Store $num=val as GRBL's settings_store_global_setting does; 0 or a GRBL error code. */
+static int setting_store(grbl_sim *s, int num, double val)
+{
+    int k = setting_index(num);
+    if (k < 0)
+        return 3;
+    if (val < 0.0)
+        return 4;
+    if (sim_settings[k].integer)
+        val = (double)(long)val;
+    if (num == 0 && val < 3.0)
+        return 6;
+    if (num == 20 && val != 0.0 && s->set.v[22] == 0.0)
+        return 10;
+    grbl_settings_set(&s->set, num, val);
+    if (num == 22 && val == 0.0)
+        grbl_settings_set(&s->set, 20, 0.0); /* GRBL forces soft limits off with homing */
+    if (num >= 120 && num <= 122 && num - 120 < s->p.n_axes && val > 0.0)
+        s->ax[num - 120].accel_mm_s2 = val;
+    if (num >= 130 && num <= 132 && num - 130 < s->p.n_axes && val > 0.0)
+        s->ax[num - 130].travel_mm = val;
+    return 0;
+}
+
+/* "$N=V" text; 0 or a GRBL error code (3 not a setting line, 2 bad number). */
+static int setting_line(grbl_sim *s, const char *t)
+{
+    const char *eq = strchr(t, '=');
+    if (!eq || eq == t + 1)
+        return 3;
+    int num = 0;
+    for (const char *c = t + 1; c < eq; c++) {
+        if (*c < '0' || *c > '9' || c - t > 4)
+            return 3;
+        num = num * 10 + (*c - '0');
+    }
+    char *end = NULL;
+    double v = strtod(eq + 1, &end);
+    if (end == eq + 1 || *end || !isfinite(v))
+        return 2;
+    return setting_store(s, num, v);
+}
+
+static bool homing_enabled(const grbl_sim *s)
+{
+    return s->set.v[22] != 0.0;
+}
+
+/* Inches when $13=1: positions, offsets and feeds as GRBL reports them. */
+static double rep_unit(const grbl_sim *s)
+{
+    return s->set.v[13] != 0.0 ? 1.0 / 25.4 : 1.0;
+}
 
 grbl_sim_params grbl_sim_params_default(void)
 {
@@ -74,6 +156,7 @@ grbl_sim_params grbl_sim_params_default(void)
     p.alarm_after_s = -1.0;
     p.alarm_code = 1;
     p.seed = 12345u;
+    p.reset_delay_s = 1.0;
     return p;
 }
 
@@ -147,6 +230,11 @@ static void raise_alarm(grbl_sim *s, int code)
     char b[32];
     snprintf(b, sizeof b, "ALARM:%d", code);
     reply(s, b);
+    if (code == 1 || code == 2) {
+        /* GRBL 1.1: hard and soft limit alarms are critical; only a reset goes on. */
+        s->critical = true;
+        reply(s, "[MSG:Reset to continue]");
+    }
 }
 
 static void status_report(grbl_sim *s)
@@ -164,24 +252,34 @@ static void status_report(grbl_sim *s)
     case M_ALARM: st = "Alarm"; break;
     case M_HOME: st = "Home"; break;
     }
+    double u = rep_unit(s);
+    const char *nf = u != 1.0 ? "%.4f" : "%.3f";
     double v2 = 0.0;
     for (int i = 0; i < s->p.n_axes; i++)
         v2 += s->ax[i].vel_mm_s * s->ax[i].vel_mm_s;
     double pos[GRBL_SIM_AXES] = {0, 0, 0};
     for (int i = 0; i < s->p.n_axes; i++)
-        pos[i] = s->ax[i].pos_mm;
-    char b[240];
-    if (s->p.report_wpos) {
-        const double *w = s->p.wco_mm;
-        char wco[80] = "";
-        if (s->reports % 10 == 0)
-            snprintf(wco, sizeof wco, "|WCO:%.3f,%.3f,%.3f", w[0], w[1], w[2]);
-        snprintf(b, sizeof b, "<%s%s|WPos:%.3f,%.3f,%.3f|Bf:%d,127|FS:%.0f,0%s>", st, sub, pos[0] - w[0],
-                 pos[1] - w[1], pos[2] - w[2], SIM_QUEUE - s->q_len, sqrt(v2) * 60.0, wco);
-    } else {
-        snprintf(b, sizeof b, "<%s%s|MPos:%.3f,%.3f,%.3f|Bf:%d,127|FS:%.0f,0>", st, sub, pos[0], pos[1],
-                 pos[2], SIM_QUEUE - s->q_len, sqrt(v2) * 60.0);
+        pos[i] = s->ax[i].pos_mm - s->origin[i];
+    int mask = (int)s->set.v[10];
+    bool wpos = (mask & 1) == 0;
+    char b[240], f[40];
+    size_t n = 0;
+    n += (size_t)snprintf(b + n, sizeof b - n, "<%s%s|%s:", st, sub, wpos ? "WPos" : "MPos");
+    for (int i = 0; i < GRBL_SIM_AXES; i++) {
+        snprintf(f, sizeof f, nf, (pos[i] - (wpos ? s->p.wco_mm[i] : 0.0)) * u);
+        n += (size_t)snprintf(b + n, sizeof b - n, "%s%s", i ? "," : "", f);
     }
+    if (mask & 2)
+        n += (size_t)snprintf(b + n, sizeof b - n, "|Bf:%d,127", SIM_QUEUE - s->q_len);
+    n += (size_t)snprintf(b + n, sizeof b - n, "|FS:%.0f,0", sqrt(v2) * 60.0 * u);
+    if (wpos && s->reports % 10 == 0) {
+        n += (size_t)snprintf(b + n, sizeof b - n, "|WCO:");
+        for (int i = 0; i < GRBL_SIM_AXES; i++) {
+            snprintf(f, sizeof f, nf, s->p.wco_mm[i] * u);
+            n += (size_t)snprintf(b + n, sizeof b - n, "%s%s", i ? "," : "", f);
+        }
+    }
+    snprintf(b + n, sizeof b - n, ">");
     s->reports++;
     reply(s, b);
 }
@@ -197,6 +295,7 @@ static void soft_reset(grbl_sim *s)
     s->home_pending = false;
     s->line_len = 0;
     s->absolute = true;
+    s->critical = false;
     out_raw(s, "\r\n", 2);
     if (moving || homing) {
         /* GRBL: a reset in motion loses position; ALARM:3 (6 during homing). */
@@ -207,7 +306,39 @@ static void soft_reset(grbl_sim *s)
         return;
     }
     reply(s, "Grbl 1.1h ['$' for help]");
-    if (s->mode == M_ALARM || s->p.start_in_alarm) {
+    if (s->mode == M_ALARM) {
+        s->mode = M_ALARM;
+        reply(s, "[MSG:'$H'|'$X' to unlock]");
+    } else {
+        s->mode = M_IDLE;
+    }
+}
+
+/* A hardware reset (power, the reset line pulsed by DTR when a client opens the port): the
+   board forgets everything but its EEPROM; GRBL counts from zero where the axes stand once its
+   bootloader hands over (boot_until). */
+static void hard_reset(grbl_sim *s)
+{
+    for (int i = 0; i < s->p.n_axes; i++)
+        rail_axis_halt(&s->ax[i]);
+    flush_queue(s);
+    s->cancelling = false;
+    s->home_pending = false;
+    s->line_len = 0;
+    s->line_overflow = false;
+    s->absolute = true;
+    s->critical = false;
+    s->mode = M_ALARM; /* nothing runs while booting */
+    s->boot_until = rail_clock_now(s->clock) + s->p.reset_delay_s;
+}
+
+static void boot_done(grbl_sim *s)
+{
+    s->boot_until = -1.0;
+    for (int i = 0; i < s->p.n_axes; i++)
+        s->origin[i] = s->ax[i].pos_mm;
+    reply(s, "Grbl 1.1h ['$' for help]");
+    if (homing_enabled(s)) {
         s->mode = M_ALARM;
         reply(s, "[MSG:'$H'|'$X' to unlock]");
     } else {
@@ -288,9 +419,11 @@ static int parse_motion(grbl_sim *s, const char *t, bool jog, sim_block *b, bool
     }
     if (!have_f)
         return jog ? 16 : 22;
-    if (b->feed_mm_min > s->p.max_feed_mm_min)
-        b->feed_mm_min = s->p.max_feed_mm_min;
-    /* Targets are relative to the end of the queue (where the machine will be). */
+    for (int i = 0; i < s->p.n_axes; i++)
+        if (b->has[i] && b->feed_mm_min > s->set.v[110 + i])
+            b->feed_mm_min = s->set.v[110 + i]; /* GRBL limits a block to its axes' max rates */
+    /* Targets are relative to the end of the queue (where the machine will be), in machine
+       coordinates: physical = machine + origin. */
     for (int i = 0; i < s->p.n_axes; i++) {
         double base = s->ax[i].pos_mm;
         for (int k = s->q_len - 1; k >= 0; k--) {
@@ -301,7 +434,7 @@ static int parse_motion(grbl_sim *s, const char *t, bool jog, sim_block *b, bool
             }
         }
         if (b->has[i])
-            b->target[i] = abs_mode ? val[i] : base + val[i];
+            b->target[i] = abs_mode ? val[i] + s->origin[i] : base + val[i];
     }
     b->jog = jog;
     return 0;
@@ -338,6 +471,8 @@ static void exec_line(grbl_sim *s, char *t)
         reply(s, "ok");
         return;
     }
+    if (s->critical)
+        return; /* after a critical alarm GRBL serves nothing but a reset */
     if (t[0] == '$') {
         if (strcmp(t, "$X") == 0) {
             if (s->mode == M_ALARM) {
@@ -347,6 +482,10 @@ static void exec_line(grbl_sim *s, char *t)
             reply(s, "ok");
         } else if (strcmp(t, "$H") == 0 || strcmp(t, "$HX") == 0 || strcmp(t, "$HY") == 0 ||
                    strcmp(t, "$HZ") == 0) {
+            if (!homing_enabled(s)) {
+                reply_error(s, 5);
+                return;
+            }
             if (s->mode != M_IDLE && s->mode != M_ALARM) {
                 reply_error(s, 8);
                 return;
@@ -376,25 +515,37 @@ static void exec_line(grbl_sim *s, char *t)
                 reply_error(s, e);
                 return;
             }
-            if (!in_travel(s, &b)) {
+            if (s->set.v[20] != 0.0 && !in_travel(s, &b)) {
                 reply_error(s, 15);
                 return;
             }
             enqueue(s, &b);
             reply(s, "ok");
         } else if (strcmp(t, "$$") == 0) {
-            char b[64];
-            snprintf(b, sizeof b, "$20=1");
-            reply(s, b);
-            snprintf(b, sizeof b, "$22=1");
-            reply(s, b);
-            snprintf(b, sizeof b, "$110=%.3f", s->p.max_feed_mm_min);
-            reply(s, b);
-            snprintf(b, sizeof b, "$120=%.3f", s->p.accel_mm_s2 / 3600.0);
-            reply(s, b);
-            snprintf(b, sizeof b, "$130=%.3f", s->p.travel_mm[0]);
-            reply(s, b);
+            if (s->mode != M_IDLE && s->mode != M_ALARM) {
+                reply_error(s, 8);
+                return;
+            }
+            for (int i = 0; i < SIM_N_SETTINGS; i++) {
+                char b[48];
+                int num = sim_settings[i].num;
+                if (sim_settings[i].integer)
+                    snprintf(b, sizeof b, "$%d=%ld", num, (long)s->set.v[num]);
+                else
+                    snprintf(b, sizeof b, "$%d=%.3f", num, s->set.v[num]);
+                reply(s, b);
+            }
             reply(s, "ok");
+        } else if (t[1] >= '0' && t[1] <= '9') {
+            if (s->mode != M_IDLE && s->mode != M_ALARM) {
+                reply_error(s, 8);
+                return;
+            }
+            int e = setting_line(s, t);
+            if (e)
+                reply_error(s, e);
+            else
+                reply(s, "ok");
         } else if (strcmp(t, "$I") == 0) {
             reply(s, "[VER:1.1h.ribbon-grblsim:]");
             reply(s, "[OPT:V,15,128]");
@@ -420,7 +571,7 @@ static void exec_line(grbl_sim *s, char *t)
     for (int i = 0; i < s->p.n_axes; i++)
         any = any || b.has[i];
     if (any) {
-        if (!in_travel(s, &b)) {
+        if (s->set.v[20] != 0.0 && !in_travel(s, &b)) {
             raise_alarm(s, 2); /* GRBL soft limit on a G-code move */
             return;
         }
@@ -435,6 +586,10 @@ static void exec_line(grbl_sim *s, char *t)
 
 static void handle_byte(grbl_sim *s, unsigned char c)
 {
+    if (s->boot_until >= 0.0)
+        return; /* the bootloader has the line: bytes sent now are lost */
+    if (s->critical && c != '?' && c != 0x18)
+        return;
     switch (c) {
     case '?':
         if (s->p.drop_prob > 0.0 && rail_sim_rand(&s->rng) < s->p.drop_prob)
@@ -499,6 +654,8 @@ static void advance(grbl_sim *s)
     double now = rail_clock_now(s->clock);
     double dt = now - s->t_last;
     s->t_last = now;
+    if (s->boot_until >= 0.0 && now >= s->boot_until)
+        boot_done(s);
     if (!s->alarm_fired && s->p.alarm_after_s >= 0.0 && now - s->t_start >= s->p.alarm_after_s) {
         s->alarm_fired = true;
         raise_alarm(s, s->p.alarm_code);
@@ -541,6 +698,8 @@ static void advance(grbl_sim *s)
             rail_axis_step(&s->ax[i], dt);
         if (!axes_busy(s)) {
             s->mode = M_IDLE;
+            for (int i = 0; i < s->p.n_axes; i++)
+                s->origin[i] = 0.0; /* homed: machine zero is the switch again */
             if (s->home_pending) {
                 s->home_pending = false;
                 reply(s, "ok");
@@ -605,11 +764,30 @@ static void advance(grbl_sim *s)
 
 rail_err grbl_sim_step(grbl_sim *s, double max_wait_s)
 {
-    struct pollfd pf = {s->master, POLLIN, 0};
+    struct pollfd pf[2] = {{s->master, POLLIN, 0}, {s->ino, POLLIN, 0}};
     int ms = max_wait_s > 0.0 ? (int)(max_wait_s * 1000.0) : 0;
-    int r = poll(&pf, 1, ms);
+    if (s->boot_until >= 0.0) {
+        int left = (int)ceil((s->boot_until - rail_clock_now(s->clock)) * 1000.0);
+        if (left < ms)
+            ms = left > 0 ? left : 0;
+    }
+    int r = poll(pf, s->ino >= 0 ? 2 : 1, ms);
+    if (r > 0 && s->ino >= 0 && (pf[1].revents & POLLIN)) {
+        /* A client opened the port: DTR resets the board (an Arduino's auto-reset). */
+        char ev[1024];
+        ssize_t n = read(s->ino, ev, sizeof ev);
+        bool opened = false;
+        for (ssize_t off = 0; n > 0 && off + (ssize_t)sizeof(struct inotify_event) <= n;) {
+            const struct inotify_event *ie = (const void *)(ev + off);
+            if (ie->mask & IN_OPEN)
+                opened = true;
+            off += (ssize_t)sizeof(struct inotify_event) + ie->len;
+        }
+        if (opened)
+            hard_reset(s);
+    }
     advance(s);
-    if (r > 0 && (pf.revents & POLLIN)) {
+    if (r > 0 && (pf[0].revents & POLLIN)) {
         unsigned char buf[512];
         ssize_t n = read(s->master, buf, sizeof buf);
         for (ssize_t i = 0; i < n; i++)
@@ -666,10 +844,45 @@ rail_err grbl_sim_open(grbl_sim **out, const grbl_sim_params *p, char *why, size
         s->ax[i] = rail_axis_make(p->start_mm[i], p->accel_mm_s2, p->travel_mm[i]);
     s->absolute = true;
     s->rng = rail_sim_seed(p->seed);
-    s->mode = p->start_in_alarm ? M_ALARM : M_IDLE;
-    reply(s, "Grbl 1.1h ['$' for help]");
-    if (p->start_in_alarm)
-        reply(s, "[MSG:'$H'|'$X' to unlock]");
+    s->boot_until = -1.0;
+    /* The EEPROM: GRBL's defaults, then what the parameters say, then p->settings. */
+    for (int i = 0; i < SIM_N_SETTINGS; i++)
+        grbl_settings_set(&s->set, sim_settings[i].num, sim_settings[i].def);
+    for (int i = 0; i < GRBL_SIM_AXES; i++) {
+        grbl_settings_set(&s->set, 110 + i, p->max_feed_mm_min);
+        grbl_settings_set(&s->set, 120 + i, p->accel_mm_s2);
+        grbl_settings_set(&s->set, 130 + i, p->travel_mm[i] > 0.0 ? p->travel_mm[i] : 200.0);
+    }
+    grbl_settings_set(&s->set, 10, p->report_wpos ? 0.0 : 1.0);
+    grbl_settings_set(&s->set, 21, 1.0); /* the simulated ends are limit switches */
+    grbl_settings_set(&s->set, 22, p->start_in_alarm ? 1.0 : 0.0);
+    grbl_settings_set(&s->set, 25, p->home_feed_mm_min);
+    int se = p->soft_limits ? setting_store(s, 20, 1.0) : 0;
+    char text[sizeof p->settings + 1];
+    snprintf(text, sizeof text, "%s", p->settings);
+    char *save = NULL;
+    for (char *tok = strtok_r(text, " ,", &save); tok && !se; tok = strtok_r(NULL, " ,", &save)) {
+        se = tok[0] == '$' ? setting_line(s, tok) : 3;
+        if (se)
+            snprintf(why, why_len, "grblsim: setting '%s' refused: error:%d", tok, se);
+    }
+    if (se) {
+        if (p->soft_limits && se == 10)
+            snprintf(why, why_len, "grblsim: soft limits ($20=1) need homing ($22=1): error:10");
+        grbl_sim_close(s);
+        return RAIL_E_INVALID;
+    }
+    /* Powered before anyone listened: no banner reaches a client, as with a real board. */
+    s->mode = homing_enabled(s) ? M_ALARM : M_IDLE;
+    s->ino = -1;
+    if (p->reset_on_open) {
+        s->ino = inotify_init1(IN_NONBLOCK | IN_CLOEXEC);
+        if (s->ino < 0 || inotify_add_watch(s->ino, s->path, IN_OPEN) < 0) {
+            snprintf(why, why_len, "grblsim: cannot watch %s for opens: %s", s->path, strerror(errno));
+            grbl_sim_close(s);
+            return RAIL_E_IO;
+        }
+    }
     *out = s;
     return RAIL_OK;
 }
@@ -689,6 +902,8 @@ void grbl_sim_close(grbl_sim *s)
 {
     if (!s)
         return;
+    if (s->ino > 0)
+        close(s->ino);
     if (s->slave >= 0)
         close(s->slave);
     if (s->master >= 0)

@@ -9,7 +9,25 @@
  * Faults: drop a fraction of requests unanswered, garble a fraction of replies, stall an axis at
  * a position (the controller keeps reporting the motion, feed 0, as an open-loop stepper would),
  * raise an alarm after a time. The simulator keeps the slave side open in raw mode so clients
- * may come and go; its state (position, queue) lives across them as a real board's would. */
+ * may come and go; its state (position, queue) lives across them as a real board's would.
+ *
+ * As GRBL 1.1 documents itself (doc/markdown/settings.md, commands.md, interface.md and the
+ * csv tables of the GRBL project): `$$` lists the settings ($0-$6, $10-$13, $20-$27, $30-$32,
+ * $100-$132) with GRBL's documented defaults except where the parameters below say otherwise
+ * (rates, accelerations, travels, homing, soft limits, report mask); `$N=V` stores one (error:3
+ * unknown setting, error:2 bad number, error:4 negative, error:6 step pulse below 3 us,
+ * error:10 soft limits without homing, error:8 unless idle or in alarm; $22=0 also clears
+ * $20). $13=1 reports positions, offsets and feeds in inches (4 decimals); $10 bit 0 chooses
+ * MPos or WPos, bit 1 the Bf field; $11x clamps feeds and $12x is each axis's acceleration.
+ * Soft reset (0x18) at rest keeps the position and prints the banner; in motion it prints
+ * ALARM:3 first (ALARM:6 while homing) and stays in alarm. Alarms 1 (hard limit) and 2 (soft
+ * limit) are critical: "[MSG:Reset to continue]", and nothing but '?' and a reset is served
+ * until a reset. With homing enabled ($22=1) the controller starts (and resets) in alarm with
+ * "[MSG:'$H'|'$X' to unlock]"; $H with homing disabled is error:5; a jog beyond the travel is
+ * error:15 only with soft limits on ($20=1), as in GRBL. With reset_on_open, a client opening
+ * the port resets the board as an Arduino's DTR line does: input is lost for reset_delay_s
+ * (the bootloader), then the banner, and the machine position counts from zero where the axes
+ * stand. A board powered before any client listens prints no banner to anyone. */
 #ifndef RIBBON_DRIVERS_GRBL_SIM_H
 #define RIBBON_DRIVERS_GRBL_SIM_H
 
@@ -38,6 +56,11 @@ typedef struct grbl_sim_params {
     bool report_wpos;                   /* report WPos (= MPos - wco_mm) with WCO in every 10th
                                            report, as GRBL does with $10=0 */
     double wco_mm[GRBL_SIM_AXES];       /* mm, work coordinate offset for report_wpos */
+    bool soft_limits;                   /* $20=1 (GRBL needs homing for it: start_in_alarm) */
+    bool reset_on_open;                 /* a client opening the port resets the board (DTR) */
+    double reset_delay_s;               /* s from that reset to the banner (bootloader) */
+    char settings[256];                 /* "$N=V ..." stored at power-up over the defaults
+                                           (e.g. "$13=1"), each checked as `$N=V` is */
 } grbl_sim_params;
 
 typedef struct grbl_sim grbl_sim;

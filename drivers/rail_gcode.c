@@ -26,13 +26,14 @@ typedef struct gcode {
     bool homing;
     bool stopping;        /* stop sent; the controller has not reported rest yet */
     double prev_pos, prev_t; /* mm, s: previous reading, for the velocity while stopping */
-    char fault[120];      /* sticky driver-detected fault (stall, reset under a move), "" = none */
+    char fault[200];      /* sticky driver-detected fault (stall, reset under a move), "" = none */
     int resets_at_start;  /* link->resets_seen when the move began */
     double progress_pos;  /* mm, position at the last progress */
     double progress_t;    /* s */
     double pos_mm;        /* mm, last reported position of our axis */
     double axes_mm[GRBL_MAX_AXES]; /* mm, every axis at the last report (shared controllers) */
     double last_feed;     /* mm/min */
+    grbl_settings_check_out chk; /* the controller's settings checked for this axis at open */
 } gcode;
 
 static rail_err link_error(rail *r, gcode *k, rail_err e)
@@ -46,6 +47,25 @@ static double segment_mm(const gcode *k)
 {
     double seg = k->speed_mm_s * k->g.segment_s;
     return seg > k->g.min_segment_mm ? seg : k->g.min_segment_mm;
+}
+
+/* What the user must do before this rail moves again, after its controller lost its position:
+   the action first, so a status message cut at its length still says it. */
+static void untrusted_text(const gcode *k, const rail *r, char *buf, size_t n)
+{
+    (void)r;
+    if (k->chk.homing)
+        snprintf(buf, n, "position not trusted, home it (home --confirm; $22=1): %s", k->l->zero_why);
+    else
+        snprintf(buf, n, "position not trusted, check the rail and confirm-zero --confirm: %s",
+                 k->l->zero_why);
+}
+
+static rail_err untrusted(rail *r, gcode *k)
+{
+    char t[400];
+    untrusted_text(k, r, t, sizeof t);
+    return rail_set_error(r, RAIL_E_STATE, "rail '%s': %s", rail_get_params(r)->name, t);
 }
 
 static rail_err send_segment(rail *r, gcode *k)
@@ -130,8 +150,17 @@ static rail_err gcode_poll(rail *r, void *impl, rail_status *out)
         k->homing = false;
         out->state = RAIL_STATE_ALARM;
         out->code = k->l->alarm_code;
-        snprintf(out->message, sizeof out->message, "GRBL alarm %d: %s", out->code,
-                 out->code ? grbl_alarm_text(out->code) : "locked (home or unlock)");
+        if (out->code) {
+            snprintf(out->message, sizeof out->message, "GRBL alarm %d: %s", out->code,
+                     grbl_alarm_text(out->code));
+        } else if (k->l->zero_lost) {
+            char t[400];
+            rail_text_copy(t, sizeof t, "GRBL locked in alarm; ");
+            untrusted_text(k, r, t + strlen(t), sizeof t - strlen(t));
+            rail_text_copy(out->message, sizeof out->message, t);
+        } else {
+            snprintf(out->message, sizeof out->message, "GRBL locked in alarm (home or unlock)");
+        }
         return RAIL_OK;
     case GRBL_HOME:
         out->state = RAIL_STATE_HOMING;
@@ -152,6 +181,8 @@ static rail_err gcode_poll(rail *r, void *impl, rail_status *out)
             return RAIL_OK;
         }
         k->homing = false;
+        if (k->l->home_error == 0 && !k->l->zero_lost)
+            k->fault[0] = 0; /* homed: a reset's fault is over, the zero is the switch's */
         if (k->l->home_error > 0) {
             out->state = RAIL_STATE_FAULT;
             out->code = k->l->home_error;
@@ -161,11 +192,12 @@ static rail_err gcode_poll(rail *r, void *impl, rail_status *out)
             return RAIL_OK;
         }
     }
-    if (k->active && k->l->resets_seen != k->resets_at_start) {
+    if (k->active && (k->l->resets_seen != k->resets_at_start || k->l->zero_lost)) {
         /* The controller restarted under a move: never carry the move on by ourselves. */
         k->active = false;
         snprintf(k->fault, sizeof k->fault,
-                 "controller reset during the move at %.3f mm; move abandoned, reset to clear", pos);
+                 "controller reset during the move at %.3f mm (%.60s); move abandoned, reset to clear",
+                 pos, k->l->zero_lost ? k->l->zero_why : "banner");
     }
     if (k->active && now - k->progress_t > k->g.stall_timeout_s) {
         grbl_link_realtime(k->l, 0x85);
@@ -177,6 +209,16 @@ static rail_err gcode_poll(rail *r, void *impl, rail_status *out)
     if (k->fault[0]) {
         out->state = RAIL_STATE_FAULT;
         rail_text_copy(out->message, sizeof out->message, k->fault);
+        return RAIL_OK;
+    }
+    if (k->l->zero_lost && !k->homing) {
+        /* A rail whose controller lost its count is a fault wherever it stands: a trial (through
+           rail_pair) stops both rails on it, and nothing moves until homed or confirmed. */
+        k->active = false;
+        out->state = RAIL_STATE_FAULT;
+        char t[400];
+        untrusted_text(k, r, t, sizeof t);
+        rail_text_copy(out->message, sizeof out->message, t);
         return RAIL_OK;
     }
     if (k->active) {
@@ -209,6 +251,16 @@ static rail_err gcode_poll(rail *r, void *impl, rail_status *out)
         k->prev_t = now;
         return RAIL_OK;
     }
+    if (!ours_still && (rep.state == GRBL_JOG || rep.state == GRBL_RUN || rep.state == GRBL_HOLD)) {
+        /* Our axis still runs segments of a move given up after a failed read: moving until
+           they end (segments_ahead at most), so nobody takes a position on the way for rest. */
+        out->state = RAIL_STATE_MOVING;
+        if (now > k->prev_t)
+            out->velocity_mm_s = (pos - k->prev_pos) / (now - k->prev_t);
+        k->prev_pos = pos;
+        k->prev_t = now;
+        return RAIL_OK;
+    }
     k->stopping = false;
     out->state = RAIL_STATE_IDLE;
     if (rep.state == GRBL_JOG || rep.state == GRBL_RUN) {
@@ -234,6 +286,8 @@ static rail_err gcode_stop(rail *r, void *impl)
 static rail_err gcode_move_abs(rail *r, void *impl, double target, double speed)
 {
     gcode *k = impl;
+    if (k->l->zero_lost)
+        return untrusted(r, k);
     if (k->fault[0])
         return rail_set_error(r, RAIL_E_STATE, "%s", k->fault);
     if (k->active || k->stopping) {
@@ -251,6 +305,8 @@ static rail_err gcode_move_abs(rail *r, void *impl, double target, double speed)
     rail_err e = gcode_poll(r, impl, &st);
     if (e != RAIL_OK)
         return e;
+    if (k->l->zero_lost)
+        return untrusted(r, k);
     if (fabs(target - st.position_mm) < 1e-4)
         return RAIL_OK;
     k->goal_mm = target;
@@ -285,7 +341,7 @@ static rail_err gcode_estop(rail *r, void *impl)
             break;
         rail_clock_sleep(rail_get_clock(r), 0.02);
     }
-    e = grbl_link_realtime(k->l, 0x18);
+    e = grbl_link_soft_reset(k->l);
     return e == RAIL_OK ? e : link_error(r, k, e);
 }
 
@@ -316,7 +372,23 @@ static rail_err gcode_reset(rail *r, void *impl)
     k->fault[0] = 0;
     k->active = false;
     int code = 0;
-    rail_err e = grbl_link_send(k->l, "$X", &code);
+    rail_err e = RAIL_OK;
+    if (k->l->critical) {
+        /* After a hard or soft limit alarm GRBL waits for a soft reset before anything else
+           (its "[MSG:Reset to continue]"); the axes are at rest, the position already lost. */
+        int resets0 = k->l->resets_seen;
+        e = grbl_link_soft_reset(k->l);
+        double t0 = rail_clock_now(k->l->clock);
+        for (int i = 0; e == RAIL_OK && i < 100 && k->l->resets_seen == resets0; i++) {
+            if (rail_clock_now(k->l->clock) - t0 > k->l->reply_timeout_s + 0.5)
+                break;
+            rail_clock_sleep(k->l->clock, 0.01);
+            e = grbl_link_drain(k->l);
+        }
+        if (e != RAIL_OK)
+            return link_error(r, k, e);
+    }
+    e = grbl_link_send(k->l, "$X", &code);
     if (e != RAIL_OK)
         return link_error(r, k, e);
     k->l->alarm_code = 0;
@@ -367,6 +439,14 @@ rail_err rail_gcode_open(rail **out, const rail_params *p, const rail_gcode_para
         snprintf(why, why_len, "gcode: stall_timeout_s must be positive and min_segment_mm in (0, 10]");
         return RAIL_E_INVALID;
     }
+    if (!(g->boot_wait_s >= 0.0 && g->boot_wait_s <= 30.0)) {
+        snprintf(why, why_len, "gcode: boot_wait_s must be in [0, 30] s");
+        return RAIL_E_INVALID;
+    }
+    if (!p) {
+        snprintf(why, why_len, "gcode: no rail parameters");
+        return RAIL_E_INVALID;
+    }
     gcode *k = calloc(1, sizeof *k);
     if (!k) {
         snprintf(why, why_len, "gcode: out of memory");
@@ -384,5 +464,57 @@ rail_err rail_gcode_open(rail **out, const rail_params *p, const rail_gcode_para
             return e;
         }
     }
-    return rail_create(out, p, clock, &gcode_ops, k, why, why_len);
+    /* What the controller is set to, against what this rail needs of it. */
+    grbl_settings_check(&k->l->settings, k->ax, p, &k->chk);
+    if (k->chk.refuse) {
+        snprintf(why, why_len, "gcode: %s", k->chk.refuse_why);
+        grbl_link_release(k->l);
+        free(k);
+        return RAIL_E_DEVICE;
+    }
+    rail_params pa = *p;
+    pa.accel_mm_s2 = k->chk.accel_mm_s2; /* the controller's own, which it will really use */
+    return rail_create(out, &pa, clock, &gcode_ops, k, why, why_len);
+}
+
+rail_err rail_gcode_confirm_zero(rail *r, bool confirmed)
+{
+    gcode *k = rail_driver_impl(r, &gcode_ops);
+    if (!k)
+        return rail_set_error(r, RAIL_E_UNSUPPORTED, "confirm-zero: rail '%s' is not a G-code rail",
+                              rail_get_params(r)->name);
+    if (!confirmed)
+        return rail_set_error(r, RAIL_E_CONFIRM,
+                              "confirm-zero: rail '%s' needs --confirm: the controller's count "
+                              "is taken as right where the rail stands",
+                              rail_get_params(r)->name);
+    if (k->chk.homing && k->l->zero_lost)
+        return rail_set_error(r, RAIL_E_STATE,
+                              "confirm-zero: rail '%s': homing is enabled ($22=1): home it "
+                              "instead (home --confirm)",
+                              rail_get_params(r)->name);
+    grbl_link_zero_trusted(k->l);
+    k->fault[0] = 0;
+    return RAIL_OK;
+}
+
+size_t rail_gcode_describe(const rail *r, char *buf, size_t n)
+{
+    gcode *k = rail_driver_impl((rail *)r, &gcode_ops);
+    if (n)
+        buf[0] = 0;
+    if (!k || !n)
+        return 0;
+    char set[1200];
+    grbl_settings_format(&k->l->settings, set, sizeof set);
+    int w = snprintf(buf, n, "GRBL axis %c, reset on open: %s; settings: %s%s%s", k->g.axis,
+                     k->l->reset_on_open ? "yes" : "no", set, k->chk.warn[0] ? "; warnings: " : "",
+                     k->chk.warn);
+    return w < 0 ? 0 : (size_t)w < n ? (size_t)w : n - 1;
+}
+
+const char *rail_gcode_warnings(const rail *r)
+{
+    gcode *k = rail_driver_impl((rail *)r, &gcode_ops);
+    return k ? k->chk.warn : "";
 }

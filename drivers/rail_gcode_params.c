@@ -14,5 +14,6 @@ rail_gcode_params rail_gcode_params_default(void)
     g.reply_timeout_s = 0.2;
     g.stall_timeout_s = 1.0;
     g.min_segment_mm = 0.05;
+    g.boot_wait_s = 2.5;
     return g;
 }

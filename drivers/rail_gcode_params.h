@@ -13,11 +13,15 @@ typedef struct rail_gcode_params {
     int segments_ahead;      /* segments queued beyond the current position (1..4) */
     double reply_timeout_s;  /* s to wait for "ok" or a status report */
     double stall_timeout_s;  /* s without progress while moving before a stall fault */
+    double boot_wait_s;      /* s, longest wait at open for the controller to answer: an
+                                Arduino-based board resets when the port opens and its
+                                bootloader listens up to 1 s (Optiboot) before GRBL starts */
     double min_segment_mm;   /* mm, shortest segment (slow jogs): the dead-process bound is
                                 segments_ahead * max(segment_s * speed, min_segment_mm) */
 } rail_gcode_params;
 
-/* GRBL's defaults: 115200 baud, axis X, 0.3 s segments, 2 ahead, 0.2 s reply, 1 s stall. */
+/* GRBL's defaults: 115200 baud, axis X, 0.3 s segments, 2 ahead, 0.2 s reply, 1 s stall,
+ * 2.5 s boot wait. */
 rail_gcode_params rail_gcode_params_default(void);
 
 #endif

@@ -4,10 +4,12 @@
  *   ribbonctl rail (--config F --rail compress|shear | --driver mock|gcode|modbus [--port PATH]
  *                  [--address HOST:PORT] [--axis X|Y] ...) ACTION [--json]
  *   ACTION: status | home --confirm | move-abs MM | move-rel MM | jog MM_S [--duration S] | stop
- *           | estop | reset | bench | probe
- * (reset clears a device alarm, e.g. GRBL's "$X" unlock; it never moves the rail. probe reads
- * every register of a Modbus rail's map once and prints it with its meaning and units: it writes
- * nothing, so the map can be checked against the drive's manual before anything moves.)
+ *           | estop | reset | confirm-zero --confirm | bench | probe
+ * (reset clears a device alarm, e.g. GRBL's "$X" unlock; it never moves the rail. confirm-zero
+ * tells a G-code rail whose controller reset that its count is right where the rail stands.
+ * probe reads every register of a Modbus rail's map once and prints it with its meaning and
+ * units: it writes nothing, so the map can be checked against the drive's manual before anything
+ * moves.)
  *
  * Moves and homing wait until the rail is at rest (polling at the rail's rate keeps GRBL jog
  * segments flowing and the Modbus watchdog fed), then print the final status. A jog runs for
@@ -75,6 +77,8 @@ static void usage(FILE *f)
             "ACTION: status | home --confirm | move-abs MM | move-rel MM | jog MM_S | stop | estop\n"
             "        | reset (clear a device alarm; never moves) | bench\n"
             "        | probe (modbus: read every mapped register once, print it; writes nothing)\n"
+            "        | confirm-zero --confirm (gcode: after a controller reset, trust its count\n"
+            "          where the rail stands; with homing on ($22=1) home instead)\n"
             "options: --speed MM_S  --timeout S  --duration S (jog)  --polls N (bench)  --json\n");
 }
 
@@ -360,6 +364,9 @@ static rail_err open_rail(rail_cli *c, rail **r, char *why, size_t why_len)
     if (e != RAIL_OK) {
         rail_locks_release(held);
         held = NULL;
+    } else if (rail_gcode_warnings(*r)[0]) {
+        /* What the controller's settings ($$) mean for this rail, adopted or tolerated. */
+        fprintf(stderr, "ribbonctl rail: %s: %s\n", c->p.name, rail_gcode_warnings(*r));
     }
     return e;
 }
@@ -619,7 +626,8 @@ int ctl_rail_main(int argc, char **argv)
     const char *A = c.action;
     int needs_value = !strcmp(A, "move-abs") || !strcmp(A, "move-rel") || !strcmp(A, "jog");
     if (strcmp(A, "status") && strcmp(A, "home") && strcmp(A, "stop") && strcmp(A, "estop") &&
-        strcmp(A, "reset") && strcmp(A, "bench") && strcmp(A, "probe") && !needs_value) {
+        strcmp(A, "reset") && strcmp(A, "bench") && strcmp(A, "probe") && strcmp(A, "confirm-zero") &&
+        !needs_value) {
         fprintf(stderr, "ribbonctl rail: unknown action '%s'\n", A);
         usage(stderr);
         return 2;
@@ -662,6 +670,10 @@ int ctl_rail_main(int argc, char **argv)
             e = rail_status_poll(r, &st);
     } else if (!strcmp(A, "reset")) {
         e = rail_reset(r);
+        if (e == RAIL_OK)
+            e = rail_status_poll(r, &st);
+    } else if (!strcmp(A, "confirm-zero")) {
+        e = rail_gcode_confirm_zero(r, c.confirm != 0);
         if (e == RAIL_OK)
             e = rail_status_poll(r, &st);
     } else if (!strcmp(A, "stop")) {

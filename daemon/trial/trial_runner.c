@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "rail_gcode.h"
 #include "rail_pair.h"
 
 /* Rail calls in a live trial go under the poller's lock (the rails are not thread-safe). */
@@ -460,6 +461,20 @@ static void note_standing(run_ctx *c)
                1e3 / rail_get_params(c->tr->shear)->poll_hz, 1e3 / c->tr->plan.fps);
 }
 
+/* What each rail's controller is set to, stored with the trial (issue 34): for a GRBL rail its
+   whole `$$`, whether the board reset on open, and the driver's warnings; nothing for others. */
+static void record_rail_settings(run_ctx *c)
+{
+    rail *rails[2] = {c->tr->compress, c->tr->shear};
+    for (int i = 0; i < 2 && c->tr->sink.event; i++) {
+        char d[1600], msg[1700];
+        if (rail_gcode_describe(rails[i], d, sizeof d) == 0)
+            continue;
+        snprintf(msg, sizeof msg, "rail settings: rail %s: %s", rail_get_params(rails[i])->name, d);
+        c->tr->sink.event(c->tr->sink.user, c->t, "info", msg);
+    }
+}
+
 void trial_runner_run(trial_runner *tr, trial_result *out)
 {
     memset(out, 0, sizeof *out);
@@ -478,6 +493,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
 
     c.t_det_frame = c.t_stop_cmd = NAN;
     out->stop_cmd_latency_s = out->stop_stand_latency_s = NAN;
+    record_rail_settings(&c);
     /* Where the rails are, and the preconditions. */
     if (poll_rails(&c, why, sizeof why) != RAIL_OK) {
         finish(&c, TRIAL_FAILED, "rails not ready: %s", why);

@@ -251,8 +251,15 @@ static void test_injected_alarm_and_unlock(void **s)
     assert_int_equal(wait_idle(r, 3.0, &st), RAIL_E_DEVICE);
     assert_int_equal(st.state, RAIL_STATE_ALARM);
     assert_int_equal(st.code, 1);
-    assert_non_null(strstr(st.message, "hard limit"));
+    assert_non_null(strstr(st.message, "Hard limit"));
+    /* A hard limit is critical in GRBL ("Reset to continue"): reset soft-resets, then unlocks;
+       the position is lost, so the rail stays a fault until its zero is confirmed. */
     assert_int_equal(rail_reset(r), RAIL_OK);
+    assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
+    assert_int_equal(st.state, RAIL_STATE_FAULT);
+    assert_non_null(strstr(st.message, "not trusted"));
+    assert_int_equal(rail_move_abs(r, 1.0, 10.0), RAIL_E_STATE);
+    assert_int_equal(rail_gcode_confirm_zero(r, true), RAIL_OK);
     assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
     assert_int_equal(st.state, RAIL_STATE_IDLE);
     rail_close(r);
@@ -264,11 +271,15 @@ static void test_grbl_error_code_named(void **s)
     (void)s;
     char path[128];
     grbl_sim_params sp = grbl_sim_params_default();
-    sp.travel_mm[0] = 100.0;
-    sp.start_mm[0] = 98.0;
+    sp.travel_mm[0] = 5.0;
+    sp.start_in_alarm = true; /* $22=1, which GRBL's soft limits ($20=1) need */
+    sp.soft_limits = true;
     pid_t pid = grblsim_spawn(&sp, path, sizeof path);
-    rail *r = open_axis(path, 'X', "shear", NULL); /* soft max 150 > machine travel 100 */
-    assert_int_equal(rail_move_abs(r, 120.0, 50.0), RAIL_E_DEVICE);
+    rail *r = open_axis(path, 'X', "shear", NULL); /* soft max 150 > machine travel 5 */
+    rail_status st;
+    assert_int_equal(rail_home(r, true), RAIL_OK);
+    assert_int_equal(wait_idle(r, 3.0, &st), RAIL_OK);
+    assert_int_equal(rail_move_abs(r, 20.0, 50.0), RAIL_E_DEVICE); /* a 10 mm segment */
     assert_non_null(strstr(rail_last_error(r), "error:15"));
     assert_non_null(strstr(rail_last_error(r), "travel"));
     rail_close(r);
@@ -481,11 +492,14 @@ static void test_reconnect_never_resumes(void **s)
     unlink(link);
     assert_int_equal(symlink(p2, link), 0);
     assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
-    assert_int_equal(st.state, RAIL_STATE_IDLE);
     assert_true(st.position_mm == 7.0);
     rail_clock_sleep(rail_clock_real(), 0.4);
     assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
     assert_true(st.position_mm == 7.0); /* the jog was not resumed */
+    /* A controller that came back may have reset: no move until its zero is confirmed. */
+    assert_int_equal(st.state, RAIL_STATE_FAULT);
+    assert_int_equal(rail_move_abs(r, 8.0, 10.0), RAIL_E_STATE);
+    assert_int_equal(rail_gcode_confirm_zero(r, true), RAIL_OK);
     assert_int_equal(rail_move_abs(r, 8.0, 10.0), RAIL_OK); /* and new commands work */
     assert_int_equal(wait_idle(r, 3.0, &st), RAIL_OK);
     NEAR(st.position_mm, 8.0, SIM_RES);

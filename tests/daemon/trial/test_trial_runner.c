@@ -5,7 +5,9 @@
  * rails back where they started; the shear limit without a snap; a ribbon in the lower state is
  * refused before shearing; a stalled rail fails the trial and stops both; an abort from another
  * thread stops the rails and ends the trial aborted, with both rails standing; frames with the
- * compress rail away from the calibrated clamps are stored untracked, not measured. */
+ * compress rail away from the calibrated clamps are stored untracked, not measured.
+ * And (issue 34) a trial on GRBL rails (the simulator on a pty) records each controller's `$$`
+ * as its first event. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -16,6 +18,9 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "grbl_link.h"
+#include "grblsim_spawn.h"
+#include "rail_gcode.h"
 #include "rail_mock.h"
 #include "trial.h"
 #include "vis_test_shapes.h"
@@ -58,6 +63,8 @@ typedef struct log {
     double target_dl, tol_dl;
     long measured_away;   /* frames measured with the compress rail more than tol_dl from target_dl */
     long clamps_moving;   /* frames stored untracked as clamp_not_found */
+    char *first_event;    /* when set: the first event's text */
+    size_t first_event_len;
 } log_t;
 
 static int on_state(void *u, trial_state s, double t, const char *why)
@@ -73,6 +80,8 @@ static int on_event(void *u, double t, const char *kind, const char *msg)
     (void)t;
     (void)kind;
     log_t *lg = u;
+    if (lg->first_event && !lg->first_event[0])
+        snprintf(lg->first_event, lg->first_event_len, "%s", msg);
     snprintf(lg->last_event, sizeof lg->last_event, "%s", msg);
     if (strstr(msg, "both witnesses")) snprintf(lg->both_event, sizeof lg->both_event, "%s", msg);
     if (strstr(msg, "load witness") || strstr(msg, "both witnesses")) lg->n_witness++;
@@ -180,6 +189,52 @@ static void rig_close(rig *r)
     rail_close(r->c);
     rail_close(r->s);
 }
+
+/* Issue 34: a trial on GRBL rails stores each controller's settings (`$$`) as its first event;
+   here the shear rail stands off its zero, so the trial fails right after recording them. */
+static void grbl_settings_stored(void **state)
+{
+    (void)state;
+    rig r;
+    rig_open(&r, NAN);
+    rail_close(r.c);
+    rail_close(r.s);
+    char path[128], why[300];
+    grbl_sim_params sp = grbl_sim_params_default();
+    sp.start_mm[1] = 5.0;
+    pid_t pid = grblsim_spawn(&sp, path, sizeof path);
+    assert_true(pid > 0);
+    rail_params pc = rail_params_default();
+    snprintf(pc.name, sizeof pc.name, "compress");
+    pc.soft_max_mm = 150;
+    pc.max_speed_mm_s = 50;
+    pc.accel_mm_s2 = 200;
+    pc.poll_hz = 10;
+    rail_params ps = pc;
+    snprintf(ps.name, sizeof ps.name, "shear");
+    rail_gcode_params g = rail_gcode_params_default();
+    snprintf(g.port, sizeof g.port, "%s", path);
+    grbl_link *l = NULL;
+    assert_int_equal(grbl_link_open(&l, &g, rail_clock_real(), why, sizeof why), RAIL_OK);
+    g.axis = 'X';
+    assert_int_equal(rail_gcode_open(&r.c, &pc, &g, l, rail_clock_real(), why, sizeof why), RAIL_OK);
+    g.axis = 'Y';
+    assert_int_equal(rail_gcode_open(&r.s, &ps, &g, l, rail_clock_real(), why, sizeof why), RAIL_OK);
+    grbl_link_release(l);
+    char first[1800] = "";
+    r.log.first_event = first;
+    r.log.first_event_len = sizeof first;
+    trial_result res;
+    rig_run(&r, &res);
+    assert_int_equal(res.final, TRIAL_FAILED);
+    assert_non_null(strstr(res.reason, "not at its zero"));
+    assert_non_null(strstr(first, "rail settings: rail compress: GRBL axis X"));
+    assert_non_null(strstr(first, "$13=0"));
+    assert_non_null(strstr(first, "$110=3000"));
+    rig_close(&r);
+    grblsim_kill(pid);
+}
+
 
 static void good_trial(void **state)
 {
@@ -417,6 +472,7 @@ static void abort_stops_rails(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(grbl_settings_stored),
         cmocka_unit_test(good_trial),
         cmocka_unit_test(frames_away_from_compression_untracked),
         cmocka_unit_test(shear_limit_no_snap),
