@@ -16,8 +16,8 @@
  *     the camera's GenICam bounds, frames not the calibration's size): named, the rails never moved
  *     (the simulator's axes log), nothing stored but the failed trial; `ribbonctl cameras` finds
  *     the camera.
- *   - the same at Gamma 0.21: the twin's truth and the prediction symmetric (the measured regime
- *     pinned to today's fixed rule's reading, known wrong);
+ *   - the same at Gamma 0.21: the twin's truth, the prediction and the measured regime symmetric
+ *     (the 0.5 rad pathway rule, sim/rod_regime.h);
  *   - ribbond killed with SIGKILL mid-shear: the shear axis stands within the GRBL driver's bound
  *     (its queued jog segments) as the simulator's truth log shows.
  * The rig is started and stopped by tests/daemon/rig_harness.c, whose teardown kills what a failed
