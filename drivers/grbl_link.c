@@ -108,9 +108,11 @@ static void async_line(grbl_link *l, const char *line, size_t len)
     case GRBL_LINE_WELCOME:
         l->resets_seen++;
         l->critical = false;
-        if (l->own_resets > 0) {
+        if (l->own_resets > 0 &&
+            rail_clock_now(l->clock) - l->own_reset_t <= l->reply_timeout_s + GRBL_OWN_RESET_SLACK_S) {
             l->own_resets--; /* our own reset at rest: GRBL keeps the position */
         } else {
+            l->own_resets = 0; /* a banner of ours that never came is not one to wait for */
             char pb[48];
             grbl_link_zero_lost(l, "the controller restarted ('%s': power, USB or reset line), "
                                 "counting from zero where it stood",
@@ -248,6 +250,7 @@ static rail_err reopen(grbl_link *l, grbl_report *rep)
     l->rx_len = 0;
     l->lost = false;
     l->home_pending = false;
+    l->own_resets = 0; /* no banner still due is ours on a new port */
     l->resets_seen++;
     grbl_link_zero_lost(l, "the port was lost and reopened: the controller may have reset");
     e = grbl_link_status(l, rep);
@@ -464,8 +467,10 @@ rail_err grbl_link_read_settings(grbl_link *l)
 rail_err grbl_link_soft_reset(grbl_link *l)
 {
     rail_err e = grbl_link_realtime(l, 0x18);
-    if (e == RAIL_OK)
+    if (e == RAIL_OK) {
         l->own_resets++;
+        l->own_reset_t = rail_clock_now(l->clock);
+    }
     return e;
 }
 

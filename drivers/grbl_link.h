@@ -27,6 +27,8 @@ struct grbl_link {
     int home_error;          /* error:N (>0) or -ALARM (<0) ending the homing cycle */
     int resets_seen;         /* reset banners seen (and reconnects: both end any move) */
     int own_resets;          /* soft resets (0x18) we sent at rest whose banner is still due */
+    double own_reset_t;      /* rail-clock s of the last one: only a banner within the reply
+                                timeout (plus GRBL_OWN_RESET_SLACK_S) of it is ours */
     bool zero_lost;          /* the controller's position is not trusted (a reset or an alarm
                                 that loses it, since the last homing or confirmed zero) */
     char zero_why[200];      /* what lost it */
@@ -41,6 +43,10 @@ struct grbl_link {
     int baud;
     char why[256];           /* reason of the last failure */
 };
+
+/* s past the reply timeout within which the banner after our own soft reset must come (GRBL
+   prints it at once); a later banner is the controller's own restart, whatever we sent. */
+#define GRBL_OWN_RESET_SLACK_S 0.5
 
 /* Open a controller link on g's port, baud and reply timeout (the rail_clock times replies). */
 rail_err grbl_link_open(grbl_link **out, const rail_gcode_params *g, rail_clock clock, char *why,

@@ -30,17 +30,16 @@ struct trial_rail_poller {
 };
 
 /* A frozen daemon: both rails emergency-stopped first, then the fault published (every later read
- * returns it). gap: s the clock ran (bound: s it may); what: where it was seen. Call
- * without either lock. Returns 1 when this call stopped them (0: a fault was already out). */
-static int clock_jumped(trial_rail_poller *p, double gap, double bound, const char *what)
+ * returns it). gap: s the clock ran (bound: s it may); what: where it was seen. Call with the
+ * rails' lock held (so nothing can be sent between the check and the stops) and without p->lock.
+ * Returns 1 when this call stopped them (0: a fault was already out). */
+static int clock_jumped_locked(trial_rail_poller *p, double gap, double bound, const char *what)
 {
-    pthread_mutex_lock(&p->rails);
     pthread_mutex_lock(&p->lock);
     int first = p->err == RAIL_OK;
     pthread_mutex_unlock(&p->lock);
-    if (first) rail_pair_estop(p->compress, p->shear);
-    pthread_mutex_unlock(&p->rails);
     if (!first) return 0;
+    rail_pair_estop(p->compress, p->shear);
     pthread_mutex_lock(&p->lock);
     p->err = RAIL_E_STATE;
     snprintf(p->why, sizeof p->why,
@@ -51,6 +50,15 @@ static int clock_jumped(trial_rail_poller *p, double gap, double bound, const ch
     pthread_cond_broadcast(&p->first);
     pthread_mutex_unlock(&p->lock);
     return 1;
+}
+
+/* The same, taking the rails' lock itself (call with neither lock held). */
+static int clock_jumped(trial_rail_poller *p, double gap, double bound, const char *what)
+{
+    pthread_mutex_lock(&p->rails);
+    int r = clock_jumped_locked(p, gap, bound, what);
+    pthread_mutex_unlock(&p->rails);
+    return r;
 }
 
 static void *poll_main(void *arg)
@@ -75,6 +83,15 @@ static void *poll_main(void *arg)
          * then stopped at once (rail_pair_poll's rule). */
         pthread_mutex_lock(&p->rails);
         double t0 = rail_clock_now(p->clock);
+        /* Checked again with the rails' lock held, before anything is sent: a freeze between the
+         * check above and here (waiting for the lock behind the trial's thread included) would
+         * otherwise poll, and so top up a G-code jog, as if nothing had happened. */
+        if (t0 - prev_end > p->period_s + TRIAL_CLOCK_JUMP_S) {
+            clock_jumped_locked(p, t0 - prev_end, p->period_s + TRIAL_CLOCK_JUMP_S,
+                                "before a rail poll (it waited for the rails)");
+            pthread_mutex_unlock(&p->rails);
+            break;
+        }
         pthread_mutex_lock(&p->lock);
         p->polling = 1;
         p->t_poll_start = t0;
@@ -198,6 +215,32 @@ rail_err trial_rail_poller_latest(trial_rail_poller *p, rail_status *sc, rail_st
     rail_err e = p->err;
     if (e != RAIL_OK) snprintf(why, why_len, "%s", p->why);
     pthread_mutex_unlock(&p->lock);
+    return e;
+}
+
+rail_err trial_rail_poller_lock_for_move(trial_rail_poller *p, char *why, size_t why_len)
+{
+    rail_status sc, ss;
+    double t;
+    rail_err e = trial_rail_poller_latest(p, &sc, &ss, &t, why, why_len);
+    if (e != RAIL_OK) return e;
+    pthread_mutex_lock(&p->rails);
+    /* With the rails' lock held the poller is between polls: its last one ended at t_poll. */
+    pthread_mutex_lock(&p->lock);
+    e = p->err;
+    double gap = rail_clock_now(p->clock) - p->t_poll, bound = p->period_s + TRIAL_CLOCK_JUMP_S;
+    int jumped = e == RAIL_OK && p->polls > 0 && gap > bound;
+    if (e != RAIL_OK) snprintf(why, why_len, "%s", p->why);
+    pthread_mutex_unlock(&p->lock);
+    if (e == RAIL_OK && !jumped) return RAIL_OK; /* the lock stays held for the move */
+    if (jumped) {
+        clock_jumped_locked(p, gap, bound, "before a move");
+        pthread_mutex_lock(&p->lock);
+        e = p->err;
+        snprintf(why, why_len, "%s", p->why);
+        pthread_mutex_unlock(&p->lock);
+    }
+    pthread_mutex_unlock(&p->rails);
     return e;
 }
 

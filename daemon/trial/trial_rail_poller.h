@@ -39,6 +39,11 @@ trial_rail_poller *trial_rail_poller_start(rail *compress, rail *shear, double p
  * (why names the rail). Waits for the first poll. */
 rail_err trial_rail_poller_latest(trial_rail_poller *p, rail_status *sc, rail_status *ss, double *t_poll, char *why,
                                   size_t why_len);
+/* The rails' lock for a call that may start motion (a move): RAIL_OK with the lock held (release
+ * it with trial_rail_poller_unlock after the call), or the poller's fault with the lock released.
+ * The freeze check is made again under the lock, so no move goes out between a check and a
+ * freeze: a clock jump seen here emergency-stops both rails before the lock is let go. */
+rail_err trial_rail_poller_lock_for_move(trial_rail_poller *p, char *why, size_t why_len);
 void trial_rail_poller_lock(trial_rail_poller *p);
 void trial_rail_poller_unlock(trial_rail_poller *p);
 /* Longest time one poll took (s), longest gap from one poll's end to the next one's start (s: the

@@ -27,13 +27,15 @@ static int poller_ok(trial_runner *tr, char *why, size_t why_len)
     double t;
     return trial_rail_poller_latest(tr->poller, &a, &b, &t, why, why_len) == RAIL_OK;
 }
-/* A live trial sends a move only while the poller sees no fault: after a freeze this thread may
- * wake before the poller, and a move from stale statuses would carry the trial on by itself. */
+/* A live trial sends a move only while the poller sees no fault, checked with the rails' lock
+ * held (trial_rail_poller_lock_for_move): after a freeze this thread may wake before the poller,
+ * and a move from stale statuses would carry the trial on by itself. */
 static rail_err r_move(trial_runner *tr, rail *r, double target, double speed)
 {
     char w[256];
-    if (!poller_ok(tr, w, sizeof w)) return RAIL_E_STATE;
-    rails_lock(tr);
+    if (tr->poller) {
+        if (trial_rail_poller_lock_for_move(tr->poller, w, sizeof w) != RAIL_OK) return RAIL_E_STATE;
+    }
     rail_err e = rail_move_abs(r, target, speed);
     rails_unlock(tr);
     return e;
@@ -225,9 +227,15 @@ static void finish(run_ctx *c, trial_state s, const char *fmt, ...)
         enter(c, s, 0.0, c->res->reason);
         return;
     } else if (s == TRIAL_ABORTED) {
-        r_stop(c->tr, c->tr->compress);
-        r_stop(c->tr, c->tr->shear);
+        /* A stop that fails (a refused write) or rails still moving after the wait (a drive
+         * going on to its target) end in the emergency stop of both, never in "aborted" alone. */
+        rail_err ec = r_stop(c->tr, c->tr->compress);
+        rail_err es = r_stop(c->tr, c->tr->shear);
         still_moving = wait_rails_standing(c) != 0;
+        if (ec != RAIL_OK || es != RAIL_OK || still_moving) {
+            r_estop_pair(c->tr);
+            still_moving = 1;
+        }
     }
     c->res->reason[0] = '\0';
     if (fmt) {
@@ -238,7 +246,8 @@ static void finish(run_ctx *c, trial_state s, const char *fmt, ...)
     }
     if (still_moving) {
         size_t n = strlen(c->res->reason);
-        snprintf(c->res->reason + n, sizeof c->res->reason - n, " (rails not standing %.0f s after the stop)",
+        snprintf(c->res->reason + n, sizeof c->res->reason - n,
+                 " (a stop failed or the rails were not standing %.0f s after it: both emergency-stopped)",
                  RUNNER_STOP_WAIT_S);
     }
     c->res->final = s;

@@ -261,6 +261,47 @@ static void test_reset_during_trial_stops_both(void **s)
     grblsim_kill(b);
 }
 
+/* A soft reset of ours whose banner never came (lost on the line, or waited out) is no licence to
+   swallow a later genuine restart: only a banner within the reply timeout of our own 0x18 is
+   ours. Here the link counts one due from 2 s ago, then the controller really restarts (its
+   port opened by another process): the rail must read the position lost (review of issue 34). */
+static void test_stale_own_reset_hides_no_restart(void **s)
+{
+    (void)s;
+    char path[128], why[600];
+    grbl_sim_params sp = grbl_sim_params_default();
+    sp.reset_on_open = true;
+    sp.reset_delay_s = 0.1;
+    pid_t pid = grblsim_spawn(&sp, path, sizeof path);
+    rail_gcode_params g = gparams(path, 'X');
+    grbl_link *l = NULL;
+    assert_int_equal(grbl_link_open(&l, &g, rail_clock_real(), why, sizeof why), RAIL_OK);
+    rail_params p = params("shear");
+    rail *r = NULL;
+    assert_int_equal(rail_gcode_open(&r, &p, &g, l, rail_clock_real(), why, sizeof why), RAIL_OK);
+    assert_int_equal(rail_gcode_confirm_zero(r, true), RAIL_OK); /* the reset at open */
+    rail_status st;
+    assert_int_equal(rail_status_poll(r, &st), RAIL_OK);
+    assert_int_equal(st.state, RAIL_STATE_IDLE);
+    l->own_resets = 1; /* our 0x18 of 2 s ago, its banner lost */
+    l->own_reset_t = rail_clock_now(rail_clock_real()) - 2.0;
+    int fd = open(path, O_RDWR | O_NOCTTY); /* DTR: the controller restarts */
+    assert_true(fd >= 0);
+    close(fd);
+    for (int i = 0; i < 50; i++) {
+        rail_clock_sleep(rail_clock_real(), 0.03);
+        rail_status_poll(r, &st);
+        if (st.state == RAIL_STATE_FAULT) break;
+    }
+    printf("# after the restart: %s: %s\n", rail_state_name(st.state), st.message);
+    assert_int_equal(st.state, RAIL_STATE_FAULT);
+    assert_int_equal(rail_move_abs(r, 5.0, 10.0), RAIL_E_STATE);
+    assert_non_null(strstr(rail_last_error(r), "not trusted"));
+    rail_close(r);
+    grbl_link_release(l);
+    grblsim_kill(pid);
+}
+
 /* A reset under the moving rail itself: the move is abandoned, the rail stops and stays a
    fault; with homing enabled ($22=1) only a homing cycle makes it move again. */
 static void test_reset_mid_move_needs_homing(void **s)
@@ -337,6 +378,7 @@ int main(void)
         cmocka_unit_test(test_banner_wait_on_reset_at_open),
         cmocka_unit_test(test_reset_during_trial_stops_both),
         cmocka_unit_test(test_reset_mid_move_needs_homing),
+        cmocka_unit_test(test_stale_own_reset_hides_no_restart),
         cmocka_unit_test(test_alarm_named_and_position_lost),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -6,6 +6,8 @@
  *     across a freeze; the mock rails move on with it as a drive would): the poller's next read
  *     is the fault "the monotonic clock jumped", both rails are stopped, and they stand still
  *     afterwards;
+ *   - a jump while the poller waits for the rails' lock: seen with the lock in hand, before the
+ *     poll, both rails stopped; a move asked for afterwards refused;
  *   - a real freeze: a child process with its poller is stopped with SIGSTOP for 1.5 s while its
  *     shear moves, then continued: on waking it reports the clock jump, its rails stopped and
  *     standing, and the jump it names covers the freeze (real time, about 3 s). */
@@ -119,6 +121,47 @@ static void injected_clock_jump_stops_rails(void **state)
     rail_close(s);
 }
 
+/* A freeze while the poller waits for the rails' lock: it woke in time, then blocked on the lock
+ * the trial's thread held (here the test's), and the clock jumped before it got it. It must see
+ * the jump with the lock in hand, before it polls (a G-code poll tops up the jog segments), and
+ * stop both rails. Before this check the poller polled on as if nothing had happened and no read
+ * ever saw the jump (review of issue 33, item 2). */
+static void freeze_while_waiting_for_the_rails(void **state)
+{
+    (void)state;
+    atomic_store(&jump_s, 0.0);
+    rail_clock clk = {jumpy_now, jumpy_sleep, NULL};
+    rail *c = NULL, *s = NULL;
+    open_rails(clk, &c, &s);
+    char why[512] = "";
+    trial_rail_poller *p = trial_rail_poller_start(c, s, 0.01, why, sizeof why);
+    assert_non_null(p);
+    rail_status sc, ss;
+    double tp;
+    sleep_s(0.3);
+    assert_int_equal(trial_rail_poller_latest(p, &sc, &ss, &tp, why, sizeof why), RAIL_OK);
+    assert_int_equal(ss.state, RAIL_STATE_MOVING);
+    trial_rail_poller_lock(p);
+    sleep_s(0.05);              /* the poller has woken and waits for the lock */
+    atomic_store(&jump_s, 2.0); /* the freeze, while it waits */
+    trial_rail_poller_unlock(p);
+    sleep_s(0.2);               /* only the poller looks meanwhile */
+    rail_err e = trial_rail_poller_latest(p, &sc, &ss, &tp, why, sizeof why);
+    printf("# a jump while the poller waited for the rails: %s\n", e == RAIL_OK ? "not seen" : why);
+    assert_int_not_equal(e, RAIL_OK);
+    assert_non_null(strstr(why, "the monotonic clock jumped"));
+    assert_non_null(strstr(why, "before a rail poll"));
+    double pos;
+    assert_int_equal(moved_after(p, s, &pos), 0);
+    /* A move asked for now is refused, the lock not kept. */
+    assert_int_not_equal(trial_rail_poller_lock_for_move(p, why, sizeof why), RAIL_OK);
+    trial_rail_poller_lock(p);
+    trial_rail_poller_unlock(p);
+    trial_rail_poller_stop(p);
+    rail_close(c);
+    rail_close(s);
+}
+
 static void sigstop_freeze_stops_rails(void **state)
 {
     (void)state;
@@ -190,6 +233,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(injected_clock_jump_stops_rails),
+        cmocka_unit_test(freeze_while_waiting_for_the_rails),
         cmocka_unit_test(sigstop_freeze_stops_rails),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
