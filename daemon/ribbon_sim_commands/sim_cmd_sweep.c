@@ -398,7 +398,10 @@ int sim_cmd_sweep(int argc, char **argv)
     struct sigaction sa, old;
     sweep_farm_start(&argc, &argv, &rank, &ranks);
     if (!sw.phi || !sw.gamma || !sw.dl) goto done;
-    /* Every rank reads the file before rank 0 appends to it. */
+    /* Every rank reads the file, and sees whether it exists, before rank 0 creates or appends to
+     * it: a rank that looked after rank 0 had written the header would take the file for another
+     * sweep's, leave, and the others wait for it forever. */
+    int fresh = access(o.out, F_OK) != 0;
     int loaded = sweep_table_load(o.out, &sw.table, err, sizeof err);
     sweep_farm_barrier();
     if (loaded != 0) {
@@ -407,7 +410,6 @@ int sim_cmd_sweep(int argc, char **argv)
     }
     /* A file to resume must come from this sweep (sim_sweep_origin.h): the same program, scene,
      * N, tolerance and seed, the same Gamma grid, and phi and Delta L on its grid. */
-    int fresh = access(o.out, F_OK) != 0;
     if (!fresh) {
         char what[400];
         if (!sw.table.origin[0]) {
