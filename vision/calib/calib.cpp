@@ -7,6 +7,7 @@
 // camera_tilt_rad,
 // camera_matrix (9 values, row-major), dist (5 values); the last two appear together or not at all.
 #include "vis_internal.hpp"
+#include "vis_calib.h"
 
 #include <cerrno>
 #include <cstdio>

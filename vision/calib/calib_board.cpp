@@ -10,6 +10,7 @@
 // at different tilts are needed for the focal length (and so D): fronto-parallel views alone fix
 // only their ratio, px_per_mm.
 #include "vis_internal.hpp"
+#include "vis_calib.h"
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>

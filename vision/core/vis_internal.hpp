@@ -6,7 +6,7 @@
 #ifndef RIBBON_VIS_INTERNAL_HPP
 #define RIBBON_VIS_INTERNAL_HPP
 
-#include "vision.h"
+#include "vis_core.h"
 
 #include <opencv2/core.hpp>
 #include <cmath>

@@ -3,6 +3,7 @@
 #define RIBBON_VIS_CAMERA_MODEL_HPP
 
 #include "vis_internal.hpp"
+#include "vis_render.h"
 
 namespace vis {
 bool camera_valid(const vis_camera &c, vis_error *err);

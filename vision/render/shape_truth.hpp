@@ -3,6 +3,7 @@
 #define RIBBON_VIS_SHAPE_TRUTH_HPP
 
 #include "vis_internal.hpp"
+#include "vis_render.h"
 
 #include <vector>
 

@@ -1,7 +1,7 @@
 // block_ids.cpp: a live camera's block ids followed to count lost frames, and to tell a late
 // buffer (delivered after a newer one) from a 16-bit wrap or a restart of the ids. Kept apart from
 // source_aravis.cpp so the rule is tested without a camera (tests/vision/test_vision_block_ids.c).
-#include "vision.h"
+#include "vis_source.h"
 
 // A late buffer is at most this many ids behind the newest: a stream holds tens of buffers, so a
 // buffer further back is not late but a wrap (16-bit ids) or the camera's ids starting again.

@@ -3,6 +3,7 @@
 #define RIBBON_VIS_SOURCE_HPP
 
 #include "vis_internal.hpp"
+#include "vis_source.h"
 
 namespace vis {
 // A source of grey frames. read() returns VIS_OK, VIS_ERR_END at a clean end, or an error.

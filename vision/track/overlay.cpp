@@ -3,6 +3,7 @@
 // Green centreline, red midpoint, and a text line (frame, Delta Z, A, quality, or the reason). The
 // input may be grey or BGR; the output is always BGR.
 #include "vis_internal.hpp"
+#include "vis_track.h"
 
 #include <opencv2/imgproc.hpp>
 

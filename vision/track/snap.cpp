@@ -5,6 +5,7 @@
 // (`min_jump`, normalised Delta Z) and a fraction of the series' whole range is that frame. Frames
 // without a measurement are skipped, so a lost frame cannot fake or hide a jump.
 #include "vis_internal.hpp"
+#include "vis_track.h"
 
 extern "C" int vis_snap_find(const double *dz, const unsigned char *valid, size_t n, double min_jump,
                              double fraction)

@@ -13,6 +13,7 @@
 #define RIBBON_VIS_TRACKER_IMPL_HPP
 
 #include "vis_internal.hpp"
+#include "vis_track.h"
 
 #include <memory>
 #include <string>

@@ -4,6 +4,7 @@
 // row k of the CSV describes frame k of the video. The CSV header names every column with its unit;
 // numbers are printed with %.17g so the truth round-trips exactly.
 #include "vis_internal.hpp"
+#include "vis_video.h"
 
 #include <cstdio>
 

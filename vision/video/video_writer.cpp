@@ -11,6 +11,7 @@
 // test_vision_video); lossy codecs would bias sub-pixel tracking. Grey frames are written as grey;
 // OpenCV hands them back as BGR with equal channels, which the sources convert to grey exactly.
 #include "vis_internal.hpp"
+#include "vis_video.h"
 
 #include <opencv2/videoio.hpp>
 
