@@ -1,9 +1,9 @@
 /* check_includes.c: the house's include rules, checked on the source tree (issue 12, DESIGN.md
  * section 2). Usage: check_includes SOURCE_ROOT. Prints every breach and exits 1 if there is one.
  *
- * What it reads: every .c/.h in config/, drivers/ (not its fuzz/ harnesses) and daemon/ (all its
- * rooms), and the headers of sim/ and vision/ so their includes can be placed too (sim/ and
- * vision/ files are checked for the floor rule as well). Only quoted includes count ("x.h");
+ * What it reads: every .c/.h in config/, drivers/ (not its fuzz/ harnesses), daemon/ (all its
+ * rooms) and vision/ (all its rooms, .cpp/.hpp too), and the files of sim/ so their includes can
+ * be placed too (sim/ is checked for the floor rule only). Only quoted includes count ("x.h");
  * system headers are not the house's. A header is found by its file name (the build puts every
  * folder on the include path), so two headers of one name are themselves a breach.
  *
@@ -13,9 +13,13 @@
  *     rooms cli, store, plot, api, twin, trial, report (floors 2..8, in that order), the command
  *     rooms ribbonctl_commands and ribbon_sim_commands (9), and daemon/ itself, the programs'
  *     mains and rig_daemon (10). A file may include a header of its own room or of a room on a
- *     lower floor, never one of its own floor's other rooms or of a floor above.
+ *     lower floor, never one of its own floor's other rooms or of a floor above. vision/'s rooms
+ *     share floor 0 and stand on steps inside it (core 0.0, render 0.1, video, calib and source
+ *     0.2, track 0.3, vision/ itself with vision.h 0.4): a vision room may include a room of
+ *     vision/ on a lower step, and nothing of sim/ or drivers/, as before.
  *  2. Faces. A room with a face (the table below) is entered from outside only through it: a
- *     file of another room includes only the face's headers.
+ *     file of another room includes only the face's headers. A vision room's C++ face (.hpp: its
+ *     C++ interface for the rooms above it in vision/) is entered from vision/ only.
  *  3. Ownership. A header belongs to the file it is named after: every function it declares is
  *     defined in that file (x.h -> x.c). A face, or a header without a file of its name, may
  *     declare functions of any file of its room, and of no other room.
@@ -25,7 +29,9 @@
  *
  * The parsing is deliberately plain (this is a lint, not a compiler): comments and preprocessor
  * lines are dropped, a declaration is a top-level statement ending in ';' with a '(' and not a
- * typedef, and a definition is a line starting in column 0 with the name followed by '('. */
+ * typedef, and a definition is a line starting in column 0 with the name followed by '('. An
+ * `extern "C" {` block is transparent (its declarations are top level: vision's C faces); a C++
+ * namespace is not, so rule 3 judges the C declarations of vision/ and not its C++ internals. */
 #define _POSIX_C_SOURCE 200809L
 #include <dirent.h>
 #include <stdarg.h>
@@ -39,6 +45,7 @@ enum { MAX_FILES = 2048, MAX_INCLUDES = 64, NAME_LEN = 128, PATH_LEN = 512 };
 typedef struct room {
     const char *name;   /* "drivers", "daemon/store", "daemon" (the programs) */
     int floor;
+    int step;           /* order of the rooms of one folder on one floor (vision/'s), else 0 */
     const char *face[4]; /* the headers other rooms may include; {NULL}: every header is open */
 } room;
 
@@ -46,25 +53,34 @@ typedef struct room {
  * includes the room's member headers others need; the command rooms' faces are the tables of
  * their commands. Rooms with {NULL} have no face: all their headers are open to the rooms above
  * (the floors still hold); drivers/ and config/ are families of members, each with its own
- * header (rule 3). A face in this table that is missing from the tree is a breach. */
+ * header (rule 3). A face in this table that is missing from the tree is a breach.
+ * vision/'s rooms are C++ inside and C outside: each has one C face (vis_<room>.h, which vision.h
+ * gathers for the house above); a room whose C++ another vision room builds on lists those .hpp
+ * headers after it (core's glue and image-header check, source's interface). */
 static const room rooms[] = {
-    {"sim", 0, {NULL}},
-    {"drivers", 0, {NULL}},
-    {"vision", 0, {NULL}},
-    {"config", 1, {NULL}},
-    {"daemon/cli", 2, {"cli.h", NULL}},
-    {"daemon/store", 3, {"store.h", NULL}},
-    {"daemon/plot", 4, {"plot.h", NULL}},
-    {"daemon/api", 5, {"api.h", NULL}},
-    {"daemon/live", 6, {"live.h", NULL}},
-    {"daemon/twin", 6, {"twin.h", NULL}},
-    {"daemon/trial", 7, {"trial.h", NULL}},
-    {"daemon/rigsim", 7, {"rigsim.h", NULL}},
-    {"daemon/report", 8, {"trial_report.h", NULL}},
-    {"daemon/campaign", 8, {"campaign.h", NULL}},
-    {"daemon/ribbonctl_commands", 9, {"ctl.h", NULL}},
-    {"daemon/ribbon_sim_commands", 9, {"sim_cmd.h", NULL}},
-    {"daemon", 10, {NULL}},
+    {"sim", 0, 0, {NULL}},
+    {"drivers", 0, 0, {NULL}},
+    {"vision/core", 0, 0, {"vis_core.h", "vis_internal.hpp", "image_header.hpp", NULL}},
+    {"vision/render", 0, 1, {"vis_render.h", NULL}},
+    {"vision/video", 0, 2, {"vis_video.h", NULL}},
+    {"vision/calib", 0, 2, {"vis_calib.h", NULL}},
+    {"vision/source", 0, 2, {"vis_source.h", "source.hpp", NULL}},
+    {"vision/track", 0, 3, {"vis_track.h", NULL}},
+    {"vision", 0, 4, {"vision.h", NULL}},
+    {"config", 1, 0, {NULL}},
+    {"daemon/cli", 2, 0, {"cli.h", NULL}},
+    {"daemon/store", 3, 0, {"store.h", NULL}},
+    {"daemon/plot", 4, 0, {"plot.h", NULL}},
+    {"daemon/api", 5, 0, {"api.h", NULL}},
+    {"daemon/live", 6, 0, {"live.h", NULL}},
+    {"daemon/twin", 6, 0, {"twin.h", NULL}},
+    {"daemon/trial", 7, 0, {"trial.h", NULL}},
+    {"daemon/rigsim", 7, 0, {"rigsim.h", NULL}},
+    {"daemon/report", 8, 0, {"trial_report.h", NULL}},
+    {"daemon/campaign", 8, 0, {"campaign.h", NULL}},
+    {"daemon/ribbonctl_commands", 9, 0, {"ctl.h", NULL}},
+    {"daemon/ribbon_sim_commands", 9, 0, {"sim_cmd.h", NULL}},
+    {"daemon", 10, 0, {NULL}},
 };
 enum { N_ROOMS = sizeof rooms / sizeof rooms[0] };
 
@@ -73,7 +89,7 @@ typedef struct file {
     char name[NAME_LEN];  /* "rail.c" */
     char stem[NAME_LEN];  /* "rail" */
     int is_header;
-    int checked;          /* 2: every rule; 1: the floors only (sim/, vision/) */
+    int checked;          /* 2: every rule; 1: the floors only (sim/) */
     int room;             /* index into rooms */
     int unit;             /* index of the unit it belongs to */
     int n_inc;
@@ -110,8 +126,10 @@ static int room_of(const char *rel)
     for (int i = 0; i < N_ROOMS; i++) {
         size_t n = strlen(rooms[i].name);
         if (strncmp(rel, rooms[i].name, n) == 0 && rel[n] == '/' && n > best_len) {
-            /* "daemon" holds only the files at its top; a deeper folder is a room of its own. */
-            if (strcmp(rooms[i].name, "daemon") == 0 && strchr(rel + n + 1, '/'))
+            /* "daemon" and "vision" hold only the files at their top; a deeper folder is a room
+             * of its own. */
+            if ((strcmp(rooms[i].name, "daemon") == 0 || strcmp(rooms[i].name, "vision") == 0) &&
+                strchr(rel + n + 1, '/'))
                 continue;
             best = i;
             best_len = n;
@@ -132,6 +150,31 @@ static int is_face(const file *f)
 static int has_face(int room_index)
 {
     return rooms[room_index].face[0] != NULL;
+}
+
+/* Whether two rooms are in one top folder ("vision/core" and "vision"). */
+static int same_folder(const room *a, const room *b)
+{
+    size_t na = strcspn(a->name, "/"), nb = strcspn(b->name, "/");
+    return na == nb && strncmp(a->name, b->name, na) == 0;
+}
+
+/* Whether room `from` may include a header of room `to` (rule 1). */
+static int below(const room *to, const room *from)
+{
+    if (to->floor != from->floor)
+        return to->floor < from->floor;
+    return same_folder(to, from) && to->step < from->step;
+}
+
+/* "3", or "0.2" for a room on a step of its floor. */
+static const char *floor_name(const room *r, char *buf, size_t len)
+{
+    if (r->step)
+        snprintf(buf, len, "%d.%d", r->floor, r->step);
+    else
+        snprintf(buf, len, "%d", r->floor);
+    return buf;
 }
 
 /* The file's text with comments and string/char literals blanked, newlines kept. */
@@ -332,11 +375,16 @@ static void check_floors_and_faces(void)
             if (h->room == f->room)
                 continue;
             const room *from = &rooms[f->room], *to = &rooms[h->room];
-            if (to->floor >= from->floor)
-                breach("%s:%d: includes %s: %s (floor %d) may not include %s (floor %d)", f->path,
-                       f->inc_line[k], h->path, from->name, from->floor, to->name, to->floor);
+            char ff[16], ft[16];
+            if (!below(to, from))
+                breach("%s:%d: includes %s: %s (floor %s) may not include %s (floor %s)", f->path,
+                       f->inc_line[k], h->path, from->name, floor_name(from, ff, sizeof ff),
+                       to->name, floor_name(to, ft, sizeof ft));
             else if (has_face(h->room) && !is_face(h))
                 breach("%s:%d: includes %s, a private header of %s (its face: %s)", f->path,
+                       f->inc_line[k], h->path, to->name, to->face[0]);
+            else if (ends_with(h->name, ".hpp") && !same_folder(from, to))
+                breach("%s:%d: includes %s, C++ inside %s (its face: %s)", f->path,
                        f->inc_line[k], h->path, to->name, to->face[0]);
         }
     }
@@ -385,6 +433,7 @@ static void declared_functions(const file *h, void (*fn)(const file *, const cha
     char stmt[4096];
     size_t sl = 0;
     int depth = 0, skipping = 0; /* skipping: the statement hit a '{' at depth 0 */
+    int open_extern = 0;         /* extern "C" { blocks open at depth 0 (transparent) */
     int stmt_line = 1, line = 1;
     for (const char *p = t; *p; p++) {
         if (*p == '\n')
@@ -404,6 +453,21 @@ static void declared_functions(const file *h, void (*fn)(const file *, const cha
             }
         }
         if (*p == '{') {
+            if (depth == 0 && !skipping) {
+                stmt[sl] = '\0';
+                const char *s = stmt;
+                while (*s == ' ' || *s == '\t' || *s == '\n')
+                    s++;
+                size_t n = strlen(s);
+                while (n && (s[n - 1] == ' ' || s[n - 1] == '\t' || s[n - 1] == '\n'))
+                    n--;
+                if (n == 10 && strncmp(s, "extern \"C\"", 10) == 0) {
+                    open_extern++;
+                    sl = 0;
+                    stmt_line = line;
+                    continue;
+                }
+            }
             if (depth == 0)
                 skipping = 1;
             depth++;
@@ -412,6 +476,12 @@ static void declared_functions(const file *h, void (*fn)(const file *, const cha
         if (*p == '}') {
             if (depth > 0)
                 depth--;
+            else if (open_extern > 0) {
+                open_extern--;
+                sl = 0;
+                skipping = 0;
+                stmt_line = line;
+            }
             continue;
         }
         if (depth > 0)
@@ -589,8 +659,8 @@ int main(int argc, char **argv)
     scan(root, "config", 2, 1);
     scan(root, "drivers", 2, 1); /* drivers/fuzz holds test harnesses, not the library */
     scan(root, "daemon", 2, 0);
-    scan(root, "sim", 1, 1);    /* placed, and held to the floors; their own files' rules are */
-    scan(root, "vision", 1, 1); /* theirs (issue 12 covers daemon/, drivers/, config/) */
+    scan(root, "vision", 2, 0); /* its rooms (issue 34 G) */
+    scan(root, "sim", 1, 1);    /* placed, and held to the floors; its own files' rules are its own */
     for (int r = 0; r < N_ROOMS; r++)
         for (int k = 0; k < 4 && rooms[r].face[k]; k++) {
             int found = 0;
