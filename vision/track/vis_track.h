@@ -21,7 +21,6 @@ typedef enum vis_polarity {
     VIS_POLARITY_LIGHT         /* light ribbon on a dark background */
 } vis_polarity;
 
-
 typedef struct vis_track_params {
     double length_mm;          /* free length l used to normalise Delta Z, mm (0 = measured) */
     vis_polarity polarity;     /* which way the ribbon contrasts with the background */
