@@ -62,6 +62,7 @@ static const room rooms[] = {
     {"daemon/rigsim", 7, {"rigsim.h", NULL}},
     {"daemon/report", 8, {"trial_report.h", NULL}},
     {"daemon/campaign", 8, {"campaign.h", NULL}},
+    {"daemon/check", 8, {"check.h", NULL}},
     {"daemon/ribbonctl_commands", 9, {"ctl.h", NULL}},
     {"daemon/ribbon_sim_commands", 9, {"sim_cmd.h", NULL}},
     {"daemon", 10, {NULL}},
