@@ -63,8 +63,6 @@ const char *check_level_name(check_level l); /* "ok", "warn", "fail" */
 void check_report_print(const check_report *r, FILE *f);
 /* {"ok": bool, "fails": N, "warns": N, "checks": [{"level","part","what","text"}, ...]} */
 json_t *check_report_json(const check_report *r);
-/* The fails joined as "part what: text; ..." (for a 409's reason); "" when none. */
-size_t check_report_fails_text(const check_report *r, char *buf, size_t n);
 
 /* ---- who must be able to write (check_access.c) -------------------------------------------- */
 

@@ -66,17 +66,3 @@ json_t *check_report_json(const check_report *r)
     }
     return json_pack("{s:b, s:i, s:i, s:o}", "ok", r->fails == 0, "fails", r->fails, "warns", r->warns, "checks", a);
 }
-
-size_t check_report_fails_text(const check_report *r, char *buf, size_t n)
-{
-    size_t used = 0;
-    if (n) buf[0] = 0;
-    for (int i = 0; i < r->n && used + 1 < n; i++) {
-        const check_item *it = &r->items[i];
-        if (it->level != CHECK_FAIL) continue;
-        int w = snprintf(buf + used, n - used, "%s%s %s: %s", used ? "; " : "", it->part, it->what, it->text);
-        if (w < 0) break;
-        used += (size_t)w < n - used ? (size_t)w : n - used - 1;
-    }
-    return used;
-}
