@@ -19,6 +19,7 @@
 
 #include "check.h"
 #include "grblsim_spawn.h"
+#include "mbsim_spawn.h"
 #include "rail_lock.h"
 #include "test_dir.h"
 #include "vision.h"
@@ -380,6 +381,56 @@ static void test_limits(void **s)
     assert_int_equal(g_rep->fails, 2);
 }
 
+/* Two Modbus TCP drives (config/rig-rehearsal-modbus.ini on two simulators): every register of
+ * each map read once; then the shear drive's alarm register mapped to an address the drive does
+ * not have, as a map copied from the wrong manual would: the probe names it and the rails do not
+ * open; a drive that does not answer at all. */
+static void test_modbus(void **s)
+{
+    (void)s;
+    good_camera();
+    check_env env = env_for_tests();
+    mb_sim_params mp = mb_sim_params_default();
+    int pc = 0, ps = 0;
+    mp.start_mm = 90.0;
+    pid_t c = mbsim_spawn(mp, &pc);
+    mp.start_mm = 50.0;
+    pid_t h = mbsim_spawn(mp, &ps);
+    assert_true(c > 0 && h > 0);
+    char ov[6][400];
+    snprintf(ov[0], sizeof ov[0], "rail.compress.address=127.0.0.1:%d", pc);
+    snprintf(ov[1], sizeof ov[1], "rail.shear.address=127.0.0.1:%d", ps);
+    snprintf(ov[2], sizeof ov[2], "store.path=%s/rig.db", g_dir);
+    snprintf(ov[3], sizeof ov[3], "camera.calibration=%s", g_calib);
+    snprintf(ov[4], sizeof ov[4], "camera.video_dir=%s/videos", g_dir);
+    snprintf(ov[5], sizeof ov[5], "rail.shear.reg_alarm=9000");
+    const char *p[6] = {ov[0], ov[1], ov[2], ov[3], ov[4], ov[5]};
+    cfg_error ce;
+    assert_int_equal(rig_config_load(RIBBON_SOURCE_DIR "/config/rig-rehearsal-modbus.ini", p, 5, g_cfg, &ce), CFG_OK);
+    check_report_init(g_rep);
+    check_rig_run(g_cfg, &env, g_rep);
+    show("two Modbus drives", g_rep);
+    expect(g_rep, "rail compress", "map", CHECK_OK, "registers read");
+    expect(g_rep, "rail shear", "map", CHECK_OK, "registers read");
+    expect(g_rep, "rail compress", "state", CHECK_OK, "idle at 90.000 mm");
+    assert_int_equal(g_rep->fails, 0);
+
+    assert_int_equal(rig_config_load(RIBBON_SOURCE_DIR "/config/rig-rehearsal-modbus.ini", p, 6, g_cfg, &ce), CFG_OK);
+    check_report_init(g_rep);
+    check_rig_run(g_cfg, &env, g_rep);
+    show("the shear drive's alarm register at an address it does not have", g_rep);
+    expect(g_rep, "rail shear", "map", CHECK_FAIL, "alarm at 9000");
+    expect(g_rep, "rail compress", "map", CHECK_OK, NULL);
+    mbsim_kill(h);
+    mbsim_kill(c);
+
+    check_report_init(g_rep);
+    check_rig_run(g_cfg, &env, g_rep);
+    show("no drive answers", g_rep);
+    expect(g_rep, "rail compress", "map", CHECK_FAIL, NULL);
+    expect(g_rep, "rails", "open", CHECK_FAIL, NULL);
+}
+
 static int setup(void **s)
 {
     (void)s;
@@ -412,7 +463,7 @@ int main(void)
         cmocka_unit_test(test_grbl_reset_on_open), cmocka_unit_test(test_grbl_wrong_accel),
         cmocka_unit_test(test_missing_port),     cmocka_unit_test(test_camera_faults),
         cmocka_unit_test(test_store_not_writable), cmocka_unit_test(test_disk),
-        cmocka_unit_test(test_rail_held),        cmocka_unit_test(test_limits),
+        cmocka_unit_test(test_rail_held), cmocka_unit_test(test_modbus),        cmocka_unit_test(test_limits),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
