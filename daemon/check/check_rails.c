@@ -130,8 +130,13 @@ static void check_open_rail(const rail_open_spec *s, rail *rl, check_report *r)
         check_add(r, CHECK_OK, part, "state", "idle at %.3f mm", st.position_mm);
         break;
     case RAIL_STATE_ALARM:
-        check_add(r, CHECK_FAIL, part, "state", "alarm at %.3f mm: %s; home it (ribbonctl rail --config RIG --rail %s "
-                  "home --confirm) or clear it (reset)", st.position_mm, st.message, s->params.name);
+        if (strstr(st.message, "home it") || strstr(st.message, "confirm-zero")) /* says what to do */
+            check_add(r, CHECK_FAIL, part, "state", "alarm at %.3f mm: %s (ribbonctl rail --config RIG --rail %s)",
+                      st.position_mm, st.message, s->params.name);
+        else
+            check_add(r, CHECK_FAIL, part, "state", "alarm at %.3f mm: %s; home it (ribbonctl rail --config RIG --rail "
+                      "%s home --confirm) or, once you know why, clear it (reset)", st.position_mm, st.message,
+                      s->params.name);
         break;
     case RAIL_STATE_FAULT:
         check_add(r, CHECK_FAIL, part, "state", "fault at %.3f mm: %s", st.position_mm, st.message);

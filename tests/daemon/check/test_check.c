@@ -193,6 +193,20 @@ static void test_grbl_reset_on_open(void **s)
     assert_int_equal(g_rep->fails, 2);
 }
 
+/* Homing enabled ($22=1) and not homed: GRBL starts locked in alarm. */
+static void test_grbl_not_homed(void **s)
+{
+    (void)s;
+    good_camera();
+    check_env env = env_for_tests();
+    grbl_sim_params gp = grbl_good();
+    gp.start_in_alarm = true;
+    run_on_grbl(&gp, NULL, 0, &env, "GRBL with homing enabled, not homed");
+    expect(g_rep, "rail compress", "state", CHECK_FAIL, "alarm at");
+    expect(g_rep, "rail shear", "state", CHECK_FAIL, "home --confirm");
+    assert_int_equal(g_rep->fails, 2);
+}
+
 static void test_grbl_wrong_accel(void **s)
 {
     (void)s;
@@ -460,7 +474,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_good_rig),         cmocka_unit_test(test_grbl_inches),
-        cmocka_unit_test(test_grbl_reset_on_open), cmocka_unit_test(test_grbl_wrong_accel),
+        cmocka_unit_test(test_grbl_reset_on_open), cmocka_unit_test(test_grbl_not_homed), cmocka_unit_test(test_grbl_wrong_accel),
         cmocka_unit_test(test_missing_port),     cmocka_unit_test(test_camera_faults),
         cmocka_unit_test(test_store_not_writable), cmocka_unit_test(test_disk),
         cmocka_unit_test(test_rail_held), cmocka_unit_test(test_modbus),        cmocka_unit_test(test_limits),
