@@ -3,7 +3,8 @@
  * the daemon still opens (before: it refused to start, so the lab saw nothing but a log line): its
  * status says not ready with the reasons, a trial is refused with 409 naming them, and once the
  * port is there (the GRBL simulator behind a link at the configured path) and the camera answers,
- * POST /checks opens the rails and the daemon is ready. No trial runs. */
+ * POST /checks opens the rails and the daemon is ready. Then the real ribbond in mock mode runs them
+ * again on SIGHUP. No trial runs. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -14,7 +15,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "grblsim_spawn.h"
@@ -120,6 +123,62 @@ static void test_not_ready_then_ready(void **state)
     grblsim_kill(g);
 }
 
+/* The real ribbond (mock mode): the checks at start are logged once, SIGHUP runs them again (a
+ * second "checks:" line), SIGTERM still stops it with status 0. */
+static int count_lines(const char *path, const char *what)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) return 0;
+    char line[2048];
+    int n = 0;
+    while (fgets(line, sizeof line, f))
+        if (strstr(line, what)) n++;
+    fclose(f);
+    return n;
+}
+
+static int wait_lines(const char *path, const char *what, int n)
+{
+    for (int i = 0; i < 300; i++) { /* 30 s at most */
+        if (count_lines(path, what) >= n) return 1;
+        usleep(100000);
+    }
+    return 0;
+}
+
+static void test_sighup(void **state)
+{
+    (void)state;
+    char log[128], s_store[160], s_video[160];
+    snprintf(log, sizeof log, "%s/ribbond.log", dir);
+    snprintf(s_store, sizeof s_store, "store.path=%s/mock.db", dir);
+    snprintf(s_video, sizeof s_video, "camera.video_dir=%s/mock-videos", dir);
+    fflush(NULL);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        FILE *f = freopen(log, "w", stderr);
+        (void)f;
+        execl(RIBBON_BIN_DIR "/ribbond", "ribbond", "--config", RIBBON_SOURCE_DIR "/config/mock.ini", "--set", s_store,
+              "--set", s_video, "--set", "api.port=0", (char *)NULL);
+        _exit(127);
+    }
+    int up = wait_lines(log, "listening on", 1);
+    if (up) {
+        assert_int_equal(count_lines(log, "checks: ready"), 1);
+        kill(pid, SIGHUP);
+        up = wait_lines(log, "checks: ready", 2);
+    }
+    kill(pid, SIGTERM);
+    int st = 0;
+    waitpid(pid, &st, 0);
+    char cmd[200];
+    snprintf(cmd, sizeof cmd, "cat %s", log);
+    if (!up && system(cmd) != 0) fail_msg("no log");
+    assert_true(up);
+    assert_true(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+}
+
 int main(void)
 {
     snprintf(dir, sizeof dir, "/tmp/ribbond-check-XXXXXX");
@@ -128,7 +187,7 @@ int main(void)
     snprintf(locks, sizeof locks, "%s/locks", dir);
     mkdir(locks, 0700);
     setenv("RIBBON_LOCK_DIR", locks, 1);
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_not_ready_then_ready)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_not_ready_then_ready), cmocka_unit_test(test_sighup)};
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     test_dir_done(dir, rc == 0, "ribbond check");
     return rc;
