@@ -167,11 +167,22 @@ static void reopen_rails(rig_daemon *d)
     say(d, "rails opened");
 }
 
+/* A trial or replay still runs (it owns the rails). Unlike running_session, reaps nothing: that
+ * writes to the store, which is the API thread's, and SIGHUP's checks run on the main thread.
+ * Caller holds lock. */
+static int rails_busy(rig_daemon *d)
+{
+    session_status ss;
+    replay_job_status rs;
+    if (d->session && (trial_session_status(d->session, &ss), !ss.finished)) return 1;
+    return d->replay && (replay_job_status_get(d->replay, &rs), !rs.finished);
+}
+
 /* The checks; reopen: try rails that are not open first (not at start: they just failed). */
 static int run_checks(rig_daemon *d, int reopen, int *fails, char *why, size_t why_len)
 {
     pthread_mutex_lock(&d->lock);
-    if (running_session(d) || running_replay(d)) {
+    if (rails_busy(d)) {
         pthread_mutex_unlock(&d->lock);
         snprintf(why, why_len, "a trial or replay is running (it owns the rails): check again when it has ended");
         return -1;
