@@ -7,6 +7,7 @@
 #include "ctl.h"
 
 static const cli_command commands[] = {
+    {"check", ctl_check_main, "is the rig ready: every part the rig file names, one ok / warn / fail line each"},
     {"rail", ctl_rail_main, "drive one rail: status | home | move-abs MM | move-rel MM | jog MM_S | stop | estop | reset | bench"},
     {"ports", ctl_ports_main, "list serial ports (path, USB VID:PID, serial number)"},
     {"track", ctl_track_main, "measure Delta Z and A in every frame of a video: CSV, overlay, --json summary"},

@@ -2,7 +2,8 @@
  * control API, and stop cleanly on SIGTERM / SIGINT (the running trial is aborted, the rails
  * stopped, samples flushed; exit 0). Under systemd (Type=notify) it reports READY=1 once the API
  * listens and STOPPING=1 when it begins to stop. `ribbond bench` measures the store's sample rate
- * and the wall time of a complete mock trial, on one machine-readable line. */
+ * and the wall time of a complete mock trial, on one machine-readable line. SIGHUP runs the rig's
+ * readiness checks again (rig_daemon_check). */
 #include <errno.h>
 #include <math.h>
 #include <pthread.h>
@@ -43,6 +44,9 @@ static void usage(FILE *f)
             "Drive it with ribbonctl (start, abort, status, list, show, report, ...).\n"
             "At start-up, trials left running by a dead daemon are marked interrupted; motion is never\n"
             "resumed. SIGTERM or SIGINT aborts the running trial, stops the rails and exits 0.\n"
+            "It runs the rig's readiness checks (as ribbonctl check) at start: while one fails it serves\n"
+            "status and the page with the reasons and refuses trials; SIGHUP or POST /checks runs them again\n"
+            "(in rig mode, rails that did not open are opened then).\n"
             "One daemon per store and per rail device: ribbond locks STORE.lock beside the store and each\n"
             "serial port or Modbus drive of the rig file (in $RIBBON_LOCK_DIR, else /run/lock) before it\n"
             "touches anything; a second one refuses to start, naming the first (pid, since when).\n"
@@ -148,6 +152,7 @@ int main(int argc, char **argv)
     sigemptyset(&set);
     sigaddset(&set, SIGTERM);
     sigaddset(&set, SIGINT);
+    sigaddset(&set, SIGHUP);
     pthread_sigmask(SIG_BLOCK, &set, NULL);
     signal(SIGPIPE, SIG_IGN);
 
@@ -170,7 +175,13 @@ int main(int argc, char **argv)
     sd_notifyf(0, "READY=1\nSTATUS=%s", line);
 
     int sig = 0;
-    while (sigwait(&set, &sig) != 0) {
+    for (int stop = 0; !stop;) {
+        if (sigwait(&set, &sig) != 0) continue;
+        stop = sig != SIGHUP;
+        if (!stop && rig_daemon_check(&d, NULL, why, sizeof why)) { /* SIGHUP: the checks again */
+            snprintf(line, sizeof line, "SIGHUP: checks not run: %.500s", why);
+            log_line(line);
+        }
     }
     snprintf(line, sizeof line, "signal %s: stopping (running trial aborted, rails stopped)", strsignal(sig));
     log_line(line);

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "live.h"
@@ -31,6 +32,9 @@ static void unstored_write(rig_daemon *d);
 static int queue_start_trial(void *user, const store_specimen *sp, const char *const *set, int n_set, const char *note,
                              int64_t *trial_id, char *why, size_t why_len);
 static int queue_trial_running(void *user, int64_t trial_id);
+static trial_session *running_session(rig_daemon *d);
+static replay_job *running_replay(rig_daemon *d);
+static int run_checks(rig_daemon *d, int reopen, int *fails, char *why, size_t why_len);
 
 static void release_locks(rig_daemon *d)
 {
@@ -104,7 +108,12 @@ int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *o
     rail_err re = RAIL_OK;
     /* Both rails from the same (checked) config the loader produced. */
     re = rail_open_pair(&d->cfg.compress, &d->cfg.shear, clk, &d->compress, &d->shear, why, why_len);
-    if (re != RAIL_OK) {
+    if (re != RAIL_OK && d->cfg.mode == RIG_MODE_RIG) {
+        /* A missing port, a controller the driver refuses: the daemon serves the reason (the
+           checks) and opens the rails when the lab has fixed it and the checks run again. */
+        snprintf(d->rails_why, sizeof d->rails_why, "%s", why);
+        say(d, "rails not opened: %s; trials refused until the checks pass (POST /checks or SIGHUP)", why);
+    } else if (re != RAIL_OK) {
         store_close(d->st);
         d->st = NULL;
         release_locks(d);
@@ -131,7 +140,80 @@ int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *o
                 say(d, "%d raw trial video(s) an earlier run left queued for their lossless transcode", queued);
         }
     }
+    d->check_hooks = check_env_default();
+    run_checks(d, 0, NULL, w, sizeof w);
     return 0;
+}
+
+/* Rig mode, rails not open: take their locks again (a port that appeared since is locked under
+ * its device's numbers, as another program would look for it) and open them. Caller holds lock. */
+static void reopen_rails(rig_daemon *d)
+{
+    char w[900];
+    rail_locks_release(d->rails_lock);
+    d->rails_lock = NULL;
+    char what[RIG_PATH_MAX + 32];
+    snprintf(what, sizeof what, "ribbond on %s", d->config_path);
+    if (rail_locks_take(&d->cfg.compress, &d->cfg.shear, what, &d->rails_lock, w, sizeof w) != RAIL_OK) {
+        snprintf(d->rails_why, sizeof d->rails_why, "%s", w);
+        return;
+    }
+    if (rail_open_pair(&d->cfg.compress, &d->cfg.shear, rail_clock_real(), &d->compress, &d->shear, w, sizeof w) !=
+        RAIL_OK) {
+        snprintf(d->rails_why, sizeof d->rails_why, "%s", w);
+        return;
+    }
+    d->rails_why[0] = 0;
+    say(d, "rails opened");
+}
+
+/* A trial or replay still runs (it owns the rails). Unlike running_session, reaps nothing: that
+ * writes to the store, which is the API thread's, and SIGHUP's checks run on the main thread.
+ * Caller holds lock. */
+static int rails_busy(rig_daemon *d)
+{
+    session_status ss;
+    replay_job_status rs;
+    if (d->session && (trial_session_status(d->session, &ss), !ss.finished)) return 1;
+    return d->replay && (replay_job_status_get(d->replay, &rs), !rs.finished);
+}
+
+/* The checks; reopen: try rails that are not open first (not at start: they just failed). */
+static int run_checks(rig_daemon *d, int reopen, int *fails, char *why, size_t why_len)
+{
+    pthread_mutex_lock(&d->lock);
+    if (rails_busy(d)) {
+        pthread_mutex_unlock(&d->lock);
+        snprintf(why, why_len, "a trial or replay is running (it owns the rails): check again when it has ended");
+        return -1;
+    }
+    if (reopen && d->cfg.mode == RIG_MODE_RIG && !d->compress) reopen_rails(d);
+    check_env env = d->check_hooks;
+    env.compress = d->compress;
+    env.shear = d->shear;
+    env.rails_why = d->rails_why[0] ? d->rails_why : NULL;
+    check_report_init(&d->checks);
+    check_rig_run(&d->cfg, &env, &d->checks);
+    time_t now = time(NULL);
+    struct tm tm;
+    gmtime_r(&now, &tm);
+    strftime(d->checked_at, sizeof d->checked_at, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    int n = d->checks.fails;
+    for (int i = 0; i < d->checks.n; i++) {
+        const check_item *it = &d->checks.items[i];
+        if (it->level != CHECK_OK)
+            say(d, "check: %s %s %s: %s", check_level_name(it->level), it->part, it->what, it->text);
+    }
+    say(d, "checks: %s (%d fail%s, %d warning%s)", n ? "NOT READY, trials refused" : "ready", n, n == 1 ? "" : "s",
+        d->checks.warns, d->checks.warns == 1 ? "" : "s");
+    pthread_mutex_unlock(&d->lock);
+    if (fails) *fails = n;
+    return 0;
+}
+
+int rig_daemon_check(rig_daemon *d, int *fails, char *why, size_t why_len)
+{
+    return run_checks(d, 1, fails, why, why_len);
 }
 
 int rig_daemon_serve(rig_daemon *d, unsigned *port, char *why, size_t why_len)
@@ -352,6 +434,11 @@ static int op_status(void *user, json_t **out, char *why, size_t why_len)
                                           "state", rail_state_name(sh.state), "position_mm", sh.position_mm));
         }
     }
+    json_t *ck = check_report_json(&d->checks);
+    json_object_set_new(ck, "checked_at", json_string(d->checked_at));
+    json_object_set_new(o, "checks", ck);
+    json_object_set_new(o, "ready", json_boolean(d->checks.fails == 0 && (d->cfg.mode == RIG_MODE_REPLAY ||
+                                                                          (d->compress && d->shear))));
     if (d->n_unstored) {
         json_t *a = json_array();
         for (int k = 0; k < d->n_unstored; k++)
@@ -470,6 +557,23 @@ static int start_trial(rig_daemon *d, store *check, const store_specimen *sp, co
                  trial_state_name(ss.state));
         return -1;
     }
+    if (d->checks.fails || !d->compress || !d->shear) {
+        /* Which checks fail, then the first one's text: the whole list is in GET /status. */
+        char names[300] = "", first[480] = "";
+        for (int i = 0; i < d->checks.n; i++) {
+            const check_item *it = &d->checks.items[i];
+            if (it->level != CHECK_FAIL) continue;
+            size_t u = strlen(names);
+            snprintf(names + u, sizeof names - u, "%s%s %s", u ? ", " : "", it->part, it->what);
+            if (!first[0]) snprintf(first, sizeof first, "%s", it->text);
+        }
+        pthread_mutex_unlock(&d->lock);
+        *http_status = 409;
+        snprintf(why, why_len, "the rig is not ready: %d check%s fail (%s; checked %s): first: %.300s; fix it, then "
+                 "POST /checks or SIGHUP (GET /status lists them all)", d->checks.fails,
+                 d->checks.fails == 1 ? "" : "s", names, d->checked_at, first[0] ? first : d->rails_why);
+        return -1;
+    }
     trial_err te = trial_session_start_tx(&cfg, d->compress, d->shear, note, d->log, d->bus, d->transcoder,
                                           &d->session, id, why, why_len);
     pthread_mutex_unlock(&d->lock);
@@ -533,12 +637,32 @@ static int queue_trial_running(void *user, int64_t trial_id)
     return running;
 }
 
+/* GET /checks: the last readiness checks; POST /checks: run them again (409 while a trial runs). */
+static int checks_route(rig_daemon *d, const char *method, json_t **out, int *http_status, char *why, size_t why_len)
+{
+    if (!strcmp(method, "POST") && rig_daemon_check(d, NULL, why, why_len)) {
+        *http_status = 409;
+        return -1;
+    }
+    if (strcmp(method, "POST") && strcmp(method, "GET")) {
+        *http_status = 405;
+        snprintf(why, why_len, "method %s not allowed here (allowed: GET, POST)", method);
+        return -1;
+    }
+    pthread_mutex_lock(&d->lock);
+    *out = check_report_json(&d->checks);
+    json_object_set_new(*out, "checked_at", json_string(d->checked_at));
+    pthread_mutex_unlock(&d->lock);
+    return 0;
+}
+
 /* /specimens and /queue (campaign_routes.h); a new specimen's size and material default to the
  * rig file's scene and specimen. */
 static int op_campaign(void *user, const char *method, const char *path, const json_t *body, json_t **out,
                        int *http_status, char *why, size_t why_len)
 {
     rig_daemon *d = user;
+    if (!strcmp(path, "/checks")) return checks_route(d, method, out, http_status, why, why_len);
     if (!d->queue && !strncmp(path, "/queue", 6)) {
         *http_status = 409;
         snprintf(why, why_len, "the queue runs trials on rails: a %s-mode daemon has none", rig_mode_name(d->cfg.mode));

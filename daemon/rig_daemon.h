@@ -23,6 +23,7 @@
 
 #include "api.h"
 #include "campaign.h"
+#include "check.h"
 #include "live.h"
 #include "owner_lock.h"
 #include "rail.h"
@@ -67,14 +68,31 @@ typedef struct rig_daemon {
     int n_unstored;
     trial_transcoder *transcoder; /* rig mode: the trials' raw videos to FFV1, in the background */
     campaign_queue *queue;     /* the campaign's queue (rig and mock modes; rig_daemon_serve) */
+    /* The readiness checks (check.h), run at start and by rig_daemon_check; under lock. While
+     * one fails, trials are refused (409 with the fails) and GET /status carries them. */
+    check_report checks;
+    char checked_at[32];       /* when they last ran, UTC ISO 8601 */
+    char rails_why[900];       /* rig mode: why the rails could not be opened ("" = open) */
+    check_env check_hooks;     /* tests: camera_probe, statvfs_fn; service_user stays NULL
+                                  (ribbond runs as its own service user) */
 } rig_daemon;
 
 /* Loads the rig file, takes the locks (the store's, STORE_PATH.lock, and in rig and mock modes
  * the rails' devices: rail_lock.h) before touching anything, opens the store (marking interrupted
- * trials) and, in rig and mock modes, both rails. Returns 0, or -1 with why: a store or a device
- * another daemon holds is refused naming the holder (pid, since when). */
+ * trials) and, in rig and mock modes, both rails, then runs the readiness checks. Returns 0, or -1
+ * with why: a store or a device another daemon holds is refused naming the holder (pid, since
+ * when). In rig mode rails that do not open (a missing port, a refused controller) do not stop the
+ * daemon: it serves status and the page with the reasons, refuses trials, and opens them when the
+ * checks run again (rig_daemon_check). */
 int rig_daemon_open(rig_daemon *d, const char *config_path, const char *const *overrides, int n_overrides,
                     void (*log)(const char *line), char *why, size_t why_len);
+/* Runs the readiness checks again (at start, on SIGHUP, POST /checks): in rig mode rails that could
+ * not be opened are opened now (their locks taken again: a port that appeared since has a lock of
+ * its own name). Refused (-1, why) while a trial or replay runs: it owns the rails. Holds the
+ * daemon's lock while it runs (a missing GenICam camera takes about 3 s to give up). Logs every
+ * fail and warning. 0, and *fails (may be NULL) the count of fails. */
+int rig_daemon_check(rig_daemon *d, int *fails, char *why, size_t why_len);
+
 /* Starts the control API; *port gets the bound port. */
 int rig_daemon_serve(rig_daemon *d, unsigned *port, char *why, size_t why_len);
 /* Stops a running trial or replay (aborted with reason), waits for it, stops the API, closes the rails

@@ -16,7 +16,7 @@
  *   GET  /live/events              events                     200 text/event-stream (never ends)
  *   GET  /live/camera.jpg          camera_jpeg                200 JPEG     404 no frame yet
  *   GET  /live/prediction          prediction                 200 object   404 none yet
- *   GET, POST /specimens[/...], /queue[/...]  campaign(method, path, body)  200/201  400 404 405 409
+ *   GET, POST /specimens[/...], /queue[/...], /checks  campaign(method, path, body)  200/201  400 404 405 409
  *   GET  any path of cfg.assets    (served by the server)     200 the asset, no token needed
  *
  * The live routes feed the live page (docs/live-page.md); the assets are the page itself (HTML,

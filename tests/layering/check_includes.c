@@ -78,6 +78,7 @@ static const room rooms[] = {
     {"daemon/rigsim", 7, 0, {"rigsim.h", NULL}},
     {"daemon/report", 8, 0, {"trial_report.h", NULL}},
     {"daemon/campaign", 8, 0, {"campaign.h", NULL}},
+    {"daemon/check", 8, 0, {"check.h", NULL}},
     {"daemon/ribbonctl_commands", 9, 0, {"ctl.h", NULL}},
     {"daemon/ribbon_sim_commands", 9, 0, {"sim_cmd.h", NULL}},
     {"daemon", 10, 0, {NULL}},

@@ -247,6 +247,25 @@ async function loadStatus() {
   $('source-box').hidden = s.mode !== 'replay'; // replay mode: POST /trials {"source_trial": ID}
   $('overrides').disabled = s.mode === 'replay';
   if (s.state === 'idle' && (!view || view.trial === null)) setState('idle');
+  showChecks(s.checks);
+}
+
+// The rig's readiness checks (GET /status "checks"): the fails and warnings, shown while any
+// stands; trials are refused while one fails. "Check again" runs them (POST /checks).
+function showChecks(c) {
+  if (!c) return;
+  const items = (c.checks || []).filter((it) => it.level !== 'ok');
+  $('checks-box').hidden = items.length === 0;
+  $('checks-state').textContent = c.ok ? 'ready' : 'NOT READY, trials refused';
+  $('checks-box').dataset.ok = c.ok ? '1' : '0';
+  const ul = $('checks');
+  ul.textContent = '';
+  for (const it of items) {
+    const li = document.createElement('li');
+    li.className = it.level === 'fail' ? 'fault' : 'warning';
+    li.textContent = it.level + ' ' + it.part + ' ' + it.what + ': ' + it.text;
+    ul.appendChild(li);
+  }
 }
 
 async function loadTrials() {
@@ -353,6 +372,7 @@ $('start').addEventListener('click', () => {
   if (!$('source-box').hidden && source >= 1) body.source_trial = source;
   control('/trials', body).catch((e) => ($('control-msg').textContent = String(e)));
 });
+$('checks-run').addEventListener('click', () => control('/checks', {}).then(loadStatus).catch((e) => ($('control-msg').textContent = String(e))));
 $('abort').addEventListener('click', () => control('/trials/current/abort', {}).catch((e) => ($('control-msg').textContent = String(e))));
 
 // ---- the campaign's queue (docs/campaign.md) ----------------------------------------------------
