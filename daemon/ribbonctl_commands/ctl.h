@@ -17,4 +17,14 @@ int ctl_transcode_main(int argc, char **argv);    /* ctl_transcode.c: raw video 
 int ctl_trials_main(int argc, char **argv); /* ctl_trials.c: start abort status list show export report
                                             phase-report replay */
 int ctl_campaign_main(int argc, char **argv); /* ctl_campaign.c: specimen, queue */
+int ctl_phase_main(int argc, char **argv);    /* ctl_phase.c: the lab's phase diagram */
+int ctl_plan_main(int argc, char **argv);     /* ctl_plan.c: the next specimens, approval */
+
+/* ctl_phase.c, shared with ctl_plan.c: the predicted boundary over [phi_lo, phi_hi], from
+ * boundary_csv (ribbon-sim boundary's CSV) or, with config (cfg loaded from it), traced from its
+ * scene and cached in DB.boundary.csv. *have 0 when neither was given. -1 with the reason printed. */
+struct campaign_predicted;
+struct rig_config;
+int ctl_campaign_predicted(const char *config, const char *boundary_csv, const char *db, double phi_lo, double phi_hi,
+                           struct campaign_predicted *pred, struct rig_config *cfg, int *have);
 #endif
