@@ -8,6 +8,7 @@
  *   campaign_predicted.h the predicted boundary Gamma*(phi): ribbon-sim boundary's CSV or a cached trace
  *   campaign_phase.h     the lab's phase diagram from the store: counts, edges, CSV, JSON, figure
  *   campaign_plan.h      the next specimens: beliefs with a fitted systematic offset, proposals
+ *   campaign_bench.h     the simulated campaign: the planner against a bench of twins
  * Everything outside this folder includes this header only. */
 #ifndef RIBBON_CAMPAIGN_H
 #define RIBBON_CAMPAIGN_H
@@ -20,5 +21,6 @@
 #include "campaign_predicted.h"
 #include "campaign_phase.h"
 #include "campaign_plan.h"
+#include "campaign_bench.h"
 
 #endif

@@ -19,6 +19,7 @@ int ctl_trials_main(int argc, char **argv); /* ctl_trials.c: start abort status 
 int ctl_campaign_main(int argc, char **argv); /* ctl_campaign.c: specimen, queue */
 int ctl_phase_main(int argc, char **argv);    /* ctl_phase.c: the lab's phase diagram */
 int ctl_plan_main(int argc, char **argv);     /* ctl_plan.c: the next specimens, approval */
+int ctl_plan_bench_main(int argc, char **argv); /* ctl_plan_bench.c: the simulated campaign */
 
 /* ctl_phase.c, shared with ctl_plan.c: the predicted boundary over [phi_lo, phi_hi], from
  * boundary_csv (ribbon-sim boundary's CSV) or, with config (cfg loaded from it), traced from its
