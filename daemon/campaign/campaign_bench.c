@@ -74,12 +74,13 @@ static double sign_of(double v)
 
 /* The twin folded at (phi, gamma): 1 asymmetric, 0 symmetric, -1 failed or neither. */
 static int measure(const rod_scene *scene, const campaign_bench_opts *o, double phi, double gamma, unsigned *rng,
-                   char *why, size_t why_len)
+                   double *angle, char *why, size_t why_len)
 {
     rod_scene t = *scene;
     double ul = (2 * uniform(rng) - 1) * o->spread, ur = (2 * uniform(rng) - 1) * o->spread;
     double base = phi - o->relax_deg;
     double mean = base * (1 + 0.5 * (ul + ur));
+    *angle = mean;
     t.fold_angle_deg = sign_of(scene->fold_angle_deg) * mean;
     t.fold_angle_left_deg = t.fold_angle_right_deg = NAN;
     t.fold_position_left = t.fold_position_right = NAN;
@@ -143,7 +144,8 @@ int campaign_bench_run(const rod_scene *scene, const campaign_bench_opts *o, cam
         if (campaign_plan_run(o->phi_deg, r->predicted, n, obs, nobs, &po, 1, &res, why, why_len)) return -1;
         /* a phi already narrow enough gets nothing more: plan among the others */
         double t1 = now_s();
-        int reg = measure(scene, o, prop.phi_deg, prop.gamma, &rng, w, sizeof w);
+        double angle = NAN;
+        int reg = measure(scene, o, prop.phi_deg, prop.gamma, &rng, &angle, w, sizeof w);
         r->classify_s += now_s() - t1;
         if (reg < 0) {
             snprintf(why, why_len, "measuring specimen %d: %s", r->specimens + 1, w);
@@ -163,8 +165,8 @@ int campaign_bench_run(const rod_scene *scene, const campaign_bench_opts *o, cam
             if (o->phi_deg[j] == prop.phi_deg) r->per_phi[j]++;
         if (progress) {
             char line[200];
-            snprintf(line, sizeof line, "specimen %d: phi %g Gamma %.5f -> %s (offset %+.4f)", r->specimens,
-                     prop.phi_deg, prop.gamma, reg ? "asymmetric" : "symmetric", res.offset_mean);
+            snprintf(line, sizeof line, "specimen %d: phi %g Gamma %.5f (twin's creases %.3f deg) -> %s (offset %+.4f)",
+                     r->specimens, prop.phi_deg, prop.gamma, angle, reg ? "asymmetric" : "symmetric", res.offset_mean);
             progress(u, line);
         }
     }

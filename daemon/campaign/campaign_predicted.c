@@ -21,6 +21,35 @@ void campaign_predicted_free(campaign_predicted *p)
     p->n = 0;
 }
 
+static char *slurp(const char *path)
+{
+    FILE *f = path ? fopen(path, "rb") : NULL;
+    if (!f) return NULL;
+    size_t cap = 4096, n = 0, r;
+    char *s = malloc(cap);
+    while (s && (r = fread(s + n, 1, cap - n - 1, f)) > 0) {
+        n += r;
+        if (n + 1 == cap) {
+            char *t = realloc(s, cap *= 2);
+            if (!t) free(s);
+            s = t;
+        }
+    }
+    fclose(f);
+    if (s) s[n] = '\0';
+    return s;
+}
+
+char *campaign_predicted_key_text(const char *rig_path, const char *scene_path)
+{
+    char *rig = slurp(rig_path), *scene = slurp(scene_path);
+    size_t len = (rig ? strlen(rig) : 0) + (scene ? strlen(scene) : 0) + 8;
+    char *key = malloc(len);
+    if (key) snprintf(key, len, "%s\n--\n%s", rig ? rig : "", scene ? scene : "");
+    free(rig), free(scene);
+    return key;
+}
+
 uint64_t campaign_predicted_key(const char *text)
 {
     uint64_t h = 1469598103934665603ULL;

@@ -15,6 +15,11 @@
 
 #include "scene.h"
 
+/* The phi range ribbonctl and ribbond trace (and cache) the predicted boundary over, whatever is
+ * asked: one cache serves the phase diagram, the planner and the API. */
+#define CAMPAIGN_PHI_TRACE_LO 20.0
+#define CAMPAIGN_PHI_TRACE_HI 160.0
+
 typedef struct campaign_predicted {
     double *phi_deg, *gamma; /* n points, phi ascending */
     size_t n;
@@ -44,6 +49,10 @@ int campaign_predicted_cached(const rod_scene *sc, const char *scene_text, doubl
  * range 45.2 .. 135 deg: ...") when phi lies outside the curve. */
 int campaign_predicted_at(const campaign_predicted *p, double phi_deg, double *gamma, char *why, size_t why_len);
 void campaign_predicted_free(campaign_predicted *p);
+/* The text the cache is keyed on: the rig file's text, a separator, the scene file's (unreadable
+ * files count as empty), so ribbonctl and ribbond share one cache per rig. malloc'ed; NULL when out
+ * of memory. */
+char *campaign_predicted_key_text(const char *rig_path, const char *scene_path);
 /* FNV-1a 64 of a text (the cache key). */
 uint64_t campaign_predicted_key(const char *text);
 

@@ -80,27 +80,6 @@ static int parse(int argc, char **argv, phase_opts *o)
     return 0;
 }
 
-/* The whole text of a file, malloc'ed, or NULL. */
-static char *slurp(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    size_t cap = 4096, n = 0;
-    char *s = malloc(cap);
-    size_t r;
-    while (s && (r = fread(s + n, 1, cap - n - 1, f)) > 0) {
-        n += r;
-        if (n + 1 == cap) {
-            char *t = realloc(s, cap *= 2);
-            if (!t) free(s);
-            s = t;
-        }
-    }
-    fclose(f);
-    if (s) s[n] = '\0';
-    return s;
-}
-
 int ctl_campaign_predicted(const char *config, const char *boundary_csv, const char *db, double phi_lo, double phi_hi,
                            campaign_predicted *pred, rig_config *cfg_out, int *have)
 {
@@ -115,11 +94,7 @@ int ctl_campaign_predicted(const char *config, const char *boundary_csv, const c
         return 0;
     }
     if (!config) return 0;
-    char *rig = slurp(cfg_out->path), *scene = slurp(cfg_out->scene_path);
-    size_t len = (rig ? strlen(rig) : 0) + (scene ? strlen(scene) : 0) + 64;
-    char *key = malloc(len);
-    if (key) snprintf(key, len, "%s\n--\n%s", rig ? rig : "", scene ? scene : "");
-    free(rig), free(scene);
+    char *key = campaign_predicted_key_text(cfg_out->path, cfg_out->scene_path);
     char cache[1100];
     snprintf(cache, sizeof cache, "%s.boundary.csv", db);
     fprintf(stderr, "predicted boundary: phi %g .. %g deg from %s\n", phi_lo, phi_hi, cfg_out->scene_path);
@@ -167,7 +142,8 @@ int ctl_phase_main(int argc, char **argv)
     double lo = ph.obs[0].phi_deg, hi = ph.obs[ph.n_obs - 1].phi_deg;
     campaign_predicted pred = {0};
     int have = 0;
-    if (ctl_campaign_predicted(o.config, o.boundary_csv, db, fmax(1, lo - 5), fmin(179, hi + 5), &pred, &cfg, &have)) {
+    if (ctl_campaign_predicted(o.config, o.boundary_csv, db, CAMPAIGN_PHI_TRACE_LO, CAMPAIGN_PHI_TRACE_HI, &pred, &cfg,
+                               &have)) {
         campaign_phase_free(&ph);
         return 1;
     }

@@ -20,9 +20,6 @@
 #include "store.h"
 
 #define MAX_PHI 32
-/* The predicted boundary is traced (and cached) over this phi range once, whatever is asked. */
-#define PHI_TRACE_LO 20.0
-#define PHI_TRACE_HI 160.0
 
 typedef struct plan_opts {
     const char *db, *config, *boundary_csv, *phi, *url, *token, *name;
@@ -117,18 +114,6 @@ static int parse(int argc, char **argv, plan_opts *o)
     return 0;
 }
 
-static json_t *proposal_json(const store_plan_proposal *p)
-{
-    return json_pack("{s:I,s:I,s:f,s:f,s:f,s:f,s:f,s:f,s:b,s:s,s:o,s:o,s:o,s:s,s:o}", "id", (json_int_t)p->id, "batch",
-                     (json_int_t)p->batch, "phi_deg", p->phi_deg, "gamma", p->gamma, "sd_before", p->sd_before,
-                     "predicted_gamma", p->predicted_gamma, "offset_mean", p->offset_mean, "offset_sd", p->offset_sd,
-                     "calibrated", p->calibrated, "status", store_plan_status_name(p->status), "specimen",
-                     p->specimen_name[0] ? json_string(p->specimen_name) : json_null(), "operator_item",
-                     p->operator_item_id ? json_integer(p->operator_item_id) : json_null(), "trial_item",
-                     p->trial_item_id ? json_integer(p->trial_item_id) : json_null(), "created_at", p->created_at,
-                     "approved_at", p->approved_at[0] ? json_string(p->approved_at) : json_null());
-}
-
 static void print_json(json_t *j)
 {
     char *t = json_dumps(j, JSON_INDENT(2));
@@ -188,7 +173,7 @@ static int list(store *st, const plan_opts *o)
     }
     if (o->json) {
         json_t *a = json_array();
-        for (size_t k = 0; k < n; k++) json_array_append_new(a, proposal_json(&v[k]));
+        for (size_t k = 0; k < n; k++) json_array_append_new(a, campaign_proposal_json(&v[k]));
         print_json(a);
         json_decref(a);
     } else {
@@ -265,7 +250,7 @@ int ctl_plan_main(int argc, char **argv)
     }
     campaign_predicted pred = {0};
     int have = 0;
-    if (ctl_campaign_predicted(o.config, o.boundary_csv, db, PHI_TRACE_LO, PHI_TRACE_HI, &pred, &cfg, &have) || !have) {
+    if (ctl_campaign_predicted(o.config, o.boundary_csv, db, CAMPAIGN_PHI_TRACE_LO, CAMPAIGN_PHI_TRACE_HI, &pred, &cfg, &have) || !have) {
         if (!have) fprintf(stderr, "ribbonctl plan: the planner needs the predicted boundary: give --config RIG or --boundary-csv FILE\n");
         campaign_phase_free(&ph);
         store_close(st);
@@ -311,7 +296,7 @@ int ctl_plan_main(int argc, char **argv)
                                                "predicted_gamma", beliefs[j].predicted, "mean", beliefs[j].mean, "sd",
                                                beliefs[j].sd, "median", beliefs[j].median, "lo", beliefs[j].lo, "hi",
                                                beliefs[j].hi));
-        for (size_t k = 0; k < res.k; k++) json_array_append_new(a, proposal_json(&sp_rows[k]));
+        for (size_t k = 0; k < res.k; k++) json_array_append_new(a, campaign_proposal_json(&sp_rows[k]));
         json_t *j = json_pack("{s:f,s:f,s:b,s:s,s:o,s:o}", "offset_mean", res.offset_mean, "offset_sd", res.offset_sd,
                               "calibrated", po.calibrate, "predicted_source", pred.source, "beliefs", b, "proposals", a);
         print_json(j);
