@@ -301,6 +301,98 @@ static void ribbonctl_phase_and_plan(void **state)
     free(v);
 }
 
+static int no_trial(void *user, const store_specimen *sp, const char *const *set, int n_set, const char *note,
+                    int64_t *trial_id, char *w, size_t wl)
+{
+    (void)user, (void)sp, (void)set, (void)n_set, (void)note, (void)trial_id;
+    snprintf(w, wl, "no trials in this test");
+    return -1;
+}
+
+static int none_running(void *user, int64_t trial_id)
+{
+    (void)user, (void)trial_id;
+    return 0;
+}
+
+/* The routes, as ribbond serves them: GET /campaign/phase (404 named on an empty store, then the
+ * data with the predicted boundary from the rig's cache), GET /plan, POST /plan/ID/approve (the
+ * specimen, an operator step and a trial queued; approving twice is a 409; no queue is a 409). */
+static void api_routes(void **state)
+{
+    fx *f = *state;
+    campaign_ctx c = {.st = f->st, .defaults = store_specimen_default()};
+    c.defaults.length_m = 0.2, c.defaults.width_m = 0.005, c.defaults.thickness_m = 2.5e-4;
+    json_t *out = NULL;
+    int http = 0;
+    assert_int_equal(campaign_route(&c, "GET", "/campaign/phase", NULL, &out, &http, why, sizeof why), -1);
+    assert_int_equal(http, 404);
+    assert_non_null(strstr(why, "no specimens"));
+    fill(f->st);
+    /* the predicted boundary from a cache file already there (its key: these two paths' texts) */
+    char cache[128];
+    snprintf(cache, sizeof cache, "%s/cache.csv", f->dir);
+    campaign_predicted pred;
+    assert_int_equal(campaign_predicted_load_csv(f->bcsv, &pred, why, sizeof why), 0);
+    char *key = campaign_predicted_key_text(f->bcsv, f->bcsv);
+    char line[160];
+    snprintf(line, sizeof line, "# campaign-boundary key=%016llx phi=%g:%g",
+             (unsigned long long)campaign_predicted_key(key), CAMPAIGN_PHI_TRACE_LO, CAMPAIGN_PHI_TRACE_HI);
+    free(key);
+    assert_int_equal(campaign_predicted_save_csv(&pred, cache, line, why, sizeof why), 0);
+    campaign_predicted_free(&pred);
+    rod_scene sc = rod_scene_default();
+    c.scene = &sc;
+    c.rig_path = c.scene_path = f->bcsv;
+    c.boundary_cache = cache;
+    assert_int_equal(campaign_route(&c, "GET", "/campaign/phase", NULL, &out, &http, why, sizeof why), 0);
+    assert_int_equal(http, 200);
+    json_t *pj = json_object_get(out, "predicted");
+    assert_non_null(strstr(json_string_value(json_object_get(pj, "source")), "cache"));
+    assert_int_equal(json_array_size(json_object_get(pj, "gamma")), 9);
+    assert_int_equal(json_array_size(json_object_get(out, "edges")), 2);
+    json_decref(out);
+    store_plan_proposal p = {.phi_deg = 120, .gamma = 0.18, .sd_before = 0.01, .predicted_gamma = 0.185};
+    assert_int_equal(store_plan_add_batch(f->st, &p, 1, T0, why, sizeof why), STORE_OK);
+    char path[64];
+    snprintf(path, sizeof path, "/plan/%lld/approve", (long long)p.id);
+    json_t *body = json_object();
+    assert_int_equal(campaign_route(&c, "POST", path, body, &out, &http, why, sizeof why), -1);
+    assert_int_equal(http, 409); /* no queue */
+    campaign_queue_ops ops = {.start_trial = no_trial, .trial_running = none_running};
+    assert_int_equal(campaign_queue_open(f->db, &ops, NULL, NULL, &c.q, why, sizeof why), 0);
+    assert_int_equal(campaign_route(&c, "POST", path, body, &out, &http, why, sizeof why), 0);
+    assert_int_equal(http, 201);
+    json_t *jp = json_object_get(out, "proposal");
+    assert_string_equal(json_string_value(json_object_get(jp, "status")), "approved");
+    char want[32];
+    snprintf(want, sizeof want, "plan-%lld", (long long)p.id);
+    assert_string_equal(json_string_value(json_object_get(jp, "specimen")), want);
+    json_int_t op = json_integer_value(json_object_get(jp, "operator_item")),
+               ti = json_integer_value(json_object_get(jp, "trial_item"));
+    json_decref(out);
+    store_queue_item it;
+    assert_int_equal(store_queue_get(f->st, op, &it, why, sizeof why), STORE_OK);
+    assert_int_equal(it.kind, STORE_QUEUE_OPERATOR);
+    assert_non_null(strstr(it.prompt, "phi 120 deg, Gamma 0.1800"));
+    assert_int_equal(store_queue_get(f->st, ti, &it, why, sizeof why), STORE_OK);
+    assert_int_equal(it.kind, STORE_QUEUE_TRIAL);
+    assert_string_equal(it.specimen_name, want);
+    store_specimen sp;
+    assert_int_equal(store_specimen_get_by_name(f->st, want, &sp, why, sizeof why), STORE_OK);
+    assert_true(sp.phi_deg == 120 && sp.fold_position == 0.18);
+    assert_int_equal(campaign_route(&c, "POST", path, body, &out, &http, why, sizeof why), -1);
+    assert_int_equal(http, 409);
+    assert_non_null(strstr(why, "is approved"));
+    assert_int_equal(campaign_route(&c, "GET", "/plan", NULL, &out, &http, why, sizeof why), 0);
+    assert_int_equal(json_array_size(out), 1);
+    json_decref(out);
+    assert_int_equal(campaign_route(&c, "POST", "/plan/7/reject", body, &out, &http, why, sizeof why), -1);
+    assert_int_equal(http, 404);
+    json_decref(body);
+    campaign_queue_close(c.q);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -308,6 +400,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(edges_land_in_their_brackets, setup, teardown),
         cmocka_unit_test_setup_teardown(proposals_store, setup, teardown),
         cmocka_unit_test_setup_teardown(ribbonctl_phase_and_plan, setup, teardown),
+        cmocka_unit_test_setup_teardown(api_routes, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
