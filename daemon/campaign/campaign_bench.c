@@ -119,7 +119,7 @@ int campaign_bench_run(const rod_scene *scene, const campaign_bench_opts *o, cam
         snprintf(why, why_len, "the model's boundary: %s", w);
         return -1;
     }
-    campaign_obs obs[64];
+    campaign_obs *obs = r->obs;
     size_t nobs = 0;
     unsigned rng = o->seed ? o->seed : 1;
     campaign_plan_opts po = campaign_plan_opts_default();
@@ -154,12 +154,14 @@ int campaign_bench_run(const rod_scene *scene, const campaign_bench_opts *o, cam
         size_t k = 0;
         while (k < nobs && !(obs[k].phi_deg == prop.phi_deg && obs[k].gamma == prop.gamma)) k++;
         if (k == nobs) {
-            if (nobs == sizeof obs / sizeof obs[0]) break;
+            if (nobs == sizeof r->obs / sizeof r->obs[0]) break;
             obs[nobs++] = (campaign_obs){.phi_deg = prop.phi_deg, .gamma = prop.gamma};
         }
         if (reg) obs[k].n_asym++;
         else obs[k].n_sym++;
         obs[k].n_specimens++;
+        if (r->specimens < 64) r->order[r->specimens] = (int)k;
+        r->nobs = nobs;
         r->specimens++;
         for (size_t j = 0; j < n; j++)
             if (o->phi_deg[j] == prop.phi_deg) r->per_phi[j]++;

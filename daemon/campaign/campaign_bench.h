@@ -29,6 +29,7 @@
 
 #include <stddef.h>
 
+#include "campaign_edge.h"
 #include "scene.h"
 
 #define CAMPAIGN_BENCH_MAX_PHI 8
@@ -56,6 +57,9 @@ typedef struct campaign_bench_result {
     int per_phi[CAMPAIGN_BENCH_MAX_PHI]; /* specimens at each phi */
     double classify_s;            /* wall time of the measurements */
     double wall_s;                /* the whole campaign, the truth's and the model's traces included */
+    campaign_obs obs[64];         /* the measured design points, in the order first tried */
+    size_t nobs;
+    int order[64];                /* specimen k's design point (index into obs) */
 } campaign_bench_result;
 
 /* Runs one campaign on the scene (the planner's model). -1 with why when a trace or a

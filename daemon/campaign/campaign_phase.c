@@ -208,7 +208,7 @@ int campaign_phase_png(const campaign_phase *ph, const campaign_predicted *pred,
     }
     for (size_t k = 0; k < ph->n_edges; k++)
         e[k] = (plot_phase_edge){ph->edges[k].phi_deg, ph->edges[k].gamma, ph->edges[k].lo, ph->edges[k].hi};
-    if (!d.title) d.title = "the lab's phase diagram: measured regimes, experimental and predicted boundaries";
+    if (!d.title) d.title = "the lab's phase diagram";
     d.trials = t;
     d.n_trials = m;
     d.edges = e;

@@ -320,7 +320,7 @@ static plot_status phase_draw(void *vctx, char *why, size_t why_len)
         e[n++] = (plot_legend_entry){"predicted boundary", PLOT_LEGEND_KIND_LINE, PLOT_COL_INK, PLOT_LSTY_DASHED,
                                      PLOT_WIDTH_DATA, NULL, 0};
     if (have_edges)
-        e[n++] = (plot_legend_entry){"experimental boundary (95%)", PLOT_LEGEND_KIND_SYMBOL, PLOT_COL_SERIES_3, 0, 0,
+        e[n++] = (plot_legend_entry){"experimental boundary", PLOT_LEGEND_KIND_SYMBOL, PLOT_COL_SERIES_3, 0, 0,
                                      PLOT_GLYPH_STAR, 1.4};
     for (int k = 0; k < 5; k++) {
         if (order[k] == PLOT_REGIME_NO_UPPER || !marks[order[k]])
