@@ -191,8 +191,9 @@ int campaign_phase_png(const campaign_phase *ph, const campaign_predicted *pred,
     /* one marker per regime present at a point, with its count */
     plot_phase_trial *t = calloc(3 * ph->n_obs + 1, sizeof *t);
     plot_phase_edge *e = calloc(ph->n_edges + 1, sizeof *e);
-    if (!t || !e) {
-        free(t), free(e);
+    int *cnt = calloc(3 * ph->n_obs + 1, sizeof *cnt);
+    if (!t || !e || !cnt) {
+        free(t), free(e), free(cnt);
         snprintf(why, why_len, "phase figure: out of memory");
         return -1;
     }
@@ -202,15 +203,16 @@ int campaign_phase_png(const campaign_phase *ph, const campaign_predicted *pred,
         /* symmetric and asymmetric at one point side by side would hide each other: nudge them
          * apart by a fraction of a degree in phi */
         int both = o->n_asym && o->n_sym;
-        if (o->n_asym) t[m++] = (plot_phase_trial){o->gamma, o->phi_deg + (both ? 0.6 : 0), PLOT_REGIME_ASYMMETRIC, o->n_asym};
-        if (o->n_sym) t[m++] = (plot_phase_trial){o->gamma, o->phi_deg - (both ? 0.6 : 0), PLOT_REGIME_SYMMETRIC, o->n_sym};
-        if (o->n_other) t[m++] = (plot_phase_trial){o->gamma, o->phi_deg, PLOT_REGIME_NO_SNAP, o->n_other};
+        if (o->n_asym) cnt[m] = o->n_asym, t[m++] = (plot_phase_trial){o->gamma, o->phi_deg + (both ? 0.6 : 0), PLOT_REGIME_ASYMMETRIC};
+        if (o->n_sym) cnt[m] = o->n_sym, t[m++] = (plot_phase_trial){o->gamma, o->phi_deg - (both ? 0.6 : 0), PLOT_REGIME_SYMMETRIC};
+        if (o->n_other) cnt[m] = o->n_other, t[m++] = (plot_phase_trial){o->gamma, o->phi_deg, PLOT_REGIME_NO_SNAP};
     }
     for (size_t k = 0; k < ph->n_edges; k++)
         e[k] = (plot_phase_edge){ph->edges[k].phi_deg, ph->edges[k].gamma, ph->edges[k].lo, ph->edges[k].hi};
     if (!d.title) d.title = "the lab's phase diagram";
     d.trials = t;
     d.n_trials = m;
+    d.trial_counts = cnt;
     d.edges = e;
     d.n_edges = ph->n_edges;
     if (pred && pred->n) {
@@ -219,6 +221,6 @@ int campaign_phase_png(const campaign_phase *ph, const campaign_predicted *pred,
         d.n_boundary = pred->n;
     }
     plot_status s = plot_phase_report(path, &d, why, why_len);
-    free(t), free(e);
+    free(t), free(e), free(cnt);
     return s == PLOT_OK ? 0 : -1;
 }

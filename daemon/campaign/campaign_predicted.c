@@ -109,6 +109,10 @@ int campaign_predicted_load_csv(const char *path, campaign_predicted *out, char 
     int lineno = 0, header = 0, have_dl = 0;
     while (fgets(line, sizeof line, f)) {
         lineno++;
+        if (!strncmp(line, "# stop: ", 8)) {
+            snprintf(out->stop, sizeof out->stop, "%.299s", line + 8);
+            out->stop[strcspn(out->stop, "\n")] = '\0';
+        }
         if (line[0] == '#' || line[0] == '\n') continue;
         if (!header) {
             if (strncmp(line, "kind,dl,phi_deg,gamma", 21)) {
@@ -160,6 +164,7 @@ int campaign_predicted_save_csv(const campaign_predicted *p, const char *path, c
         return -1;
     }
     if (key_line) fprintf(f, "%s\n", key_line);
+    if (p->stop[0]) fprintf(f, "# stop: %s\n", p->stop);
     fprintf(f, "kind,dl,phi_deg,gamma,dw,dz,eig_even,eig_odd,parity_even,parity_odd\n");
     for (size_t i = 0; i < p->n; i++)
         fprintf(f, "boundary,%.17g,%.17g,%.17g,,,,,,\n", p->dl, p->phi_deg[i], p->gamma[i]);
@@ -233,7 +238,7 @@ int campaign_predicted_cached(const rod_scene *sc, const char *scene_text, doubl
         fclose(f);
         char w[300];
         if (ok && k == key && a <= phi_lo && bb >= phi_hi && campaign_predicted_load_csv(cache_path, out, w, sizeof w) == 0) {
-            snprintf(out->source, sizeof out->source, "cache %s", cache_path);
+            snprintf(out->source, sizeof out->source, "cache %.580s", cache_path);
             return 0;
         }
     }

@@ -29,7 +29,8 @@ typedef struct campaign_predicted {
     char stop[300];          /* why a trace ended short of the range asked ("" when covered) */
 } campaign_predicted;
 
-/* Reads ribbon-sim boundary's CSV (rows "boundary", the first Delta L's; '#' lines skipped).
+/* Reads ribbon-sim boundary's CSV (rows "boundary", the first Delta L's; '#' lines skipped, but
+ * "# stop: WHY", the cache's note of where its trace stopped, is kept in stop).
  * -1 with why naming the file and line; a file without boundary rows is an error. */
 int campaign_predicted_load_csv(const char *path, campaign_predicted *out, char *why, size_t why_len);
 /* Writes it back in that format (the cache), key line first when key_line is not NULL. */

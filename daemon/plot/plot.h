@@ -95,8 +95,6 @@ typedef struct plot_phase_trial {
     double gamma;       /* crease position Gamma, fraction of l */
     double phi_deg;     /* crease angle phi, degrees */
     plot_regime regime; /* measured regime */
-    int count;          /* trials drawn by this marker: 2 or more is written beside it ("x3");
-                           0 or 1: one trial, no text */
 } plot_phase_trial;
 
 /* The boundary the experiments support at one phi (ribbonctl phase): a bar from lo to hi (a NaN
@@ -127,6 +125,8 @@ typedef struct plot_phase_data {
     size_t n_boundary;                /* 0 = no boundary curve */
     const plot_phase_trial *trials;   /* measured trials */
     size_t n_trials;
+    const int *trial_counts;          /* NULL, or n_trials counts: the trials a marker stands for;
+                                         2 or more is written beside it ("x3") */
     const plot_phase_edge *edges;     /* experimental boundary, one per phi (NULL: none) */
     size_t n_edges;
     int width_px, height_px;          /* 0 = default */

@@ -284,9 +284,9 @@ static plot_status phase_draw(void *vctx, char *why, size_t why_len)
         plschr(0.0, PLOT_CHAR_SCALE * scale);
         plstring(1, &x, &y, glyph);
         plschr(0.0, PLOT_CHAR_SCALE);
-        if (t->count > 1) {
+        if (d->trial_counts && d->trial_counts[i] > 1) {
             char txt[32];
-            snprintf(txt, sizeof txt, "×%d", t->count);
+            snprintf(txt, sizeof txt, "×%d", d->trial_counts[i]);
             plschr(0.0, 0.8 * PLOT_CHAR_SCALE);
             plptex(x + 0.012 * (c->x1 - c->x0), y + 0.02 * (c->y1 - c->y0), 1.0, 0.0, 0.0, txt);
             plschr(0.0, PLOT_CHAR_SCALE);
