@@ -142,7 +142,6 @@ int campaign_bench_run(const rod_scene *scene, const campaign_bench_opts *o, cam
         }
         if (r->specimens >= o->max_specimens) break;
         if (campaign_plan_run(o->phi_deg, r->predicted, n, obs, nobs, &po, 1, &res, why, why_len)) return -1;
-        /* a phi already narrow enough gets nothing more: plan among the others */
         double t1 = now_s();
         double angle = NAN;
         int reg = measure(scene, o, prop.phi_deg, prop.gamma, &rng, &angle, w, sizeof w);
