@@ -9,7 +9,8 @@
  *   POST /queue/start | /queue/stop
  *   GET  /queue/ID                  the item's whole status
  *   POST /queue/ID/remove | /queue/ID/move {"position": N} | /queue/ID/confirm {"values": {...}}
- *   GET  /campaign/phase            the lab's phase diagram's data (campaign_phase_json)    404 none
+ *   GET  /campaign/phase            the lab's phase diagram's data (campaign_phase_json); with
+ *                                   nothing to draw yet, empty lists and "empty": why
  *   GET  /plan                      every proposal, newest first
  *   POST /plan/ID/approve           {"name": "..."}: the proposal's specimen, an operator step
  *                                   and a trial in the queue                    409 not proposed
@@ -153,7 +154,13 @@ static int phase_data(const campaign_ctx *c, json_t **out, int *http, char *why,
     campaign_phase ph;
     char w[1024];
     int rc = campaign_phase_collect(c->st, &ph, w, sizeof w);
-    if (rc) return fail(http, rc == -2 ? 404 : 500, why, why_len, "%s", w);
+    if (rc == -2) {
+        /* nothing to draw yet is a state, not a failure: 200 with the reason (the page polls this) */
+        *out = json_pack("{s:[],s:[],s:n,s:i,s:i,s:s}", "points", "edges", "predicted", "specimens", 0, "trials", 0,
+                         "empty", w);
+        return 0;
+    }
+    if (rc) return fail(http, 500, why, why_len, "%s", w);
     campaign_predicted pred = {0};
     int have = 0;
     if (c->scene) {

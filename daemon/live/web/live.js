@@ -358,8 +358,8 @@ async function loadCampaign() {
   const r = await api('/campaign/phase');
   const d = await r.json().catch(() => ({}));
   $('campaign-box').dataset.status = String(r.status);
-  if (!r.ok) {
-    $('campaign-info').textContent = d.error || ('HTTP ' + r.status);
+  if (!r.ok || d.empty) {
+    $('campaign-info').textContent = d.empty || d.error || ('HTTP ' + r.status);
   } else {
     $('campaign-info').textContent = `${d.specimens} specimens, ${d.trials} measured trials; predicted boundary: ` +
       (d.predicted ? d.predicted.source : (d.predicted_error || 'none'));
