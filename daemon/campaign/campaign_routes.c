@@ -255,7 +255,18 @@ static int plan_approve(const campaign_ctx *c, int64_t id, const json_t *body, j
     int64_t tid = (int64_t)json_integer_value(json_object_get(to, "id"));
     json_decref(oo);
     json_decref(to);
-    if (rc) return -1;
+    if (rc) {
+        /* the trial could not be queued: take the operator step out again (it ends skipped), so
+         * the queue never holds half an approval; the proposal stays proposed */
+        if (oid) {
+            json_t *ro = NULL;
+            int h2;
+            char w2[256];
+            campaign_queue_remove(c->q, oid, &ro, &h2, w2, sizeof w2);
+            json_decref(ro);
+        }
+        return -1;
+    }
     if ((e = store_plan_approve(c->st, id, sid, oid, tid, store_wall_now(), w, sizeof w)) != STORE_OK)
         return fail(http, e == STORE_E_STATE ? 409 : 500, why, why_len, "%s", w);
     store_plan_get(c->st, id, &p, w, sizeof w);
