@@ -25,6 +25,9 @@ static const cli_command commands[] = {
     {"phase-report", ctl_trials_main, "every trial's measured regime on the predicted (Gamma, phi) phase diagram"},
     {"replay", ctl_trials_main, "replay ID: a recorded trial through tracking and snap detection again"},
     {"specimen", ctl_campaign_main, "the store's specimens: add NAME --phi DEG --gamma G ... | list | show NAME | retire NAME"},
+    {"phase", ctl_phase_main, "the lab's phase diagram: measured regimes, experimental and predicted boundaries (--out, --csv, --json)"},
+    {"plan", ctl_plan_main, "the next specimens to make (--phi LIST --count K), stored; --approve N puts one in the queue"},
+    {"plan-bench", ctl_plan_bench_main, "the simulated campaign: the planner against twins it does not know, one line"},
     {"queue", ctl_campaign_main, "the campaign's queue: add trial|operator|pause | list | show | remove | move | start | stop | confirm"},
 };
 

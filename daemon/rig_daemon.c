@@ -663,7 +663,7 @@ static int op_campaign(void *user, const char *method, const char *path, const j
 {
     rig_daemon *d = user;
     if (!strcmp(path, "/checks")) return checks_route(d, method, out, http_status, why, why_len);
-    if (!d->queue && !strncmp(path, "/queue", 6)) {
+    if (!d->queue && (!strncmp(path, "/queue", 6) || !strncmp(path, "/plan/", 6))) {
         *http_status = 409;
         snprintf(why, why_len, "the queue runs trials on rails: a %s-mode daemon has none", rig_mode_name(d->cfg.mode));
         return -1;
@@ -675,6 +675,12 @@ static int op_campaign(void *user, const char *method, const char *path, const j
     c.defaults.youngs_modulus_pa = d->cfg.scene.youngs_modulus;
     c.defaults.density_kg_m3 = d->cfg.scene.density;
     snprintf(c.defaults.material, sizeof c.defaults.material, "%.31s", d->cfg.specimen.material);
+    char cache[RIG_PATH_MAX + 16];
+    snprintf(cache, sizeof cache, "%s.boundary.csv", d->cfg.store_path);
+    c.scene = &d->cfg.scene;
+    c.rig_path = d->cfg.path;
+    c.scene_path = d->cfg.scene_path;
+    c.boundary_cache = cache;
     return campaign_route(&c, method, path, body, out, http_status, why, why_len);
 }
 

@@ -84,7 +84,8 @@ api_route api_route_parse(const char *path, int64_t *id, char *why, size_t why_l
     if (strcmp(path, "/trials") == 0)
         return API_ROUTE_TRIALS;
     if ((strcmp(path, "/specimens") == 0 || strncmp(path, "/specimens/", 11) == 0 || strcmp(path, "/queue") == 0 ||
-         strncmp(path, "/queue/", 7) == 0 || strcmp(path, "/checks") == 0) && strlen(path) < API_CAMPAIGN_PATH_MAX)
+         strncmp(path, "/queue/", 7) == 0 || strcmp(path, "/checks") == 0 || strcmp(path, "/campaign/phase") == 0 || strcmp(path, "/plan") == 0 ||
+         strncmp(path, "/plan/", 6) == 0) && strlen(path) < API_CAMPAIGN_PATH_MAX)
         return API_ROUTE_CAMPAIGN;
     if (strcmp(path, "/trials/current/abort") == 0)
         return API_ROUTE_ABORT;

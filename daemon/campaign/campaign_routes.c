@@ -9,6 +9,11 @@
  *   POST /queue/start | /queue/stop
  *   GET  /queue/ID                  the item's whole status
  *   POST /queue/ID/remove | /queue/ID/move {"position": N} | /queue/ID/confirm {"values": {...}}
+ *   GET  /campaign/phase            the lab's phase diagram's data (campaign_phase_json); with
+ *                                   nothing to draw yet, empty lists and "empty": why
+ *   GET  /plan                      every proposal, newest first
+ *   POST /plan/ID/approve           {"name": "..."}: the proposal's specimen, an operator step
+ *                                   and a trial in the queue                    409 not proposed
  *
  * The API server hands every path under /specimens and /queue here (it checks the path's bytes
  * and the token; the methods are checked here, 405 naming the allowed one). */
@@ -20,12 +25,15 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "campaign_phase.h"
+#include "campaign_plan.h"
 #include "campaign_specimen.h"
 
 int campaign_route_match(const char *path)
 {
     return path && (!strcmp(path, "/specimens") || !strncmp(path, "/specimens/", 11) || !strcmp(path, "/queue") ||
-                    !strncmp(path, "/queue/", 7));
+                    !strncmp(path, "/queue/", 7) || !strcmp(path, "/campaign/phase") || !strcmp(path, "/plan") ||
+                    !strncmp(path, "/plan/", 6));
 }
 
 static int fail(int *http, int status, char *why, size_t why_len, const char *fmt, ...)
@@ -139,6 +147,134 @@ static int specimen_retire(const campaign_ctx *c, const char *name, const json_t
     return 0;
 }
 
+/* GET /campaign/phase: the measured points, the experimental boundary and the predicted one (from
+ * the cache; traced on the first request after the rig or scene file changed, about a second). */
+static int phase_data(const campaign_ctx *c, json_t **out, int *http, char *why, size_t why_len)
+{
+    campaign_phase ph;
+    char w[1024];
+    int rc = campaign_phase_collect(c->st, &ph, w, sizeof w);
+    if (rc == -2) {
+        /* nothing to draw yet is a state, not a failure: 200 with the reason (the page polls this) */
+        *out = json_pack("{s:[],s:[],s:n,s:i,s:i,s:s}", "points", "edges", "predicted", "specimens", 0, "trials", 0,
+                         "empty", w);
+        return 0;
+    }
+    if (rc) return fail(http, 500, why, why_len, "%s", w);
+    campaign_predicted pred = {0};
+    int have = 0;
+    if (c->scene) {
+        char *key = campaign_predicted_key_text(c->rig_path, c->scene_path);
+        have = campaign_predicted_cached(c->scene, key ? key : "", CAMPAIGN_PHI_TRACE_LO, CAMPAIGN_PHI_TRACE_HI,
+                                         c->boundary_cache, &pred, w, sizeof w) == 0;
+        free(key);
+    }
+    json_t *o = campaign_phase_json(&ph, have ? &pred : NULL);
+    if (c->scene && !have) json_object_set_new(o, "predicted_error", json_string(w));
+    campaign_predicted_free(&pred);
+    campaign_phase_free(&ph);
+    *out = o;
+    return 0;
+}
+
+json_t *campaign_proposal_json(const store_plan_proposal *p)
+{
+    return json_pack("{s:I,s:I,s:f,s:f,s:f,s:f,s:f,s:f,s:b,s:s,s:o,s:o,s:o,s:s,s:o}", "id", (json_int_t)p->id, "batch",
+                     (json_int_t)p->batch, "phi_deg", p->phi_deg, "gamma", p->gamma, "sd_before", p->sd_before,
+                     "predicted_gamma", p->predicted_gamma, "offset_mean", p->offset_mean, "offset_sd", p->offset_sd,
+                     "calibrated", p->calibrated, "status", store_plan_status_name(p->status), "specimen",
+                     p->specimen_name[0] ? json_string(p->specimen_name) : json_null(), "operator_item",
+                     p->operator_item_id ? json_integer(p->operator_item_id) : json_null(), "trial_item",
+                     p->trial_item_id ? json_integer(p->trial_item_id) : json_null(), "created_at", p->created_at,
+                     "approved_at", p->approved_at[0] ? json_string(p->approved_at) : json_null());
+}
+
+static int plan_list(const campaign_ctx *c, json_t **out, int *http, char *why, size_t why_len)
+{
+    store_plan_proposal *v = NULL;
+    size_t n = 0;
+    char w[300];
+    if (store_plan_list(c->st, &v, &n, w, sizeof w) != STORE_OK) return fail(http, 500, why, why_len, "%s", w);
+    json_t *a = json_array();
+    for (size_t k = 0; k < n; k++) json_array_append_new(a, campaign_proposal_json(&v[k]));
+    free(v);
+    *out = a;
+    return 0;
+}
+
+/* POST /plan/ID/approve: the specimen (name from the body, default plan-ID; the design from the
+ * proposal, the rest from the rig's defaults), then an operator step (fold and mount it, its
+ * measured angles) and a trial of it at the end of the queue, then the proposal approved. */
+static int plan_approve(const campaign_ctx *c, int64_t id, const json_t *body, json_t **out, int *http, char *why,
+                        size_t why_len)
+{
+    if (!c->q) return fail(http, 409, why, why_len, "this daemon has no queue: a proposal goes into the queue");
+    const char *k;
+    json_t *v;
+    json_object_foreach((json_t *)body, k, v)
+    {
+        if (strcmp(k, "name")) return fail(http, 400, why, why_len, "unknown field \"%.64s\" (an approval has: name)", k);
+    }
+    json_t *jn = json_object_get(body, "name");
+    if (jn && !json_is_string(jn)) return fail(http, 400, why, why_len, "field \"name\" must be a specimen name");
+    store_plan_proposal p;
+    char w[512];
+    store_err e = store_plan_get(c->st, id, &p, w, sizeof w);
+    if (e == STORE_E_NOTFOUND) return fail(http, 404, why, why_len, "no proposal %lld (ribbonctl plan --list)", (long long)id);
+    if (e != STORE_OK) return fail(http, 500, why, why_len, "%s", w);
+    if (p.status != STORE_PLAN_PROPOSED)
+        return fail(http, 409, why, why_len, "proposal %lld is %s: only a proposed one can be approved", (long long)id,
+                    store_plan_status_name(p.status));
+    char name[64];
+    snprintf(name, sizeof name, "%s", jn ? json_string_value(jn) : "");
+    if (!name[0]) snprintf(name, sizeof name, "plan-%lld", (long long)id);
+    store_specimen sp, old;
+    if (store_specimen_get_by_name(c->st, name, &old, w, sizeof w) == STORE_OK)
+        return fail(http, 409, why, why_len, "specimen %s exists: name the new strip (\"name\")", name);
+    json_t *sb = json_pack("{s:s,s:f,s:f}", "name", name, "phi_deg", p.phi_deg, "gamma", p.gamma);
+    int rc = campaign_specimen_from_json(sb, &c->defaults, &sp, why, why_len);
+    json_decref(sb);
+    if (rc) return (*http = 400, -1);
+    int64_t sid = 0;
+    if ((e = store_specimen_upsert(c->st, &sp, &sid, w, sizeof w)) != STORE_OK)
+        return fail(http, 500, why, why_len, "%s", w);
+    char prompt[200];
+    snprintf(prompt, sizeof prompt, "fold and mount %s: phi %g deg, Gamma %.4f (plan proposal %lld); measured angles?",
+             name, p.phi_deg, p.gamma, (long long)id);
+    json_t *ob = json_pack("{s:s,s:s,s:s,s:[s,s,s]}", "kind", "operator", "specimen", name, "prompt", prompt, "fields",
+                           "crease_angle_left_deg", "crease_angle_right_deg", "folded_at");
+    json_t *oo = NULL, *to = NULL;
+    char note[64];
+    snprintf(note, sizeof note, "plan proposal %lld", (long long)id);
+    json_t *tb = json_pack("{s:s,s:s,s:s}", "kind", "trial", "specimen", name, "note", note);
+    rc = campaign_queue_add(c->q, ob, &oo, http, why, why_len);
+    if (rc == 0) rc = campaign_queue_add(c->q, tb, &to, http, why, why_len);
+    json_decref(ob);
+    json_decref(tb);
+    int64_t oid = (int64_t)json_integer_value(json_object_get(oo, "id"));
+    int64_t tid = (int64_t)json_integer_value(json_object_get(to, "id"));
+    json_decref(oo);
+    json_decref(to);
+    if (rc) {
+        /* the trial could not be queued: take the operator step out again (it ends skipped), so
+         * the queue never holds half an approval; the proposal stays proposed */
+        if (oid) {
+            json_t *ro = NULL;
+            int h2;
+            char w2[256];
+            campaign_queue_remove(c->q, oid, &ro, &h2, w2, sizeof w2);
+            json_decref(ro);
+        }
+        return -1;
+    }
+    if ((e = store_plan_approve(c->st, id, sid, oid, tid, store_wall_now(), w, sizeof w)) != STORE_OK)
+        return fail(http, e == STORE_E_STATE ? 409 : 500, why, why_len, "%s", w);
+    store_plan_get(c->st, id, &p, w, sizeof w);
+    *out = json_pack("{s:o}", "proposal", campaign_proposal_json(&p));
+    *http = 201;
+    return 0;
+}
+
 /* "/queue/ID[/verb]": the id (decimal, >= 1) and the verb ("" when none). */
 static int queue_path(const char *rest, int64_t *id, const char **verb, int *http, char *why, size_t why_len)
 {
@@ -171,6 +307,16 @@ int campaign_route(const campaign_ctx *c, const char *method, const char *path, 
             return need(method, "POST", http, why, why_len) ? -1
                                                              : specimen_retire(c, name, body, out, http, why, why_len);
         return fail(http, 404, why, why_len, "no route %s", path);
+    }
+    if (!strcmp(path, "/campaign/phase"))
+        return need(method, "GET", http, why, why_len) ? -1 : phase_data(c, out, http, why, why_len);
+    if (!strcmp(path, "/plan")) return need(method, "GET", http, why, why_len) ? -1 : plan_list(c, out, http, why, why_len);
+    if (!strncmp(path, "/plan/", 6)) {
+        int64_t pid = 0;
+        const char *pverb = "";
+        if (queue_path(path + 6, &pid, &pverb, http, why, why_len)) return -1;
+        if (strcmp(pverb, "approve")) return fail(http, 404, why, why_len, "no route %s (a proposal has: approve)", path);
+        return need(method, "POST", http, why, why_len) ? -1 : plan_approve(c, pid, body, out, http, why, why_len);
     }
     if (!strcmp(path, "/queue")) {
         if (!post) return campaign_queue_list(c->q, out, http, why, why_len);

@@ -97,6 +97,15 @@ typedef struct plot_phase_trial {
     plot_regime regime; /* measured regime */
 } plot_phase_trial;
 
+/* The boundary the experiments support at one phi (ribbonctl phase): a bar from lo to hi (a NaN
+ * side is open: the bar runs to the axis there, dotted) and, when gamma is finite, a marker at the
+ * estimate; the finite estimates are joined by a solid line. Bluish green. */
+typedef struct plot_phase_edge {
+    double phi_deg;
+    double gamma;  /* estimate; NaN = none */
+    double lo, hi; /* interval; NaN = open on that side; both NaN: not drawn */
+} plot_phase_edge;
+
 /* plot_phase_report: x = Gamma, y = phi (deg). The predicted grid is drawn as shaded cells
  * (cell edges halfway between neighbouring sweep points), the predicted boundary Gamma*(phi) as a
  * dashed black line, trials as markers: filled squares asymmetric, open circles symmetric,
@@ -116,6 +125,10 @@ typedef struct plot_phase_data {
     size_t n_boundary;                /* 0 = no boundary curve */
     const plot_phase_trial *trials;   /* measured trials */
     size_t n_trials;
+    const int *trial_counts;          /* NULL, or n_trials counts: the trials a marker stands for;
+                                         2 or more is written beside it ("x3") */
+    const plot_phase_edge *edges;     /* experimental boundary, one per phi (NULL: none) */
+    size_t n_edges;
     int width_px, height_px;          /* 0 = default */
 } plot_phase_data;
 

@@ -11,7 +11,10 @@
  *
  * On top: the predicted boundary Gamma*(phi) as a dashed black line (NaN breaks it), then the
  * trials: filled dark-blue squares asymmetric, open dark-red circles symmetric, crosses no snap,
- * open diamonds unknown. The legend only lists what is present in the figure.
+ * open diamonds unknown; a marker standing for several trials says how many ("x3"). Then the
+ * experimental boundary (ribbonctl phase): a bluish-green bar per phi over its interval (dotted to
+ * the axis where a side is open), a star at each estimate, the estimates joined. The legend only
+ * lists what is present in the figure.
  */
 #include "plot.h"
 
@@ -23,6 +26,7 @@
 #include <math.h>
 #include <plplot.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #define VP_LEFT 0.10
 #define VP_RIGHT 0.68
@@ -140,6 +144,13 @@ static plot_status check_phase(const plot_phase_data *d, char *why, size_t why_l
     if ((st = plot_series_check("boundary_gamma", d->boundary_gamma, d->n_boundary, why, why_len)) != PLOT_OK ||
         (st = plot_series_check("boundary_phi_deg", d->boundary_phi_deg, d->n_boundary, why, why_len)) != PLOT_OK)
         return st;
+    if (d->n_edges > 0 && !d->edges)
+        return plot_fail(PLOT_ERR_ARG, why, why_len, "edges is NULL but n_edges = %zu", d->n_edges);
+    for (size_t i = 0; i < d->n_edges; i++) {
+        const plot_phase_edge *e = &d->edges[i];
+        if (!isfinite(e->phi_deg) || isinf(e->gamma) || isinf(e->lo) || isinf(e->hi))
+            return plot_fail(PLOT_ERR_ARG, why, why_len, "edges[%zu] has an infinite coordinate or no phi", i);
+    }
     if (d->n_trials > 0 && !d->trials)
         return plot_fail(PLOT_ERR_ARG, why, why_len, "trials is NULL but n_trials = %zu", d->n_trials);
     for (size_t i = 0; i < d->n_trials; i++) {
@@ -157,6 +168,57 @@ typedef struct phase_ctx {
     const plot_phase_data *d;
     double x0, x1, y0, y1;
 } phase_ctx;
+
+/* The experimental boundary: bars, stars, the line through the estimates. True when drawn. */
+static bool draw_edges(const phase_ctx *c)
+{
+    const plot_phase_data *d = c->d;
+    bool any = false;
+    plcol0(PLOT_COL_SERIES_3);
+    for (size_t i = 0; i < d->n_edges; i++) {
+        const plot_phase_edge *e = &d->edges[i];
+        if (isnan(e->lo) && isnan(e->hi)) continue;
+        any = true;
+        PLFLT y[2] = {e->phi_deg, e->phi_deg};
+        PLFLT lo = isnan(e->lo) ? c->x0 : e->lo, hi = isnan(e->hi) ? c->x1 : e->hi;
+        plwidth(2 * PLOT_WIDTH_DATA);
+        PLFLT x[2] = {isnan(e->lo) ? e->hi : lo, isnan(e->hi) ? e->lo : hi};
+        if (!isnan(e->lo) && !isnan(e->hi)) {
+            pllsty(PLOT_LSTY_SOLID);
+            plline(2, x, y);
+        } else {
+            PLFLT xo[2] = {isnan(e->lo) ? lo : x[1], isnan(e->hi) ? hi : x[0]};
+            pllsty(PLOT_LSTY_DOTTED);
+            plline(2, xo, y);
+            pllsty(PLOT_LSTY_SOLID);
+        }
+        plwidth(PLOT_WIDTH_THIN);
+        for (int s = 0; s < 2; s++) { /* end ticks at the closed sides */
+            double v = s ? e->hi : e->lo;
+            if (isnan(v)) continue;
+            PLFLT tx[2] = {v, v}, ty[2] = {e->phi_deg - 0.012 * (c->y1 - c->y0), e->phi_deg + 0.012 * (c->y1 - c->y0)};
+            plline(2, tx, ty);
+        }
+        if (isfinite(e->gamma)) {
+            PLFLT gx = e->gamma, gy = e->phi_deg;
+            plschr(0.0, 1.4 * PLOT_CHAR_SCALE);
+            plstring(1, &gx, &gy, PLOT_GLYPH_STAR);
+            plschr(0.0, PLOT_CHAR_SCALE);
+        }
+    }
+    /* the estimates joined, in phi order (edges come sorted by phi) */
+    plwidth(PLOT_WIDTH_DATA);
+    for (size_t i = 0; i + 1 < d->n_edges; i++) {
+        size_t j = i + 1;
+        if (!isfinite(d->edges[i].gamma)) continue;
+        while (j < d->n_edges && !isfinite(d->edges[j].gamma)) j++;
+        if (j >= d->n_edges) break;
+        PLFLT x[2] = {d->edges[i].gamma, d->edges[j].gamma}, y[2] = {d->edges[i].phi_deg, d->edges[j].phi_deg};
+        plline(2, x, y);
+    }
+    plwidth(PLOT_WIDTH_THIN);
+    return any;
+}
 
 static void draw_cells(const plot_phase_data *d, bool present[4])
 {
@@ -222,7 +284,15 @@ static plot_status phase_draw(void *vctx, char *why, size_t why_len)
         plschr(0.0, PLOT_CHAR_SCALE * scale);
         plstring(1, &x, &y, glyph);
         plschr(0.0, PLOT_CHAR_SCALE);
+        if (d->trial_counts && d->trial_counts[i] > 1) {
+            char txt[32];
+            snprintf(txt, sizeof txt, "×%d", d->trial_counts[i]);
+            plschr(0.0, 0.8 * PLOT_CHAR_SCALE);
+            plptex(x + 0.012 * (c->x1 - c->x0), y + 0.02 * (c->y1 - c->y0), 1.0, 0.0, 0.0, txt);
+            plschr(0.0, PLOT_CHAR_SCALE);
+        }
     }
+    bool have_edges = draw_edges(c);
 
     plot_legend_entry e[PLOT_LEGEND_MAX];
     int n = 0;
@@ -249,6 +319,9 @@ static plot_status phase_draw(void *vctx, char *why, size_t why_len)
     if (have_boundary)
         e[n++] = (plot_legend_entry){"predicted boundary", PLOT_LEGEND_KIND_LINE, PLOT_COL_INK, PLOT_LSTY_DASHED,
                                      PLOT_WIDTH_DATA, NULL, 0};
+    if (have_edges)
+        e[n++] = (plot_legend_entry){"experimental boundary", PLOT_LEGEND_KIND_SYMBOL, PLOT_COL_SERIES_3, 0, 0,
+                                     PLOT_GLYPH_STAR, 1.4};
     for (int k = 0; k < 5; k++) {
         if (order[k] == PLOT_REGIME_NO_UPPER || !marks[order[k]])
             continue;
@@ -261,7 +334,7 @@ static plot_status phase_draw(void *vctx, char *why, size_t why_len)
     plot_legend_draw(e, n, PL_POSITION_RIGHT | PL_POSITION_OUTSIDE | PL_POSITION_VIEWPORT, 0.02, 0.0);
 
     if (d->n_gamma == 0 && plot_series_finite(d->boundary_gamma, d->boundary_phi_deg, d->n_boundary) == 0 &&
-        d->n_trials == 0) {
+        d->n_trials == 0 && d->n_edges == 0) {
         plcol0(PLOT_COL_UNSTABLE);
         plptex(0.5 * (c->x0 + c->x1), 0.5 * (c->y0 + c->y1), 1.0, 0.0, 0.5, "no data");
     }
@@ -311,6 +384,13 @@ plot_status plot_phase_report(const char *png_path, const plot_phase_data *d, ch
             plot_range_add1(&ax, d->trials[i].gamma);
             plot_range_add1(&ay, d->trials[i].phi_deg);
         }
+    }
+    for (size_t i = 0; i < d->n_edges; i++) {
+        const plot_phase_edge *e = &d->edges[i];
+        if (isnan(e->lo) && isnan(e->hi)) continue;
+        plot_range_add1(&ay, e->phi_deg);
+        if (isfinite(e->lo)) plot_range_add1(&ax, e->lo);
+        if (isfinite(e->hi)) plot_range_add1(&ax, e->hi);
     }
     bool inside_x = cx.n > 0 && ax.lo >= cx.lo && ax.hi <= cx.hi;
     bool inside_y = cy.n > 0 && ay.lo >= cy.lo && ay.hi <= cy.hi;

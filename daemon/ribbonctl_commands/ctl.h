@@ -18,4 +18,15 @@ int ctl_trials_main(int argc, char **argv); /* ctl_trials.c: start abort status 
                                             phase-report replay */
 int ctl_campaign_main(int argc, char **argv); /* ctl_campaign.c: specimen, queue */
 int ctl_check_main(int argc, char **argv);    /* ctl_check.c: is the rig ready (daemon/check/) */
+int ctl_phase_main(int argc, char **argv);    /* ctl_phase.c: the lab's phase diagram */
+int ctl_plan_main(int argc, char **argv);     /* ctl_plan.c: the next specimens, approval */
+int ctl_plan_bench_main(int argc, char **argv); /* ctl_plan_bench.c: the simulated campaign */
+
+/* ctl_phase.c, shared with ctl_plan.c: the predicted boundary over [phi_lo, phi_hi], from
+ * boundary_csv (ribbon-sim boundary's CSV) or, with config (cfg loaded from it), traced from its
+ * scene and cached in DB.boundary.csv. *have 0 when neither was given. -1 with the reason printed. */
+struct campaign_predicted;
+struct rig_config;
+int ctl_campaign_predicted(const char *config, const char *boundary_csv, const char *db, double phi_lo, double phi_hi,
+                           struct campaign_predicted *pred, struct rig_config *cfg, int *have);
 #endif

@@ -33,7 +33,7 @@
 #include <jansson.h>
 
 /* The schema version this program creates and understands (see the migration list in store.c). */
-#define STORE_SCHEMA_VERSION 8
+#define STORE_SCHEMA_VERSION 9
 
 /* Errors of the store layer; store_err_message() gives the generic text, why the specific one. */
 typedef enum store_err {
@@ -250,6 +250,41 @@ store_err store_queue_state_set(store *st, bool running, const char *reason, dou
  * stopped, saying why (the items found running, or that the daemon restarted) if it ran. *count
  * gets how many items became unknown. A restart never resumes the queue. */
 store_err store_queue_recover(store *st, double wall_s, int *count, char *why, size_t why_len);
+
+/* ---- the planner's proposals (store_plans.c) ----------------------------------------------- */
+
+typedef enum store_plan_status {
+    STORE_PLAN_PROPOSED = 0, /* "proposed": may be approved */
+    STORE_PLAN_APPROVED,     /* "approved": its specimen and queue items exist (final) */
+    STORE_PLAN_SUPERSEDED,   /* "superseded": a newer plan replaced it (final) */
+    STORE_PLAN_STATUS_COUNT
+} store_plan_status;
+const char *store_plan_status_name(store_plan_status s);
+
+typedef struct store_plan_proposal {
+    int64_t id;              /* set by the store */
+    int64_t batch;           /* set by the store: one per store_plan_add_batch call */
+    double phi_deg, gamma;   /* the specimen to make: design angle (deg) and position */
+    double sd_before;        /* the belief's sd of Gamma* at that phi when proposed */
+    double predicted_gamma;  /* the model's Gamma* there (before the offset) */
+    double offset_mean, offset_sd; /* the fitted systematic offset (0, 0 without calibration) */
+    int calibrated;          /* 1: offset fitted; 0: fixed at 0 */
+    store_plan_status status;
+    int64_t specimen_id, operator_item_id, trial_item_id; /* 0 until approved */
+    char specimen_name[64];  /* read only */
+    char created_at[32], approved_at[32];
+} store_plan_proposal;
+
+/* A new plan: every still 'proposed' proposal becomes 'superseded', then the n proposals are
+ * added as one batch (ids back in p[k].id). One transaction. */
+store_err store_plan_add_batch(store *st, store_plan_proposal *p, size_t n, double wall_s, char *why, size_t why_len);
+store_err store_plan_get(store *st, int64_t id, store_plan_proposal *out, char *why, size_t why_len);
+/* Every proposal, newest first. *out malloc'ed (free()); NULL when *n == 0. */
+store_err store_plan_list(store *st, store_plan_proposal **out, size_t *n, char *why, size_t why_len);
+/* Marks a 'proposed' proposal approved with its specimen and queue items: STORE_E_STATE naming
+ * its status otherwise, STORE_E_NOTFOUND. */
+store_err store_plan_approve(store *st, int64_t id, int64_t specimen_id, int64_t operator_item_id,
+                             int64_t trial_item_id, double wall_s, char *why, size_t why_len);
 
 /* ---- trials (store_trials.c) ------------------------------------------------------------ */
 

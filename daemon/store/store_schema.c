@@ -207,6 +207,28 @@ static const char schema_v8[] =
     "INSERT INTO queue_state VALUES (1, 0, 'never started', strftime('%Y-%m-%dT%H:%M:%fZ','now'));"
     "PRAGMA user_version = 8;";
 
+/* v9: the planner's proposals (issue 35 part D): each next specimen the planner proposed, the
+ * belief it was proposed from, and once approved the specimen made for it and its queue items. A
+ * proposal is 'proposed' until approved once ('approved', final) or replaced by a newer plan's
+ * ('superseded', final). */
+static const char schema_v9[] =
+    "CREATE TABLE plan_proposals ("
+    " id INTEGER PRIMARY KEY,"
+    " batch INTEGER NOT NULL CHECK (batch >= 1),"
+    " phi_deg REAL NOT NULL CHECK (phi_deg > 0 AND phi_deg < 180),"
+    " gamma REAL NOT NULL CHECK (gamma > 0 AND gamma < 0.5),"
+    " sd_before REAL NOT NULL CHECK (sd_before >= 0),"
+    " predicted_gamma REAL NOT NULL,"
+    " offset_mean REAL NOT NULL, offset_sd REAL NOT NULL CHECK (offset_sd >= 0),"
+    " calibrated INTEGER NOT NULL CHECK (calibrated IN (0,1)),"
+    " status TEXT NOT NULL DEFAULT 'proposed' CHECK (status IN ('proposed','approved','superseded')),"
+    " specimen_id INTEGER REFERENCES specimens(id),"
+    " operator_item_id INTEGER REFERENCES queue_items(id),"
+    " trial_item_id INTEGER REFERENCES queue_items(id),"
+    " created_at TEXT NOT NULL, approved_at TEXT,"
+    " CHECK ((status = 'approved') = (specimen_id IS NOT NULL AND trial_item_id IS NOT NULL)));"
+    "PRAGMA user_version = 9;";
+
 typedef struct store_migration {
     int version;      /* user_version after the step */
     const char *what; /* for reasons */
@@ -222,6 +244,7 @@ static const store_migration migrations[] = {
     {6, "video file size per trial", schema_v6},
     {7, "the crease model of a prediction", schema_v7},
     {8, "specimen states and the queue", schema_v8},
+    {9, "the planner's proposals", schema_v9},
 };
 #define N_MIGRATIONS (sizeof migrations / sizeof migrations[0])
 _Static_assert(sizeof migrations / sizeof migrations[0] == STORE_SCHEMA_VERSION,

@@ -332,6 +332,93 @@ async function loadPhase() {
   if (map.startsWith('computing') || map === 'not started') phaseTimer = setTimeout(() => loadPhase().catch(() => {}), 3000);
 }
 
+// ---- the lab's phase diagram (GET /campaign/phase) and the planner's proposals (GET /plan,
+// POST /plan/ID/approve): loaded at start, after each trial and every 15 s ----------------------
+let campaignChart = null;
+function campaignPlot(d) {
+  if (typeof Chart === 'undefined') return;
+  const asym = [], sym = [], other = [], est = [], bars = [], pred = [];
+  for (const p of d.points) {
+    if (p.n_asym) asym.push({ x: p.gamma, y: p.phi_deg, n: p.n_asym });
+    if (p.n_sym) sym.push({ x: p.gamma, y: p.phi_deg, n: p.n_sym });
+    if (p.n_other) other.push({ x: p.gamma, y: p.phi_deg, n: p.n_other });
+  }
+  for (const e of d.edges) {
+    if (e.gamma !== null) est.push({ x: e.gamma, y: e.phi_deg });
+    if (e.lo !== null || e.hi !== null) {
+      bars.push({ x: e.lo !== null ? e.lo : e.hi, y: e.phi_deg }, { x: e.hi !== null ? e.hi : e.lo, y: e.phi_deg }, { x: NaN, y: NaN });
+    }
+  }
+  if (d.predicted) d.predicted.phi_deg.forEach((phi, k) => pred.push({ x: d.predicted.gamma[k], y: phi }));
+  const sets = [
+    { label: 'measured asymmetric', data: asym, pointStyle: 'rect', pointRadius: 6, backgroundColor: '#0d3b8c' },
+    { label: 'measured symmetric', data: sym, pointStyle: 'circle', pointRadius: 6, backgroundColor: 'rgba(0,0,0,0)', borderColor: '#a11d1d', borderWidth: 2 },
+    { label: 'no snap / unknown', data: other, pointStyle: 'crossRot', pointRadius: 6, borderColor: '#555' },
+    { label: 'experimental boundary', data: est, pointStyle: 'star', pointRadius: 8, borderColor: '#009e73', showLine: true, borderWidth: 2 },
+    { label: 'its interval', data: bars, showLine: true, pointRadius: 0, borderWidth: 5, borderColor: '#009e73', spanGaps: false },
+    { label: 'predicted boundary', data: pred, showLine: true, pointRadius: 0, borderDash: [6, 4], borderColor: '#000' },
+  ];
+  if (!campaignChart) {
+    campaignChart = new Chart($('campaign-plot'), {
+      type: 'scatter',
+      data: { datasets: sets },
+      options: {
+        animation: false, maintainAspectRatio: false, parsing: false,
+        scales: { x: { title: { display: true, text: '\u0393' } }, y: { title: { display: true, text: '\u03c6 (deg)' } } },
+        plugins: { tooltip: { callbacks: { label: (c) => `${c.dataset.label}: \u0393 ${c.raw.x}, \u03c6 ${c.raw.y}` + (c.raw.n > 1 ? ` (\u00d7${c.raw.n})` : '') } } },
+      },
+    });
+  } else {
+    campaignChart.data.datasets = sets;
+    campaignChart.update();
+  }
+}
+async function loadCampaign() {
+  const r = await api('/campaign/phase');
+  const d = await r.json().catch(() => ({}));
+  $('campaign-box').dataset.status = String(r.status);
+  if (!r.ok || d.empty) {
+    $('campaign-info').textContent = d.empty || d.error || ('HTTP ' + r.status);
+  } else {
+    $('campaign-info').textContent = `${d.specimens} specimens, ${d.trials} measured trials; predicted boundary: ` +
+      (d.predicted ? d.predicted.source : (d.predicted_error || 'none'));
+    const tb = $('edges').tBodies[0];
+    tb.replaceChildren();
+    for (const e of d.edges) {
+      const tr = tb.insertRow();
+      for (const t of [e.phi_deg, e.method, fmt(e.gamma, 4), `[${fmt(e.lo, 4)}, ${fmt(e.hi, 4)}]`, e.n_asym, e.n_sym, fmt(e.predicted_gamma, 4)])
+        tr.insertCell().textContent = String(t);
+    }
+    $('edges').dataset.rows = String(d.edges.length);
+    campaignPlot(d);
+  }
+  const pr = await api('/plan');
+  if (!pr.ok) return;
+  const list = await pr.json();
+  const tb = $('proposals').tBodies[0];
+  tb.replaceChildren();
+  for (const p of list.slice(0, 12)) {
+    const tr = tb.insertRow();
+    for (const t of [p.id, p.status, p.phi_deg, fmt(p.gamma, 4), fmt(p.sd_before, 4), fmt(p.offset_mean, 4), p.specimen || '-'])
+      tr.insertCell().textContent = String(t);
+    const cell = tr.insertCell();
+    if (p.status === 'proposed') {
+      const b = document.createElement('button');
+      b.type = 'button';
+      b.textContent = 'Approve';
+      b.addEventListener('click', async () => {
+        const a = await api(`/plan/${p.id}/approve`, { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: '{}' });
+        const j = await a.json().catch(() => ({}));
+        $('proposal-msg').textContent = a.ok ? `proposal ${p.id} queued: specimen ${j.proposal.specimen}` : 'refused (' + a.status + '): ' + (j.error || '');
+        $('proposal-msg').dataset.status = String(a.status);
+        loadCampaign().catch(() => {});
+        loadQueue().catch(() => {});
+      });
+      cell.appendChild(b);
+    }
+  }
+}
+
 // ---- camera -----------------------------------------------------------------------------------
 let camUrl = null, camCount = 0;
 async function camera() {
@@ -454,5 +541,7 @@ const c1 = makeChart('plot-dz', '\u0394Z'), c2 = makeChart('plot-a', 'A (rad)');
 if (c1 && c2) charts.push(c1, c2);
 else $('control-msg').textContent = 'Chart.js is missing (install libjs-chart.js): no plots';
 resetView(null);
+loadCampaign().catch(() => {});
+setInterval(() => loadCampaign().catch(() => {}), 15000);
 follow();
 camera();
