@@ -7,7 +7,7 @@
 #include "rod_fit_snap.h"
 #include "sim_cmd.h"
 #include "sim_opts.h"
-#include "sim_scene_write.h"
+#include "scene_write.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -449,7 +449,7 @@ int sim_cmd_fit(int argc, char **argv)
         char head[256];
         snprintf(head, sizeof head, "written by ribbon-sim fit: the scene fitted to %s\n(residual %.3g noise units RMS)",
                  a.csv, r.rms);
-        if (!f || sim_scene_write(f, &fitted, head) || fclose(f)) {
+        if (!f || cfg_scene_write(f, &fitted, head) || fclose(f)) {
             fprintf(stderr, "ribbon-sim fit: --out-scene %s: %s\n", a.out_scene, strerror(errno));
             return 1;
         }
