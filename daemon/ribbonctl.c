@@ -23,6 +23,7 @@ static const cli_command commands[] = {
     {"report", ctl_trials_main, "report ID --out FILE.png: Delta Z and A against Delta W, measured and predicted"},
     {"phase-report", ctl_trials_main, "every trial's measured regime on the predicted (Gamma, phi) phase diagram"},
     {"replay", ctl_trials_main, "replay ID: a recorded trial through tracking and snap detection again"},
+    {"calibrate", ctl_calibrate_main, "calibrate ID [ID ...]: one strip fitted to stored trials, its snap predicted with a band"},
     {"specimen", ctl_campaign_main, "the store's specimens: add NAME --phi DEG --gamma G ... | list | show NAME | retire NAME"},
     {"queue", ctl_campaign_main, "the campaign's queue: add trial|operator|pause | list | show | remove | move | start | stop | confirm"},
 };

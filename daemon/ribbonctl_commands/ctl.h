@@ -17,4 +17,5 @@ int ctl_transcode_main(int argc, char **argv);    /* ctl_transcode.c: raw video 
 int ctl_trials_main(int argc, char **argv); /* ctl_trials.c: start abort status list show export report
                                             phase-report replay */
 int ctl_campaign_main(int argc, char **argv); /* ctl_campaign.c: specimen, queue */
+int ctl_calibrate_main(int argc, char **argv); /* ctl_calibrate.c: one strip fitted to stored trials */
 #endif
