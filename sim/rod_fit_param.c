@@ -7,7 +7,7 @@
 
 static const char *const names[ROD_FIT_NKEYS] = {
     "folds.angle_left_deg", "folds.angle_right_deg", "folds.position_left",
-    "folds.position_right", "folds.hinge_stiffness", "ribbon.youngs_modulus",
+    "folds.position_right", "folds.hinge_stiffness", "ribbon.youngs_modulus", "view.dz_offset",
 };
 
 const char *rod_fit_key_name(rod_fit_key k)
@@ -25,6 +25,11 @@ int rod_fit_key_parse(const char *name)
 int rod_fit_key_log(rod_fit_key k)
 {
     return k == ROD_FIT_HINGE || k == ROD_FIT_YOUNGS;
+}
+
+int rod_fit_key_strip(rod_fit_key k)
+{
+    return k != ROD_FIT_DZ_OFFSET;
 }
 
 void rod_fit_base_init(rod_fit_base *b, const rod *r, const rod_scene *sc)
@@ -48,6 +53,7 @@ void rod_fit_scene_values(const rod_scene *sc, double u[ROD_FIT_NKEYS])
     u[ROD_FIT_POSITION_RIGHT] = rod_scene_crease_position(sc, 1);
     u[ROD_FIT_HINGE] = rod_scene_hinge_rigid(sc) ? 0.0 : log(sc->fold_hinge_stiffness);
     u[ROD_FIT_YOUNGS] = log(sc->youngs_modulus);
+    u[ROD_FIT_DZ_OFFSET] = 0.0;
 }
 
 int rod_fit_key_usable(const rod_scene *sc, rod_fit_key k, char *why, size_t why_len)

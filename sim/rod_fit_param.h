@@ -12,6 +12,13 @@
  *   ribbon.youngs_modulus                        ln(E / Pa), the shear modulus scaled with it
  *                                                (G / E held): the elastic stiffness against
  *                                                gravity and the hinges
+ *   view.dz_offset                               over l: a vertical offset of the camera's view,
+ *                                                added to the model's Delta Z (the camera's
+ *                                                zero height not on the clamps' line). Not a
+ *                                                property of the strip: the rod and the scene
+ *                                                never see it (0 at the scene's values), and the
+ *                                                snap does not depend on it.
+ * New keys go at the end, so the values of the ones before stay what callers compiled against.
  */
 #ifndef RIBBON_SIM_ROD_FIT_PARAM_H
 #define RIBBON_SIM_ROD_FIT_PARAM_H
@@ -25,6 +32,7 @@ typedef enum rod_fit_key {
     ROD_FIT_POSITION_RIGHT,
     ROD_FIT_HINGE,
     ROD_FIT_YOUNGS,
+    ROD_FIT_DZ_OFFSET,
     ROD_FIT_NKEYS
 } rod_fit_key;
 
@@ -34,6 +42,9 @@ const char *rod_fit_key_name(rod_fit_key k);
 int rod_fit_key_parse(const char *name);
 /* 1 when parameter k is on a log scale (its standard error is a relative error). */
 int rod_fit_key_log(rod_fit_key k);
+/* 1 when parameter k describes the strip (it enters the rod and the scene); 0 for the camera's
+ * view.dz_offset, which only shifts what is observed. */
+int rod_fit_key_strip(rod_fit_key k);
 
 /* What the rod was built with, so parameter vectors can be applied and re-applied. */
 typedef struct rod_fit_base {

@@ -32,12 +32,13 @@ static const char usage[] =
     "  compares its A_cam and projected Delta Z (--paper: the paper's A and Delta Z).\n"
     "  --fit      parameters to fit, the others held at the scene's values: folds.angle_left_deg,\n"
     "             folds.angle_right_deg, folds.position_left, folds.position_right,\n"
-    "             folds.hinge_stiffness (compliant creases), ribbon.youngs_modulus (G with it);\n"
+    "             folds.hinge_stiffness (compliant creases), ribbon.youngs_modulus (G with it),\n"
+    "             view.dz_offset (the camera's vertical offset, over l: not written to --out-scene);\n"
     "             default: both crease angles, and the hinge stiffness when the creases are compliant\n"
     "  --sigma-dz, --sigma-a   noise of Delta Z and of A (rad) that weights each residual\n"
     "             (defaults 0.002 and 0.015: the tracker's order, docs/vision.md)\n"
     "  --bound    KEY=LO:HI in the scene key's units (default: scene -+ 20 deg, -+ 0.05 l,\n"
-    "             k / 100 .. x 100, E / 10 .. x 10)\n"
+    "             k / 100 .. x 100, E / 10 .. x 10, offset -+ 0.05)\n"
     "  --prior    KEY=SIGMA: a prior centred on the scene's value, SIGMA in the key's units\n"
     "             (relative for folds.hinge_stiffness and ribbon.youngs_modulus: 0.2 is 20%)\n"
     "  --dw-max   leave out samples beyond this Delta W (the fit's cut-off before the snap)\n"
@@ -227,9 +228,9 @@ static int parse_keys(const char *list, const rod_scene *sc, rod_fit_opts *o)
     for (char *t = strtok(buf, ","); t; t = strtok(NULL, ",")) {
         int k = rod_fit_key_parse(t);
         if (k < 0) {
-            fprintf(stderr, "ribbon-sim fit: --fit %s: not a fit parameter (folds.angle_left_deg, "
-                            "folds.angle_right_deg, folds.position_left, folds.position_right, "
-                            "folds.hinge_stiffness, ribbon.youngs_modulus)\n", t);
+            fprintf(stderr, "ribbon-sim fit: --fit %s: not a fit parameter (", t);
+            for (int j = 0; j < ROD_FIT_NKEYS; j++) fprintf(stderr, "%s%s", j ? ", " : "", rod_fit_key_name(j));
+            fprintf(stderr, ")\n");
             return -1;
         }
         o->fit[k] = 1;

@@ -73,6 +73,7 @@ static void sensitivities_match_re_solved_equilibria(void **state)
     rod_snapshot_save(r, &eq);
     const double hfd[ROD_FIT_NKEYS] = {0.02, 0.02, 2e-5, 2e-5, 2e-3, 2e-3};
     for (int j = 0; j < ROD_FIT_NKEYS; j++) {
+        if (!rod_fit_key_strip((rod_fit_key)j)) continue; /* the camera's offset: test_rod_fit */
         double up[ROD_FIT_NKEYS];
         rod_obs op, om;
         memcpy(up, u, sizeof up);
