@@ -362,7 +362,9 @@ static void default_bounds(const rod_scene *sc, int k, double u0, double *lo, do
     case ROD_FIT_ANGLE_RIGHT: *lo = u0 - 20.0; *hi = u0 + 20.0; break;
     case ROD_FIT_POSITION_LEFT:
     case ROD_FIT_POSITION_RIGHT: *lo = fmax(u0 - 0.05, 1e-3); *hi = fmin(u0 + 0.05, 1.0 - 1e-3); break;
-    case ROD_FIT_HINGE: *lo = u0 - log(100.0); *hi = u0 + log(100.0); break;
+    case ROD_FIT_HINGE:
+    case ROD_FIT_HINGE_LEFT:
+    case ROD_FIT_HINGE_RIGHT: *lo = u0 - log(100.0); *hi = u0 + log(100.0); break;
     case ROD_FIT_DZ_OFFSET: *lo = u0 - 0.05; *hi = u0 + 0.05; break;
     default: *lo = u0 - log(10.0); *hi = u0 + log(10.0); break;
     }
@@ -471,6 +473,12 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
         c.scale[k] = (k == ROD_FIT_POSITION_LEFT || k == ROD_FIT_POSITION_RIGHT || k == ROD_FIT_DZ_OFFSET) ? 0.01 : 1.0;
         res->fitted[k] = 1;
         c.key[c.nfit++] = k;
+    }
+    if (o->fit[ROD_FIT_HINGE] && (o->fit[ROD_FIT_HINGE_LEFT] || o->fit[ROD_FIT_HINGE_RIGHT])) {
+        snprintf(why, why_len, "%s with %s: one hinge stiffness for both creases or one each, not both",
+                 rod_fit_key_name(ROD_FIT_HINGE),
+                 rod_fit_key_name(o->fit[ROD_FIT_HINGE_LEFT] ? ROD_FIT_HINGE_LEFT : ROD_FIT_HINGE_RIGHT));
+        return ROD_ERR_SCENE;
     }
     memcpy(res->lo, c.lo, sizeof c.lo);
     memcpy(res->hi, c.hi, sizeof c.hi);

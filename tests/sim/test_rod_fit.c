@@ -12,6 +12,9 @@
  *     differences of the whole followed path, the offset recovered beside the creases and the
  *     hinge from a compression and a shear, and named "not determined" from the hold alone (one
  *     state: Delta Z and A cannot fix two crease angles and an offset);
+ *   - one hinge stiffness per crease (folds.hinge_stiffness_left, _right): two different hinges
+ *     recovered noise-free beside both angles, written back into a scene as per-crease keys;
+ *     fitting them with the pair's key is refused;
  *   - bad input: too few observations, a parameter the scene does not have, bounds that hold the
  *     truth out (the parameter is reported at its bound), data no parameter set fits (misfit). */
 #include <setjmp.h>
@@ -285,6 +288,47 @@ static void the_cameras_offset_is_recovered(void **state)
     assert_true(isinf(r.se[ROD_FIT_DZ_OFFSET]));
 }
 
+static void each_creases_hinge_is_recovered(void **state)
+{
+    (void)state;
+    rod_scene truth = fit_kit_pet(31), sc = fit_kit_pet(31);
+    truth.fold_angle_left_deg = -87.0;
+    truth.fold_angle_right_deg = -89.0;
+    truth.fold_hinge_stiffness_left = 2e-3;
+    truth.fold_hinge_stiffness_right = 5e-3;
+    rod_fit_obs obs[NMAX];
+    int n = observe_n(&truth, obs, 12, 0.15, 0.0, 0.0);
+    rod_fit_opts o = rod_fit_opts_default();
+    o.fit[ROD_FIT_ANGLE_LEFT] = o.fit[ROD_FIT_ANGLE_RIGHT] = o.fit[ROD_FIT_HINGE_LEFT] = o.fit[ROD_FIT_HINGE_RIGHT] = 1;
+    rod_fit_result r;
+    char why[256];
+    rod_status st = rod_fit_run(&sc, obs, n, &o, &r, why, sizeof why);
+    if (st != ROD_OK) printf("fit: %s\n", why);
+    assert_int_equal(st, ROD_OK);
+    print_fit("one hinge per crease, noise-free", &r, &o);
+    assert_true(r.rms < 1e-4);
+    assert_true(fabs(exp(r.u[ROD_FIT_HINGE_LEFT]) / 2e-3 - 1.0) < 1e-5);
+    assert_true(fabs(exp(r.u[ROD_FIT_HINGE_RIGHT]) / 5e-3 - 1.0) < 1e-5);
+    assert_true(fabs(r.u[ROD_FIT_ANGLE_LEFT] + 87.0) < 1e-4 && fabs(r.u[ROD_FIT_ANGLE_RIGHT] + 89.0) < 1e-4);
+    /* into a scene: per-crease keys, the pair's key unchanged */
+    rod_scene fitted = sc;
+    rod_fit_scene_apply(&fitted, r.u);
+    assert_true(fabs(fitted.fold_hinge_stiffness_left / 2e-3 - 1.0) < 1e-5);
+    assert_true(fabs(fitted.fold_hinge_stiffness_right / 5e-3 - 1.0) < 1e-5);
+    assert_true(fabs(fitted.fold_hinge_stiffness / sc.fold_hinge_stiffness - 1.0) < 1e-14);
+    /* and a fit of the pair's k alone leaves a scene without per-crease keys */
+    double u0[ROD_FIT_NKEYS];
+    rod_fit_scene_values(&sc, u0);
+    u0[ROD_FIT_HINGE] += 0.1;
+    fitted = sc;
+    rod_fit_scene_apply(&fitted, u0);
+    assert_true(isnan(fitted.fold_hinge_stiffness_left) && isnan(fitted.fold_hinge_stiffness_right));
+    o.fit[ROD_FIT_HINGE] = 1;
+    assert_int_equal(rod_fit_run(&sc, obs, n, &o, &r, why, sizeof why), ROD_ERR_SCENE);
+    printf("both kinds: %s\n", why);
+    assert_non_null(strstr(why, "one hinge stiffness for both creases or one each"));
+}
+
 static void bad_input_is_named(void **state)
 {
     (void)state;
@@ -334,6 +378,7 @@ int main(void)
         cmocka_unit_test(bending_stiffness_without_gravity_is_named),
         cmocka_unit_test(the_model_jacobian_matches_finite_differences),
         cmocka_unit_test(the_cameras_offset_is_recovered),
+        cmocka_unit_test(each_creases_hinge_is_recovered),
         cmocka_unit_test(bad_input_is_named),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
