@@ -112,6 +112,8 @@ static const char *strip_differs(const rod_scene *a, const rod_scene *b)
     SAME(fold_position_left, "folds.position_left");
     SAME(fold_position_right, "folds.position_right");
     SAME(fold_hinge_stiffness, "folds.hinge_stiffness");
+    SAME(fold_hinge_stiffness_left, "folds.hinge_stiffness_left");
+    SAME(fold_hinge_stiffness_right, "folds.hinge_stiffness_right");
     SAME(fold_angle_rel, "imperfection.fold_angle_rel");
 #undef SAME
     if (a->nodes != b->nodes) return "mesh.nodes";
