@@ -281,14 +281,14 @@ static void print_text(const calib_out *c)
     }
     printf("residual     %.3g noise units RMS over %d residuals (at the trials' strip: %.3g)\n", r->rms, r->nres,
            r->rms_start);
-    printf("%-24s %14s %14s   %s\n", "parameter", "trial's strip", "fitted", "standard error");
+    printf("%-27s %14s %14s   %s\n", "parameter", "trial's strip", "fitted", "standard error");
     for (int i = 0; i < c->m; i++) {
         int k = c->keys[i];
         char se[96];
         if (!isfinite(r->se[k])) snprintf(se, sizeof se, "not determined by these data");
         else if (rod_fit_key_log(k)) snprintf(se, sizeof se, "%.3g%% (relative)", 100.0 * r->se[k]);
         else snprintf(se, sizeof se, "%.3g%s", r->se[k], r->determined[k] ? "" : " (prior only: not determined by these data)");
-        printf("%-24s %14.6g %14.6g   %s%s\n", rod_fit_key_name(k), natural(k, r->u0[k]), natural(k, r->u[k]), se,
+        printf("%-27s %14.6g %14.6g   %s%s\n", rod_fit_key_name(k), natural(k, r->u0[k]), natural(k, r->u[k]), se,
                r->at_bound[k] ? (r->at_bound[k] > 0 ? "  AT ITS UPPER BOUND" : "  AT ITS LOWER BOUND") : "");
     }
     if (c->m > 1) {
