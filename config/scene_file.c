@@ -78,6 +78,10 @@ static const cfg_scene_key scene_keys[] = {
      rigid_word, "N m/rad",
      "rotational stiffness k of each crease, a hinge whose energy depends on its turning angle "
      "alone, or rigid (stiffness_factor holds the angle); default rigid"},
+    {"folds", "hinge_stiffness_left", CFG_TYPE_DOUBLE, OFF(fold_hinge_stiffness_left), 0.0, 1e6, MINO, NULL,
+     "N m/rad", "the left crease's own hinge stiffness (compliant creases only); default hinge_stiffness"},
+    {"folds", "hinge_stiffness_right", CFG_TYPE_DOUBLE, OFF(fold_hinge_stiffness_right), 0.0, 1e6, MINO, NULL,
+     "N m/rad", "the right crease's own hinge stiffness (compliant creases only); default hinge_stiffness"},
     {"folds", "stiffness_factor", CFG_TYPE_DOUBLE, OFF(fold_stiffness_factor), 1.0, 1e12, REQ,
      NULL, "1",
      "rigid creases only (required with them, refused with a compliant hinge): multiplies the soft "

@@ -24,6 +24,7 @@ static const cli_command commands[] = {
     {"report", ctl_trials_main, "report ID --out FILE.png: Delta Z and A against Delta W, measured and predicted"},
     {"phase-report", ctl_trials_main, "every trial's measured regime on the predicted (Gamma, phi) phase diagram"},
     {"replay", ctl_trials_main, "replay ID: a recorded trial through tracking and snap detection again"},
+    {"calibrate", ctl_calibrate_main, "calibrate ID [ID ...]: one strip fitted to stored trials, its snap predicted with a band"},
     {"specimen", ctl_campaign_main, "the store's specimens: add NAME --phi DEG --gamma G ... | list | show NAME | retire NAME"},
     {"phase", ctl_phase_main, "the lab's phase diagram: measured regimes, experimental and predicted boundaries (--out, --csv, --json)"},
     {"plan", ctl_plan_main, "the next specimens to make (--phi LIST --count K), stored; --approve N puts one in the queue"},

@@ -122,6 +122,8 @@ rod_status rod_alloc(const rod_scene *s, rod **out, char *why, size_t why_len)
     if (has_folds) {
         r->fold_factor = r->terms.fold ? s->fold_stiffness_factor : 1.0;
         r->hinge_k = s->fold_hinge_stiffness;
+        if (r->terms.hinge)
+            for (int k = 0; k < 2; k++) r->hinge_k_side[k] = rod_scene_hinge_k(s, k);
         /* As rod_set_fold_angle(phi, rel) on a symmetric pair, to the last bit. */
         double rel = s->fold_angle_rel;
         rod_set_crease_angles(r, rod_scene_crease_angle_deg(s, 0) * M_PI / 180.0 * (1.0 + 0.5 * rel),

@@ -95,6 +95,7 @@ typedef struct rod {
     double fold_phi[2];  /* rad, their full angles (imperfection included) */
     double fold_factor;  /* rigid: stiffness factor at the creases */
     double hinge_k;      /* N m/rad, compliant hinges' stiffness (terms.hinge) */
+    double hinge_k_side[2]; /* N m/rad, the left and right crease's own k when > 0; 0: hinge_k */
     double hinge_phi[2]; /* rad, the hinges' current rest angles (the route ramps them) */
     double fold_position;/* left crease position (Gamma) the mesh was built for (rod_mesh_set) */
     double fold_position_right; /* right crease position, from the left clamp point, over l */

@@ -224,7 +224,7 @@ rod_status rod_fit_model_eval(rod_fit_model *m, const double u[ROD_FIT_NKEYS], c
         prev = &m->state[kk];
         rod_obs o;
         rod_observe(r, m->k1, &o);
-        y[2 * k] = m->paper ? o.dz : o.dz_cam;
+        y[2 * k] = (m->paper ? o.dz : o.dz_cam) + u[ROD_FIT_DZ_OFFSET];
         y[2 * k + 1] = m->paper ? o.a : o.a_cam;
         if (!isfinite(y[2 * k]) || !isfinite(y[2 * k + 1])) {
             snprintf(why, why_len, "non-finite observable at Delta L %.4g, Delta W %.4g", ob->dl, ob->dw);
@@ -244,6 +244,8 @@ rod_status rod_fit_model_eval(rod_fit_model *m, const double u[ROD_FIT_NKEYS], c
                 jac[(2 * k) * ROD_FIT_NKEYS + j] = use[j] ? (m->paper ? d[j].dz : d[j].dz_cam) : 0.0;
                 jac[(2 * k + 1) * ROD_FIT_NKEYS + j] = use[j] ? (m->paper ? d[j].a : d[j].a_cam) : 0.0;
             }
+            /* The camera's offset shifts Delta Z by itself and leaves A alone: exact. */
+            if (use[ROD_FIT_DZ_OFFSET]) jac[(2 * k) * ROD_FIT_NKEYS + ROD_FIT_DZ_OFFSET] = 1.0;
         }
     }
     return ROD_OK;
@@ -360,7 +362,10 @@ static void default_bounds(const rod_scene *sc, int k, double u0, double *lo, do
     case ROD_FIT_ANGLE_RIGHT: *lo = u0 - 20.0; *hi = u0 + 20.0; break;
     case ROD_FIT_POSITION_LEFT:
     case ROD_FIT_POSITION_RIGHT: *lo = fmax(u0 - 0.05, 1e-3); *hi = fmin(u0 + 0.05, 1.0 - 1e-3); break;
-    case ROD_FIT_HINGE: *lo = u0 - log(100.0); *hi = u0 + log(100.0); break;
+    case ROD_FIT_HINGE:
+    case ROD_FIT_HINGE_LEFT:
+    case ROD_FIT_HINGE_RIGHT: *lo = u0 - log(100.0); *hi = u0 + log(100.0); break;
+    case ROD_FIT_DZ_OFFSET: *lo = u0 - 0.05; *hi = u0 + 0.05; break;
     default: *lo = u0 - log(10.0); *hi = u0 + log(10.0); break;
     }
 }
@@ -465,9 +470,15 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
         }
         c.lo[k] = lo;
         c.hi[k] = hi;
-        c.scale[k] = (k == ROD_FIT_POSITION_LEFT || k == ROD_FIT_POSITION_RIGHT) ? 0.01 : 1.0;
+        c.scale[k] = (k == ROD_FIT_POSITION_LEFT || k == ROD_FIT_POSITION_RIGHT || k == ROD_FIT_DZ_OFFSET) ? 0.01 : 1.0;
         res->fitted[k] = 1;
         c.key[c.nfit++] = k;
+    }
+    if (o->fit[ROD_FIT_HINGE] && (o->fit[ROD_FIT_HINGE_LEFT] || o->fit[ROD_FIT_HINGE_RIGHT])) {
+        snprintf(why, why_len, "%s with %s: one hinge stiffness for both creases or one each, not both",
+                 rod_fit_key_name(ROD_FIT_HINGE),
+                 rod_fit_key_name(o->fit[ROD_FIT_HINGE_LEFT] ? ROD_FIT_HINGE_LEFT : ROD_FIT_HINGE_RIGHT));
+        return ROD_ERR_SCENE;
     }
     memcpy(res->lo, c.lo, sizeof c.lo);
     memcpy(res->hi, c.hi, sizeof c.hi);

@@ -35,7 +35,8 @@ typedef struct rod_fit_obs {
 typedef struct rod_fit_opts {
     int fit[ROD_FIT_NKEYS];          /* 1: fitted, 0: held at the scene's value */
     double lo[ROD_FIT_NKEYS], hi[ROD_FIT_NKEYS]; /* bounds in fit units; NaN: the defaults
-                                        (scene value -+ 20 deg, -+ 0.05 l, -+ ln 100 for k,
+                                        (scene value -+ 20 deg, -+ 0.05 l for positions and
+                                        the view's Delta Z offset, -+ ln 100 for k,
                                         -+ ln 10 for E, positions kept inside (0, 1)) */
     double prior_sigma[ROD_FIT_NKEYS]; /* fit units; INFINITY: no prior (the default) */
     double sigma_dz, sigma_a;        /* noise of each observable (Delta Z, A in rad) */

@@ -7,7 +7,8 @@
 
 static const char *const names[ROD_FIT_NKEYS] = {
     "folds.angle_left_deg", "folds.angle_right_deg", "folds.position_left",
-    "folds.position_right", "folds.hinge_stiffness", "ribbon.youngs_modulus",
+    "folds.position_right", "folds.hinge_stiffness", "ribbon.youngs_modulus", "view.dz_offset",
+    "folds.hinge_stiffness_left", "folds.hinge_stiffness_right",
 };
 
 const char *rod_fit_key_name(rod_fit_key k)
@@ -24,7 +25,12 @@ int rod_fit_key_parse(const char *name)
 
 int rod_fit_key_log(rod_fit_key k)
 {
-    return k == ROD_FIT_HINGE || k == ROD_FIT_YOUNGS;
+    return k == ROD_FIT_HINGE || k == ROD_FIT_YOUNGS || k == ROD_FIT_HINGE_LEFT || k == ROD_FIT_HINGE_RIGHT;
+}
+
+int rod_fit_key_strip(rod_fit_key k)
+{
+    return k != ROD_FIT_DZ_OFFSET;
 }
 
 void rod_fit_base_init(rod_fit_base *b, const rod *r, const rod_scene *sc)
@@ -36,6 +42,7 @@ void rod_fit_base_init(rod_fit_base *b, const rod *r, const rod_scene *sc)
     b->youngs = sc->youngs_modulus;
     b->length = sc->length;
     b->rel = sc->fold_angle_rel;
+    b->ln_k = rod_scene_hinge_rigid(sc) ? 0.0 : log(sc->fold_hinge_stiffness);
     b->n_left = r->fold_outer_edges;
     b->n_right = r->fold_outer_right;
 }
@@ -48,6 +55,9 @@ void rod_fit_scene_values(const rod_scene *sc, double u[ROD_FIT_NKEYS])
     u[ROD_FIT_POSITION_RIGHT] = rod_scene_crease_position(sc, 1);
     u[ROD_FIT_HINGE] = rod_scene_hinge_rigid(sc) ? 0.0 : log(sc->fold_hinge_stiffness);
     u[ROD_FIT_YOUNGS] = log(sc->youngs_modulus);
+    u[ROD_FIT_DZ_OFFSET] = 0.0;
+    u[ROD_FIT_HINGE_LEFT] = rod_scene_hinge_rigid(sc) ? 0.0 : log(rod_scene_hinge_k(sc, 0));
+    u[ROD_FIT_HINGE_RIGHT] = rod_scene_hinge_rigid(sc) ? 0.0 : log(rod_scene_hinge_k(sc, 1));
 }
 
 int rod_fit_key_usable(const rod_scene *sc, rod_fit_key k, char *why, size_t why_len)
@@ -56,11 +66,12 @@ int rod_fit_key_usable(const rod_scene *sc, rod_fit_key k, char *why, size_t why
         snprintf(why, why_len, "not a fit parameter");
         return 1;
     }
-    if (k <= ROD_FIT_HINGE && !rod_scene_has_creases(sc)) {
+    int hinge = k == ROD_FIT_HINGE || k == ROD_FIT_HINGE_LEFT || k == ROD_FIT_HINGE_RIGHT;
+    if ((k <= ROD_FIT_HINGE || hinge) && !rod_scene_has_creases(sc)) {
         snprintf(why, why_len, "%s: the scene has no creases", names[k]);
         return 1;
     }
-    if (k == ROD_FIT_HINGE && rod_scene_hinge_rigid(sc)) {
+    if (hinge && rod_scene_hinge_rigid(sc)) {
         snprintf(why, why_len, "%s: the scene's creases are rigid; give the scene a compliant hinge "
                                "(folds.hinge_stiffness in N m/rad) as the fit's starting point", names[k]);
         return 1;
@@ -77,7 +88,11 @@ void rod_fit_apply(rod *r, const rod_fit_base *b, const double u[ROD_FIT_NKEYS])
     for (int i = 0; i < r->n; i++) r->EI1[i] = b->EI1 * s;
     r->force_scale = b->EI1 * s / (b->length * b->length);
     if (!r->terms.fold && !r->terms.hinge) return;
-    if (r->terms.hinge) r->hinge_k = exp(u[ROD_FIT_HINGE]);
+    if (r->terms.hinge) {
+        r->hinge_k = exp(u[ROD_FIT_HINGE]);
+        r->hinge_k_side[0] = exp(u[ROD_FIT_HINGE] - b->ln_k + u[ROD_FIT_HINGE_LEFT]);
+        r->hinge_k_side[1] = exp(u[ROD_FIT_HINGE] - b->ln_k + u[ROD_FIT_HINGE_RIGHT]);
+    }
     if (u[ROD_FIT_POSITION_LEFT] != r->fold_position || u[ROD_FIT_POSITION_RIGHT] != r->fold_position_right)
         rod_mesh_set_creases(r, u[ROD_FIT_POSITION_LEFT], u[ROD_FIT_POSITION_RIGHT], b->n_left, b->n_right);
     /* As rod_alloc: the imperfection on top of each crease's own angle (it also resets the crease
@@ -96,5 +111,14 @@ void rod_fit_scene_apply(rod_scene *sc, const double u[ROD_FIT_NKEYS])
     sc->fold_angle_right_deg = u[ROD_FIT_ANGLE_RIGHT];
     sc->fold_position_left = u[ROD_FIT_POSITION_LEFT];
     sc->fold_position_right = u[ROD_FIT_POSITION_RIGHT];
-    if (!rod_scene_hinge_rigid(sc)) sc->fold_hinge_stiffness = exp(u[ROD_FIT_HINGE]);
+    if (rod_scene_hinge_rigid(sc)) return;
+    /* Each crease's own key is written when the scene had it or the fit made the two differ. */
+    double ln_k0 = log(sc->fold_hinge_stiffness), k = exp(u[ROD_FIT_HINGE]);
+    double side[2] = {exp(u[ROD_FIT_HINGE] - ln_k0 + u[ROD_FIT_HINGE_LEFT]),
+                      exp(u[ROD_FIT_HINGE] - ln_k0 + u[ROD_FIT_HINGE_RIGHT])};
+    int own = !isnan(sc->fold_hinge_stiffness_left) || !isnan(sc->fold_hinge_stiffness_right) ||
+              fabs(side[0] / k - 1.0) > 1e-12 || fabs(side[1] / k - 1.0) > 1e-12;
+    sc->fold_hinge_stiffness = k;
+    sc->fold_hinge_stiffness_left = own ? side[0] : NAN;
+    sc->fold_hinge_stiffness_right = own ? side[1] : NAN;
 }

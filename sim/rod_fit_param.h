@@ -12,6 +12,17 @@
  *   ribbon.youngs_modulus                        ln(E / Pa), the shear modulus scaled with it
  *                                                (G / E held): the elastic stiffness against
  *                                                gravity and the hinges
+ *   folds.hinge_stiffness_left, _right           ln(k / (N m/rad)) of each crease's own hinge
+ *                                                (compliant creases only): one k each, instead
+ *                                                of one for both (not both kinds in one fit);
+ *                                                held ones follow folds.hinge_stiffness
+ *   view.dz_offset                               over l: a vertical offset of the camera's view,
+ *                                                added to the model's Delta Z (the camera's
+ *                                                zero height not on the clamps' line). Not a
+ *                                                property of the strip: the rod and the scene
+ *                                                never see it (0 at the scene's values), and the
+ *                                                snap does not depend on it.
+ * New keys go at the end, so the values of the ones before stay what callers compiled against.
  */
 #ifndef RIBBON_SIM_ROD_FIT_PARAM_H
 #define RIBBON_SIM_ROD_FIT_PARAM_H
@@ -25,6 +36,9 @@ typedef enum rod_fit_key {
     ROD_FIT_POSITION_RIGHT,
     ROD_FIT_HINGE,
     ROD_FIT_YOUNGS,
+    ROD_FIT_DZ_OFFSET,
+    ROD_FIT_HINGE_LEFT,
+    ROD_FIT_HINGE_RIGHT,
     ROD_FIT_NKEYS
 } rod_fit_key;
 
@@ -34,20 +48,26 @@ const char *rod_fit_key_name(rod_fit_key k);
 int rod_fit_key_parse(const char *name);
 /* 1 when parameter k is on a log scale (its standard error is a relative error). */
 int rod_fit_key_log(rod_fit_key k);
+/* 1 when parameter k describes the strip (it enters the rod and the scene); 0 for the camera's
+ * view.dz_offset, which only shifts what is observed. */
+int rod_fit_key_strip(rod_fit_key k);
 
 /* What the rod was built with, so parameter vectors can be applied and re-applied. */
 typedef struct rod_fit_base {
     double EA, EI1, EI2, GJ; /* the scene's stiffnesses (EI1 away from creases) */
     double youngs, length;   /* Pa, m */
     double rel;              /* imperfection fold_angle_rel */
+    double ln_k;             /* ln of the scene's folds.hinge_stiffness (0 for rigid creases) */
     int n_left, n_right;     /* mesh edges outside each crease, held as the creases move */
 } rod_fit_base;
 
 /* Records the base of a rod just built by rod_alloc from sc. */
 void rod_fit_base_init(rod_fit_base *b, const rod *r, const rod_scene *sc);
 
-/* The scene's values in fit units (u[ROD_FIT_HINGE] is 0 for rigid creases, where it is not a
- * parameter). */
+/* The scene's values in fit units (u[ROD_FIT_HINGE] and the per-crease ones are 0 for rigid
+ * creases, where they are not parameters). Each crease's hinge is
+ *     k_side = exp(u[ROD_FIT_HINGE] - ln k_scene + u[ROD_FIT_HINGE_side]),
+ * so fitting folds.hinge_stiffness scales both, and fitting the per-crease keys sets each. */
 void rod_fit_scene_values(const rod_scene *sc, double u[ROD_FIT_NKEYS]);
 
 /* 0 when parameter k can be fitted on scene sc; otherwise non-zero with the reason. */

@@ -38,7 +38,7 @@ rod_status rod_fit_snap_predict(const rod_scene *sc, const rod_fit_result *fit, 
     }
     int key[ROD_FIT_NKEYS], m = 0;
     for (int k = 0; k < ROD_FIT_NKEYS; k++) {
-        if (!fit->fitted[k]) continue;
+        if (!fit->fitted[k] || !rod_fit_key_strip((rod_fit_key)k)) continue; /* the camera's offset: no snap */
         if (!fit->determined[k]) {
             out->left_out++;
             continue;

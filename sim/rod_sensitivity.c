@@ -94,6 +94,11 @@ rod_status rod_sens_eval(rod_sens_ws *w, rod *r, const rod_fit_base *b, const do
     rod_status st = ROD_OK;
     for (int j = 0; j < ROD_FIT_NKEYS && st == ROD_OK; j++) {
         if (!use[j]) continue;
+        if (!rod_fit_key_strip((rod_fit_key)j)) { /* the equilibrium does not depend on it */
+            if (dq[j]) memset(dq[j], 0, sizeof(double) * (size_t)nf);
+            memset(&dobs[j], 0, sizeof dobs[j]);
+            continue;
+        }
         double h = rod_sens_step((rod_fit_key)j);
         perturbed(w, r, b, u, j, h, NULL, dl, dw);
         rod_gradient(r, w->gp);

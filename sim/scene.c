@@ -29,6 +29,8 @@ rod_scene rod_scene_default(void)
     s.fold_position_left = NAN;
     s.fold_position_right = NAN;
     s.fold_hinge_stiffness = ROD_HINGE_RIGID;
+    s.fold_hinge_stiffness_left = NAN;
+    s.fold_hinge_stiffness_right = NAN;
     s.fold_stiffness_factor = 1e4;
     s.fold_angle_rel = 1e-6;
     s.nodes = 201;
@@ -72,6 +74,12 @@ int rod_scene_has_creases(const rod_scene *s)
 
 int rod_scene_hinge_rigid(const rod_scene *s) { return isinf(s->fold_hinge_stiffness) && s->fold_hinge_stiffness > 0; }
 
+double rod_scene_hinge_k(const rod_scene *s, int k)
+{
+    double own = k == 0 ? s->fold_hinge_stiffness_left : s->fold_hinge_stiffness_right;
+    return isnan(own) ? s->fold_hinge_stiffness : own;
+}
+
 /* Mean of cos over the tangent angles swept uniformly from x0 to x1. */
 static double mean_cos(double x0, double x1)
 {
@@ -105,6 +113,18 @@ static int check_creases(const rod_scene *s, char *msg, size_t msglen, char *key
         return fail(msg, msglen, key, keylen, "folds.hinge_stiffness",
                     "the hinge stiffness must be a positive number of N m/rad (or rigid); 0, negative "
                     "and NaN are refused");
+    /* Each crease's own hinge: a compliant pair's, positive and finite. */
+    for (int k = 0; k < 2; k++) {
+        double own = k == 0 ? s->fold_hinge_stiffness_left : s->fold_hinge_stiffness_right;
+        const char *name = k == 0 ? "folds.hinge_stiffness_left" : "folds.hinge_stiffness_right";
+        if (isnan(own)) continue;
+        if (rod_scene_hinge_rigid(s))
+            return fail(msg, msglen, key, keylen, name,
+                        "a crease's own hinge stiffness needs compliant creases: set folds.hinge_stiffness "
+                        "to a number of N m/rad too");
+        if (!(own > 0.0 && isfinite(own)))
+            return fail(msg, msglen, key, keylen, name, "a crease's hinge stiffness must be a positive number of N m/rad");
+    }
     /* The free length is meshed with N - 3 edges; a crease closer to the clamp than one edge
      * would sit inside the clamped edge. */
     double h = 1.0 / (double)(s->nodes - 3);

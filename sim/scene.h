@@ -43,6 +43,9 @@ typedef struct rod_scene {
                                      NaN: 1 - Gamma */
     double fold_hinge_stiffness;  /* N m/rad, the creases' rotational stiffness k (a compliant
                                      hinge, sim/rod_hinge.c); ROD_HINGE_RIGID: rigid creases */
+    double fold_hinge_stiffness_left;  /* N m/rad, the left crease's own k (compliant creases
+                                          only); NaN: fold_hinge_stiffness */
+    double fold_hinge_stiffness_right; /* N m/rad, the right crease's own k; NaN: the pair's */
     double fold_stiffness_factor; /* >= 1, rigid creases only: multiplies the soft bending
                                      stiffness at a fold node (the penalty that holds the angle) */
 
@@ -91,6 +94,8 @@ int rod_scene_has_creases(const rod_scene *s);
 
 /* 1 when the creases are rigid (fold_hinge_stiffness is ROD_HINGE_RIGID). */
 int rod_scene_hinge_rigid(const rod_scene *s);
+/* Crease k's hinge stiffness (0 left, 1 right): its own key when set, else the pair's. */
+double rod_scene_hinge_k(const rod_scene *s, int k);
 
 /* Tools that rely on the C2 symmetry of the perfect scene (continuation's classification,
  * sweeps, the boundary) call this: 0 when the resolved creases are a symmetric pair (equal

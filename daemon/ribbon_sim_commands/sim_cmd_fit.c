@@ -7,7 +7,7 @@
 #include "rod_fit_snap.h"
 #include "sim_cmd.h"
 #include "sim_opts.h"
-#include "sim_scene_write.h"
+#include "scene_write.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -23,7 +23,7 @@
 static const char usage[] =
     "usage: ribbon-sim fit --scene FILE --csv SAMPLES.csv [--fit KEY,KEY,...] [--sigma-dz X]\n"
     "                      [--sigma-a X] [--bound KEY=LO:HI ...] [--prior KEY=SIGMA ...] [--paper]\n"
-    "                      [--dw-max X] [--scale-covariance] [--no-snap]\n"
+    "                      [--dw-max X] [--dl-min X] [--scale-covariance] [--no-snap]\n"
     "                      [--out-scene FILE] [--set section.key=value ...] [--json]\n"
     "  Fits the scene's strip to observed static states: a CSV with a header naming the columns\n"
     "  dl, dw, dz and a (Delta L, Delta W, Delta Z, A; other columns are ignored, so `ribbonctl\n"
@@ -32,15 +32,18 @@ static const char usage[] =
     "  compares its A_cam and projected Delta Z (--paper: the paper's A and Delta Z).\n"
     "  --fit      parameters to fit, the others held at the scene's values: folds.angle_left_deg,\n"
     "             folds.angle_right_deg, folds.position_left, folds.position_right,\n"
-    "             folds.hinge_stiffness (compliant creases), ribbon.youngs_modulus (G with it);\n"
+    "             folds.hinge_stiffness (compliant creases: one k for both, or one each with\n"
+    "             folds.hinge_stiffness_left and _right), ribbon.youngs_modulus (G with it),\n"
+    "             view.dz_offset (the camera's vertical offset, over l: not written to --out-scene);\n"
     "             default: both crease angles, and the hinge stiffness when the creases are compliant\n"
     "  --sigma-dz, --sigma-a   noise of Delta Z and of A (rad) that weights each residual\n"
     "             (defaults 0.002 and 0.015: the tracker's order, docs/vision.md)\n"
     "  --bound    KEY=LO:HI in the scene key's units (default: scene -+ 20 deg, -+ 0.05 l,\n"
-    "             k / 100 .. x 100, E / 10 .. x 10)\n"
+    "             k / 100 .. x 100, E / 10 .. x 10, offset -+ 0.05)\n"
     "  --prior    KEY=SIGMA: a prior centred on the scene's value, SIGMA in the key's units\n"
     "             (relative for folds.hinge_stiffness and ribbon.youngs_modulus: 0.2 is 20%)\n"
     "  --dw-max   leave out samples beyond this Delta W (the fit's cut-off before the snap)\n"
+    "  --dl-min   leave out samples below this Delta L (early compression, no upper state there)\n"
     "  --scale-covariance  standard errors scaled by the residual (chi2 / (n - p))\n"
     "  --no-snap  skip the fitted strip's snap prediction and its band\n"
     "  --out-scene  write the fitted strip as a scene file\n"
@@ -56,7 +59,7 @@ typedef struct fit_args {
     const char *csv, *fit, *out_scene;
     const char *bound[FIT_MAX_SPECS], *prior[FIT_MAX_SPECS];
     int nbound, nprior;
-    double sigma_dz, sigma_a, dw_max;
+    double sigma_dz, sigma_a, dw_max, dl_min;
     int paper, scale_cov, no_snap;
 } fit_args;
 
@@ -82,7 +85,7 @@ static int take_flags(int *argc, char **argv, fit_args *a)
         const char **str = !strcmp(f, "--csv") ? &a->csv : !strcmp(f, "--fit") ? &a->fit
                          : !strcmp(f, "--out-scene") ? &a->out_scene : NULL;
         double *num = !strcmp(f, "--sigma-dz") ? &a->sigma_dz : !strcmp(f, "--sigma-a") ? &a->sigma_a
-                    : !strcmp(f, "--dw-max") ? &a->dw_max : NULL;
+                    : !strcmp(f, "--dw-max") ? &a->dw_max : !strcmp(f, "--dl-min") ? &a->dl_min : NULL;
         if (str || num) {
             if (i + 1 >= *argc) {
                 fprintf(stderr, "ribbon-sim fit: %s needs a value (see --help)\n", f);
@@ -137,7 +140,7 @@ static int split(char *line, char **cols, int max)
     return n;
 }
 
-static int read_csv(const char *path, double dw_max, rod_fit_obs **out, int *n_out, int *skipped)
+static int read_csv(const char *path, double dw_max, double dl_min, rod_fit_obs **out, int *n_out, int *skipped)
 {
     FILE *f = fopen(path, "r");
     if (!f) {
@@ -187,6 +190,7 @@ static int read_csv(const char *path, double dw_max, rod_fit_obs **out, int *n_o
             continue;
         }
         if (dw_max > 0.0 && v[1] > dw_max) continue;
+        if (dl_min > 0.0 && v[0] < dl_min) continue;
         if (n >= FIT_MAX_SAMPLES) {
             fprintf(stderr, "ribbon-sim fit: --csv %s: more than %d samples\n", path, FIT_MAX_SAMPLES);
             goto done;
@@ -227,9 +231,9 @@ static int parse_keys(const char *list, const rod_scene *sc, rod_fit_opts *o)
     for (char *t = strtok(buf, ","); t; t = strtok(NULL, ",")) {
         int k = rod_fit_key_parse(t);
         if (k < 0) {
-            fprintf(stderr, "ribbon-sim fit: --fit %s: not a fit parameter (folds.angle_left_deg, "
-                            "folds.angle_right_deg, folds.position_left, folds.position_right, "
-                            "folds.hinge_stiffness, ribbon.youngs_modulus)\n", t);
+            fprintf(stderr, "ribbon-sim fit: --fit %s: not a fit parameter (", t);
+            for (int j = 0; j < ROD_FIT_NKEYS; j++) fprintf(stderr, "%s%s", j ? ", " : "", rod_fit_key_name(j));
+            fprintf(stderr, ")\n");
             return -1;
         }
         o->fit[k] = 1;
@@ -322,7 +326,7 @@ int sim_cmd_fit(int argc, char **argv)
     o.scale_covariance = a.scale_cov;
     rod_fit_obs *obs = NULL;
     int n = 0, skipped = 0;
-    if (read_csv(a.csv, a.dw_max, &obs, &n, &skipped)) return 2;
+    if (read_csv(a.csv, a.dw_max, a.dl_min, &obs, &n, &skipped)) return 2;
     rod_fit_result r;
     char why[512];
     rod_status st = rod_fit_run(&sc, obs, n, &o, &r, why, sizeof why);
@@ -449,7 +453,7 @@ int sim_cmd_fit(int argc, char **argv)
         char head[256];
         snprintf(head, sizeof head, "written by ribbon-sim fit: the scene fitted to %s\n(residual %.3g noise units RMS)",
                  a.csv, r.rms);
-        if (!f || sim_scene_write(f, &fitted, head) || fclose(f)) {
+        if (!f || cfg_scene_write(f, &fitted, head) || fclose(f)) {
             fprintf(stderr, "ribbon-sim fit: --out-scene %s: %s\n", a.out_scene, strerror(errno));
             return 1;
         }

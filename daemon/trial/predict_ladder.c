@@ -37,6 +37,11 @@ void predict_scene_hash(const rod_scene *sc, char out[17])
         snprintf(buf + used, sizeof buf - used, "|%a %a %a %a %a", sc->fold_angle_left_deg, sc->fold_angle_right_deg,
                  sc->fold_position_left, sc->fold_position_right, sc->fold_hinge_stiffness);
     }
+    /* Each crease's own hinge (issue 32), appended only when set, for the same reason. */
+    if (!isnan(sc->fold_hinge_stiffness_left) || !isnan(sc->fold_hinge_stiffness_right)) {
+        size_t used = strlen(buf);
+        snprintf(buf + used, sizeof buf - used, "|k %a %a", sc->fold_hinge_stiffness_left, sc->fold_hinge_stiffness_right);
+    }
     uint64_t h = fnv(1469598103934665603ull, buf);
     snprintf(out, 17, "%016llx", (unsigned long long)h);
 }

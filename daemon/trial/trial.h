@@ -14,8 +14,9 @@
  *   trial_session.h      one trial from request to stored result, on its own thread
  *   trial_replay.h       a recording through the same pipeline again
  *   replay_job.h         a replay on a thread of its own inside ribbond
+ *   trial_config_text.h  the configuration text stored with a trial, and its scene read back
  * Used inside the room only: trial_prediction.h (the prediction beside a trial),
- * trial_camera_setup.h, trial_specimen.h, trial_config_text.h, trial_publish.h (the session's hook
+ * trial_camera_setup.h, trial_specimen.h, trial_publish.h (the session's hook
  * into the live page's bus). */
 #ifndef RIBBON_TRIAL_H
 #define RIBBON_TRIAL_H
@@ -32,5 +33,6 @@
 #include "trial_session.h"
 #include "trial_replay.h"
 #include "replay_job.h"
+#include "trial_config_text.h"
 
 #endif

@@ -1,5 +1,6 @@
 /* trial_config_text.c: the configuration a trial ran with, as text kept in its row: the rig file
- * and the scene file as they were (each capped at 1 MiB), and the operator's note. */
+ * and the scene file as they were (each capped at 1 MiB), and the operator's note; and the scene
+ * file's part of such a text found again. */
 #include "trial_config_text.h"
 
 #include <stdio.h>
@@ -61,4 +62,33 @@ char *trial_config_text(const rig_config *cfg, const char *note)
         snprintf(buf + len, n + 1, "# note: %s\n", note);
     }
     return buf;
+}
+
+/* The start of the last line of text[0, end) that begins with prefix, or NULL. */
+static const char *last_line_with(const char *text, const char *end, const char *prefix)
+{
+    size_t n = strlen(prefix);
+    const char *found = NULL;
+    for (const char *p = text; p && p < end; p = strchr(p, '\n'), p = p ? p + 1 : NULL)
+        if ((size_t)(end - p) >= n && !strncmp(p, prefix, n)) found = p;
+    return found;
+}
+
+int trial_config_text_scene(const char *text, const char **begin, size_t *len)
+{
+    const char *end = text + strlen(text);
+    const char *head = last_line_with(text, end, "# scene file ");
+    if (!head) return -1;
+    const char *body = strchr(head, '\n');
+    if (!body) return -1;
+    body++;
+    if (!strncmp(body, "# (could not be read)", 21)) return -1;
+    /* What trial_config_text and a replay's row append after the scene: at most these two. */
+    const char *tail = last_line_with(body, end, "# replay of trial ");
+    if (tail) end = tail;
+    tail = last_line_with(body, end, "# note: ");
+    if (tail) end = tail;
+    *begin = body;
+    *len = (size_t)(end - body);
+    return 0;
 }

@@ -682,6 +682,20 @@ static void test_crease_keys(void **state)
         assert_string_equal(err.key, "folds.stiffness_factor");
         assert_int_equal(err.origin, CFG_ORIGIN_OVERRIDE);
     }
+    /* Each crease's own hinge (issue 32): read, defaulting to the pair's; refused beside rigid
+       creases and when not positive. */
+    {
+        const char *list[] = {"folds.hinge_stiffness=1e-3", "folds.hinge_stiffness_right=2e-3"};
+        assert_int_equal(parse(scene_edit(0, NULL), list, 2, &s, &err), CFG_OK);
+        assert_true(rod_scene_hinge_k(&s, 0) == 1e-3 && rod_scene_hinge_k(&s, 1) == 2e-3);
+        const char *rigid[] = {"folds.hinge_stiffness_left=2e-3"};
+        assert_int_equal(parse(scene_edit(0, NULL), rigid, 1, &s, &err), CFG_ERR_CHECK);
+        cfg_error_format(&err, shown, sizeof shown);
+        print_message("  refused: %s\n", shown);
+        assert_string_equal(err.key, "folds.hinge_stiffness_left");
+        assert_non_null(strstr(err.message, "needs compliant creases"));
+    }
+    expect_override_error("folds.hinge_stiffness_left=0", CFG_ERR_RANGE, "folds.hinge_stiffness_left", "out of range");
     /* ... while --set hinge_stiffness over a rigid file replaces the crease model. */
     {
         const char *list[] = {"folds.hinge_stiffness=1e-3"};

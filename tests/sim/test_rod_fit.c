@@ -8,6 +8,13 @@
  *   - an unidentifiable parameter named: the bending stiffness without gravity under
  *     displacement control with rigid creases (DESIGN.md section 9: the shape does not depend
  *     on it) is "not determined" (no standard error), while the crease angle is;
+ *   - the camera's vertical offset (view.dz_offset): the model's Jacobian column against finite
+ *     differences of the whole followed path, the offset recovered beside the creases and the
+ *     hinge from a compression and a shear, and named "not determined" from the hold alone (one
+ *     state: Delta Z and A cannot fix two crease angles and an offset);
+ *   - one hinge stiffness per crease (folds.hinge_stiffness_left, _right): two different hinges
+ *     recovered noise-free beside both angles, written back into a scene as per-crease keys;
+ *     fitting them with the pair's key is refused;
  *   - bad input: too few observations, a parameter the scene does not have, bounds that hold the
  *     truth out (the parameter is reported at its bound), data no parameter set fits (misfit). */
 #include <setjmp.h>
@@ -198,6 +205,130 @@ static void bending_stiffness_without_gravity_is_named(void **state)
     assert_true(fabs(r.u[ROD_FIT_ANGLE_LEFT] + 87.0) < 1e-4 && fabs(r.u[ROD_FIT_ANGLE_RIGHT] + 87.0) < 1e-4);
 }
 
+/* The model's Jacobian (sensitivities, and the offset's exact column) against central differences
+   of whole evaluations, each followed again from the route. */
+static void the_model_jacobian_matches_finite_differences(void **state)
+{
+    (void)state;
+    rod_scene sc = truth_strip();
+    rod_fit_obs obs[NMAX];
+    int n = observe(&sc, obs, 0.0, 0.0);
+    rod_fit_model *m = NULL;
+    char why[256];
+    assert_int_equal(rod_fit_model_alloc(&sc, obs, n, 0, &m, why, sizeof why), ROD_OK);
+    double u[ROD_FIT_NKEYS], y[2 * NMAX], yp[2 * NMAX], ym[2 * NMAX], jac[2 * NMAX * ROD_FIT_NKEYS];
+    rod_fit_scene_values(&sc, u);
+    u[ROD_FIT_DZ_OFFSET] = 0.004;
+    int use[ROD_FIT_NKEYS] = {0};
+    use[ROD_FIT_ANGLE_LEFT] = use[ROD_FIT_HINGE] = use[ROD_FIT_DZ_OFFSET] = 1;
+    assert_int_equal(rod_fit_model_eval(m, u, use, y, jac, why, sizeof why), ROD_OK);
+    for (int k = 0; k < n; k++) assert_true(fabs(y[2 * k] - obs[k].dz - 0.004) < 1e-12);
+    const int keys[3] = {ROD_FIT_ANGLE_LEFT, ROD_FIT_HINGE, ROD_FIT_DZ_OFFSET};
+    const double h[3] = {0.02, 2e-3, 1e-3};
+    for (int i = 0; i < 3; i++) {
+        double up[ROD_FIT_NKEYS];
+        memcpy(up, u, sizeof up);
+        up[keys[i]] += h[i];
+        rod_fit_model_reset(m);
+        assert_int_equal(rod_fit_model_eval(m, up, NULL, yp, NULL, why, sizeof why), ROD_OK);
+        up[keys[i]] -= 2.0 * h[i];
+        rod_fit_model_reset(m);
+        assert_int_equal(rod_fit_model_eval(m, up, NULL, ym, NULL, why, sizeof why), ROD_OK);
+        double err = 0.0, mag = 0.0;
+        for (int r = 0; r < 2 * n; r++) {
+            double fd = (yp[r] - ym[r]) / (2.0 * h[i]);
+            err = fmax(err, fabs(fd - jac[r * ROD_FIT_NKEYS + keys[i]]));
+            mag = fmax(mag, fabs(fd));
+        }
+        printf("%-24s max |d obs / du| %.4g, max error of the Jacobian %.2g\n", rod_fit_key_name(keys[i]), mag, err);
+        assert_true(mag > 0.0);
+        assert_true(err <= 1e-4 * mag);
+    }
+    /* The offset's column is exactly (1 for Delta Z, 0 for A). */
+    for (int k = 0; k < n; k++) {
+        assert_true(jac[(2 * k) * ROD_FIT_NKEYS + ROD_FIT_DZ_OFFSET] == 1.0);
+        assert_true(jac[(2 * k + 1) * ROD_FIT_NKEYS + ROD_FIT_DZ_OFFSET] == 0.0);
+    }
+    rod_fit_model_free(m);
+}
+
+static void the_cameras_offset_is_recovered(void **state)
+{
+    (void)state;
+    rod_scene truth = truth_strip(), sc = fit_kit_pet(31);
+    truth.youngs_modulus = sc.youngs_modulus;
+    truth.shear_modulus = sc.shear_modulus;
+    rod_fit_obs obs[NMAX];
+    int n = observe(&truth, obs, 0.0, 0.0);
+    for (int k = 0; k < n; k++) obs[k].dz += 0.01; /* the camera's zero 2 mm below the clamps' line */
+    rod_fit_opts o = rod_fit_opts_default();
+    o.fit[ROD_FIT_ANGLE_LEFT] = o.fit[ROD_FIT_ANGLE_RIGHT] = o.fit[ROD_FIT_HINGE] = o.fit[ROD_FIT_DZ_OFFSET] = 1;
+    rod_fit_result r;
+    char why[256];
+    rod_status st = rod_fit_run(&sc, obs, n, &o, &r, why, sizeof why);
+    if (st != ROD_OK) printf("fit: %s\n", why);
+    assert_int_equal(st, ROD_OK);
+    print_fit("offset, noise-free", &r, &o);
+    double ut[ROD_FIT_NKEYS];
+    rod_fit_scene_values(&truth, ut);
+    ut[ROD_FIT_DZ_OFFSET] = 0.01;
+    assert_true(r.rms < 1e-4);
+    for (int k = 0; k < ROD_FIT_NKEYS; k++)
+        if (o.fit[k]) {
+            assert_true(r.determined[k]);
+            assert_true(fabs(r.u[k] - ut[k]) <= 1e-6 * (r.hi[k] - r.lo[k]));
+        }
+    /* From the hold alone (one state filmed many times) two observables cannot fix three values. */
+    for (int k = 0; k < 8; k++) obs[k] = obs[NC - 1];
+    st = rod_fit_run(&sc, obs, 8, &o, &r, why, sizeof why);
+    if (st != ROD_OK) printf("fit: %s\n", why);
+    assert_int_equal(st, ROD_OK);
+    print_fit("offset, hold only", &r, &o);
+    assert_false(r.determined[ROD_FIT_DZ_OFFSET]);
+    assert_true(isinf(r.se[ROD_FIT_DZ_OFFSET]));
+}
+
+static void each_creases_hinge_is_recovered(void **state)
+{
+    (void)state;
+    rod_scene truth = fit_kit_pet(31), sc = fit_kit_pet(31);
+    truth.fold_angle_left_deg = -87.0;
+    truth.fold_angle_right_deg = -89.0;
+    truth.fold_hinge_stiffness_left = 2e-3;
+    truth.fold_hinge_stiffness_right = 5e-3;
+    rod_fit_obs obs[NMAX];
+    int n = observe_n(&truth, obs, 12, 0.15, 0.0, 0.0);
+    rod_fit_opts o = rod_fit_opts_default();
+    o.fit[ROD_FIT_ANGLE_LEFT] = o.fit[ROD_FIT_ANGLE_RIGHT] = o.fit[ROD_FIT_HINGE_LEFT] = o.fit[ROD_FIT_HINGE_RIGHT] = 1;
+    rod_fit_result r;
+    char why[256];
+    rod_status st = rod_fit_run(&sc, obs, n, &o, &r, why, sizeof why);
+    if (st != ROD_OK) printf("fit: %s\n", why);
+    assert_int_equal(st, ROD_OK);
+    print_fit("one hinge per crease, noise-free", &r, &o);
+    assert_true(r.rms < 1e-4);
+    assert_true(fabs(exp(r.u[ROD_FIT_HINGE_LEFT]) / 2e-3 - 1.0) < 1e-5);
+    assert_true(fabs(exp(r.u[ROD_FIT_HINGE_RIGHT]) / 5e-3 - 1.0) < 1e-5);
+    assert_true(fabs(r.u[ROD_FIT_ANGLE_LEFT] + 87.0) < 1e-4 && fabs(r.u[ROD_FIT_ANGLE_RIGHT] + 89.0) < 1e-4);
+    /* into a scene: per-crease keys, the pair's key unchanged */
+    rod_scene fitted = sc;
+    rod_fit_scene_apply(&fitted, r.u);
+    assert_true(fabs(fitted.fold_hinge_stiffness_left / 2e-3 - 1.0) < 1e-5);
+    assert_true(fabs(fitted.fold_hinge_stiffness_right / 5e-3 - 1.0) < 1e-5);
+    assert_true(fabs(fitted.fold_hinge_stiffness / sc.fold_hinge_stiffness - 1.0) < 1e-14);
+    /* and a fit of the pair's k alone leaves a scene without per-crease keys */
+    double u0[ROD_FIT_NKEYS];
+    rod_fit_scene_values(&sc, u0);
+    u0[ROD_FIT_HINGE] += 0.1;
+    fitted = sc;
+    rod_fit_scene_apply(&fitted, u0);
+    assert_true(isnan(fitted.fold_hinge_stiffness_left) && isnan(fitted.fold_hinge_stiffness_right));
+    o.fit[ROD_FIT_HINGE] = 1;
+    assert_int_equal(rod_fit_run(&sc, obs, n, &o, &r, why, sizeof why), ROD_ERR_SCENE);
+    printf("both kinds: %s\n", why);
+    assert_non_null(strstr(why, "one hinge stiffness for both creases or one each"));
+}
+
 static void bad_input_is_named(void **state)
 {
     (void)state;
@@ -245,6 +376,9 @@ int main(void)
         cmocka_unit_test(recovers_it_within_its_errors_with_noise),
         cmocka_unit_test(a_crease_position_is_recovered),
         cmocka_unit_test(bending_stiffness_without_gravity_is_named),
+        cmocka_unit_test(the_model_jacobian_matches_finite_differences),
+        cmocka_unit_test(the_cameras_offset_is_recovered),
+        cmocka_unit_test(each_creases_hinge_is_recovered),
         cmocka_unit_test(bad_input_is_named),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

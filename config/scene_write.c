@@ -1,12 +1,12 @@
-/* sim_scene_write.c: a scene written from the loader's key table (sim_scene_write.h). */
-#include "sim_scene_write.h"
+/* scene_write.c: a scene written from the loader's key table (scene_write.h). */
+#include "scene_write.h"
 
 #include "scene_file.h"
 
 #include <math.h>
 #include <string.h>
 
-int sim_scene_write(FILE *f, const rod_scene *sc, const char *header)
+int cfg_scene_write(FILE *f, const rod_scene *sc, const char *header)
 {
     size_t n = 0;
     const cfg_scene_key *keys = cfg_scene_keys(&n);
