@@ -60,6 +60,7 @@ static const room rooms[] = {
     {"daemon/twin", 6, {"twin.h", NULL}},
     {"daemon/trial", 7, {"trial.h", NULL}},
     {"daemon/rigsim", 7, {"rigsim.h", NULL}},
+    {"daemon/family", 7, {"family.h", NULL}},
     {"daemon/report", 8, {"trial_report.h", NULL}},
     {"daemon/campaign", 8, {"campaign.h", NULL}},
     {"daemon/ribbonctl_commands", 9, {"ctl.h", NULL}},
