@@ -293,6 +293,12 @@ int main(int argc, char **argv)
     double it_med, it_max, ir_med, ir_max;
     timing(j.cases, twins, 3, &it_med, &it_max);
     timing(j.cases, twins, 4, &ir_med, &ir_max);
+    /* A figure with nothing to take it over (no twin ran, no fit landed) prints as -1, never NaN. */
+    double *figs[] = {&s.scene_median, &s.scene_max, &s.before_median, &s.before_max, &s.before_in2sd,
+                      &s.before_z_median, &s.at_median, &s.at_max, &s.at_in2sd, &s.at_z_median, &s.tracker_dz_rms,
+                      &s.tracker_a_rms, &fb_med, &fb_max, &rf_med, &sn_med, &it_med, &it_max, &ir_med, &ir_max};
+    for (size_t k = 0; k < sizeof figs / sizeof figs[0]; k++)
+        if (!isfinite(*figs[k])) *figs[k] = -1.0;
     char keys[256] = "";
     for (int k = 0; k < ROD_FIT_NKEYS; k++)
         if (j.o.fit.fit[k])

@@ -4,7 +4,7 @@
  * (a) the family's draws stay inside the issue's ranges, cover them, and depend on (seed, index)
  *     only;
  * (b) the summary's medians, band coverage and regime score on hand-made cases (closed form);
- * (c) three twins of the benchmark's family (seed 1, indices 0..2, PET strip at N = 61) filmed by
+ * (c) (argument "twins", test_family_twins) three twins of the benchmark's family (seed 1, indices 0..2, PET strip at N = 61) filmed by
  *     the synthetic camera at the rig's resolution and noise, measured by the tracker, fitted
  *     before the shear and at 80% of the way to the snap. What is asserted is what the fit meets
  *     on the whole family (docs/calibration.md, "Tested against strips the fit does not know"):
@@ -176,13 +176,18 @@ static void test_three_twins(void **state)
     assert_true(s.at_median <= 0.003);
 }
 
-int main(void)
+/* No argument: (a) and (b), seconds, in both builds. "twins": (c), about 10 s of CPU, registered
+   as test_family_twins (heavy: under the sanitizers it is ten times that). */
+int main(int argc, char **argv)
 {
     gsl_set_error_handler_off();
+    if (argc > 1 && !strcmp(argv[1], "twins")) {
+        const struct CMUnitTest twins[] = {cmocka_unit_test(test_three_twins)};
+        return cmocka_run_group_tests(twins, NULL, NULL);
+    }
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_draws_in_ranges),
         cmocka_unit_test(test_summary_closed_form),
-        cmocka_unit_test(test_three_twins),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
