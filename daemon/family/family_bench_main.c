@@ -20,6 +20,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "family.h"
 
+#include <gsl/gsl_errno.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
@@ -194,6 +195,7 @@ static double now_s(void)
 
 int main(int argc, char **argv)
 {
+    gsl_set_error_handler_off(); /* GSL's failures come back as codes, never as an abort */
     const char *scene = NULL, *sets[MAX_SETS], *fitkeys = NULL, *priors[ROD_FIT_NKEYS];
     int nsets = 0, npriors = 0, twins = 20, threads = 0, verbose = 0, json = 0;
     unsigned long long seed = 1;
