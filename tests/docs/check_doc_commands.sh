@@ -1,7 +1,7 @@
 #!/bin/sh
 # check_doc_commands.sh: the docs check. Every command that README.md and docs/*.md show (in code
 # blocks and in `code spans`: ribbonctl, ribbon-sim, ribbond, ribbon-grblsim, ribbon-mbsim,
-# ribbon-store-bench, make) must exist, and its --help must name every --option the docs use
+# ribbon-store-bench, ribbon-fit-family, make) must exist, and its --help must name every --option the docs use
 # with it, so docs that drift from the programs fail the build.
 #
 # usage: check_doc_commands.sh BIN_DIR MAKEFILE DOC.md|DIR ...   (a DIR stands for its *.md, so

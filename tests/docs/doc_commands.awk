@@ -9,7 +9,7 @@
 # `$ ` prompt, and its other lines are output. POSIX awk (Debian's mawk runs it).
 
 BEGIN {
-    progs = "(ribbonctl|ribbon-sim|ribbond|ribbon-grblsim|ribbon-mbsim|ribbon-store-bench|make)"
+    progs = "(ribbonctl|ribbon-sim|ribbond|ribbon-grblsim|ribbon-mbsim|ribbon-store-bench|ribbon-fit-family|make)"
     # A program's name: after a space, a slash (build/bin/ribbond) or a parenthesis, followed by
     # a space or the end; so cmake, ribbond.service and daemon/ribbonctl.c are not commands.
     progre = "[ /(]" progs "( |$)"

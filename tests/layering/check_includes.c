@@ -76,6 +76,7 @@ static const room rooms[] = {
     {"daemon/twin", 6, 0, {"twin.h", NULL}},
     {"daemon/trial", 7, 0, {"trial.h", NULL}},
     {"daemon/rigsim", 7, 0, {"rigsim.h", NULL}},
+    {"daemon/family", 7, 0, {"family.h", NULL}},
     {"daemon/report", 8, 0, {"trial_report.h", NULL}},
     {"daemon/campaign", 8, 0, {"campaign.h", NULL}},
     {"daemon/check", 8, 0, {"check.h", NULL}},
