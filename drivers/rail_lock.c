@@ -11,7 +11,9 @@
 #include "owner_lock.h"
 #include "rail_serial.h"
 
-#define RAIL_LOCK_MAX 2 /* one device per rail at most */
+/* One device per rail at most, each locked in up to RAIL_LOCK_DIRS directories. */
+#define RAIL_LOCK_DIRS 3
+#define RAIL_LOCK_MAX (2 * RAIL_LOCK_DIRS)
 
 struct rail_locks {
     owner_lock *held[RAIL_LOCK_MAX];
@@ -25,6 +27,23 @@ const char *rail_lock_dir(void)
     struct stat sb;
     if (stat("/run/lock", &sb) == 0 && S_ISDIR(sb.st_mode) && access("/run/lock", W_OK) == 0) return "/run/lock";
     return "/tmp";
+}
+
+/* Every directory a ribbond or a ribbonctl may resolve as its lock directory: $RIBBON_LOCK_DIR
+ * (when set), /run/lock (when a directory) and /tmp, without repeats. The first is ours. */
+static int lock_dirs(const char *dirs[RAIL_LOCK_DIRS])
+{
+    int n = 0;
+    const char *cand[RAIL_LOCK_DIRS + 1] = {rail_lock_dir(), getenv("RIBBON_LOCK_DIR"), "/run/lock", "/tmp"};
+    for (int i = 0; i <= RAIL_LOCK_DIRS && n < RAIL_LOCK_DIRS; i++) {
+        const char *d = cand[i];
+        struct stat sb;
+        if (!d || !*d || (i > 0 && (stat(d, &sb) != 0 || !S_ISDIR(sb.st_mode)))) continue;
+        int seen = 0;
+        for (int k = 0; k < n; k++) seen |= !strcmp(dirs[k], d);
+        if (!seen) dirs[n++] = d;
+    }
+    return n;
 }
 
 /* Letters, digits, '.' and '-' of text, every other byte '_' (a file name from an address). */
@@ -94,17 +113,30 @@ rail_err rail_locks_take(const rail_open_spec *compress, const rail_open_spec *s
         keys[r][0] = '\0';
         if (!spec[r] || !device_key(spec[r], keys[r], sizeof keys[r], name, sizeof name)) continue;
         if (r == 1 && !strcmp(keys[0], keys[1])) continue; /* one device, one lock */
-        char path[512], w[600];
-        snprintf(path, sizeof path, "%s/ribbon-rig-%s.lock", rail_lock_dir(), keys[r]);
-        int busy = 0;
-        owner_lock *ol = owner_lock_take(path, what, &busy, w, sizeof w);
-        if (!ol) {
+        /* Ours first; then the device's lock file in every other directory another process may
+         * have resolved (its environment or its rights differ): taken there too where we may
+         * write, so it finds us whichever it uses; tested without taking where we may not. */
+        const char *dirs[RAIL_LOCK_DIRS];
+        int nd = lock_dirs(dirs);
+        for (int d = 0; d < nd; d++) {
+            char path[512], w[600];
+            snprintf(path, sizeof path, "%s/ribbon-rig-%s.lock", dirs[d], keys[r]);
+            int busy = 0;
+            owner_lock *ol = NULL;
+            if (d == 0 || access(dirs[d], W_OK) == 0)
+                ol = owner_lock_take(path, what, &busy, w, sizeof w);
+            else
+                busy = owner_lock_probe(path, w, sizeof w);
+            if (ol) {
+                l->held[l->n++] = ol;
+                continue;
+            }
+            if (d > 0 && !busy) continue; /* another directory's file we cannot make: not ours */
             snprintf(why, why_len, "rail %s: %s %s: %s", spec[r]->params.name[0] ? spec[r]->params.name : "?", name,
                      busy ? "is in use" : "cannot be locked", w);
             rail_locks_release(l);
             return busy ? RAIL_E_STATE : RAIL_E_IO;
         }
-        l->held[l->n++] = ol;
     }
     if (l->n == 0) {
         free(l);
