@@ -17,7 +17,9 @@
  * stand), so any banner we did not cause by a soft reset at rest, any alarm whose documented
  * meaning is a lost position (1 hard limit, 3 reset in motion, 6-9 homing failed), a
  * "[MSG:Reset to continue]" and a reopened port set zero_lost until a homing cycle ends with
- * "ok" or the user confirms the zero (rail_gcode.h). */
+ * "ok" or the user confirms the zero (rail_gcode.h). The state outlives the process: a marker
+ * file beside the device's lock (rail_trust.h) is written when it is lost, read at open and
+ * removed when it is trusted again. */
 #define _GNU_SOURCE /* memmem */
 #include <math.h>
 #include <stdio.h>
@@ -25,6 +27,7 @@
 #include <string.h>
 
 #include "grbl_link.h"
+#include "rail_trust.h"
 
 static rail_err lfail(grbl_link *l, rail_err e, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static rail_err lfail(grbl_link *l, rail_err e, const char *fmt, ...)
@@ -50,17 +53,23 @@ static const char *printable(const char *line, char *buf, size_t n)
 
 void grbl_link_zero_lost(grbl_link *l, const char *fmt, ...)
 {
+    char was[sizeof l->zero_why];
+    memcpy(was, l->zero_why, sizeof was);
+    bool lost = l->zero_lost;
     l->zero_lost = true;
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(l->zero_why, sizeof l->zero_why, fmt, ap);
     va_end(ap);
+    if (!lost || strcmp(was, l->zero_why) != 0)
+        rail_trust_mark(l->spec, l->zero_why); /* a restarted process must refuse motion too */
 }
 
 void grbl_link_zero_trusted(grbl_link *l)
 {
     l->zero_lost = false;
     l->zero_why[0] = 0;
+    rail_trust_clear(l->spec);
 }
 
 /* GRBL 1.1's alarm table: 1 (hard limit) and 3 (reset in motion) say the machine position is
@@ -394,6 +403,12 @@ rail_err grbl_link_open(grbl_link **out, const rail_gcode_params *g, rail_clock 
     if (rep.state == GRBL_ALARM && !l->zero_lost)
         grbl_link_zero_lost(l, "the controller is in alarm at open (homing required, or an alarm "
                             "from before)");
+    char kept[600];
+    if (!l->zero_lost && rail_trust_marked(l->spec, kept, sizeof kept)) {
+        /* An earlier process saw it lose its position and nobody homed or confirmed it since. */
+        l->zero_lost = true;
+        rail_text_copy(l->zero_why, sizeof l->zero_why, kept);
+    }
     e = grbl_link_read_settings(l);
     if (e != RAIL_OK) {
         snprintf(why, why_len, "gcode: cannot read the settings ($$) of %.100s: %.200s", l->ser->path, l->why);

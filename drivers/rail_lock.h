@@ -25,13 +25,10 @@
 #include <stddef.h>
 
 #include "rail.h"
+#include "rail_lock_name.h"
 #include "rail_open.h"
 
 typedef struct rail_locks rail_locks;
-
-/* The lock directory: $RIBBON_LOCK_DIR when set, else /run/lock when it is a writable directory
- * (Debian's, shared by every user), else /tmp. */
-const char *rail_lock_dir(void);
 
 /* Takes the locks of both rails' devices; what goes into the holder's line. RAIL_OK with *out
  * (NULL when no rail names a device), or RAIL_E_STATE with why naming the rail, the device and
