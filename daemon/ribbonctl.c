@@ -24,6 +24,7 @@ static const cli_command commands[] = {
     {"phase-report", ctl_trials_main, "every trial's measured regime on the predicted (Gamma, phi) phase diagram"},
     {"replay", ctl_trials_main, "replay ID: a recorded trial through tracking and snap detection again"},
     {"specimen", ctl_campaign_main, "the store's specimens: add NAME --phi DEG --gamma G ... | list | show NAME | retire NAME"},
+    {"rails", ctl_rails_main, "a rail of the running ribbond: home NAME --confirm | confirm-zero NAME --confirm"},
     {"queue", ctl_campaign_main, "the campaign's queue: add trial|operator|pause | list | show | remove | move | start | stop | confirm"},
 };
 

@@ -17,4 +17,5 @@ int ctl_transcode_main(int argc, char **argv);    /* ctl_transcode.c: raw video 
 int ctl_trials_main(int argc, char **argv); /* ctl_trials.c: start abort status list show export report
                                             phase-report replay */
 int ctl_campaign_main(int argc, char **argv); /* ctl_campaign.c: specimen, queue */
+int ctl_rails_main(int argc, char **argv);    /* ctl_rails.c: the daemon's rails: home, confirm-zero */
 #endif
