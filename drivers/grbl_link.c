@@ -27,6 +27,8 @@
 #include <string.h>
 
 #include "grbl_link.h"
+#include "rail_lock_name.h"
+#include "rail_port_lock.h"
 #include "rail_trust.h"
 
 static rail_err lfail(grbl_link *l, rail_err e, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
@@ -250,7 +252,25 @@ rail_err grbl_link_send(grbl_link *l, const char *cmd, int *err_code)
 static rail_err reopen(grbl_link *l, grbl_report *rep)
 {
     rail_serial *ser = NULL;
-    char why[256];
+    char why[700];
+    /* The name may lead to another device now (USB re-enumeration): its lock first, before a byte
+       goes to it; the lock held since the open covers the original device only. */
+    char key[200], name[240];
+    rail_lock_serial_key(l->spec, key, sizeof key, name, sizeof name);
+    if (strcmp(key, l->key) == 0) {
+        rail_port_lock_release(l->relock); /* back on the device the opener locked */
+        l->relock = NULL;
+        l->relock_key[0] = 0;
+    } else if (!l->relock || strcmp(key, l->relock_key) != 0) {
+        int held = 0;
+        struct rail_port_lock *pl = rail_port_lock_take(l->spec, "ribbon rig: a rail's port reopened", &held, why,
+                                                        sizeof why);
+        if (!pl)
+            return lfail(l, RAIL_E_DISCONNECTED, "port leads to another device, not reopened: %.230s", why);
+        rail_port_lock_release(l->relock);
+        l->relock = pl;
+        rail_text_copy(l->relock_key, sizeof l->relock_key, key);
+    }
     rail_err e = rail_serial_open(&ser, l->spec, l->baud, why, sizeof why);
     if (e != RAIL_OK)
         return lfail(l, RAIL_E_DISCONNECTED, "controller lost; reopening failed: %s", why);
@@ -382,6 +402,8 @@ rail_err grbl_link_open(grbl_link **out, const rail_gcode_params *g, rail_clock 
     l->reply_timeout_s = g->reply_timeout_s;
     l->refs = 1;
     rail_text_copy(l->spec, sizeof l->spec, g->port);
+    char kname[240];
+    rail_lock_serial_key(g->port, l->key, sizeof l->key, kname, sizeof kname);
     l->baud = g->baud;
     rail_err e = rail_serial_open(&l->ser, g->port, g->baud, why, why_len);
     if (e != RAIL_OK) {
@@ -532,5 +554,6 @@ void grbl_link_release(grbl_link *l)
     if (!l || --l->refs > 0)
         return;
     rail_serial_close(l->ser);
+    rail_port_lock_release(l->relock);
     free(l);
 }
