@@ -29,6 +29,7 @@ static const cli_command commands[] = {
     {"phase", ctl_phase_main, "the lab's phase diagram: measured regimes, experimental and predicted boundaries (--out, --csv, --json)"},
     {"plan", ctl_plan_main, "the next specimens to make (--phi LIST --count K), stored; --approve N puts one in the queue"},
     {"plan-bench", ctl_plan_bench_main, "the simulated campaign: the planner against twins it does not know, one line"},
+    {"rails", ctl_rails_main, "a rail of the running ribbond: home NAME --confirm | confirm-zero NAME --confirm"},
     {"queue", ctl_campaign_main, "the campaign's queue: add trial|operator|pause | list | show | remove | move | start | stop | confirm"},
 };
 

@@ -684,6 +684,96 @@ static int op_campaign(void *user, const char *method, const char *path, const j
     return campaign_route(&c, method, path, body, out, http_status, why, why_len);
 }
 
+/* POST /rails/{name}/home and /rails/{name}/confirm-zero, body {"confirm": true}: after a
+ * controller lost its position (docs/rails.md) the rail refuses motion until it is homed or its
+ * zero confirmed; ribbond holds the rails' locks, so this is the way to do it while it runs. Only
+ * between trials: the daemon's lock is held throughout, so no trial starts meanwhile, and the
+ * trial's thread (the rails' owner during a trial) is not running. */
+static int op_rail(void *user, const char *path, const json_t *body, json_t **out, int *http_status, char *why,
+                   size_t why_len)
+{
+    rig_daemon *d = user;
+    char name[64] = "", action[32] = "";
+    const char *p = path + 7; /* "/rails/" */
+    const char *slash = strchr(p, '/');
+    if (!slash || (size_t)(slash - p) >= sizeof name || strlen(slash + 1) >= sizeof action) {
+        *http_status = 404;
+        snprintf(why, why_len, "no such route %.100s: POST /rails/NAME/home or /rails/NAME/confirm-zero", path);
+        return -1;
+    }
+    memcpy(name, p, (size_t)(slash - p));
+    snprintf(action, sizeof action, "%s", slash + 1);
+    int home = !strcmp(action, "home");
+    if (!home && strcmp(action, "confirm-zero") != 0) {
+        *http_status = 404;
+        snprintf(why, why_len, "no such rail action '%.31s': home or confirm-zero", action);
+        return -1;
+    }
+    const char *key;
+    json_t *v;
+    json_object_foreach((json_t *)body, key, v) {
+        if (strcmp(key, "confirm") != 0) {
+            *http_status = 400;
+            snprintf(why, why_len, "unknown field \"%.60s\": the body is {\"confirm\": true}", key);
+            return -1;
+        }
+    }
+    json_t *c = json_object_get(body, "confirm");
+    if (!json_is_true(c)) {
+        *http_status = 400;
+        snprintf(why, why_len,
+                 "%s needs {\"confirm\": true}: %s", action,
+                 home ? "homing drives the rail to its switch (a clamped specimen would be crushed)"
+                      : "the controller's count is taken as right where the rail stands");
+        return -1;
+    }
+    if (!d->compress || !d->shear) {
+        *http_status = 409;
+        snprintf(why, why_len, "a %s-mode daemon drives no rails", rig_mode_name(d->cfg.mode));
+        return -1;
+    }
+    rail *r = !strcmp(name, rail_get_params(d->compress)->name) ? d->compress
+              : !strcmp(name, rail_get_params(d->shear)->name)  ? d->shear
+                                                                 : NULL;
+    if (!r) {
+        *http_status = 404;
+        snprintf(why, why_len, "no rail named '%.63s' (this rig's rails: %s, %s)", name,
+                 rail_get_params(d->compress)->name, rail_get_params(d->shear)->name);
+        return -1;
+    }
+    pthread_mutex_lock(&d->lock);
+    trial_session *s = running_session(d);
+    if (s) {
+        session_status ss;
+        trial_session_status(s, &ss);
+        pthread_mutex_unlock(&d->lock);
+        *http_status = 409;
+        snprintf(why, why_len, "trial %lld is running (%s): a rail is homed or its zero confirmed only between "
+                 "trials (abort it first)", (long long)ss.trial_id, trial_state_name(ss.state));
+        return -1;
+    }
+    rail_err e = home ? rail_home(r, true) : rail_gcode_confirm_zero(r, true);
+    rail_status st;
+    memset(&st, 0, sizeof st);
+    if (e == RAIL_OK) rail_status_poll(r, &st);
+    if (e != RAIL_OK) snprintf(why, why_len, "%s", rail_last_error(r));
+    pthread_mutex_unlock(&d->lock);
+    if (e != RAIL_OK) {
+        *http_status = e == RAIL_E_STATE || e == RAIL_E_UNSUPPORTED ? 409 : e == RAIL_E_CONFIRM ? 400 : 502;
+        return -1;
+    }
+    say(d, "rail %s: %s by the API", name, home ? "homing started" : "zero confirmed");
+    if (home) *http_status = 202;
+    json_t *o = json_object();
+    json_object_set_new(o, "rail", json_string(name));
+    json_object_set_new(o, "action", json_string(action));
+    json_object_set_new(o, "state", json_string(rail_state_name(st.state)));
+    json_object_set_new(o, "position_mm", num_or_null(st.position_mm));
+    json_object_set_new(o, "message", json_string(st.message));
+    *out = o;
+    return 0;
+}
+
 static int op_abort(void *user, json_t **out, int *http_status, char *why, size_t why_len)
 {
     rig_daemon *d = user;
@@ -814,5 +904,6 @@ api_ops rig_daemon_ops(void)
     o.camera_jpeg = op_camera;
     o.prediction = op_prediction;
     o.campaign = op_campaign;
+    o.rail = op_rail;
     return o;
 }

@@ -17,7 +17,9 @@
  * stand), so any banner we did not cause by a soft reset at rest, any alarm whose documented
  * meaning is a lost position (1 hard limit, 3 reset in motion, 6-9 homing failed), a
  * "[MSG:Reset to continue]" and a reopened port set zero_lost until a homing cycle ends with
- * "ok" or the user confirms the zero (rail_gcode.h). */
+ * "ok" or the user confirms the zero (rail_gcode.h). The state outlives the process: a marker
+ * file beside the device's lock (rail_trust.h) is written when it is lost, read at open and
+ * removed when it is trusted again. */
 #define _GNU_SOURCE /* memmem */
 #include <math.h>
 #include <stdio.h>
@@ -25,6 +27,9 @@
 #include <string.h>
 
 #include "grbl_link.h"
+#include "rail_lock_name.h"
+#include "rail_port_lock.h"
+#include "rail_trust.h"
 
 static rail_err lfail(grbl_link *l, rail_err e, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static rail_err lfail(grbl_link *l, rail_err e, const char *fmt, ...)
@@ -50,17 +55,23 @@ static const char *printable(const char *line, char *buf, size_t n)
 
 void grbl_link_zero_lost(grbl_link *l, const char *fmt, ...)
 {
+    char was[sizeof l->zero_why];
+    memcpy(was, l->zero_why, sizeof was);
+    bool lost = l->zero_lost;
     l->zero_lost = true;
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(l->zero_why, sizeof l->zero_why, fmt, ap);
     va_end(ap);
+    if (!lost || strcmp(was, l->zero_why) != 0)
+        rail_trust_mark(l->spec, l->zero_why); /* a restarted process must refuse motion too */
 }
 
 void grbl_link_zero_trusted(grbl_link *l)
 {
     l->zero_lost = false;
     l->zero_why[0] = 0;
+    rail_trust_clear(l->spec);
 }
 
 /* GRBL 1.1's alarm table: 1 (hard limit) and 3 (reset in motion) say the machine position is
@@ -241,7 +252,25 @@ rail_err grbl_link_send(grbl_link *l, const char *cmd, int *err_code)
 static rail_err reopen(grbl_link *l, grbl_report *rep)
 {
     rail_serial *ser = NULL;
-    char why[256];
+    char why[700];
+    /* The name may lead to another device now (USB re-enumeration): its lock first, before a byte
+       goes to it; the lock held since the open covers the original device only. */
+    char key[200], name[240];
+    rail_lock_serial_key(l->spec, key, sizeof key, name, sizeof name);
+    if (strcmp(key, l->key) == 0) {
+        rail_port_lock_release(l->relock); /* back on the device the opener locked */
+        l->relock = NULL;
+        l->relock_key[0] = 0;
+    } else if (!l->relock || strcmp(key, l->relock_key) != 0) {
+        int held = 0;
+        struct rail_port_lock *pl = rail_port_lock_take(l->spec, "ribbon rig: a rail's port reopened", &held, why,
+                                                        sizeof why);
+        if (!pl)
+            return lfail(l, RAIL_E_DISCONNECTED, "port leads to another device, not reopened: %.230s", why);
+        rail_port_lock_release(l->relock);
+        l->relock = pl;
+        rail_text_copy(l->relock_key, sizeof l->relock_key, key);
+    }
     rail_err e = rail_serial_open(&ser, l->spec, l->baud, why, sizeof why);
     if (e != RAIL_OK)
         return lfail(l, RAIL_E_DISCONNECTED, "controller lost; reopening failed: %s", why);
@@ -373,6 +402,8 @@ rail_err grbl_link_open(grbl_link **out, const rail_gcode_params *g, rail_clock 
     l->reply_timeout_s = g->reply_timeout_s;
     l->refs = 1;
     rail_text_copy(l->spec, sizeof l->spec, g->port);
+    char kname[240];
+    rail_lock_serial_key(g->port, l->key, sizeof l->key, kname, sizeof kname);
     l->baud = g->baud;
     rail_err e = rail_serial_open(&l->ser, g->port, g->baud, why, why_len);
     if (e != RAIL_OK) {
@@ -394,6 +425,12 @@ rail_err grbl_link_open(grbl_link **out, const rail_gcode_params *g, rail_clock 
     if (rep.state == GRBL_ALARM && !l->zero_lost)
         grbl_link_zero_lost(l, "the controller is in alarm at open (homing required, or an alarm "
                             "from before)");
+    char kept[600];
+    if (!l->zero_lost && rail_trust_marked(l->spec, kept, sizeof kept)) {
+        /* An earlier process saw it lose its position and nobody homed or confirmed it since. */
+        l->zero_lost = true;
+        rail_text_copy(l->zero_why, sizeof l->zero_why, kept);
+    }
     e = grbl_link_read_settings(l);
     if (e != RAIL_OK) {
         snprintf(why, why_len, "gcode: cannot read the settings ($$) of %.100s: %.200s", l->ser->path, l->why);
@@ -517,5 +554,6 @@ void grbl_link_release(grbl_link *l)
     if (!l || --l->refs > 0)
         return;
     rail_serial_close(l->ser);
+    rail_port_lock_release(l->relock);
     free(l);
 }

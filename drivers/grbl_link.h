@@ -40,6 +40,11 @@ struct grbl_link {
     bool have_wco;
     bool lost;               /* the port failed: the next status query tries to reopen it */
     char spec[256];          /* port spec, for reopening */
+    char key[200];           /* the device's lock key when the port was opened (rail_lock_name.h):
+                                the opener's lock (rail_lock.h) covers it */
+    char relock_key[200];    /* the key of relock */
+    struct rail_port_lock *relock; /* the lock of the device a reopen found instead (USB
+                                      re-enumeration: rail_port_lock.h), NULL = none needed */
     int baud;
     char why[256];           /* reason of the last failure */
 };

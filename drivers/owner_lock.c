@@ -71,6 +71,25 @@ owner_lock *owner_lock_take(const char *path, const char *what, int *held, char 
     return l;
 }
 
+int owner_lock_probe(const char *path, char *why, size_t why_len)
+{
+    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+    if (fd < 0) return 0;
+    int held = 0;
+    if (flock(fd, LOCK_SH | LOCK_NB) != 0) {
+        held = errno == EWOULDBLOCK;
+        if (held) {
+            char holder[200];
+            read_holder(fd, holder, sizeof holder);
+            snprintf(why, why_len, "%s is held by %s", path, holder[0] ? holder : "another process");
+        }
+    } else {
+        flock(fd, LOCK_UN);
+    }
+    close(fd);
+    return held;
+}
+
 void owner_lock_release(owner_lock *l)
 {
     if (!l) return;

@@ -25,6 +25,10 @@ typedef struct owner_lock owner_lock;
  * written); else *held = 0 and the reason the file could not be created or locked. held may be
  * NULL. */
 owner_lock *owner_lock_take(const char *path, const char *what, int *held, char *why, size_t why_len);
+/* Whether another owner holds the lock on path, without taking it and without creating the
+ * file (a directory this process may not write: a read-only descriptor can still test a flock).
+ * 1 with why "PATH is held by pid ..." as above; 0 when it is free or there is no such file. */
+int owner_lock_probe(const char *path, char *why, size_t why_len);
 /* Releases the lock (the file stays). NULL is a no-op. */
 void owner_lock_release(owner_lock *l);
 

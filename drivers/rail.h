@@ -70,6 +70,12 @@ typedef enum rail_err {
 
 const char *rail_err_message(rail_err err);
 
+/* s: the longest the monotonic clock may run past a rail's poll period (1 / poll_hz) between two
+ * status reports of a moving rail before the process counts as having been frozen (SIGSTOP, a
+ * suspended machine): the trial poller's TRIAL_CLOCK_JUMP_S, and the G-code driver's bound before
+ * it sends another jog segment. */
+#define RAIL_CLOCK_JUMP_S 0.5
+
 /* What the rail is doing, as the device (or the link to it) says. */
 typedef enum rail_state {
     RAIL_STATE_IDLE = 0,

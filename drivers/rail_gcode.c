@@ -33,6 +33,8 @@ typedef struct gcode {
     double pos_mm;        /* mm, last reported position of our axis */
     double axes_mm[GRBL_MAX_AXES]; /* mm, every axis at the last report (shared controllers) */
     double last_feed;     /* mm/min */
+    double status_t;      /* s (rail clock): when the latest good status report was in */
+    double prev_status_t; /* s: the one before it (the move's start for its first poll) */
     grbl_settings_check_out chk; /* the controller's settings checked for this axis at open */
 } gcode;
 
@@ -85,6 +87,30 @@ static rail_err send_segment(rail *r, gcode *k)
     return RAIL_OK;
 }
 
+/* A freeze (SIGSTOP, a suspended machine, a stalled scheduler) anywhere between the previous
+   good status and a segment about to go out: while frozen the controller ran out of segments and
+   stopped, and the status this top-up rests on may predate the freeze, so sending would start the
+   rail again by itself. The bound is the trial poller's (trial_rail_poller.h): one poll period
+   plus RAIL_CLOCK_JUMP_S. Returns true (the jog cancelled, a sticky fault set) when it is past. */
+static bool frozen_before_send(rail *r, gcode *k, double pos)
+{
+    double now = rail_clock_now(rail_get_clock(r));
+    double bound = 1.0 / rail_get_params(r)->poll_hz + RAIL_CLOCK_JUMP_S;
+    double gap = now - k->prev_status_t;
+    if (gap <= bound)
+        return false;
+    grbl_link_realtime(k->l, 0x85);
+    k->active = false;
+    k->stopping = true;
+    k->prev_pos = pos;
+    k->prev_t = now;
+    snprintf(k->fault, sizeof k->fault,
+             "the monotonic clock jumped %.2f s between status reports (at most %.2f s): frozen; "
+             "jog cancelled at %.3f mm, not topped up; reset to clear",
+             gap, bound, pos);
+    return true;
+}
+
 /* Keep segments_ahead segments queued ahead of pos. */
 static rail_err top_up(rail *r, gcode *k, double pos)
 {
@@ -94,6 +120,8 @@ static rail_err top_up(rail *r, gcode *k, double pos)
         double ahead = (k->sent_to_mm - pos) * k->dir;
         if (remaining <= 1e-6 || ahead >= k->g.segments_ahead * seg - 1e-9)
             break;
+        if (frozen_before_send(r, k, pos))
+            return rail_set_error(r, RAIL_E_STATE, "%s", k->fault);
         rail_err e = send_segment(r, k);
         if (e != RAIL_OK)
             return e;
@@ -109,6 +137,9 @@ static rail_err gcode_poll(rail *r, void *impl, rail_status *out)
     /* One retry after a garbled report: a single bad line is not yet a fault. A silent
        controller is not retried here: grbl_link_status has already asked twice within
        reply_timeout_s, which is the bound on detecting a lost link. */
+    /* The report's time is taken before it is asked for: a freeze after the reply came in (before
+       this reading) must count against it, not be hidden inside a fresh time stamp. */
+    double t_ask = rail_clock_now(rail_get_clock(r));
     for (int i = 0; i < 2; i++) {
         e = grbl_link_status(k->l, &rep);
         if (e != RAIL_E_PROTOCOL)
@@ -127,6 +158,8 @@ static rail_err gcode_poll(rail *r, void *impl, rail_status *out)
     double now = rail_clock_now(rail_get_clock(r));
     double pos = rep.pos[k->ax];
     k->pos_mm = pos;
+    k->prev_status_t = k->status_t;
+    k->status_t = t_ask;
     out->position_mm = pos;
     out->velocity_mm_s = 0.0;
     k->last_feed = rep.feed_mm_min;
@@ -316,6 +349,7 @@ static rail_err gcode_move_abs(rail *r, void *impl, double target, double speed)
     k->progress_pos = st.position_mm;
     k->progress_t = rail_clock_now(rail_get_clock(r));
     k->resets_at_start = k->l->resets_seen;
+    k->prev_status_t = k->status_t; /* the move starts from the report just read */
     k->active = true;
     return top_up(r, k, st.position_mm);
 }

@@ -8,6 +8,9 @@
  * position; the front end's polls top the queue up. A process that dies stops feeding, so the
  * rail stops within segments_ahead segments; a jog cancel (0x85) is the decelerating stop;
  * estop is a feed hold ('!') and, once stopped, a soft reset (0x18) that empties the planner.
+ * No segment goes out more than 1 / poll_hz + RAIL_CLOCK_JUMP_S after the previous status report
+ * (the process was frozen and the controller may have starved): the jog is cancelled instead and
+ * the rail faults until reset.
  * Opening a link cancels any motion the controller is still running: nothing resumes by itself.
  * Positions are machine positions: MPos ($10=1, GRBL's default), or WPos plus the last WCO the
  * controller reported (a WPos report before any WCO is refused).

@@ -12,20 +12,23 @@
  *                                    libmodbus takes a numeric IPv4 address);
  *   mock rail                        no device, no lock.
  * Two rails on one device (two GRBL axes of one controller, two drives on one RS-485 line) take
- * its lock once. */
+ * its lock once.
+ * A ribbond under systemd (its unit's environment) and a ribbonctl from a shell may resolve
+ * different lock directories (RIBBON_LOCK_DIR set for one only, or /run/lock writable for one
+ * only). So the device's lock file is also taken in every other candidate directory
+ * ($RIBBON_LOCK_DIR, /run/lock, /tmp) this process may write, and tested (a read-only flock
+ * probe) in those it may not: whichever directory the other process uses, one of the two finds
+ * the other's lock, and its refusal names the lock file it found held. */
 #ifndef RIBBON_DRIVERS_RAIL_LOCK_H
 #define RIBBON_DRIVERS_RAIL_LOCK_H
 
 #include <stddef.h>
 
 #include "rail.h"
+#include "rail_lock_name.h"
 #include "rail_open.h"
 
 typedef struct rail_locks rail_locks;
-
-/* The lock directory: $RIBBON_LOCK_DIR when set, else /run/lock when it is a writable directory
- * (Debian's, shared by every user), else /tmp. */
-const char *rail_lock_dir(void);
 
 /* Takes the locks of both rails' devices; what goes into the holder's line. RAIL_OK with *out
  * (NULL when no rail names a device), or RAIL_E_STATE with why naming the rail, the device and

@@ -87,6 +87,8 @@ api_route api_route_parse(const char *path, int64_t *id, char *why, size_t why_l
          strncmp(path, "/queue/", 7) == 0 || strcmp(path, "/checks") == 0 || strcmp(path, "/campaign/phase") == 0 || strcmp(path, "/plan") == 0 ||
          strncmp(path, "/plan/", 6) == 0) && strlen(path) < API_CAMPAIGN_PATH_MAX)
         return API_ROUTE_CAMPAIGN;
+    if (strncmp(path, "/rails/", 7) == 0 && strlen(path) < API_CAMPAIGN_PATH_MAX)
+        return API_ROUTE_RAIL;
     if (strcmp(path, "/trials/current/abort") == 0)
         return API_ROUTE_ABORT;
     if (strncmp(path, prefix, sizeof prefix - 1) != 0)
@@ -132,6 +134,7 @@ const char *api_route_allow(api_route r)
     case API_ROUTE_CAMPAIGN:
         return "GET, POST";
     case API_ROUTE_ABORT:
+    case API_ROUTE_RAIL:
         return "POST";
     case API_ROUTE_NONE:
     case API_ROUTE_BAD_ID:
@@ -161,6 +164,7 @@ int api_route_method_ok(api_route r, const char *method)
     case API_ROUTE_CAMPAIGN:
         return get || post;
     case API_ROUTE_ABORT:
+    case API_ROUTE_RAIL:
         return post;
     case API_ROUTE_NONE:
     case API_ROUTE_BAD_ID:

@@ -22,6 +22,8 @@ typedef enum api_route {
     API_ROUTE_PHASE,    /* /phase.png                GET */
     API_ROUTE_CAMPAIGN, /* /specimens[/...], /queue[/...], /checks  GET, POST (the campaign op sorts
                            them; a path of at most API_CAMPAIGN_PATH_MAX - 1 bytes) */
+    API_ROUTE_RAIL,     /* /rails/{name}/home, /rails/{name}/confirm-zero  POST (the op parses the
+                           name and the action; a path of at most API_CAMPAIGN_PATH_MAX - 1 bytes) */
     API_ROUTE_BAD_PATH, /* a byte outside the grammar (or not starting with '/'): 400 (keep last:
                            the fuzz target checks routes against it) */
 } api_route;

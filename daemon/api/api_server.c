@@ -328,7 +328,7 @@ static enum MHD_Result on_headers(api_server *s, int stream_pool, struct MHD_Con
     free(headers.h);
     req->route = v.route;
     req->id = v.id;
-    if (v.route == API_ROUTE_CAMPAIGN)
+    if (v.route == API_ROUTE_CAMPAIGN || v.route == API_ROUTE_RAIL)
         snprintf(req->path, sizeof req->path, "%s", url);
     if (v.status == 0)
         return MHD_YES;
@@ -447,6 +447,17 @@ static enum MHD_Result dispatch(api_server *s, struct MHD_Connection *c, const c
             json_decref(body);
             return finish_op(c, "start", rc, out, status, why);
         }
+
+    case API_ROUTE_RAIL: {
+        if (ops->rail == NULL)
+            break;
+        json_t *body = api_body_object(req->body, req->len, why, sizeof why);
+        if (body == NULL)
+            return reply_error(c, MHD_HTTP_BAD_REQUEST, why, NULL);
+        rc = ops->rail(s->user, req->path, body, &out, &status, why, sizeof why);
+        json_decref(body);
+        return finish_op(c, "rail", rc, out, status, why);
+    }
 
     case API_ROUTE_ABORT:
         if (ops->abort_current == NULL)

@@ -17,6 +17,7 @@
  *   GET  /live/camera.jpg          camera_jpeg                200 JPEG     404 no frame yet
  *   GET  /live/prediction          prediction                 200 object   404 none yet
  *   GET, POST /specimens[/...], /queue[/...], /checks  campaign(method, path, body)  200/201  400 404 405 409
+ *   POST /rails/{name}/home, /rails/{name}/confirm-zero  rail(path, body)  200/202  400 404 409
  *   GET  any path of cfg.assets    (served by the server)     200 the asset, no token needed
  *
  * The live routes feed the live page (docs/live-page.md); the assets are the page itself (HTML,
@@ -163,6 +164,10 @@ typedef struct api_ops {
      * method per path (405 naming the allowed one). */
     int (*campaign)(void *user, const char *method, const char *path, const json_t *body, json_t **out,
                     int *http_status, char *why, size_t why_len);
+    /* POST /rails/{name}/home or /rails/{name}/confirm-zero with {"confirm": true} (path as
+     * requested): home a rail or confirm its zero between trials (docs/api.md). */
+    int (*rail)(void *user, const char *path, const json_t *body, json_t **out, int *http_status, char *why,
+                size_t why_len);
 } api_ops;
 
 typedef struct api_server api_server;

@@ -15,7 +15,8 @@
  * then the daemon's (start_trial and trial_running take it); the daemon never calls in here
  * holding its own. An item is marked running before its trial starts and names the trial after:
  * a crash in between leaves a running item without a trial, which the next start-up marks
- * unknown (and any trial it created, interrupted). */
+ * unknown (and any trial it created, interrupted). An item that ends the queue (a pause, a
+ * trial that did not end done or did not start) ends and stops it in one store transaction. */
 #include "campaign_queue.h"
 
 #include <errno.h>
@@ -71,14 +72,37 @@ static void end_item(campaign_queue *q, const store_queue_item *it, store_queue_
         say(q, "queue: item %lld could not be ended %s: %s", (long long)it->id, store_queue_status_name(s), w);
 }
 
+/* The item ends and the queue stops in one transaction: when it cannot be written, neither is,
+ * the item stays running and the next step ends it again (never an ended item with the queue
+ * still running, which would start the next item). */
+static void end_item_stop(campaign_queue *q, const store_queue_item *it, store_queue_status s, const char *reason,
+                          const char *stop_reason)
+{
+    char w[256];
+    if (store_queue_item_end_stop(q->st, it->id, s, reason, NULL, stop_reason, store_wall_now(), w, sizeof w) !=
+        STORE_OK)
+        say(q, "queue: item %lld could not be ended %s and the queue stopped (%s): %s; tried again on the next look",
+            (long long)it->id, store_queue_status_name(s), stop_reason, w);
+    else
+        say(q, "queue stopped: %s", stop_reason);
+}
+
+/* A pause item reached (begun): it ends done and stops the queue. */
+static void end_pause(campaign_queue *q, const store_queue_item *it)
+{
+    char why[600];
+    snprintf(why, sizeof why, "paused by item %lld%s%.400s: start the queue to go on", (long long)it->id,
+             it->note[0] ? ": " : "", it->note);
+    end_item_stop(q, it, STORE_QUEUE_DONE, "the queue paused here", why);
+}
+
 /* The running trial item: ends as its trial did once the session has ended and the store has its
  * final status. */
 static void follow_trial(campaign_queue *q, const store_queue_item *it)
 {
     if (!it->trial_id) {
         /* begun, but its trial never started (the start failed and its end could not be written) */
-        end_item(q, it, STORE_QUEUE_FAILED, "its trial did not start", NULL);
-        stop_queue(q, "a queue item's trial did not start");
+        end_item_stop(q, it, STORE_QUEUE_FAILED, "its trial did not start", "a queue item's trial did not start");
         return;
     }
     if (q->ops.trial_running(q->user, it->trial_id)) return;
@@ -96,13 +120,14 @@ static void follow_trial(campaign_queue *q, const store_queue_item *it)
     char reason[600];
     snprintf(reason, sizeof reason, "trial %lld ended %s%s%.500s", (long long)t.id, store_status_name(t.status),
              t.reason[0] ? ": " : "", t.reason);
-    end_item(q, it, s, reason, NULL);
     say(q, "queue item %lld: %s", (long long)it->id, reason);
     if (s != STORE_QUEUE_DONE) {
         char why[700];
         snprintf(why, sizeof why, "item %lld's %.600s; check the rig, then start the queue again", (long long)it->id,
                  reason);
-        stop_queue(q, why);
+        end_item_stop(q, it, s, reason, why);
+    } else {
+        end_item(q, it, s, reason, NULL);
     }
 }
 
@@ -142,6 +167,7 @@ static void step(campaign_queue *q)
     if (!it) return;
     if (store_queue_current(q->st, it, w, sizeof w) == STORE_OK) {
         if (it->kind == STORE_QUEUE_TRIAL) follow_trial(q, it);
+        if (it->kind == STORE_QUEUE_PAUSE) end_pause(q, it); /* its end could not be written: again */
         /* an operator step waits for campaign_queue_confirm */
         free(it);
         return;
@@ -160,18 +186,14 @@ static void step(campaign_queue *q)
     } else if (e == STORE_OK && store_queue_item_begin(q->st, it->id, store_wall_now(), w, sizeof w) == STORE_OK) {
         char why[600];
         if (it->kind == STORE_QUEUE_PAUSE) {
-            end_item(q, it, STORE_QUEUE_DONE, "the queue paused here", NULL);
-            snprintf(why, sizeof why, "paused by item %lld%s%.400s: start the queue to go on", (long long)it->id,
-                     it->note[0] ? ": " : "", it->note);
-            stop_queue(q, why);
+            end_pause(q, it);
         } else if (it->kind == STORE_QUEUE_OPERATOR) {
             say(q, "queue item %lld waits for the operator: %s", (long long)it->id, it->prompt);
         } else if (start_trial_item(q, it, why, sizeof why)) {
-            char reason[700];
+            char reason[700], stop[700];
             snprintf(reason, sizeof reason, "its trial was not started: %.600s", why);
-            end_item(q, it, STORE_QUEUE_FAILED, reason, NULL);
-            snprintf(reason, sizeof reason, "item %lld's trial was not started: %.600s", (long long)it->id, why);
-            stop_queue(q, reason);
+            snprintf(stop, sizeof stop, "item %lld's trial was not started: %.600s", (long long)it->id, why);
+            end_item_stop(q, it, STORE_QUEUE_FAILED, reason, stop);
         }
     } else if (e != STORE_OK) {
         say(q, "queue: %s", w);

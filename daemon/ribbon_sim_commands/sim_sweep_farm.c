@@ -154,6 +154,10 @@ static int outbox_flush(outbox *b)
 
 static int worker(int rank, sweep_task_fn run, void *run_ctx, const sweep_farm_opts *o)
 {
+    if (o && o->die_rank == rank && o->die_task == 0) { /* test hook: gone before its first READY */
+        fprintf(stderr, "\nribbon-sim sweep: test hook: rank %d exits before asking for a task\n", rank);
+        _exit(7);
+    }
     for (int given = 1;; given++) {
         int dummy = 0, task = -1;
         MPI_Send(&dummy, 1, MPI_INT, 0, TAG_READY, MPI_COMM_WORLD);
@@ -267,7 +271,7 @@ static int master(int size, farm *f, const sweep_farm_opts *o, char *why, size_t
     }
     pthread_t th;
     int have_local = pthread_create(&th, NULL, local_thread, f) == 0;
-    int lost = 0;
+    int lost = 0, lost_idle = 0;
     for (;;) {
         int flag = 0;
         MPI_Status st;
@@ -310,6 +314,17 @@ static int master(int size, farm *f, const sweep_farm_opts *o, char *why, size_t
                             timeout, t, f->state[t] == T_PENDING ? "queued again" : "given up (3 ranks lost on it)");
                 }
             }
+        /* Workers that hold no task and have not asked for one (they left before READY, or between
+         * a DONE and their next READY, which follow each other at once): the same bound, or rank 0
+         * would wait for them for ever (they count as alive until they stop). */
+        for (int k = 1; k < size; k++)
+            if (!w[k].dead && !w[k].stopped && !w[k].waiting && w[k].task < 0 && now() - w[k].last_seen > timeout) {
+                w[k].dead = 1;
+                rank_lost = 1;
+                lost_idle++;
+                fprintf(stderr, "\nribbon-sim sweep: rank %d never asked for a task (no READY for %.0f s): taken for "
+                        "dead, the farm goes on without it\n", k, timeout);
+            }
         int open = 0;
         for (int t = 0; t < f->ntasks; t++) open += f->state[t] == T_PENDING || f->state[t] == T_RUNNING;
         int cancelled = f->cancel && *f->cancel;
@@ -349,8 +364,8 @@ static int master(int size, farm *f, const sweep_farm_opts *o, char *why, size_t
     int left = 0;
     for (int t = 0; t < f->ntasks; t++) left += f->state[t] != T_DONE;
     for (int t = 0; t < f->ntasks; t++) lost += f->state[t] == T_GIVEN_UP;
-    if (left) snprintf(why, why_len, "%d tasks not done (%d given up after %d lost ranks each, the others interrupted)",
-                       left, lost, MAX_ATTEMPTS);
+    if (left) snprintf(why, why_len, "%d tasks not done (%d given up after %d lost ranks each, the others interrupted%s)",
+                       left, lost, MAX_ATTEMPTS, lost_idle ? "; a rank never asked for a task" : "");
     free(w);
     return left;
 }

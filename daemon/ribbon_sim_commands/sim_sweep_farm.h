@@ -8,6 +8,8 @@
  * come and a heartbeat every second, then ask again. A worker that falls silent for longer than
  * the heartbeat timeout is taken for dead: its task goes back to the queue (retried on another
  * rank, at most 3 times), rows it already sent are kept (the writer skips rows it already has).
+ * A worker that holds no task and has not asked for one (it left before its first READY) for as
+ * long is taken for dead too ("rank K never asked for a task"): rank 0 no longer waits for it.
  * Open MPI 4.1 aborts the whole job when a rank dies unless mpirun runs with --enable-recovery
  * (docs/sweeps.md); without it a rerun resumes from the rows written. Only the main thread calls
  * MPI (MPI_THREAD_FUNNELED). Rows travel as bytes: the ranks run the same binary. */
@@ -34,7 +36,8 @@ typedef void (*sweep_task_fn)(void *ctx, int task, sweep_emit_fn emit, void *emi
 typedef struct sweep_farm_opts {
     double heartbeat_timeout_s; /* a worker silent this long is taken for dead (default 30) */
     int die_rank, die_task;     /* test hook: rank die_rank (>= 1) exits (status 7) when handed
-                                 * its die_task-th task (1-based), without a word to rank 0;
+                                 * its die_task-th task (1-based), without a word to rank 0; 0:
+                                 * before it first asks for a task (READY);
                                  * -1: never (RIBBON_SWEEP_TEST_DIE=rank:n) */
 } sweep_farm_opts;
 

@@ -17,6 +17,7 @@ int ctl_transcode_main(int argc, char **argv);    /* ctl_transcode.c: raw video 
 int ctl_trials_main(int argc, char **argv); /* ctl_trials.c: start abort status list show export report
                                             phase-report replay */
 int ctl_campaign_main(int argc, char **argv); /* ctl_campaign.c: specimen, queue */
+int ctl_rails_main(int argc, char **argv);    /* ctl_rails.c: the daemon's rails: home, confirm-zero */
 int ctl_calibrate_main(int argc, char **argv); /* ctl_calibrate.c: one strip fitted to stored trials */
 int ctl_check_main(int argc, char **argv);    /* ctl_check.c: is the rig ready (daemon/check/) */
 int ctl_phase_main(int argc, char **argv);    /* ctl_phase.c: the lab's phase diagram */

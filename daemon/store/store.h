@@ -241,6 +241,12 @@ store_err store_queue_item_set_trial(store *st, int64_t id, int64_t trial_id, ch
 /* running -> an end status with a reason; values_json (NULL = keep) is stored with it. */
 store_err store_queue_item_end(store *st, int64_t id, store_queue_status status, const char *reason,
                                const char *values_json, double wall_s, char *why, size_t why_len);
+/* The same and, when stop_reason is not NULL, the queue stopped with it: one transaction, so a
+ * crash or a failed write leaves either both (the item ended, the queue stopped) or neither (the
+ * item still running, to be ended again), never an ended item with the queue running on. */
+store_err store_queue_item_end_stop(store *st, int64_t id, store_queue_status status, const char *reason,
+                                    const char *values_json, const char *stop_reason, double wall_s, char *why,
+                                    size_t why_len);
 /* The queue's state: running or not, and why (reason_len bytes), changed_at (32 bytes, may be NULL). */
 store_err store_queue_state_get(store *st, bool *running, char *reason, size_t reason_len, char *changed_at,
                                 char *why, size_t why_len);

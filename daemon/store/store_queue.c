@@ -355,13 +355,11 @@ store_err store_queue_item_set_trial(store *st, int64_t id, int64_t trial_id, ch
     return e;
 }
 
-store_err store_queue_item_end(store *st, int64_t id, store_queue_status status, const char *reason,
-                               const char *values_json, double wall_s, char *why, size_t why_len)
+/* The item's end (no transaction of its own); when is its time as text. */
+static store_err item_end(store *st, int64_t id, store_queue_status status, const char *reason,
+                          const char *values_json, const char *when, char *why, size_t why_len)
 {
-    char when[32];
-    store_err e = store_check_writable(st, why, why_len);
-    if (e || (e = now_text(wall_s, when, why, why_len)))
-        return e;
+    store_err e = STORE_OK;
     if (status < STORE_QUEUE_DONE || status >= STORE_QUEUE_STATUS_COUNT || status == STORE_QUEUE_SKIPPED)
         return store_fail(why, why_len, STORE_E_INVALID, "a running item ends done, failed, aborted or unknown");
     if (values_json && (e = store_need_json(values_json, "queue item values", why, why_len)))
@@ -387,6 +385,43 @@ store_err store_queue_item_end(store *st, int64_t id, store_queue_status status,
         e = store_fail(why, why_len, STORE_E_STATE, "queue item %lld is not running", (long long)id);
     sqlite3_finalize(s);
     return e;
+}
+
+store_err store_queue_item_end(store *st, int64_t id, store_queue_status status, const char *reason,
+                               const char *values_json, double wall_s, char *why, size_t why_len)
+{
+    char when[32];
+    store_err e = store_check_writable(st, why, why_len);
+    if (e || (e = now_text(wall_s, when, why, why_len)))
+        return e;
+    return item_end(st, id, status, reason, values_json, when, why, why_len);
+}
+
+/* The queue's state row (no transaction of its own). */
+static store_err state_set(store *st, bool running, const char *reason, const char *when, char *why, size_t why_len)
+{
+    if (!reason || !*reason)
+        return store_fail(why, why_len, STORE_E_INVALID, "the queue's state needs a reason");
+    int ch = 0;
+    store_err e = run(st, "UPDATE queue_state SET running = ?2, reason = ?3, changed_at = ?4 WHERE id = ?1", 1,
+                      running ? 1 : 0, reason, when, "setting the queue's state", &ch, why, why_len);
+    if (e == STORE_OK && ch == 0)
+        e = store_fail(why, why_len, STORE_E_CORRUPT, "the queue's state row is missing");
+    return e;
+}
+
+store_err store_queue_item_end_stop(store *st, int64_t id, store_queue_status status, const char *reason,
+                                    const char *values_json, const char *stop_reason, double wall_s, char *why,
+                                    size_t why_len)
+{
+    char when[32];
+    store_err e = store_check_writable(st, why, why_len);
+    if (e || (e = now_text(wall_s, when, why, why_len)) || (e = store_begin(st, why, why_len)))
+        return e;
+    e = item_end(st, id, status, reason, values_json, when, why, why_len);
+    if (e == STORE_OK && stop_reason)
+        e = state_set(st, false, stop_reason, when, why, why_len);
+    return finish_tx(st, e, why, why_len);
 }
 
 store_err store_queue_state_get(store *st, bool *running, char *reason, size_t reason_len, char *changed_at,
@@ -419,14 +454,7 @@ store_err store_queue_state_set(store *st, bool running, const char *reason, dou
     store_err e = store_check_writable(st, why, why_len);
     if (e || (e = now_text(wall_s, when, why, why_len)))
         return e;
-    if (!reason || !*reason)
-        return store_fail(why, why_len, STORE_E_INVALID, "the queue's state needs a reason");
-    int ch = 0;
-    e = run(st, "UPDATE queue_state SET running = ?2, reason = ?3, changed_at = ?4 WHERE id = ?1", 1, running ? 1 : 0,
-            reason, when, "setting the queue's state", &ch, why, why_len);
-    if (e == STORE_OK && ch == 0)
-        e = store_fail(why, why_len, STORE_E_CORRUPT, "the queue's state row is missing");
-    return e;
+    return state_set(st, running, reason, when, why, why_len);
 }
 
 store_err store_queue_recover(store *st, double wall_s, int *count, char *why, size_t why_len)

@@ -31,7 +31,7 @@ typedef struct trial_rail_poller trial_rail_poller;
 
 /* s: the longest the clock may run past the poll period between two polls before the daemon
  * counts as having been frozen (the bound on detecting a lost rail link is 0.5 s too). */
-#define TRIAL_CLOCK_JUMP_S 0.5
+#define TRIAL_CLOCK_JUMP_S RAIL_CLOCK_JUMP_S
 
 /* Starts polling (the rails stay the caller's; nothing else may call them unlocked). */
 trial_rail_poller *trial_rail_poller_start(rail *compress, rail *shear, double period_s, char *why, size_t why_len);

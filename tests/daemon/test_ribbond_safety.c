@@ -8,7 +8,8 @@
  *      trial's final status is written by the daemon's first operation after the disk has room
  *      again, and a daemon closed before that leaves it to the next start-up (interrupted).
  *   4. A replay of a trial that is still running is refused with 409 and the reason.
- *  13. An abort of a trial that has ended while its session still closes is 409, not 200. */
+ *  13. An abort of a trial that has ended while its session still closes is 409, not 200.
+ * And issue 34 A: a rail is homed or its zero confirmed through the API between trials only. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -310,6 +311,70 @@ static void abort_of_an_ended_trial_refused(void **state)
     all_passed = 1;
 }
 
+/* POST /rails/NAME/{home,confirm-zero} through the op (issue 34 A: a restarted ribbond refuses to
+ * move a rail whose position is not trusted, and holds its lock: it must home or confirm it):
+ * an explicit confirm is required, an unknown rail is 404, a running trial makes it 409, and
+ * between trials a mock rail homes (202) while confirm-zero is refused as for a non-G-code rail. */
+static int rail_op(rig_daemon *d, const char *path, int confirm, int *status, char *why, size_t n)
+{
+    api_ops ops = rig_daemon_ops();
+    assert_non_null(ops.rail);
+    json_t *body = confirm ? json_pack("{s:b}", "confirm", 1) : json_object(), *out = NULL;
+    *status = 200;
+    int rc = ops.rail(d, path, body, &out, status, why, n);
+    printf("%s: %d %s\n", path, *status, rc ? why : "ok");
+    if (rc == 0) {
+        char *txt = json_dumps(out, JSON_COMPACT);
+        snprintf(why, n, "%s", txt ? txt : "");
+        free(txt);
+    }
+    json_decref(body);
+    json_decref(out);
+    return rc;
+}
+
+static void rails_homed_or_confirmed_between_trials_only(void **state)
+{
+    (void)state;
+    all_passed = 0;
+    daemon_sets s;
+    sets_for(&s, "rails.db");
+    rig_daemon d;
+    open_daemon(&d, &s);
+    char why[512];
+    int status = 0;
+    assert_int_not_equal(rail_op(&d, "/rails/shear/home", 0, &status, why, sizeof why), 0);
+    assert_int_equal(status, 400);
+    assert_non_null(strstr(why, "confirm"));
+    assert_int_not_equal(rail_op(&d, "/rails/nope/home", 1, &status, why, sizeof why), 0);
+    assert_int_equal(status, 404);
+    assert_non_null(strstr(why, "no rail named 'nope'"));
+    assert_int_not_equal(rail_op(&d, "/rails/shear/jog", 1, &status, why, sizeof why), 0);
+    assert_int_equal(status, 404);
+
+    start_trial(&d);
+    assert_true(wait_state(&d, 0, 20.0));
+    assert_int_not_equal(rail_op(&d, "/rails/shear/home", 1, &status, why, sizeof why), 0);
+    assert_int_equal(status, 409);
+    assert_non_null(strstr(why, "is running"));
+    assert_int_not_equal(rail_op(&d, "/rails/compress/confirm-zero", 1, &status, why, sizeof why), 0);
+    assert_int_equal(status, 409);
+    api_ops ops = rig_daemon_ops();
+    json_t *out = NULL;
+    assert_int_equal(ops.abort_current(&d, &out, &status, why, sizeof why), 0);
+    json_decref(out);
+    assert_true(wait_state(&d, 1, 30.0));
+
+    assert_int_not_equal(rail_op(&d, "/rails/shear/confirm-zero", 1, &status, why, sizeof why), 0);
+    assert_int_equal(status, 409);
+    assert_non_null(strstr(why, "not a G-code rail"));
+    assert_int_equal(rail_op(&d, "/rails/shear/home", 1, &status, why, sizeof why), 0);
+    assert_int_equal(status, 202);
+    assert_non_null(strstr(why, "\"action\":\"home\""));
+    rig_daemon_close(&d, "test done");
+    all_passed = 1;
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -317,6 +382,7 @@ int main(void)
         cmocka_unit_test(replay_of_running_trial_refused),
         cmocka_unit_test(full_disk_final_status_written_later),
         cmocka_unit_test(abort_of_an_ended_trial_refused),
+        cmocka_unit_test(rails_homed_or_confirmed_between_trials_only),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -6,7 +6,9 @@
  *     refused naming the rail, the port and the holder, also through another name of the same
  *     device (a symlink); a Modbus TCP drive is locked by its address; mock rails lock nothing.
  * Lock files go to a temporary RIBBON_LOCK_DIR; the serial "port" is /dev/null (a character
- * device: the lock is keyed on its numbers and never opens it). */
+ * device: the lock is keyed on its numbers and never opens it).
+ *   - the lock directory: a ribbond with RIBBON_LOCK_DIR and a ribbonctl without it (and the other
+ *     way round) see each other's lock, the refusal naming the lock file found held. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -156,11 +158,52 @@ static void rails_lock_their_devices(void **state)
     assert_null(second);
 }
 
+/* A ribbond started with RIBBON_LOCK_DIR (a systemd unit's Environment=) and a ribbonctl run
+ * from a shell without it, and the other way round, resolve different lock directories: each
+ * must still find the other's lock, and say which lock file it found held. The device is a
+ * Modbus TCP address of this process's own (only its lock's name matters; nothing connects). */
+static void env_and_default_lock_dirs_see_each_other(void **state)
+{
+    (void)state;
+    char why[1024], addr[64], def[512];
+    rail_open_spec m = gcode_spec("shear", "");
+    snprintf(m.driver, sizeof m.driver, "modbus");
+    m.modbus = rail_modbus_params_default();
+    snprintf(addr, sizeof addr, "127.0.0.1:%d", 20000 + (int)(getpid() % 40000));
+    snprintf(m.modbus.address, sizeof m.modbus.address, "%s", addr);
+    rail_locks *a = NULL, *b = NULL;
+
+    assert_int_equal(rail_locks_take(&m, NULL, "ribbond with RIBBON_LOCK_DIR", &a, why, sizeof why), RAIL_OK);
+    unsetenv("RIBBON_LOCK_DIR");
+    snprintf(def, sizeof def, "%s/ribbon-rig-modbus-127.0.0.1_%s.lock", rail_lock_dir(), strchr(addr, ':') + 1);
+    rail_err e = rail_locks_take(&m, NULL, "ribbonctl without it", &b, why, sizeof why);
+    printf("without the variable: %s\n", why);
+    assert_int_equal(e, RAIL_E_STATE);
+    assert_null(b);
+    assert_non_null(strstr(why, def)); /* the lock file found held, by its path */
+    assert_non_null(strstr(why, "(ribbond with RIBBON_LOCK_DIR)"));
+    rail_locks_release(a);
+
+    assert_int_equal(rail_locks_take(&m, NULL, "ribbond without it", &a, why, sizeof why), RAIL_OK);
+    setenv("RIBBON_LOCK_DIR", dir, 1);
+    e = rail_locks_take(&m, NULL, "ribbonctl with RIBBON_LOCK_DIR", &b, why, sizeof why);
+    printf("with the variable: %s\n", why);
+    assert_int_equal(e, RAIL_E_STATE);
+    assert_null(b);
+    assert_non_null(strstr(why, def));
+    assert_non_null(strstr(why, "(ribbond without it)"));
+    rail_locks_release(a);
+    /* Free again for either, once released. */
+    assert_int_equal(rail_locks_take(&m, NULL, "again", &b, why, sizeof why), RAIL_OK);
+    rail_locks_release(b);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(owner_lock_names_holder_and_dies_with_it),
         cmocka_unit_test(rails_lock_their_devices),
+        cmocka_unit_test(env_and_default_lock_dirs_see_each_other),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -4,8 +4,9 @@
 # and three shards joined by sweep-merge. Then the farm's failure paths with the test hook
 # RIBBON_SWEEP_TEST_DIE (rank 1 exits on its first task without a word): with mpirun
 # --enable-recovery the job goes on, the task is retried on another rank and the rows are the
-# same; without it Open MPI aborts the job (non-zero exit, fewer rows) and a plain rerun resumes
-# to the same rows. Coarse mesh (N = 41) and a 2 x 3 x 2 grid keep each run to seconds.
+# same; a worker that exits before it ever asks for a task (1:0) is taken for dead after the
+# heartbeat timeout instead of being waited for for ever; without --enable-recovery Open MPI aborts
+# the job (non-zero exit, fewer rows) and a plain rerun resumes to the same rows. Coarse mesh (N = 41) and a 2 x 3 x 2 grid keep each run to seconds.
 set -eu
 SIM=$1
 MPIRUN=$2
@@ -51,10 +52,17 @@ RIBBON_SWEEP_TEST_DIE=1:1 $MPI --enable-recovery -np 3 "$SIM" sweep $ARGS --out 
 grep -q 'taken for dead' "$DIR/died.err" || fail "the dead worker was not noticed"
 rows "$DIR/died.csv" | cmp - "$DIR/one.rows" || fail "rows after a lost worker differ"
 
+# A worker that leaves before it ever asks for a task (no READY): rank 0 used to wait for it for
+# ever; now it is taken for dead after the heartbeat timeout, named, and the others finish.
+RIBBON_SWEEP_TEST_DIE=1:0 timeout 300 $MPI --enable-recovery -np 3 "$SIM" sweep $ARGS --out "$DIR/noready.csv" \
+  --heartbeat 2 >/dev/null 2>"$DIR/noready.err" || fail "a worker gone before READY: $(tail -5 "$DIR/noready.err")"
+grep -q 'never asked for a task' "$DIR/noready.err" || fail "the worker gone before READY was not named"
+rows "$DIR/noready.csv" | cmp - "$DIR/one.rows" || fail "rows after a worker gone before READY differ"
+
 # A dying worker under Open MPI's default: the job aborts, a rerun resumes.
 if RIBBON_SWEEP_TEST_DIE=1:1 $MPI -np 3 "$SIM" sweep $ARGS --out "$DIR/abort.csv" >/dev/null 2>&1; then
   fail "the job survived a dead rank without --enable-recovery (Open MPI's default changed?)"
 fi
 "$SIM" sweep $ARGS --out "$DIR/abort.csv" --jobs 2 >/dev/null 2>&1 || fail "resume after the abort"
 rows "$DIR/abort.csv" | cmp - "$DIR/one.rows" || fail "rows after abort and resume differ"
-echo "test_sweep_mpi: same rows for 1 process, mpirun -np 3, 3 shards, a lost worker and an aborted job resumed"
+echo "test_sweep_mpi: same rows for 1 process, mpirun -np 3, 3 shards, a lost worker, a worker gone before READY and an aborted job resumed"
