@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmocka.h>
@@ -395,6 +396,58 @@ static void api_routes(void **state)
     campaign_queue_close(c.q);
 }
 
+/* The boundary cache is written by ribbond (GET /campaign/phase) and ribbonctl phase / plan, maybe
+ * at once: two processes each save their own boundary 300 times to the same path. Every save
+ * succeeds and the file left is whole, one writer's (a temp name both share: one's rename finds
+ * its temp gone, or the two writes interleave in it). */
+static void fill_pred(campaign_predicted *p, size_t n, double g0)
+{
+    memset(p, 0, sizeof *p);
+    p->n = n;
+    p->dl = 0.1;
+    p->phi_deg = calloc(n, sizeof *p->phi_deg);
+    p->gamma = calloc(n, sizeof *p->gamma);
+    for (size_t k = 0; k < n; k++) p->phi_deg[k] = 30.0 + (double)k, p->gamma[k] = g0 + 1e-4 * (double)k;
+}
+
+static void cache_two_writers(void **state)
+{
+    fx *f = *state;
+    char cache[128];
+    snprintf(cache, sizeof cache, "%s/s.db.boundary.csv", f->dir);
+    const size_t n[2] = {40, 90};
+    const double g0[2] = {0.1, 0.2};
+    fflush(NULL);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    int me = pid == 0;
+    campaign_predicted p;
+    fill_pred(&p, n[me], g0[me]);
+    int failed = 0;
+    char w[300] = "";
+    for (int i = 0; i < 300; i++)
+        if (campaign_predicted_save_csv(&p, cache, "# campaign-boundary key=0000000000000001 phi=1:179", w, sizeof w))
+            failed++;
+    campaign_predicted_free(&p);
+    if (me) _exit(failed ? 1 : 0);
+    int st = 0;
+    waitpid(pid, &st, 0);
+    if (failed) fail_msg("%d of 300 saves failed here: %s", failed, w);
+    assert_true(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+    campaign_predicted q;
+    assert_int_equal(campaign_predicted_load_csv(cache, &q, why, sizeof why), 0);
+    int k = q.n == n[1];
+    assert_int_equal(q.n, n[k]);
+    for (size_t j = 0; j < q.n; j++) {
+        assert_true(q.phi_deg[j] == 30.0 + (double)j);
+        assert_true(fabs(q.gamma[j] - (g0[k] + 1e-4 * (double)j)) < 1e-15);
+    }
+    campaign_predicted_free(&q);
+    char cmd[200];
+    snprintf(cmd, sizeof cmd, "test $(ls -A %s | grep -c s.db.boundary) -eq 1", f->dir); /* no temp left behind */
+    assert_int_equal(system(cmd), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -403,6 +456,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(proposals_store, setup, teardown),
         cmocka_unit_test_setup_teardown(ribbonctl_phase_and_plan, setup, teardown),
         cmocka_unit_test_setup_teardown(api_routes, setup, teardown),
+        cmocka_unit_test_setup_teardown(cache_two_writers, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
