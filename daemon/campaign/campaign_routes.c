@@ -202,6 +202,17 @@ static int plan_list(const campaign_ctx *c, json_t **out, int *http, char *why, 
     return 0;
 }
 
+/* Takes a queue item an approval added out again (it ends skipped); id 0: none. */
+static void unqueue(campaign_queue *q, int64_t id)
+{
+    if (!id) return;
+    json_t *ro = NULL;
+    int h2;
+    char w2[256];
+    campaign_queue_remove(q, id, &ro, &h2, w2, sizeof w2);
+    json_decref(ro);
+}
+
 /* POST /plan/ID/approve: the specimen (name from the body, default plan-ID; the design from the
  * proposal, the rest from the rig's defaults), then an operator step (fold and mount it, its
  * measured angles) and a trial of it at the end of the queue, then the proposal approved. */
@@ -258,17 +269,15 @@ static int plan_approve(const campaign_ctx *c, int64_t id, const json_t *body, j
     if (rc) {
         /* the trial could not be queued: take the operator step out again (it ends skipped), so
          * the queue never holds half an approval; the proposal stays proposed */
-        if (oid) {
-            json_t *ro = NULL;
-            int h2;
-            char w2[256];
-            campaign_queue_remove(c->q, oid, &ro, &h2, w2, sizeof w2);
-            json_decref(ro);
-        }
+        unqueue(c->q, oid);
         return -1;
     }
-    if ((e = store_plan_approve(c->st, id, sid, oid, tid, store_wall_now(), w, sizeof w)) != STORE_OK)
+    if ((e = store_plan_approve(c->st, id, sid, oid, tid, store_wall_now(), w, sizeof w)) != STORE_OK) {
+        /* superseded meanwhile (ribbonctl plan) or the store refused: nothing of it stays queued */
+        unqueue(c->q, tid);
+        unqueue(c->q, oid);
         return fail(http, e == STORE_E_STATE ? 409 : 500, why, why_len, "%s", w);
+    }
     store_plan_get(c->st, id, &p, w, sizeof w);
     *out = json_pack("{s:o}", "proposal", campaign_proposal_json(&p));
     *http = 201;

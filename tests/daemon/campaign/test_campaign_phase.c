@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include <cmocka.h>
+#include <sqlite3.h>
 
 #include "campaign.h"
 #include "store.h"
@@ -396,6 +397,78 @@ static void api_routes(void **state)
     campaign_queue_close(c.q);
 }
 
+/* `ribbonctl plan` (another process, another connection) writes a new plan between approval's
+ * look at the proposal and its update: the proposal is superseded. The approval is refused (409,
+ * STORE_E_STATE), not reported done with the proposal superseded, and the route leaves nothing of
+ * it in the queue. The race is made exact: a trace callback on the approving connection writes the
+ * new plan on a second one when the Nth read of one proposal has finished. */
+typedef struct race {
+    store *other;
+    int reads, at;
+} race;
+
+static int race_cb(unsigned type, void *ctx, void *p, void *x)
+{
+    (void)type, (void)x;
+    race *r = ctx;
+    const char *sql = sqlite3_sql((sqlite3_stmt *)p);
+    if (!sql || !strstr(sql, "FROM plan_proposals p") || !strstr(sql, "WHERE p.id")) return 0;
+    if (++r->reads == r->at) {
+        store_plan_proposal q = {.phi_deg = 60, .gamma = 0.2, .sd_before = 0.01, .predicted_gamma = 0.2};
+        char w[256];
+        assert_int_equal(store_plan_add_batch(r->other, &q, 1, T0 + 60, w, sizeof w), STORE_OK);
+    }
+    return 0;
+}
+
+static void approve_raced_by_a_new_plan(void **state)
+{
+    fx *f = *state;
+    race r = {0};
+    OK(store_open(f->db, &r.other, why, sizeof why));
+    int64_t sid = specimen(f->st, "s1", 120, 0.18);
+    store_plan_proposal p = {.phi_deg = 120, .gamma = 0.18, .sd_before = 0.01, .predicted_gamma = 0.185};
+    OK(store_plan_add_batch(f->st, &p, 1, T0, why, sizeof why));
+    r.at = 1;
+    sqlite3_trace_v2(store_handle(f->st), SQLITE_TRACE_PROFILE, race_cb, &r);
+    assert_int_equal(store_plan_approve(f->st, p.id, sid, 0, 1, T0 + 120, why, sizeof why), STORE_E_STATE);
+    assert_non_null(strstr(why, "superseded"));
+    store_plan_proposal g;
+    OK(store_plan_get(f->st, p.id, &g, why, sizeof why));
+    assert_int_equal(g.status, STORE_PLAN_SUPERSEDED);
+
+    /* through the route: the race inside store_plan_approve (the route read the proposal first) */
+    store_plan_proposal p2 = {.phi_deg = 100, .gamma = 0.17, .sd_before = 0.01, .predicted_gamma = 0.17};
+    OK(store_plan_add_batch(f->st, &p2, 1, T0 + 180, why, sizeof why));
+    campaign_ctx c = {.st = f->st, .defaults = store_specimen_default()};
+    c.defaults.length_m = 0.2, c.defaults.width_m = 0.005, c.defaults.thickness_m = 2.5e-4;
+    campaign_queue_ops ops = {.start_trial = no_trial, .trial_running = none_running};
+    assert_int_equal(campaign_queue_open(f->db, &ops, NULL, NULL, &c.q, why, sizeof why), 0);
+    r.reads = 0;
+    r.at = 2;
+    char path[64];
+    snprintf(path, sizeof path, "/plan/%lld/approve", (long long)p2.id);
+    json_t *body = json_object(), *out = NULL;
+    int http = 0;
+    int rc = campaign_route(&c, "POST", path, body, &out, &http, why, sizeof why);
+    sqlite3_trace_v2(store_handle(f->st), 0, NULL, NULL);
+    printf("approval raced: %d %d %s\n", rc, http, rc ? why : "(done)");
+    assert_int_equal(rc, -1);
+    assert_int_equal(http, 409);
+    json_decref(out);
+    json_decref(body);
+    OK(store_plan_get(f->st, p2.id, &g, why, sizeof why));
+    assert_int_equal(g.status, STORE_PLAN_SUPERSEDED);
+    store_queue_item *v = NULL;
+    size_t n = 0;
+    OK(store_queue_list(f->st, &v, &n, why, sizeof why));
+    for (size_t k = 0; k < n; k++) /* nothing of the refused approval waits in the queue */
+        if (v[k].status == STORE_QUEUE_QUEUED) fail_msg("queue item %lld still queued", (long long)v[k].id);
+    free(v);
+    campaign_queue_close(c.q);
+    store_close(r.other);
+}
+
 /* The boundary cache is written by ribbond (GET /campaign/phase) and ribbonctl phase / plan, maybe
  * at once: two processes each save their own boundary 300 times to the same path. Every save
  * succeeds and the file left is whole, one writer's (a temp name both share: one's rename finds
@@ -457,6 +530,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(ribbonctl_phase_and_plan, setup, teardown),
         cmocka_unit_test_setup_teardown(api_routes, setup, teardown),
         cmocka_unit_test_setup_teardown(cache_two_writers, setup, teardown),
+        cmocka_unit_test_setup_teardown(approve_raced_by_a_new_plan, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
