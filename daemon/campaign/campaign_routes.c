@@ -165,6 +165,15 @@ static int phase_data(const campaign_ctx *c, json_t **out, int *http, char *why,
     int have = 0;
     if (c->scene) {
         char *key = campaign_predicted_key_text(c->rig_path, c->scene_path);
+        /* the daemon's --set may change the scene the files give: a cache traced without them
+           (ribbonctl phase / plan) is not this scene's, nor is this one theirs */
+        for (int k = 0; key && k < c->n_sets; k++) {
+            size_t len = strlen(key), add = strlen(c->sets[k]) + 8;
+            char *t = realloc(key, len + add);
+            if (!t) free(key);
+            key = t;
+            if (key) snprintf(key + len, add, "\n--set %s", c->sets[k]);
+        }
         have = campaign_predicted_cached(c->scene, key ? key : "", CAMPAIGN_PHI_TRACE_LO, CAMPAIGN_PHI_TRACE_HI,
                                          c->boundary_cache, &pred, w, sizeof w) == 0;
         free(key);
