@@ -681,6 +681,8 @@ static int op_campaign(void *user, const char *method, const char *path, const j
     c.rig_path = d->cfg.path;
     c.scene_path = d->cfg.scene_path;
     c.boundary_cache = cache;
+    c.sets = d->overrides;
+    c.n_sets = d->n_overrides;
     return campaign_route(&c, method, path, body, out, http_status, why, why_len);
 }
 

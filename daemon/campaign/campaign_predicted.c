@@ -4,11 +4,15 @@
  * (campaign_predicted.h). */
 #include "campaign_predicted.h"
 
+#include <errno.h>
+#include <fcntl.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "rod_boundary.h"
 
@@ -156,11 +160,20 @@ fail:
 int campaign_predicted_save_csv(const campaign_predicted *p, const char *path, const char *key_line, char *why,
                                 size_t why_len)
 {
+    /* A temp name of this writer's own (pid, a counter): ribbond and ribbonctl phase / plan write
+       the same cache, maybe at once, and each renames only its own whole file into place. */
+    static atomic_uint seq;
     char tmp[1100];
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *f = fopen(tmp, "w");
+    int fd = -1;
+    for (int i = 0; i < 16 && fd < 0; i++) {
+        snprintf(tmp, sizeof tmp, "%s.%ld.%u.tmp", path, (long)getpid(), atomic_fetch_add(&seq, 1u));
+        fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        if (fd < 0 && errno != EEXIST) break;
+    }
+    FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
     if (!f) {
-        snprintf(why, why_len, "cannot write %s", tmp);
+        snprintf(why, why_len, "cannot write %s: %s", tmp, strerror(errno));
+        if (fd >= 0) close(fd), remove(tmp);
         return -1;
     }
     if (key_line) fprintf(f, "%s\n", key_line);

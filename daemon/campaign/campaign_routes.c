@@ -165,6 +165,15 @@ static int phase_data(const campaign_ctx *c, json_t **out, int *http, char *why,
     int have = 0;
     if (c->scene) {
         char *key = campaign_predicted_key_text(c->rig_path, c->scene_path);
+        /* the daemon's --set may change the scene the files give: a cache traced without them
+           (ribbonctl phase / plan) is not this scene's, nor is this one theirs */
+        for (int k = 0; key && k < c->n_sets; k++) {
+            size_t len = strlen(key), add = strlen(c->sets[k]) + 8;
+            char *t = realloc(key, len + add);
+            if (!t) free(key);
+            key = t;
+            if (key) snprintf(key + len, add, "\n--set %s", c->sets[k]);
+        }
         have = campaign_predicted_cached(c->scene, key ? key : "", CAMPAIGN_PHI_TRACE_LO, CAMPAIGN_PHI_TRACE_HI,
                                          c->boundary_cache, &pred, w, sizeof w) == 0;
         free(key);
@@ -200,6 +209,17 @@ static int plan_list(const campaign_ctx *c, json_t **out, int *http, char *why, 
     free(v);
     *out = a;
     return 0;
+}
+
+/* Takes a queue item an approval added out again (it ends skipped); id 0: none. */
+static void unqueue(campaign_queue *q, int64_t id)
+{
+    if (!id) return;
+    json_t *ro = NULL;
+    int h2;
+    char w2[256];
+    campaign_queue_remove(q, id, &ro, &h2, w2, sizeof w2);
+    json_decref(ro);
 }
 
 /* POST /plan/ID/approve: the specimen (name from the body, default plan-ID; the design from the
@@ -258,17 +278,15 @@ static int plan_approve(const campaign_ctx *c, int64_t id, const json_t *body, j
     if (rc) {
         /* the trial could not be queued: take the operator step out again (it ends skipped), so
          * the queue never holds half an approval; the proposal stays proposed */
-        if (oid) {
-            json_t *ro = NULL;
-            int h2;
-            char w2[256];
-            campaign_queue_remove(c->q, oid, &ro, &h2, w2, sizeof w2);
-            json_decref(ro);
-        }
+        unqueue(c->q, oid);
         return -1;
     }
-    if ((e = store_plan_approve(c->st, id, sid, oid, tid, store_wall_now(), w, sizeof w)) != STORE_OK)
+    if ((e = store_plan_approve(c->st, id, sid, oid, tid, store_wall_now(), w, sizeof w)) != STORE_OK) {
+        /* superseded meanwhile (ribbonctl plan) or the store refused: nothing of it stays queued */
+        unqueue(c->q, tid);
+        unqueue(c->q, oid);
         return fail(http, e == STORE_E_STATE ? 409 : 500, why, why_len, "%s", w);
+    }
     store_plan_get(c->st, id, &p, w, sizeof w);
     *out = json_pack("{s:o}", "proposal", campaign_proposal_json(&p));
     *http = 201;

@@ -17,6 +17,8 @@ typedef struct campaign_ctx {
     const rod_scene *scene;  /* the rig's scene: the predicted boundary (NULL: none) */
     const char *rig_path, *scene_path; /* the files the boundary cache is keyed on */
     const char *boundary_cache; /* the cache file (campaign_predicted.h); NULL: trace every time */
+    const char *const *sets; /* the daemon's overrides (--set): in the cache's key with the files' */
+    int n_sets;                 /* text, as they may change the scene */
 } campaign_ctx;
 
 /* A stored proposal as the API and ribbonctl plan --json show it. */

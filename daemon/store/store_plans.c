@@ -175,5 +175,13 @@ store_err store_plan_approve(store *st, int64_t id, int64_t specimen_id, int64_t
     store_bind_id(s, 3, operator_item_id);
     store_bind_id(s, 4, trial_item_id);
     sqlite3_bind_text(s, 5, when, -1, SQLITE_TRANSIENT);
-    return step_done(st, s, "approving a proposal", why, why_len);
+    if ((e = step_done(st, s, "approving a proposal", why, why_len))) return e;
+    if (sqlite3_changes(st->db) == 1) return STORE_OK;
+    /* Another writer (ribbonctl plan: a new batch) changed it since it was read above. */
+    if (store_plan_get(st, id, &p, why, why_len) == STORE_OK && p.status != STORE_PLAN_PROPOSED)
+        return store_fail(why, why_len, STORE_E_STATE, "proposal %lld became %s while it was being approved%s",
+                          (long long)id, names[p.status],
+                          p.status == STORE_PLAN_SUPERSEDED ? " (a newer plan replaced it: ribbonctl plan --list)" : "");
+    return store_fail(why, why_len, STORE_E_STATE, "proposal %lld was not approved: it changed while it was being "
+                      "approved (ribbonctl plan --list)", (long long)id);
 }

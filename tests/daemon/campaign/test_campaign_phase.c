@@ -14,9 +14,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmocka.h>
+#include <sqlite3.h>
 
 #include "campaign.h"
 #include "store.h"
@@ -395,6 +397,174 @@ static void api_routes(void **state)
     campaign_queue_close(c.q);
 }
 
+/* `ribbonctl plan` (another process, another connection) writes a new plan between approval's
+ * look at the proposal and its update: the proposal is superseded. The approval is refused (409,
+ * STORE_E_STATE), not reported done with the proposal superseded, and the route leaves nothing of
+ * it in the queue. The race is made exact: a trace callback on the approving connection writes the
+ * new plan on a second one when the Nth read of one proposal has finished. */
+typedef struct race {
+    store *other;
+    int reads, at;
+} race;
+
+static int race_cb(unsigned type, void *ctx, void *p, void *x)
+{
+    (void)type, (void)x;
+    race *r = ctx;
+    const char *sql = sqlite3_sql((sqlite3_stmt *)p);
+    if (!sql || !strstr(sql, "FROM plan_proposals p") || !strstr(sql, "WHERE p.id")) return 0;
+    if (++r->reads == r->at) {
+        store_plan_proposal q = {.phi_deg = 60, .gamma = 0.2, .sd_before = 0.01, .predicted_gamma = 0.2};
+        char w[256];
+        assert_int_equal(store_plan_add_batch(r->other, &q, 1, T0 + 60, w, sizeof w), STORE_OK);
+    }
+    return 0;
+}
+
+static void approve_raced_by_a_new_plan(void **state)
+{
+    fx *f = *state;
+    race r = {0};
+    OK(store_open(f->db, &r.other, why, sizeof why));
+    int64_t sid = specimen(f->st, "s1", 120, 0.18);
+    store_plan_proposal p = {.phi_deg = 120, .gamma = 0.18, .sd_before = 0.01, .predicted_gamma = 0.185};
+    OK(store_plan_add_batch(f->st, &p, 1, T0, why, sizeof why));
+    r.at = 1;
+    sqlite3_trace_v2(store_handle(f->st), SQLITE_TRACE_PROFILE, race_cb, &r);
+    assert_int_equal(store_plan_approve(f->st, p.id, sid, 0, 1, T0 + 120, why, sizeof why), STORE_E_STATE);
+    assert_non_null(strstr(why, "superseded"));
+    store_plan_proposal g;
+    OK(store_plan_get(f->st, p.id, &g, why, sizeof why));
+    assert_int_equal(g.status, STORE_PLAN_SUPERSEDED);
+
+    /* through the route: the race inside store_plan_approve (the route read the proposal first) */
+    store_plan_proposal p2 = {.phi_deg = 100, .gamma = 0.17, .sd_before = 0.01, .predicted_gamma = 0.17};
+    OK(store_plan_add_batch(f->st, &p2, 1, T0 + 180, why, sizeof why));
+    campaign_ctx c = {.st = f->st, .defaults = store_specimen_default()};
+    c.defaults.length_m = 0.2, c.defaults.width_m = 0.005, c.defaults.thickness_m = 2.5e-4;
+    campaign_queue_ops ops = {.start_trial = no_trial, .trial_running = none_running};
+    assert_int_equal(campaign_queue_open(f->db, &ops, NULL, NULL, &c.q, why, sizeof why), 0);
+    r.reads = 0;
+    r.at = 2;
+    char path[64];
+    snprintf(path, sizeof path, "/plan/%lld/approve", (long long)p2.id);
+    json_t *body = json_object(), *out = NULL;
+    int http = 0;
+    int rc = campaign_route(&c, "POST", path, body, &out, &http, why, sizeof why);
+    sqlite3_trace_v2(store_handle(f->st), 0, NULL, NULL);
+    printf("approval raced: %d %d %s\n", rc, http, rc ? why : "(done)");
+    assert_int_equal(rc, -1);
+    assert_int_equal(http, 409);
+    json_decref(out);
+    json_decref(body);
+    OK(store_plan_get(f->st, p2.id, &g, why, sizeof why));
+    assert_int_equal(g.status, STORE_PLAN_SUPERSEDED);
+    store_queue_item *v = NULL;
+    size_t n = 0;
+    OK(store_queue_list(f->st, &v, &n, why, sizeof why));
+    for (size_t k = 0; k < n; k++) /* nothing of the refused approval waits in the queue */
+        if (v[k].status == STORE_QUEUE_QUEUED) fail_msg("queue item %lld still queued", (long long)v[k].id);
+    free(v);
+    campaign_queue_close(c.q);
+    store_close(r.other);
+}
+
+/* ribbond's --set may change the scene its files give (protocol.compression=...): the boundary
+ * cache ribbonctl phase / plan wrote for the files alone is not the daemon's scene's, so the API
+ * does not take it. Here the scene cannot be traced (nodes = 1, refused at once): without the
+ * overrides in the key the route would serve the files' cache as this scene's boundary. */
+static void cache_keyed_on_daemon_sets(void **state)
+{
+    fx *f = *state;
+    fill(f->st);
+    char cache[128];
+    snprintf(cache, sizeof cache, "%s/cache.csv", f->dir);
+    campaign_predicted pred;
+    assert_int_equal(campaign_predicted_load_csv(f->bcsv, &pred, why, sizeof why), 0);
+    char *key = campaign_predicted_key_text(f->bcsv, f->bcsv);
+    char line[160];
+    snprintf(line, sizeof line, "# campaign-boundary key=%016llx phi=%g:%g",
+             (unsigned long long)campaign_predicted_key(key), CAMPAIGN_PHI_TRACE_LO, CAMPAIGN_PHI_TRACE_HI);
+    free(key);
+    assert_int_equal(campaign_predicted_save_csv(&pred, cache, line, why, sizeof why), 0);
+    campaign_predicted_free(&pred);
+    rod_scene sc = rod_scene_default();
+    sc.nodes = 1;
+    campaign_ctx c = {.st = f->st, .defaults = store_specimen_default()};
+    c.scene = &sc;
+    c.rig_path = c.scene_path = f->bcsv;
+    c.boundary_cache = cache;
+    json_t *out = NULL;
+    int http = 0;
+    /* the files alone: the cache is theirs */
+    assert_int_equal(campaign_route(&c, "GET", "/campaign/phase", NULL, &out, &http, why, sizeof why), 0);
+    assert_non_null(strstr(json_string_value(json_object_get(json_object_get(out, "predicted"), "source")), "cache"));
+    json_decref(out);
+    const char *sets[] = {"protocol.compression=0.3"};
+    c.sets = sets;
+    c.n_sets = 1;
+    assert_int_equal(campaign_route(&c, "GET", "/campaign/phase", NULL, &out, &http, why, sizeof why), 0);
+    assert_int_equal(http, 200);
+    json_t *pj = json_object_get(out, "predicted");
+    if (!json_is_null(pj))
+        fail_msg("the files' cache served for a scene the daemon's --set changed: %s",
+                 json_string_value(json_object_get(pj, "source")));
+    printf("predicted_error: %s\n", json_string_value(json_object_get(out, "predicted_error")));
+    json_decref(out);
+}
+
+/* The boundary cache is written by ribbond (GET /campaign/phase) and ribbonctl phase / plan, maybe
+ * at once: two processes each save their own boundary 300 times to the same path. Every save
+ * succeeds and the file left is whole, one writer's (a temp name both share: one's rename finds
+ * its temp gone, or the two writes interleave in it). */
+static void fill_pred(campaign_predicted *p, size_t n, double g0)
+{
+    memset(p, 0, sizeof *p);
+    p->n = n;
+    p->dl = 0.1;
+    p->phi_deg = calloc(n, sizeof *p->phi_deg);
+    p->gamma = calloc(n, sizeof *p->gamma);
+    for (size_t k = 0; k < n; k++) p->phi_deg[k] = 30.0 + (double)k, p->gamma[k] = g0 + 1e-4 * (double)k;
+}
+
+static void cache_two_writers(void **state)
+{
+    fx *f = *state;
+    char cache[128];
+    snprintf(cache, sizeof cache, "%s/s.db.boundary.csv", f->dir);
+    const size_t n[2] = {40, 90};
+    const double g0[2] = {0.1, 0.2};
+    fflush(NULL);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    int me = pid == 0;
+    campaign_predicted p;
+    fill_pred(&p, n[me], g0[me]);
+    int failed = 0;
+    char w[300] = "";
+    for (int i = 0; i < 300; i++)
+        if (campaign_predicted_save_csv(&p, cache, "# campaign-boundary key=0000000000000001 phi=1:179", w, sizeof w))
+            failed++;
+    campaign_predicted_free(&p);
+    if (me) _exit(failed ? 1 : 0);
+    int st = 0;
+    waitpid(pid, &st, 0);
+    if (failed) fail_msg("%d of 300 saves failed here: %s", failed, w);
+    assert_true(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+    campaign_predicted q;
+    assert_int_equal(campaign_predicted_load_csv(cache, &q, why, sizeof why), 0);
+    int k = q.n == n[1];
+    assert_int_equal(q.n, n[k]);
+    for (size_t j = 0; j < q.n; j++) {
+        assert_true(q.phi_deg[j] == 30.0 + (double)j);
+        assert_true(fabs(q.gamma[j] - (g0[k] + 1e-4 * (double)j)) < 1e-15);
+    }
+    campaign_predicted_free(&q);
+    char cmd[200];
+    snprintf(cmd, sizeof cmd, "test $(ls -A %s | grep -c s.db.boundary) -eq 1", f->dir); /* no temp left behind */
+    assert_int_equal(system(cmd), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -403,6 +573,9 @@ int main(void)
         cmocka_unit_test_setup_teardown(proposals_store, setup, teardown),
         cmocka_unit_test_setup_teardown(ribbonctl_phase_and_plan, setup, teardown),
         cmocka_unit_test_setup_teardown(api_routes, setup, teardown),
+        cmocka_unit_test_setup_teardown(cache_two_writers, setup, teardown),
+        cmocka_unit_test_setup_teardown(cache_keyed_on_daemon_sets, setup, teardown),
+        cmocka_unit_test_setup_teardown(approve_raced_by_a_new_plan, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
