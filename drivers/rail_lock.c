@@ -17,9 +17,6 @@ struct rail_locks {
     int n;
 };
 
-
-
-
 /* The device a spec names: a key for its lock file and its name for messages; 0 when it names
  * none (mock). */
 static int device_key(const rail_open_spec *s, char *key, size_t key_len, char *name, size_t name_len)
@@ -40,7 +37,6 @@ static int device_key(const rail_open_spec *s, char *key, size_t key_len, char *
     rail_lock_serial_key(serial, key, key_len, name, name_len);
     return 1;
 }
-
 
 void rail_locks_release(rail_locks *l)
 {
