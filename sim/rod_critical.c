@@ -62,7 +62,10 @@ rod_crit_opts rod_crit_opts_default(void)
 
 void rod_params_apply(rod *r, const double *p)
 {
-    if (r->terms.fold) {
+    /* Rigid (terms.fold) and compliant (terms.hinge) creases alike move with Gamma and phi: with
+     * only terms.fold tested here, a compliant scene's Gamma and phi were silently ignored, its
+     * test functions did not change along the boundary's search and no codim-2 point was found. */
+    if (r->terms.fold || r->terms.hinge) {
         rod_mesh_set(r, p[ROD_PAR_GAMMA], r->fold_outer_edges);
         rod_set_fold_angle(r, p[ROD_PAR_PHI], 0.0);
     }
@@ -74,7 +77,7 @@ void rod_crit_move_gamma(rod_crit *c, const double *p, int n_out)
 {
     rod *r = c->r;
     int n = r->n;
-    if (!r->terms.fold) {
+    if (!r->terms.fold && !r->terms.hinge) {
         rod_params_apply(r, p);
         return;
     }

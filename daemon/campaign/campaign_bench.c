@@ -11,6 +11,7 @@
 #include "campaign_plan.h"
 #include "rod_bifurcation.h"
 #include "rod_boundary.h"
+#include "rod_protocol.h"
 
 campaign_bench_opts campaign_bench_opts_default(void)
 {
@@ -72,6 +73,53 @@ static double sign_of(double v)
     return v < 0 ? -1.0 : 1.0;
 }
 
+/* The simulated snap's regime of scene t (rod_predict, fast): 1 asymmetric, 0 symmetric, -1 no
+ * snap or failed (why set). */
+static int snap_regime(const rod_scene *t, char *why, size_t why_len)
+{
+    rod_predict_opts po = rod_predict_opts_fast(t);
+    rod_prediction p;
+    if (rod_predict(t, &po, &p, why, why_len) != ROD_OK) return -1;
+    if (!p.snapped) {
+        snprintf(why, why_len, "no snap up to Delta W %g at phi %g, Gamma %.4f", t->shear_max, fabs(t->fold_angle_deg),
+                 t->fold_position);
+        return -1;
+    }
+    return p.asymmetric ? 1 : 0;
+}
+
+/* Bracket and bisection tolerance of the dynamic truth (Gamma). */
+#define DYN_TRUTH_BRACKET 0.04
+#define DYN_TRUTH_TOL 5e-4
+
+/* The dynamic switch of the twins' mean strip at crease angle phi (deg), bisected from
+ * [g0 - DYN_TRUTH_BRACKET, g0 + DYN_TRUTH_BRACKET] (g0 its static Gamma*), into *g. */
+static int dynamic_truth(const rod_scene *twin, double phi, double g0, double *g, char *why, size_t why_len)
+{
+    rod_scene t = *twin;
+    t.fold_angle_deg = (twin->fold_angle_deg < 0 ? -1.0 : 1.0) * phi;
+    double lo = g0 - DYN_TRUTH_BRACKET, hi = g0 + DYN_TRUTH_BRACKET;
+    t.fold_position = lo;
+    int rl = snap_regime(&t, why, why_len);
+    t.fold_position = hi;
+    int rh = snap_regime(&t, why, why_len);
+    if (rl != 1 || rh != 0) {
+        snprintf(why, why_len, "the twins' dynamic switch at phi %g is not bracketed by Gamma %.4f (%s) .. %.4f (%s)", phi,
+                 lo, rl == 1 ? "asymmetric" : rl == 0 ? "symmetric" : "failed", hi,
+                 rh == 1 ? "asymmetric" : rh == 0 ? "symmetric" : "failed");
+        return -1;
+    }
+    for (int k = 0; k < 20 && hi - lo > DYN_TRUTH_TOL; k++) {
+        t.fold_position = 0.5 * (lo + hi);
+        int r = snap_regime(&t, why, why_len);
+        if (r < 0) return -1;
+        if (r) lo = t.fold_position;
+        else hi = t.fold_position;
+    }
+    *g = 0.5 * (lo + hi);
+    return 0;
+}
+
 /* The twin folded at (phi, gamma): 1 asymmetric, 0 symmetric, -1 failed or neither. */
 static int measure(const rod_scene *scene, const campaign_bench_opts *o, double phi, double gamma, unsigned *rng,
                    double *angle, char *why, size_t why_len)
@@ -86,7 +134,9 @@ static int measure(const rod_scene *scene, const campaign_bench_opts *o, double 
     t.fold_position_left = t.fold_position_right = NAN;
     t.fold_position = gamma;
     t.fold_stiffness_factor = o->twin_stiffness_factor;
+    if (o->twin_hinge > 0) t.fold_hinge_stiffness = o->twin_hinge;
     t.fold_angle_rel = (ul - ur) / (1 + 0.5 * (ul + ur));
+    if (o->dynamic) return snap_regime(&t, why, why_len);
     rod_analysis_opts ao = rod_analysis_opts_classify();
     rod_analysis a;
     if (rod_bifurcation_analyse(&t, &ao, &a, why, why_len) != ROD_OK) return -1;
@@ -108,6 +158,7 @@ int campaign_bench_run(const rod_scene *scene, const campaign_bench_opts *o, cam
     }
     rod_scene twin = *scene;
     twin.fold_stiffness_factor = o->twin_stiffness_factor;
+    if (o->twin_hinge > 0) twin.fold_hinge_stiffness = o->twin_hinge;
     double relaxed[CAMPAIGN_BENCH_MAX_PHI];
     for (size_t j = 0; j < n; j++) relaxed[j] = o->phi_deg[j] - o->relax_deg;
     char w[600];
@@ -115,6 +166,11 @@ int campaign_bench_run(const rod_scene *scene, const campaign_bench_opts *o, cam
         snprintf(why, why_len, "the twins' true boundary: %s", w);
         return -1;
     }
+    for (size_t j = 0; o->dynamic && j < n; j++)
+        if (dynamic_truth(&twin, relaxed[j], r->truth[j], &r->truth[j], w, sizeof w)) {
+            snprintf(why, why_len, "the twins' dynamic boundary: %s", w);
+            return -1;
+        }
     if (trace_at(scene, o->phi_deg, n, r->predicted, w, sizeof w)) {
         snprintf(why, why_len, "the model's boundary: %s", w);
         return -1;

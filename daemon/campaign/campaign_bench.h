@@ -13,9 +13,16 @@
  * the static boundary is 0.1763, the rate lag of docs/simulator.md), so a dynamic measurement would
  * score the rate lag, not the planner; and a mock trial (N = 121 twin, rendering, tracking) costs
  * tens of seconds against a fraction of one here.
- * The compliant crease is the rigid-crease model's smaller stiffness factor, not a hinge
- * (folds.hinge_stiffness): rod_boundary does not find the codimension-2 point with a hinge crease
- * (measured: "codim-2 point not found" for k = 0.0035 .. 1 N m/rad on the mock scene).
+ * The compliant crease is by default the rigid-crease model's smaller stiffness factor; with
+ * twin_hinge > 0 it is a compliant hinge (folds.hinge_stiffness), which rod_boundary traces since
+ * rod_params_apply moves hinged creases (docs/boundary.md "Compliant creases").
+ *
+ * Dynamic (opts.dynamic). The trial's own measure without the camera: rod_predict in fast mode
+ * (adaptive steps, as `ribbon-sim predict --fast`) on the twin at the scene's shear rate, its
+ * regime by the rule (peak |A| above snap.asym_threshold). Truth: the twins' mean strip (equal
+ * creases at phi - relax, the scene's imperfection) bisected in Gamma on the same measure to
+ * DYN_TRUTH_TOL from a bracket around its static Gamma*. Heavy: about 1 s per specimen and 10 per
+ * phi for the truth at N = 61.
  *
  * Truth. The twins' mean strip (relaxed, compliant, equal creases) traced with rod_boundary at each
  * design phi (its creases at phi - relax). The planner's model: the scene traced at the design phi.
@@ -39,7 +46,14 @@ typedef struct campaign_bench_opts {
     size_t nphi;
     double relax_deg;             /* deg the twins' creases relaxed (default 6) */
     double twin_stiffness_factor; /* the twins' crease factor (default 3; the mock scene's is 1e4) */
+    double twin_hinge;            /* N m/rad: > 0 makes the twins' creases compliant hinges of this
+                                     stiffness (folds.hinge_stiffness) instead of the factor; 0
+                                     (default): rigid creases with twin_stiffness_factor */
     double spread;                /* each crease off by U(-spread, spread) (default 0.01) */
+    int dynamic;                  /* 1: each twin measured by its simulated snap (rod_predict, fast
+                                     mode, the regime rule on peak |A|) instead of the
+                                     classification, and the truth the dynamic switch of the twins'
+                                     mean strip bisected in Gamma on that (see below); 0 (default) */
     int max_specimens;            /* default 15 */
     double stop_width;            /* Gamma, default 0.005 */
     unsigned seed;                /* default 1 */

@@ -15,15 +15,19 @@
 static void help(void)
 {
     printf("usage: ribbonctl plan-bench --scene F [--phi LIST] [--max K] [--seed S] [--relax DEG] [--factor F]\n"
-           "                            [--spread S] [--db FILE] [--verbose]\n"
+           "                            [--hinge K] [--spread S] [--dynamic] [--db FILE] [--verbose]\n"
            "\n"
            "The simulated campaign: the planner proposes one specimen at a time at the phi values of LIST\n"
            "(default 60,90,120); each is folded as a twin of the scene whose creases relaxed by --relax\n"
-           "degrees (default 6) and are more compliant (rigid-crease stiffness factor --factor, default 3),\n"
+           "degrees (default 6) and are more compliant (rigid-crease stiffness factor --factor, default 3,\n"
+           "or compliant hinges of --hinge K N m/rad),\n"
            "each crease off by up to --spread (default 0.01) at random, and its regime measured by the\n"
            "simulator's classification; until every phi's experimental boundary is at most 0.005 wide or\n"
            "--max specimens (default 15). Then the same bench without calibration. Truth: the twins' mean\n"
            "strip's boundary traced by rod_boundary. One line: bench-plan specimens=... max_error=...\n"
+           "--dynamic measures each twin by its simulated snap (the fast prediction, the regime rule on\n"
+           "peak |A|) and takes as truth the mean strip's dynamic switch bisected to 5e-4 (slow: about a\n"
+           "second per specimen, ten per phi).\n"
            "--db writes the calibrated campaign's specimens (B-1, B-2, ...) and measured trials to a store\n"
            "(for ribbonctl phase).\n");
 }
@@ -88,6 +92,10 @@ int ctl_plan_bench_main(int argc, char **argv)
             verbose = 1;
             continue;
         }
+        if (!strcmp(a, "--dynamic")) {
+            o.dynamic = 1;
+            continue;
+        }
         if (!v) {
             fprintf(stderr, "ribbonctl plan-bench: %s needs a value (see --help)\n", a);
             return 2;
@@ -100,6 +108,13 @@ int ctl_plan_bench_main(int argc, char **argv)
         else if (!strcmp(a, "--seed")) o.seed = (unsigned)strtoul(v, &end, 10);
         else if (!strcmp(a, "--relax")) o.relax_deg = strtod(v, &end);
         else if (!strcmp(a, "--factor")) o.twin_stiffness_factor = strtod(v, &end);
+        else if (!strcmp(a, "--hinge")) {
+            o.twin_hinge = strtod(v, &end);
+            if (!(o.twin_hinge > 0) || !isfinite(o.twin_hinge)) {
+                fprintf(stderr, "ribbonctl plan-bench: --hinge takes a positive stiffness in N m/rad\n");
+                return 2;
+            }
+        }
         else if (!strcmp(a, "--spread")) o.spread = strtod(v, &end);
         else if (!strcmp(a, "--phi")) {
             o.nphi = 0;
