@@ -22,7 +22,8 @@
  *                    software_version | samples_count (v3, kept by the sample writer) |
  *                    stop_cmd_latency_s stop_stand_latency_s (v4: snap-to-stop latency) |
  *                    video_bytes (v6: the size of video_path) |
- *                    crease_age_s (v5: the creases' age at the trial)
+ *                    crease_age_s (v5: the creases' age at the trial) |
+ *                    camera_offset_s camera_offset_sd_s (v9: measured at the shear's start)
  *   samples          (trial_id -> trials, seq) | t_s kind frame | compress_mm shear_mm |
  *                    dl dw dz a quality reason                              (WITHOUT ROWID)
  *   events           id | trial_id -> trials | t_s wall_time state kind message
@@ -207,6 +208,14 @@ static const char schema_v8[] =
     "INSERT INTO queue_state VALUES (1, 0, 'never started', strftime('%Y-%m-%dT%H:%M:%fZ','now'));"
     "PRAGMA user_version = 8;";
 
+/* v9: the camera's time offset measured at the trial's shear start (issue 34 C,
+ * daemon/trial/trial_cam_offset.h): t_shown = t_frame + offset, s, and its standard deviation.
+ * NULL when not measured (rows from before, other modes, a fit that could not be made). */
+static const char schema_v9[] =
+    "ALTER TABLE trials ADD COLUMN camera_offset_s REAL;"
+    "ALTER TABLE trials ADD COLUMN camera_offset_sd_s REAL CHECK (camera_offset_sd_s >= 0);"
+    "PRAGMA user_version = 9;";
+
 typedef struct store_migration {
     int version;      /* user_version after the step */
     const char *what; /* for reasons */
@@ -222,6 +231,7 @@ static const store_migration migrations[] = {
     {6, "video file size per trial", schema_v6},
     {7, "the crease model of a prediction", schema_v7},
     {8, "specimen states and the queue", schema_v8},
+    {9, "the camera's measured time offset per trial", schema_v9},
 };
 #define N_MIGRATIONS (sizeof migrations / sizeof migrations[0])
 _Static_assert(sizeof migrations / sizeof migrations[0] == STORE_SCHEMA_VERSION,
