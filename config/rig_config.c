@@ -60,6 +60,7 @@ static const char *const crease_names[] = {"up", "down", NULL};
 static const char *const off_on[] = {"off", "on", NULL};
 static const char *const transcode_names[] = {"off", "ffv1", NULL};
 static const char *const keep_names[] = {"recorded", "tracker", NULL};
+static const char *const time_offset_names[] = {"configured", "measure", NULL};
 
 /* The key table. Bounds catch typos and keep later arithmetic finite; what depends on several
  * keys (limits against the scene, speeds against the rails) is checked after loading. */
@@ -186,6 +187,13 @@ static const rig_key rig_keys[] = {
     {"camera", "frozen_move_mm", RIG_KEY_DOUBLE, OFF(camera.frozen_move_mm), 0, 0.0, 1000.0, MINO, 0, NULL, "mm",
      "0.05", "rig mode: the rail motion during camera.frozen_frames identical frames that makes them a frozen "
              "image (a still scene repeats legitimately)"},
+    {"camera", "time_offset", RIG_KEY_ENUM, OFF(camera.time_offset_measure), 0, 0, 0, 0, 0, time_offset_names, "-",
+     "configured", "rig mode: the camera's time offset measured at each shear's start is used for the rest of "
+                   "that trial (measure), or only compared with calibration.camera_time_offset_s, with a "
+                   "warning when they differ by more than a frame period (configured)"},
+    {"camera", "time_offset_window_s", RIG_KEY_DOUBLE, OFF(camera.time_offset_window_s), 0, 0.0, 60.0, 0, 0, NULL,
+     "s", "4", "rig mode: the span of each shear's start over which the camera's time offset is measured (the "
+                 "shear clamp's image against the shear rail); 0 = not measured"},
     {"camera", "transcode", RIG_KEY_ENUM, OFF(camera.transcode), 0, 0, 0, 0, 0, transcode_names, "-", "ffv1",
      "rig mode: after each trial, in the background, the raw Y800 video (trial-N.avi) is transcoded to "
      "lossless FFV1 (trial-N.mkv), verified bit for bit, and the raw file removed; off: keep the raw video"},
@@ -1440,6 +1448,7 @@ static void config_defaults(rig_config *cfg)
     cfg->camera.roi = RIG_ROI_AUTO;
     cfg->camera.margin_px = 20;
     cfg->camera.transcode = RIG_TRANSCODE_FFV1;
+    cfg->camera.time_offset_window_s = 4.0;
     cfg->camera.transcode_keep = RIG_KEEP_RECORDED;
     cfg->camera.transcode_threads = 2;
     snprintf(cfg->camera.video_dir, sizeof cfg->camera.video_dir, "videos");

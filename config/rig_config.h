@@ -127,6 +127,10 @@ typedef struct rig_camera {
     /* Rig mode, after each trial (daemon/trial/trial_transcoder.h): the raw Y800 video
      * transcoded losslessly in the background, verified bit for bit, then the raw file removed. */
     int transcode;              /* RIG_TRANSCODE_OFF or RIG_TRANSCODE_FFV1 */
+    /* Rig mode (daemon/trial/trial_cam_watch.h): the camera's time offset measured at each
+     * shear's start over time_offset_window_s (0 = not), used for the trial when measure is 1. */
+    int time_offset_measure;    /* 0 configured, 1 measure */
+    double time_offset_window_s;
     int transcode_keep;         /* RIG_KEEP_RECORDED (every recorded pixel) or RIG_KEEP_TRACKER */
     int transcode_threads;      /* the encoder's slice threads */
 } rig_camera;

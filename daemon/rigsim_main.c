@@ -56,6 +56,9 @@ static void usage(FILE *f)
             "  --camera-stop-after S the camera stops sending S seconds after start\n"
             "  --freeze-after S      the image freezes S seconds after start\n"
             "  --lost-packets R      the camera drops each GVSP packet with probability R (0..1)\n"
+            "  --camera-delay-ms MS  each image shows the twin MS ms before its timestamp (the\n"
+            "                        camera's exposure-to-stamp delay; default 0)\n"
+            "  --camera-tilt-deg D   the camera looks down D degrees (default 0, level; |D| < 60)\n"
             "rails: one GRBL controller on a pty (both rails driver = gcode, one port) or two Modbus TCP\n"
             "       drives on 127.0.0.1 (both driver = modbus, map = ribbon-sim)\n"
             "signals: SIGUSR1 cuts the rails' link now, SIGUSR2 stops the camera now,\n"
@@ -98,7 +101,7 @@ int main(int argc, char **argv)
     int n_sets = 0;
     double start_dl = 0.2, duration = -1.0;
     rigsim_rail_faults rf = {-1.0, -1.0, 0, 0.0};
-    rigsim_camera_faults cf = {-1.0, -1.0, 0.0};
+    rigsim_camera_faults cf = {-1.0, -1.0, 0.0, 0.0, 0.0};
     for (int i = 2; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         int bad = 0;
@@ -132,6 +135,13 @@ int main(int argc, char **argv)
             bad = num(a, v, 0.0, 1e7, &cf.freeze_after_s);
         else if (!strcmp(a, "--lost-packets"))
             bad = num(a, v, 0.0, 1.0, &cf.lost_packets);
+        else if (!strcmp(a, "--camera-tilt-deg")) {
+            bad = num(a, v, -60.0, 60.0, &cf.tilt_rad);
+            cf.tilt_rad *= M_PI / 180.0;
+        } else if (!strcmp(a, "--camera-delay-ms")) {
+            bad = num(a, v, 0.0, 1000.0, &cf.delay_s);
+            cf.delay_s *= 1e-3;
+        }
         else if (!strcmp(a, "--stall")) {
             if ((v[0] != 'X' && v[0] != 'Y' && v[0] != 'Z') || v[1] != ':') {
                 fprintf(stderr, PROG ": --stall needs AXIS:MM, e.g. Y:60\n");

@@ -221,10 +221,13 @@ static void *twin_main(void *arg)
         prev_ts = tp;
         prev_c = pc;
         prev_s = ps;
-        double ec = pc + vc * (target - tp), es = ps + vs * (target - tp);
+        /* The instant the image shows: its send time less the camera's delay (the exposure comes
+         * before the stamp), never before the instant the last image showed. */
+        const double shown = target - c->f.delay_s;
+        double ec = pc + vc * (shown - tp), es = ps + vs * (shown - tp);
         double dl = rig_calib_dl(&c->calib, c->length_m, ec), dw = rig_calib_dw(&c->calib, c->length_m, es);
         pthread_mutex_lock(&c->lock);
-        double t_twin = target - c->t0;
+        double t_twin = fmax(shown - c->t0, c->img_twin_t);
         int frozen = c->f.freeze_after_s >= 0.0 && t_render - c->t_start >= c->f.freeze_after_s;
         pthread_mutex_unlock(&c->lock);
         double t_drawn = t_render;
@@ -279,7 +282,7 @@ static void *twin_main(void *arg)
 static void note_age(rigsim_camera *c, double send_mono, double send_real, int frozen)
 {
     if (frozen) return;
-    const double age = send_mono - (c->img_twin_t + c->t0);
+    const double age = send_mono - c->f.delay_s - (c->img_twin_t + c->t0);
     if (age > c->age_max_s) c->age_max_s = age;
     if (age > 0.5 / c->fps) {
         c->behind++;
@@ -331,8 +334,8 @@ static void fill(ArvBuffer *b, void *user, guint32 exposure_us, guint32 gain, Ar
     if (c->truth) {
         c->ring[c->ring_head % RIGSIM_TRUTH_RING] = (truth_line){
             c->frames, send_mono, send_real, pc, ps, rig_calib_dl(&c->calib, c->length_m, pc),
-            rig_calib_dw(&c->calib, c->length_m, ps), c->img_dz, c->img_twin_t, send_mono - (c->img_twin_t + c->t0),
-            frozen};
+            rig_calib_dw(&c->calib, c->length_m, ps), c->img_dz, c->img_twin_t,
+            send_mono - c->f.delay_s - (c->img_twin_t + c->t0), frozen};
         c->ring_head++;
         if (c->ring_head - c->ring_tail > RIGSIM_TRUTH_RING) {
             c->truth_lost += c->ring_head - c->ring_tail - RIGSIM_TRUTH_RING;
@@ -358,11 +361,12 @@ int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_st
     c->rails = rails;
     c->calib = cfg->calib;
     c->length_m = sc->length;
-    c->f = f ? *f : (rigsim_camera_faults){-1.0, -1.0, 0.0};
+    c->f = f ? *f : (rigsim_camera_faults){-1.0, -1.0, 0.0, 0.0, 0.0};
     pthread_mutex_init(&c->lock, NULL);
     twin_camera_params cp = twin_camera_params_default();
     cp.width_px = cfg->camera.width_px > 0 ? cfg->camera.width_px : 640;
     cp.height_px = cfg->camera.height_px > 0 ? cfg->camera.height_px : 480;
+    cp.tilt_rad = c->f.tilt_rad;
     vis_error ve = {0};
     c->frame = vis_frame_alloc(cp.width_px, cp.height_px, 1, &ve);
     c->back = vis_frame_alloc(cp.width_px, cp.height_px, 1, &ve);
@@ -397,7 +401,7 @@ int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_st
             snprintf(why, why_len, "truth log %s cannot be written", truth_path);
             goto fail;
         }
-        fprintf(c->truth, "image,mono_s,real_s,compress_mm,shear_mm,dl,dw,dz,frozen,twin_t_s,image_age_s\n");
+        fprintf(c->truth, "image,mono_s,real_s,compress_mm,shear_mm,dl,dw,dz,frozen,twin_t_s,image_age_s,camera_delay_s\n");
     }
     /* The twin's first grab finds its mounted state (a static solve, seconds): done here, at the
      * twin's time 0, before any image is due. */
@@ -461,8 +465,8 @@ static void truth_write(rigsim_camera *c)
     pthread_mutex_unlock(&c->lock);
     for (long k = 0; k < n; k++) {
         const truth_line *l = &c->out[k];
-        fprintf(c->truth, "%ld,%.9f,%.9f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,%.9f,%.6f\n", l->image, l->mono, l->real, l->pc,
-                l->ps, l->dl, l->dw, l->dz, l->frozen, l->twin_t, l->age);
+        fprintf(c->truth, "%ld,%.9f,%.9f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,%.9f,%.6f,%.6f\n", l->image, l->mono, l->real,
+                l->pc, l->ps, l->dl, l->dw, l->dz, l->frozen, l->twin_t, l->age, c->f.delay_s);
     }
 }
 

@@ -17,7 +17,9 @@
  * Truth log (CSV, one line per image sent): index, host monotonic time of the send, real-time clock
  * time (the camera's timestamp), the axes' actual positions at the send (mm), Delta L, Delta W,
  * the twin's Delta Z in the image, frozen, the twin time the image shows (s), and the image's age
- * at the send (s: send time - the time the twin was stepped to; negative when rendered ahead). Faults: the camera stops (the device goes away) or the image freezes (the last
+ * at the send beyond the camera's delay (s: send time - delay - the time the twin was stepped to;
+ * negative when rendered ahead), and the camera's delay (s: the image shows the instant send time -
+ * delay - age). Faults: the camera stops (the device goes away) or the image freezes (the last
  * image is sent again) from a time on. */
 #ifndef RIBBON_RIGSIM_CAMERA_H
 #define RIBBON_RIGSIM_CAMERA_H
@@ -35,6 +37,12 @@ typedef struct rigsim_camera_faults {
     double freeze_after_s; /* s after start, < 0 = off: the same image from then on */
     double lost_packets;   /* GVSP packets dropped at random, 0..1 (Aravis's gvsp-lost-ratio; the
                               fake camera does not resend): damaged or lost frames */
+    double delay_s;        /* the camera's delay from exposure to timestamp, s (>= 0; 0 = none): each
+                              image shows the twin (and the axes) this long before its stamp, as a
+                              real camera's exposure precedes its timestamp (issue 34 C) */
+    double tilt_rad;       /* the camera's pitch, radians (positive looks down; 0 = level): a tilted
+                              camera sees the shear (along its optical axis) move the clamp in the
+                              image; the calibration written says so */
 } rigsim_camera_faults;
 
 /* Serves the camera on 127.0.0.1 with serial number `serial`; sc is the scene at the twin's

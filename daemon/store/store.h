@@ -33,7 +33,7 @@
 #include <jansson.h>
 
 /* The schema version this program creates and understands (see the migration list in store.c). */
-#define STORE_SCHEMA_VERSION 9
+#define STORE_SCHEMA_VERSION 10
 
 /* Errors of the store layer; store_err_message() gives the generic text, why the specific one. */
 typedef enum store_err {
@@ -350,6 +350,10 @@ store_err store_trial_set_result(store *st, int64_t id, bool snapped, double sna
 store_err store_trial_set_latency(store *st, int64_t id, double stop_cmd_s, double stop_stand_s, char *why,
                                   size_t why_len);
 store_err store_trial_set_video(store *st, int64_t id, const char *video_path, char *why, size_t why_len);
+/* The camera's time offset measured at the shear's start (s, finite) and its standard deviation
+ * (s, finite, >= 0); STORE_E_INVALID otherwise, the row untouched. */
+store_err store_trial_set_camera_offset(store *st, int64_t id, double offset_s, double sd_s, char *why,
+                                        size_t why_len);
 /* The trial's video file and its size in bytes (>= 0): the raw recording at the trial's end, then
  * the transcoded file once it is verified (trial_transcoder.h). roi (NULL: unchanged): the new
  * file's region x, y, w, h inside the full frame, written into the calibration record's "roi" in

@@ -22,7 +22,8 @@
  *                    software_version | samples_count (v3, kept by the sample writer) |
  *                    stop_cmd_latency_s stop_stand_latency_s (v4: snap-to-stop latency) |
  *                    video_bytes (v6: the size of video_path) |
- *                    crease_age_s (v5: the creases' age at the trial)
+ *                    crease_age_s (v5: the creases' age at the trial) |
+ *                    camera_offset_s camera_offset_sd_s (v9: measured at the shear's start)
  *   samples          (trial_id -> trials, seq) | t_s kind frame | compress_mm shear_mm |
  *                    dl dw dz a quality reason                              (WITHOUT ROWID)
  *   events           id | trial_id -> trials | t_s wall_time state kind message
@@ -229,6 +230,14 @@ static const char schema_v9[] =
     " CHECK ((status = 'approved') = (specimen_id IS NOT NULL AND trial_item_id IS NOT NULL)));"
     "PRAGMA user_version = 9;";
 
+/* v10: the camera's time offset measured at the trial's shear start (issue 34 C,
+ * daemon/trial/trial_cam_offset.h): t_shown = t_frame + offset, s, and its standard deviation.
+ * NULL when not measured (rows from before, other modes, a fit that could not be made). */
+static const char schema_v10[] =
+    "ALTER TABLE trials ADD COLUMN camera_offset_s REAL;"
+    "ALTER TABLE trials ADD COLUMN camera_offset_sd_s REAL CHECK (camera_offset_sd_s >= 0);"
+    "PRAGMA user_version = 10;";
+
 typedef struct store_migration {
     int version;      /* user_version after the step */
     const char *what; /* for reasons */
@@ -245,6 +254,7 @@ static const store_migration migrations[] = {
     {7, "the crease model of a prediction", schema_v7},
     {8, "specimen states and the queue", schema_v8},
     {9, "the planner's proposals", schema_v9},
+    {10, "the camera's measured time offset per trial", schema_v10},
 };
 #define N_MIGRATIONS (sizeof migrations / sizeof migrations[0])
 _Static_assert(sizeof migrations / sizeof migrations[0] == STORE_SCHEMA_VERSION,

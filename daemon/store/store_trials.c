@@ -243,6 +243,27 @@ store_err store_trial_set_latency(store *st, int64_t id, double stop_cmd_s, doub
     return update_one(st, s, id, "saving a trial's snap-to-stop latency", why, why_len);
 }
 
+store_err store_trial_set_camera_offset(store *st, int64_t id, double offset_s, double sd_s, char *why,
+                                        size_t why_len)
+{
+    store_err e = store_check_writable(st, why, why_len);
+    if (e != STORE_OK)
+        return e;
+    if (!isfinite(offset_s) || !(isfinite(sd_s) && sd_s >= 0.0))
+        return store_fail(why, why_len, STORE_E_INVALID,
+                          "trial camera_offset_s %g, camera_offset_sd_s %g: finite, and the deviation not negative",
+                          offset_s, sd_s);
+    sqlite3_stmt *s;
+    e = store_prepare(st, "UPDATE trials SET camera_offset_s = ?1, camera_offset_sd_s = ?2 WHERE id = ?3", &s, why,
+                      why_len);
+    if (e != STORE_OK)
+        return e;
+    store_bind_real(s, 1, offset_s);
+    store_bind_real(s, 2, sd_s);
+    sqlite3_bind_int64(s, 3, id);
+    return update_one(st, s, id, "saving a trial's camera offset", why, why_len);
+}
+
 store_err store_trial_set_video(store *st, int64_t id, const char *video_path, char *why, size_t why_len)
 {
     store_err e = store_check_writable(st, why, why_len);

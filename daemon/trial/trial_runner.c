@@ -112,6 +112,18 @@ int trial_runner_init(trial_runner *tr, const trial_plan *plan, rail *compress, 
         snprintf(why, why_len, "trial runner: %s", ve.message);
         return -1;
     }
+    if (plan->cam_offset_window_s > 0.0 &&
+        !(tr->cam_watch = trial_cam_watch_alloc(plan->cam_offset_window_s, plan->fps, plan->cam_offset_measure,
+                                                plan->calib.camera_time_offset_s, plan->cam_clamp_px[0],
+                                                plan->cam_clamp_px[1]))) {
+        snprintf(why, why_len,
+                 "trial runner: the camera offset's watch cannot start (window %g s, clamp points (%g, %g) and (%g, "
+                 "%g) px: they must be at least 20 px apart)",
+                 plan->cam_offset_window_s, plan->cam_clamp_px[0][0], plan->cam_clamp_px[0][1], plan->cam_clamp_px[1][0],
+                 plan->cam_clamp_px[1][1]);
+        trial_runner_free(tr);
+        return -1;
+    }
     return 0;
 }
 
@@ -119,6 +131,8 @@ void trial_runner_free(trial_runner *tr)
 {
     vis_frame_free(tr->frame);
     tr->frame = NULL;
+    trial_cam_watch_free(tr->cam_watch);
+    tr->cam_watch = NULL;
 }
 
 /* The loop's working state. */
@@ -156,6 +170,7 @@ typedef struct run_ctx {
     long loss_total;      /* frames lost or incomplete so far */
     double loss_noted_t;  /* trial time of the last loss event (rate: one a second) */
     long loss_noted;      /* loss_total at it */
+    double cam_offset;    /* s added to a frame's time to place it on the rails' clock */
 } run_ctx;
 
 static int emit_event(run_ctx *c, const char *kind, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
@@ -374,6 +389,7 @@ static int step(run_ctx *c, const trial_sample *smp)
             c->target_shear_mm = rig_calib_shear_mm(&p->calib, l, p->scene.shear_max);
             double v = p->scene.shear_rate * 1000.0;
             snap_detect_init(&tr->det, &p->snap);
+            if (tr->cam_watch) trial_cam_watch_shear(tr->cam_watch, rail_clock_now(c->clock));
             if (command(c, tr->shear, r_move(tr, tr->shear, c->target_shear_mm, v), "shear move")) return 1;
             enter(c, TRIAL_SHEARING, p->scene.shear_max / (p->scene.shear_rate / l) * 1.5 + 30.0, NULL);
         }
@@ -484,6 +500,37 @@ static void record_rail_settings(run_ctx *c)
     }
 }
 
+/* The camera's offset (trial_cam_watch.h): the hold's last frames and the shear's first go to the
+ * fit; the frames' own times, before any offset. */
+static void cam_watch_frame(run_ctx *c, double t_frame)
+{
+    const trial_plan *p = &c->tr->plan;
+    if (c->st == TRIAL_HOLDING && c->t - c->t_state >= p->hold_s - TRIAL_CAM_WATCH_STAND_S)
+        trial_cam_watch_standing(c->tr->cam_watch);
+    if (c->st == TRIAL_HOLDING || c->st == TRIAL_CHECKING || c->st == TRIAL_SHEARING)
+        trial_cam_watch_frame(c->tr->cam_watch, t_frame, c->tr->frame);
+}
+
+/* Once the shear's window is over (or the shear ended: force): the event, the result's fields,
+ * and with camera.time_offset = measure the offset for the frames from here on. */
+static void cam_watch_poll(run_ctx *c, int force)
+{
+    trial_cam_offset_fit fit;
+    char msg[600];
+    force = force || (c->st != TRIAL_SHEARING && c->st != TRIAL_CHECKING && c->st != TRIAL_HOLDING);
+    trial_cam_watch_verdict v =
+        trial_cam_watch_poll(c->tr->cam_watch, rail_clock_now(c->clock), force, &fit, msg, sizeof msg);
+    if (v == TRIAL_CAM_WATCH_PENDING) return;
+    if (v != TRIAL_CAM_WATCH_FAILED) {
+        c->res->camera_offset_s = fit.offset_s;
+        c->res->camera_offset_sd_s = fit.sd_s;
+    }
+    if (v == TRIAL_CAM_WATCH_USED) c->cam_offset = fit.offset_s;
+    if (c->tr->sink.event)
+        c->tr->sink.event(c->tr->sink.user, c->t,
+                          v == TRIAL_CAM_WATCH_USED || v == TRIAL_CAM_WATCH_AGREES ? "info" : "warning", msg);
+}
+
 void trial_runner_run(trial_runner *tr, trial_result *out)
 {
     memset(out, 0, sizeof *out);
@@ -502,6 +549,8 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
 
     c.t_det_frame = c.t_stop_cmd = NAN;
     out->stop_cmd_latency_s = out->stop_stand_latency_s = NAN;
+    out->camera_offset_s = out->camera_offset_sd_s = NAN;
+    c.cam_offset = p->calib.camera_time_offset_s;
     record_rail_settings(&c);
     /* Where the rails are, and the preconditions. */
     if (poll_rails(&c, why, sizeof why) != RAIL_OK) {
@@ -568,6 +617,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
                 finish(&c, TRIAL_FAILED, "sample not stored: %s", why);
                 goto end;
             }
+            if (k == 1 && tr->cam_watch) trial_cam_watch_reading(tr->cam_watch, st->t_s, st->position_mm);
             if (k == 1 && p->torque_witness && st->has_load && isfinite(st->load) &&
                 witness_add(&c, st->load, smp.dw, smp.t_s))
                 goto end;
@@ -600,7 +650,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
                 break;
             }
         }
-        double t_rail = t_frame + p->calib.camera_time_offset_s;
+        double t_rail = t_frame + c.cam_offset;
         pos_c = position_at(&c.sc, t_poll, t_rail);
         pos_s = position_at(&c.ss, t_poll, t_rail);
         if (tr->capture) {
@@ -656,6 +706,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             if (step(&c, &smp)) break;
             continue;
         }
+        if (tr->cam_watch) cam_watch_frame(&c, t_frame);
         vis_measure m;
         if (p->clamp_tol_mm > 0 && fabs(pos_c - c.target_compress_mm) > p->clamp_tol_mm) {
             /* The compress rail is moving (or back at zero): the clamps are not at the calibrated
@@ -687,8 +738,10 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
         if (c.st == TRIAL_SHEARING || c.st == TRIAL_SNAPPED)
             snap_detect_add(&tr->det, frame, smp.t_s, smp.dw, smp.dz, smp.a, smp.measured);
         if (step(&c, &smp)) break;
+        if (tr->cam_watch) cam_watch_poll(&c, 0);
     }
 end:
+    if (tr->cam_watch) cam_watch_poll(&c, 1);
     out->duration_s = rail_clock_now(c.clock) - c.t0;
     out->vision_snapped = snap_detect_snapped(&tr->det);
     out->load_witnessed = c.w_fired;

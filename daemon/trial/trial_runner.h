@@ -38,6 +38,7 @@
 
 #include "rail.h"
 #include "rig_calib.h"
+#include "trial_cam_watch.h"
 #include "trial_capture.h"
 #include "trial_rail_poller.h"
 #include "scene.h"
@@ -90,6 +91,12 @@ typedef struct trial_plan {
                                     clamp points are (the session: trial_clamp_tol_mm); others are
                                     stored untracked with the reason "clamp not found". 0: every
                                     frame is tracked */
+    double cam_offset_window_s;  /* > 0: the camera's time offset is measured over this much of the
+                                    shear's start (trial_cam_watch.h); 0: not measured */
+    int cam_offset_measure;      /* 1: the measured offset replaces calib.camera_time_offset_s for
+                                    the rest of the trial (camera.time_offset = measure) */
+    double cam_clamp_px[2][2];   /* the camera calibration's clamp points (left, right; u, v), px:
+                                    where the offset's watch looks for the jaws */
 } trial_plan;
 
 /* How near its target a rail counts as arrived (holding starts there), mm. */
@@ -156,6 +163,9 @@ typedef struct trial_result {
      * when not measured (no camera snap, or the rail was not seen standing). */
     double stop_cmd_latency_s, stop_stand_latency_s;
     long skipped_frames, dropped_frames;
+    /* The camera's time offset measured at the shear's start (plan.cam_offset_window_s) and its
+     * standard deviation, s; NaN when not measured. */
+    double camera_offset_s, camera_offset_sd_s;
 } trial_result;
 
 typedef struct trial_runner {
@@ -174,6 +184,7 @@ typedef struct trial_runner {
     /* Live pipeline (rig mode): frames from the capture ring, rails from the poller (borrowed). */
     trial_capture *capture;
     trial_rail_poller *poller;
+    trial_cam_watch *cam_watch;  /* the camera's offset at the shear's start (plan.cam_offset_window_s) */
 } trial_runner;
 
 /* Rig mode: frames come from the capture pipeline (camera timestamps, in order, never paced by the

@@ -605,6 +605,10 @@ static trial_plan session_plan(const rig_config *cfg)
     plan.torque_witness = cfg->detect.torque_witness;
     plan.load_jump = cfg->detect.load_jump;
     plan.paced_by_camera = cfg->mode == RIG_MODE_RIG;
+    if (cfg->mode == RIG_MODE_RIG) {
+        plan.cam_offset_window_s = cfg->camera.time_offset_window_s;
+        plan.cam_offset_measure = cfg->camera.time_offset_measure;
+    }
     return plan;
 }
 
@@ -614,6 +618,10 @@ static int session_run(trial_session *s, session_parts *p, char *why, size_t why
 {
     trial_plan plan = session_plan(&s->cfg);
     plan.clamp_tol_mm = trial_clamp_tol_mm(s->cal.px_per_mm);
+    for (int k = 0; k < 2; k++) {
+        plan.cam_clamp_px[0][k] = s->cal.clamp_left_px[k];
+        plan.cam_clamp_px[1][k] = s->cal.clamp_right_px[k];
+    }
     if (store_samples_begin(s->st, s->trial_id, NULL, &s->writer, why, why_len) != STORE_OK) return -1;
     trial_sink sink = {sink_state, sink_event, sink_sample, sink_frame, s};
     if (trial_runner_init(&s->runner, &plan, s->compress, s->shear, p->cam, p->trk, sink, why, why_len)) return -1;
@@ -657,6 +665,10 @@ static void session_store_result(trial_session *s)
     if (isfinite(s->result.stop_cmd_latency_s) &&
         store_trial_set_latency(s->st, s->trial_id, s->result.stop_cmd_latency_s, s->result.stop_stand_latency_s, w,
                                 sizeof w) != STORE_OK)
+        session_event(s, NAN, STORE_EVENT_FAULT, w);
+    if (isfinite(s->result.camera_offset_s) &&
+        store_trial_set_camera_offset(s->st, s->trial_id, s->result.camera_offset_s, s->result.camera_offset_sd_s, w,
+                                      sizeof w) != STORE_OK)
         session_event(s, NAN, STORE_EVENT_FAULT, w);
     session_store_final(s, s->result.final, s->result.reason[0] ? s->result.reason : NULL);
     trial_publish_stored(s->bus, s->trial_id, s->result.final);

@@ -1221,6 +1221,30 @@ static void test_trial_latency(void **state)
     store_close(st);
 }
 
+/* v10: the camera's time offset measured at the shear's start: NULL until set, stored with its
+ * standard deviation; a NaN offset or a negative deviation refused without touching the row. */
+static void test_trial_camera_offset(void **state)
+{
+    fixture *f = *state;
+    store *st;
+    OK(store_open(f->db, &st, why, sizeof why));
+    store_trial_def d = store_trial_def_default();
+    d.mode = STORE_MODE_RIG;
+    d.created_wall_s = T0;
+    int64_t id;
+    OK(store_trial_create(st, &d, &id, why, sizeof why));
+    sqlite3 *db = store_handle(st);
+    assert_int_equal(q_int(db, "SELECT count(*) FROM trials WHERE camera_offset_s IS NULL AND camera_offset_sd_s IS NULL"), 1);
+    OK(store_trial_set_camera_offset(st, id, -0.0192, 0.0009, why, sizeof why));
+    assert_int_equal(q_int(db, "SELECT count(*) FROM trials WHERE camera_offset_s = -0.0192 AND camera_offset_sd_s = 0.0009"), 1);
+    assert_int_equal(store_trial_set_camera_offset(st, id, NAN, 0.001, why, sizeof why), STORE_E_INVALID);
+    assert_non_null(strstr(why, "camera_offset_s"));
+    assert_int_equal(store_trial_set_camera_offset(st, id, -0.01, -0.001, why, sizeof why), STORE_E_INVALID);
+    assert_int_equal(q_int(db, "SELECT count(*) FROM trials WHERE camera_offset_s = -0.0192"), 1);
+    assert_int_equal(store_trial_set_camera_offset(st, id + 99, 0.0, 0.001, why, sizeof why), STORE_E_NOTFOUND);
+    store_close(st);
+}
+
 /* v6: a trial's video file and its size: unknown (NULL) until set, set with the path in one
  * statement, in the JSON; a negative size or no path refused without touching the row. */
 static void test_trial_video_file(void **state)
@@ -1508,6 +1532,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_writer_disk_full, setup, teardown),
         cmocka_unit_test_setup_teardown(test_trial_curve, setup, teardown),
         cmocka_unit_test_setup_teardown(test_trial_latency, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_trial_camera_offset, setup, teardown),
         cmocka_unit_test_setup_teardown(test_trial_video_file, setup, teardown),
         cmocka_unit_test_setup_teardown(test_json, setup, teardown),
         cmocka_unit_test_setup_teardown(test_csv, setup, teardown),
