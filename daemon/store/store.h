@@ -33,7 +33,7 @@
 #include <jansson.h>
 
 /* The schema version this program creates and understands (see the migration list in store.c). */
-#define STORE_SCHEMA_VERSION 8
+#define STORE_SCHEMA_VERSION 9
 
 /* Errors of the store layer; store_err_message() gives the generic text, why the specific one. */
 typedef enum store_err {

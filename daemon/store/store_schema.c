@@ -207,6 +207,21 @@ static const char schema_v8[] =
     "INSERT INTO queue_state VALUES (1, 0, 'never started', strftime('%Y-%m-%dT%H:%M:%fZ','now'));"
     "PRAGMA user_version = 8;";
 
+/* v9: the calibrated prediction beside the scene's (issue 32 B): the trial's own strip fitted to
+ * its compression and hold (and shear frames before the snap, when refreshed), its snap with a
+ * 1-sigma band, its regime and the probability of the other one, the fitted parameters with their
+ * standard errors (fit_json), or the named reason the fit failed (fit_failure). NULL = no fit. */
+static const char schema_v9[] =
+    "ALTER TABLE trials ADD COLUMN snap_dw_calibrated REAL;"
+    "ALTER TABLE trials ADD COLUMN snap_sd_calibrated REAL CHECK (snap_sd_calibrated >= 0);"
+    "ALTER TABLE trials ADD COLUMN regime_calibrated TEXT"
+    " CHECK (regime_calibrated IN ('symmetric','asymmetric','no snap'));"
+    "ALTER TABLE trials ADD COLUMN p_other_calibrated REAL"
+    " CHECK (p_other_calibrated >= 0 AND p_other_calibrated <= 1);"
+    "ALTER TABLE trials ADD COLUMN fit_json TEXT CHECK (fit_json IS NULL OR json_valid(fit_json));"
+    "ALTER TABLE trials ADD COLUMN fit_failure TEXT;"
+    "PRAGMA user_version = 9;";
+
 typedef struct store_migration {
     int version;      /* user_version after the step */
     const char *what; /* for reasons */
@@ -222,6 +237,7 @@ static const store_migration migrations[] = {
     {6, "video file size per trial", schema_v6},
     {7, "the crease model of a prediction", schema_v7},
     {8, "specimen states and the queue", schema_v8},
+    {9, "the calibrated prediction per trial", schema_v9},
 };
 #define N_MIGRATIONS (sizeof migrations / sizeof migrations[0])
 _Static_assert(sizeof migrations / sizeof migrations[0] == STORE_SCHEMA_VERSION,
