@@ -14,7 +14,8 @@
  *   trial_session.h      one trial from request to stored result, on its own thread
  *   trial_replay.h       a recording through the same pipeline again
  *   replay_job.h         a replay on a thread of its own inside ribbond
- * Used inside the room only: trial_prediction.h (the prediction beside a trial),
+ * Used inside the room only: trial_prediction.h (the prediction beside a trial), trial_calibrate.h
+ * (the fit beside a trial),
  * trial_camera_setup.h, trial_specimen.h, trial_config_text.h, trial_publish.h (the session's hook
  * into the live page's bus). */
 #ifndef RIBBON_TRIAL_H
