@@ -14,6 +14,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
 enum { JOB_RUNNING = 0, JOB_DONE, JOB_ABANDONED };
 
@@ -218,6 +221,9 @@ static void job_free(calib_job *j)
 static void *job_main(void *arg)
 {
     calib_job *j = arg;
+    /* Below the trial's own threads (rig mode's capture, tracker, poller share the cores): Linux
+     * gives a thread its own niceness (setpriority on its thread id), as the transcoder does. */
+    setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), TRIAL_CALIBRATE_NICE);
     trial_calibrate_compute(&j->scene, j->keys, j->obs, j->nobs_before, j->nobs_shear, &j->cancel, &j->res);
     int expected = JOB_RUNNING;
     if (!atomic_compare_exchange_strong(&j->state, &expected, JOB_DONE)) job_free(j); /* abandoned */

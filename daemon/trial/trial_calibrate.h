@@ -39,6 +39,7 @@
                                               solve per evaluation) */
 #define TRIAL_CALIBRATE_MAX_SHEAR_OBS 40   /* the same for the shear frames of a refresh */
 #define TRIAL_CALIBRATE_ABORT_CAP_S 2.0    /* s of wall time an aborted trial waits for its worker */
+#define TRIAL_CALIBRATE_NICE 10            /* the worker's niceness (the trial's threads come first) */
 #define TRIAL_CALIBRATE_PRIOR_ANGLE_DEG 10.0 /* prior width of each crease angle around the scene's */
 
 typedef struct trial_calibrated {
