@@ -160,10 +160,13 @@ void trial_calibrate_compute(const rod_scene *sc, const char *keys, const rod_fi
     }
     /* The scene's values are the start and the centre of a weak prior on the crease angles. */
     o.prior_sigma[ROD_FIT_ANGLE_LEFT] = o.prior_sigma[ROD_FIT_ANGLE_RIGHT] = TRIAL_CALIBRATE_PRIOR_ANGLE_DEG;
+    o.cancel = cancel; /* the fit stops at its next evaluation when the trial ends early */
     char why[320] = "";
     rod_status st = rod_fit_run(sc, obs, nobs, &o, &r->fit, why, sizeof why);
     if (st != ROD_OK) {
-        if (!strncmp(why, "too few observations", 20))
+        if (cancel && atomic_load(cancel))
+            failed(r, "cancelled", "cancelled: the trial ended while the fit ran");
+        else if (!strncmp(why, "too few observations", 20))
             failed(r, "too_few_frames", "too few frames: %s", why);
         else
             failed(r, "fit_failed", "the fit failed: %s", why);

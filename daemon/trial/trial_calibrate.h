@@ -19,11 +19,12 @@
  * prediction_failed, cancelled, after_snap, thread. A fitted strip that does not snap before protocol.shear_max
  * is a prediction (ok, snapped = 0), not a failure. The trial goes on; the scene's prediction is kept.
  *
- * The worker cannot be interrupted inside a fit or a prediction (both are capped: the fit's
- * iterations, the predictor's steps), so the end of the trial waits for a running worker at most
- * def.cap_s of wall time (TRIAL_CALIBRATE_ABORT_CAP_S after an abort, which skips the prediction
- * when the fit is still running) and then leaves it to free itself, saying so in an event. The
- * worker touches nothing but its own copy of the data. */
+ * An abort or a failure cancels the worker: the fit stops at its next evaluation (rod_fit_opts.
+ * cancel) and the prediction is skipped; a prediction already running cannot be interrupted (it is
+ * capped: the predictor's steps, 1 + 2 p of them). So the end of the trial waits for a running
+ * worker at most def.cap_s of wall time (TRIAL_CALIBRATE_ABORT_CAP_S after an abort or a
+ * failure), after the rails stopped, and only past that leaves it to free itself, saying so in an
+ * event. The worker touches nothing but its own copy of the data. */
 #ifndef RIBBON_DAEMON_TRIAL_CALIBRATE_H
 #define RIBBON_DAEMON_TRIAL_CALIBRATE_H
 
@@ -38,7 +39,8 @@
                                               (evenly thinned: each observation costs a static
                                               solve per evaluation) */
 #define TRIAL_CALIBRATE_MAX_SHEAR_OBS 40   /* the same for the shear frames of a refresh */
-#define TRIAL_CALIBRATE_ABORT_CAP_S 2.0    /* s of wall time an aborted trial waits for its worker */
+#define TRIAL_CALIBRATE_ABORT_CAP_S 10.0   /* s of wall time an aborted trial waits for its worker
+                                              (a band's predictions under load; a fit stops at once) */
 #define TRIAL_CALIBRATE_NICE 10            /* the worker's niceness (the trial's threads come first) */
 #define TRIAL_CALIBRATE_PRIOR_ANGLE_DEG 10.0 /* prior width of each crease angle around the scene's */
 

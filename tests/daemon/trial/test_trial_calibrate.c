@@ -6,15 +6,16 @@
  *      the strip's own predicted snap than the scene's prediction is, inside 3 sigma of it.
  *   2. compute_bad_input: too few frames, the lower state, an unknown fit key, a key the scene
  *      cannot fit, frames no parameter set fits (misfit), frames that ask for an angle beyond the
- *      bounds (at_bound): each a named failure with no number.
+ *      bounds (at_bound), a cancelled fit (stopped at its first evaluation): each a named failure
+ *      with no number.
  *   3. session_mock_trial: a whole mock trial (config/mock.ini's rig: mock rails on a virtual
  *      clock, the [twin] strip filmed and tracked) with a short shear: the fit starts when the
  *      hold ends, lands (an event says when, before or after the shear started), refreshes during
  *      the shear, and the trial's row holds snap_dw_calibrated with its band and regime and the
  *      fit's parameters; an unknown fit key is stored as the trial's named fit failure while the
  *      trial runs to done with its scene prediction.
- *   4. session_abort_joins: a trial aborted while its fit runs ends without leaving the worker
- *      behind past its cap (the end's event says which way it went). */
+ *   4. session_abort_joins: a trial aborted while its fit runs ends with the worker cancelled and
+ *      joined (the process's threads back to their count) well within the abort cap. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -162,6 +163,17 @@ static void compute_bad_input(void **state)
     rod_fit_obs far[NHOLD];
     hold_frames(&sc, u, far, NHOLD);
     expect_failure(&sc, "", far, NHOLD, "at_bound");
+    /* Cancelled (the trial ended): the fit stops at its first evaluation, nothing predicted. */
+    atomic_int stop;
+    atomic_init(&stop, 1);
+    trial_calibrated r;
+    memset(&r, 0, sizeof r);
+    trial_calibrate_compute(&sc, "", obs, NHOLD, 0, &stop, &r);
+    printf("cancelled      -> %s: %s (%d evaluations, %.3f s)\n", r.reason_key, r.reason, r.fit.evaluations, r.wall_s);
+    assert_false(r.ok);
+    assert_string_equal(r.reason_key, "cancelled");
+    assert_int_equal(r.fit.evaluations, 0);
+    assert_true(isnan(r.snap_dw));
 }
 
 /* ---- whole mock trials through the session ---------------------------------------------------- */
@@ -258,8 +270,12 @@ static void session_mock_trial(void **state)
     assert_int_equal(events_with(t, "calibration: fitting", NULL, 0), 1);
     assert_true(events_with(t, "calibrated prediction fit 0", last, sizeof last) == 1);
     assert_true(strstr(last, "after the shear started") || strstr(last, "before the shear started"));
-    int refreshes = events_with(t, "calibrated prediction refresh", NULL, 0);
-    assert_true(refreshes >= 1);
+    /* How many refreshes land depends on the machine (the worker runs at niceness 10 beside the
+     * virtual-clock twin): counted and printed; the stored one must be the last that landed ok. */
+    int refreshes = events_with(t, "calibrated prediction refresh", last, sizeof last);
+    int last_ok = 0;
+    if (refreshes) assert_int_equal(sscanf(last, "calibrated prediction refresh %d", &last_ok), 1);
+    printf("%d refreshes landed ok, the last: refresh %d\n", refreshes, last_ok);
     assert_int_equal(events_with(t, "calibrated prediction stored", NULL, 0), 1);
     events_with(t, "failed", NULL, 0);
     events_with(t, "snap detected", NULL, 0);
@@ -287,7 +303,7 @@ static void session_mock_trial(void **state)
     assert_true(json_is_object(fit));
     assert_true(json_is_true(json_object_get(fit, "ok")));
     assert_int_equal(json_array_size(json_object_get(fit, "parameters")), 2);
-    assert_true(json_integer_value(json_object_get(fit, "refresh")) >= 1); /* the last before the snap */
+    assert_int_equal(json_integer_value(json_object_get(fit, "refresh")), last_ok); /* the last before the snap */
     /* The scene's prediction is kept beside it. */
     assert_true(json_is_number(json_object_get(t, "snap_dw_predicted")));
     json_decref(t);
@@ -341,7 +357,7 @@ static void session_abort_joins(void **state)
     printf("aborted in %s; joined %.2f s after the abort; threads %d before, %d after\n",
            trial_state_name(ss.state), waited, before, after);
     assert_int_equal(r.final, TRIAL_ABORTED);
-    assert_true(waited < TRIAL_CALIBRATE_ABORT_CAP_S + 10.0);
+    assert_true(waited < TRIAL_CALIBRATE_ABORT_CAP_S);
     assert_int_equal(after, before);
     json_t *t = trial_json("abort.db", id);
     int said = events_with(t, "calibrat", NULL, 0);
