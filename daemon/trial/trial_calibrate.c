@@ -23,6 +23,7 @@ enum { JOB_RUNNING = 0, JOB_DONE, JOB_ABANDONED };
 typedef struct calib_job {
     atomic_int state;
     atomic_int cancel;
+    int nice;
     pthread_t thread;
     rod_scene scene;
     char keys[256];
@@ -226,7 +227,7 @@ static void *job_main(void *arg)
     calib_job *j = arg;
     /* Below the trial's own threads (rig mode's capture, tracker, poller share the cores): Linux
      * gives a thread its own niceness (setpriority on its thread id), as the transcoder does. */
-    setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), TRIAL_CALIBRATE_NICE);
+    if (j->nice > 0) setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), j->nice);
     trial_calibrate_compute(&j->scene, j->keys, j->obs, j->nobs_before, j->nobs_shear, &j->cancel, &j->res);
     int expected = JOB_RUNNING;
     if (!atomic_compare_exchange_strong(&j->state, &expected, JOB_DONE)) job_free(j); /* abandoned */
@@ -361,6 +362,7 @@ static void launch(trial_calibrate *c, double t, int refresh)
         return;
     }
     j->scene = c->def.scene;
+    j->nice = c->def.nice;
     snprintf(j->keys, sizeof j->keys, "%s", c->def.keys);
     j->obs = obs;
     j->nobs_before = thin_into(obs, &c->before, TRIAL_CALIBRATE_MAX_HOLD_OBS);

@@ -41,7 +41,7 @@
 #define TRIAL_CALIBRATE_MAX_SHEAR_OBS 40   /* the same for the shear frames of a refresh */
 #define TRIAL_CALIBRATE_ABORT_CAP_S 10.0   /* s of wall time an aborted trial waits for its worker
                                               (a band's predictions under load; a fit stops at once) */
-#define TRIAL_CALIBRATE_NICE 10            /* the worker's niceness (the trial's threads come first) */
+#define TRIAL_CALIBRATE_NICE 10            /* the worker's niceness in rig mode (the trial's threads first) */
 #define TRIAL_CALIBRATE_PRIOR_ANGLE_DEG 10.0 /* prior width of each crease angle around the scene's */
 
 typedef struct trial_calibrated {
@@ -70,6 +70,9 @@ typedef struct trial_calibrate_def {
                                and the hinge stiffness when the scene's creases are compliant */
     double refresh_s;       /* trial time between refreshes in the shear; 0 = no refresh */
     double cap_s;           /* wall time the trial's end waits for a running worker */
+    int nice;               /* the worker's niceness: TRIAL_CALIBRATE_NICE in rig mode, where the
+                               trial's real-time threads share the cores; 0 in mock mode, whose
+                               virtual clock runs the twin flat out and would starve it */
     /* The trial's event sink (the runner's), and the landing report; both on the runner's thread. */
     int (*event)(void *user, double t_s, const char *kind, const char *message);
     void (*landed)(void *user, const trial_calibrated *r);

@@ -655,6 +655,7 @@ static void session_open_calibrate(trial_session *s, session_parts *p)
     d.scene = p->pred;
     snprintf(d.keys, sizeof d.keys, "%s", s->cfg.sim.fit_keys);
     d.refresh_s = s->cfg.sim.fit_refresh_s;
+    d.nice = s->cfg.mode == RIG_MODE_RIG ? TRIAL_CALIBRATE_NICE : 0;
     d.event = calib_event;
     d.landed = calibrated_landed;
     d.user = s;
