@@ -393,16 +393,21 @@ static int teardown(void **state)
     return system(cmd) == 0 ? 0 : -1;
 }
 
+/* `test_trial_calibrate session` runs the whole mock trials (3, 4) only; without an argument, the
+ * fit's own tests (1, 2), seconds in either build. */
 int main(int argc, char **argv)
 {
-    (void)argc;
-    (void)argv;
     gsl_set_error_handler_off();
+    if (argc > 1 && !strcmp(argv[1], "session")) {
+        const struct CMUnitTest session[] = {
+            cmocka_unit_test(session_mock_trial),
+            cmocka_unit_test(session_abort_joins),
+        };
+        return cmocka_run_group_tests(session, setup, teardown);
+    }
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(compute_recovers_strip),
         cmocka_unit_test(compute_bad_input),
-        cmocka_unit_test(session_mock_trial),
-        cmocka_unit_test(session_abort_joins),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
