@@ -87,8 +87,8 @@ demo: build
 # on a pty, the twin filmed by a GigE Vision camera on 127.0.0.1), ribbond runs one trial on
 # config/rig-rehearsal.ini in real time (about 80 s), then the pipeline's counts and the
 # snap-to-stop latency are printed from the trial's events, and the twin's own snap (ribbon-rigsim's
-# "twin truth" line: the strip of the rig file's [twin]) beside the measured and predicted one, with
-# their differences. The store and videos go to the working
+# "twin truth" line: the strip of the rig file's [twin]) beside the measured, predicted and
+# calibrated one (docs/calibration.md "In every trial"), with their differences. The store and videos go to the working
 # directory (ribbon-rehearsal.db, ribbon-rehearsal-videos/); the pty, calibration and truth log to
 # a temporary directory.
 REHEARSAL_RIG ?= config/rig-rehearsal.ini
@@ -117,10 +117,12 @@ rehearsal: build
 	sed -n 's/^twin: \(N = .*\)/  twin       (ribbon-rigsim) \1/p' $$dir/rigsim.log; \
 	awk -v m="$$(sed -n 's/.*measured   snap Delta W = \([0-9.]*\).*/\1/p' $$dir/trial.txt)" \
 	    -v p="$$(sed -n 's/.*predicted  snap Delta W = \([0-9.]*\).*/\1/p' $$dir/trial.txt)" \
+	    -v c="$$(sed -n 's/.*calibrated snap Delta W = \([0-9.]*\).*/\1/p' $$dir/trial.txt)" \
 	  '/^twin truth: snap Delta W = / { t = $$7 + 0; r = $$9; \
 	    printf "  twin truth snap Delta W = %.5f  regime %s\n", t, r; \
 	    if (m != "") printf "  measured - twin truth   %+.5f (%+.2f%%)\n", m - t, 100 * (m - t) / t; \
-	    if (p != "") printf "  predicted - twin truth  %+.5f (%+.2f%%)\n", p - t, 100 * (p - t) / t } \
+	    if (p != "") printf "  predicted - twin truth  %+.5f (%+.2f%%)\n", p - t, 100 * (p - t) / t; \
+	    if (c != "") printf "  calibrated - twin truth %+.5f (%+.2f%%)\n", c - t, 100 * (c - t) / t } \
 	   /^twin truth: no snap/ { print "  " $$0 }' $$dir/rigsim.log; \
 	tail -1 $$dir/rigsim.log; exit $$rc
 

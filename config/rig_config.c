@@ -233,6 +233,13 @@ static const rig_key rig_keys[] = {
     {"sim", "ladder_nodes", RIG_KEY_LIST, OFF(sim), 0, 5, 100001, 0, 0, NULL, "1",
      "39,75,147,291",
      "N of each rung, increasing; dt scales with the edge length, the finest rung at the scene's dt"},
+    {"sim", "fit", RIG_KEY_ENUM, OFF(sim.fit), 0, 0, 0, SWITCH, 0, off_on, "-", "on",
+     "the calibrated prediction: the trial's strip fitted to its own compression and hold, its snap predicted (docs/calibration.md)"},
+    {"sim", "fit_keys", RIG_KEY_TEXT, OFF(sim.fit_keys), SZ(sim.fit_keys), 1, 255, 0, 0, NULL, "-",
+     "both crease angles (and folds.hinge_stiffness when compliant)",
+     "comma-separated fit parameters; a name that is not one is the trial's named fit failure"},
+    {"sim", "fit_refresh_s", RIG_KEY_DOUBLE, OFF(sim.fit_refresh_s), 0, 0.0, 3600.0, 0, 0, NULL, "s", "0.5",
+     "trial time between refreshes of the fit during the shear (0: none)"},
 
     {"store", "path", RIG_KEY_PATH, OFF(store_path), SZ(store_path), 0, 0, OUT, ALL, NULL, "-",
      "required", "SQLite database, relative to rig.outputs"},
@@ -1467,6 +1474,8 @@ static void config_defaults(rig_config *cfg)
     cfg->detect.load_jump = 0.5;
     cfg->sim.target_error = 0.01;
     cfg->sim.fast = true;
+    cfg->sim.fit = true;
+    cfg->sim.fit_refresh_s = 0.5;
     static const int ladder[] = {39, 75, 147, 291};
     for (int i = 0; i < 4; i++) cfg->sim.ladder_nodes[i] = ladder[i];
     cfg->sim.n_ladder = 4;

@@ -158,6 +158,9 @@ typedef struct rig_sim {
     int ladder_nodes[RIG_LADDER_MAX]; /* N of each rung, increasing */
     int n_ladder;
     bool explicit_resolution;        /* derived: nodes or dt set, target_error not used */
+    bool fit;                        /* the calibrated prediction beside each trial (issue 32 B) */
+    char fit_keys[256];              /* comma-separated fit keys; "" = the default set */
+    double fit_refresh_s;            /* s of trial time between refreshes in the shear; 0 = none */
 } rig_sim;
 
 typedef struct rig_api {

@@ -264,6 +264,7 @@ typedef struct fit_ctx {
     double *last_f;              /* last good residuals */
     double *cache_x, *cache_J;   /* x of the cached Jacobian, its weighted rows */
     int cached, evaluations, failures;
+    int cancelled;               /* o->cancel was seen set */
     char why[256];
 } fit_ctx;
 
@@ -283,6 +284,10 @@ static int eval_fj(const gsl_vector *x, fit_ctx *c, gsl_vector *f, gsl_matrix *J
     x_to_u(c, x, u);
     int use[ROD_FIT_NKEYS] = {0};
     for (int i = 0; i < c->nfit; i++) use[c->key[i]] = 1;
+    if (c->o->cancel && atomic_load(c->o->cancel)) {
+        c->cancelled = 1;
+        return GSL_EBADFUNC; /* stops the driver */
+    }
     c->evaluations++;
     char why[256];
     rod_status st = rod_fit_model_eval(c->m, u, use, c->y, c->jac, why, sizeof why);
@@ -524,6 +529,7 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
     }
     /* At the scene's values first: a model that fails there is the caller's to know. */
     if (eval_fj(x, &c, NULL, NULL) != GSL_SUCCESS || c.failures) {
+        if (c.cancelled) goto cancelled;
         snprintf(why, why_len, "the scene's own strip: %s", c.why);
         st = ROD_ERR_BRANCH_LOST;
         goto done;
@@ -553,6 +559,7 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
     if (gs == GSL_SUCCESS) gs = gsl_multifit_nlinear_driver((size_t)o->max_iterations, 1e-8, 1e-10, 1e-10, NULL, NULL,
                                                             &info, w);
     res->iterations = (int)gsl_multifit_nlinear_niter(w);
+    if (c.cancelled) goto cancelled;
     if (c.failures > FAIL_CAP) {
         snprintf(why, why_len, "the model failed at %d trial parameter sets (last: %s)", c.failures, c.why);
         st = ROD_ERR_BRANCH_LOST;
@@ -590,6 +597,10 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
     }
     res->model_failures = c.failures;
     st = ROD_OK;
+    goto done;
+cancelled:
+    snprintf(why, why_len, "cancelled");
+    st = ROD_ERR_TIME_LIMIT;
 done:
     res->evaluations = c.evaluations;
     res->wall_s = now_s() - t0;

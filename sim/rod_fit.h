@@ -24,6 +24,7 @@
 #ifndef RIBBON_SIM_ROD_FIT_H
 #define RIBBON_SIM_ROD_FIT_H
 
+#include <stdatomic.h>
 #include <stddef.h>
 
 #include "rod_fit_param.h"
@@ -46,6 +47,9 @@ typedef struct rod_fit_opts {
     int min_obs;                     /* fewest observations accepted (>= fitted parameters + 1) */
     double misfit;                   /* RMS residual (in units of the noise) above which no
                                         parameter set fits these data */
+    const atomic_int *cancel;        /* NULL, or non-zero stops the fit at its next evaluation
+                                        (ROD_ERR_TIME_LIMIT, "cancelled"): a trial's fit
+                                        beside it (daemon/trial/trial_calibrate.c) */
 } rod_fit_opts;
 
 rod_fit_opts rod_fit_opts_default(void);

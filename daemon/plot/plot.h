@@ -83,6 +83,10 @@ typedef struct plot_trial_data {
     double snap_dw_predicted;     /* Delta W at the predicted snap; NaN = no snap */
     const char *regime_measured;  /* free text shown in the legend; NULL = unknown */
     const char *regime_predicted; /* free text shown in the legend; NULL = unknown */
+    /* The calibrated prediction (issue 32 B): its snap drawn as a line with its 1-sigma band
+     * shaded behind the curves; NaN = none (no band: sd NaN). */
+    double snap_dw_calibrated, snap_sd_calibrated;
+    const char *regime_calibrated; /* free text shown in the legend; NULL = unknown */
     int width_px, height_px;      /* 0 = default */
 } plot_trial_data;
 

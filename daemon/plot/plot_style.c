@@ -31,6 +31,8 @@ static const unsigned char plot_palette[PLOT_COL_COUNT][3] = {
     [PLOT_COL_SERIES_5] = {86, 180, 233},
     [PLOT_COL_SERIES_6] = {213, 94, 1}, /* one blue step off PLOT_COL_PREDICTED, so tests tell them apart */
     [PLOT_COL_CELL_NOUPPER] = {228, 212, 240},
+    [PLOT_COL_CALIBRATED] = {0, 140, 100},
+    [PLOT_COL_CALIBRATED_BAND] = {205, 235, 222},
 };
 
 void plot_style_rgb(enum plot_color c, int *r, int *g, int *b)

@@ -29,6 +29,8 @@ enum plot_color {
     PLOT_COL_SERIES_5,       /* sky blue */
     PLOT_COL_SERIES_6,       /* vermilion */
     PLOT_COL_CELL_NOUPPER,   /* pale lilac: predicted cells without a stable upper state */
+    PLOT_COL_CALIBRATED,     /* bluish green: the calibrated prediction's snap (issue 32 B) */
+    PLOT_COL_CALIBRATED_BAND, /* pale green: its 1-sigma band */
     PLOT_COL_COUNT
 };
 

@@ -14,7 +14,8 @@
  * strided, so a long video does not turn the line into a smear); predicted: vermilion dashed line.
  * Each snap is a vertical line in both panels in its curve's colour, a triangle at the top of the
  * upper panel and its value written beside it (measured above predicted, so two close snaps stay
- * readable). The A axis spans at least +-PLOT_TRIAL_A_MIN rad: a symmetric snap, whose A stays near
+ * readable). The calibrated prediction's snap (issue 32 B) is a bluish green line with its 1-sigma
+ * band shaded pale green behind the grid and the curves. The A axis spans at least +-PLOT_TRIAL_A_MIN rad: a symmetric snap, whose A stays near
  * zero, then reads as flat instead of as magnified noise.
  */
 #include "plot.h"
@@ -44,6 +45,18 @@ void plot_trial_data_default(plot_trial_data *d)
     *d = (plot_trial_data){0};
     d->snap_dw_measured = NAN;
     d->snap_dw_predicted = NAN;
+    d->snap_dw_calibrated = NAN;
+    d->snap_sd_calibrated = NAN;
+}
+
+/* The calibrated snap's 1-sigma band, shaded over the panel's height (behind the curves). */
+static void draw_band(double x, double sd, double y0, double y1)
+{
+    if (!isfinite(x) || !isfinite(sd) || !(sd > 0.0)) return;
+    PLFLT bx[4] = {x - sd, x + sd, x + sd, x - sd}, by[4] = {y0, y0, y1, y1};
+    plcol0(PLOT_COL_CALIBRATED_BAND);
+    plfill(4, bx, by);
+    plcol0(PLOT_COL_INK);
 }
 
 static plot_status check_curve(const char *name, const plot_curve *c, char *why, size_t why_len)
@@ -155,6 +168,7 @@ static void draw_panel(const trial_ctx *c, int which)
     else
         plvpor(VP_LEFT, VP_RIGHT, VP_BOT_BOTTOM, VP_BOT_TOP);
     plwind(c->x0, c->x1, y0, y1);
+    draw_band(d->snap_dw_calibrated, d->snap_sd_calibrated, y0, y1); /* behind the grid and curves */
     draw_grid(which == 0 ? "bcst" : "bcnst");
 
     plcol0(PLOT_COL_INK);
@@ -165,6 +179,7 @@ static void draw_panel(const trial_ctx *c, int which)
         plmtex("b", 3.0, 0.5, 0.5, "#gDW = dw/l");
     }
 
+    draw_snap_line(d->snap_dw_calibrated, y0, y1, PLOT_COL_CALIBRATED);
     draw_snap_line(d->snap_dw_measured, y0, y1, PLOT_COL_MEASURED);
     draw_snap_line(d->snap_dw_predicted, y0, y1, PLOT_COL_PREDICTED);
     draw_curve(&d->predicted, yp, PLOT_COL_PREDICTED, PLOT_LSTY_DASHED, false);
@@ -196,12 +211,18 @@ static plot_status trial_draw(void *vctx, char *why, size_t why_len)
         plmtex("t", 1.5, 0.5, 0.5, d->title);
 
     /* legend beside the top panel */
-    char lm[64], lp[64], lsm[64], lsp[64];
+    char lm[64], lp[64], lsm[64], lsp[64], lsc[96];
     snprintf(lm, sizeof lm, "measured (%.24s)", d->regime_measured ? d->regime_measured : "unknown");
     snprintf(lp, sizeof lp, "predicted (%.24s)", d->regime_predicted ? d->regime_predicted : "unknown");
     snprintf(lsm, sizeof lsm, "measured snap %.4f", d->snap_dw_measured);
     snprintf(lsp, sizeof lsp, "predicted snap %.4f", d->snap_dw_predicted);
-    plot_legend_entry e[6];
+    if (isfinite(d->snap_sd_calibrated))
+        snprintf(lsc, sizeof lsc, "calibrated %.4f +- %.4f (%.16s)", d->snap_dw_calibrated, d->snap_sd_calibrated,
+                 d->regime_calibrated ? d->regime_calibrated : "unknown");
+    else
+        snprintf(lsc, sizeof lsc, "calibrated %.4f (%.16s)", d->snap_dw_calibrated,
+                 d->regime_calibrated ? d->regime_calibrated : "unknown");
+    plot_legend_entry e[7];
     int n = 0;
     if (plot_series_finite(d->measured.dw, d->measured.dz, d->measured.n) > 0)
         e[n++] = (plot_legend_entry){lm, PLOT_LEGEND_KIND_LINE_SYMBOL, PLOT_COL_MEASURED, PLOT_LSTY_SOLID,
@@ -219,6 +240,8 @@ static plot_status trial_draw(void *vctx, char *why, size_t why_len)
     if (isfinite(d->snap_dw_predicted))
         e[n++] = (plot_legend_entry){lsp, PLOT_LEGEND_KIND_LINE_SYMBOL, PLOT_COL_PREDICTED, PLOT_LSTY_DOTTED, 1.5,
                                      PLOT_GLYPH_TRIANGLE_DOWN, 0.8};
+    if (isfinite(d->snap_dw_calibrated))
+        e[n++] = (plot_legend_entry){lsc, PLOT_LEGEND_KIND_LINE, PLOT_COL_CALIBRATED, PLOT_LSTY_DOTTED, 1.5, NULL, 0};
     if (!isfinite(d->snap_dw_measured))
         e[n++] = (plot_legend_entry){"no measured snap", PLOT_LEGEND_KIND_NONE, PLOT_COL_MEASURED, 0, 0, NULL, 0};
     if (!isfinite(d->snap_dw_predicted))
@@ -242,7 +265,9 @@ plot_status plot_trial_report(const char *png_path, const plot_trial_data *d, ch
         (st = check_curve("measured", &d->measured, why, why_len)) != PLOT_OK ||
         (st = check_curve("predicted", &d->predicted, why, why_len)) != PLOT_OK ||
         (st = plot_value_check("snap_dw_measured", d->snap_dw_measured, why, why_len)) != PLOT_OK ||
-        (st = plot_value_check("snap_dw_predicted", d->snap_dw_predicted, why, why_len)) != PLOT_OK)
+        (st = plot_value_check("snap_dw_predicted", d->snap_dw_predicted, why, why_len)) != PLOT_OK ||
+        (st = plot_value_check("snap_dw_calibrated", d->snap_dw_calibrated, why, why_len)) != PLOT_OK ||
+        (st = plot_value_check("snap_sd_calibrated", d->snap_sd_calibrated, why, why_len)) != PLOT_OK)
         return st;
 
     trial_ctx c = {.d = d};
@@ -252,6 +277,7 @@ plot_status plot_trial_report(const char *png_path, const plot_trial_data *d, ch
     plot_range_add(&r, d->predicted.dw, d->predicted.n);
     plot_range_add1(&r, d->snap_dw_measured);
     plot_range_add1(&r, d->snap_dw_predicted);
+    plot_range_add1(&r, d->snap_dw_calibrated);
     plot_range_axis(&r, 0.03, 0.0, 1.0, &c.x0, &c.x1);
     return plot_session_run(PLOT_DEVICE, png_path, w, h, trial_draw, &c, why, why_len);
 }

@@ -56,6 +56,19 @@ trial_err trial_report_png(store *st, int64_t id, const char *png_path, char *wh
     d.snap_dw_predicted = have_pred && p.snapped ? p.snap_dw : NAN;
     d.regime_measured = store_regime_name(t.regime_measured);
     d.regime_predicted = have_pred ? store_regime_name(p.regime) : NULL;
+    /* The calibrated prediction beside the scene's (issue 32 B), from the trial's JSON view. */
+    json_t *tj = NULL;
+    char w2[256];
+    char reg_cal[16] = "";
+    if (store_trial_json(st, id, &tj, w2, sizeof w2) == STORE_OK) {
+        json_t *c = json_object_get(tj, "snap_dw_calibrated"), *sd = json_object_get(tj, "snap_sd_calibrated");
+        if (json_is_number(c)) d.snap_dw_calibrated = json_number_value(c);
+        if (json_is_number(c) && json_is_number(sd)) d.snap_sd_calibrated = json_number_value(sd);
+        const char *rc = json_string_value(json_object_get(tj, "regime_calibrated"));
+        if (rc) snprintf(reg_cal, sizeof reg_cal, "%s", rc);
+        d.regime_calibrated = rc ? reg_cal : NULL;
+        json_decref(tj);
+    }
     plot_status ps = plot_trial_report(png_path, &d, why, why_len);
     store_curve_free(&meas);
     if (have_pred) store_prediction_free(&p);

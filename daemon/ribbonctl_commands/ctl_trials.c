@@ -187,15 +187,33 @@ static const char *prediction_failure(const json_t *t)
     return why ? why : "no reason stored";
 }
 
+/* The calibrated snap and its band as "0.40522+-0.00230" (or its failure's key, or "-"). */
+static void fmt_calibrated(char *buf, size_t n, const json_t *t)
+{
+    const json_t *v = json_object_get(t, "snap_dw_calibrated"), *sd = json_object_get(t, "snap_sd_calibrated");
+    const char *f = json_string_value(json_object_get(t, "fit_failure"));
+    if (json_is_number(v) && json_is_number(sd))
+        snprintf(buf, n, "%.5f+-%.5f", json_number_value(v), json_number_value(sd));
+    else if (json_is_number(v))
+        snprintf(buf, n, "%.5f", json_number_value(v));
+    else if (f)
+        snprintf(buf, n, "failed");
+    else if (json_is_string(json_object_get(t, "regime_calibrated")))
+        snprintf(buf, n, "no snap");
+    else
+        snprintf(buf, n, "-");
+}
+
 static void print_trial_row(const json_t *t)
 {
-    char m[32], p[32];
+    char m[32], p[32], c[48];
     fmt_num(m, sizeof m, json_object_get(t, "snap_dw_measured"));
     fmt_num(p, sizeof p, json_object_get(t, "snap_dw_predicted"));
-    printf("%5lld  %-6s  %-11s  %9s  %-10s  %9s  %-10s  %8lld\n",
+    fmt_calibrated(c, sizeof c, t);
+    printf("%5lld  %-6s  %-11s  %9s  %-10s  %9s  %-10s  %17s  %-10s  %8lld\n",
            (long long)json_integer_value(json_object_get(t, "id")), jstr(t, "mode"), jstr(t, "status"), m,
-           jstr(t, "regime_measured"), p, prediction_failure(t) ? "failed" : jstr(t, "regime_predicted"),
-           (long long)json_integer_value(json_object_get(t, "samples")));
+           jstr(t, "regime_measured"), p, prediction_failure(t) ? "failed" : jstr(t, "regime_predicted"), c,
+           jstr(t, "regime_calibrated"), (long long)json_integer_value(json_object_get(t, "samples")));
 }
 
 /* What the prediction used of the specimen: each crease's angle and position and where each came
@@ -222,13 +240,13 @@ static void print_creases(const json_t *t)
 
 static void print_header(void)
 {
-    printf("%5s  %-6s  %-11s  %9s  %-10s  %9s  %-10s  %8s\n", "id", "mode", "status", "snap_meas", "regime",
-           "snap_pred", "predicted", "samples");
+    printf("%5s  %-6s  %-11s  %9s  %-10s  %9s  %-10s  %17s  %-10s  %8s\n", "id", "mode", "status", "snap_meas",
+           "regime", "snap_pred", "predicted", "snap_cal (1 sigma)", "calibrated", "samples");
 }
 
 /* Mock mode: the twin's own snap (its "twin truth" event) and what it is (its "twin" event),
  * with the measurement's and the prediction's differences from it. Nothing for other trials. */
-static void print_twin_truth(const json_t *t, const json_t *m, const json_t *p)
+static void print_twin_truth(const json_t *t, const json_t *m, const json_t *p, const json_t *c)
 {
     json_t *evs = json_object_get(t, "events");
     const char *params = NULL, *truth = NULL;
@@ -263,6 +281,55 @@ static void print_twin_truth(const json_t *t, const json_t *m, const json_t *p)
     if (json_is_number(p))
         printf("  predicted - twin truth  %+.5f (%+.2f%%)\n", json_number_value(p) - dw,
                100.0 * (json_number_value(p) - dw) / dw);
+    if (json_is_number(c))
+        printf("  calibrated - twin truth %+.5f (%+.2f%%)\n", json_number_value(c) - dw,
+               100.0 * (json_number_value(c) - dw) / dw);
+}
+
+/* The calibrated prediction (issue 32 B): the snap of the strip fitted to the trial's own frames,
+ * its 1-sigma band, its regime and the other one's probability, which fit it is, and its
+ * difference from the measurement; or the fit's named failure. Nothing for trials without a fit. */
+static void print_calibrated(const json_t *t, const json_t *m)
+{
+    const json_t *c = json_object_get(t, "snap_dw_calibrated"), *sd = json_object_get(t, "snap_sd_calibrated");
+    const json_t *fit = json_object_get(t, "fit");
+    const char *f = json_string_value(json_object_get(t, "fit_failure"));
+    if (f) {
+        printf("  calibrated failed: %s (the scene's prediction stands)\n", f);
+        return;
+    }
+    if (!json_is_string(json_object_get(t, "regime_calibrated"))) return;
+    if (!json_is_number(c)) {
+        printf("  calibrated no snap before protocol.shear_max\n");
+        return;
+    }
+    printf("  calibrated snap Delta W = %.5f", json_number_value(c));
+    if (json_is_number(sd)) printf(" +- %.5f (1 sigma)", json_number_value(sd));
+    printf("  regime %s", jstr(t, "regime_calibrated"));
+    const json_t *po = json_object_get(t, "p_other_regime_calibrated");
+    if (json_is_number(po)) printf(", P(other) %.3g", json_number_value(po));
+    json_int_t k = json_integer_value(json_object_get(fit, "refresh"));
+    if (json_is_object(fit))
+        printf("  (%s, %lld + %lld frames)", k ? "refreshed in the shear" : "from the compression and hold",
+               (long long)json_integer_value(json_object_get(fit, "frames_before")),
+               (long long)json_integer_value(json_object_get(fit, "frames_shear")));
+    printf("\n");
+    const json_t *ps = json_object_get(fit, "parameters");
+    for (size_t i = 0; i < json_array_size(ps); i++) {
+        const json_t *q = json_array_get(ps, i);
+        const json_t *se = json_object_get(q, "se");
+        printf("    %-24s %12.6g -> %12.6g  ", jstr(q, "key"), json_number_value(json_object_get(q, "scene")),
+               json_number_value(json_object_get(q, "fitted")));
+        if (!json_is_number(se)) printf("not determined by these data\n");
+        else if (!strcmp(jstr(q, "se_kind"), "relative")) printf("+- %.3g%%\n", 100.0 * json_number_value(se));
+        else printf("+- %.3g\n", json_number_value(se));
+    }
+    if (json_is_number(m) && json_number_value(m) != 0.0) {
+        double d = json_number_value(c) - json_number_value(m);
+        printf("  calibrated - measured %+.5f (%+.2f%%", d, 100.0 * d / json_number_value(m));
+        if (json_is_number(sd) && json_number_value(sd) > 0.0) printf(", %.2f sigma", d / json_number_value(sd));
+        printf(")\n");
+    }
 }
 
 /* Measured against predicted, the line make demo shows. */
@@ -287,7 +354,8 @@ static void print_comparison(const json_t *t)
     printf("\n");
     if (json_is_number(m) && json_is_number(p) && json_number_value(p) != 0.0)
         printf("  difference %.2f%%\n", 100.0 * (json_number_value(m) - json_number_value(p)) / json_number_value(p));
-    print_twin_truth(t, m, p);
+    print_calibrated(t, m);
+    print_twin_truth(t, m, p, json_object_get(t, "snap_dw_calibrated"));
     json_t *lc = json_object_get(t, "stop_cmd_latency_s"), *ls = json_object_get(t, "stop_stand_latency_s");
     if (json_is_number(lc)) {
         printf("  snap-to-stop latency %.1f ms to the stop command", 1e3 * json_number_value(lc));

@@ -33,7 +33,7 @@
 #include <jansson.h>
 
 /* The schema version this program creates and understands (see the migration list in store.c). */
-#define STORE_SCHEMA_VERSION 10
+#define STORE_SCHEMA_VERSION 11
 
 /* Errors of the store layer; store_err_message() gives the generic text, why the specific one. */
 typedef enum store_err {
@@ -354,6 +354,18 @@ store_err store_trial_set_video(store *st, int64_t id, const char *video_path, c
  * (s, finite, >= 0); STORE_E_INVALID otherwise, the row untouched. */
 store_err store_trial_set_camera_offset(store *st, int64_t id, double offset_s, double sd_s, char *why,
                                         size_t why_len);
+/* The calibrated prediction beside the scene's (issue 32 B, store_calibrated.c): snap_dw (NaN: no
+ * snap), its 1-sigma band snap_sd and p_other (NaN: no band), regime ("symmetric", "asymmetric",
+ * "no snap"), fit_json (a JSON object: the fitted parameters with their standard errors), failure
+ * NULL. Or, failure non-NULL, the named reason the fit failed (the other fields cleared). A later
+ * call replaces an earlier one. Non-finite numbers other than NaN are refused. */
+typedef struct store_calibrated {
+    double snap_dw, snap_sd, p_other;
+    const char *regime;
+    const char *fit_json;
+    const char *failure;
+} store_calibrated;
+store_err store_trial_set_calibrated(store *st, int64_t id, const store_calibrated *c, char *why, size_t why_len);
 /* The trial's video file and its size in bytes (>= 0): the raw recording at the trial's end, then
  * the transcoded file once it is verified (trial_transcoder.h). roi (NULL: unchanged): the new
  * file's region x, y, w, h inside the full frame, written into the calibration record's "roi" in
@@ -553,6 +565,8 @@ store_err store_ladder_get(store *st, const char *scene_hash, store_ladder_rung 
  *   regime_measured, regime_predicted, samples, video_path, source_trial, specimen,
  *   created, started, ended, software_version,
  *   crease_age_s,
+ *   snap_dw_calibrated, snap_sd_calibrated (1 sigma), regime_calibrated,
+ *   p_other_regime_calibrated, fit_failure, fit (the stored fit_json or null),
  *   prediction: null or {id, status ("done" | "failed"), failure, nodes, dt, adaptive, est_error,
  *                        wall_s, imperfection, scene_hash,
  *                        creases: {angle_left_deg, angle_left_from, angle_right_deg,

@@ -18,7 +18,8 @@
     " p.status, p.failure, p.crease_angle_left_deg, p.crease_angle_left_from, p.crease_angle_right_deg,"    \
     " p.crease_angle_right_from, p.crease_position_left, p.crease_position_left_from,"                     \
     " p.crease_position_right, p.crease_position_right_from, t.video_bytes, p.crease_hinge,"               \
-    " p.crease_hinge_stiffness_nm_per_rad"                                                                  \
+    " p.crease_hinge_stiffness_nm_per_rad, t.snap_dw_calibrated, t.snap_sd_calibrated, t.regime_calibrated,"  \
+    " t.p_other_calibrated, t.fit_json, t.fit_failure"                                                     \
     " FROM trials t LEFT JOIN specimens s ON s.id = t.specimen_id"                                          \
     " LEFT JOIN predictions p ON p.id = (SELECT max(id) FROM predictions WHERE trial_id = t.id) "
 
@@ -26,7 +27,8 @@ enum { C_ID, C_MODE, C_STATUS, C_STATE, C_REASON, C_SNAPPED, C_SNAP_DW, C_REGIME
        C_CREATED, C_STARTED, C_ENDED, C_VERSION, C_SAMPLES, C_P_ID, C_P_SNAP_DW, C_P_REGIME, C_P_NODES, C_P_DT,
        C_P_ADAPTIVE, C_P_EST_ERROR, C_P_WALL_S, C_P_IMPERFECTION, C_P_HASH, C_CALIBRATION, C_STOP_CMD,
        C_STOP_STAND, C_CREASE_AGE, C_P_STATUS, C_P_FAILURE, C_P_CREASES /* 8 columns: value, source */,
-       C_VIDEO_BYTES = C_P_CREASES + 8, C_P_HINGE, C_P_HINGE_K };
+       C_VIDEO_BYTES = C_P_CREASES + 8, C_P_HINGE, C_P_HINGE_K, C_CAL_SNAP_DW, C_CAL_SNAP_SD,
+       C_CAL_REGIME, C_CAL_P_OTHER, C_CAL_FIT, C_CAL_FAILURE };
 
 static json_t *jreal(double v)
 {
@@ -102,6 +104,14 @@ static json_t *creases_object(sqlite3_stmt *s)
     return c;
 }
 
+/* The calibrated prediction's fit (fit_json, always valid JSON on the way in), or null. */
+static json_t *fit_object(sqlite3_stmt *s)
+{
+    const char *f = (const char *)sqlite3_column_text(s, C_CAL_FIT);
+    json_t *j = f ? json_loads(f, JSON_DECODE_ANY, NULL) : NULL;
+    return j ? j : json_null();
+}
+
 static json_t *trial_object(sqlite3_stmt *s)
 {
     json_t *o = json_object();
@@ -120,7 +130,12 @@ static json_t *trial_object(sqlite3_stmt *s)
               set(o, "software_version", jcol_text(s, C_VERSION)) &&
               set(o, "stop_cmd_latency_s", jcol_real(s, C_STOP_CMD)) &&
               set(o, "stop_stand_latency_s", jcol_real(s, C_STOP_STAND)) &&
-              set(o, "crease_age_s", jcol_real(s, C_CREASE_AGE));
+              set(o, "crease_age_s", jcol_real(s, C_CREASE_AGE)) &&
+              set(o, "snap_dw_calibrated", jcol_real(s, C_CAL_SNAP_DW)) &&
+              set(o, "snap_sd_calibrated", jcol_real(s, C_CAL_SNAP_SD)) &&
+              set(o, "regime_calibrated", jcol_text(s, C_CAL_REGIME)) &&
+              set(o, "p_other_regime_calibrated", jcol_real(s, C_CAL_P_OTHER)) &&
+              set(o, "fit_failure", jcol_text(s, C_CAL_FAILURE)) && set(o, "fit", fit_object(s));
     if (ok && sqlite3_column_type(s, C_P_ID) == SQLITE_NULL) {
         ok = set(o, "prediction", json_null());
     } else if (ok) {

@@ -23,7 +23,7 @@
  *                    stop_cmd_latency_s stop_stand_latency_s (v4: snap-to-stop latency) |
  *                    video_bytes (v6: the size of video_path) |
  *                    crease_age_s (v5: the creases' age at the trial) |
- *                    camera_offset_s camera_offset_sd_s (v9: measured at the shear's start)
+ *                    camera_offset_s camera_offset_sd_s (v10: measured at the shear's start)
  *   samples          (trial_id -> trials, seq) | t_s kind frame | compress_mm shear_mm |
  *                    dl dw dz a quality reason                              (WITHOUT ROWID)
  *   events           id | trial_id -> trials | t_s wall_time state kind message
@@ -238,6 +238,21 @@ static const char schema_v10[] =
     "ALTER TABLE trials ADD COLUMN camera_offset_sd_s REAL CHECK (camera_offset_sd_s >= 0);"
     "PRAGMA user_version = 10;";
 
+/* v11: the calibrated prediction beside the scene's (issue 32 B): the trial's own strip fitted to
+ * its compression and hold (and shear frames before the snap, when refreshed), its snap with a
+ * 1-sigma band, its regime and the probability of the other one, the fitted parameters with their
+ * standard errors (fit_json), or the named reason the fit failed (fit_failure). NULL = no fit. */
+static const char schema_v11[] =
+    "ALTER TABLE trials ADD COLUMN snap_dw_calibrated REAL;"
+    "ALTER TABLE trials ADD COLUMN snap_sd_calibrated REAL CHECK (snap_sd_calibrated >= 0);"
+    "ALTER TABLE trials ADD COLUMN regime_calibrated TEXT"
+    " CHECK (regime_calibrated IN ('symmetric','asymmetric','no snap'));"
+    "ALTER TABLE trials ADD COLUMN p_other_calibrated REAL"
+    " CHECK (p_other_calibrated >= 0 AND p_other_calibrated <= 1);"
+    "ALTER TABLE trials ADD COLUMN fit_json TEXT CHECK (fit_json IS NULL OR json_valid(fit_json));"
+    "ALTER TABLE trials ADD COLUMN fit_failure TEXT;"
+    "PRAGMA user_version = 11;";
+
 typedef struct store_migration {
     int version;      /* user_version after the step */
     const char *what; /* for reasons */
@@ -255,6 +270,7 @@ static const store_migration migrations[] = {
     {8, "specimen states and the queue", schema_v8},
     {9, "the planner's proposals", schema_v9},
     {10, "the camera's measured time offset per trial", schema_v10},
+    {11, "the calibrated prediction per trial", schema_v11},
 };
 #define N_MIGRATIONS (sizeof migrations / sizeof migrations[0])
 _Static_assert(sizeof migrations / sizeof migrations[0] == STORE_SCHEMA_VERSION,

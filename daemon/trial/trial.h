@@ -16,7 +16,8 @@
  *   replay_job.h         a replay on a thread of its own inside ribbond
  *   trial_config_text.h  the configuration text stored with a trial, and its scene read back
  * Used inside the room only: trial_prediction.h (the prediction beside a trial),
- * trial_camera_setup.h, trial_specimen.h, trial_publish.h (the session's hook
+ * trial_camera_setup.h, trial_calibrate.h (the fit beside a trial),
+ * trial_specimen.h, trial_publish.h (the session's hook
  * into the live page's bus). */
 #ifndef RIBBON_TRIAL_H
 #define RIBBON_TRIAL_H

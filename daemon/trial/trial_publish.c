@@ -111,3 +111,25 @@ void trial_publish_stored(live_bus *b, int64_t trial_id, trial_state final)
              trial_state_name(final));
     live_bus_publish(b, m, 0);
 }
+
+void trial_publish_calibrated(live_bus *b, int64_t trial_id, const trial_calibrated *r)
+{
+    if (!b || !r) return;
+    char m[1024], s[32], sd[32], p[32], c[32], t[32], w[700];
+    if (r->ok)
+        snprintf(m, sizeof m,
+                 "{\"type\":\"calibrated\",\"trial\":%lld,\"ok\":true,\"refresh\":%d,\"t\":%s,\"dw_cut\":%s,"
+                 "\"snapped\":%s,\"snap_dw\":%s,\"snap_sd\":%s,\"regime\":\"%s\",\"p_other\":%s}",
+                 (long long)trial_id, r->refresh, live_num(t, sizeof t, r->t_landed), live_num(c, sizeof c, r->dw_cut),
+                 r->snapped ? "true" : "false", live_num(s, sizeof s, r->snapped ? r->snap_dw : 0.0 / 0.0),
+                 live_num(sd, sizeof sd, r->snapped ? r->snap_sd : 0.0 / 0.0),
+                 !r->snapped ? "no snap" : r->asymmetric ? "asymmetric" : "symmetric",
+                 live_num(p, sizeof p, r->snapped ? r->p_other : 0.0 / 0.0));
+    else
+        snprintf(m, sizeof m,
+                 "{\"type\":\"calibrated\",\"trial\":%lld,\"ok\":false,\"refresh\":%d,\"t\":%s,\"reason_key\":\"%s\","
+                 "\"why\":\"%s\"}",
+                 (long long)trial_id, r->refresh, live_num(t, sizeof t, r->t_landed), r->reason_key,
+                 live_str(w, sizeof w, r->reason));
+    live_bus_publish(b, m, 0);
+}

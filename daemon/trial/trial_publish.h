@@ -24,6 +24,8 @@ void trial_publish_frame(live_bus *b, const vis_frame *f, const vis_tracker *trk
 void trial_publish_frame_curve(live_bus *b, const vis_frame *f, const double *uv, size_t n, long index, double t_s);
 void trial_publish_prediction(live_bus *b, int64_t trial_id, int ok, int snapped, double snap_dw, const char *regime,
                            size_t n, const double *dw, const double *dz, const double *a, const char *why);
+/* A calibrated prediction that landed (trial_calibrate.h): the fit beside the trial, or why it failed. */
+void trial_publish_calibrated(live_bus *b, int64_t trial_id, const trial_calibrated *r);
 void trial_publish_result(live_bus *b, int64_t trial_id, const trial_result *r);
 /* The trial's final status is in the store (the page reloads the trials table and the phase
  * diagram on it: the result message comes before the store has it). */

@@ -54,6 +54,8 @@ static void r_estop_pair(trial_runner *tr)
     rails_unlock(tr);
 }
 
+void trial_runner_set_calibrate(trial_runner *tr, trial_calibrate *calib) { tr->calib = calib; }
+
 void trial_runner_set_live(trial_runner *tr, trial_capture *capture, trial_rail_poller *poller)
 {
     tr->capture = capture;
@@ -300,6 +302,8 @@ static int stop_for_snap(run_ctx *c)
 {
     if (command(c, c->tr->shear, r_stop(c->tr, c->tr->shear), "shear stop")) return 1;
     c->t_snap = c->t;
+    trial_calibrate_snap(c->tr->calib, c->t,
+                         c->tr->det.phase != SNAP_WAITING ? snap_detect_dw(&c->tr->det) : c->w_fired ? c->w_dw : NAN);
     c->t_stop_cmd = rail_clock_now(c->clock) - c->t0;
     enter(c, TRIAL_SNAPPED, c->tr->plan.post_snap_s + 30.0, NULL);
     return 0;
@@ -367,6 +371,7 @@ static int step(run_ctx *c, const trial_sample *smp)
             c->check_sum = 0.0;
             c->check_n = 0;
             vis_tracker_reset(tr->tracker); /* frames during the moves are not trusted */
+            trial_calibrate_start(tr->calib, c->t); /* on its worker: the shear does not wait */
             enter(c, TRIAL_CHECKING, 10.0 + 10.0 / p->fps, NULL);
         }
         return 0;
@@ -391,6 +396,7 @@ static int step(run_ctx *c, const trial_sample *smp)
             snap_detect_init(&tr->det, &p->snap);
             if (tr->cam_watch) trial_cam_watch_shear(tr->cam_watch, rail_clock_now(c->clock));
             if (command(c, tr->shear, r_move(tr, tr->shear, c->target_shear_mm, v), "shear move")) return 1;
+            trial_calibrate_shear_started(tr->calib, c->t);
             enter(c, TRIAL_SHEARING, p->scene.shear_max / (p->scene.shear_rate / l) * 1.5 + 30.0, NULL);
         }
         return 0;
@@ -596,6 +602,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
         }
         double now = rail_clock_now(c.clock), t_poll = tr->poller ? c.t_poll : now;
         c.t = now - c.t0;
+        trial_calibrate_tick(tr->calib, c.t, c.st == TRIAL_SHEARING);
         trial_sample smp;
         /* Fresh rail readings (not extrapolations) are stored as they come. */
         for (int k = 0; k < 2; k++) {
@@ -724,6 +731,8 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             smp.dz = m.dz;
             smp.a = rig_calib_a_sign(&p->calib) * m.a;
             out->measured_frames++;
+            if (c.st >= TRIAL_COMPRESSING && c.st <= TRIAL_SHEARING)
+                trial_calibrate_add(tr->calib, c.st == TRIAL_SHEARING, smp.dl, smp.dw, smp.dz, smp.a);
         }
         smp.quality = isfinite(m.quality) ? m.quality : 0.0;
         out->frames++;
@@ -743,6 +752,9 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
 end:
     if (tr->cam_watch) cam_watch_poll(&c, 1);
     out->duration_s = rail_clock_now(c.clock) - c.t0;
+    /* The rails stand (finish stopped them): the fit beside the trial ends, waited for at most its cap. */
+    c.t = out->duration_s;
+    trial_calibrate_end(tr->calib, c.t, out->final != TRIAL_DONE);
     out->vision_snapped = snap_detect_snapped(&tr->det);
     out->load_witnessed = c.w_fired;
     out->load_dw = c.w_fired ? c.w_dw : 0.0;

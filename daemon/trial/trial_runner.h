@@ -39,6 +39,7 @@
 #include "rail.h"
 #include "rig_calib.h"
 #include "trial_cam_watch.h"
+#include "trial_calibrate.h"
 #include "trial_capture.h"
 #include "trial_rail_poller.h"
 #include "scene.h"
@@ -185,12 +186,18 @@ typedef struct trial_runner {
     trial_capture *capture;
     trial_rail_poller *poller;
     trial_cam_watch *cam_watch;  /* the camera's offset at the shear's start (plan.cam_offset_window_s) */
+    trial_calibrate *calib;      /* the fit beside the trial (borrowed; NULL = none) */
 } trial_runner;
 
 /* Rig mode: frames come from the capture pipeline (camera timestamps, in order, never paced by the
  * loop) instead of cam.grab, and the rails' statuses from the poller thread; every rail command is
  * made under the poller's lock. Call after init, before run. */
 void trial_runner_set_live(trial_runner *tr, trial_capture *capture, trial_rail_poller *poller);
+
+/* The fit beside the trial (trial_calibrate.h): the runner feeds it the measured frames, starts it
+ * when the hold ends, polls it once a frame and ends it after the rails stopped. Call after init,
+ * before run. */
+void trial_runner_set_calibrate(trial_runner *tr, trial_calibrate *calib);
 
 /* Prepares a runner (allocates its frame). The rails, camera and tracker stay the caller's. */
 int trial_runner_init(trial_runner *tr, const trial_plan *plan, rail *compress, rail *shear,

@@ -13,6 +13,7 @@
 #include <sys/statvfs.h>
 
 #include "predict_ladder.h"
+#include "trial_calibrate.h"
 #include "rod_protocol.h"
 #include "store.h"
 #include "trial_camera_setup.h"
@@ -57,6 +58,7 @@ struct trial_session {
     int width, height;      /* frame size */
     live_bus *bus;          /* the live page's (may be NULL): published into, never waited on */
     rod_scene pred_scene;   /* the prediction's scene: the rig's with the specimen's creases */
+    trial_calibrate *calib; /* the fit beside the trial (trial_calibrate.h), NULL when off */
     trial_specimen_use use; /* which crease values it uses, where each came from */
 };
 
@@ -612,6 +614,61 @@ static trial_plan session_plan(const rig_config *cfg)
     return plan;
 }
 
+/* The calibrated prediction that landed (on the trial thread): stored in the trial's row beside
+ * the scene's prediction (a later fit replaces an earlier one; a failure replaces nothing that
+ * landed ok), published on the live bus as an event (the event itself says what it is). */
+static void calibrated_landed(void *user, const trial_calibrated *r)
+{
+    trial_session *s = user;
+    const trial_calibrated *kept = trial_calibrate_kept(s->calib);
+    if (!r->ok && kept) return; /* an earlier fit stands */
+    char fit[2048];
+    trial_calibrated_json(r, fit, sizeof fit);
+    store_calibrated c = {.snap_dw = r->ok && r->snapped ? r->snap_dw : NAN,
+                          .snap_sd = r->ok && r->snapped ? r->snap_sd : NAN,
+                          .p_other = r->ok && r->snapped ? r->p_other : NAN,
+                          .regime = !r->snapped ? "no snap" : r->asymmetric ? "asymmetric" : "symmetric",
+                          .fit_json = fit,
+                          .failure = NULL};
+    char failure[400];
+    if (!r->ok) {
+        snprintf(failure, sizeof failure, "%s: %s", r->reason_key, r->reason);
+        c.failure = failure;
+    }
+    char w[256];
+    if (store_trial_set_calibrated(s->st, s->trial_id, &c, w, sizeof w) != STORE_OK)
+        session_event(s, r->t_landed, STORE_EVENT_WARNING, w);
+    trial_publish_calibrated(s->bus, s->trial_id, r);
+}
+
+static int calib_event(void *user, double t_s, const char *kind, const char *message)
+{
+    trial_session *s = user;
+    store_event_kind k = STORE_EVENT_INFO;
+    store_event_kind_parse(kind, &k);
+    session_event(s, t_s, k, message);
+    return 0;
+}
+
+/* The fit beside the trial (sim.fit), on the prediction's scene at its resolution. A fit that
+ * cannot be set up is said in an event; the trial runs without it. */
+static void session_open_calibrate(trial_session *s, session_parts *p)
+{
+    if (!s->cfg.sim.fit) return;
+    trial_calibrate_def d = trial_calibrate_def_default();
+    d.scene = p->pred;
+    snprintf(d.keys, sizeof d.keys, "%s", s->cfg.sim.fit_keys);
+    d.refresh_s = s->cfg.sim.fit_refresh_s;
+    d.nice = s->cfg.mode == RIG_MODE_RIG ? TRIAL_CALIBRATE_NICE : 0;
+    d.event = calib_event;
+    d.landed = calibrated_landed;
+    d.user = s;
+    char w[256];
+    s->calib = trial_calibrate_new(&d, w, sizeof w);
+    if (!s->calib) session_event(s, NAN, STORE_EVENT_WARNING, w);
+    trial_runner_set_calibrate(&s->runner, s->calib);
+}
+
 /* Step 4: the runner, storing every sample (batched), event and state; the trial is running (and
  * counted for its specimen) from here. */
 static int session_run(trial_session *s, session_parts *p, char *why, size_t why_len)
@@ -626,6 +683,7 @@ static int session_run(trial_session *s, session_parts *p, char *why, size_t why
     trial_sink sink = {sink_state, sink_event, sink_sample, sink_frame, s};
     if (trial_runner_init(&s->runner, &plan, s->compress, s->shear, p->cam, p->trk, sink, why, why_len)) return -1;
     if (s->live) trial_live_attach(s->live, &s->runner);
+    session_open_calibrate(s, p);
     pthread_mutex_lock(&s->lock);
     s->runner_ready = 1;
     if (s->abort_pending) trial_runner_abort(&s->runner, s->abort_reason);
@@ -696,6 +754,8 @@ static void session_release(trial_session *s, session_parts *p)
     if (s->live) session_live_close(s);
     trial_prediction_join(s->prediction);
     s->prediction = NULL;
+    trial_calibrate_free(s->calib); /* ended by the runner; else waited for at most its abort cap */
+    s->calib = NULL;
     trial_runner_free(&s->runner);
     vis_tracker_free(p->trk);
     mock_camera_close(p->mock);

@@ -461,6 +461,32 @@ static void score_prediction(double pred, double truth, double bound)
     assert_true(fabs(pred - truth) < 0.10 * truth);
 }
 
+/* The calibrated prediction (issue 32 B, docs/calibration.md "In every trial"): mock.ini's twin
+ * has compliant creases where the scene's are rigid, a strip outside the fit's family, and the
+ * hold's frames (one state: Delta L 0.5, Delta W 0) cannot tell a crease's angle from its hinge's
+ * compliance: measured, they ask for creases about 25 deg more open than the scene's, and the
+ * fit's strip would snap further from the truth than the scene's (0.50 against 0.397). So here
+ * the closeness is not expected: the trial must store the outcome of its fit, either a
+ * calibrated prediction with a band or the fit's named failure, and print the numbers. The
+ * closeness is asserted where the twin is in the family (test_trial_calibrate's mock trial,
+ * test_rig_rehearsal's real-time trial). */
+static void score_calibrated(const json_t *t, double meas, double pred, double truth)
+{
+    json_t *c = json_object_get(t, "snap_dw_calibrated"), *sd = json_object_get(t, "snap_sd_calibrated");
+    const char *fail = json_string_value(json_object_get(t, "fit_failure"));
+    if (json_is_number(c))
+        printf("calibrated %.5f +- %.5f %s: - measured %+.5f (%+.2f%%), - twin truth %+.5f; scene's - measured "
+               "%+.5f (%+.2f%%)\n",
+               json_number_value(c), json_number_value(sd), json_string_value(json_object_get(t, "regime_calibrated")),
+               json_number_value(c) - meas, 100.0 * (json_number_value(c) - meas) / meas, json_number_value(c) - truth,
+               pred - meas, 100.0 * (pred - meas) / meas);
+    else
+        printf("calibrated: failed: %s\n", fail ? fail : "(nothing stored)");
+    assert_true(json_is_number(c) != (fail != NULL));
+    if (fail) assert_non_null(strchr(fail, ':')); /* "KEY: sentence" */
+    else assert_true(json_is_number(sd) && json_number_value(sd) > 0.0);
+}
+
 static void mock_trial_then_replay(void **state)
 {
     (void)state;
@@ -526,6 +552,7 @@ static void mock_trial_then_replay(void **state)
     assert_string_equal(rm, treg);
     assert_string_equal(rp, treg);
     score_prediction(pred, truth, bound);
+    score_calibrated(t, meas, pred, truth);
     assert_int_equal(json_integer_value(json_object_get(pr, "nodes")), 61);
     assert_true(samples > 100);
     assert_true(json_array_size(json_object_get(t, "events")) >= 7);
@@ -1144,6 +1171,13 @@ static void specimen_unequal_predicts(void **state)
     for (size_t k = 0; k < json_array_size(evs); k++) {
         json_t *e = json_array_get(evs, k);
         const char *kind = json_string_value(json_object_get(e, "kind"));
+        const char *msg = json_string_value(json_object_get(e, "message"));
+        /* The fit beside the trial (issue 32 B) is not this test's: its outcome is printed (the
+         * twin here is the rig's scene, not the specimen's creases the fit starts from). */
+        if (msg && (!strncmp(msg, "calibration", 11) || !strncmp(msg, "no calibrated prediction", 24))) {
+            printf("fit: %s: %s\n", kind ? kind : "-", msg);
+            continue;
+        }
         if (kind && (!strcmp(kind, "warning") || !strcmp(kind, "fault")))
             fprintf(stderr, "unexpected %s: %s\n", kind, json_string_value(json_object_get(e, "message")));
         assert_false(kind && (!strcmp(kind, "warning") || !strcmp(kind, "fault")));

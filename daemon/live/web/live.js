@@ -50,9 +50,13 @@ function setNum(id, v, d) {
 let view = null;
 let daemonMode = null; // from GET /status: a replay-mode daemon has no queue, and is not asked
 function resetView(trial) {
-  view = { trial, samples: 0, frames: 0, measured: 0, missed: 0, haveFrame: false, predSnap: null, measSnap: null };
+  view = { trial, samples: 0, frames: 0, measured: 0, missed: 0, haveFrame: false, predSnap: null, measSnap: null,
+    calSnap: null, calSd: null };
   $('trial-id').textContent = trial === null ? '-' : String(trial);
-  for (const id of ['v-dl', 'v-dw', 'v-dz', 'v-a', 'v-q', 'v-t', 'snap-predicted', 'snap-measured']) setNum(id, null);
+  for (const id of ['v-dl', 'v-dw', 'v-dz', 'v-a', 'v-q', 'v-t', 'snap-predicted', 'snap-measured', 'snap-calibrated',
+    'snap-calibrated-sd']) setNum(id, null);
+  $('regime-calibrated').textContent = '-';
+  $('calibration-fit').textContent = '-';
   for (const id of ['v-samples', 'v-frames', 'v-measured', 'v-unmeasured', 'v-missed', 'v-dropped', 'v-skipped'])
     $(id).textContent = '0';
   view.dropped = 0;
@@ -88,6 +92,11 @@ function makeChart(canvas, ylabel) {
         { label: 'predicted', data: [], showLine: true, pointRadius: 0, borderWidth: 2, borderColor: '#ef6c00' },
         { label: 'predicted snap', data: [], showLine: true, pointRadius: 0, borderDash: [6, 4], borderColor: '#ef6c00' },
         { label: 'measured snap', data: [], showLine: true, pointRadius: 0, borderDash: [2, 2], borderColor: '#1565c0' },
+        // The calibrated prediction (issue 32 B): its snap, and its 1-sigma band as a shaded
+        // rectangle (a closed outline filled to itself).
+        { label: 'calibrated snap', data: [], showLine: true, pointRadius: 0, borderDash: [4, 2], borderColor: '#00896a' },
+        { label: 'calibrated band (1\u03c3)', data: [], showLine: true, pointRadius: 0, borderWidth: 0,
+          backgroundColor: 'rgba(0, 137, 106, 0.18)', fill: true },
       ],
     },
     options: {
@@ -103,6 +112,10 @@ function markSnaps() {
     const lo = Math.min(...ys), hi = Math.max(...ys);
     c.data.datasets[2].data = view && view.predSnap !== null ? [{ x: view.predSnap, y: lo }, { x: view.predSnap, y: hi }] : [];
     c.data.datasets[3].data = view && view.measSnap !== null ? [{ x: view.measSnap, y: lo }, { x: view.measSnap, y: hi }] : [];
+    const cs = view ? view.calSnap : null, sd = view ? view.calSd : null;
+    c.data.datasets[4].data = cs !== null ? [{ x: cs, y: lo }, { x: cs, y: hi }] : [];
+    c.data.datasets[5].data = cs !== null && sd !== null && sd > 0
+      ? [{ x: cs - sd, y: lo }, { x: cs - sd, y: hi }, { x: cs + sd, y: hi }, { x: cs + sd, y: lo }, { x: cs - sd, y: lo }] : [];
   }
 }
 setInterval(() => {
@@ -180,6 +193,20 @@ function handle(m) {
         loadPrediction(m.trial).catch(() => {});
       } else {
         $('regime-predicted').textContent = 'failed';
+      }
+      dirty = true;
+      break;
+    case 'calibrated': // a calibrated prediction landed: the band narrows toward the snap
+      if (!view || view.trial !== m.trial) resetView(m.trial);
+      $('calibration-fit').textContent = (m.refresh ? 'refresh ' + m.refresh : 'from the hold') + (m.ok ? '' : ': ' + m.why);
+      if (m.ok) {
+        view.calSnap = m.snapped ? m.snap_dw : null;
+        view.calSd = m.snapped ? m.snap_sd : null;
+        setNum('snap-calibrated', view.calSnap);
+        setNum('snap-calibrated-sd', view.calSd);
+        $('regime-calibrated').textContent = m.regime;
+      } else if (view.calSnap === null) {
+        $('regime-calibrated').textContent = 'failed';
       }
       dirty = true;
       break;

@@ -203,6 +203,40 @@ static void test_trial_report_draws_both_curves(void **state)
     assert_true(count_color(p, COUNT_NOT_BACKGROUND, (region){0.70, 1.0, 0.1, 0.5}) > 500);
 }
 
+/* The calibrated prediction (issue 32 B): its snap line and its 1-sigma band in both panels, at
+ * the band's place on the Delta W axis; none of either without it. */
+static void test_trial_report_calibrated_band(void **state)
+{
+    (void)state;
+    static trial_arrays t;
+    plot_trial_data d;
+    fill_trial(&t, &d);
+    char why[256];
+    const char *none = out_path("trial-nocal.png");
+    assert_int_equal(plot_trial_report(none, &d, why, sizeof why), PLOT_OK);
+    assert_int_equal(count_color(none, PLOT_COL_CALIBRATED_BAND, WHOLE), 0);
+    assert_int_equal(count_color(none, PLOT_COL_CALIBRATED, WHOLE), 0);
+    d.snap_dw_calibrated = 0.30;
+    d.snap_sd_calibrated = 0.02;
+    d.regime_calibrated = "asymmetric";
+    const char *p = out_path("trial-cal.png");
+    assert_int_equal(plot_trial_report(p, &d, why, sizeof why), PLOT_OK);
+    region top = {0.11, 0.67, 0.12, 0.49}, bottom = {0.11, 0.67, 0.51, 0.90};
+    long band_top = count_color(p, PLOT_COL_CALIBRATED_BAND, top), band_bot = count_color(p, PLOT_COL_CALIBRATED_BAND, bottom);
+    long line = count_color(p, PLOT_COL_CALIBRATED, WHOLE);
+    /* The x axis spans about 0 .. 0.5 over 0.56 of the page: the band (0.28 .. 0.32) sits near 0.11
+     * + 0.56 * 0.6 of the width, and nothing of it right of 0.11 + 0.56 * 0.7. */
+    long right = count_color(p, PLOT_COL_CALIBRATED_BAND, (region){0.11 + 0.56 * 0.72, 0.67, 0.12, 0.90});
+    printf("calibrated band: %ld px (top), %ld px (bottom), %ld right of it; line and legend %ld px\n", band_top,
+           band_bot, right, line);
+    assert_true(band_top > 1000 && band_bot > 1000);
+    assert_int_equal(right, 0);
+    assert_true(line > 100);
+    d.snap_sd_calibrated = INFINITY;
+    assert_int_equal(plot_trial_report(p, &d, why, sizeof why), PLOT_ERR_ARG);
+    assert_non_null(strstr(why, "snap_sd_calibrated"));
+}
+
 static void test_trial_report_custom_size_and_defaults(void **state)
 {
     (void)state;
@@ -918,6 +952,7 @@ int main(void)
     }
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_trial_report_draws_both_curves),
+        cmocka_unit_test(test_trial_report_calibrated_band),
         cmocka_unit_test(test_trial_report_custom_size_and_defaults),
         cmocka_unit_test(test_trial_report_nan_is_a_gap),
         cmocka_unit_test(test_trial_report_long_series),

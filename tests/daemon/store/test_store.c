@@ -1221,6 +1221,69 @@ static void test_trial_latency(void **state)
     store_close(st);
 }
 
+/* v11: a trial's calibrated prediction (issue 32 B): null until set; a band, a regime and the fit's
+ * JSON stored and read back in the JSON view; NaN is null; a failure clears the numbers and keeps
+ * its reason; infinite numbers, an unknown regime, invalid JSON and an empty reason refused
+ * without touching the row; a later call replaces an earlier one. */
+static void test_trial_calibrated(void **state)
+{
+    fixture *f = *state;
+    store *st;
+    OK(store_open(f->db, &st, why, sizeof why));
+    store_trial_def d = store_trial_def_default();
+    d.mode = STORE_MODE_MOCK;
+    d.created_wall_s = T0;
+    int64_t id;
+    OK(store_trial_create(st, &d, &id, why, sizeof why));
+    json_t *j = NULL;
+    OK(store_trial_json(st, id, &j, why, sizeof why));
+    assert_true(json_is_null(json_object_get(j, "snap_dw_calibrated")) && json_is_null(json_object_get(j, "fit")) &&
+                json_is_null(json_object_get(j, "fit_failure")) && json_is_null(json_object_get(j, "regime_calibrated")));
+    json_decref(j);
+    store_calibrated c = {.snap_dw = 0.40522, .snap_sd = 0.0023, .p_other = 0.0, .regime = "asymmetric",
+                          .fit_json = "{\"refresh\":3,\"parameters\":[]}", .failure = NULL};
+    OK(store_trial_set_calibrated(st, id, &c, why, sizeof why));
+    OK(store_trial_json(st, id, &j, why, sizeof why));
+    NEAR(json_real_value(json_object_get(j, "snap_dw_calibrated")), 0.40522, 0);
+    NEAR(json_real_value(json_object_get(j, "snap_sd_calibrated")), 0.0023, 0);
+    assert_string_equal(json_string_value(json_object_get(j, "regime_calibrated")), "asymmetric");
+    assert_int_equal(json_integer_value(json_object_get(json_object_get(j, "fit"), "refresh")), 3);
+    json_decref(j);
+    store_calibrated bad = c;
+    bad.snap_sd = INFINITY;
+    assert_int_equal(store_trial_set_calibrated(st, id, &bad, why, sizeof why), STORE_E_INVALID);
+    assert_non_null(strstr(why, "snap_sd_calibrated"));
+    bad = c;
+    bad.regime = "sideways";
+    assert_int_equal(store_trial_set_calibrated(st, id, &bad, why, sizeof why), STORE_E_INVALID);
+    bad = c;
+    bad.fit_json = "{not json";
+    assert_true(store_trial_set_calibrated(st, id, &bad, why, sizeof why) != STORE_OK);
+    bad = c;
+    bad.failure = "";
+    assert_int_equal(store_trial_set_calibrated(st, id, &bad, why, sizeof why), STORE_E_INVALID);
+    OK(store_trial_json(st, id, &j, why, sizeof why));
+    NEAR(json_real_value(json_object_get(j, "snap_dw_calibrated")), 0.40522, 0); /* unchanged */
+    json_decref(j);
+    store_calibrated nb = c; /* no band: NaN is null */
+    nb.snap_sd = nb.p_other = NAN;
+    OK(store_trial_set_calibrated(st, id, &nb, why, sizeof why));
+    OK(store_trial_json(st, id, &j, why, sizeof why));
+    assert_true(json_is_null(json_object_get(j, "snap_sd_calibrated")));
+    assert_true(json_is_null(json_object_get(j, "p_other_regime_calibrated")));
+    json_decref(j);
+    store_calibrated fl = {.snap_dw = 0.4, .snap_sd = 0.1, .p_other = 0.5, .regime = "symmetric",
+                           .fit_json = NULL, .failure = "misfit: no parameter set fits these frames"};
+    OK(store_trial_set_calibrated(st, id, &fl, why, sizeof why));
+    OK(store_trial_json(st, id, &j, why, sizeof why));
+    assert_true(json_is_null(json_object_get(j, "snap_dw_calibrated")) &&
+                json_is_null(json_object_get(j, "regime_calibrated")) && json_is_null(json_object_get(j, "fit")));
+    assert_string_equal(json_string_value(json_object_get(j, "fit_failure")), "misfit: no parameter set fits these frames");
+    json_decref(j);
+    assert_int_equal(store_trial_set_calibrated(st, id + 99, &c, why, sizeof why), STORE_E_NOTFOUND);
+    store_close(st);
+}
+
 /* v10: the camera's time offset measured at the shear's start: NULL until set, stored with its
  * standard deviation; a NaN offset or a negative deviation refused without touching the row. */
 static void test_trial_camera_offset(void **state)
@@ -1533,6 +1596,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_trial_curve, setup, teardown),
         cmocka_unit_test_setup_teardown(test_trial_latency, setup, teardown),
         cmocka_unit_test_setup_teardown(test_trial_camera_offset, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_trial_calibrated, setup, teardown),
         cmocka_unit_test_setup_teardown(test_trial_video_file, setup, teardown),
         cmocka_unit_test_setup_teardown(test_json, setup, teardown),
         cmocka_unit_test_setup_teardown(test_csv, setup, teardown),

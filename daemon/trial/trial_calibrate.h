@@ -1,0 +1,125 @@
+/* trial_calibrate.h: the fit beside a trial (issue 32 B): the trial's own strip fitted to what the
+ * camera measured before the shear, and its snap predicted with the fitted strip, while the trial
+ * goes on.
+ *
+ * The runner feeds every measured frame (Delta L, Delta W, Delta Z, A) and says when the shear
+ * ended; from then on a worker thread fits the prediction's scene (the specimen-mapped scene,
+ * start and prior of the fit) to the compression and hold frames (sim/rod_fit.h) and predicts the
+ * fitted strip's snap with its band (sim/rod_fit_snap.h). The shear never waits for it: the runner
+ * polls once a frame (trial_calibrate_tick), and a fit that lands is reported once through the
+ * def's `landed` callback on the runner's thread (the session stores it beside the scene's
+ * prediction and publishes it) and said in an event with the trial time it landed at and whether
+ * that was before or after the shear started. During the shear the fit is refreshed every
+ * def.refresh_s of trial time with the shear frames up to the latest, never two at once (one still
+ * running is waited for, not doubled); none starts after the snap, so the last one to land is the
+ * last one made from data before the snap.
+ *
+ * Bad input is a named failure (trial_calibrated.reason_key, and a sentence in reason), never a
+ * number: too_few_frames, lower_state, unknown_key, key_not_usable, misfit, at_bound, fit_failed,
+ * prediction_failed, cancelled, after_snap, thread. A fitted strip that does not snap before protocol.shear_max
+ * is a prediction (ok, snapped = 0), not a failure. The trial goes on; the scene's prediction is kept.
+ *
+ * An abort or a failure cancels the worker: the fit stops at its next evaluation (rod_fit_opts.
+ * cancel) and the prediction is skipped; a prediction already running cannot be interrupted (it is
+ * capped: the predictor's steps, 1 + 2 p of them). So the end of the trial waits for a running
+ * worker at most def.cap_s of wall time (TRIAL_CALIBRATE_ABORT_CAP_S after an abort or a
+ * failure), after the rails stopped, and only past that leaves it to free itself, saying so in an
+ * event. The worker touches nothing but its own copy of the data. */
+#ifndef RIBBON_DAEMON_TRIAL_CALIBRATE_H
+#define RIBBON_DAEMON_TRIAL_CALIBRATE_H
+
+#include <stdatomic.h>
+#include <stddef.h>
+
+#include "rod_fit.h"
+#include "rod_fit_snap.h"
+
+#define TRIAL_CALIBRATE_MIN_FRAMES 10      /* measured frames before the shear a fit needs */
+#define TRIAL_CALIBRATE_MAX_HOLD_OBS 40    /* frames of the compression and hold a fit uses at most
+                                              (evenly thinned: each observation costs a static
+                                              solve per evaluation) */
+#define TRIAL_CALIBRATE_MAX_SHEAR_OBS 40   /* the same for the shear frames of a refresh */
+#define TRIAL_CALIBRATE_ABORT_CAP_S 10.0   /* s of wall time an aborted trial waits for its worker
+                                              (a band's predictions under load; a fit stops at once) */
+#define TRIAL_CALIBRATE_NICE 10            /* the worker's niceness in rig mode (the trial's threads first) */
+#define TRIAL_CALIBRATE_PRIOR_ANGLE_DEG 10.0 /* prior width of each crease angle around the scene's */
+
+typedef struct trial_calibrated {
+    int ok;                 /* 1: fitted and its snap predicted; 0: failed (reason_key, reason) */
+    char reason_key[24];    /* failed: one of the names in the header comment */
+    char reason[320];       /* failed: the sentence */
+    int refresh;            /* 0: the fit from the compression and hold; k: the k-th refresh */
+    int nobs_before, nobs_shear; /* observations used (before the shear, of the shear) */
+    double dw_cut;          /* the largest Delta W among them */
+    double t_started, t_landed; /* trial time the fit started and landed (s) */
+    double t_shear;         /* trial time the shear started (s) */
+    int snapped;            /* ok: the fitted strip snaps before protocol.shear_max */
+    double snap_dw, snap_sd; /* ok and snapped: its snap Delta W and the 1-sigma band (NaN when the
+                               band could not be made) */
+    int asymmetric;
+    double p_other;         /* probability of the other regime (NaN without a band) */
+    char note[256];         /* the band's note (partial band, undetermined parameters) */
+    rod_fit_result fit;     /* the fitted values with their standard errors (valid when the fit ran) */
+    int fit_ran;
+    double wall_s;          /* the worker's wall time */
+} trial_calibrated;
+
+typedef struct trial_calibrate_def {
+    rod_scene scene;        /* the prediction's scene (start and prior), at its resolution */
+    char keys[256];         /* comma-separated fit keys (rod_fit_param.h); "" = both crease angles,
+                               and the hinge stiffness when the scene's creases are compliant */
+    double refresh_s;       /* trial time between refreshes in the shear; 0 = no refresh */
+    double cap_s;           /* wall time the trial's end waits for a running worker */
+    int nice;               /* the worker's niceness: TRIAL_CALIBRATE_NICE in rig mode, where the
+                               trial's real-time threads share the cores; 0 in mock mode, whose
+                               virtual clock runs the twin flat out and would starve it */
+    /* The trial's event sink (the runner's), and the landing report; both on the runner's thread. */
+    int (*event)(void *user, double t_s, const char *kind, const char *message);
+    void (*landed)(void *user, const trial_calibrated *r);
+    void *user;
+} trial_calibrate_def;
+
+trial_calibrate_def trial_calibrate_def_default(void);
+
+typedef struct trial_calibrate trial_calibrate;
+
+/* NULL with why when out of memory. */
+trial_calibrate *trial_calibrate_new(const trial_calibrate_def *def, char *why, size_t why_len);
+/* Waits (def.cap_s) for a worker still running, then frees. NULL is a no-op. */
+void trial_calibrate_free(trial_calibrate *c);
+
+/* A measured frame: shear = 0 for the compression and hold, 1 for the shear. */
+void trial_calibrate_add(trial_calibrate *c, int shear, double dl, double dw, double dz, double a);
+/* The hold ended at trial time t: the fit from the compression and hold starts now. */
+void trial_calibrate_start(trial_calibrate *c, double t);
+/* The shear started at trial time t (landings are said before or after it). */
+void trial_calibrate_shear_started(trial_calibrate *c, double t);
+/* Once a frame: a landed fit is reported; in the shear (shearing = 1) a refresh may start. */
+void trial_calibrate_tick(trial_calibrate *c, double t, int shearing);
+/* The snap was seen at trial time t, its onset at Delta W dw_onset (NaN: unknown): no refresh
+ * starts after it, and one whose frames reach the onset (frames of the snapping strip, taken
+ * before the detector fired) is not kept (reason_key after_snap). */
+void trial_calibrate_snap(trial_calibrate *c, double t, double dw_onset);
+/* The trial ended at trial time t (aborted = 1 after an abort or a failure): waits for a running
+ * worker (def.cap_s, TRIAL_CALIBRATE_ABORT_CAP_S when aborted), reports it, and says which fit is
+ * the one kept. */
+void trial_calibrate_end(trial_calibrate *c, double t, int aborted);
+
+/* Every call below is a no-op on NULL (a trial without the fit). */
+
+/* The last fit that landed ok (NULL: none), and the last one that landed at all. */
+const trial_calibrated *trial_calibrate_kept(const trial_calibrate *c);
+const trial_calibrated *trial_calibrate_last(const trial_calibrate *c);
+
+/* r as the JSON object stored with the trial (fit_json): which fit, its frames, the fitted
+ * parameters with their standard errors (null: not determined), the residual. 0, or -1 when out
+ * is too small (then {"truncated":true}). */
+int trial_calibrated_json(const trial_calibrated *r, char *out, size_t out_len);
+
+/* The fit and the snap of one set of observations, on the caller's thread (the worker's body;
+ * tests call it directly). keys as in the def. Fills r (ok or a named failure). cancel (may be
+ * NULL): non-zero skips the prediction. */
+void trial_calibrate_compute(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
+                             int nobs_shear, const atomic_int *cancel, trial_calibrated *r);
+
+#endif
