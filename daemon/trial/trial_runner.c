@@ -151,6 +151,7 @@ typedef struct run_ctx {
     double t_stop_cmd;    /* trial time the shear stop command returned (NaN: none) */
     int stand_noted;      /* the snap-to-stop latency has been reported */
     double t_arrival;     /* trial time this iteration's frame arrived from the camera (NaN: none) */
+    double t_picked;      /* trial time this loop took it from the capture ring (NaN: none) */
     trial_latency lat;    /* where the snap-to-stop time went (trial_latency.h) */
     int w_warned;         /* "no load" warning given */
     /* The camera's quality (rig mode, trial_capture.h). */
@@ -403,6 +404,7 @@ static int step(run_ctx *c, const trial_sample *smp)
             c->lat.onset_frame = tr->det.onset_frame;
             c->lat.t_onset = tr->det.t_onset;
             c->lat.t_det_arrival = c->t_arrival;
+            c->lat.t_picked = c->t_picked;
             /* The stop first: the event is a store write, which may wait on the disk. */
             if (stop_for_snap(c)) return 1;
             emit_event(c, "info", "snap detected at frame %ld; onset Delta W = %.5f", tr->det.detect_frame,
@@ -523,7 +525,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
     c.clock = rail_get_clock(tr->compress);
     c.t0 = rail_clock_now(c.clock);
     trial_latency_init(&c.lat, c.t0);
-    c.t_arrival = NAN;
+    c.t_arrival = c.t_picked = NAN;
     c.last_reading_c = c.last_reading_s = -1.0;
     snap_detect_init(&tr->det, &p->snap);
     char why[256] = "";
@@ -622,6 +624,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             }
             t_frame = fi.t_s;
             c.t_arrival = fi.host_t_s - c.t0;
+            c.t_picked = rail_clock_now(c.clock) - c.t0;
         } else {
             vis_status vs = tr->cam.grab(tr->cam.ctx, now, dl, dw, tr->frame, &t_frame, &ve);
             if (vs != VIS_OK) {

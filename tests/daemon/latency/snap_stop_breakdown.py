@@ -7,7 +7,8 @@ axes every 5 ms), all on CLOCK_MONOTONIC, and prints one JSON line with, in ms:
   true_snap_to_det_frame  the twin's snap (first image whose |dDeltaZ/dt| exceeds the scene's
                           snap speed) -> the detection frame's own time (the detector's frames)
   frame_to_arrival        detection frame's stamp -> its arrival on the host (transport)
-  arrival_to_decided      arrival -> the loop had tracked, stored and judged it (queue + tracker)
+  arrival_to_picked       arrival -> the trial loop took it from the ring (the loop behind)
+  picked_to_decided       -> the loop had tracked, stored and judged it (tracker, store)
   decided_to_stop_ret     the stop asked -> the stop command returned (rails' lock + write)
   stop_to_decel           stop returned -> the shear axis slows (below 95% of its speed; axes log)
   stop_to_rest            stop returned -> the shear axis at rest (axes log, 5 ms resolution)
@@ -58,11 +59,12 @@ def main(argv):
     out = {"label": opt["--label"], "status": st[0] if st else None}
     out["onset_to_det_frame"] = float(head.group(3))
     out["frame_to_arrival"] = ms("detection frame -> arrival")
-    out["arrival_to_decided"] = ms("-> decided")
+    out["arrival_to_picked"] = ms("-> picked up")
+    out["picked_to_decided"] = ms("-> decided")
     out["decided_to_stop_ret"] = ms("-> stop returned")
     out["stop_to_read"] = ms("-> rail read standing")
     out["det_to_read"] = ms("total")
-    parts = [out[k] for k in ("frame_to_arrival", "arrival_to_decided", "decided_to_stop_ret")]
+    parts = [out[k] for k in ("frame_to_arrival", "arrival_to_picked", "picked_to_decided", "decided_to_stop_ret")]
     t_stop = t_det + sum(p for p in parts if p is not None) / 1e3
     t_read = None if out["stop_to_read"] is None else t_stop + out["stop_to_read"] / 1e3
 
