@@ -9,7 +9,7 @@ void trial_latency_init(trial_latency *l, double t0_mono)
 {
     l->t0_mono = t0_mono;
     l->onset_frame = l->det_frame = -1;
-    l->t_onset = l->t_det = l->t_det_arrival = l->t_picked = l->t_decided = l->t_stop_ret = l->t_stand = NAN;
+    l->t_onset = l->t_det = l->t_det_arrival = l->t_picked = l->t_tracked = l->t_decided = l->t_stop_ret = l->t_stand = NAN;
 }
 
 double trial_latency_watch_window_s(double v_mm_s, double a_mm_s2)
@@ -40,7 +40,9 @@ const char *trial_latency_format(const trial_latency *l, char *msg, size_t len)
     double from = isfinite(l->t_det_arrival) ? l->t_det_arrival : l->t_det;
     n = span(msg, len, n, "; detection frame -> arrival", l->t_det, l->t_det_arrival);
     n = span(msg, len, n, " -> picked up", from, l->t_picked);
-    n = span(msg, len, n, " -> decided", isfinite(l->t_picked) ? l->t_picked : from, l->t_decided);
+    n = span(msg, len, n, " -> tracked", isfinite(l->t_picked) ? l->t_picked : from, l->t_tracked);
+    n = span(msg, len, n, " -> decided", isfinite(l->t_tracked) ? l->t_tracked : isfinite(l->t_picked) ? l->t_picked : from,
+             l->t_decided);
     n = span(msg, len, n, " -> stop returned", l->t_decided, l->t_stop_ret);
     n = span(msg, len, n, " -> rail read standing", l->t_stop_ret, l->t_stand);
     n = span(msg, len, n, "; total", l->t_det, l->t_stand);

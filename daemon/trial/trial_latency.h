@@ -19,7 +19,8 @@ typedef struct trial_latency {
     double t_det_arrival; /* host arrival of the detection frame (NaN: a camera without one) */
     double t_picked;     /* the trial loop took it from the capture ring (it waited there while the
                             loop was behind) */
-    double t_decided;    /* the loop had tracked, stored and judged it: the stop is asked for */
+    double t_tracked;    /* the tracker was done with it */
+    double t_decided;    /* the loop had stored and judged it: the stop is asked for */
     double t_stop_ret;   /* the stop command returned (the rails' lock waited for, command written) */
     double t_stand;      /* the first fresh shear reading standing (its own time) */
 } trial_latency;
@@ -31,7 +32,7 @@ void trial_latency_init(trial_latency *l, double t0_mono);
 double trial_latency_watch_window_s(double v_mm_s, double a_mm_s2);
 /* The breakdown as one line for the trial's events (ms, 0.1 resolution), e.g.
  * "snap-to-stop breakdown: onset frame 1203 -> detection frame 1205 (at 12.3456 s) 33.3 ms; detection frame ->
- * arrival 1.2 ms -> picked up 0.3 ms -> decided 3.8 ms -> stop returned 0.8 ms -> rail read standing 55.2 ms; total
+ * arrival 1.2 ms -> picked up 0.3 ms -> tracked 3.1 ms -> decided 0.7 ms -> stop returned 0.8 ms -> rail read standing 55.2 ms; total
  * 61.3 ms; t0_mono 1234.567890". Parts not reached print "n/a". Returns msg. */
 const char *trial_latency_format(const trial_latency *l, char *msg, size_t len);
 

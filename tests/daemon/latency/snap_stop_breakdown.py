@@ -8,7 +8,8 @@ axes every 5 ms), all on CLOCK_MONOTONIC, and prints one JSON line with, in ms:
                           snap speed) -> the detection frame's own time (the detector's frames)
   frame_to_arrival        detection frame's stamp -> its arrival on the host (transport)
   arrival_to_picked       arrival -> the trial loop took it from the ring (the loop behind)
-  picked_to_decided       -> the loop had tracked, stored and judged it (tracker, store)
+  picked_to_tracked       -> the tracker was done with it
+  tracked_to_decided      -> the loop had stored its sample and judged it (store, detector)
   decided_to_stop_ret     the stop asked -> the stop command returned (rails' lock + write)
   stop_to_decel           stop returned -> the shear axis slows (below 95% of its speed; axes log)
   stop_to_rest            stop returned -> the shear axis at rest (axes log, 5 ms resolution)
@@ -60,11 +61,13 @@ def main(argv):
     out["onset_to_det_frame"] = float(head.group(3))
     out["frame_to_arrival"] = ms("detection frame -> arrival")
     out["arrival_to_picked"] = ms("-> picked up")
-    out["picked_to_decided"] = ms("-> decided")
+    out["picked_to_tracked"] = ms("-> tracked")
+    out["tracked_to_decided"] = ms("-> decided")
     out["decided_to_stop_ret"] = ms("-> stop returned")
     out["stop_to_read"] = ms("-> rail read standing")
     out["det_to_read"] = ms("total")
-    parts = [out[k] for k in ("frame_to_arrival", "arrival_to_picked", "picked_to_decided", "decided_to_stop_ret")]
+    parts = [out[k] for k in ("frame_to_arrival", "arrival_to_picked", "picked_to_tracked", "tracked_to_decided",
+                              "decided_to_stop_ret")]
     t_stop = t_det + sum(p for p in parts if p is not None) / 1e3
     t_read = None if out["stop_to_read"] is None else t_stop + out["stop_to_read"] / 1e3
 
@@ -88,15 +91,26 @@ def main(argv):
             t = float(r["mono_s"])
             if t_stop - 0.3 <= t <= t_stop + 1.0:
                 rows.append((t, float(r["shear_mm"])))
+    # Slowing: the first 5 ms step below 95% of the shear speed; at rest: the first step with no
+    # more forward motion (a return that starts before the rest reverses instead of standing).
     v_cmd = float(opt["--v"])
     t_decel = t_rest = None
+    direction = 0.0
     for k in range(1, len(rows)):
         t, x = rows[k]
-        v = abs(x - rows[k - 1][1]) / (t - rows[k - 1][0]) if t > rows[k - 1][0] else 0.0
-        if t >= t_stop - 0.05 and t_decel is None and v < 0.95 * v_cmd:
+        dt = t - rows[k - 1][0]
+        if dt <= 0:
+            continue
+        v = (x - rows[k - 1][1]) / dt
+        if t < t_stop - 0.05:
+            if abs(v) > 0.5 * v_cmd:
+                direction = 1.0 if v > 0 else -1.0
+            continue
+        if t_decel is None and abs(v) < 0.95 * v_cmd:
             t_decel = rows[k - 1][0]
-        if t_decel is not None and t_rest is None and all(abs(rows[j][1] - x) < 1e-6 for j in range(k, min(k + 5, len(rows)))):
-            t_rest = rows[k - 1][0] if abs(rows[k - 1][1] - x) < 1e-6 else t
+        if t_decel is not None and t_rest is None and direction * v <= 1e-3:
+            t_rest = rows[k - 1][0]
+            break
     out["stop_to_decel"] = None if t_decel is None else round(1e3 * (t_decel - t_stop), 1)
     out["stop_to_rest"] = None if t_rest is None else round(1e3 * (t_rest - t_stop), 1)
     out["rest_to_read"] = None if t_rest is None or t_read is None else round(1e3 * (t_read - t_rest), 1)
