@@ -4,12 +4,20 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 
 void trial_latency_init(trial_latency *l, double t0_mono)
 {
     l->t0_mono = t0_mono;
     l->onset_frame = l->det_frame = -1;
-    l->t_onset = l->t_det = l->t_det_arrival = l->t_picked = l->t_tracked = l->t_decided = l->t_stop_ret = l->t_stand = NAN;
+    l->t_onset = l->t_det = l->t_det_arrival = l->t_picked = l->t_tracked = l->cpu_tracked = l->t_decided = l->t_stop_ret = l->t_stand = NAN;
+}
+
+double trial_latency_thread_cpu_s(void)
+{
+    struct timespec ts;
+    if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) != 0) return NAN;
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 double trial_latency_watch_window_s(double v_mm_s, double a_mm_s2)
@@ -38,13 +46,17 @@ const char *trial_latency_format(const trial_latency *l, char *msg, size_t len)
     n = span(msg, len, n, "", l->t_onset, l->t_det);
     /* Arrival is optional (a paced mock camera has none): the decision then counts from the frame. */
     double from = isfinite(l->t_det_arrival) ? l->t_det_arrival : l->t_det;
-    n = span(msg, len, n, "; detection frame -> arrival", l->t_det, l->t_det_arrival);
+    n = span(msg, len, n, "; frame -> arrival", l->t_det, l->t_det_arrival);
     n = span(msg, len, n, " -> picked up", from, l->t_picked);
     n = span(msg, len, n, " -> tracked", isfinite(l->t_picked) ? l->t_picked : from, l->t_tracked);
+    if (isfinite(l->cpu_tracked) && n < len) {
+        int c = snprintf(msg + n, len - n, " (CPU %.1f ms)", 1e3 * l->cpu_tracked);
+        n = c > 0 ? n + (size_t)c : n;
+    }
     n = span(msg, len, n, " -> decided", isfinite(l->t_tracked) ? l->t_tracked : isfinite(l->t_picked) ? l->t_picked : from,
              l->t_decided);
     n = span(msg, len, n, " -> stop returned", l->t_decided, l->t_stop_ret);
-    n = span(msg, len, n, " -> rail read standing", l->t_stop_ret, l->t_stand);
+    n = span(msg, len, n, " -> read standing", l->t_stop_ret, l->t_stand);
     n = span(msg, len, n, "; total", l->t_det, l->t_stand);
     if (n < len) snprintf(msg + n, len - n, "; t0_mono %.6f", l->t0_mono);
     return msg;

@@ -20,19 +20,23 @@ typedef struct trial_latency {
     double t_picked;     /* the trial loop took it from the capture ring (it waited there while the
                             loop was behind) */
     double t_tracked;    /* the tracker was done with it */
+    double cpu_tracked;  /* s of the loop thread's CPU the tracker took on it (wall minus this: waiting
+                            for a CPU) */
     double t_decided;    /* the loop had stored and judged it: the stop is asked for */
     double t_stop_ret;   /* the stop command returned (the rails' lock waited for, command written) */
     double t_stand;      /* the first fresh shear reading standing (its own time) */
 } trial_latency;
 
 void trial_latency_init(trial_latency *l, double t0_mono);
+/* s of CPU the calling thread has used (CLOCK_THREAD_CPUTIME_ID; NaN when unavailable). */
+double trial_latency_thread_cpu_s(void);
 /* s the poller should watch the shear after a stop from speed v (mm/s) at accel a (mm/s^2): the
  * deceleration v/a plus 0.5 s for the link and the controller (bounded, so a rail that never
  * reports standing costs only that many fast reads). */
 double trial_latency_watch_window_s(double v_mm_s, double a_mm_s2);
 /* The breakdown as one line for the trial's events (ms, 0.1 resolution), e.g.
- * "snap-to-stop breakdown: onset frame 1203 -> detection frame 1205 (at 12.3456 s) 33.3 ms; detection frame ->
- * arrival 1.2 ms -> picked up 0.3 ms -> tracked 3.1 ms -> decided 0.7 ms -> stop returned 0.8 ms -> rail read standing 55.2 ms; total
+ * "snap-to-stop breakdown: onset frame 1203 -> detection frame 1205 (at 12.3456 s) 33.3 ms; frame ->
+ * arrival 1.2 ms -> picked up 0.3 ms -> tracked 3.1 ms (CPU 2.9 ms) -> decided 0.7 ms -> stop returned 0.8 ms -> read standing 55.2 ms; total
  * 61.3 ms; t0_mono 1234.567890". Parts not reached print "n/a". Returns msg. */
 const char *trial_latency_format(const trial_latency *l, char *msg, size_t len);
 

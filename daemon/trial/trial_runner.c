@@ -153,6 +153,7 @@ typedef struct run_ctx {
     double t_arrival;     /* trial time this iteration's frame arrived from the camera (NaN: none) */
     double t_picked;      /* trial time this loop took it from the capture ring (NaN: none) */
     double t_tracked;     /* trial time the tracker was done with it (NaN: not tracked) */
+    double cpu_tracked;   /* s of this thread's CPU the tracker took on it (NaN: not tracked) */
     trial_latency lat;    /* where the snap-to-stop time went (trial_latency.h) */
     int w_warned;         /* "no load" warning given */
     /* The camera's quality (rig mode, trial_capture.h). */
@@ -407,6 +408,7 @@ static int step(run_ctx *c, const trial_sample *smp)
             c->lat.t_det_arrival = c->t_arrival;
             c->lat.t_picked = c->t_picked;
             c->lat.t_tracked = c->t_tracked;
+            c->lat.cpu_tracked = c->cpu_tracked;
             /* The stop first: the event is a store write, which may wait on the disk. */
             if (stop_for_snap(c)) return 1;
             emit_event(c, "info", "snap detected at frame %ld; onset Delta W = %.5f", tr->det.detect_frame,
@@ -527,7 +529,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
     c.clock = rail_get_clock(tr->compress);
     c.t0 = rail_clock_now(c.clock);
     trial_latency_init(&c.lat, c.t0);
-    c.t_arrival = c.t_picked = c.t_tracked = NAN;
+    c.t_arrival = c.t_picked = c.t_tracked = c.cpu_tracked = NAN;
     c.last_reading_c = c.last_reading_s = -1.0;
     snap_detect_init(&tr->det, &p->snap);
     char why[256] = "";
@@ -696,11 +698,15 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
              * points, and a frame measured against those would be a confident wrong answer. */
             memset(&m, 0, sizeof m);
             m.reason = VIS_REASON_CLAMP_NOT_FOUND;
-        } else if (vis_tracker_process(tr->tracker, tr->frame, smp.dw * l * 1000.0, &m, &ve) != VIS_OK) {
-            finish(&c, TRIAL_FAILED, "tracker: %s", ve.message);
-            break;
+        } else {
+            double cpu0 = trial_latency_thread_cpu_s();
+            if (vis_tracker_process(tr->tracker, tr->frame, smp.dw * l * 1000.0, &m, &ve) != VIS_OK) {
+                finish(&c, TRIAL_FAILED, "tracker: %s", ve.message);
+                break;
+            }
+            c.t_tracked = rail_clock_now(c.clock) - c.t0;
+            c.cpu_tracked = trial_latency_thread_cpu_s() - cpu0;
         }
-        c.t_tracked = rail_clock_now(c.clock) - c.t0;
         smp.reason = m.reason;
         smp.measured = m.reason == VIS_REASON_NONE && m.quality >= p->min_quality && isfinite(m.dz) &&
                        isfinite(m.a);

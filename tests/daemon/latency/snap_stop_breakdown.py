@@ -9,6 +9,7 @@ axes every 5 ms), all on CLOCK_MONOTONIC, and prints one JSON line with, in ms:
   frame_to_arrival        detection frame's stamp -> its arrival on the host (transport)
   arrival_to_picked       arrival -> the trial loop took it from the ring (the loop behind)
   picked_to_tracked       -> the tracker was done with it
+  tracker_cpu             the loop thread's CPU in the tracker on that frame (the rest: waiting)
   tracked_to_decided      -> the loop had stored its sample and judged it (store, detector)
   decided_to_stop_ret     the stop asked -> the stop command returned (rails' lock + write)
   stop_to_decel           stop returned -> the shear axis slows (below 95% of its speed; axes log)
@@ -59,12 +60,14 @@ def main(argv):
     t_det = float(head.group(2)) + t0
     out = {"label": opt["--label"], "status": st[0] if st else None}
     out["onset_to_det_frame"] = float(head.group(3))
-    out["frame_to_arrival"] = ms("detection frame -> arrival")
+    out["frame_to_arrival"] = ms("-> arrival")
     out["arrival_to_picked"] = ms("-> picked up")
     out["picked_to_tracked"] = ms("-> tracked")
     out["tracked_to_decided"] = ms("-> decided")
+    cpu = re.search(r"\(CPU ([0-9.]+) ms\)", msg)
+    out["tracker_cpu"] = float(cpu.group(1)) if cpu else None
     out["decided_to_stop_ret"] = ms("-> stop returned")
-    out["stop_to_read"] = ms("-> rail read standing")
+    out["stop_to_read"] = ms("read standing")
     out["det_to_read"] = ms("total")
     parts = [out[k] for k in ("frame_to_arrival", "arrival_to_picked", "picked_to_tracked", "tracked_to_decided",
                               "decided_to_stop_ret")]

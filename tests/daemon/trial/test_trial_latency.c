@@ -25,18 +25,19 @@ static void spans_and_missing_parts(void **state)
     l.t_det_arrival = 20.0345;
     l.t_picked = 20.0348;
     l.t_tracked = 20.0379;
+    l.cpu_tracked = 0.0029;
     l.t_decided = 20.0386;
     l.t_stop_ret = 20.0394;
     char msg[320];
     trial_latency_format(&l, msg, sizeof msg);
     printf("# %s\n", msg);
     assert_non_null(strstr(msg, "onset frame 1203 -> detection frame 1205 (at 20.0333 s) 33.3 ms"));
-    assert_non_null(strstr(msg, "detection frame -> arrival 1.2 ms -> picked up 0.3 ms -> tracked 3.1 ms -> decided 0.7 ms -> stop returned 0.8 ms"));
-    assert_non_null(strstr(msg, "-> rail read standing n/a; total n/a; t0_mono 1234.500000"));
+    assert_non_null(strstr(msg, "frame -> arrival 1.2 ms -> picked up 0.3 ms -> tracked 3.1 ms (CPU 2.9 ms) -> decided 0.7 ms -> stop returned 0.8 ms"));
+    assert_non_null(strstr(msg, "-> read standing n/a; total n/a; t0_mono 1234.500000"));
     l.t_stand = 20.0946;
     trial_latency_format(&l, msg, sizeof msg);
-    assert_non_null(strstr(msg, "-> rail read standing 55.2 ms; total 61.3 ms"));
-    l.t_det_arrival = l.t_picked = l.t_tracked = NAN; /* no camera: the decision counts from the frame */
+    assert_non_null(strstr(msg, "-> read standing 55.2 ms; total 61.3 ms"));
+    l.t_det_arrival = l.t_picked = l.t_tracked = l.cpu_tracked = NAN; /* no camera: the decision counts from the frame */
     trial_latency_format(&l, msg, sizeof msg);
     assert_non_null(strstr(msg, "arrival n/a -> picked up n/a -> tracked n/a -> decided 5.3 ms"));
 }
@@ -48,6 +49,7 @@ static void fits_an_event(void **state)
     trial_latency_init(&l, 99999999.123456);
     l.onset_frame = l.det_frame = 2147483647L;
     l.t_onset = l.t_det = l.t_det_arrival = l.t_picked = l.t_tracked = l.t_decided = l.t_stop_ret = -99999.0;
+    l.cpu_tracked = 99999.0;
     l.t_stand = 99999.0;
     char msg[320];
     trial_latency_format(&l, msg, sizeof msg);
