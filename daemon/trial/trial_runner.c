@@ -440,6 +440,15 @@ static int step(run_ctx *c, const trial_sample *smp)
         return 0;
     }
 start_return : {
+    /* A loop that caught up after the snap may get here while the shear still brakes: the
+     * return waits (at most the watch's window) for the watch to read it standing, so the
+     * latency is measured and no move goes into a deceleration. */
+    if (tr->poller && isfinite(c->t_stop_cmd) && !c->stand_noted) {
+        double until = rail_clock_now(c->clock) +
+                       trial_latency_watch_window_s(p->scene.shear_rate * 1000.0, rail_get_params(tr->shear)->accel_mm_s2);
+        while (!isfinite(trial_rail_poller_stop_seen(tr->poller)) && rail_clock_now(c->clock) < until)
+            rail_clock_sleep(c->clock, 0.002);
+    }
     note_standing(c);
     if (!c->stand_noted && isfinite(c->t_stop_cmd) && isfinite(c->t_det_frame)) {
         /* The return starts before a fresh shear reading showed the rail standing: the command

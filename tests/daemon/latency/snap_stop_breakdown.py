@@ -81,7 +81,7 @@ def main(argv):
     with open(truth) as f:
         for r in csv.DictReader(f):
             t, dz = float(r["mono_s"]), float(r["dz"])
-            if prev and t > prev[0] and t < t_det + 1.0 and abs(dz - prev[1]) / (t - prev[0]) > speed:
+            if prev and t > prev[0] and t_det - 2.0 < t < t_det + 1.0 and abs(dz - prev[1]) / (t - prev[0]) > speed:
                 t_true = t
                 break
             prev = (t, dz)
