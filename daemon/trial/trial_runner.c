@@ -726,6 +726,22 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
         }
         smp.quality = isfinite(m.quality) ? m.quality : 0.0;
         out->frames++;
+        if (tr->capture) {
+            /* Live: the frame is judged (a snap stops the shear) before its sample's store write,
+             * which may wait for a batch commit (issue 34 F: 58 ms seen on a detection frame). */
+            if (c.st == TRIAL_SHEARING || c.st == TRIAL_SNAPPED)
+                snap_detect_add(&tr->det, frame, smp.t_s, smp.dw, smp.dz, smp.a, smp.measured);
+            int ended = step(&c, &smp);
+            if (tr->sink.sample && tr->sink.sample(tr->sink.user, &smp, why, sizeof why)) {
+                if (!ended)
+                    finish(&c, TRIAL_FAILED, "sample not stored: %s", why);
+                else
+                    emit_event(&c, "fault", "sample of frame %ld not stored: %s", smp.frame, why);
+                break;
+            }
+            if (ended) break;
+            continue;
+        }
         if (tr->sink.sample && tr->sink.sample(tr->sink.user, &smp, why, sizeof why)) {
             finish(&c, TRIAL_FAILED, "sample not stored: %s", why);
             break;
