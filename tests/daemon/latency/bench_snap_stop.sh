@@ -8,8 +8,9 @@
 #    "target_ms":...,"bound_ms":...,"load":[..]}
 # target_ms is the issue's (two frame periods plus one poll), bound_ms the physical one
 # (docs/rig-realtime.md "Snap to stop": two frame periods + v/a + the stop watch's pass + 10 ms).
-# Usage: bench_snap_stop.sh BUILD_DIR RIG.ini [N] (from the checkout; keeps the runs in
-# /tmp/snap-stop.XXXXXX, printed on stderr).
+# Usage: bench_snap_stop.sh BUILD_DIR RIG.ini [N] (from the checkout; keeps the runs' stores and
+# logs in /tmp/snap-stop.XXXXXX, printed on stderr; their raw videos only with
+# RIBBON_BENCH_KEEP_VIDEO=1).
 set -u
 build=${1:?build dir}; rig=${2:?rig file}; n=${3:-3}
 here=$(cd "$(dirname "$0")" && pwd)
@@ -44,6 +45,7 @@ while [ "$i" -lt "$n" ]; do
     line=$(python3 "$here/snap_stop_breakdown.py" "$d/rig.db" "$d/truth.csv" "$d/axes.csv" --label "run$i load $load" \
         --v "$(awk -v r="$v" 'BEGIN{print r * 1000}')" --a "$a")
     echo "$line"
+    [ -n "${RIBBON_BENCH_KEEP_VIDEO:-}" ] || rm -rf "$d/videos" # ~0.4 GB of raw video a trial
     lines="$lines$line
 "
 done
