@@ -86,7 +86,7 @@ demo: build
 # Rig mode rehearsed on loopback (docs/rig-realtime.md): ribbon-rigsim is the rig (GRBL controller
 # on a pty, the twin filmed by a GigE Vision camera on 127.0.0.1), ribbond runs one trial on
 # config/rig-rehearsal.ini in real time (about 80 s), then the pipeline's counts and the
-# snap-to-stop latency are printed from the trial's events, and the twin's own snap (ribbon-rigsim's
+# snap-to-stop latency and its breakdown are printed from the trial's events, and the twin's own snap (ribbon-rigsim's
 # "twin truth" line: the strip of the rig file's [twin]) beside the measured, predicted and
 # calibrated one (docs/calibration.md "In every trial"), with their differences. The store and videos go to the working
 # directory (ribbon-rehearsal.db, ribbon-rehearsal-videos/); the pty, calibration and truth log to
@@ -112,7 +112,7 @@ rehearsal: build
 	id=$$(sed -n 's/^trial \([0-9]*\) started.*/\1/p' $$dir/trial.txt); \
 	db=$$(sed -n 's/^database: //p' $$dir/trial.txt); \
 	if [ -n "$$id" ] && [ -n "$$db" ]; then \
-	  ./$(BUILD)/bin/ribbonctl show $$id --db $$db | sed -n 's/.*info *\(pipeline: .*\)/  \1/p; s/.*warning *\(pipeline: .*\)/  \1/p; s/.*info *\(snap-to-stop latency: .*\)/  \1/p'; fi; \
+	  ./$(BUILD)/bin/ribbonctl show $$id --db $$db | sed -n 's/.*info *\(pipeline: .*\)/  \1/p; s/.*warning *\(pipeline: .*\)/  \1/p; s/.*info *\(snap-to-stop [a-z]*: .*\)/  \1/p'; fi; \
 	kill -TERM $$pid; wait $$pid; kill -TERM $$sim; wait $$sim; \
 	sed -n 's/^twin: \(N = .*\)/  twin       (ribbon-rigsim) \1/p' $$dir/rigsim.log; \
 	awk -v m="$$(sed -n 's/.*measured   snap Delta W = \([0-9.]*\).*/\1/p' $$dir/trial.txt)" \

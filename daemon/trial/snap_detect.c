@@ -34,6 +34,7 @@ snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, do
         if (!d->have_prev) {
             d->onset_dw = dw;
             d->onset_frame = frame;
+            d->t_onset = t_s;
             d->peak_abs_a = fabs(a);
         }
         d->have_prev = 1;
@@ -49,6 +50,7 @@ snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, do
         if (speed < slow) {
             d->onset_dw = dw;
             d->onset_frame = frame;
+            d->t_onset = t_s;
             d->peak_abs_a = fabs(a);
         } else {
             d->peak_abs_a = fmax(d->peak_abs_a, fabs(a));

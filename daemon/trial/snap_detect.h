@@ -36,6 +36,7 @@ typedef struct snap_detect {
     double t_prev, dz_prev;
     double onset_dw;       /* Delta W of the last slow frame */
     long onset_frame;
+    double t_onset;        /* its time */
     double peak_abs_a;
     double t_detect;
     long detect_frame;     /* first frame seen snapping */

@@ -27,6 +27,9 @@ struct trial_rail_poller {
     long polls;
     int polling;             /* a poll is in flight, since t_poll_start */
     double t_poll_start;
+    double watch_until;      /* rail clock: until then the shear is read fresh every TRIAL_STOP_WATCH_PERIOD_S
+                                (trial_rail_poller_watch_stop); NaN = not watching */
+    double watch_stand_t;    /* rail clock of the fresh reading that ended the watch standing (NaN: none) */
 };
 
 /* A frozen daemon: both rails emergency-stopped first, then the fault published (every later read
@@ -104,7 +107,13 @@ static void *poll_main(void *arg)
             other = p->shear;
             ss = p->ss;
         } else {
-            e = rail_pair_judge(p->shear, rail_status_get(p->shear, &ss), &ss, why, sizeof why);
+            pthread_mutex_lock(&p->lock);
+            int watching = t0 < p->watch_until;
+            pthread_mutex_unlock(&p->lock);
+            /* Watching a stop: a fresh reading on every pass, not the poll_hz rate limit's
+             * extrapolation, so the rail's first standing report is seen within one short pass. */
+            e = rail_pair_judge(p->shear, watching ? rail_status_poll(p->shear, &ss) : rail_status_get(p->shear, &ss),
+                                &ss, why, sizeof why);
             if (e != RAIL_OK) other = p->compress;
         }
         double t1 = rail_clock_now(p->clock);
@@ -155,7 +164,16 @@ static void *poll_main(void *arg)
         pthread_cond_broadcast(&p->first);
         pthread_mutex_unlock(&p->lock);
         if (e != RAIL_OK) break;
-        rail_clock_sleep(p->clock, p->period_s);
+        /* While a stop is watched, until the shear reads standing (or the window ends). */
+        pthread_mutex_lock(&p->lock);
+        int watch = t1 < p->watch_until;
+        if (watch && ss.state != RAIL_STATE_MOVING && ss.state != RAIL_STATE_HOMING && !ss.extrapolated) {
+            p->watch_stand_t = ss.t_s;
+            p->watch_until = NAN;
+            watch = 0;
+        }
+        pthread_mutex_unlock(&p->lock);
+        rail_clock_sleep(p->clock, watch ? fmin(p->period_s, TRIAL_STOP_WATCH_PERIOD_S) : p->period_s);
     }
     pthread_mutex_lock(&p->lock);
     p->have = 1;
@@ -179,6 +197,7 @@ trial_rail_poller *trial_rail_poller_start(rail *compress, rail *shear, double p
     p->shear = shear;
     p->clock = rail_get_clock(compress);
     p->period_s = period_s;
+    p->watch_until = p->watch_stand_t = NAN;
     pthread_mutex_init(&p->rails, NULL);
     pthread_mutex_init(&p->lock, NULL);
     pthread_cond_init(&p->first, NULL);
@@ -242,6 +261,25 @@ rail_err trial_rail_poller_lock_for_move(trial_rail_poller *p, char *why, size_t
     }
     pthread_mutex_unlock(&p->rails);
     return e;
+}
+
+void trial_rail_poller_watch_stop(trial_rail_poller *p, double window_s)
+{
+    /* Test hook: the stop unwatched, as before issue 34 F (bench_snap_stop.sh compares both). */
+    const char *off = getenv("RIBBON_TEST_NO_STOP_WATCH");
+    if (off && *off && strcmp(off, "0") != 0) return;
+    pthread_mutex_lock(&p->lock);
+    p->watch_until = rail_clock_now(p->clock) + fmax(0.0, window_s);
+    p->watch_stand_t = NAN;
+    pthread_mutex_unlock(&p->lock);
+}
+
+double trial_rail_poller_stop_seen(trial_rail_poller *p)
+{
+    pthread_mutex_lock(&p->lock);
+    double t = p->watch_stand_t;
+    pthread_mutex_unlock(&p->lock);
+    return t;
 }
 
 void trial_rail_poller_lock(trial_rail_poller *p) { pthread_mutex_lock(&p->rails); }

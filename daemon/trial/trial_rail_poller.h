@@ -44,6 +44,17 @@ rail_err trial_rail_poller_latest(trial_rail_poller *p, rail_status *sc, rail_st
  * The freeze check is made again under the lock, so no move goes out between a check and a
  * freeze: a clock jump seen here emergency-stops both rails before the lock is let go. */
 rail_err trial_rail_poller_lock_for_move(trial_rail_poller *p, char *why, size_t why_len);
+/* s between the shear's fresh readings while a stop is watched (a GRBL status report is about 60
+ * bytes, 5 ms at 115200 baud; a Modbus TCP read on a LAN well under that). */
+#define TRIAL_STOP_WATCH_PERIOD_S 0.005
+/* After a stop of the shear rail (issue 34 F): for the next window_s the shear is read fresh (past
+ * its poll_hz rate limit) every TRIAL_STOP_WATCH_PERIOD_S until a reading says it stands, so the
+ * rail's rest is seen within a short pass of the end of its deceleration instead of up to a poll
+ * period plus the poller's own period later. The compression rail keeps its rate. */
+void trial_rail_poller_watch_stop(trial_rail_poller *p, double window_s);
+/* The rail-clock time of the fresh reading that ended the last watch standing (the poller's own
+ * reading, so it does not wait for the trial's loop to come by), or NaN while none has. */
+double trial_rail_poller_stop_seen(trial_rail_poller *p);
 void trial_rail_poller_lock(trial_rail_poller *p);
 void trial_rail_poller_unlock(trial_rail_poller *p);
 /* Longest time one poll took (s), longest gap from one poll's end to the next one's start (s: the

@@ -8,6 +8,7 @@
 
 #include "rail_gcode.h"
 #include "rail_pair.h"
+#include "trial_latency.h"
 
 /* Rail calls in a live trial go under the poller's lock (the rails are not thread-safe). */
 static void rails_lock(trial_runner *tr)
@@ -165,6 +166,11 @@ typedef struct run_ctx {
     double t_det_frame;   /* trial time of the frame in which the camera saw the snap (NaN: none) */
     double t_stop_cmd;    /* trial time the shear stop command returned (NaN: none) */
     int stand_noted;      /* the snap-to-stop latency has been reported */
+    double t_arrival;     /* trial time this iteration's frame arrived from the camera (NaN: none) */
+    double t_picked;      /* trial time this loop took it from the capture ring (NaN: none) */
+    double t_tracked;     /* trial time the tracker was done with it (NaN: not tracked) */
+    double cpu_tracked;   /* s of this thread's CPU the tracker took on it (NaN: not tracked) */
+    trial_latency lat;    /* where the snap-to-stop time went (trial_latency.h) */
     int w_warned;         /* "no load" warning given */
     /* The camera's quality (rig mode, trial_capture.h). */
     double frz_c, frz_s;  /* rail positions at the first frame of the current run of equal frames */
@@ -300,11 +306,16 @@ static int command(run_ctx *c, rail *r, rail_err e, const char *what)
 /* Enters snapped: stop the shear. Returns 1 when the stop was refused (trial failed). */
 static int stop_for_snap(run_ctx *c)
 {
+    c->lat.t_decided = rail_clock_now(c->clock) - c->t0;
     if (command(c, c->tr->shear, r_stop(c->tr, c->tr->shear), "shear stop")) return 1;
     c->t_snap = c->t;
+    c->t_stop_cmd = c->lat.t_stop_ret = rail_clock_now(c->clock) - c->t0;
+    if (c->tr->poller)
+        trial_rail_poller_watch_stop(c->tr->poller,
+                                     trial_latency_watch_window_s(c->tr->plan.scene.shear_rate * 1000.0,
+                                                                  rail_get_params(c->tr->shear)->accel_mm_s2));
     trial_calibrate_snap(c->tr->calib, c->t,
                          c->tr->det.phase != SNAP_WAITING ? snap_detect_dw(&c->tr->det) : c->w_fired ? c->w_dw : NAN);
-    c->t_stop_cmd = rail_clock_now(c->clock) - c->t0;
     enter(c, TRIAL_SNAPPED, c->tr->plan.post_snap_s + 30.0, NULL);
     return 0;
 }
@@ -346,6 +357,8 @@ static int witness_add(run_ctx *c, double load, double dw, double t)
     if (c->st == TRIAL_SHEARING) return stop_for_snap(c);
     return 0;
 }
+
+static void note_standing(run_ctx *c);
 
 /* One step of the state machine after this iteration's frame. Returns 1 when the trial ended. */
 static int step(run_ctx *c, const trial_sample *smp)
@@ -410,10 +423,18 @@ static int step(run_ctx *c, const trial_sample *smp)
         if (tr->det.phase != SNAP_WAITING) {
             c->vision_noted = 1;
             c->w_until = c->t + TRIAL_WITNESS_LATE_POLLS / rail_get_params(tr->shear)->poll_hz + 2.0 / p->fps;
+            c->t_det_frame = c->lat.t_det = smp->t_s;
+            c->lat.det_frame = tr->det.detect_frame;
+            c->lat.onset_frame = tr->det.onset_frame;
+            c->lat.t_onset = tr->det.t_onset;
+            c->lat.t_det_arrival = c->t_arrival;
+            c->lat.t_picked = c->t_picked;
+            c->lat.t_tracked = c->t_tracked;
+            c->lat.cpu_tracked = c->cpu_tracked;
+            /* The stop first: the event is a store write, which may wait on the disk. */
+            if (stop_for_snap(c)) return 1;
             emit_event(c, "info", "snap detected at frame %ld; onset Delta W = %.5f", tr->det.detect_frame,
                        snap_detect_dw(&tr->det));
-            c->t_det_frame = smp->t_s;
-            if (stop_for_snap(c)) return 1;
             return 0;
         }
         if (rail_idle_at(&c->ss, c->target_shear_mm)) {
@@ -441,6 +462,16 @@ static int step(run_ctx *c, const trial_sample *smp)
         return 0;
     }
 start_return : {
+    /* A loop that caught up after the snap may get here while the shear still brakes: the
+     * return waits (at most the watch's window) for the watch to read it standing, so the
+     * latency is measured and no move goes into a deceleration. */
+    if (tr->poller && isfinite(c->t_stop_cmd) && !c->stand_noted) {
+        double until = rail_clock_now(c->clock) +
+                       trial_latency_watch_window_s(p->scene.shear_rate * 1000.0, rail_get_params(tr->shear)->accel_mm_s2);
+        while (!isfinite(trial_rail_poller_stop_seen(tr->poller)) && rail_clock_now(c->clock) < until)
+            rail_clock_sleep(c->clock, 0.002);
+    }
+    note_standing(c);
     if (!c->stand_noted && isfinite(c->t_stop_cmd) && isfinite(c->t_det_frame)) {
         /* The return starts before a fresh shear reading showed the rail standing: the command
          * latency is known, the standing one is not (it would be the end of the return). */
@@ -450,6 +481,8 @@ start_return : {
                    "snap-to-stop latency: detection frame -> stop command %.1f ms; the shear rail was not read "
                    "standing before the return (rail poll period %.1f ms)",
                    1e3 * c->res->stop_cmd_latency_s, 1e3 / rail_get_params(tr->shear)->poll_hz);
+        char msg[320];
+        emit_event(c, "info", "%s", trial_latency_format(&c->lat, msg, sizeof msg));
     }
     double dist = fmax(fabs(c->ss.position_mm - p->calib.shear_zero_mm),
                        fabs(c->sc.position_mm - c->start_compress_mm));
@@ -479,8 +512,13 @@ static rail_err poll_rails(run_ctx *c, char *why, size_t why_len)
 static void note_standing(run_ctx *c)
 {
     if (c->stand_noted || !isfinite(c->t_stop_cmd) || !isfinite(c->t_det_frame)) return;
-    if (c->ss.extrapolated || c->ss.state == RAIL_STATE_MOVING || c->ss.state == RAIL_STATE_HOMING) return;
-    double t_stand = c->ss.t_s - c->t0;
+    /* A live trial's poller watched the stop and kept its first standing reading; this loop may
+     * come by long after it (issue 34 F: 380-450 ms behind after the snap under load). */
+    double seen = c->tr->poller ? trial_rail_poller_stop_seen(c->tr->poller) : NAN;
+    if (!isfinite(seen) &&
+        (c->ss.extrapolated || c->ss.state == RAIL_STATE_MOVING || c->ss.state == RAIL_STATE_HOMING))
+        return;
+    double t_stand = (isfinite(seen) ? seen : c->ss.t_s) - c->t0;
     if (t_stand < c->t_stop_cmd) return;
     c->stand_noted = 1;
     c->res->stop_cmd_latency_s = c->t_stop_cmd - c->t_det_frame;
@@ -490,6 +528,9 @@ static void note_standing(run_ctx *c)
                "(rail poll period %.1f ms, frame period %.1f ms)",
                1e3 * c->res->stop_cmd_latency_s, 1e3 * c->res->stop_stand_latency_s,
                1e3 / rail_get_params(c->tr->shear)->poll_hz, 1e3 / c->tr->plan.fps);
+    c->lat.t_stand = t_stand;
+    char msg[320];
+    emit_event(c, "info", "%s", trial_latency_format(&c->lat, msg, sizeof msg));
 }
 
 /* What each rail's controller is set to, stored with the trial (issue 34): for a GRBL rail its
@@ -549,6 +590,8 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
     c.res = out;
     c.clock = rail_get_clock(tr->compress);
     c.t0 = rail_clock_now(c.clock);
+    trial_latency_init(&c.lat, c.t0);
+    c.t_arrival = c.t_picked = c.t_tracked = c.cpu_tracked = NAN;
     c.last_reading_c = c.last_reading_s = -1.0;
     snap_detect_init(&tr->det, &p->snap);
     char why[256] = "";
@@ -650,6 +693,8 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
                 break;
             }
             t_frame = fi.t_s;
+            c.t_arrival = fi.host_t_s - c.t0;
+            c.t_picked = rail_clock_now(c.clock) - c.t0;
         } else {
             vis_status vs = tr->cam.grab(tr->cam.ctx, now, dl, dw, tr->frame, &t_frame, &ve);
             if (vs != VIS_OK) {
@@ -720,9 +765,14 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
              * points, and a frame measured against those would be a confident wrong answer. */
             memset(&m, 0, sizeof m);
             m.reason = VIS_REASON_CLAMP_NOT_FOUND;
-        } else if (vis_tracker_process(tr->tracker, tr->frame, smp.dw * l * 1000.0, &m, &ve) != VIS_OK) {
-            finish(&c, TRIAL_FAILED, "tracker: %s", ve.message);
-            break;
+        } else {
+            double cpu0 = trial_latency_thread_cpu_s();
+            if (vis_tracker_process(tr->tracker, tr->frame, smp.dw * l * 1000.0, &m, &ve) != VIS_OK) {
+                finish(&c, TRIAL_FAILED, "tracker: %s", ve.message);
+                break;
+            }
+            c.t_tracked = rail_clock_now(c.clock) - c.t0;
+            c.cpu_tracked = trial_latency_thread_cpu_s() - cpu0;
         }
         smp.reason = m.reason;
         smp.measured = m.reason == VIS_REASON_NONE && m.quality >= p->min_quality && isfinite(m.dz) &&
@@ -736,6 +786,22 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
         }
         smp.quality = isfinite(m.quality) ? m.quality : 0.0;
         out->frames++;
+        if (tr->capture) {
+            /* Live: the frame is judged (a snap stops the shear) before its sample's store write,
+             * which may wait for a batch commit (issue 34 F: 58 ms seen on a detection frame). */
+            if (c.st == TRIAL_SHEARING || c.st == TRIAL_SNAPPED)
+                snap_detect_add(&tr->det, frame, smp.t_s, smp.dw, smp.dz, smp.a, smp.measured);
+            int ended = step(&c, &smp);
+            if (tr->sink.sample && tr->sink.sample(tr->sink.user, &smp, why, sizeof why)) {
+                if (!ended)
+                    finish(&c, TRIAL_FAILED, "sample not stored: %s", why);
+                else
+                    emit_event(&c, "fault", "sample of frame %ld not stored: %s", smp.frame, why);
+                break;
+            }
+            if (ended) break;
+            continue;
+        }
         if (tr->sink.sample && tr->sink.sample(tr->sink.user, &smp, why, sizeof why)) {
             finish(&c, TRIAL_FAILED, "sample not stored: %s", why);
             break;

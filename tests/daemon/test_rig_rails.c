@@ -396,7 +396,7 @@ static void test_modbus_trial(void **state)
     double pred = rig_q_num(db, "select snap_dw from predictions where trial_id = 1");
     rig_q_text(db, "select regime_measured from trials where id = 1", rm, sizeof rm);
     rig_q_text(db, "select regime from predictions where trial_id = 1", rp, sizeof rp);
-    rig_q_text(db, "select message from events where trial_id = 1 and message like 'snap-to-stop%'", lat, sizeof lat);
+    rig_q_text(db, "select message from events where trial_id = 1 and message like 'snap-to-stop latency%'", lat, sizeof lat);
     printf("# measured %.5f predicted %.5f (%+.2f%%; %s / %s)\n# %s\n", meas, pred, 100.0 * (meas - pred) / pred, rm,
            rp, lat);
     /* What the camera showed near the snap: the twin's image age at each send (truth log column

@@ -136,7 +136,7 @@ static void test_gcode_trial(void **state)
     char rm[32], rp[32], lat[400];
     rig_q_text(db, "select regime_measured from trials where id = 1", rm, sizeof rm);
     rig_q_text(db, "select regime from predictions where trial_id = 1", rp, sizeof rp);
-    rig_q_text(db, "select message from events where trial_id = 1 and message like 'snap-to-stop%'", lat, sizeof lat);
+    rig_q_text(db, "select message from events where trial_id = 1 and message like 'snap-to-stop latency%'", lat, sizeof lat);
     printf("# measured %.5f predicted %.5f (%s / %s)\n# %s\n", meas, pred, rm, rp, lat);
     score_against_twin(&r, meas, pred, rm, rp, "asymmetric"); /* Gamma 0.13: the pitchfork first */
     score_calibrated(&r, db, meas, pred, "asymmetric");

@@ -10,7 +10,13 @@
  *     poll, both rails stopped; a move asked for afterwards refused;
  *   - a real freeze: a child process with its poller is stopped with SIGSTOP for 1.5 s while its
  *     shear moves, then continued: on waking it reports the clock jump, its rails stopped and
- *     standing, and the jump it names covers the freeze (real time, about 3 s). */
+ *     standing, and the jump it names covers the freeze (real time, about 3 s);
+ *   - a watched stop (issue 34 F): the shear at 10 mm/s, accel 200 mm/s^2, poll_hz 20 and the
+ *     live period (25 ms) as in the rehearsal's rig files, stopped just after a poller pass. Its
+ *     rest is 50 ms after the stop (v/a); unwatched, the next pass (25 ms on) reads it decelerating
+ *     and the poll_hz limit (50 ms) defers the next fresh reading to 75 ms, 25 ms after the rest;
+ *     watched, it is read within one 5 ms pass. The median of 5 stops must read it within 15 ms of
+ *     the rest (real time, ~2 s). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -229,12 +235,84 @@ static void sigstop_freeze_stops_rails(void **state)
     assert_int_equal(WEXITSTATUS(ws), 0);
 }
 
+/* One stop of the moving shear, just after one of the poller's passes; returns s from the rail's
+ * rest (the stop + v/a) to the first fresh reading the poller published standing. */
+static double stop_read_late(trial_rail_poller *p, rail *s, int watch)
+{
+    rail_status sc, ss;
+    double tp, last = -1.0;
+    char why[256];
+    for (int k = 0; k < 2000; k++) { /* wait for a pass (at most 2 s) */
+        assert_int_equal(trial_rail_poller_latest(p, &sc, &ss, &tp, why, sizeof why), RAIL_OK);
+        if (last >= 0.0 && tp != last) break;
+        last = tp;
+        sleep_s(0.0005);
+    }
+    trial_rail_poller_lock(p);
+    assert_int_equal(rail_stop(s), RAIL_OK);
+    trial_rail_poller_unlock(p);
+    double t_stop = mono(), t_rest = t_stop + 10.0 / 200.0;
+    if (watch) trial_rail_poller_watch_stop(p, 10.0 / 200.0 + 0.5);
+    for (int k = 0; k < 2000; k++) {
+        assert_int_equal(trial_rail_poller_latest(p, &sc, &ss, &tp, why, sizeof why), RAIL_OK);
+        if (!ss.extrapolated && ss.state != RAIL_STATE_MOVING && ss.t_s >= t_stop) return ss.t_s - t_rest;
+        sleep_s(0.001);
+    }
+    fail_msg("the shear was not read standing within 2 s of its stop");
+    return NAN;
+}
+
+static int cmp_d(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static void watched_stop_is_read_at_rest(void **state)
+{
+    (void)state;
+    char why[256];
+    rail_params pp = rail_params_default();
+    pp.poll_hz = 20.0;
+    pp.accel_mm_s2 = 200.0;
+    pp.max_speed_mm_s = 50.0;
+    rail_mock_params m = rail_mock_params_default();
+    m.start_mm = 10.0;
+    rail *c = NULL, *s = NULL;
+    snprintf(pp.name, sizeof pp.name, "compress");
+    if (rail_mock_open(&c, &pp, &m, rail_clock_real(), why, sizeof why) != RAIL_OK) fail_msg("%s", why);
+    snprintf(pp.name, sizeof pp.name, "shear");
+    if (rail_mock_open(&s, &pp, &m, rail_clock_real(), why, sizeof why) != RAIL_OK) fail_msg("%s", why);
+    trial_rail_poller *p = trial_rail_poller_start(c, s, 0.5 / pp.poll_hz, why, sizeof why);
+    assert_non_null(p);
+    double late[2][5];
+    for (int w = 0; w < 2; w++)
+        for (int k = 0; k < 5; k++) {
+            trial_rail_poller_lock(p);
+            assert_int_equal(rail_move_abs(s, 95.0, 10.0), RAIL_OK);
+            trial_rail_poller_unlock(p);
+            sleep_s(0.1); /* past the 50 ms ramp: at speed */
+            late[w][k] = stop_read_late(p, s, w);
+        }
+    for (int w = 0; w < 2; w++) {
+        qsort(late[w], 5, sizeof late[w][0], cmp_d);
+        printf("# %s stop: rest read %.1f / %.1f / %.1f ms late (min / median / max of 5)\n",
+               w ? "watched" : "unwatched", 1e3 * late[w][0], 1e3 * late[w][2], 1e3 * late[w][4]);
+    }
+    trial_rail_poller_stop(p);
+    rail_close(c);
+    rail_close(s);
+    assert_true(late[1][2] >= -0.002); /* never read standing before it stood */
+    assert_true(late[1][2] <= 0.015);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(injected_clock_jump_stops_rails),
         cmocka_unit_test(freeze_while_waiting_for_the_rails),
         cmocka_unit_test(sigstop_freeze_stops_rails),
+        cmocka_unit_test(watched_stop_is_read_at_rest),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
