@@ -57,8 +57,9 @@ char *trial_config_text(const rig_config *cfg, const char *const *sets, int n_se
         free(buf);
         return NULL;
     }
-    /* One line of JSON: an override's value may hold any character, a newline too. */
-    json_t *arr = json_array();
+    /* One line of JSON: an override's value may hold any character, a newline too. No line when
+     * the caller does not know them (sets NULL): "not recorded", never a false "none". */
+    json_t *arr = sets ? json_array() : NULL;
     for (int k = 0; arr && k < n_sets; k++)
         if (json_array_append_new(arr, json_string(sets[k] ? sets[k] : "")) != 0) {
             json_decref(arr);
@@ -66,19 +67,21 @@ char *trial_config_text(const rig_config *cfg, const char *const *sets, int n_se
         }
     char *js = arr ? json_dumps(arr, JSON_COMPACT | JSON_ENSURE_ASCII) : NULL;
     json_decref(arr);
-    if (!js) {
+    if (sets && !js) /* an override that is not UTF-8: said so, and the rebuild refuses it */
+        js = strdup("(not readable: an override is not UTF-8 text)");
+    if (sets && !js) {
         free(buf);
         return NULL;
     }
-    size_t need = strlen(OVERRIDES_HEAD) + strlen(js) + 2;
-    char *nb = realloc(buf, len + need + 1);
+    size_t need = js ? strlen(OVERRIDES_HEAD) + strlen(js) + 2 : 0;
+    char *nb = js ? realloc(buf, len + need + 1) : buf;
     if (!nb) {
         free(js);
         free(buf);
         return NULL;
     }
     buf = nb;
-    len += (size_t)snprintf(buf + len, need + 1, "%s%s\n", OVERRIDES_HEAD, js);
+    if (js) len += (size_t)snprintf(buf + len, need + 1, "%s%s\n", OVERRIDES_HEAD, js);
     free(js);
     if (note && *note) {
         size_t n = strlen(note) + 16;
@@ -103,6 +106,16 @@ static const char *last_line_with(const char *text, const char *end, const char 
     return found;
 }
 
+/* The start of the first line of text[0, end) that begins with prefix, or NULL. The overrides
+ * line is looked for this way: the note after it is free text (it may hold lines of its own). */
+static const char *first_line_with(const char *text, const char *end, const char *prefix)
+{
+    size_t n = strlen(prefix);
+    for (const char *p = text; p && p < end; p = strchr(p, '\n'), p = p ? p + 1 : NULL)
+        if ((size_t)(end - p) >= n && !strncmp(p, prefix, n)) return p;
+    return NULL;
+}
+
 int trial_config_text_scene(const char *text, const char **begin, size_t *len)
 {
     const char *end = text + strlen(text);
@@ -112,13 +125,17 @@ int trial_config_text_scene(const char *text, const char **begin, size_t *len)
     if (!body) return -1;
     body++;
     if (!strncmp(body, "# (could not be read)", 21)) return -1;
-    /* What trial_config_text and a replay's row append after the scene: at most these three. */
-    const char *tail = last_line_with(body, end, "# replay of trial ");
-    if (tail) end = tail;
-    tail = last_line_with(body, end, "# note: ");
-    if (tail) end = tail;
-    tail = last_line_with(body, end, OVERRIDES_HEAD);
-    if (tail) end = tail;
+    /* What trial_config_text and a replay's row append after the scene: the overrides line
+     * first (when stored), else the note, and a replay's line. */
+    const char *tail = first_line_with(body, end, OVERRIDES_HEAD);
+    if (tail) {
+        end = tail;
+    } else {
+        tail = last_line_with(body, end, "# replay of trial ");
+        if (tail) end = tail;
+        tail = last_line_with(body, end, "# note: ");
+        if (tail) end = tail;
+    }
     *begin = body;
     *len = (size_t)(end - body);
     return 0;
@@ -128,7 +145,7 @@ json_t *trial_config_text_overrides(const char *text)
 {
     const char *end = text + strlen(text);
     const char *head = last_line_with(text, end, "# scene file ");
-    const char *line = head ? last_line_with(head, end, OVERRIDES_HEAD) : NULL;
+    const char *line = head ? first_line_with(head, end, OVERRIDES_HEAD) : NULL;
     if (!line) return NULL;
     line += strlen(OVERRIDES_HEAD);
     const char *eol = strchr(line, '\n');
@@ -169,7 +186,7 @@ int trial_config_text_scene_load(const char *text, const char *name, rod_scene *
     }
     json_t *arr = trial_config_text_overrides(text);
     const char *end = text + strlen(text);
-    if (!arr && last_line_with(text, end, OVERRIDES_HEAD)) {
+    if (!arr && first_line_with(begin + len, end, OVERRIDES_HEAD)) {
         snprintf(why, why_len, "its stored overrides cannot be read");
         return -1;
     }

@@ -9,7 +9,7 @@
 
 /* "# rig file PATH" + its text + "# scene file PATH" + its text + "# overrides applied in order
  * after the files: [...]" (the n_sets overrides "section.key=value" cfg was loaded with, as one
- * line of JSON, "[]" for none) (+ "# note: ..."), malloc'ed; NULL when out of memory (a file that
+ * line of JSON, "[]" for none; no such line when sets is NULL: not known) (+ "# note: ..."), malloc'ed; NULL when out of memory (a file that
  * cannot be read is noted in the text instead). */
 char *trial_config_text(const rig_config *cfg, const char *const *sets, int n_sets, const char *note);
 
