@@ -99,7 +99,8 @@ static int bench(int argc, char **argv)
     clock_gettime(CLOCK_MONOTONIC, &t0);
     trial_session *s = NULL;
     int64_t id = 0;
-    if (trial_session_start(&d.cfg, d.compress, d.shear, "bench", NULL, NULL, &s, &id, why, sizeof why)) {
+    if (trial_session_start_tx(&d.cfg, d.overrides, d.n_overrides, d.compress, d.shear, "bench", NULL, NULL, NULL, &s,
+                               &id, why, sizeof why)) {
         fprintf(stderr, "ribbond bench: %s\n", why);
         rig_daemon_close(&d, "bench");
         return 1;

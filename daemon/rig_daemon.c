@@ -574,7 +574,7 @@ static int start_trial(rig_daemon *d, store *check, const store_specimen *sp, co
                  d->checks.fails == 1 ? "" : "s", names, d->checked_at, first[0] ? first : d->rails_why);
         return -1;
     }
-    trial_err te = trial_session_start_tx(&cfg, d->compress, d->shear, note, d->log, d->bus, d->transcoder,
+    trial_err te = trial_session_start_tx(&cfg, ov, nov, d->compress, d->shear, note, d->log, d->bus, d->transcoder,
                                           &d->session, id, why, why_len);
     pthread_mutex_unlock(&d->lock);
     if (te != TRIAL_OK) {
@@ -829,7 +829,10 @@ static int op_show(void *user, int64_t id, json_t **out, int *http_status, char 
     running_session(d);
     pthread_mutex_unlock(&d->lock);
     store_err e = store_trial_json(d->st, id, out, why, why_len);
-    if (e == STORE_OK) return 0;
+    if (e == STORE_OK) {
+        trial_config_text_add_overrides(d->st, id, *out);
+        return 0;
+    }
     *http_status = e == STORE_E_NOTFOUND ? 404 : 500;
     return -1;
 }

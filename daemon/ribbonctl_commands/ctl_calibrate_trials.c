@@ -1,8 +1,9 @@
 /* ctl_calibrate_trials.c: stored trials turned into a fit's input (ctl_calibrate_trials.h).
  *
- * The strip: the scene file stored in the trial's config text (trial_config_text_scene), with
- * the creases its prediction used put back in (the specimen's measured angles and positions and
- * the hinge, store_creases: the prediction row is the record of what the trial's strip was
+ * The strip: the scene file stored in the trial's config text with the scene overrides stored
+ * there applied in order (trial_config_text_scene_load: the scene the trial ran), with the
+ * creases its prediction used put back in (the specimen's measured angles and positions and the
+ * hinge, store_creases: the prediction row is the record of what the trial's strip was
  * thought to be), then the user's --set overrides. A replay has no prediction of its own: its
  * source trial's is used. Several trials are one strip only when they are of one specimen and
  * their reconstructed strips agree (the protocol may differ); anything else is refused by name.
@@ -46,26 +47,18 @@ static int trial_scene(store *st, const store_trial *t, const ctl_calib_select *
                        int64_t *pred_of, double *snap_pred, char *why, size_t why_len)
 {
     char *text = NULL, w[512];
-    const char *begin;
-    size_t len;
     if (store_trial_texts(st, t->id, &text, NULL, w, sizeof w) != STORE_OK) {
         snprintf(why, why_len, "trial %lld: %s", (long long)t->id, w);
-        return -1;
-    }
-    if (trial_config_text_scene(text, &begin, &len)) {
-        snprintf(why, why_len, "trial %lld: its stored configuration holds no readable scene file", (long long)t->id);
-        free(text);
         return -1;
     }
     char name[64];
     snprintf(name, sizeof name, "trial %lld's scene", (long long)t->id);
     rod_scene sc;
     cfg_error ce;
-    cfg_status cs = cfg_scene_parse(name, begin, len, NULL, 0, &sc, &ce);
+    int rc = trial_config_text_scene_load(text, name, &sc, w, sizeof w);
     free(text);
-    if (cs != CFG_OK) {
-        cfg_error_format(&ce, w, sizeof w);
-        snprintf(why, why_len, "trial %lld: its stored scene cannot be read: %s", (long long)t->id, w);
+    if (rc) {
+        snprintf(why, why_len, "trial %lld: %s", (long long)t->id, w);
         return -1;
     }
     *pred_of = 0;

@@ -517,6 +517,24 @@ static int cmd_list(const ctl_opts *o)
     return 0;
 }
 
+/* "  overrides (in order): a=1, b=2": what the trial's files were run with changed. */
+static void print_overrides(const json_t *t)
+{
+    const json_t *ov = json_object_get(t, "overrides");
+    if (!json_is_array(ov)) {
+        printf("  overrides: not recorded (a trial stored before they were)\n");
+        return;
+    }
+    if (json_array_size(ov) == 0) {
+        printf("  overrides: none (the rig and scene files as stored)\n");
+        return;
+    }
+    printf("  overrides (in order, after the files):");
+    for (size_t k = 0; k < json_array_size(ov); k++)
+        printf("%s %s", k ? "," : "", json_string_value(json_array_get(ov, k)));
+    printf("\n");
+}
+
 static int cmd_show(const ctl_opts *o)
 {
     if (!o->id) return usage_error("show", "which trial? ribbonctl show ID");
@@ -526,6 +544,7 @@ static int cmd_show(const ctl_opts *o)
         char why[512];
         if (open_db(o, &st, 1)) return 1;
         store_err e = store_trial_json(st, o->id, &t, why, sizeof why);
+        if (e == STORE_OK) trial_config_text_add_overrides(st, o->id, t);
         store_close(st);
         if (e != STORE_OK) {
             fprintf(stderr, "ribbonctl: %s\n", why);
@@ -543,6 +562,7 @@ static int cmd_show(const ctl_opts *o)
         printf("  mode %s, samples %lld, video %s, specimen %s\n", jstr(t, "mode"),
                (long long)json_integer_value(json_object_get(t, "samples")), jstr(t, "video_path"), jstr(t, "specimen"));
         print_creases(t);
+        print_overrides(t);
         json_t *ev = json_object_get(t, "events");
         for (size_t k = 0; k < json_array_size(ev); k++) {
             json_t *e = json_array_get(ev, k);

@@ -1,11 +1,17 @@
 /* trial_config_text.c: the configuration a trial ran with, as text kept in its row: the rig file
- * and the scene file as they were (each capped at 1 MiB), and the operator's note; and the scene
- * file's part of such a text found again. */
+ * and the scene file as they were (each capped at 1 MiB), the overrides applied to them (in
+ * order: ribbond's --set, the specimen's record, the start's "set"), and the operator's note; and
+ * the scene the trial ran rebuilt from such a text. */
 #include "trial_config_text.h"
 
+#include <jansson.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "scene_file.h"
+
+#define OVERRIDES_HEAD "# overrides applied in order after the files: "
 
 /* Appends the file's text (or a note that it could not be read) to a growing buffer. */
 static int append_file(char **buf, size_t *len, size_t *cap, const char *label, const char *path)
@@ -42,7 +48,7 @@ static int append_file(char **buf, size_t *len, size_t *cap, const char *label, 
     return 0;
 }
 
-char *trial_config_text(const rig_config *cfg, const char *note)
+char *trial_config_text(const rig_config *cfg, const char *const *sets, int n_sets, const char *note)
 {
     char *buf = NULL;
     size_t len = 0, cap = 0;
@@ -51,6 +57,32 @@ char *trial_config_text(const rig_config *cfg, const char *note)
         free(buf);
         return NULL;
     }
+    /* One line of JSON: an override's value may hold any character, a newline too. No line when
+     * the caller does not know them (sets NULL): "not recorded", never a false "none". */
+    json_t *arr = sets ? json_array() : NULL;
+    for (int k = 0; arr && k < n_sets; k++)
+        if (json_array_append_new(arr, json_string(sets[k] ? sets[k] : "")) != 0) {
+            json_decref(arr);
+            arr = NULL;
+        }
+    char *js = arr ? json_dumps(arr, JSON_COMPACT | JSON_ENSURE_ASCII) : NULL;
+    json_decref(arr);
+    if (sets && !js) /* an override that is not UTF-8: said so, and the rebuild refuses it */
+        js = strdup("(not readable: an override is not UTF-8 text)");
+    if (sets && !js) {
+        free(buf);
+        return NULL;
+    }
+    size_t need = js ? strlen(OVERRIDES_HEAD) + strlen(js) + 2 : 0;
+    char *nb = js ? realloc(buf, len + need + 1) : buf;
+    if (!nb) {
+        free(js);
+        free(buf);
+        return NULL;
+    }
+    buf = nb;
+    if (js) len += (size_t)snprintf(buf + len, need + 1, "%s%s\n", OVERRIDES_HEAD, js);
+    free(js);
     if (note && *note) {
         size_t n = strlen(note) + 16;
         char *nb = realloc(buf, len + n + 1);
@@ -74,6 +106,16 @@ static const char *last_line_with(const char *text, const char *end, const char 
     return found;
 }
 
+/* The start of the first line of text[0, end) that begins with prefix, or NULL. The overrides
+ * line is looked for this way: the note after it is free text (it may hold lines of its own). */
+static const char *first_line_with(const char *text, const char *end, const char *prefix)
+{
+    size_t n = strlen(prefix);
+    for (const char *p = text; p && p < end; p = strchr(p, '\n'), p = p ? p + 1 : NULL)
+        if ((size_t)(end - p) >= n && !strncmp(p, prefix, n)) return p;
+    return NULL;
+}
+
 int trial_config_text_scene(const char *text, const char **begin, size_t *len)
 {
     const char *end = text + strlen(text);
@@ -83,12 +125,101 @@ int trial_config_text_scene(const char *text, const char **begin, size_t *len)
     if (!body) return -1;
     body++;
     if (!strncmp(body, "# (could not be read)", 21)) return -1;
-    /* What trial_config_text and a replay's row append after the scene: at most these two. */
-    const char *tail = last_line_with(body, end, "# replay of trial ");
-    if (tail) end = tail;
-    tail = last_line_with(body, end, "# note: ");
-    if (tail) end = tail;
+    /* What trial_config_text and a replay's row append after the scene: the overrides line
+     * first (when stored), else the note, and a replay's line. */
+    const char *tail = first_line_with(body, end, OVERRIDES_HEAD);
+    if (tail) {
+        end = tail;
+    } else {
+        tail = last_line_with(body, end, "# replay of trial ");
+        if (tail) end = tail;
+        tail = last_line_with(body, end, "# note: ");
+        if (tail) end = tail;
+    }
     *begin = body;
     *len = (size_t)(end - body);
     return 0;
+}
+
+json_t *trial_config_text_overrides(const char *text)
+{
+    const char *end = text + strlen(text);
+    const char *head = last_line_with(text, end, "# scene file ");
+    const char *line = head ? first_line_with(head, end, OVERRIDES_HEAD) : NULL;
+    if (!line) return NULL;
+    line += strlen(OVERRIDES_HEAD);
+    const char *eol = strchr(line, '\n');
+    json_t *arr = json_loadb(line, eol ? (size_t)(eol - line) : strlen(line), 0, NULL);
+    int ok = json_is_array(arr);
+    for (size_t k = 0; ok && k < json_array_size(arr); k++) ok = json_is_string(json_array_get(arr, k));
+    if (!ok) {
+        json_decref(arr);
+        return NULL;
+    }
+    return arr;
+}
+
+/* Whether the override "section.key=value" names one of the scene's sections. */
+static int is_scene_override(const char *ovr)
+{
+    const char *eq = strchr(ovr, '=');
+    const char *stop = eq ? eq : ovr + strlen(ovr);
+    const char *dot = NULL;
+    for (const char *p = ovr; p < stop; p++)
+        if (*p == '.') dot = p;
+    if (!dot) return 0;
+    while (ovr < dot && (*ovr == ' ' || *ovr == '\t')) ovr++;
+    size_t n;
+    const cfg_scene_key *k = cfg_scene_keys(&n);
+    for (size_t i = 0; i < n; i++)
+        if (strlen(k[i].section) == (size_t)(dot - ovr) && !strncmp(k[i].section, ovr, (size_t)(dot - ovr))) return 1;
+    return 0;
+}
+
+int trial_config_text_scene_load(const char *text, const char *name, rod_scene *out, char *why, size_t why_len)
+{
+    const char *begin;
+    size_t len;
+    if (trial_config_text_scene(text, &begin, &len)) {
+        snprintf(why, why_len, "its stored configuration holds no readable scene file");
+        return -1;
+    }
+    json_t *arr = trial_config_text_overrides(text);
+    const char *end = text + strlen(text);
+    if (!arr && first_line_with(begin + len, end, OVERRIDES_HEAD)) {
+        snprintf(why, why_len, "its stored overrides cannot be read");
+        return -1;
+    }
+    size_t n = json_array_size(arr);
+    const char **sets = calloc(n ? n : 1, sizeof *sets);
+    if (!sets) {
+        json_decref(arr);
+        snprintf(why, why_len, "out of memory");
+        return -1;
+    }
+    int ns = 0;
+    for (size_t k = 0; k < n; k++) {
+        const char *o = json_string_value(json_array_get(arr, k));
+        if (is_scene_override(o)) sets[ns++] = o;
+    }
+    cfg_error ce;
+    cfg_status cs = cfg_scene_parse(name, begin, len, sets, ns, out, &ce);
+    free(sets);
+    json_decref(arr);
+    if (cs != CFG_OK) {
+        char w[400];
+        cfg_error_format(&ce, w, sizeof w);
+        snprintf(why, why_len, "its stored scene cannot be read: %s", w);
+        return -1;
+    }
+    return 0;
+}
+
+void trial_config_text_add_overrides(store *st, int64_t id, json_t *trial)
+{
+    char *text = NULL, w[256];
+    json_t *arr = NULL;
+    if (store_trial_texts(st, id, &text, NULL, w, sizeof w) == STORE_OK && text) arr = trial_config_text_overrides(text);
+    free(text);
+    json_object_set_new(trial, "overrides", arr ? arr : json_null());
 }

@@ -344,7 +344,7 @@ int trial_replay_from_files(const rig_config *cfg, trial_replay **out, char *why
     if (read_rails(r, cfg->replay.rails, why, why_len)) goto fail;
     if (read_frame_times(r, why, why_len)) goto fail;
     shear_window(r);
-    r->config_text = trial_config_text(cfg, NULL);
+    r->config_text = trial_config_text(cfg, NULL, 0, NULL);
     if (!r->config_text) {
         snprintf(why, why_len, "out of memory");
         goto fail;

@@ -813,10 +813,10 @@ trial_err trial_session_start(const rig_config *cfg, rail *compress, rail *shear
                               void (*log)(const char *line), live_bus *bus, trial_session **out, int64_t *trial_id,
                               char *why, size_t why_len)
 {
-    return trial_session_start_tx(cfg, compress, shear, note, log, bus, NULL, out, trial_id, why, why_len);
+    return trial_session_start_tx(cfg, NULL, 0, compress, shear, note, log, bus, NULL, out, trial_id, why, why_len);
 }
 
-trial_err trial_session_start_tx(const rig_config *cfg, rail *compress, rail *shear, const char *note,
+trial_err trial_session_start_tx(const rig_config *cfg, const char *const *sets, int n_sets, rail *compress, rail *shear, const char *note,
                                  void (*log)(const char *line), live_bus *bus, trial_transcoder *tx,
                                  trial_session **out, int64_t *trial_id, char *why, size_t why_len)
 {
@@ -853,7 +853,7 @@ trial_err trial_session_start_tx(const rig_config *cfg, rail *compress, rail *sh
     int64_t spid = 0;
     if (store_specimen_upsert(s->st, &sp, &spid, why, why_len) != STORE_OK) goto fail;
     if (trial_camera_setup(cfg, &s->cal, &s->width, &s->height, &s->roi, why, why_len)) goto fail;
-    char *config_text = trial_config_text(cfg, s->note);
+    char *config_text = trial_config_text(cfg, sets, n_sets, s->note);
     char *calib = trial_record_json(cfg, &s->cal, s->roi, why, why_len);
     if (!calib) {
         free(config_text);

@@ -81,8 +81,11 @@ trial_err trial_session_start(const rig_config *cfg, rail *compress, rail *shear
                               char *why, size_t why_len);
 /* The same, with the daemon's transcoder (may be NULL): in rig mode, with camera.transcode = ffv1,
  * the trial's raw video is handed to it once the live pipeline has closed it complete (queued
- * only; the session does not wait for it). The transcoder must outlive the session. */
-trial_err trial_session_start_tx(const rig_config *cfg, rail *compress, rail *shear, const char *note,
+ * only; the session does not wait for it). The transcoder must outlive the session. sets: the
+ * n_sets overrides cfg was loaded with, in order, stored in the trial's config text (the record of
+ * the scene it ran: trial_config_text.h; NULL: not known, none stored); trial_session_start
+ * passes NULL. */
+trial_err trial_session_start_tx(const rig_config *cfg, const char *const *sets, int n_sets, rail *compress, rail *shear, const char *note,
                                  void (*log)(const char *line), live_bus *bus, trial_transcoder *tx,
                                  trial_session **out, int64_t *trial_id, char *why, size_t why_len);
 void trial_session_abort(trial_session *s, const char *reason);

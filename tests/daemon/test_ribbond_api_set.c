@@ -3,8 +3,13 @@
  * scene at any file and read it back in the error ("'hunter2' is not a number"), have the daemon
  * create and fill any directory (camera.video_dir), and change the API's token, address and port
  * silently. Now such an override is a 400 naming its key, nothing is read or created, and the
- * operator's own --set (ribbond's command line) still changes anything. No trial runs here: every
- * request is refused before one could start. */
+ * operator's own --set (ribbond's command line) still changes anything. No trial runs in the
+ * first test: every request is refused before one could start.
+ *
+ * The second (issue 32 C's defect) starts one mock trial with scene overrides and aborts it at
+ * once: the overrides applied (ribbond's --set, then the body's, in order) are in its stored
+ * record, shown by GET /trials/ID, and the scene rebuilt from the record (what ribbonctl
+ * calibrate fits) is the one the trial ran, not the bare scene file's. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -19,6 +24,9 @@
 #include <unistd.h>
 
 #include "rig_daemon.h"
+#include "scene_file.h"
+#include "store.h"
+#include "trial.h"
 #include "test_dir.h"
 
 static char dir[64];
@@ -33,9 +41,9 @@ static int setup(void **state)
     static char set_store[128], set_video[128];
     snprintf(set_store, sizeof set_store, "store.path=%s/trials.db", dir);
     snprintf(set_video, sizeof set_video, "camera.video_dir=%s/videos", dir); /* the operator's --set */
-    const char *ov[] = {set_store, set_video, "api.port=0", "sim.nodes=61"};
+    const char *ov[] = {set_store, set_video, "api.port=0", "sim.nodes=61", "ribbon.thickness=0.3e-3"};
     char why[512] = "";
-    if (rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, 4, NULL, why, sizeof why) != 0)
+    if (rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, 5, NULL, why, sizeof why) != 0)
         fail_msg("open: %s", why);
     opened = 1;
     return 0;
@@ -134,10 +142,75 @@ static void test_paths_and_api_refused(void **state)
     assert_string_equal(d.cfg.camera.video_dir, want);
 }
 
+static void test_overrides_stored_with_the_trial(void **state)
+{
+    (void)state;
+    char why[512];
+    int status = 0;
+    api_ops ops = rig_daemon_ops();
+    json_error_t je;
+    json_t *body = json_loads("{\"set\": [\"folds.angle_deg=-75\", \"trial.hold_s=0.5\", "
+                              "\"imperfection.fold_angle_rel=0.02\"]}", 0, &je);
+    assert_non_null(body);
+    json_t *out = NULL;
+    why[0] = '\0';
+    if (ops.start(&d, body, &out, &status, why, sizeof why) != 0) fail_msg("start: %d %s", status, why);
+    json_decref(body);
+    int64_t id = (int64_t)json_integer_value(json_object_get(out, "id"));
+    json_decref(out);
+    assert_true(id > 0);
+    out = NULL;
+    ops.abort_current(&d, &out, &status, why, sizeof why);
+    json_decref(out);
+
+    /* GET /trials/ID: the overrides, the daemon's first, in order. */
+    out = NULL;
+    if (ops.show(&d, id, &out, &status, why, sizeof why) != 0) fail_msg("show: %d %s", status, why);
+    json_t *got = json_object_get(out, "overrides");
+    assert_true(json_is_array(got));
+    const char *want[] = {"store.path=", "camera.video_dir=", "api.port=0", "sim.nodes=61",
+                          "ribbon.thickness=0.3e-3", "folds.angle_deg=-75", "trial.hold_s=0.5",
+                          "imperfection.fold_angle_rel=0.02"};
+    assert_int_equal(json_array_size(got), 8);
+    for (size_t k = 0; k < 8; k++)
+        if (strncmp(json_string_value(json_array_get(got, k)), want[k], strlen(want[k])) != 0)
+            fail_msg("override %zu: %s, expected %s", k, json_string_value(json_array_get(got, k)), want[k]);
+    json_decref(out);
+
+    /* The scene rebuilt from the stored record equals the one the trial was loaded with. */
+    char dbp[128];
+    snprintf(dbp, sizeof dbp, "%s/trials.db", dir);
+    store *st;
+    assert_int_equal(store_open(dbp, &st, why, sizeof why), STORE_OK);
+    char *text = NULL;
+    assert_int_equal(store_trial_texts(st, id, &text, NULL, why, sizeof why), STORE_OK);
+    store_close(st);
+    rod_scene rebuilt;
+    if (trial_config_text_scene_load(text, "stored", &rebuilt, why, sizeof why)) fail_msg("rebuild: %s", why);
+    assert_true(rebuilt.fold_angle_deg == -75.0);
+    assert_true(rebuilt.thickness == 0.3e-3);
+    assert_true(rebuilt.fold_angle_rel == 0.02);
+    rig_config cfg;
+    cfg_error ce;
+    const char *ran[] = {"sim.nodes=61", "ribbon.thickness=0.3e-3", "folds.angle_deg=-75", "trial.hold_s=0.5",
+                         "imperfection.fold_angle_rel=0.02"};
+    assert_int_equal(rig_config_load(RIBBON_SOURCE_DIR "/config/mock.ini", ran, 5, &cfg, &ce), CFG_OK);
+    assert_memory_equal(&rebuilt, &cfg.scene, sizeof rebuilt);
+    /* The bare scene file (all a trial's record kept before) is another strip. */
+    const char *begin;
+    size_t len;
+    assert_int_equal(trial_config_text_scene(text, &begin, &len), 0);
+    rod_scene bare;
+    assert_int_equal(cfg_scene_parse("bare", begin, len, NULL, 0, &bare, &ce), CFG_OK);
+    assert_true(bare.fold_angle_deg == -90.0);
+    free(text);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_paths_and_api_refused, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_overrides_stored_with_the_trial, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
