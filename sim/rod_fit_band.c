@@ -67,6 +67,16 @@ rod_status rod_fit_band_eval(const rod_fit_result *fit, double snap0, double pea
                          "direction the strip %s", w2);
                 break;
             }
+            /* two standard deviations: the regime only (a perturbed strip that fails says nothing) */
+            memcpy(u, fit->u, sizeof u);
+            for (int a = 0; a < m; a++) {
+                int k = key[a];
+                u[k] += (sgn ? -2.0 : 2.0) * sqrt(lam) * gsl_matrix_get(V, (size_t)a, (size_t)d);
+                u[k] = fmin(fit->hi[k], fmax(fit->lo[k], u[k]));
+            }
+            double s2, p2;
+            out->peak1[out->directions][sgn] = peak[sgn];
+            out->peak2[out->directions][sgn] = f(ctx, u, &s2, &p2, w2, sizeof w2) == 0 ? p2 : NAN;
         }
         if (!out->ok) break;
         var_s += 0.25 * (snap[0] - snap[1]) * (snap[0] - snap[1]);
@@ -89,4 +99,25 @@ rod_status rod_fit_band_eval(const rod_fit_result *fit, double snap0, double pea
         snprintf(out->note + n, sizeof out->note - (size_t)n, "%scovariance scaled by the reduced chi-square %.2f",
                  n ? "; " : "", out->scale);
     return ROD_OK;
+}
+
+/* The tail beyond the first crossing of thr along a piecewise linear peak |A| through (0, a0),
+   (1, a1), (2, a2); 0 without a crossing. */
+static double crossing_tail(double a0, double a1, double a2, double thr)
+{
+    double s0 = a0 - thr, s1 = a1 - thr, s2 = a2 - thr, t;
+    if (s0 * s1 <= 0.0 && s1 != s0) t = s0 / (s0 - s1);
+    else if (isfinite(a2) && s1 * s2 <= 0.0 && s2 != s1) t = 1.0 + s1 / (s1 - s2);
+    else return 0.0;
+    return 0.5 * erfc(t / sqrt(2.0));
+}
+
+double rod_fit_band_p_other(const rod_fit_band *b, double peak0, double thr)
+{
+    if (!b->ok) return 0.0;
+    double gap = fabs(peak0 - thr);
+    double p = b->peak_sd > 0.0 ? 0.5 * erfc(gap / (b->peak_sd * sqrt(2.0))) : 0.0;
+    for (int d = 0; d < b->directions; d++)
+        for (int s = 0; s < 2; s++) p = fmax(p, crossing_tail(peak0, b->peak1[d][s], b->peak2[d][s], thr));
+    return p;
 }

@@ -18,7 +18,13 @@
  * squared central differences ((s+ - s-) / 2)^2; the peak |A|'s uses the larger one-sided change
  * max((a+ - a0)^2, (a- - a0)^2), so that a kink (a change of pathway between the two sides, where
  * a central difference cancels) widens it instead of vanishing. Both are exact for a linear model
- * (sd^2 = g^T C g). */
+ * (sd^2 = g^T C g).
+ *
+ * The probability of the other regime: peak |A| normal (mean peak0, sd peak_sd) beyond the
+ * threshold, but not less than the tail beyond the first crossing of the threshold along any
+ * principal direction, found by following peak |A| piecewise linearly through its values at 0, 1
+ * and 2 standard deviations (2 p more predictions): a strip next to a change of pathway, whose
+ * peak |A| jumps rather than moves, gets the probability of the jump, not a normal tail. */
 #ifndef RIBBON_SIM_ROD_FIT_BAND_H
 #define RIBBON_SIM_ROD_FIT_BAND_H
 
@@ -39,11 +45,17 @@ typedef struct rod_fit_band {
     int by_prior;         /* parameters in the band through their prior only (not determined by data) */
     int left_out;         /* fitted strip parameters neither determined nor with a prior */
     char note[256];       /* why there is no band, or what it rests on; "" otherwise */
+    double peak1[ROD_FIT_NKEYS][2], peak2[ROD_FIT_NKEYS][2]; /* peak |A| one and two standard
+                                        deviations along each direction, + and - */
 } rod_fit_band;
 
 /* fit: rod_fit_run's result; snap0, peak0: the predictor at fit->u. Returns ROD_OK (out->ok says
  * whether there is a band) or ROD_ERR_ALLOC. */
 rod_status rod_fit_band_eval(const rod_fit_result *fit, double snap0, double peak0, rod_fit_band_fn f, void *ctx,
                              rod_fit_band *out, char *why, size_t why_len);
+
+/* The probability of the other regime (above): peak0 the fitted strip's peak |A|, thr the
+ * regime threshold. 0 when there is no band. */
+double rod_fit_band_p_other(const rod_fit_band *b, double peak0, double thr);
 
 #endif

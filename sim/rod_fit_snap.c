@@ -62,8 +62,7 @@ rod_status rod_fit_snap_predict(const rod_scene *sc, const rod_fit_result *fit, 
     if (b.ok) {
         out->snap_sd = b.snap_sd;
         out->peak_sd = b.peak_sd;
-        double gap = fabs(out->peak_abs_a - sc->asym_threshold);
-        out->p_other = out->peak_sd > 0.0 ? 0.5 * erfc(gap / (out->peak_sd * sqrt(2.0))) : 0.0;
+        out->p_other = rod_fit_band_p_other(&b, out->peak_abs_a, sc->asym_threshold);
     }
 done:
     clock_gettime(CLOCK_MONOTONIC, &t1);

@@ -109,7 +109,7 @@ static void test_linear_without_prior_the_band_is_exact(void **state)
     assert_int_equal(rod_fit_band_eval(&f, 0.25, 0.1, lin_fn, &l, &b, why, sizeof why), ROD_OK);
     assert_true(b.ok);
     assert_int_equal(b.directions, 2);
-    assert_int_equal(l.calls, 4);
+    assert_int_equal(l.calls, 8); /* one and two standard deviations either side, 2 directions */
     /* closed form: g^T C g = (11 g1^2 - 10 g1 g2 + 5 g2^2) / 30 */
     double g1 = 0.004, g2 = -0.007, exact = sqrt((11 * g1 * g1 - 10 * g1 * g2 + 5 * g2 * g2) / 30.0);
     assert_double_equal(b.snap_sd, exact, 1e-12 * exact);
@@ -208,6 +208,59 @@ static void test_a_kink_in_peak_widens_its_sd(void **state)
     assert_double_equal(b.peak_sd, exact, 1e-12);
 }
 
+static void test_p_other_is_the_normal_tail_for_a_linear_peak(void **state)
+{
+    (void)state;
+    rod_fit_result f;
+    lin l;
+    make_fit(&f, &l, 0.006);
+    rod_fit_band b;
+    char why[128];
+    assert_int_equal(rod_fit_band_eval(&f, 0.25, 0.1, lin_fn, &l, &b, why, sizeof why), ROD_OK);
+    double sd = sqrt(quad(&f, l.h)), thr = 0.1 + 2.5 * sd; /* 2.5 sd away: no probe reaches it */
+    assert_double_equal(rod_fit_band_p_other(&b, 0.1, thr), 0.5 * erfc(2.5 / sqrt(2.0)), 1e-12);
+}
+
+/* peak |A| 0.55 - 0.01 z for z > -1.5 standard deviations of the one fitted parameter, then 0.25:
+   a change of pathway between 1 and 2 sd, as twin 18 of the family (docs/calibration.md) */
+static int jump_fn(void *ctx, const double u[ROD_FIT_NKEYS], double *snap, double *peak, char *why, size_t why_len)
+{
+    (void)why;
+    (void)why_len;
+    const rod_fit_result *f = ctx;
+    double z = (u[ROD_FIT_ANGLE_LEFT] - f->u[ROD_FIT_ANGLE_LEFT]) / f->se[ROD_FIT_ANGLE_LEFT];
+    *snap = 0.25 + 0.001 * z;
+    *peak = z > -1.5 ? 0.55 - 0.01 * z : 0.25;
+    return 0;
+}
+
+static void test_p_other_sees_a_jump_across_the_threshold(void **state)
+{
+    (void)state;
+    rod_fit_result f;
+    memset(&f, 0, sizeof f);
+    for (int k = 0; k < ROD_FIT_NKEYS; k++) {
+        f.lo[k] = -100.0;
+        f.hi[k] = 100.0;
+    }
+    f.u[ROD_FIT_ANGLE_LEFT] = -85.0;
+    f.fitted[ROD_FIT_ANGLE_LEFT] = f.determined[ROD_FIT_ANGLE_LEFT] = 1;
+    f.se[ROD_FIT_ANGLE_LEFT] = 0.5;
+    f.cov[ROD_FIT_ANGLE_LEFT][ROD_FIT_ANGLE_LEFT] = 0.25;
+    f.nres = 40;
+    f.nfit = 1;
+    rod_fit_band b;
+    char why[128];
+    assert_int_equal(rod_fit_band_eval(&f, 0.25, 0.55, jump_fn, &f, &b, why, sizeof why), ROD_OK);
+    assert_true(b.ok);
+    assert_double_equal(b.peak_sd, 0.01, 1e-12);
+    /* the normal tail alone: 0.05 / 0.01 = 5 sd, 2.9e-7; the jump: peak 0.56 at z = -1 and 0.25 at
+       z = -2 cross 0.5 at z = -(1 + 0.06 / 0.31) */
+    double t = 1.0 + 0.06 / 0.31;
+    assert_double_equal(rod_fit_band_p_other(&b, 0.55, 0.5), 0.5 * erfc(t / sqrt(2.0)), 1e-12);
+    assert_true(rod_fit_band_p_other(&b, 0.55, 0.5) > 0.1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -217,6 +270,8 @@ int main(void)
         cmocka_unit_test(test_the_camera_offset_is_not_in_the_band),
         cmocka_unit_test(test_reduced_chi_square_widens_never_narrows),
         cmocka_unit_test(test_a_kink_in_peak_widens_its_sd),
+        cmocka_unit_test(test_p_other_is_the_normal_tail_for_a_linear_peak),
+        cmocka_unit_test(test_p_other_sees_a_jump_across_the_threshold),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
