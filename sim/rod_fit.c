@@ -412,6 +412,7 @@ static int covariance(fit_ctx *c, const double *Jw, rod_fit_result *res)
     double smax = gsl_vector_get(S, 0);
     double factor = 1.0;
     if (c->o->scale_covariance && n > p) factor = res->chi2 / (double)(n - p);
+    res->cov_scaled = factor != 1.0;
     for (int a = 0; a < p; a++)
         for (int b = 0; b < p; b++) {
             double s = 0.0;

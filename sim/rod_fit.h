@@ -73,6 +73,7 @@ typedef struct rod_fit_result {
     int misfit;                      /* rms above opts.misfit */
     double sv_min, sv_max;           /* singular values of the range-scaled data Jacobian */
     double wall_s;
+    int cov_scaled;                  /* 1: cov already times chi2 / (n - p) (scale_covariance) */
 } rod_fit_result;
 
 /* Fits. Returns ROD_OK with res filled (misfit and at_bound are verdicts the caller reports),

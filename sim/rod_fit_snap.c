@@ -1,10 +1,9 @@
 /* rod_fit_snap.c: the fitted strip's snap with a linearised band (rod_fit_snap.h). */
 #include "rod_fit_snap.h"
 
+#include "rod_fit_band.h"
 #include "rod_protocol.h"
 
-#include <gsl/gsl_eigen.h>
-#include <gsl/gsl_matrix.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -17,6 +16,20 @@ static rod_status predict_at(const rod_scene *sc, const double u[ROD_FIT_NKEYS],
     rod_fit_scene_apply(&s, u);
     rod_predict_opts o = rod_predict_opts_fast(&s);
     return rod_predict(&s, &o, p, why, why_len);
+}
+
+/* rod_fit_band_fn over the fast predictor: a perturbed strip must snap. */
+static int band_fn(void *ctx, const double u[ROD_FIT_NKEYS], double *snap, double *peak, char *why, size_t why_len)
+{
+    rod_prediction q;
+    if (predict_at((const rod_scene *)ctx, u, &q, why, why_len) != ROD_OK) return 1;
+    if (!q.snapped) {
+        snprintf(why, why_len, "does not snap");
+        return 1;
+    }
+    *snap = q.snap_dw;
+    *peak = q.peak_abs_a;
+    return 0;
 }
 
 rod_status rod_fit_snap_predict(const rod_scene *sc, const rod_fit_result *fit, rod_fit_snap *out, char *why,
@@ -36,69 +49,20 @@ rod_status rod_fit_snap_predict(const rod_scene *sc, const rod_fit_result *fit, 
         snprintf(out->note, sizeof out->note, "the fitted strip does not snap before protocol.shear_max");
         goto done;
     }
-    int key[ROD_FIT_NKEYS], m = 0;
-    for (int k = 0; k < ROD_FIT_NKEYS; k++) {
-        if (!fit->fitted[k] || !rod_fit_key_strip((rod_fit_key)k)) continue; /* the camera's offset: no snap */
-        if (!fit->determined[k]) {
-            out->left_out++;
-            continue;
-        }
-        key[m++] = k;
-    }
-    out->band_ok = 1;
-    if (m > 0) {
-        gsl_matrix *C = gsl_matrix_alloc((size_t)m, (size_t)m), *V = gsl_matrix_alloc((size_t)m, (size_t)m);
-        gsl_vector *ev = gsl_vector_alloc((size_t)m);
-        gsl_eigen_symmv_workspace *w = gsl_eigen_symmv_alloc((size_t)m);
-        if (!C || !V || !ev || !w) {
-            gsl_matrix_free(C); gsl_matrix_free(V); gsl_vector_free(ev); gsl_eigen_symmv_free(w);
-            snprintf(why, why_len, "out of memory");
-            return ROD_ERR_ALLOC;
-        }
-        for (int a = 0; a < m; a++)
-            for (int b = 0; b < m; b++) gsl_matrix_set(C, (size_t)a, (size_t)b, fit->cov[key[a]][key[b]]);
-        gsl_eigen_symmv(C, ev, V, w);
-        double var_s = 0.0, var_a = 0.0;
-        for (int d = 0; d < m && out->band_ok; d++) {
-            double lam = gsl_vector_get(ev, (size_t)d);
-            if (!(lam > 0.0)) continue;
-            double snap[2], peak[2];
-            for (int sgn = 0; sgn < 2; sgn++) {
-                double u[ROD_FIT_NKEYS];
-                memcpy(u, fit->u, sizeof u);
-                for (int a = 0; a < m; a++) {
-                    int k = key[a];
-                    u[k] += (sgn ? -1.0 : 1.0) * sqrt(lam) * gsl_matrix_get(V, (size_t)a, (size_t)d);
-                    u[k] = fmin(fit->hi[k], fmax(fit->lo[k], u[k]));
-                }
-                char w2[160];
-                rod_prediction q;
-                if (predict_at(sc, u, &q, w2, sizeof w2) != ROD_OK || !q.snapped) {
-                    out->band_ok = 0;
-                    snprintf(out->note, sizeof out->note, "no band: one standard deviation along a principal "
-                             "direction the strip %s", q.snapped ? w2 : "does not snap");
-                    break;
-                }
-                snap[sgn] = q.snap_dw;
-                peak[sgn] = q.peak_abs_a;
-            }
-            if (!out->band_ok) break;
-            var_s += 0.25 * (snap[0] - snap[1]) * (snap[0] - snap[1]);
-            var_a += 0.25 * (peak[0] - peak[1]) * (peak[0] - peak[1]);
-            out->directions++;
-        }
-        gsl_matrix_free(C); gsl_matrix_free(V); gsl_vector_free(ev); gsl_eigen_symmv_free(w);
-        out->snap_sd = sqrt(var_s);
-        out->peak_sd = sqrt(var_a);
-    }
-    if (out->band_ok) {
-        double gap = fabs(out->peak_abs_a - sc->asym_threshold);
-        out->p_other = out->peak_sd > 0.0 ? 0.5 * erfc(gap / (out->peak_sd * sqrt(2.0))) : 0.0;
-        if (out->left_out)
-            snprintf(out->note, sizeof out->note, "%d fitted parameter%s not determined by these data left out of "
-                     "the band (a lower bound)", out->left_out, out->left_out == 1 ? "" : "s");
-    } else {
-        out->snap_sd = out->peak_sd = out->p_other = 0.0;
+    rod_fit_band b;
+    st = rod_fit_band_eval(fit, p.snap_dw, p.peak_abs_a, band_fn, (void *)sc, &b, why, why_len);
+    if (st != ROD_OK) return st;
+    out->band_ok = b.ok;
+    out->unbounded = b.unbounded;
+    out->left_out = b.left_out;
+    out->by_prior = b.by_prior;
+    out->cov_scale = b.scale;
+    out->directions = b.directions;
+    snprintf(out->note, sizeof out->note, "%s", b.note);
+    if (b.ok) {
+        out->snap_sd = b.snap_sd;
+        out->peak_sd = b.peak_sd;
+        out->p_other = rod_fit_band_p_other(&b, out->peak_abs_a, sc->asym_threshold);
     }
 done:
     clock_gettime(CLOCK_MONOTONIC, &t1);

@@ -2,14 +2,16 @@
  * uncertainty band and the probability of the other regime.
  *
  * The prediction is the fast dynamic predictor (rod_predict with rod_predict_opts_fast, as
- * `ribbon-sim predict --fast`) on the scene with the fitted values. The band is linearised: the
- * covariance of the determined fitted parameters is diagonalised, C = sum lambda_k v_k v_k^T,
- * and the snap is predicted again at u +- sqrt(lambda_k) v_k (clamped into the bounds) for each
- * principal direction: sd^2 = sum_k ((snap+ - snap-) / 2)^2 (central differences, 2 p extra
- * predictions). The peak |A| of the snap gets the same treatment, and the probability of the
- * other regime is that of a normal peak |A| (mean: the fitted strip's, sd as above) on the other
- * side of the scene's regime threshold (snap.asym_threshold, rod_regime.h). Parameters the data do not determine are not in
- * the band (the note says which): the band is then a lower bound. */
+ * `ribbon-sim predict --fast`) on the scene with the fitted values. The band is linearised
+ * (rod_fit_band.h): every fitted strip parameter with a finite covariance (determined by the data,
+ * or held by its prior) is in it, the covariance is scaled by the reduced chi-square when that
+ * exceeds 1, and the snap is predicted again one standard deviation either side along each
+ * principal direction (2 p extra predictions). A fitted parameter the data do not determine and
+ * without a prior makes the band unbounded (band_ok 0, unbounded 1: no number). The probability of
+ * the other regime is that of a normal peak |A| (mean: the fitted strip's, sd from the larger
+ * one-sided change along each direction) on the other side of the scene's regime threshold
+ * (snap.asym_threshold, rod_regime.h).
+ */
 #ifndef RIBBON_SIM_ROD_FIT_SNAP_H
 #define RIBBON_SIM_ROD_FIT_SNAP_H
 
@@ -27,9 +29,12 @@ typedef struct rod_fit_snap {
     double peak_sd;       /* the same for peak |A| */
     double p_other;       /* probability of the other regime */
     int directions;       /* principal directions used */
-    int left_out;         /* fitted parameters left out of the band (not determined) */
-    char note[256];       /* why the band is partial or missing, "" otherwise */
+    int left_out;         /* fitted parameters neither determined nor with a prior (band unbounded) */
+    char note[256];       /* why the band is missing, or what it rests on; "" otherwise */
     double wall_s;
+    int unbounded;        /* 1: no band because a parameter without prior is not determined */
+    int by_prior;         /* parameters in the band through their prior only */
+    double cov_scale;     /* reduced chi-square applied to the covariance (1: none) */
 } rod_fit_snap;
 
 /* sc: the scene the fit started from; fit: rod_fit_run's result. Returns ROD_OK when the fitted
