@@ -567,11 +567,11 @@ static int start_trial(rig_daemon *d, store *check, const store_specimen *sp, co
             snprintf(names + u, sizeof names - u, "%s%s %s", u ? ", " : "", it->part, it->what);
             if (!first[0]) snprintf(first, sizeof first, "%s", it->text);
         }
-        pthread_mutex_unlock(&d->lock);
         *http_status = 409;
         snprintf(why, why_len, "the rig is not ready: %d check%s fail (%s; checked %s): first: %.300s; fix it, then "
                  "POST /checks or SIGHUP (GET /status lists them all)", d->checks.fails,
                  d->checks.fails == 1 ? "" : "s", names, d->checked_at, first[0] ? first : d->rails_why);
+        pthread_mutex_unlock(&d->lock); /* after the text: a check re-run may rewrite what it reads */
         return -1;
     }
     trial_err te = trial_session_start_tx(&cfg, ov, nov, d->compress, d->shear, note, d->log, d->bus, d->transcoder,
