@@ -208,6 +208,20 @@ static void test_settable_probe(void **state)
     assert_int_equal(vis_v4l2_ctrl_settable(fake_ioctl, &cam, 3, V4L2_CID_EXPOSURE_ABSOLUTE), 0);
 }
 
+/* gain_db on a V4L2 camera is refused by the opener itself, before the device is touched (there is
+ * no device here: without the refusal the error would be the device's). */
+static void test_open_refuses_gain_db(void **state)
+{
+    (void)state;
+    vis_camera_settings cs = vis_camera_settings_default();
+    cs.path = "/nonexistent/video-v4l2-test";
+    cs.gain_db = 6;
+    vis_error err = {0};
+    assert_null(vis_source_open_camera(&cs, &err));
+    assert_int_equal(err.code, VIS_ERR_ARG);
+    assert_non_null(strstr(err.message, "gain 6 dB refused: a V4L2 camera's gain has no dB scale"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -220,6 +234,7 @@ int main(void)
         cmocka_unit_test(test_read_back_differs),
         cmocka_unit_test(test_no_gain_control),
         cmocka_unit_test(test_settable_probe),
+        cmocka_unit_test(test_open_refuses_gain_db),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -139,10 +139,6 @@ public:
 // its own: V4L2 controls belong to the device, not to the descriptor OpenCV streams from.
 vis_status hold_exposure(const vis_camera_settings &cs, const std::string &name, vis_error *err)
 {
-    if (cs.gain_db >= 0)
-        return fail(err, VIS_ERR_ARG, "camera %s: gain %g dB refused: a V4L2 camera's gain has no dB scale (gain in "
-                    "dB is for GenICam cameras; a V4L2 gain is set in its control's own units, v4l2_gain)",
-                    name.c_str(), cs.gain_db);
     if (!(cs.exposure_us > 0) && !(cs.v4l2_gain >= 0))
         return VIS_OK;
     const std::string dev = cs.path && cs.path[0] ? std::string(cs.path) : "/dev/video" + std::to_string(cs.index);
@@ -247,6 +243,14 @@ Source *source_camera_open(const vis_camera_settings &cs, vis_error *err)
 {
     VideoSource *s = new VideoSource;
     s->live = true;
+    s->name = cs.path && cs.path[0] ? std::string(cs.path) : "#" + std::to_string(cs.index);
+    if (cs.gain_db >= 0) {  // refused before the device is touched
+        fail(err, VIS_ERR_ARG, "camera %s: gain %g dB refused: a V4L2 camera's gain has no dB scale (gain in dB is "
+             "for GenICam cameras; a V4L2 gain is set in its control's own units, v4l2_gain)", s->name.c_str(),
+             cs.gain_db);
+        delete s;
+        return nullptr;
+    }
     bool opened;
     if (cs.path && cs.path[0]) {
         s->name = cs.path;
