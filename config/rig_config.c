@@ -172,9 +172,13 @@ static const rig_key rig_keys[] = {
     {"camera", "offset_y_px", RIG_KEY_INT, OFF(camera.offset_y_px), 0, -1, 16384, 0, 0, NULL, "px",
      "-1 (the camera's own)", "aravis cameras: OffsetY of the region on the sensor"},
     {"camera", "exposure_us", RIG_KEY_DOUBLE, OFF(camera.exposure_us), 0, 0.0, 1e7, 0, 0, NULL, "us",
-     "0 (the camera's own)", "aravis cameras: ExposureTime"},
+     "0 (the camera's own)", "aravis cameras: ExposureTime; V4L2 cameras: exposure_time_absolute in whole 100 us "
+     "units, auto exposure switched off (docs/rig-camera-timing-and-faults.md)"},
     {"camera", "gain_db", RIG_KEY_DOUBLE, OFF(camera.gain_db), 0, -1.0, 100.0, 0, 0, NULL, "dB",
-     "-1 (the camera's own)", "aravis cameras: Gain"},
+     "-1 (the camera's own)", "aravis cameras: Gain (a V4L2 camera refuses it: see v4l2_gain)"},
+    {"camera", "v4l2_gain", RIG_KEY_DOUBLE, OFF(camera.v4l2_gain), 0, -1.0, 1e9, 0, 0, NULL, "-",
+     "-1 (the camera's own)", "V4L2 cameras: the gain (else analogue_gain) control, a whole number in the "
+     "control's own units, auto gain switched off"},
     {"camera", "ring_frames", RIG_KEY_INT, OFF(camera.ring_frames), 0, 4, 4096, 0, 0, NULL, "frames",
      "64", "rig mode: frames the capture ring holds; the video drops frames (counted) only when its "
            "writer is this far behind"},
@@ -1464,6 +1468,7 @@ static void config_defaults(rig_config *cfg)
     cfg->camera.offset_x_px = -1;
     cfg->camera.offset_y_px = -1;
     cfg->camera.gain_db = -1.0;
+    cfg->camera.v4l2_gain = -1.0;
     cfg->camera.ring_frames = 64;
     cfg->camera.track_max_lag = 16;
     cfg->camera.frozen_frames = 12;     /* daemon/trial/trial_capture.h TRIAL_FROZEN_FRAMES */

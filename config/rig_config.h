@@ -119,6 +119,7 @@ typedef struct rig_camera {
     int offset_x_px, offset_y_px; /* px, -1 = the camera's own */
     double exposure_us;         /* us, 0 = the camera's own */
     double gain_db;             /* dB, -1 = the camera's own */
+    double v4l2_gain;           /* V4L2 gain control's own units, -1 = the camera's own */
     /* The live pipeline (rig mode, trial_capture.h). */
     int ring_frames;            /* frames the capture ring holds before the video drops */
     int track_max_lag;          /* frames behind the camera after which tracking skips frames */

@@ -38,16 +38,6 @@ static void fourcc_text(unsigned v, char out[8])
     out[4] = 0;
 }
 
-/* A control's state: 1 settable, 0 absent or read-only / disabled. */
-static int ctrl_settable(int fd, unsigned id)
-{
-    struct v4l2_queryctrl q;
-    memset(&q, 0, sizeof q);
-    q.id = id;
-    if (xioctl(fd, VIDIOC_QUERYCTRL, &q) != 0) return 0;
-    return !(q.flags & (V4L2_CTRL_FLAG_DISABLED | V4L2_CTRL_FLAG_READ_ONLY));
-}
-
 static int probe_v4l2(const char *dev, const rig_config *cfg, check_camera_facts *out)
 {
     int fd = open(dev, O_RDWR | O_NONBLOCK);
@@ -79,10 +69,16 @@ static int probe_v4l2(const char *dev, const rig_config *cfg, check_camera_facts
     fourcc_text(f.fmt.pix.pixelformat, out->fourcc);
     out->width_px = (int)f.fmt.pix.width;
     out->height_px = (int)f.fmt.pix.height;
-    int absolute = ctrl_settable(fd, V4L2_CID_EXPOSURE_ABSOLUTE);
+    /* the trial's own test of the control (vision/source/v4l2_exposure.cpp) */
+    int absolute = vis_v4l2_ctrl_settable(NULL, NULL, fd, V4L2_CID_EXPOSURE_ABSOLUTE);
     struct v4l2_control c = {.id = V4L2_CID_EXPOSURE_AUTO, .value = 0};
     int has_auto = xioctl(fd, VIDIOC_G_CTRL, &c) == 0;
-    if (absolute) {
+    if (absolute && !(cfg->camera.exposure_us > 0)) {
+        out->exposure = -1;
+        snprintf(out->exposure_text, sizeof out->exposure_text,
+                 "exposure_time_absolute settable, but camera.exposure_us is not set: the camera's own exposure%s "
+                 "may change between trials", has_auto && c.value != V4L2_EXPOSURE_MANUAL ? " (auto)" : "");
+    } else if (absolute) {
         out->exposure = 1;
         snprintf(out->exposure_text, sizeof out->exposure_text, "exposure_time_absolute settable%s",
                  has_auto ? (c.value == V4L2_EXPOSURE_MANUAL ? ", auto exposure off"

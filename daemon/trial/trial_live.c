@@ -42,6 +42,7 @@ int trial_live_open(const rig_config *cfg, rail *compress, rail *shear, const ch
     cs.offset_y_px = rc->offset_y_px;
     cs.exposure_us = rc->exposure_us;
     cs.gain_db = rc->gain_db;
+    cs.v4l2_gain = rc->v4l2_gain;
     vis_error ve = {0};
     l->src = vis_source_open_camera(&cs, &ve);
     if (!l->src) {

@@ -689,6 +689,11 @@ static void test_overrides(void **state)
     assert_non_null(getcwd(cwd, sizeof cwd));
     snprintf(want, sizeof want, "%s/test.db", cwd);
     assert_string_equal(cfg.store_path, want);
+    /* A V4L2 camera's gain, in its control's own units: -1 (the camera's own) unless set. */
+    assert_true(NEAR(cfg.camera.v4l2_gain, -1.0));
+    const char *ovr_gain[] = {"camera.v4l2_gain=40"};
+    assert_int_equal(parse_ovr(make(NULL, 0, NULL), ovr_gain, 1, &cfg, &err), CFG_OK);
+    assert_true(NEAR(cfg.camera.v4l2_gain, 40.0));
 
     const char *bad1[] = {"trial.hold_s=-1"};
     expect_origin(make(NULL, 0, NULL), bad1, 1, CFG_ERR_RANGE, CFG_ORIGIN_OVERRIDE, "trial.hold_s",

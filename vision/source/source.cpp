@@ -38,6 +38,7 @@ extern "C" vis_camera_settings vis_camera_settings_default(void)
     s.offset_y_px = -1;
     s.exposure_us = 0;
     s.gain_db = -1;
+    s.v4l2_gain = -1;
     s.n_buffers = 0;
     return s;
 }

@@ -24,7 +24,9 @@
 
 #include <cerrno>
 #include <cstring>
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 namespace vis {
 namespace {
@@ -133,6 +135,22 @@ public:
     double fps() const override { return rate; }
 };
 
+// The rig file's exposure and gain held on the camera (v4l2_exposure.cpp), through a descriptor of
+// its own: V4L2 controls belong to the device, not to the descriptor OpenCV streams from.
+vis_status hold_exposure(const vis_camera_settings &cs, const std::string &name, vis_error *err)
+{
+    if (!(cs.exposure_us > 0) && !(cs.v4l2_gain >= 0))
+        return VIS_OK;
+    const std::string dev = cs.path && cs.path[0] ? std::string(cs.path) : "/dev/video" + std::to_string(cs.index);
+    const int fd = ::open(dev.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0)
+        return fail(err, VIS_ERR_IO, "camera %s: %s cannot be opened to set its exposure: %s", name.c_str(),
+                    dev.c_str(), std::strerror(errno));
+    const vis_status st = vis_v4l2_hold_exposure(nullptr, nullptr, fd, name.c_str(), cs.exposure_us, cs.v4l2_gain, err);
+    ::close(fd);
+    return st;
+}
+
 // The next decoded frame as grey, as read() makes it.
 bool decoded_grey(cv::VideoCapture &cap, cv::Mat &grey)
 {
@@ -225,6 +243,14 @@ Source *source_camera_open(const vis_camera_settings &cs, vis_error *err)
 {
     VideoSource *s = new VideoSource;
     s->live = true;
+    s->name = cs.path && cs.path[0] ? std::string(cs.path) : "#" + std::to_string(cs.index);
+    if (cs.gain_db >= 0) {  // refused before the device is touched
+        fail(err, VIS_ERR_ARG, "camera %s: gain %g dB refused: a V4L2 camera's gain has no dB scale (gain in dB is "
+             "for GenICam cameras; a V4L2 gain is set in its control's own units, v4l2_gain)", s->name.c_str(),
+             cs.gain_db);
+        delete s;
+        return nullptr;
+    }
     bool opened;
     if (cs.path && cs.path[0]) {
         s->name = cs.path;
@@ -247,6 +273,10 @@ Source *source_camera_open(const vis_camera_settings &cs, vis_error *err)
         s->cap.set(cv::CAP_PROP_FRAME_HEIGHT, cs.height_px);
     if (cs.fps > 0)
         s->cap.set(cv::CAP_PROP_FPS, cs.fps);
+    if (hold_exposure(cs, s->name, err) != VIS_OK) {
+        delete s;
+        return nullptr;
+    }
     s->rate = s->cap.get(cv::CAP_PROP_FPS);
     if (!(s->rate > 0 && s->rate < 1e5))
         s->rate = 0;

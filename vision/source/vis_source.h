@@ -2,7 +2,8 @@
  * one implementation per file: V4L2 cameras and video files (source_video.cpp), GenICam cameras
  * through Aravis (source_aravis.cpp, following their block ids with block_ids.cpp), image
  * sequences (source_images.cpp), frames rendered on the fly (source_synth.cpp), and a video decoded
- * ahead on a thread (source_prefetch.cpp). Its C++ interface for the rooms above is source.hpp. */
+ * ahead on a thread (source_prefetch.cpp); a V4L2 camera's exposure and gain held for a trial
+ * (v4l2_exposure.cpp). Its C++ interface for the rooms above is source.hpp. */
 #ifndef RIBBON_VIS_SOURCE_H
 #define RIBBON_VIS_SOURCE_H
 
@@ -27,10 +28,26 @@ typedef struct vis_camera_settings {
     int aravis;
     int offset_x_px, offset_y_px; /* ROI origin on the sensor, pixels (-1 = leave) */
     double exposure_us;           /* ExposureTime, microseconds (0 = leave) */
-    double gain_db;               /* Gain, dB (< 0 = leave) */
+    double gain_db;               /* Gain, dB (< 0 = leave); V4L2 cameras refuse it (no dB scale) */
+    /* V4L2 cameras only: exposure_us above is held there too (auto exposure switched off); their
+     * gain is v4l2_gain, in the gain control's own units (< 0 = leave). vis_v4l2_hold_exposure. */
+    double v4l2_gain;
     int n_buffers;                /* stream buffers (0 = 32) */
 } vis_camera_settings;
 vis_camera_settings vis_camera_settings_default(void);
+
+/* A V4L2 camera's exposure and gain held for a trial (vision/source/v4l2_exposure.cpp). The ioctl is
+ * a parameter (NULL = ioctl(2)) so tests can hand a fake control set. */
+typedef int (*vis_ioctl_fn)(void *user, int fd, unsigned long request, void *arg);
+/* 1 when the camera on fd has control `id` (a V4L2_CID_*) enabled and writable, else 0. */
+int vis_v4l2_ctrl_settable(vis_ioctl_fn io, void *user, int fd, unsigned id);
+/* exposure_us > 0: auto exposure switched to manual and exposure_time_absolute set (whole 100 us
+ * units); gain >= 0 (a whole number): auto gain off and gain (else analogue_gain) set. Each value is
+ * checked against the control's range and step, written, and read back. VIS_OK, or VIS_ERR_ARG
+ * naming the control and why the camera cannot hold it (no control, out of range, off its step,
+ * read back different, auto exposure that cannot be switched off); `name` names the camera. */
+vis_status vis_v4l2_hold_exposure(vis_ioctl_fn io, void *user, int fd, const char *name, double exposure_us,
+                                  double gain, vis_error *err);
 
 /* Synthetic source: the callback fills `shape` for frame `index` (arrays must stay valid until the
  * next call) and returns 0, or returns 1 at the end of the sequence, or -1 on error. */
