@@ -90,7 +90,10 @@ demo: build
 # "twin truth" line: the strip of the rig file's [twin]) beside the measured, predicted and
 # calibrated one (docs/calibration.md "In every trial"), with their differences. The store and videos go to the working
 # directory (ribbon-rehearsal.db, ribbon-rehearsal-videos/); the pty, calibration and truth log to
-# a temporary directory.
+# a temporary directory. The camera is calibrated as a lab must (ribbonctl calibrate-camera: the
+# clamps in the live stream at the mounting's zero shear, Delta L 0.2, the distance as measured,
+# 1000 mm); ribbond measures with that file, and its difference from the simulator's exact one is
+# printed.
 REHEARSAL_RIG ?= config/rig-rehearsal.ini
 # The rehearsal is real time: as root both programs run at nice -10, ahead of compilers sharing the
 # machine (a lab PC would run ribbond alone). Empty it to run at the default priority.
@@ -98,11 +101,22 @@ REHEARSAL_NICE ?= $(shell [ "$$(id -u)" = 0 ] && echo "nice -n -10")
 rehearsal: build
 	@dir=$$(mktemp -d /tmp/ribbon-rehearsal.XXXXXX); \
 	sets="--set rail.compress.port=$$dir/grbl --set rail.shear.port=$$dir/grbl --set camera.calibration=$$dir/camera.calib"; \
+	labcal="--set camera.calibration=$$dir/camera.lab.calib"; \
 	$(REHEARSAL_NICE) ./$(BUILD)/bin/ribbon-rigsim $(REHEARSAL_RIG) $$sets --truth $$dir/truth.csv >$$dir/rigsim.log 2>&1 & sim=$$!; \
 	for i in $$(seq 100); do grep -q '^ready' $$dir/rigsim.log && break; kill -0 $$sim 2>/dev/null || break; sleep 0.1; done; \
 	if ! grep -q '^ready' $$dir/rigsim.log; then cat $$dir/rigsim.log; echo "ribbon-rigsim did not start"; kill $$sim 2>/dev/null; exit 1; fi; \
 	echo "rig simulator ready ($$dir)"; \
-	$(REHEARSAL_NICE) ./$(BUILD)/bin/ribbond --config $(REHEARSAL_RIG) $$sets 2>$$dir/ribbond.log & pid=$$!; \
+	if ! ./$(BUILD)/bin/ribbonctl calibrate-camera --config $(REHEARSAL_RIG) $$sets --dl 0.2 --camera-distance-mm 1000 \
+	     --out $$dir/camera.lab.calib >$$dir/calib.txt 2>&1; then \
+	  cat $$dir/calib.txt; echo "camera calibration failed"; kill $$sim; exit 1; fi; \
+	sed 's/^/  /' $$dir/calib.txt; \
+	awk '/^px_per_mm/ { s[FILENAME] = $$3 } /^clamp_(left|right)/ { gsub(",", "", $$3); p[FILENAME, $$1, 1] = $$3; p[FILENAME, $$1, 2] = $$4 } \
+	  END { a = ARGV[1]; b = ARGV[2]; w = 0; \
+	    for (k = 1; k <= 2; k++) { d = p[a, "clamp_left", k] - p[b, "clamp_left", k]; if (d < 0) d = -d; if (d > w) w = d; \
+	      d = p[a, "clamp_right", k] - p[b, "clamp_right", k]; if (d < 0) d = -d; if (d > w) w = d } \
+	    printf "  against ribbon-rigsim'\''s exact calibration: scale %+.2f%%, clamp points within %.2f px\n", 100 * (s[a] - s[b]) / s[b], w }' \
+	  $$dir/camera.lab.calib $$dir/camera.calib; \
+	$(REHEARSAL_NICE) ./$(BUILD)/bin/ribbond --config $(REHEARSAL_RIG) $$sets $$labcal 2>$$dir/ribbond.log & pid=$$!; \
 	url=""; for i in $$(seq 300); do \
 	  url=$$(sed -n 's/.*listening on \(http[^ ]*\).*/\1/p' $$dir/ribbond.log); [ -n "$$url" ] && break; \
 	  kill -0 $$pid 2>/dev/null || break; sleep 0.1; done; \

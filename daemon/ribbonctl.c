@@ -12,6 +12,7 @@ static const cli_command commands[] = {
     {"ports", ctl_ports_main, "list serial ports (path, USB VID:PID, serial number)"},
     {"track", ctl_track_main, "measure Delta Z and A in every frame of a video: CSV, overlay, --json summary"},
     {"vision-bench", ctl_vision_bench_main, "speed of the tracker, of decoding and of decode + track, one JSON line"},
+    {"calibrate-camera", ctl_calibrate_camera_main, "the camera's calibration from the clamps in its live stream at zero shear: --config RIG --out FILE"},
     {"cameras", ctl_cameras_main, "list cameras: V4L2 devices and GenICam (GigE Vision, USB3 Vision) cameras"},
     {"transcode", ctl_transcode_main, "a raw trial video to lossless FFV1, verified bit for bit; --bench: one JSON line"},
     {"render", ctl_render_main, "simulate a scene's trial and film it: FFV1 video + ground truth CSV, JSON summary"},

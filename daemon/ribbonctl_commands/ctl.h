@@ -12,6 +12,7 @@ int ctl_track_main(int argc, char **argv);        /* ctl_track.c */
 int ctl_vision_bench_main(int argc, char **argv); /* ctl_vision_bench.c */
 int ctl_render_main(int argc, char **argv);       /* ctl_render.c (needs sim/ and vision/) */
 int ctl_cameras_main(int argc, char **argv);      /* ctl_cameras.c: V4L2 and GenICam cameras */
+int ctl_calibrate_camera_main(int argc, char **argv); /* ctl_calibrate_camera.c: clamps in the live camera */
 int ctl_transcode_main(int argc, char **argv);    /* ctl_transcode.c: raw video to FFV1, and its bench */
 
 int ctl_trials_main(int argc, char **argv); /* ctl_trials.c: start abort status list show export report

@@ -1,6 +1,9 @@
 /* test_rig_rehearsal: rig mode end to end in real time against ribbon-rigsim (issue 13 E): the GRBL
  * controller's two axes on a pty, the twin filmed by the GigE Vision camera on 127.0.0.1, ribbond
  * on config/rig-rehearsal.ini (compression at 20 mm/s so a trial takes about 30 s).
+ *   - the camera calibrated as a lab must (ribbonctl calibrate-camera: clamps in the live stream
+ *     at zero shear), within 1% in scale and 1.5 px of ribbon-rigsim's exact file; ribbond measures
+ *     with it (the G-code trial and the Gamma 0.21 one);
  *   - a whole trial: done, the measured snap within the measurement's error of the twin's own
  *     (the rig file's [twin], another strip than the prediction's; ribbon-rigsim's "twin truth"),
  *     the prediction off it by more than that, regimes asymmetric, no frame lost or dropped, every video frame in the frame-times file, each
@@ -44,16 +47,62 @@ static const char *const rehearsal_sets[] = {"rail.compress.port=%s/grbl", "rail
                                              "camera.calibration=%s/camera.calib", "store.path=%s/rig.db",
                                              "camera.video_dir=%s/videos", "trial.compress_speed_mm_s=20", NULL};
 
+/* The lab's calibration (issue 34 C): `ribbonctl calibrate-camera` finds the clamps in the
+ * simulator's live camera stream with the specimen mounted at Delta L dl, zero shear (the distance
+ * 1000 mm as a lab measures it with a tape), and ribbond measures with that file, not with the
+ * exact one ribbon-rigsim writes (camera.calib, kept for the comparison). Against the exact file,
+ * measured on the rehearsal's level camera at dl 0.2: scale -0.57%, clamp points within 0.94 px
+ * (the jaw face's perspective bias, vis_track.h, pulls both points toward the image centre). The
+ * bounds asserted: 1% and 1.5 px. */
+static double calib_num(const char *path, const char *key, int k)
+{
+    char line[256];
+    double v[2] = {NAN, NAN};
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    while (fgets(line, sizeof line, f))
+        if (!strncmp(line, key, strlen(key)) && line[strlen(key)] == ' ')
+            sscanf(strchr(line, '=') + 1, "%lf , %lf", &v[0], &v[1]);
+    fclose(f);
+    return v[k];
+}
+
+static void lab_calibrate(rig_run *r, const char *dl)
+{
+    char out[160], exact[160], cmd[4096];
+    snprintf(out, sizeof out, "%s/camera.lab.calib", r->dir);
+    snprintf(exact, sizeof exact, "%s/camera.calib", r->dir);
+    int n = snprintf(cmd, sizeof cmd, BIN "/ribbonctl calibrate-camera --config " RIG " --dl %s --camera-distance-mm 1000 --out %s",
+                     dl, out);
+    for (int k = 0; k < r->n_sets; k++) n += snprintf(cmd + n, sizeof cmd - (size_t)n, " --set '%s'", r->sets[k]);
+    assert_true(n < (int)sizeof cmd - 1);
+    assert_int_equal(system(cmd), 0);
+    const double s_lab = calib_num(out, "px_per_mm", 0), s_ex = calib_num(exact, "px_per_mm", 0);
+    double worst = 0.0;
+    for (int k = 0; k < 2; k++) {
+        worst = fmax(worst, fabs(calib_num(out, "clamp_left", k) - calib_num(exact, "clamp_left", k)));
+        worst = fmax(worst, fabs(calib_num(out, "clamp_right", k) - calib_num(exact, "clamp_right", k)));
+    }
+    printf("# lab calibration against the exact file: scale %.5f px/mm (%+.2f%%), clamp points within %.2f px\n", s_lab,
+           100.0 * (s_lab - s_ex) / s_ex, worst);
+    assert_true(fabs(s_lab - s_ex) <= 0.01 * s_ex);
+    assert_true(worst <= 1.5);
+    char set[300];
+    snprintf(set, sizeof set, "camera.calibration=%s", out);
+    rig_daemon_set(r, set);
+}
+
 /* Starts the simulator (with extra args) and ribbond (with daemon_set, when not NULL, for it only). */
-static void start_with(rig_run *r, const char *const *sim_extra, const char *daemon_set)
+static void start_with(rig_run *r, const char *const *sim_extra, const char *daemon_set, int lab_calib)
 {
     rig_prepare(r, rehearsal_sets);
     rig_start_sim(r, RIG, sim_extra);
+    if (lab_calib) lab_calibrate(r, "0.2");
     if (daemon_set) rig_daemon_set(r, daemon_set);
     rig_start_daemon(r, RIG);
 }
 
-static void start(rig_run *r, const char *const *sim_extra) { start_with(r, sim_extra, NULL); }
+static void start(rig_run *r, const char *const *sim_extra) { start_with(r, sim_extra, NULL, 0); }
 
 /* The rehearsal's twin is the rig file's [twin] strip (creases 86 deg, 2.5% unequal, N = 91,
  * dt = 1.5 ms), not the scene the prediction uses: the measured snap is scored against the twin's
@@ -122,7 +171,7 @@ static void test_gcode_trial(void **state)
 {
     (void)state;
     rig_run r;
-    start(&r, NULL);
+    start_with(&r, NULL, NULL, 1); /* the lab's calibration from the clamps in the live stream */
     int rc = rig_trial(&r, 1);
     rig_stop(&r);
     sqlite3 *db = rig_db_open(&r);
@@ -168,6 +217,11 @@ static void test_gcode_trial_gamma021(void **state)
     rig_run r;
     rig_prepare(&r, sets);
     rig_start_sim(&r, RIG, sim_extra);
+    /* The lab's calibration here too. Measured: alone on the machine (load 3.5-5) -0.00029 and
+     * -0.00020 against the truth (bounds 0.00213, 0.00347); at load 10, while other sessions' rig tests
+     * ran on the machine (seen beside at least one run; one GigE Vision port), +0.01132 and +0.00793 (bound 0.0018) beside
+     * -0.00062, as the exact file there (+0.00337, bound 0.00238, beside +0.00007): run it alone. */
+    lab_calibrate(&r, "0.25");
     rig_start_daemon(&r, RIG);
     int rc = rig_trial(&r, 1);
     rig_stop(&r);
@@ -224,7 +278,7 @@ static double last_axis_move(rig_run *r)
 /* A fault on command mid-shear (SIGUSR2 camera, SIGRTMIN frozen image), then the trial's end. */
 static void fault_mid_shear(rig_run *r, int sig, const char *daemon_set)
 {
-    start_with(r, NULL, daemon_set);
+    start_with(r, NULL, daemon_set, 0);
     assert_int_equal(rig_trial(r, 0), 0);
     char got[700];
     if (rig_wait_state(r, "shearing", 90.0, got, sizeof got)) fail_msg("the trial did not reach shearing: %s", got);
@@ -351,7 +405,7 @@ static void test_heavy_loss_fails(void **state)
 static void bad_input_case(const char *set, const char *needle)
 {
     rig_run r;
-    start_with(&r, NULL, set);
+    start_with(&r, NULL, set, 0);
     int rc = rig_trial(&r, 1);
     rig_stop(&r);
     sqlite3 *db = rig_db_open(&r);
