@@ -179,6 +179,7 @@ typedef struct run_ctx {
     double loss_noted_t;  /* trial time of the last loss event (rate: one a second) */
     long loss_noted;      /* loss_total at it */
     double cam_offset;    /* s added to a frame's time to place it on the rails' clock */
+    int comp_track_failed; /* a compression frame's tracker failed (said once) */
 } run_ctx;
 
 static int emit_event(run_ctx *c, const char *kind, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
@@ -549,6 +550,31 @@ static void record_rail_settings(run_ctx *c)
 
 /* The camera's offset (trial_cam_watch.h): the hold's last frames and the shear's first go to the
  * fit; the frames' own times, before any offset. */
+/* A compression frame at Delta L dl measured with the clamp points where the compression rail puts
+ * them (trial_comp_track.h). A tracker that fails there leaves the frame untracked ("clamp not
+ * found") and says so once in the events; the trial goes on. Returns nonzero only when the trial
+ * must stop (never: kept for the loop's shape). */
+static int comp_track_frame(run_ctx *c, double dl, vis_measure *m)
+{
+    trial_runner *tr = c->tr;
+    const trial_plan *p = &tr->plan;
+    double l = p->scene.length;
+    vis_track_params tp = vis_track_params_default();
+    tp.length_mm = 1000.0 * l;
+    vis_error ve = {0};
+    if (trial_comp_track_measure(&tp, &p->comp_calib, p->calib.camera_side, l,
+                                 rig_calib_dl(&p->calib, l, c->target_compress_mm), dl, tr->frame, m,
+                                 &ve) != VIS_OK) {
+        if (!c->comp_track_failed)
+            emit_event(c, "warning", "compression frame at Delta L %.4f not tracked: %s (later failures not noted)",
+                       dl, ve.message);
+        c->comp_track_failed = 1;
+        memset(m, 0, sizeof *m);
+        m->reason = VIS_REASON_CLAMP_NOT_FOUND;
+    }
+    return 0;
+}
+
 static void cam_watch_frame(run_ctx *c, double t_frame)
 {
     const trial_plan *p = &c->tr->plan;
@@ -765,6 +791,9 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
              * points, and a frame measured against those would be a confident wrong answer. */
             memset(&m, 0, sizeof m);
             m.reason = VIS_REASON_CLAMP_NOT_FOUND;
+            if (p->comp_track_from_dl > 0.0 && c.st == TRIAL_COMPRESSING && smp.dl >= p->comp_track_from_dl &&
+                comp_track_frame(&c, smp.dl, &m))
+                break;
         } else {
             double cpu0 = trial_latency_thread_cpu_s();
             if (vis_tracker_process(tr->tracker, tr->frame, smp.dw * l * 1000.0, &m, &ve) != VIS_OK) {

@@ -40,6 +40,7 @@
 #include "rig_calib.h"
 #include "trial_cam_watch.h"
 #include "trial_calibrate.h"
+#include "trial_comp_track.h"
 #include "trial_capture.h"
 #include "trial_rail_poller.h"
 #include "scene.h"
@@ -92,6 +93,12 @@ typedef struct trial_plan {
                                     clamp points are (the session: trial_clamp_tol_mm); others are
                                     stored untracked with the reason "clamp not found". 0: every
                                     frame is tracked */
+    double comp_track_from_dl;   /* > 0 (with clamp_tol_mm > 0): compression frames at Delta L at or
+                                    above this are tracked with the clamp points moved to where the
+                                    compression rail puts them (trial_comp_track.h; the session:
+                                    trial_comp_track_from_dl); 0: they are stored untracked */
+    vis_calib comp_calib;        /* the camera calibration (clamp points at the trial's compression)
+                                    that comp_track_from_dl's frames are placed from */
     double cam_offset_window_s;  /* > 0: the camera's time offset is measured over this much of the
                                     shear's start (trial_cam_watch.h); 0: not measured */
     int cam_offset_measure;      /* 1: the measured offset replaces calib.camera_time_offset_s for

@@ -675,6 +675,12 @@ static int session_run(trial_session *s, session_parts *p, char *why, size_t why
 {
     trial_plan plan = session_plan(&s->cfg);
     plan.clamp_tol_mm = trial_clamp_tol_mm(s->cal.px_per_mm);
+    /* The compression's last part tracked with the clamp points moved (trial_comp_track.h): mock
+     * mode only for now (a fresh tracker per frame; its cost in the live loop is not measured). */
+    if (!s->live && plan.clamp_tol_mm > 0.0) {
+        plan.comp_track_from_dl = trial_comp_track_from_dl(plan.scene.compression);
+        plan.comp_calib = s->cal;
+    }
     for (int k = 0; k < 2; k++) {
         plan.cam_clamp_px[0][k] = s->cal.clamp_left_px[k];
         plan.cam_clamp_px[1][k] = s->cal.clamp_right_px[k];

@@ -5,7 +5,9 @@
  * rails back where they started; the shear limit without a snap; a ribbon in the lower state is
  * refused before shearing; a stalled rail fails the trial and stops both; an abort from another
  * thread stops the rails and ends the trial aborted, with both rails standing; frames with the
- * compress rail away from the calibrated clamps are stored untracked, not measured.
+ * compress rail away from the calibrated clamps are stored untracked, not measured; and (issue 32
+ * B) with the clamp points moved where the compress rail puts them, the compression's last part is
+ * measured, within the tracker's noise of the fake's arch at each frame's Delta L.
  * And (issue 34) a trial on GRBL rails (the simulator on a pty) records each controller's `$$`
  * as its first event; and a camera that stamps its images 30 ms after what they show has its
  * offset measured at the shear's start, within 2 ms and 3 stated standard deviations of -30 ms, and
@@ -66,6 +68,9 @@ typedef struct log {
     double target_dl, tol_dl;
     long measured_away;   /* frames measured with the compress rail more than tol_dl from target_dl */
     long clamps_moving;   /* frames stored untracked as clamp_not_found */
+    int comp_truth;       /* 1: frames measured away from target_dl are checked against the fake's arch */
+    double comp_dl_min, comp_dl_max; /* their Delta L range */
+    double comp_err_dz, comp_err_a;  /* their largest |measured - the arch's own| */
     char *first_event;    /* when set: the first event's text */
     size_t first_event_len;
 } log_t;
@@ -97,7 +102,21 @@ static int on_sample(void *u, const trial_sample *s, char *why, size_t why_len)
     log_t *lg = u;
     lg->samples++;
     if (s->kind == 1) lg->frames++;
-    if (s->kind == 1 && s->measured && fabs(s->dl - lg->target_dl) > lg->tol_dl) lg->measured_away++;
+    if (s->kind == 1 && s->measured && fabs(s->dl - lg->target_dl) > lg->tol_dl) {
+        lg->measured_away++;
+        if (lg->comp_truth) {
+            /* The fake's arch at this frame (phi 0, no shear): its midpoint height and A = 0. */
+            static vt_shape arch;
+            vt_arch(&arch, 121, L, L * (1.0 - s->dl), 0.0, 0.0);
+            double zmax = 0.0;
+            for (size_t k = 0; k < arch.n; k++) zmax = fmax(zmax, arch.pos[3 * k + 2]);
+            if (lg->measured_away == 1) lg->comp_dl_min = lg->comp_dl_max = s->dl;
+            lg->comp_dl_min = fmin(lg->comp_dl_min, s->dl);
+            lg->comp_dl_max = fmax(lg->comp_dl_max, s->dl);
+            lg->comp_err_dz = fmax(lg->comp_err_dz, fabs(s->dz - zmax / L));
+            lg->comp_err_a = fmax(lg->comp_err_a, fabs(s->a));
+        }
+    }
     if (s->kind == 1 && !s->measured && s->reason == VIS_REASON_CLAMP_NOT_FOUND) lg->clamps_moving++;
     return 0;
 }
@@ -388,6 +407,40 @@ static void frames_away_from_compression_untracked(void **state)
     assert_true(snap[1] == snap[0]);
 }
 
+/* Issue 32 B: with comp_track_from_dl (0.45 here, trial_comp_track_from_dl of the compression 0.5)
+ * the compression frames from there on are tracked with the clamp points moved to where the
+ * compress rail puts them (trial_comp_track.h): measured, at several Delta L from 0.45 up to the
+ * compression, each within the tracker's noise of the fake's own arch at its Delta L (Delta Z within
+ * 0.005, |A| within 0.05 rad: about 3 of the tracker's 0.015 rad; the arch is symmetric), the return still untracked, and the snap the
+ * same. Without the moved points (the runner before) none of them is measured. */
+static void compression_frames_tracked(void **state)
+{
+    (void)state;
+    rig r;
+    rig_open(&r, NAN);
+    r.plan.clamp_tol_mm = trial_clamp_tol_mm(r.px_per_mm);
+    r.plan.comp_track_from_dl = trial_comp_track_from_dl(r.plan.scene.compression);
+    r.plan.comp_calib = rig_cal;
+    r.log.target_dl = 0.5;
+    r.log.tol_dl = r.plan.clamp_tol_mm / (L * 1000.0) + 1e-9;
+    r.log.comp_truth = 1;
+    trial_result res;
+    rig_run(&r, &res);
+    printf("compression tracked from Delta L %.3f: %ld frames measured at Delta L %.4f .. %.4f, largest "
+           "|Delta Z - arch| %.5f, |A| %.5f; %ld clamp_not_found; snap Delta W %.5f %s\n",
+           r.plan.comp_track_from_dl, r.log.measured_away, r.log.comp_dl_min, r.log.comp_dl_max,
+           r.log.comp_err_dz, r.log.comp_err_a, r.log.clamps_moving, res.snap_dw, res.regime);
+    assert_int_equal(res.final, TRIAL_DONE);
+    assert_true(r.log.measured_away >= 5);
+    assert_true(r.log.comp_dl_min >= r.plan.comp_track_from_dl - 1e-9);
+    assert_true(r.log.comp_dl_max - r.log.comp_dl_min > 0.02);
+    assert_true(r.log.comp_err_dz < 0.005);
+    assert_true(r.log.comp_err_a < 0.05);
+    assert_true(r.log.clamps_moving > 0); /* the early compression and the return */
+    assert_true(res.snap_dw > 0.3 && res.snap_dw <= 0.3 + 0.0025 + 1e-9);
+    rig_close(&r);
+}
+
 static void shear_limit_no_snap(void **state)
 {
     (void)state;
@@ -561,6 +614,7 @@ int main(void)
         cmocka_unit_test(camera_offset_measured),
         cmocka_unit_test(good_trial),
         cmocka_unit_test(frames_away_from_compression_untracked),
+        cmocka_unit_test(compression_frames_tracked),
         cmocka_unit_test(shear_limit_no_snap),
         cmocka_unit_test(load_witness_alone),
         cmocka_unit_test(load_and_vision_witnesses),
