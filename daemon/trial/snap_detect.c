@@ -23,6 +23,7 @@ void snap_detect_init(snap_detect *d, const snap_params *p)
     d->p = *p;
     d->onset_frame = -1;
     d->detect_frame = -1;
+    d->frame_prev = -1;
 }
 
 snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, double dz, double a, int valid)
@@ -40,12 +41,19 @@ snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, do
         d->have_prev = 1;
         d->t_prev = t_s;
         d->dz_prev = dz;
+        d->frame_prev = frame;
+        d->dw_prev = dw;
         return d->phase;
     }
-    double jump = fabs(dz - d->dz_prev), speed = jump / (t_s - d->t_prev);
+    double dt = t_s - d->t_prev, jump = fabs(dz - d->dz_prev), speed = jump / dt;
     double slow = 0.1 * d->p.snap_speed;
+    long gap = frame - d->frame_prev - 1;
+    double v_before = d->v_prev;
+    d->v_prev = speed;
     d->t_prev = t_s;
     d->dz_prev = dz;
+    d->frame_prev = frame;
+    d->dw_prev = dw;
     if (d->phase == SNAP_WAITING) {
         if (speed < slow) {
             d->onset_dw = dw;
@@ -55,11 +63,17 @@ snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, do
         } else {
             d->peak_abs_a = fmax(d->peak_abs_a, fabs(a));
         }
-        if (speed > d->p.snap_speed && jump > d->p.dz_jump) {
+        int seen = speed > d->p.snap_speed && jump > d->p.dz_jump;
+        /* Across a gap: the post-snap state without the snap's frames (snap_detect.h). */
+        int across = !seen && gap > 0 && jump > d->p.dz_jump && jump > d->p.snap_speed * dt / (double)(gap + 1) &&
+                     speed > slow && speed > 2.0 * v_before;
+        if (seen || across) {
             d->phase = SNAP_SNAPPING;
             d->t_detect = t_s;
             d->detect_frame = frame;
             d->slow_run = 0;
+            d->gap_frames = across ? gap : 0;
+            d->onset_dw_hi = across ? dw : d->onset_dw;
         }
         return d->phase;
     }
@@ -76,6 +90,9 @@ int snap_detect_asymmetric(const snap_detect *d)
 {
     return snap_detect_snapped(d) && rod_regime_asymmetric(d->peak_abs_a, d->p.asym_threshold);
 }
+
+long snap_detect_gap_frames(const snap_detect *d) { return d->gap_frames; }
+double snap_detect_dw_hi(const snap_detect *d) { return d->gap_frames > 0 ? d->onset_dw_hi : d->onset_dw; }
 
 const char *snap_detect_regime(const snap_detect *d)
 {

@@ -11,7 +11,15 @@
  *     asym_threshold (the simulator's own rule, sim/rod_regime.h: 0.5 rad by default, derived
  *     from creases up to 5% apart with the tracker's noise; the camera must resolve the snap's
  *     passage, docs/trials.md "Snap detection").
- * Frames the tracker could not measure are skipped (they neither start nor end anything). */
+ * Frames the tracker could not measure are skipped (they neither start nor end anything).
+ * Across a gap (unmeasured frames between two measured ones, e.g. frames stored untracked while the
+ * trial loop was behind) the snap's own fast frames may be unseen and the speed over the gap
+ * diluted below snap_speed: the first measured frame after the gap is then also a snap when its
+ * jump from the last measured frame exceeds dz_jump, what snap_speed gives in ONE frame period
+ * (the gap's time over its frame count), and its mean speed over the gap exceeds both a tenth of
+ * snap_speed (the slow bound) and twice the speed measured before the gap (so a ribbon that was
+ * already moving steadily, below snap_speed, is not called snapping by a gap). Its onset is bounded by the gap: the last slow frame (at or before the gap's
+ * start) up to the detection frame; gap_frames and onset_dw_hi say so (issue 34 F). */
 #ifndef RIBBON_DAEMON_SNAP_DETECT_H
 #define RIBBON_DAEMON_SNAP_DETECT_H
 
@@ -41,6 +49,13 @@ typedef struct snap_detect {
     double t_detect;
     long detect_frame;     /* first frame seen snapping */
     int slow_run;
+    long frame_prev;       /* the last measured frame's index */
+    double v_prev;         /* the last measured |d(Delta Z)/dt| (0 before the second frame) */
+    double dw_prev;        /* ... and its Delta W */
+    long gap_frames;       /* unmeasured frames just before the detection frame (0: seen directly) */
+    double onset_dw_hi;    /* the onset's upper bound: the detection frame's Delta W when it was
+                              caught across a gap (the onset lies in [onset_dw, onset_dw_hi]);
+                              equal to onset_dw otherwise */
 } snap_detect;
 
 snap_params snap_params_default(void);
@@ -51,6 +66,10 @@ snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, do
 int snap_detect_snapped(const snap_detect *d);
 double snap_detect_dw(const snap_detect *d);
 int snap_detect_asymmetric(const snap_detect *d);
+/* Unmeasured frames the detection spanned (0: the snap's fast frames were seen). */
+long snap_detect_gap_frames(const snap_detect *d);
+/* Upper bound of the onset's Delta W (= snap_detect_dw when no gap). */
+double snap_detect_dw_hi(const snap_detect *d);
 /* "asymmetric", "symmetric" or "no snap". */
 const char *snap_detect_regime(const snap_detect *d);
 

@@ -434,8 +434,16 @@ static int step(run_ctx *c, const trial_sample *smp)
             c->lat.cpu_tracked = c->cpu_tracked;
             /* The stop first: the event is a store write, which may wait on the disk. */
             if (stop_for_snap(c)) return 1;
-            emit_event(c, "info", "snap detected at frame %ld; onset Delta W = %.5f", tr->det.detect_frame,
-                       snap_detect_dw(&tr->det));
+            if (snap_detect_gap_frames(&tr->det) > 0)
+                emit_event(c, "info",
+                           "snap detected at frame %ld across a gap of %ld untracked frames (the trial loop was "
+                           "behind): onset Delta W = %.5f, between %.5f and %.5f (uncertainty %.5f)",
+                           tr->det.detect_frame, snap_detect_gap_frames(&tr->det), snap_detect_dw(&tr->det),
+                           snap_detect_dw(&tr->det), snap_detect_dw_hi(&tr->det),
+                           snap_detect_dw_hi(&tr->det) - snap_detect_dw(&tr->det));
+            else
+                emit_event(c, "info", "snap detected at frame %ld; onset Delta W = %.5f", tr->det.detect_frame,
+                           snap_detect_dw(&tr->det));
             return 0;
         }
         if (rail_idle_at(&c->ss, c->target_shear_mm)) {

@@ -79,6 +79,61 @@ static void unmeasured_frames_are_skipped(void **state)
     assert_true(labs(d.onset_frame - k) <= 1);
 }
 
+/* Frames gap_from..gap_to unmeasured (the trial loop behind, issue 34 F). */
+static snap_detect run_gap(double t0, double tau, long gap_from, long gap_to, long n)
+{
+    snap_params p = snap_params_default();
+    snap_detect d;
+    snap_detect_init(&d, &p);
+    for (long k = 0; k < n; k++) {
+        double t = k / FPS;
+        int valid = !(k >= gap_from && k <= gap_to);
+        snap_detect_add(&d, k, t, RATE * t, valid ? dz_at(t, t0, tau) : NAN, a_at(t, t0, tau, 1.2), valid);
+    }
+    return d;
+}
+
+static void snap_inside_a_gap_is_caught_after_it(void **state)
+{
+    (void)state;
+    /* The whole drop (0.6 at t0 = 10 s) falls in 26 unmeasured frames (9.5 s to 10.75 s): the
+     * speed across the gap is 0.6 / 1.35 s = 0.44/s, below the snap speed, so the consecutive-frame
+     * rule alone never fires. Across the gap it is a snap at the first measured frame after it,
+     * its onset between the last measured frame before the gap (slow) and that frame. */
+    snap_detect d = run_gap(10.0, 0.15, 190, 215, 600);
+    assert_true(snap_detect_snapped(&d));
+    assert_int_equal(d.detect_frame, 216);
+    assert_int_equal(snap_detect_gap_frames(&d), 26);
+    assert_int_equal(d.onset_frame, 189);
+    assert_true(fabs(snap_detect_dw(&d) - RATE * 189 / FPS) < 1e-12);
+    assert_true(fabs(snap_detect_dw_hi(&d) - RATE * 216 / FPS) < 1e-12);
+    /* A snap seen directly has no gap and a zero-width bound. */
+    snap_detect e = run(10.0, 0.15, 1.2, 0, 600);
+    assert_int_equal(snap_detect_gap_frames(&e), 0);
+    assert_true(snap_detect_dw_hi(&e) == snap_detect_dw(&e));
+}
+
+static void steady_motion_across_a_gap_is_no_snap(void **state)
+{
+    (void)state;
+    /* Delta Z moving steadily at 0.3/s (above the slow bound, below the snap speed), frames 100-
+     * 139 unmeasured: the jump across the gap (0.615) is many frames' worth of the snap speed, but
+     * the ribbon does nothing it was not already doing; and a slow creep (0.002/s) over a 300-frame
+     * gap is no snap either. */
+    snap_params p = snap_params_default();
+    snap_detect d, e;
+    snap_detect_init(&d, &p);
+    snap_detect_init(&e, &p);
+    for (long k = 0; k < 400; k++) {
+        double t = k / FPS;
+        int valid = !(k >= 100 && k < 140), valid2 = !(k >= 50 && k < 350);
+        snap_detect_add(&d, k, t, RATE * t, 0.9 - 0.3 * t, 0.0, valid);
+        snap_detect_add(&e, k, t, RATE * t, 0.3 - 0.002 * t, 0.0, valid2);
+    }
+    assert_false(snap_detect_snapped(&d));
+    assert_false(snap_detect_snapped(&e));
+}
+
 static void slow_creep_is_no_snap(void **state)
 {
     (void)state;
@@ -119,6 +174,8 @@ int main(void)
         cmocka_unit_test(asymmetric_snap),
         cmocka_unit_test(symmetric_snap),
         cmocka_unit_test(unmeasured_frames_are_skipped),
+        cmocka_unit_test(snap_inside_a_gap_is_caught_after_it),
+        cmocka_unit_test(steady_motion_across_a_gap_is_no_snap),
         cmocka_unit_test(slow_creep_is_no_snap),
         cmocka_unit_test(noise_spikes_need_the_jump_floor),
     };
