@@ -397,7 +397,10 @@ static void replay_refuses_wrong_or_cut_video(store *st, int64_t id, const char 
 
 /* No frame of trial `id` is measured with the compress rail away from the trial's compression
  * (Delta L 0.5), where the calibration's clamp points are (more than 0.5 mm: the runner's bound is
- * half a pixel, 0.2 mm here); and the compression's frames are there, stored untracked. */
+ * half a pixel, 0.2 mm here), except in the last 0.05 of Delta L before it, where a mock trial
+ * tracks the compression with the clamp point moved to where the rail puts it
+ * (trial_comp_track.h: from Delta L = max(0.5 c, c - 0.05)); the earlier compression's frames are
+ * there, stored untracked. */
 static void none_measured_off_compression(store *st, int64_t id)
 {
     char why[256];
@@ -408,13 +411,15 @@ static void none_measured_off_compression(store *st, int64_t id)
     long away = 0, untracked = 0;
     for (size_t k = 0; k < n; k++) {
         if (smp[k].kind != STORE_SAMPLE_FRAME) continue;
-        if (isfinite(smp[k].dz) && fabs(smp[k].dl - 0.5) > tol_dl) away++;
+        if (isfinite(smp[k].dz) && fabs(smp[k].dl - 0.5) > tol_dl) {
+            away++;
+            assert_true(smp[k].dl > 0.45 - tol_dl && smp[k].dl < 0.5 + tol_dl); /* the moved-clamp window only */
+        }
         if (!isfinite(smp[k].dz) && !strcmp(smp[k].reason, "clamp not found")) untracked++;
     }
     free(smp);
-    printf("trial %lld: %ld frames measured off the compression, %ld stored untracked as clamp not found\n",
-           (long long)id, away, untracked);
-    assert_int_equal(away, 0);
+    printf("trial %lld: %ld frames measured off the compression (all within its last 0.05 of Delta L), %ld stored "
+           "untracked as clamp not found\n", (long long)id, away, untracked);
     assert_true(untracked > 0);
 }
 
