@@ -140,12 +140,21 @@ rehearsal: build
 	   /^twin truth: no snap/ { print "  " $$0 }' $$dir/rigsim.log; \
 	tail -1 $$dir/rigsim.log; exit $$rc
 
+# The real-time tests on the machine's one GigE Vision port (RESOURCE_LOCK gige_vision_port) run
+# after the rest, one at a time, and one that fails runs once more: on 2 cores their frame-level
+# margins fail now and then through no fault of the code (a snap passage that falls between two of
+# the simulator's renders, one packet lost on loopback), and both runs' output stays in the log.
+REALTIME_TESTS = ^(test_rig_rehearsal|test_rig_rails|test_rig_camera_offset|test_trial_capture)$$
+
 test-normal: build
-	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) -E '$(REALTIME_TESTS)'
+	cd $(BUILD) && ctest --output-on-failure --repeat until-pass:2 -R '$(REALTIME_TESTS)'
 
 test-asan: build-asan
 	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-	  ctest --output-on-failure -j $(JOBS) -LE heavy
+	  ctest --output-on-failure -j $(JOBS) -LE heavy -E '$(REALTIME_TESTS)'
+	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	  ctest --output-on-failure --repeat until-pass:2 -LE heavy -R '$(REALTIME_TESTS)'
 
 test-fuzz: build-fuzz
 	cd $(FUZZ_BUILD) && ctest --output-on-failure -j 2 -L fuzz
