@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "trial.h"
 #include "vision.h"
 
 static int xioctl(int fd, unsigned long req, void *arg)
@@ -95,16 +96,7 @@ static int probe_v4l2(const char *dev, const rig_config *cfg, check_camera_facts
 
 static int probe_aravis(const rig_config *cfg, check_camera_facts *out)
 {
-    vis_camera_settings cs = vis_camera_settings_default();
-    cs.path = cfg->camera.device;
-    cs.aravis = 1;
-    cs.width_px = cfg->camera.width_px;
-    cs.height_px = cfg->camera.height_px;
-    cs.fps = cfg->camera.fps;
-    cs.offset_x_px = cfg->camera.offset_x_px;
-    cs.offset_y_px = cfg->camera.offset_y_px;
-    cs.exposure_us = cfg->camera.exposure_us;
-    cs.gain_db = cfg->camera.gain_db;
+    vis_camera_settings cs = trial_camera_settings(&cfg->camera); /* an aravis source here */
     vis_error ve = {0};
     vis_source *src = vis_source_open_camera(&cs, &ve);
     if (!src) {

@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "trial.h"
 #include "cfg_number.h"
 #include "ctl.h"
 #include "rig_config.h"
@@ -77,17 +78,7 @@ static int find_clamps_live(const rig_config *cfg, int want, double left[2], dou
         snprintf(why, why_len, "the rig file's camera.source is not a live camera");
         return -1;
     }
-    vis_camera_settings cs = vis_camera_settings_default();
-    cs.index = rc->index;
-    cs.path = rc->source == RIG_SOURCE_DEVICE || rc->source == RIG_SOURCE_ARAVIS ? rc->device : NULL;
-    cs.aravis = rc->source == RIG_SOURCE_ARAVIS;
-    cs.width_px = rc->width_px;
-    cs.height_px = rc->height_px;
-    cs.fps = rc->fps;
-    cs.offset_x_px = rc->offset_x_px;
-    cs.offset_y_px = rc->offset_y_px;
-    cs.exposure_us = rc->exposure_us;
-    cs.gain_db = rc->gain_db;
+    vis_camera_settings cs = trial_camera_settings(rc);
     vis_error ve = {0};
     vis_source *src = vis_source_open_camera(&cs, &ve);
     if (!src) {

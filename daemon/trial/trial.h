@@ -35,5 +35,6 @@
 #include "trial_replay.h"
 #include "replay_job.h"
 #include "trial_config_text.h"
+#include "trial_camera_settings.h"
 
 #endif

@@ -1,5 +1,6 @@
 /* trial_live.c: a rig-mode trial's camera, capture pipeline and rail poller (see trial_live.h). */
 #include "trial_live.h"
+#include "trial_camera_settings.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -31,18 +32,7 @@ int trial_live_open(const rig_config *cfg, rail *compress, rail *shear, const ch
         return -1;
     }
     const rig_camera *rc = &cfg->camera;
-    vis_camera_settings cs = vis_camera_settings_default();
-    cs.index = rc->index;
-    cs.path = rc->source == RIG_SOURCE_DEVICE || rc->source == RIG_SOURCE_ARAVIS ? rc->device : NULL;
-    cs.aravis = rc->source == RIG_SOURCE_ARAVIS;
-    cs.width_px = rc->width_px;
-    cs.height_px = rc->height_px;
-    cs.fps = rc->fps;
-    cs.offset_x_px = rc->offset_x_px;
-    cs.offset_y_px = rc->offset_y_px;
-    cs.exposure_us = rc->exposure_us;
-    cs.gain_db = rc->gain_db;
-    cs.v4l2_gain = rc->v4l2_gain;
+    vis_camera_settings cs = trial_camera_settings(rc);
     vis_error ve = {0};
     l->src = vis_source_open_camera(&cs, &ve);
     if (!l->src) {
