@@ -18,6 +18,7 @@
 
 #include "api.h"
 #include "ctl.h"
+#include "ctl_calibrate_joint.h"
 #include "ctl_calibrate_trials.h"
 #include "rod_fit.h"
 #include "rod_fit_snap.h"
@@ -30,14 +31,14 @@
 static const char usage[] =
     "usage: ribbonctl calibrate ID [ID ...] [--db FILE] [--fit KEY,KEY,...] [--json] [--write-scene FILE]\n"
     "                           [--set section.key=value ...] [--dw-max X] [--dl-min X] [--max-samples N]\n"
-    "                           [--sigma-dz X] [--sigma-a X] [--scale-covariance] [--no-snap]\n"
+    "                           [--sigma-dz X] [--sigma-a X] [--scale-covariance] [--no-snap] [--share-hinge]\n"
     "  Fits one strip to the camera's Delta Z and A in stored trials (replays too): the trial's\n"
     "  scene with the creases its prediction used, followed through the compression near the hold\n"
-    "  and the shear up to a cut-off. Several trials must be of one specimen; they share its\n"
-    "  parameters. Prints each fitted value with its standard error (\"not determined by these\n"
-    "  data\" when the data cannot fix it), their correlations, the residual in noise units, and the\n"
-    "  fitted strip's snap with a 1-sigma band and its 2-sigma interval, its regime and the\n"
-    "  probability of the other one, beside each trial's measured and predicted snap.\n"
+    "  and the shear up to a cut-off. Several trials must be of one specimen (or --share-hinge);\n"
+    "  they share its parameters. Prints each fitted value with its standard error (\"not\n"
+    "  determined by these data\" when the data cannot fix it), their correlations, the residual in\n"
+    "  noise units, and the fitted strip's snap with a 1-sigma band and its 2-sigma interval, its\n"
+    "  regime and the probability of the other one, beside each trial's measured and predicted snap.\n"
     "  --db         the store (default: ask ribbond where its store is, --url / $RIBBON_URL)\n"
     "  --fit        parameters fitted, the others held: folds.angle_left_deg, folds.angle_right_deg,\n"
     "               folds.position_left, folds.position_right, folds.hinge_stiffness (one k for\n"
@@ -53,6 +54,11 @@ static const char usage[] =
     "  --sigma-dz, --sigma-a  the tracker's noise of Delta Z and A (defaults 0.002, 0.015 rad)\n"
     "  --scale-covariance  standard errors scaled by the residual; --no-snap  no snap prediction\n"
     "  --write-scene  the fitted strip as a scene file for ribbon-sim\n"
+    "  --share-hinge  trials of several specimens: grouped per specimen, each group one strip with its\n"
+    "               own parameters (--fit, default both crease angles), one hinge stiffness per unit\n"
+    "               width k / b (folds.hinge_stiffness_per_width, N/rad) shared by all, k = (k / b) width;\n"
+    "               prints k / b with its standard error and each specimen's fit and snap;\n"
+    "               --write-scene FILE writes one scene per specimen, FILE-specimen<ID>.ini\n"
     "  Exit 1 when a trial is refused (no such trial, unfinished, too few samples, lower state,\n"
     "  different specimens) or no parameter set fits; 2 on usage (an unknown key). docs/calibration.md.\n";
 
@@ -61,7 +67,7 @@ typedef struct calib_args {
     int nids;
     const char *db, *fit, *write_scene, *url, *token;
     const char *sets[MAX_SETS];
-    int nsets, json, scale_cov, no_snap;
+    int nsets, json, scale_cov, no_snap, share_hinge;
     double sigma_dz, sigma_a, dw_max, dl_min;
     long max_samples;
 } calib_args;
@@ -120,6 +126,7 @@ static int parse(int argc, char **argv, calib_args *a)
         if (!strcmp(f, "--json")) a->json = 1;
         else if (!strcmp(f, "--scale-covariance")) a->scale_cov = 1;
         else if (!strcmp(f, "--no-snap")) a->no_snap = 1;
+        else if (!strcmp(f, "--share-hinge")) a->share_hinge = 1;
         else if (f[0] != '-') {
             char *end;
             errno = 0;
@@ -357,6 +364,19 @@ int ctl_calibrate_main(int argc, char **argv)
     sel.n_sets = a.nsets;
     store *st;
     if (open_store(&a, &st)) return 1;
+    if (a.share_hinge) {
+        ctl_calib_joint_args ja = {.ids = a.ids, .nids = a.nids, .sel = &sel, .fit = o, .json = a.json,
+                                   .no_snap = a.no_snap, .write_scene = a.write_scene};
+        rod_scene any = rod_scene_default(); /* a --fit list does not depend on the scene */
+        if (a.fit) parse_keys(a.fit, &any, &ja.fit);
+        else ja.fit.fit[ROD_FIT_ANGLE_LEFT] = ja.fit.fit[ROD_FIT_ANGLE_RIGHT] = 1;
+        ja.fit.sigma_dz = a.sigma_dz;
+        ja.fit.sigma_a = a.sigma_a;
+        ja.fit.scale_covariance = a.scale_cov;
+        rc = ctl_calibrate_joint(st, &ja);
+        store_close(st);
+        return rc;
+    }
     ctl_calib_data d;
     char why[1024];
     if (ctl_calib_load(st, a.ids, a.nids, &sel, &d, why, sizeof why)) {

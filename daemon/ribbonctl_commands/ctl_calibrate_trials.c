@@ -246,8 +246,8 @@ int ctl_calib_load(store *st, const int64_t *ids, int n, const ctl_calib_select 
         } else {
             if (t.specimen_id != out->trials[0].specimen_id) {
                 snprintf(why, why_len,
-                         "trials %lld and %lld are of different specimens (%s, %s): calibrate fits one strip (a "
-                         "hinge stiffness shared per unit width across specimens is not offered yet)",
+                         "trials %lld and %lld are of different specimens (%s, %s): calibrate fits one strip (with "
+                         "--share-hinge, one per specimen sharing the hinge stiffness per unit width)",
                          (long long)ids[0], (long long)t.id, out->trials[0].specimen, ct->specimen);
                 goto fail;
             }

@@ -1,0 +1,27 @@
+/* ctl_calibrate_joint.h: `ribbonctl calibrate ID [ID ...] --share-hinge` (ctl_calibrate_joint.c):
+ * trials of several specimens grouped per specimen, each group one strip with its own
+ * parameters, the hinge stiffness per unit width shared (sim/rod_fit_joint.h). */
+#ifndef RIBBON_CTL_CALIBRATE_JOINT_H
+#define RIBBON_CTL_CALIBRATE_JOINT_H
+
+#include <stdint.h>
+
+#include "ctl_calibrate_trials.h"
+#include "rod_fit.h"
+#include "store.h"
+
+typedef struct ctl_calib_joint_args {
+    const int64_t *ids;
+    int nids;
+    const ctl_calib_select *sel;  /* the cuts and --set, for every trial */
+    rod_fit_opts fit;             /* fit[] from --fit (folds.hinge_stiffness there: the shared one),
+                                     noise, scale_covariance */
+    int json, no_snap;
+    const char *write_scene;      /* NULL, or FILE: one scene per specimen, FILE's name with
+                                     "-specimen<ID>" before its extension */
+} ctl_calib_joint_args;
+
+/* Reads, fits and prints. Returns the exit code (0; 1 with the reason on stderr). */
+int ctl_calibrate_joint(store *st, const ctl_calib_joint_args *a);
+
+#endif
