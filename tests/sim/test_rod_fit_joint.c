@@ -11,6 +11,8 @@
  *     fit is the sum of 1 / se(k_s)^2 of each specimen fitted alone (its own angles and k), at
  *     the same point (the Schur complement of a block-arrowhead information matrix), so the
  *     joint standard error is below either;
+ *   - an undetermined direction named per specimen: without gravity every E and k / b scale
+ *     together, so "S-10mm:ribbon.youngs_modulus" and k / b get no standard error, the angles do;
  *   - refusals with a reason: a width that is not known, a rigid hinge, per-crease hinges, the
  *     pair's hinge asked per specimen. */
 #include <setjmp.h>
@@ -219,6 +221,45 @@ static void joint_information_is_the_sum_of_the_specimens(void **state)
     rod_fit_joint_result_free(&r);
 }
 
+static void an_undetermined_direction_is_named_per_specimen(void **state)
+{
+    (void)state;
+    /* Without gravity, under displacement control, a strip's shape depends on its hinge only
+       through k / (E I1): scaling every specimen's E and the shared k / b together changes
+       nothing, so E of each specimen and k / b are "not determined by these data" (no number),
+       while the crease angles are. */
+    static kit k;
+    for (int s = 0; s < 2; s++) {
+        k.truth[s] = specimen(s, 1);
+        k.truth[s].gravity[2] = 0.0;
+        observe(&k.truth[s], k.obs[s]);
+        k.start[s] = k.truth[s];
+    }
+    rod_fit_joint_spec sp[2] = {{"S-5mm", &k.start[0], k.obs[0], NOBS}, {"S-10mm", &k.start[1], k.obs[1], NOBS}};
+    rod_fit_joint_opts o = angles();
+    o.each.fit[ROD_FIT_YOUNGS] = 1;
+    rod_fit_joint_result r;
+    char why[512];
+    rod_status st = rod_fit_joint_run(sp, 2, &o, &r, why, sizeof why);
+    if (st != ROD_OK) printf("joint fit: %s\n", why);
+    assert_int_equal(st, ROD_OK);
+    print_joint(&r);
+    assert_int_equal(r.np, 7);
+    assert_string_equal(r.key[6], "S-10mm:ribbon.youngs_modulus");
+    assert_false(r.kb_determined);
+    assert_true(isinf(r.kb_se));
+    for (int i = 1; i < r.np; i++) {
+        int young = strstr(r.key[i], "youngs_modulus") != NULL;
+        assert_int_equal(r.determined[i], !young);
+        assert_int_equal(isfinite(r.se[i]), !young);
+    }
+    printf("smallest singular value of the range-scaled Jacobian %.3g (largest %.3g)\n", r.sv_min, r.sv_max);
+    assert_true(r.sv_min < 1e-3 * r.sv_max);
+    assert_false(r.spec[1].determined[ROD_FIT_YOUNGS]);
+    assert_true(r.spec[1].determined[ROD_FIT_ANGLE_LEFT]);
+    rod_fit_joint_result_free(&r);
+}
+
 /* Runs the joint fit expecting a refusal whose reason holds each of the words given. */
 static void refused(const rod_fit_joint_spec *sp, const rod_fit_joint_opts *o, const char *w1, const char *w2)
 {
@@ -267,6 +308,7 @@ int main(void)
         cmocka_unit_test(recovers_the_shared_hinge_per_width),
         cmocka_unit_test(the_joint_jacobian_matches_finite_differences),
         cmocka_unit_test(joint_information_is_the_sum_of_the_specimens),
+        cmocka_unit_test(an_undetermined_direction_is_named_per_specimen),
         cmocka_unit_test(refusals_are_named),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
