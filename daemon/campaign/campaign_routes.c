@@ -211,20 +211,10 @@ static int plan_list(const campaign_ctx *c, json_t **out, int *http, char *why, 
     return 0;
 }
 
-/* Takes a queue item an approval added out again (it ends skipped); id 0: none. */
-static void unqueue(campaign_queue *q, int64_t id)
-{
-    if (!id) return;
-    json_t *ro = NULL;
-    int h2;
-    char w2[256];
-    campaign_queue_remove(q, id, &ro, &h2, w2, sizeof w2);
-    json_decref(ro);
-}
-
 /* POST /plan/ID/approve: the specimen (name from the body, default plan-ID; the design from the
- * proposal, the rest from the rig's defaults), then an operator step (fold and mount it, its
- * measured angles) and a trial of it at the end of the queue, then the proposal approved. */
+ * proposal, the rest from the rig's defaults), an operator step (fold and mount it, its measured
+ * angles) and a trial of it at the end of the queue, and the proposal approved: all in one store
+ * transaction (campaign_queue_approve), all or nothing. */
 static int plan_approve(const campaign_ctx *c, int64_t id, const json_t *body, json_t **out, int *http, char *why,
                         size_t why_len)
 {
@@ -248,45 +238,29 @@ static int plan_approve(const campaign_ctx *c, int64_t id, const json_t *body, j
     char name[64];
     snprintf(name, sizeof name, "%s", jn ? json_string_value(jn) : "");
     if (!name[0]) snprintf(name, sizeof name, "plan-%lld", (long long)id);
-    store_specimen sp, old;
-    if (store_specimen_get_by_name(c->st, name, &old, w, sizeof w) == STORE_OK)
-        return fail(http, 409, why, why_len, "specimen %s exists: name the new strip (\"name\")", name);
+    store_specimen sp;
     json_t *sb = json_pack("{s:s,s:f,s:f}", "name", name, "phi_deg", p.phi_deg, "gamma", p.gamma);
     int rc = campaign_specimen_from_json(sb, &c->defaults, &sp, why, why_len);
     json_decref(sb);
     if (rc) return (*http = 400, -1);
-    int64_t sid = 0;
-    if ((e = store_specimen_upsert(c->st, &sp, &sid, w, sizeof w)) != STORE_OK)
-        return fail(http, 500, why, why_len, "%s", w);
-    char prompt[200];
-    snprintf(prompt, sizeof prompt, "fold and mount %s: phi %g deg, Gamma %.4f (plan proposal %lld); measured angles?",
-             name, p.phi_deg, p.gamma, (long long)id);
-    json_t *ob = json_pack("{s:s,s:s,s:s,s:[s,s,s]}", "kind", "operator", "specimen", name, "prompt", prompt, "fields",
-                           "crease_angle_left_deg", "crease_angle_right_deg", "folded_at");
-    json_t *oo = NULL, *to = NULL;
-    char note[64];
-    snprintf(note, sizeof note, "plan proposal %lld", (long long)id);
-    json_t *tb = json_pack("{s:s,s:s,s:s}", "kind", "trial", "specimen", name, "note", note);
-    rc = campaign_queue_add(c->q, ob, &oo, http, why, why_len);
-    if (rc == 0) rc = campaign_queue_add(c->q, tb, &to, http, why, why_len);
-    json_decref(ob);
-    json_decref(tb);
-    int64_t oid = (int64_t)json_integer_value(json_object_get(oo, "id"));
-    int64_t tid = (int64_t)json_integer_value(json_object_get(to, "id"));
-    json_decref(oo);
-    json_decref(to);
-    if (rc) {
-        /* the trial could not be queued: take the operator step out again (it ends skipped), so
-         * the queue never holds half an approval; the proposal stays proposed */
-        unqueue(c->q, oid);
-        return -1;
-    }
-    if ((e = store_plan_approve(c->st, id, sid, oid, tid, store_wall_now(), w, sizeof w)) != STORE_OK) {
-        /* superseded meanwhile (ribbonctl plan) or the store refused: nothing of it stays queued */
-        unqueue(c->q, tid);
-        unqueue(c->q, oid);
-        return fail(http, e == STORE_E_STATE ? 409 : 500, why, why_len, "%s", w);
-    }
+    store_queue_item *it = malloc(2 * sizeof *it); /* two 13 kB items: off the API thread's stack */
+    if (!it) return fail(http, 500, why, why_len, "approving proposal %lld: out of memory", (long long)id);
+    it[0] = store_queue_item_default();
+    it[0].kind = STORE_QUEUE_OPERATOR;
+    snprintf(it[0].prompt, sizeof it[0].prompt,
+             "fold and mount %s: phi %g deg, Gamma %.4f (plan proposal %lld); measured angles?", name, p.phi_deg,
+             p.gamma, (long long)id);
+    snprintf(it[0].fields_json, sizeof it[0].fields_json,
+             "[\"crease_angle_left_deg\",\"crease_angle_right_deg\",\"folded_at\"]");
+    it[1] = store_queue_item_default();
+    it[1].kind = STORE_QUEUE_TRIAL;
+    snprintf(it[1].note, sizeof it[1].note, "plan proposal %lld", (long long)id);
+    /* specimen, operator step, trial item and the proposal approved: one transaction, so a failure
+     * leaves none of them, and a name taken meanwhile is the store's UNIQUE constraint (409) */
+    store_plan_approval a;
+    rc = campaign_queue_approve(c->q, id, &sp, &it[0], &it[1], &a, http, why, why_len);
+    free(it);
+    if (rc) return -1;
     store_plan_get(c->st, id, &p, w, sizeof w);
     *out = json_pack("{s:o}", "proposal", campaign_proposal_json(&p));
     *http = 201;
