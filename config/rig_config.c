@@ -87,7 +87,7 @@ static const rig_key rig_keys[] = {
      MINO, 0, NULL, "mm/s", "5",
      "speed of both rails back to where the trial started (at most either max_speed_mm_s)"},
     {"trial", "min_free_disk_mb", RIG_KEY_DOUBLE, OFF(trial.min_free_disk_mb), 0, 0.0, 1e9, 0, 0,
-     NULL, "MB", "1000", "free space needed in camera.video_dir before a trial starts (10^6 bytes)"},
+     NULL, "MB", "1000", "free space needed in camera.video_dir before a trial starts (10^6 bytes); replay mode: in the store's directory"},
     {"trial", "upper_dz_min", RIG_KEY_DOUBLE, OFF(trial.upper_dz_min), 0, 0.0, 1.0, MINO | MAXO,
      0, NULL, "1", "0.05",
      "Delta Z the camera must see after the hold (the upper state), else the trial aborts"},
