@@ -260,6 +260,8 @@ void rig_daemon_close(rig_daemon *d, const char *reason)
     d->api = NULL;
     campaign_queue_close(d->queue); /* it starts nothing more; a running trial is stopped below */
     d->queue = NULL;
+    campaign_trace_free(d->trace); /* waits for a trace still running (about a second at most idle) */
+    d->trace = NULL;
     phase_map_free(d->phase); /* cancels a map being computed */
     d->phase = NULL;
     pthread_mutex_lock(&d->lock);
@@ -709,6 +711,8 @@ static int op_campaign(void *user, const char *method, const char *path, const j
     c.rig_path = d->cfg.path;
     c.scene_path = d->cfg.scene_path;
     c.boundary_cache = cache;
+    if (!d->trace) d->trace = campaign_trace_new(); /* NULL (out of memory): traced here, as before */
+    c.trace = d->trace;
     c.sets = d->overrides;
     c.n_sets = d->n_overrides;
     return campaign_route(&c, method, path, body, out, http_status, why, why_len);

@@ -10,7 +10,8 @@
  *   GET  /queue/ID                  the item's whole status
  *   POST /queue/ID/remove | /queue/ID/move {"position": N} | /queue/ID/confirm {"values": {...}}
  *   GET  /campaign/phase            the lab's phase diagram's data (campaign_phase_json); with
- *                                   nothing to draw yet, empty lists and "empty": why
+ *                                   nothing to draw yet, empty lists and "empty": why; 503 while
+ *                                   the predicted boundary is traced (ribbond: campaign_trace.h)
  *   GET  /plan                      every proposal, newest first
  *   POST /plan/ID/approve           {"name": "..."}: the proposal's specimen, an operator step
  *                                   and a trial in the queue                    409 not proposed
@@ -148,7 +149,8 @@ static int specimen_retire(const campaign_ctx *c, const char *name, const json_t
 }
 
 /* GET /campaign/phase: the measured points, the experimental boundary and the predicted one (from
- * the cache; traced on the first request after the rig or scene file changed, about a second). */
+ * the cache; traced on the first request after the rig or scene file changed, about a second: with
+ * c->trace on a thread of its own, and 503 until it has landed). */
 static int phase_data(const campaign_ctx *c, json_t **out, int *http, char *why, size_t why_len)
 {
     campaign_phase ph;
@@ -174,9 +176,24 @@ static int phase_data(const campaign_ctx *c, json_t **out, int *http, char *why,
             key = t;
             if (key) snprintf(key + len, add, "\n--set %s", c->sets[k]);
         }
-        have = campaign_predicted_cached(c->scene, key ? key : "", CAMPAIGN_PHI_TRACE_LO, CAMPAIGN_PHI_TRACE_HI,
-                                         c->boundary_cache, &pred, w, sizeof w) == 0;
-        free(key);
+        if (c->trace) {
+            /* off the API thread: a cold cache answers 503 until the trace has landed */
+            double age = 0.0;
+            int rc2 = campaign_trace_get(c->trace, c->scene, key ? key : "", CAMPAIGN_PHI_TRACE_LO,
+                                         CAMPAIGN_PHI_TRACE_HI, c->boundary_cache, &pred, &age, w, sizeof w);
+            free(key);
+            if (rc2 == 1) {
+                campaign_phase_free(&ph);
+                return fail(http, 503, why, why_len,
+                            "the predicted boundary is being traced in the background (%.1f s so far; about a "
+                            "second on an idle core): ask again shortly", age);
+            }
+            have = rc2 == 0;
+        } else {
+            have = campaign_predicted_cached(c->scene, key ? key : "", CAMPAIGN_PHI_TRACE_LO, CAMPAIGN_PHI_TRACE_HI,
+                                             c->boundary_cache, &pred, w, sizeof w) == 0;
+            free(key);
+        }
     }
     json_t *o = campaign_phase_json(&ph, have ? &pred : NULL);
     if (c->scene && !have) json_object_set_new(o, "predicted_error", json_string(w));
