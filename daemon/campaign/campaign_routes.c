@@ -76,10 +76,13 @@ static int specimen_add(const campaign_ctx *c, const json_t *body, json_t **out,
     if (store_specimen_get_by_name(c->st, sp.name, &old, w, sizeof w) == STORE_OK)
         return fail(http, 409, why, why_len, "specimen %s exists (id %lld, %s): a specimen is added once", sp.name,
                     (long long)old.id, store_specimen_state_name(old.state));
+    /* the look above names the one there; the insert decides (the name's UNIQUE constraint), so
+       two adds of one name at once cannot both pass it */
     int64_t id = 0;
-    store_err e = store_specimen_upsert(c->st, &sp, &id, w, sizeof w);
+    store_err e = store_specimen_insert(c->st, &sp, &id, w, sizeof w);
     if (e == STORE_OK) e = store_specimen_get(c->st, id, &sp, w, sizeof w);
-    if (e != STORE_OK) return fail(http, e == STORE_E_INVALID ? 400 : 500, why, why_len, "%s", w);
+    if (e != STORE_OK)
+        return fail(http, e == STORE_E_EXISTS ? 409 : e == STORE_E_INVALID ? 400 : 500, why, why_len, "%s", w);
     *out = campaign_specimen_json(&sp);
     *http = 201;
     return 0;

@@ -8,7 +8,8 @@
  * - Two approvals of one name at once, from two connections (two daemons' API threads on one
  *   store): a third connection holds the write lock while both start, so both have looked at the
  *   store before either writes. Exactly one wins (201); the other gets 409 naming the specimen,
- *   from the store's UNIQUE constraint, and the winner's specimen keeps the winner's design. */
+ *   from the store's UNIQUE constraint, and the winner's specimen keeps the winner's design. The
+ *   same for two POST /specimens of one name. */
 #include <pthread.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -164,7 +165,8 @@ static void failure_mid_approval_leaves_nothing(void **state)
 
 typedef struct racer {
     campaign_ctx c; /* its own connection and queue (opened before the race: opening writes) */
-    int64_t proposal;
+    int64_t proposal; /* 0: POST /specimens {"name": "twin", "phi_deg": phi, "gamma": 0.15} instead */
+    double phi;
     int rc, http;
     char why[600];
 } racer;
@@ -172,17 +174,21 @@ typedef struct racer {
 static void *race(void *arg)
 {
     racer *r = arg;
-    r->rc = approve(&r->c, r->proposal, "twin", &r->http, r->why, sizeof r->why);
+    if (r->proposal) {
+        r->rc = approve(&r->c, r->proposal, "twin", &r->http, r->why, sizeof r->why);
+        return NULL;
+    }
+    json_t *body = json_pack("{s:s,s:f,s:f}", "name", "twin", "phi_deg", r->phi, "gamma", 0.15), *out = NULL;
+    r->rc = campaign_route(&r->c, "POST", "/specimens", body, &out, &r->http, r->why, sizeof r->why);
+    json_decref(body);
+    json_decref(out);
     return NULL;
 }
 
-static void two_approvals_of_one_name(void **state)
+/* Both racers start while a third connection holds the write lock (so both look before either
+ * writes), then the lock goes. */
+static void run_race(fx *f, racer r[2])
 {
-    fx *f = *state;
-    store_plan_proposal p[2] = {{.phi_deg = 120, .gamma = 0.18, .sd_before = 0.01, .predicted_gamma = 0.185},
-                                {.phi_deg = 60, .gamma = 0.21, .sd_before = 0.01, .predicted_gamma = 0.2}};
-    OK(store_plan_add_batch(f->st, p, 2, T0, why, sizeof why));
-    racer r[2] = {{.proposal = p[0].id}, {.proposal = p[1].id}};
     campaign_queue_ops ops = {.start_trial = no_trial, .trial_running = none_running};
     store *own[2];
     for (int k = 0; k < 2; k++) {
@@ -190,7 +196,6 @@ static void two_approvals_of_one_name(void **state)
         r[k].c = ctx_for(own[k]);
         assert_int_equal(campaign_queue_open(f->db, &ops, NULL, NULL, &r[k].c.q, why, sizeof why), 0);
     }
-    /* a third connection holds the write lock while both approvals start */
     sqlite3 *hold = NULL;
     assert_int_equal(sqlite3_open(f->db, &hold), SQLITE_OK);
     assert_int_equal(sqlite3_exec(hold, "BEGIN IMMEDIATE", NULL, NULL, NULL), SQLITE_OK);
@@ -205,7 +210,17 @@ static void two_approvals_of_one_name(void **state)
         campaign_queue_close(r[k].c.q);
         store_close(own[k]);
     }
-    for (int k = 0; k < 2; k++) printf("# approval %d: rc %d http %d %s\n", k, r[k].rc, r[k].http, r[k].rc ? r[k].why : "");
+    for (int k = 0; k < 2; k++) printf("# racer %d: rc %d http %d %s\n", k, r[k].rc, r[k].http, r[k].rc ? r[k].why : "");
+}
+
+static void two_approvals_of_one_name(void **state)
+{
+    fx *f = *state;
+    store_plan_proposal p[2] = {{.phi_deg = 120, .gamma = 0.18, .sd_before = 0.01, .predicted_gamma = 0.185},
+                                {.phi_deg = 60, .gamma = 0.21, .sd_before = 0.01, .predicted_gamma = 0.2}};
+    OK(store_plan_add_batch(f->st, p, 2, T0, why, sizeof why));
+    racer r[2] = {{.proposal = p[0].id}, {.proposal = p[1].id}};
+    run_race(f, r);
     assert_true(r[0].rc == 0 || r[1].rc == 0);
     int w = r[0].rc == 0 ? 0 : 1, l = 1 - w;
     assert_int_equal(r[w].http, 201);
@@ -226,11 +241,30 @@ static void two_approvals_of_one_name(void **state)
     assert_int_equal(g.status, STORE_PLAN_PROPOSED);
 }
 
+/* POST /specimens has the same race (look, then upsert): two adds of one name at once, one 201, the
+ * other 409, and the winner's record is not overwritten. */
+static void two_adds_of_one_name(void **state)
+{
+    fx *f = *state;
+    racer r[2] = {{.phi = 60}, {.phi = 120}};
+    run_race(f, r);
+    assert_true(r[0].rc == 0 || r[1].rc == 0);
+    int w = r[0].rc == 0 ? 0 : 1, l = 1 - w;
+    assert_int_equal(r[w].http, 201);
+    assert_int_equal(r[l].rc, -1);
+    assert_int_equal(r[l].http, 409);
+    assert_non_null(strstr(r[l].why, "specimen twin exists"));
+    store_specimen sp;
+    OK(store_specimen_get_by_name(f->st, "twin", &sp, why, sizeof why));
+    assert_true(sp.phi_deg == r[w].phi);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(failure_mid_approval_leaves_nothing, setup, teardown),
         cmocka_unit_test_setup_teardown(two_approvals_of_one_name, setup, teardown),
+        cmocka_unit_test_setup_teardown(two_adds_of_one_name, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
