@@ -87,7 +87,7 @@ static const rig_key rig_keys[] = {
      MINO, 0, NULL, "mm/s", "5",
      "speed of both rails back to where the trial started (at most either max_speed_mm_s)"},
     {"trial", "min_free_disk_mb", RIG_KEY_DOUBLE, OFF(trial.min_free_disk_mb), 0, 0.0, 1e9, 0, 0,
-     NULL, "MB", "1000", "free space needed in camera.video_dir before a trial starts (10^6 bytes)"},
+     NULL, "MB", "1000", "free space needed in camera.video_dir before a trial starts (10^6 bytes); replay mode: in the store's directory"},
     {"trial", "upper_dz_min", RIG_KEY_DOUBLE, OFF(trial.upper_dz_min), 0, 0.0, 1.0, MINO | MAXO,
      0, NULL, "1", "0.05",
      "Delta Z the camera must see after the hold (the upper state), else the trial aborts"},
@@ -214,8 +214,6 @@ static const rig_key rig_keys[] = {
 
     {"detect", "dz_jump", RIG_KEY_DOUBLE, OFF(detect.dz_jump), 0, 0.0, 2.0, MINO, 0, NULL, "1",
      "0.02", "jump of Delta Z between consecutive frames that counts as the snap"},
-    {"detect", "jump_fraction", RIG_KEY_DOUBLE, OFF(detect.jump_fraction), 0, 0.0, 1.0, MINO, 0,
-     NULL, "1", "0.3", "... and at least this fraction of the trial's Delta Z range"},
     {"detect", "min_quality", RIG_KEY_DOUBLE, OFF(detect.min_quality), 0, 0.0, 1.0, 0, 0, NULL,
      "1", "0.3", "frames tracked below this quality (0..1) count as not measured"},
     {"detect", "torque_witness", RIG_KEY_ENUM, OFF(detect.torque_witness), 0, 0, 0, SWITCH, 0,
@@ -264,6 +262,30 @@ static const rig_key rig_keys[] = {
 };
 
 #define N_KEYS (sizeof rig_keys / sizeof rig_keys[0])
+
+/* Keys a rig file may no longer set. A retired key is refused with why and what replaces it,
+ * never ignored: a file that sets it was written for a behaviour the program does not have.
+ *   detect.jump_fraction: documented as "... and at least this fraction of the trial's Delta Z
+ *   range" but never read. The snap is the simulator's (snap_detect.h: speed above snap.speed,
+ *   jump above detect.dz_jump, a floor over the tracker's noise); a per-frame jump as a fraction
+ *   of the range would depend on the camera's frame rate (a 20 ms snap spans 1 frame at 60 fps,
+ *   10 at 500 fps) and the measured snap would no longer be the quantity the simulator predicts. */
+static const struct retired_key {
+    const char *section, *name, *why;
+} retired_keys[] = {
+    {"detect", "jump_fraction",
+     "retired: snap detection never read it and does not (a jump as a fraction of the Delta Z range "
+     "depends on the frame rate); the snap is snap.speed and detect.dz_jump (docs/trials.md \"Snap "
+     "detection\"): delete the line"},
+};
+
+static const char *retired_why(const char *section, const char *name)
+{
+    for (size_t i = 0; i < sizeof retired_keys / sizeof retired_keys[0]; i++)
+        if (!strcmp(retired_keys[i].section, section) && !strcmp(retired_keys[i].name, name))
+            return retired_keys[i].why;
+    return NULL;
+}
 
 static const char *const section_list[] = {"rig",      "rail.compress", "rail.shear", "trial",
                                            "calibration", "specimen",   "camera",     "detect",
@@ -900,6 +922,11 @@ static int on_key(void *user, int line, const char *section, const char *name, c
     if (s == SEC_RAIL_COMPRESS || s == SEC_RAIL_SHEAR)
         return rail_keep(c, s == SEC_RAIL_COMPRESS ? 0 : 1, from, name, value);
     if (s == SEC_TWIN) return twin_keep(c, from, name, value);
+    const char *retired = retired_why(section, name);
+    if (retired) {
+        fail_from(c, CFG_ERR_UNKNOWN, from, dotted, "%s", retired);
+        return 1;
+    }
     int k = cfg_keys_find(&key_table, section, name);
     if (k < 0) {
         char known[320];
@@ -953,6 +980,8 @@ static cfg_status override_apply(load_ctx *c, int index)
     if (s == SEC_RAIL_COMPRESS || s == SEC_RAIL_SHEAR)
         return rail_keep(c, s == SEC_RAIL_COMPRESS ? 0 : 1, from, name, value) ? c->err->status
                                                                                 : CFG_OK;
+    const char *retired = retired_why(section, name);
+    if (retired) return fail_from(c, CFG_ERR_UNKNOWN, from, dotted, "%s", retired);
     int k = cfg_keys_find(&key_table, section, name);
     if (k < 0)
         return fail_from(c, CFG_ERR_UNKNOWN, from, dotted,
@@ -1474,7 +1503,6 @@ static void config_defaults(rig_config *cfg)
     cfg->camera.frozen_frames = 12;     /* daemon/trial/trial_capture.h TRIAL_FROZEN_FRAMES */
     cfg->camera.frozen_move_mm = 0.05;  /* ... TRIAL_FROZEN_MOVE_MM */
     cfg->detect.dz_jump = 0.02;
-    cfg->detect.jump_fraction = 0.3;
     cfg->detect.min_quality = 0.3;
     cfg->detect.load_jump = 0.5;
     cfg->sim.target_error = 0.01;

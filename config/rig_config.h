@@ -143,7 +143,6 @@ enum { RIG_KEEP_RECORDED = 0, RIG_KEEP_TRACKER = 1 };
 
 typedef struct rig_detect {
     double dz_jump;       /* smallest jump of Delta Z between consecutive frames that is a snap */
-    double jump_fraction; /* ... and at least this fraction of the trial's Delta Z range */
     double min_quality;   /* frames tracked below this quality (0..1) are not measured */
     bool torque_witness;  /* use the shear drive's load (torque / following error; mock: the
                              twin's shear force) as a second witness */

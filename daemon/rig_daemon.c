@@ -178,6 +178,23 @@ static int rails_busy(rig_daemon *d)
     return d->replay && (replay_job_status_get(d->replay, &rs), !rs.finished);
 }
 
+/* The checks of the rig file's mode into d->checks, stamped, every line not ok logged. Caller
+ * holds lock. */
+static void checks_fill(rig_daemon *d, const check_env *env)
+{
+    check_report_init(&d->checks);
+    check_rig_run(&d->cfg, env, &d->checks);
+    time_t now = time(NULL);
+    struct tm tm;
+    gmtime_r(&now, &tm);
+    strftime(d->checked_at, sizeof d->checked_at, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    for (int i = 0; i < d->checks.n; i++) {
+        const check_item *it = &d->checks.items[i];
+        if (it->level != CHECK_OK)
+            say(d, "check: %s %s %s: %s", check_level_name(it->level), it->part, it->what, it->text);
+    }
+}
+
 /* The checks; reopen: try rails that are not open first (not at start: they just failed). */
 static int run_checks(rig_daemon *d, int reopen, int *fails, char *why, size_t why_len)
 {
@@ -192,18 +209,8 @@ static int run_checks(rig_daemon *d, int reopen, int *fails, char *why, size_t w
     env.compress = d->compress;
     env.shear = d->shear;
     env.rails_why = d->rails_why[0] ? d->rails_why : NULL;
-    check_report_init(&d->checks);
-    check_rig_run(&d->cfg, &env, &d->checks);
-    time_t now = time(NULL);
-    struct tm tm;
-    gmtime_r(&now, &tm);
-    strftime(d->checked_at, sizeof d->checked_at, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    checks_fill(d, &env);
     int n = d->checks.fails;
-    for (int i = 0; i < d->checks.n; i++) {
-        const check_item *it = &d->checks.items[i];
-        if (it->level != CHECK_OK)
-            say(d, "check: %s %s %s: %s", check_level_name(it->level), it->part, it->what, it->text);
-    }
     say(d, "checks: %s (%d fail%s, %d warning%s)", n ? "NOT READY, trials refused" : "ready", n, n == 1 ? "" : "s",
         d->checks.warns, d->checks.warns == 1 ? "" : "s");
     pthread_mutex_unlock(&d->lock);
@@ -253,6 +260,8 @@ void rig_daemon_close(rig_daemon *d, const char *reason)
     d->api = NULL;
     campaign_queue_close(d->queue); /* it starts nothing more; a running trial is stopped below */
     d->queue = NULL;
+    campaign_trace_free(d->trace); /* waits for a trace still running (about a second at most idle) */
+    d->trace = NULL;
     phase_map_free(d->phase); /* cancels a map being computed */
     d->phase = NULL;
     pthread_mutex_lock(&d->lock);
@@ -451,6 +460,33 @@ static int op_status(void *user, json_t **out, char *why, size_t why_len)
     return 0;
 }
 
+/* The 409 of a start refused while a check fails: which checks fail, then the first one's text
+ * (the whole list is in GET /status). Caller holds lock. */
+static void not_ready(rig_daemon *d, int *http_status, char *why, size_t why_len)
+{
+    char names[300] = "", first[480] = "";
+    for (int i = 0; i < d->checks.n; i++) {
+        const check_item *it = &d->checks.items[i];
+        if (it->level != CHECK_FAIL) continue;
+        size_t u = strlen(names);
+        snprintf(names + u, sizeof names - u, "%s%s %s", u ? ", " : "", it->part, it->what);
+        if (!first[0]) snprintf(first, sizeof first, "%s", it->text);
+    }
+    *http_status = 409;
+    snprintf(why, why_len, "the rig is not ready: %d check%s fail (%s; checked %s): first: %.300s; fix it, then "
+             "POST /checks or SIGHUP (GET /status lists them all)", d->checks.fails,
+             d->checks.fails == 1 ? "" : "s", names, d->checked_at, first[0] ? first : d->rails_why);
+}
+
+/* Replay mode: the checks a replay needs (check_rig_run's replay part: the store writable, free
+ * disk where it is), run again at each start: a few stats, a statvfs and a small write probe, so
+ * the answer is today's and not the one from the daemon's start. Caller holds lock. */
+static void replay_checks(rig_daemon *d)
+{
+    check_env env = d->check_hooks;
+    checks_fill(d, &env);
+}
+
 /* Replay mode: POST /trials {"source_trial": ID} replays a stored trial; {} replays [replay]
  * source_trial, or the outside files the rig file names (replay.video, replay.rails). The replay
  * runs on a thread of its own; the answer (201) is the new trial, status running. */
@@ -470,6 +506,12 @@ static int replay_start(rig_daemon *d, const json_t *body, json_t **out, int *ht
         pthread_mutex_unlock(&d->lock);
         *http_status = 409;
         snprintf(why, why_len, "replay trial %lld is running (frame %ld); abort it first", (long long)rs.trial_id, rs.frame);
+        return -1;
+    }
+    replay_checks(d);
+    if (d->checks.fails) {
+        not_ready(d, http_status, why, why_len);
+        pthread_mutex_unlock(&d->lock);
         return -1;
     }
     trial_replay *r = NULL;
@@ -558,19 +600,7 @@ static int start_trial(rig_daemon *d, store *check, const store_specimen *sp, co
         return -1;
     }
     if (d->checks.fails || !d->compress || !d->shear) {
-        /* Which checks fail, then the first one's text: the whole list is in GET /status. */
-        char names[300] = "", first[480] = "";
-        for (int i = 0; i < d->checks.n; i++) {
-            const check_item *it = &d->checks.items[i];
-            if (it->level != CHECK_FAIL) continue;
-            size_t u = strlen(names);
-            snprintf(names + u, sizeof names - u, "%s%s %s", u ? ", " : "", it->part, it->what);
-            if (!first[0]) snprintf(first, sizeof first, "%s", it->text);
-        }
-        *http_status = 409;
-        snprintf(why, why_len, "the rig is not ready: %d check%s fail (%s; checked %s): first: %.300s; fix it, then "
-                 "POST /checks or SIGHUP (GET /status lists them all)", d->checks.fails,
-                 d->checks.fails == 1 ? "" : "s", names, d->checked_at, first[0] ? first : d->rails_why);
+        not_ready(d, http_status, why, why_len);
         pthread_mutex_unlock(&d->lock); /* after the text: a check re-run may rewrite what it reads */
         return -1;
     }
@@ -681,6 +711,8 @@ static int op_campaign(void *user, const char *method, const char *path, const j
     c.rig_path = d->cfg.path;
     c.scene_path = d->cfg.scene_path;
     c.boundary_cache = cache;
+    if (!d->trace) d->trace = campaign_trace_new(); /* NULL (out of memory): traced here, as before */
+    c.trace = d->trace;
     c.sets = d->overrides;
     c.n_sets = d->n_overrides;
     return campaign_route(&c, method, path, body, out, http_status, why, why_len);

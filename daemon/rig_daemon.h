@@ -68,6 +68,8 @@ typedef struct rig_daemon {
     int n_unstored;
     trial_transcoder *transcoder; /* rig mode: the trials' raw videos to FFV1, in the background */
     campaign_queue *queue;     /* the campaign's queue (rig and mock modes; rig_daemon_serve) */
+    campaign_trace *trace;     /* GET /campaign/phase's predicted boundary, traced off the API
+                                  thread (made on its first request; the API thread's) */
     /* The readiness checks (check.h), run at start and by rig_daemon_check; under lock. While
      * one fails, trials are refused (409 with the fails) and GET /status carries them. */
     check_report checks;

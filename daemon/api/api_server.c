@@ -184,7 +184,8 @@ static json_t *message_string(const char *msg)
     return json_string(clean);
 }
 
-/* {"error": msg, "status": status}, with an Allow header for 405. */
+/* {"error": msg, "status": status}, with an Allow header for 405 and Retry-After: 1 for 503 (an op
+ * busy with something that will end soon: GET /campaign/phase while the boundary is traced). */
 static enum MHD_Result reply_error(struct MHD_Connection *c, int status, const char *msg, const char *allow)
 {
     json_t *j = json_object();
@@ -198,6 +199,8 @@ static enum MHD_Result reply_error(struct MHD_Connection *c, int status, const c
     json_decref(j);
     if (text == NULL)
         return MHD_NO;
+    if (status == MHD_HTTP_SERVICE_UNAVAILABLE)
+        return reply_buffer_x(c, status, "application/json", text, len, allow, MHD_HTTP_HEADER_RETRY_AFTER, "1");
     return reply_buffer(c, status, "application/json", text, len, allow);
 }
 

@@ -16,7 +16,7 @@
  *   GET  /live/events              events                     200 text/event-stream (never ends)
  *   GET  /live/camera.jpg          camera_jpeg                200 JPEG     404 no frame yet
  *   GET  /live/prediction          prediction                 200 object   404 none yet
- *   GET, POST /specimens[/...], /queue[/...], /checks  campaign(method, path, body)  200/201  400 404 405 409
+ *   GET, POST /specimens[/...], /queue[/...], /checks  campaign(method, path, body)  200/201  400 404 405 409 503
  *   POST /rails/{name}/home, /rails/{name}/confirm-zero  rail(path, body)  200/202  400 404 409
  *   GET  any path of cfg.assets    (served by the server)     200 the asset, no token needed
  *
@@ -56,7 +56,8 @@
  * writes a human reason into why (n bytes, NUL-terminated) and an HTTP status in 400..599 into
  * *http_status (anything else becomes 500); *out is then ignored (and released if set).
  * *http_status arrives preset to the success status (200, 201 for start); an op may change it to
- * another 2xx on success.
+ * another 2xx on success. An op's 503 (busy with something that ends soon) is sent with
+ * Retry-After: 1.
  */
 #ifndef RIBBON_DAEMON_API_SERVER_H
 #define RIBBON_DAEMON_API_SERVER_H

@@ -6,6 +6,7 @@
  *   campaign_routes.h    the /specimens, /queue, /campaign/phase and /plan routes
  *   campaign_edge.h      the boundary the experiments support at one phi (bracket, probit)
  *   campaign_predicted.h the predicted boundary Gamma*(phi): ribbon-sim boundary's CSV or a cached trace
+ *   campaign_trace.h     that trace off the API thread (ribbond's GET /campaign/phase: 503 meanwhile)
  *   campaign_phase.h     the lab's phase diagram from the store: counts, edges, CSV, JSON, figure
  *   campaign_plan.h      the next specimens: beliefs with a fitted systematic offset, proposals
  *   campaign_bench.h     the simulated campaign: the planner against a bench of twins
@@ -19,6 +20,7 @@
 #include "campaign_routes.h"
 #include "campaign_edge.h"
 #include "campaign_predicted.h"
+#include "campaign_trace.h"
 #include "campaign_phase.h"
 #include "campaign_plan.h"
 #include "campaign_bench.h"

@@ -239,8 +239,8 @@ int campaign_predicted_trace(const rod_scene *sc, double phi_lo, double phi_hi, 
     return 0;
 }
 
-int campaign_predicted_cached(const rod_scene *sc, const char *scene_text, double phi_lo, double phi_hi,
-                              const char *cache_path, campaign_predicted *out, char *why, size_t why_len)
+int campaign_predicted_cache_read(const char *scene_text, double phi_lo, double phi_hi, const char *cache_path,
+                                  campaign_predicted *out)
 {
     uint64_t key = campaign_predicted_key(scene_text);
     FILE *f = cache_path ? fopen(cache_path, "r") : NULL;
@@ -255,6 +255,14 @@ int campaign_predicted_cached(const rod_scene *sc, const char *scene_text, doubl
             return 0;
         }
     }
+    return -1;
+}
+
+int campaign_predicted_cached(const rod_scene *sc, const char *scene_text, double phi_lo, double phi_hi,
+                              const char *cache_path, campaign_predicted *out, char *why, size_t why_len)
+{
+    uint64_t key = campaign_predicted_key(scene_text);
+    if (campaign_predicted_cache_read(scene_text, phi_lo, phi_hi, cache_path, out) == 0) return 0;
     if (campaign_predicted_trace(sc, phi_lo, phi_hi, out, why, why_len)) return -1;
     if (cache_path) {
         char line[128], w[300];

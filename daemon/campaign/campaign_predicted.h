@@ -41,6 +41,10 @@ int campaign_predicted_save_csv(const campaign_predicted *p, const char *path, c
  * no codimension-2 point was found at all (why). */
 int campaign_predicted_trace(const rod_scene *sc, double phi_lo, double phi_hi, campaign_predicted *out, char *why,
                              size_t why_len);
+/* The cache alone: cache_path's curve when its key (FNV-1a of scene_text) matches and it covers
+ * [phi_lo, phi_hi]: 0, else -1 (no file, another key or range, unreadable); never traces. */
+int campaign_predicted_cache_read(const char *scene_text, double phi_lo, double phi_hi, const char *cache_path,
+                                  campaign_predicted *out);
 /* The cached trace: cache_path's curve when its key (FNV-1a of scene_text) matches and it covers
  * [phi_lo, phi_hi], else a new trace written there (a cache that cannot be written is not an
  * error: source says so). */

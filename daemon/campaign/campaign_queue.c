@@ -468,6 +468,24 @@ int campaign_queue_add(campaign_queue *q, const json_t *body, json_t **out, int 
     return rc;
 }
 
+int campaign_queue_approve(campaign_queue *q, int64_t proposal_id, const store_specimen *sp,
+                           const store_queue_item *op, const store_queue_item *trial, store_plan_approval *out,
+                           int *http, char *why, size_t why_len)
+{
+    char w[512];
+    pthread_mutex_lock(&q->lock);
+    store_err e = store_plan_approve_new(q->st, proposal_id, sp, op, trial, store_wall_now(), out, w, sizeof w);
+    if (e == STORE_OK) kick(q);
+    pthread_mutex_unlock(&q->lock);
+    if (e == STORE_OK) return 0;
+    if (e == STORE_E_EXISTS) {
+        *http = 409;
+        snprintf(why, why_len, "%s", w);
+        return -1;
+    }
+    return store_fail_http(e, w, http, why, why_len);
+}
+
 int campaign_queue_list(campaign_queue *q, json_t **out, int *http, char *why, size_t why_len)
 {
     store_queue_item *v = NULL;

@@ -40,6 +40,14 @@ int campaign_queue_list(campaign_queue *q, json_t **out, int *http, char *why, s
 /* One item's whole status: the item, its specimen, its trial (with events) and the queue's state. */
 int campaign_queue_show(campaign_queue *q, int64_t id, json_t **out, int *http, char *why, size_t why_len);
 int campaign_queue_remove(campaign_queue *q, int64_t id, json_t **out, int *http, char *why, size_t why_len);
+/* A plan proposal's approval (POST /plan/ID/approve), on the queue's connection under its lock, in
+ * one store transaction (store_plan_approve_new): the new specimen sp, the operator step op and the
+ * trial item trial for it, the proposal approved; all or nothing. 0 with *out, or -1 with why and
+ * *http: 409 a specimen of that name exists (the store's UNIQUE constraint) or the proposal is not
+ * proposed, 404 no such proposal, 500 the store refused. */
+int campaign_queue_approve(campaign_queue *q, int64_t proposal_id, const store_specimen *sp,
+                           const store_queue_item *op, const store_queue_item *trial, store_plan_approval *out,
+                           int *http, char *why, size_t why_len);
 int campaign_queue_move(campaign_queue *q, int64_t id, const json_t *body, json_t **out, int *http, char *why,
                         size_t why_len);
 /* start: the queue runs from its next item; stop: it starts no further item (a running trial

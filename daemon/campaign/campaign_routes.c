@@ -10,7 +10,8 @@
  *   GET  /queue/ID                  the item's whole status
  *   POST /queue/ID/remove | /queue/ID/move {"position": N} | /queue/ID/confirm {"values": {...}}
  *   GET  /campaign/phase            the lab's phase diagram's data (campaign_phase_json); with
- *                                   nothing to draw yet, empty lists and "empty": why
+ *                                   nothing to draw yet, empty lists and "empty": why; 503 while
+ *                                   the predicted boundary is traced (ribbond: campaign_trace.h)
  *   GET  /plan                      every proposal, newest first
  *   POST /plan/ID/approve           {"name": "..."}: the proposal's specimen, an operator step
  *                                   and a trial in the queue                    409 not proposed
@@ -75,10 +76,13 @@ static int specimen_add(const campaign_ctx *c, const json_t *body, json_t **out,
     if (store_specimen_get_by_name(c->st, sp.name, &old, w, sizeof w) == STORE_OK)
         return fail(http, 409, why, why_len, "specimen %s exists (id %lld, %s): a specimen is added once", sp.name,
                     (long long)old.id, store_specimen_state_name(old.state));
+    /* the look above names the one there; the insert decides (the name's UNIQUE constraint), so
+       two adds of one name at once cannot both pass it */
     int64_t id = 0;
-    store_err e = store_specimen_upsert(c->st, &sp, &id, w, sizeof w);
+    store_err e = store_specimen_insert(c->st, &sp, &id, w, sizeof w);
     if (e == STORE_OK) e = store_specimen_get(c->st, id, &sp, w, sizeof w);
-    if (e != STORE_OK) return fail(http, e == STORE_E_INVALID ? 400 : 500, why, why_len, "%s", w);
+    if (e != STORE_OK)
+        return fail(http, e == STORE_E_EXISTS ? 409 : e == STORE_E_INVALID ? 400 : 500, why, why_len, "%s", w);
     *out = campaign_specimen_json(&sp);
     *http = 201;
     return 0;
@@ -148,7 +152,8 @@ static int specimen_retire(const campaign_ctx *c, const char *name, const json_t
 }
 
 /* GET /campaign/phase: the measured points, the experimental boundary and the predicted one (from
- * the cache; traced on the first request after the rig or scene file changed, about a second). */
+ * the cache; traced on the first request after the rig or scene file changed, about a second: with
+ * c->trace on a thread of its own, and 503 until it has landed). */
 static int phase_data(const campaign_ctx *c, json_t **out, int *http, char *why, size_t why_len)
 {
     campaign_phase ph;
@@ -174,9 +179,24 @@ static int phase_data(const campaign_ctx *c, json_t **out, int *http, char *why,
             key = t;
             if (key) snprintf(key + len, add, "\n--set %s", c->sets[k]);
         }
-        have = campaign_predicted_cached(c->scene, key ? key : "", CAMPAIGN_PHI_TRACE_LO, CAMPAIGN_PHI_TRACE_HI,
-                                         c->boundary_cache, &pred, w, sizeof w) == 0;
-        free(key);
+        if (c->trace) {
+            /* off the API thread: a cold cache answers 503 until the trace has landed */
+            double age = 0.0;
+            int rc2 = campaign_trace_get(c->trace, c->scene, key ? key : "", CAMPAIGN_PHI_TRACE_LO,
+                                         CAMPAIGN_PHI_TRACE_HI, c->boundary_cache, &pred, &age, w, sizeof w);
+            free(key);
+            if (rc2 == 1) {
+                campaign_phase_free(&ph);
+                return fail(http, 503, why, why_len,
+                            "the predicted boundary is being traced in the background (%.1f s so far; about a "
+                            "second on an idle core): ask again shortly", age);
+            }
+            have = rc2 == 0;
+        } else {
+            have = campaign_predicted_cached(c->scene, key ? key : "", CAMPAIGN_PHI_TRACE_LO, CAMPAIGN_PHI_TRACE_HI,
+                                             c->boundary_cache, &pred, w, sizeof w) == 0;
+            free(key);
+        }
     }
     json_t *o = campaign_phase_json(&ph, have ? &pred : NULL);
     if (c->scene && !have) json_object_set_new(o, "predicted_error", json_string(w));
@@ -211,20 +231,10 @@ static int plan_list(const campaign_ctx *c, json_t **out, int *http, char *why, 
     return 0;
 }
 
-/* Takes a queue item an approval added out again (it ends skipped); id 0: none. */
-static void unqueue(campaign_queue *q, int64_t id)
-{
-    if (!id) return;
-    json_t *ro = NULL;
-    int h2;
-    char w2[256];
-    campaign_queue_remove(q, id, &ro, &h2, w2, sizeof w2);
-    json_decref(ro);
-}
-
 /* POST /plan/ID/approve: the specimen (name from the body, default plan-ID; the design from the
- * proposal, the rest from the rig's defaults), then an operator step (fold and mount it, its
- * measured angles) and a trial of it at the end of the queue, then the proposal approved. */
+ * proposal, the rest from the rig's defaults), an operator step (fold and mount it, its measured
+ * angles) and a trial of it at the end of the queue, and the proposal approved: all in one store
+ * transaction (campaign_queue_approve), all or nothing. */
 static int plan_approve(const campaign_ctx *c, int64_t id, const json_t *body, json_t **out, int *http, char *why,
                         size_t why_len)
 {
@@ -248,45 +258,29 @@ static int plan_approve(const campaign_ctx *c, int64_t id, const json_t *body, j
     char name[64];
     snprintf(name, sizeof name, "%s", jn ? json_string_value(jn) : "");
     if (!name[0]) snprintf(name, sizeof name, "plan-%lld", (long long)id);
-    store_specimen sp, old;
-    if (store_specimen_get_by_name(c->st, name, &old, w, sizeof w) == STORE_OK)
-        return fail(http, 409, why, why_len, "specimen %s exists: name the new strip (\"name\")", name);
+    store_specimen sp;
     json_t *sb = json_pack("{s:s,s:f,s:f}", "name", name, "phi_deg", p.phi_deg, "gamma", p.gamma);
     int rc = campaign_specimen_from_json(sb, &c->defaults, &sp, why, why_len);
     json_decref(sb);
     if (rc) return (*http = 400, -1);
-    int64_t sid = 0;
-    if ((e = store_specimen_upsert(c->st, &sp, &sid, w, sizeof w)) != STORE_OK)
-        return fail(http, 500, why, why_len, "%s", w);
-    char prompt[200];
-    snprintf(prompt, sizeof prompt, "fold and mount %s: phi %g deg, Gamma %.4f (plan proposal %lld); measured angles?",
-             name, p.phi_deg, p.gamma, (long long)id);
-    json_t *ob = json_pack("{s:s,s:s,s:s,s:[s,s,s]}", "kind", "operator", "specimen", name, "prompt", prompt, "fields",
-                           "crease_angle_left_deg", "crease_angle_right_deg", "folded_at");
-    json_t *oo = NULL, *to = NULL;
-    char note[64];
-    snprintf(note, sizeof note, "plan proposal %lld", (long long)id);
-    json_t *tb = json_pack("{s:s,s:s,s:s}", "kind", "trial", "specimen", name, "note", note);
-    rc = campaign_queue_add(c->q, ob, &oo, http, why, why_len);
-    if (rc == 0) rc = campaign_queue_add(c->q, tb, &to, http, why, why_len);
-    json_decref(ob);
-    json_decref(tb);
-    int64_t oid = (int64_t)json_integer_value(json_object_get(oo, "id"));
-    int64_t tid = (int64_t)json_integer_value(json_object_get(to, "id"));
-    json_decref(oo);
-    json_decref(to);
-    if (rc) {
-        /* the trial could not be queued: take the operator step out again (it ends skipped), so
-         * the queue never holds half an approval; the proposal stays proposed */
-        unqueue(c->q, oid);
-        return -1;
-    }
-    if ((e = store_plan_approve(c->st, id, sid, oid, tid, store_wall_now(), w, sizeof w)) != STORE_OK) {
-        /* superseded meanwhile (ribbonctl plan) or the store refused: nothing of it stays queued */
-        unqueue(c->q, tid);
-        unqueue(c->q, oid);
-        return fail(http, e == STORE_E_STATE ? 409 : 500, why, why_len, "%s", w);
-    }
+    store_queue_item *it = malloc(2 * sizeof *it); /* two 13 kB items: off the API thread's stack */
+    if (!it) return fail(http, 500, why, why_len, "approving proposal %lld: out of memory", (long long)id);
+    it[0] = store_queue_item_default();
+    it[0].kind = STORE_QUEUE_OPERATOR;
+    snprintf(it[0].prompt, sizeof it[0].prompt,
+             "fold and mount %s: phi %g deg, Gamma %.4f (plan proposal %lld); measured angles?", name, p.phi_deg,
+             p.gamma, (long long)id);
+    snprintf(it[0].fields_json, sizeof it[0].fields_json,
+             "[\"crease_angle_left_deg\",\"crease_angle_right_deg\",\"folded_at\"]");
+    it[1] = store_queue_item_default();
+    it[1].kind = STORE_QUEUE_TRIAL;
+    snprintf(it[1].note, sizeof it[1].note, "plan proposal %lld", (long long)id);
+    /* specimen, operator step, trial item and the proposal approved: one transaction, so a failure
+     * leaves none of them, and a name taken meanwhile is the store's UNIQUE constraint (409) */
+    store_plan_approval a;
+    rc = campaign_queue_approve(c->q, id, &sp, &it[0], &it[1], &a, http, why, why_len);
+    free(it);
+    if (rc) return -1;
     store_plan_get(c->st, id, &p, w, sizeof w);
     *out = json_pack("{s:o}", "proposal", campaign_proposal_json(&p));
     *http = 201;

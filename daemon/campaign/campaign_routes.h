@@ -7,6 +7,7 @@
 #include <stddef.h>
 
 #include "campaign_queue.h"
+#include "campaign_trace.h"
 #include "scene.h"
 #include "store.h"
 
@@ -17,6 +18,8 @@ typedef struct campaign_ctx {
     const rod_scene *scene;  /* the rig's scene: the predicted boundary (NULL: none) */
     const char *rig_path, *scene_path; /* the files the boundary cache is keyed on */
     const char *boundary_cache; /* the cache file (campaign_predicted.h); NULL: trace every time */
+    campaign_trace *trace;      /* ribbond: a cold cache is traced on its thread (503 meanwhile);
+                                   NULL: traced on the caller's thread */
     const char *const *sets; /* the daemon's overrides (--set): in the cache's key with the files' */
     int n_sets;                 /* text, as they may change the scene */
 } campaign_ctx;
@@ -29,6 +32,8 @@ json_t *campaign_proposal_json(const store_plan_proposal *p);
 int campaign_route_match(const char *path);
 /* Serves method ("GET", "POST") on path with body (POST: an object; GET: NULL). 0 with *out and
  * *http (200, 201 for a new specimen or item), or -1 with why and *http (400, 404, 405, 409, 500). */
+/* GET /campaign/phase while c->trace traces the predicted boundary: 503 (the API server adds
+ * Retry-After), why saying so. */
 int campaign_route(const campaign_ctx *c, const char *method, const char *path, const json_t *body, json_t **out,
                    int *http, char *why, size_t why_len);
 

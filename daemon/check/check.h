@@ -13,7 +13,8 @@
  *   camera          found, pixel format, frame size against the calibration, exposure
  *                   settable and auto-exposure off (check_camera.c)
  *   store, disk     the store file and its directory writable by the service user, a write
- *                   probe, free disk for CHECK_TRIALS trials of raw video (check_disk.c)
+ *                   probe, free disk for CHECK_TRIALS trials of raw video (check_disk.c); replay
+ *                   mode: the store, and trial.min_free_disk_mb free where it is
  *
  * Nothing here moves a rail: rails are opened (which cancels any motion a controller still
  * runs), read and closed. The camera is opened only to read its format (V4L2: ioctls, no
@@ -103,6 +104,8 @@ int check_camera_probe(const rig_config *cfg, check_camera_facts *out);         
 void check_camera(const rig_config *cfg, const check_env *env, check_report *r);      /* check_camera.c */
 void check_store(const rig_config *cfg, const check_env *env, check_report *r);       /* check_disk.c */
 void check_disk(const rig_config *cfg, const check_env *env, check_report *r);        /* check_disk.c */
+/* Replay mode: trial.min_free_disk_mb free where the store is (a replay writes nothing else). */
+void check_store_disk(const rig_config *cfg, const check_env *env, check_report *r);  /* check_disk.c */
 /* Bytes of raw Y800 video one trial of this rig file records (full frames at camera.fps over
  * the protocol's duration); the duration in s into *seconds (may be NULL). */
 double check_trial_video_bytes(const rig_config *cfg, int width_px, int height_px, double *seconds);

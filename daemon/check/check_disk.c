@@ -5,7 +5,8 @@
  * check_env.trials trials of raw Y800 video (a trial records every frame raw; camera.transcode
  * shrinks it afterwards, so the raw size is what a trial needs while it runs). Below one trial's
  * video (or trial.min_free_disk_mb, if larger) is a fail: the trial would be refused; below
- * `trials` trials is a warning. */
+ * `trials` trials is a warning. A replay records no video: all it writes is its trial's rows in
+ * the store, so its disk check is trial.min_free_disk_mb free in the store's directory. */
 #include <errno.h>
 #include <fcntl.h>
 #include <libgen.h>
@@ -150,4 +151,27 @@ void check_disk(const rig_config *cfg, const check_env *env, check_report *r)
         check_add(r, CHECK_OK, "disk", "free", "%s free in %.300s: %d trials of raw video need %s (%s each: %d x %d "
                   "at %.0f fps for %.0f s)", fb, dir, trials, nb, pb, w, h, cfg->camera.fps, secs);
     }
+}
+
+void check_store_disk(const rig_config *cfg, const check_env *env, check_report *r)
+{
+    char tmp[RIG_PATH_MAX], dir[RIG_PATH_MAX];
+    snprintf(tmp, sizeof tmp, "%s", cfg->store_path);
+    existing_dir(dirname(tmp), dir, sizeof dir);
+    struct statvfs fs;
+    int (*sv)(const char *, struct statvfs *) = env->statvfs_fn ? env->statvfs_fn : statvfs;
+    if (sv(dir, &fs) != 0) {
+        check_add(r, CHECK_FAIL, "disk", "free", "statvfs %.300s: %s", dir, strerror(errno));
+        return;
+    }
+    double free_b = (double)fs.f_bavail * (double)fs.f_frsize, need = cfg->trial.min_free_disk_mb * 1e6;
+    char fb[32], nb[32];
+    human_bytes(free_b, fb, sizeof fb);
+    human_bytes(need, nb, sizeof nb);
+    if (free_b < need)
+        check_add(r, CHECK_FAIL, "disk", "free", "%s free in %.300s (the store's directory: all a replay writes), a "
+                  "replay needs %s (trial.min_free_disk_mb): free the disk or set store.path on another", fb, dir, nb);
+    else
+        check_add(r, CHECK_OK, "disk", "free", "%s free in %.300s (the store's directory: all a replay writes), at "
+                  "least %s (trial.min_free_disk_mb)", fb, dir, nb);
 }

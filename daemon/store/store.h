@@ -47,6 +47,7 @@ typedef enum store_err {
     STORE_E_IO,         /* SQLite or the file system failed (open, read, write, disk full) */
     STORE_E_CONSTRAINT, /* the database refused the row (constraint) */
     STORE_E_NOMEM,      /* allocation failed */
+    STORE_E_EXISTS,     /* a name already taken (the table's UNIQUE constraint): why names it */
     STORE_E_COUNT
 } store_err;
 
@@ -165,6 +166,9 @@ store_specimen store_specimen_default(void); /* every optional number NaN, texts
 
 /* Insert, or update every field but trials_count of the specimen with the same name. */
 store_err store_specimen_upsert(store *st, const store_specimen *sp, int64_t *id, char *why, size_t why_len);
+/* Insert a new specimen only: a name already taken is STORE_E_EXISTS ("specimen NAME exists"),
+ * decided by the table's UNIQUE constraint (no look first, so two writers cannot both pass). */
+store_err store_specimen_insert(store *st, const store_specimen *sp, int64_t *id, char *why, size_t why_len);
 store_err store_specimen_get(store *st, int64_t id, store_specimen *out, char *why, size_t why_len);
 store_err store_specimen_get_by_name(store *st, const char *name, store_specimen *out, char *why,
                                      size_t why_len);
@@ -291,6 +295,18 @@ store_err store_plan_list(store *st, store_plan_proposal **out, size_t *n, char 
  * its status otherwise, STORE_E_NOTFOUND. */
 store_err store_plan_approve(store *st, int64_t id, int64_t specimen_id, int64_t operator_item_id,
                              int64_t trial_item_id, double wall_s, char *why, size_t why_len);
+/* What an approval made. */
+typedef struct store_plan_approval {
+    int64_t specimen_id, operator_item_id, trial_item_id;
+} store_plan_approval;
+/* The whole approval of proposal id in one transaction: the new specimen sp
+ * (store_specimen_insert: a name taken is STORE_E_EXISTS), the operator step op and the trial
+ * item trial appended to the queue for it (their specimen_id is the new specimen's), and the
+ * proposal marked approved with the three (STORE_E_STATE when it is not 'proposed',
+ * STORE_E_NOTFOUND). All of it or nothing: any failure rolls every row back. */
+store_err store_plan_approve_new(store *st, int64_t id, const store_specimen *sp, const store_queue_item *op,
+                                 const store_queue_item *trial, double wall_s, store_plan_approval *out,
+                                 char *why, size_t why_len);
 
 /* ---- trials (store_trials.c) ------------------------------------------------------------ */
 

@@ -23,6 +23,7 @@ static const char *const err_names[STORE_E_COUNT] = {
     "database or file system error",
     "refused by a database constraint",
     "out of memory",
+    "the name is taken",
 };
 
 const char *store_err_message(store_err err)

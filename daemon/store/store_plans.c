@@ -185,3 +185,43 @@ store_err store_plan_approve(store *st, int64_t id, int64_t specimen_id, int64_t
     return store_fail(why, why_len, STORE_E_STATE, "proposal %lld was not approved: it changed while it was being "
                       "approved (ribbonctl plan --list)", (long long)id);
 }
+
+/* One transaction, taken before anything is read (BEGIN IMMEDIATE): the proposal's state, the
+ * specimen's name and the queue's end are then what the writes below see, and a failure at any
+ * write rolls back the rows written before it. */
+store_err store_plan_approve_new(store *st, int64_t id, const store_specimen *sp, const store_queue_item *op,
+                                 const store_queue_item *trial, double wall_s, store_plan_approval *out,
+                                 char *why, size_t why_len)
+{
+    store_plan_approval a = {0, 0, 0};
+    store_err e = store_check_writable(st, why, why_len);
+    if (e) return e;
+    if (op->kind != STORE_QUEUE_OPERATOR || trial->kind != STORE_QUEUE_TRIAL)
+        return store_fail(why, why_len, STORE_E_INVALID, "an approval queues an operator step, then a trial");
+    store_queue_item *items = malloc(2 * sizeof *items);
+    if (!items) return store_fail(why, why_len, STORE_E_NOMEM, "approving a proposal: out of memory");
+    if ((e = store_begin(st, why, why_len))) {
+        free(items);
+        return e;
+    }
+    store_plan_proposal p;
+    if (!(e = store_plan_get(st, id, &p, why, why_len)) && p.status != STORE_PLAN_PROPOSED)
+        e = store_fail(why, why_len, STORE_E_STATE, "proposal %lld is %s: only a proposed one can be approved%s",
+                       (long long)id, names[p.status],
+                       p.status == STORE_PLAN_SUPERSEDED ? " (a newer plan replaced it: ribbonctl plan --list)" : "");
+    if (!e) e = store_specimen_insert(st, sp, &a.specimen_id, why, why_len);
+    if (!e) {
+        items[0] = *op;
+        items[1] = *trial;
+        items[0].specimen_id = items[1].specimen_id = a.specimen_id;
+        e = store_queue_add(st, &items[0], wall_s, &a.operator_item_id, why, why_len);
+    }
+    if (!e) e = store_queue_add(st, &items[1], wall_s, &a.trial_item_id, why, why_len);
+    if (!e)
+        e = store_plan_approve(st, id, a.specimen_id, a.operator_item_id, a.trial_item_id, wall_s, why, why_len);
+    if (!e) e = store_commit(st, why, why_len);
+    if (e) store_rollback(st);
+    free(items);
+    if (!e && out) *out = a;
+    return e;
+}

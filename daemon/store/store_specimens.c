@@ -61,7 +61,15 @@ static store_err check(const store_specimen *sp, char *why, size_t why_len)
     return STORE_OK;
 }
 
-store_err store_specimen_upsert(store *st, const store_specimen *sp, int64_t *id, char *why, size_t why_len)
+/* The insert both writers share; the upsert adds its ON CONFLICT clause. */
+#define SPECIMEN_INSERT                                                                                     \
+    "INSERT INTO specimens (name, length_m, width_m, thickness_m, youngs_modulus_pa,"                      \
+    " density_kg_m3, material, crease_angle_left_deg, crease_angle_right_deg,"                             \
+    " fold_position, crease_orientation, crease_position_left, crease_position_right,"                     \
+    " folded_at, phi_deg) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,?15)"
+
+/* upsert 1: update the row of the same name; 0: a name taken is STORE_E_EXISTS. */
+static store_err save(store *st, const store_specimen *sp, int upsert, int64_t *id, char *why, size_t why_len)
 {
     store_err e = store_check_writable(st, why, why_len);
     if (e == STORE_OK)
@@ -70,10 +78,8 @@ store_err store_specimen_upsert(store *st, const store_specimen *sp, int64_t *id
         return e;
     sqlite3_stmt *s;
     e = store_prepare(st,
-                      "INSERT INTO specimens (name, length_m, width_m, thickness_m, youngs_modulus_pa,"
-                      " density_kg_m3, material, crease_angle_left_deg, crease_angle_right_deg,"
-                      " fold_position, crease_orientation, crease_position_left, crease_position_right,"
-                      " folded_at, phi_deg) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,?15)"
+                      !upsert ? SPECIMEN_INSERT " RETURNING id" :
+                      SPECIMEN_INSERT
                       " ON CONFLICT(name) DO UPDATE SET length_m=excluded.length_m,"
                       " width_m=excluded.width_m, thickness_m=excluded.thickness_m,"
                       " youngs_modulus_pa=excluded.youngs_modulus_pa, density_kg_m3=excluded.density_kg_m3,"
@@ -108,10 +114,22 @@ store_err store_specimen_upsert(store *st, const store_specimen *sp, int64_t *id
             *id = sqlite3_column_int64(s, 0);
         rc = sqlite3_step(s);
     }
-    if (rc != SQLITE_DONE)
+    if (rc != SQLITE_DONE && !upsert && sqlite3_extended_errcode(st->db) == SQLITE_CONSTRAINT_UNIQUE)
+        e = store_fail(why, why_len, STORE_E_EXISTS, "specimen %s exists: name the new strip (\"name\")", sp->name);
+    else if (rc != SQLITE_DONE)
         e = store_sql_fail(st->db, rc, why, why_len, "saving the specimen");
     sqlite3_finalize(s);
     return e;
+}
+
+store_err store_specimen_upsert(store *st, const store_specimen *sp, int64_t *id, char *why, size_t why_len)
+{
+    return save(st, sp, 1, id, why, why_len);
+}
+
+store_err store_specimen_insert(store *st, const store_specimen *sp, int64_t *id, char *why, size_t why_len)
+{
+    return save(st, sp, 0, id, why, why_len);
 }
 
 #define SPECIMEN_COLUMNS                                                                                    \

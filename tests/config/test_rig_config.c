@@ -370,6 +370,33 @@ static void test_unknown_and_duplicate(void **state)
     expect_line(make1(25, "[detect] x"), CFG_ERR_SYNTAX, 25, "", "after the section header");
 }
 
+/* A retired key (documented once, read by nothing) is refused, never silently ignored: the
+ * refusal names its line (or --set) and says why it went and what to use instead. */
+static void test_retired_keys(void **state)
+{
+    (void)state;
+    expect_line(make1(26, "dz_jump = 0.02\njump_fraction = 0.3"), CFG_ERR_UNKNOWN, 27,
+                "detect.jump_fraction", "retired");
+    expect_line(make1(26, "dz_jump = 0.02\njump_fraction = 0.3"), CFG_ERR_UNKNOWN, 27,
+                "detect.jump_fraction", "detect.dz_jump");
+    const char *ovr[] = {"detect.jump_fraction=0.5"};
+    expect_origin(make(NULL, 0, NULL), ovr, 1, CFG_ERR_UNKNOWN, CFG_ORIGIN_OVERRIDE,
+                  "detect.jump_fraction", "retired");
+    /* No shipped file sets it. */
+    const char *files[] = {"mock.ini", "rig-gcode.ini", "rig-modbus.ini", "replay.ini",
+                           "rig-rehearsal.ini", "rig-rehearsal-modbus.ini"};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/%s", CONFIG_DIR, files[i]);
+        const char *text = slurp(path);
+        assert_non_null(text);
+        if (strstr(text, "jump_fraction")) {
+            print_error("%s still sets detect.jump_fraction\n", files[i]);
+            fail();
+        }
+    }
+}
+
 /* A bad value of every type, in every section. */
 static void test_bad_values(void **state)
 {
@@ -1038,6 +1065,7 @@ int main(void)
         cmocka_unit_test(test_service_unit),
         cmocka_unit_test(test_base_loads),
         cmocka_unit_test(test_unknown_and_duplicate),
+        cmocka_unit_test(test_retired_keys),
         cmocka_unit_test(test_bad_values),
         cmocka_unit_test(test_missing_per_mode),
         cmocka_unit_test(test_mode_rules),

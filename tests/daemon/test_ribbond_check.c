@@ -3,8 +3,9 @@
  * the daemon still opens (before: it refused to start, so the lab saw nothing but a log line): its
  * status says not ready with the reasons, a trial is refused with 409 naming them, and once the
  * port is there (the GRBL simulator behind a link at the configured path) and the camera answers,
- * POST /checks opens the rails and the daemon is ready. Then the real ribbond in mock mode runs them
- * again on SIGHUP. No trial runs. */
+ * POST /checks opens the rails and the daemon is ready. In replay mode a replay start runs the
+ * replay's checks (store writable, free disk where the store is) and is refused with 409 naming a
+ * failed one. Then the real ribbond in mock mode runs them again on SIGHUP. No trial runs. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -123,6 +124,62 @@ static void test_not_ready_then_ready(void **state)
     grblsim_kill(g);
 }
 
+/* Replay mode: a replay start consults the checks a replay needs, as a trial start does (409 naming
+ * the failed check, nothing started): the store's directory writable (judged here for the user
+ * nobody, who may not write the test's 0700 directory) and free disk where the store is (all a
+ * replay writes; statvfs faked to 1 MB). Healthy again, the start gets past the checks to the
+ * replay itself (400: this store has no trial 1 to replay). */
+static int tiny_statvfs(const char *path, struct statvfs *out)
+{
+    (void)path;
+    memset(out, 0, sizeof *out);
+    out->f_frsize = out->f_bsize = 4096;
+    out->f_bavail = 256; /* 1 MB */
+    out->f_blocks = 100000;
+    return 0;
+}
+
+static void test_replay_consults_checks(void **state)
+{
+    (void)state;
+    static rig_daemon d;
+    char s_store[160], why[1024] = "";
+    snprintf(s_store, sizeof s_store, "store.path=%s/replay.db", dir);
+    const char *ov[] = {s_store, "api.port=0"};
+    if (rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/replay.ini", ov, 2, NULL, why, sizeof why))
+        fail_msg("replay daemon: %s", why);
+    api_ops ops = rig_daemon_ops();
+    json_error_t je;
+    json_t *body = json_loads("{}", 0, &je), *out = NULL;
+    int http = 0;
+
+    d.check_hooks.statvfs_fn = tiny_statvfs;
+    assert_int_equal(ops.start(&d, body, &out, &http, why, sizeof why), -1);
+    printf("replay, disk full: %d %s\n", http, why);
+    assert_int_equal(http, 409);
+    assert_non_null(strstr(why, "not ready"));
+    assert_non_null(strstr(why, "disk free"));
+    assert_non_null(strstr(why, "trial.min_free_disk_mb"));
+    d.check_hooks.statvfs_fn = NULL;
+
+    d.check_hooks.service_user = "nobody";
+    assert_int_equal(ops.start(&d, body, &out, &http, why, sizeof why), -1);
+    printf("replay, store not writable: %d %s\n", http, why);
+    assert_int_equal(http, 409);
+    assert_non_null(strstr(why, "store writable"));
+    d.check_hooks.service_user = NULL;
+
+    assert_int_equal(ops.start(&d, body, &out, &http, why, sizeof why), -1);
+    printf("replay, ready: %d %s\n", http, why);
+    assert_int_equal(http, 400);
+    assert_null(strstr(why, "not ready"));
+    json_t *st = status(&d);
+    assert_true(json_is_true(json_object_get(json_object_get(st, "checks"), "ok")));
+    json_decref(st);
+    json_decref(body);
+    rig_daemon_close(&d, "test done");
+}
+
 /* The real ribbond (mock mode): the checks at start are logged once, SIGHUP runs them again (a
  * second "checks:" line), SIGTERM still stops it with status 0. */
 static int count_lines(const char *path, const char *what)
@@ -187,7 +244,8 @@ int main(void)
     snprintf(locks, sizeof locks, "%s/locks", dir);
     mkdir(locks, 0700);
     setenv("RIBBON_LOCK_DIR", locks, 1);
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_not_ready_then_ready), cmocka_unit_test(test_sighup)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_not_ready_then_ready),
+                                       cmocka_unit_test(test_replay_consults_checks), cmocka_unit_test(test_sighup)};
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     test_dir_done(dir, rc == 0, "ribbond check");
     return rc;

@@ -404,6 +404,11 @@ async function loadCampaign() {
   const r = await api('/campaign/phase');
   const d = await r.json().catch(() => ({}));
   $('campaign-box').dataset.status = String(r.status);
+  if (r.status === 503) {
+    // the predicted boundary is being traced in the background: ask again when the daemon says
+    const s = Math.min(Math.max(Number(r.headers.get('Retry-After')) || 1, 1), 15);
+    setTimeout(() => loadCampaign().catch(() => {}), 1000 * s);
+  }
   if (!r.ok || d.empty) {
     $('campaign-info').textContent = d.empty || d.error || ('HTTP ' + r.status);
   } else {

@@ -4,7 +4,8 @@
  * draw. Then specimens trialled at known regimes and a proposal written to the daemon's store: the
  * page's edges table shows phi 90's bracket [0.16, 0.17] and the predicted boundary (traced by
  * ribbond from its scene); the proposal's Approve button queues its operator step and trial (the
- * queue's items checked through the API) and the proposal reads approved; no console error. No
+ * queue's items checked through the API) and the proposal reads approved; no console error (but
+ * the 503 of GET /campaign/phase while ribbond traces the boundary, asked again after it). No
  * trial runs (seconds). Heavy and labelled "browser": the sanitizer build skips it. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -140,7 +141,10 @@ static void test_live_campaign(void **state)
         const char *level = json_string_value(json_object_get(e, "level"));
         const char *msg = json_string_value(json_object_get(e, "message"));
         printf("# console %s: %s\n", level ? level : "?", msg ? msg : "");
-        if (level && !strcmp(level, "SEVERE")) fail_msg("console error: %s", msg ? msg : "");
+        /* the 503 of GET /campaign/phase while the boundary is traced is expected (the browser logs
+           every non-2xx answer); the page asks again after Retry-After */
+        if (level && !strcmp(level, "SEVERE") && !(msg && strstr(msg, "/campaign/phase") && strstr(msg, "503")))
+            fail_msg("console error: %s", msg ? msg : "");
     }
     json_decref(log);
 }
