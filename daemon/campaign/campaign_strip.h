@@ -19,8 +19,10 @@
  *   hinge       ln k of the creases' hinge (folds.hinge_stiffness; or the mean of ln k_left and
  *               ln k_right with the mean of their standard errors when each crease had its own)
  *   youngs      ln E (ribbon.youngs_modulus), G / E held
- * Standard error of a pooled value: 1 / sqrt(sum w), times the Birge ratio sqrt(chi2 / (n - 1))
- * when that exceeds 1 (fits that scatter more than their errors say). A parameter no fit
+ * Each fit's standard error is floored at half the median of the pooled fits' (no fit weighs more
+ * than four typical ones: one overconfident fit would otherwise set the strip). Standard error of
+ * a pooled value: 1 / sqrt(sum w), times the Birge ratio sqrt(chi2 / (n - 1)) when that exceeds 1
+ * (fits that scatter more than their errors say). A parameter no fit
  * determined stays the scene's (NaN here). Positions are not pooled (each specimen's position is
  * its design, the planner's variable); the creases' difference is not (random by hand).
  *
@@ -50,6 +52,7 @@ typedef struct campaign_strip_fit {
     double angle_se_deg;
     double angle_scene_deg;    /* the fit's scene mean magnitude */
     double ln_hinge, ln_hinge_se; /* ln(k / (N m/rad)) and its standard error */
+    double hinge_scene;        /* N m/rad, the fit's start (its scene's k); NaN without a hinge */
     double ln_youngs, ln_youngs_se; /* ln(E / Pa) */
 } campaign_strip_fit;
 
@@ -86,6 +89,17 @@ void campaign_strip_describe(const campaign_lab_strip *ls, char *out, size_t out
  * with why (outside the curve's range). */
 int campaign_strip_at(const campaign_predicted *curve, const campaign_lab_strip *ls, double phi_deg, double *gamma,
                       char *why, size_t why_len);
+
+/* The lab strip's boundary: lab (campaign_strip_apply's scene) traced over [phi_lo, phi_hi]
+ * (campaign_predicted_trace) from its codim-2 point near (phi0, g[i]), trying the starts g[0..ng)
+ * in order until the curve covers every need[j] - relaxation: the search for the codim-2 point
+ * lands on the boundary's nearest point, and from a start far from it (the scene's Gamma*, when
+ * the hinge raised the boundary by 0.01) it can land where the continuation in phi cannot go on
+ * (measured: mock scene, k 3.51e-3, N = 61, from Gamma 0.1763 at 90 deg; from 0.185 it goes).
+ * 0 with *out, or -1 with why (each start's reason, the last one's in full). */
+int campaign_strip_trace(const rod_scene *lab, const campaign_lab_strip *ls, double phi0, const double *g, size_t ng,
+                         double phi_lo, double phi_hi, const double *need, size_t nneed, campaign_predicted *out,
+                         char *why, size_t why_len);
 
 /* Every usable fit in the store: the trials' fit_json (issue 32 B), each with its specimen's
  * design angle. *out malloc'ed (free()), *n of them; *n_failed counts trials whose stored fit

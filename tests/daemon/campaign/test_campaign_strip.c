@@ -9,7 +9,8 @@
  * Relaxation: weights 1, 1/4, 4: mean 34.5 / 5.25; chi2 = 23/7 over 2 degrees of freedom, so the
  * standard error is sqrt(23/14) / sqrt(5.25). Hinge: ln k weighted 25 and 100, mean (25 ln 4e-3 +
  * 100 ln 6e-3) / 125, Birge ratio from its chi2 over 1. E is left the scene's. The lab strip at
- * design phi 90 reads the trace at 90 - relaxation. */
+ * design phi 90 reads the trace at 90 - relaxation. One overconfident fit among four counts with
+ * half the median standard error, not its own. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -143,9 +144,31 @@ static void from_result(void **s)
     assert_true(ls.hinge == 5e-3);
 }
 
+/* One fit far more confident than the others: its standard error counts as half the median of
+ * the four (0.5), not its own 0.01. Relaxations 5, 5, 5 (se 1) and 9 (se 0.01): weights 1, 1, 1,
+ * 4; mean (15 + 36) / 7; chi2 = 3 (51/7 - 5)^2 + (9 - 51/7)^2 / 0.25 over 3. */
+static void one_overconfident_fit_is_floored(void **s)
+{
+    (void)s;
+    campaign_strip_fit f[4];
+    for (int i = 0; i < 4; i++) {
+        memset(&f[i], 0, sizeof f[i]);
+        f[i].design_phi_deg = 90;
+        f[i].angle_mean_deg = i < 3 ? 85 : 81;
+        f[i].angle_se_deg = i < 3 ? 1 : 0.01;
+        f[i].ln_hinge = f[i].ln_hinge_se = f[i].ln_youngs = f[i].ln_youngs_se = NAN;
+    }
+    campaign_lab_strip ls;
+    campaign_strip_pool(f, 4, &ls);
+    double m = 51.0 / 7.0, chi2 = 3 * (m - 5) * (m - 5) + (9 - m) * (9 - m) / 0.25;
+    assert_true(fabs(ls.relax_deg - m) < 1e-12);
+    assert_true(fabs(ls.relax_se - sqrt(chi2 / 3) / sqrt(7.0)) < 1e-12);
+}
+
 int main(void)
 {
     const struct CMUnitTest t[] = {cmocka_unit_test(pooled_against_hand_worked),
-                                   cmocka_unit_test(nothing_pooled_is_the_scene), cmocka_unit_test(from_result)};
+                                   cmocka_unit_test(nothing_pooled_is_the_scene), cmocka_unit_test(from_result),
+                                   cmocka_unit_test(one_overconfident_fit_is_floored)};
     return cmocka_run_group_tests(t, NULL, NULL);
 }
