@@ -183,8 +183,9 @@ static double fit_hinge(const rod_scene *scene, const campaign_bench_opts *o)
 }
 
 /* Twin t's calibration as a trial would make it (campaign_bench.h): its observables before the
- * snap with noise, fitted from the design's scene. 1 with *f filled, 0 when the fit gave no usable
- * calibration (why), -1 when the twin's own observables could not be computed (why). */
+ * snap with noise, fitted from the design's scene. 1 with *f filled, 0 when there is no usable
+ * calibration (why): the fit gave none, or the twin's own states could not be followed (a trial
+ * whose fit fails goes on without one). */
 static int calibrate_twin(const rod_scene *scene, const rod_scene *t, const campaign_bench_opts *o, double phi,
                           double gamma, double dw_crit, unsigned *nrng, campaign_strip_fit *f, char *why,
                           size_t why_len)
@@ -200,11 +201,18 @@ static int calibrate_twin(const rod_scene *scene, const rod_scene *t, const camp
         obs[n++] = (rod_fit_obs){.dl = c, .dw = dw_stop * (k + 1) / FIT_N_SHEAR};
     rod_fit_model *m = NULL;
     double y[2 * FIT_NOBS], u[ROD_FIT_NKEYS];
-    if (rod_fit_model_alloc(t, obs, n, 0, &m, why, why_len) != ROD_OK) return -1;
+    char w[400];
+    if (rod_fit_model_alloc(t, obs, n, 0, &m, w, sizeof w) != ROD_OK) {
+        snprintf(why, why_len, "the twin's observables: %s", w);
+        return 0;
+    }
     rod_fit_scene_values(t, u);
-    rod_status st = rod_fit_model_eval(m, u, NULL, y, NULL, why, why_len);
+    rod_status st = rod_fit_model_eval(m, u, NULL, y, NULL, w, sizeof w);
     rod_fit_model_free(m);
-    if (st != ROD_OK) return -1;
+    if (st != ROD_OK) {
+        snprintf(why, why_len, "the twin's observables: %s", w);
+        return 0;
+    }
     for (int k = 0; k < n; k++) {
         obs[k].dz = y[2 * k] + o->fit_sigma_dz * normal(nrng);
         obs[k].a = y[2 * k + 1] + o->fit_sigma_a * normal(nrng);
@@ -411,10 +419,6 @@ int campaign_bench_run(const rod_scene *scene, const campaign_bench_opts *o, cam
             double t2 = now_s();
             int c = calibrate_twin(scene, &t, o, prop.phi_deg, prop.gamma, dw_crit, &nrng, &fits[nfits], w, sizeof w);
             r->fit_s += now_s() - t2;
-            if (c < 0) {
-                snprintf(why, why_len, "specimen %d's observables: %s", r->specimens + 1, w);
-                goto out;
-            }
             if (c) {
                 const campaign_strip_fit *f = &fits[nfits++];
                 if (r->specimens < 64) r->fit[r->specimens] = *f, r->has_fit[r->specimens] = 1;

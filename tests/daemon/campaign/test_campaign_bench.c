@@ -8,9 +8,10 @@
  *   - twins with compliant hinges (5e-3 N m/rad, mock.ini's [twin]), at N = 61: the planner given
  *     the twins' calibrations (each fitted from its noisy observables before the snap, pooled into
  *     the lab strip, campaign_strip.h) closes every interval to 0.005 within 15 specimens and
- *     locates the truth within 0.005 (measured 11 specimens, 0.0027, about 8 s of CPU). Before the
+ *     locates the truth within 0.005 (measured 11 specimens, 0.0025, about 12 s of CPU). Before the
  *     lab strip the calibrated planner's single offset could not follow the hinge's
- *     phi-dependent shift (+0.019, +0.008, +0.004): 15 specimens, not closed, 0.0061 off.
+ *     phi-dependent shift (+0.019, +0.008, +0.004): 15 specimens, not closed, 0.0061 off (0.0049
+ *     before the planner's tie rule).
  * With the argument "full" (heavy, the normal build): over five seeds the three planners (lab
  * strip, offset only, none) each within 15 specimens and 0.005, the offset-only one never using
  * more specimens than the uncalibrated; the hinge twins without calibration within 0.005 (measured
