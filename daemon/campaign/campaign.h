@@ -9,6 +9,7 @@
  *   campaign_trace.h     that trace off the API thread (ribbond's GET /campaign/phase: 503 meanwhile)
  *   campaign_phase.h     the lab's phase diagram from the store: counts, edges, CSV, JSON, figure
  *   campaign_plan.h      the next specimens: beliefs with a fitted systematic offset, proposals
+ *   campaign_strip.h     the lab strip: the specimens' fitted strips pooled, the planner's model
  *   campaign_bench.h     the simulated campaign: the planner against a bench of twins
  * Everything outside this folder includes this header only. */
 #ifndef RIBBON_CAMPAIGN_H
@@ -23,6 +24,7 @@
 #include "campaign_trace.h"
 #include "campaign_phase.h"
 #include "campaign_plan.h"
+#include "campaign_strip.h"
 #include "campaign_bench.h"
 
 #endif

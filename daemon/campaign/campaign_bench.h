@@ -27,16 +27,37 @@
  * Truth. The twins' mean strip (relaxed, compliant, equal creases) traced with rod_boundary at each
  * design phi (its creases at phi - relax). The planner's model: the scene traced at the design phi.
  *
+ * Scoring (opts.truth): against the static truth or the dynamic one, whatever measured the twins
+ * (by default the one that matches the measurement: dynamic with opts.dynamic). The result keeps
+ * both where they were computed.
+ *
  * A campaign: one specimen at a time, each where the planner puts it (calibrated or with the
  * offset fixed at 0), until every phi's experimental boundary (campaign_edge.h) is a closed
  * interval at most stop_width wide, or max_specimens. The located boundary is the experimental
- * edge's estimate (the belief's median where the edge is still open). */
+ * edge's estimate (the belief's median where the edge is still open).
+ *
+ * Calibrations (opts.lab_strip, with calibrate). Each twin yields a calibration as a trial would,
+ * from its own observables before the snap, never from the bench's hidden values: its static
+ * states through the last 0.05 of the compression (5), the hold (5 frames of one state) and the
+ * shear up to fit_shear_frac of its own first instability (or snap, dynamic) (8), their camera
+ * Delta Z and A (rod_fit_model_eval on the twin) with Gaussian noise of fit_sigma_dz and
+ * fit_sigma_a, fitted by sim/rod_fit from the design's scene (as trial_calibrate: both crease
+ * angles with a 10 deg prior, and the hinge stiffness when the start's creases are compliant).
+ * Why not the family benchmark's film (daemon/family/: render and track each frame): it costs a
+ * second or two per specimen, and its tracker measured the twins to 7e-5 l and 0.006 rad, below the
+ * noise added here (the fit's default weights, 0.002 and 0.015 rad), so the direct fit is the
+ * cheaper and the more pessimistic stand-in. A fit that ends at a bound or misfits is no
+ * calibration (counted), as in a trial. The fits are pooled into the lab strip (campaign_strip.h),
+ * its boundary traced (campaign_predicted_trace, cached on the strip's key; traced again when the
+ * pooled hinge moves by more than a quarter of its standard error) and read at phi - relaxation;
+ * the planner's offset is fitted on top of it. */
 #ifndef RIBBON_CAMPAIGN_BENCH_H
 #define RIBBON_CAMPAIGN_BENCH_H
 
 #include <stddef.h>
 
 #include "campaign_edge.h"
+#include "campaign_strip.h"
 #include "scene.h"
 
 #define CAMPAIGN_BENCH_MAX_PHI 8
@@ -58,6 +79,18 @@ typedef struct campaign_bench_opts {
     double stop_width;            /* Gamma, default 0.005 */
     unsigned seed;                /* default 1 */
     int calibrate;                /* the planner's calibration (default 1) */
+    int lab_strip;                /* with calibrate: 1 (default) the planner's boundary is the lab
+                                     strip's, pooled from the twins' fits; 0: the scene's plus the
+                                     offset alone (the planner before issue 35 D's calibration) */
+    double fit_hinge_start;       /* N m/rad, the fits' starting hinge on a scene with rigid creases:
+                                     NaN (default) 3e-3 when twin_hinge > 0 (the lab knows its
+                                     creases are hinges, not how stiff), rigid otherwise; 0: never
+                                     a hinge (angles only); > 0: this start */
+    double fit_sigma_dz, fit_sigma_a; /* the calibrations' noise (0.002, 0.015 rad) */
+    double fit_shear_frac;        /* shear observed up to this fraction of the twin's own first
+                                     instability or snap (0.8) */
+    int truth;                    /* scored against: 0 (default) the measurement's kind, 1 the
+                                     static boundary, 2 the dynamic switch */
 } campaign_bench_opts;
 
 campaign_bench_opts campaign_bench_opts_default(void);
@@ -74,6 +107,17 @@ typedef struct campaign_bench_result {
     campaign_obs obs[64];         /* the measured design points, in the order first tried */
     size_t nobs;
     int order[64];                /* specimen k's design point (index into obs) */
+    double truth_static[CAMPAIGN_BENCH_MAX_PHI];  /* the twins' mean strip's static Gamma* */
+    double truth_dynamic[CAMPAIGN_BENCH_MAX_PHI]; /* its dynamic switch; NaN when not computed */
+    int calibrations, calibration_failures; /* twins' fits pooled; fits that failed (why: progress) */
+    campaign_lab_strip strip;     /* the final lab strip (n_fits 0: none used) */
+    double model[CAMPAIGN_BENCH_MAX_PHI]; /* the planner's last boundary (predicted, or the lab strip's) */
+    int traces;                   /* the lab strip's traces */
+    campaign_strip_fit fit[64];   /* specimen k's calibration, where has_fit[k] */
+    int has_fit[64];
+    int trace_failures;           /* traces that failed: the planner kept its boundary */
+    char trace_failure[512];      /* the last one's reason */
+    double fit_s, trace_s;        /* wall time of the twins' fits and of the lab strip's traces */
 } campaign_bench_result;
 
 /* Runs one campaign on the scene (the planner's model). -1 with why when a trace or a

@@ -17,6 +17,7 @@
 #include <stdlib.h>
 
 #define SAME_PHI 1e-6
+#define PLAN_TIE 1e-3 /* relative: belief widths closer than this are a tie (see the allocation) */
 
 campaign_plan_opts campaign_plan_opts_default(void)
 {
@@ -196,13 +197,18 @@ int campaign_plan_run(const double *phi_deg, const double *predicted, size_t nph
         b->predicted = predicted[j];
         summarise(w, ng, o, b);
     }
-    /* Allocate the k specimens: widest effective belief first. */
+    /* Allocate the k specimens: widest effective belief first. Widths within PLAN_TIE of each
+     * other are a tie, given to the phi listed first: beliefs equal in exact arithmetic (the prior
+     * at every phi; two phi the trials have not touched) differ by the grid's aliasing and by
+     * round-off, and round-off differs between builds (ribbonctl resolves cblas_* to libblas, the
+     * tests to GSL's own cblas: the codim-2 traces then differ by 1e-6), which used to decide
+     * where the next specimen went and so the whole campaign (docs/campaign.md). */
     for (size_t n = 0; n < k; n++) {
         size_t best = 0;
         double bw = -1;
         for (size_t j = 0; j < nphi; j++) {
             double e = res->beliefs[j].sd / (alloc[j] + 1);
-            if (e > bw) bw = e, best = j;
+            if (e > bw * (1 + PLAN_TIE)) bw = e, best = j;
         }
         alloc[best]++;
     }

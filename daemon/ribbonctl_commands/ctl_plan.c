@@ -1,9 +1,10 @@
 /* ctl_plan.c: `ribbonctl plan`, the next specimens to make (issue 35 part D, docs/campaign.md
  * "The next specimen"). Proposing reads the store (--db, or the rig file's store.path) and the
  * predicted boundary (as `ribbonctl phase`: --boundary-csv, or traced from --config's scene and
- * cached), runs the planner (campaign_plan.h: the prediction shifted by the offset fitted from
- * the trials so far, the measured regimes with their noise) and stores the proposals as one
- * batch. --list shows them. --approve N asks ribbond (POST /plan/N/approve) to make proposal N a
+ * cached), pools the trials' calibrations into the lab strip (campaign_strip.h) and traces its
+ * boundary (cached on the strip), runs the planner (campaign_plan.h: that boundary shifted by the
+ * offset fitted from the trials so far, the measured regimes with their noise) and stores the
+ * proposals as one batch. --list shows them. --approve N asks ribbond (POST /plan/N/approve) to make proposal N a
  * specimen with an operator step and a trial in the queue. */
 #include <errno.h>
 #include <math.h>
@@ -25,7 +26,7 @@ typedef struct plan_opts {
     const char *db, *config, *boundary_csv, *phi, *url, *token, *name;
     long count;
     long long approve;
-    int json, list, no_calibration;
+    int json, list, no_calibration, no_strip;
     double noise, tau, offset_sd;
 } plan_opts;
 
@@ -33,20 +34,26 @@ static void help(void)
 {
     printf("usage:\n"
            "  ribbonctl plan [--phi LIST] [--count K] [--db FILE] [--config RIG] [--boundary-csv FILE]\n"
-           "      [--no-calibration] [--noise W] [--tau T] [--offset-sd S] [--json]\n"
+           "      [--no-strip] [--no-calibration] [--noise W] [--tau T] [--offset-sd S] [--json]\n"
            "  ribbonctl plan --list [--db FILE] [--config RIG] [--json]\n"
            "  ribbonctl plan --approve N [--name SPECIMEN] [--url URL] [--token T] [--json]\n"
            "\n"
            "Proposes the next K specimens (phi, Gamma) (default 3) that most reduce the uncertainty of the\n"
            "experimental boundary at the phi values of LIST (degrees, comma-separated; default: the phi\n"
-           "values already trialled). The model: at each phi the true boundary is the predicted Gamma*(phi)\n"
-           "(ribbon-sim boundary's: --boundary-csv, or traced from --config's scene and cached) plus one\n"
-           "systematic offset shared by every phi, fitted from the trials so far (prior sd --offset-sd,\n"
-           "default 0.03), plus a model error per phi (--tau, default 0.003); a trial near the boundary may\n"
-           "go either way (probit width --noise, default 0.002). --no-calibration fixes the offset at 0.\n"
+           "values already trialled). The model: at each phi the true boundary is the lab strip's Gamma*\n"
+           "plus one systematic offset shared by every phi, fitted from the trials so far (prior sd\n"
+           "--offset-sd, default 0.03), plus a model error per phi (--tau, default 0.003); a trial near the\n"
+           "boundary may go either way (probit width --noise, default 0.002). The lab strip is the scene\n"
+           "with what the trials' calibrations (each trial's fitted strip) share: the creases' mean\n"
+           "relaxation, the hinge stiffness and E, each pooled by its standard errors where a fit\n"
+           "determined it; its boundary is traced from --config's scene with them (cached beside the store)\n"
+           "and read at phi - relaxation. Without calibrations it is the predicted Gamma*(phi) (ribbon-sim\n"
+           "boundary's: --boundary-csv, or traced from --config's scene and cached); with --boundary-csv\n"
+           "alone only the relaxation is used. The first line says which strip. --no-strip plans from the\n"
+           "predicted boundary and the offset alone; --no-calibration also fixes the offset at 0.\n"
            "Each specimen goes to the widest belief, at its median (several at one phi: its quantiles).\n"
            "The proposals are stored (a new plan supersedes the ones not approved). A phi outside the\n"
-           "model's range (where the predicted boundary was not traced) is refused, named.\n"
+           "model's range (where the boundary was not traced) is refused, named.\n"
            "--approve N (through ribbond's API) adds specimen N's record (--name, default plan-N) and puts\n"
            "an operator step (fold and mount it, measured angles?) and a trial of it in the queue.\n");
 }
@@ -75,6 +82,7 @@ static int parse(int argc, char **argv, plan_opts *o)
         } else if (!strcmp(a, "--json")) o->json = 1;
         else if (!strcmp(a, "--list")) o->list = 1;
         else if (!strcmp(a, "--no-calibration")) o->no_calibration = 1;
+        else if (!strcmp(a, "--no-strip")) o->no_strip = 1;
         else if (!strcmp(a, "--db")) dst = &o->db;
         else if (!strcmp(a, "--config")) dst = &o->config;
         else if (!strcmp(a, "--boundary-csv")) dst = &o->boundary_csv;
@@ -188,6 +196,138 @@ static int list(store *st, const plan_opts *o)
     return 0;
 }
 
+static json_t *num_or_null(double v)
+{
+    return isfinite(v) ? json_real(v) : json_null();
+}
+
+static json_t *strip_json(const campaign_lab_strip *ls, const char *note)
+{
+    char d[400];
+    campaign_strip_describe(ls, d, sizeof d);
+    return json_pack("{s:s,s:s,s:i,s:i,s:o,s:o,s:i,s:o,s:o,s:i,s:o,s:o}", "description", d, "note", note, "fits",
+                     ls->n_fits, "relax_fits", ls->n_relax, "relax_deg", num_or_null(ls->n_relax ? ls->relax_deg : NAN),
+                     "relax_se", num_or_null(ls->relax_se), "hinge_fits", ls->n_hinge, "hinge", num_or_null(ls->hinge),
+                     "hinge_se_rel", num_or_null(ls->hinge_se_rel), "youngs_fits", ls->n_youngs, "youngs",
+                     num_or_null(ls->youngs), "youngs_se_rel", num_or_null(ls->youngs_se_rel));
+}
+
+/* The lab strip from the store's calibrations (zeroed with --no-strip or --no-calibration) and,
+ * when it changes the scene's hinge or E, its boundary traced from --config's scene and cached
+ * beside the store (DB.labstrip.boundary.csv, keyed on the rig, the scene and the strip; *labpred,
+ * n 0 when the scene's curve serves). A trace that does not cover the planned phi, or no scene to
+ * trace, falls back to the relaxation alone, said in note. -1 only when the store cannot be
+ * read. */
+static int lab_strip(const plan_opts *o, const rig_config *cfg, const char *db, store *st,
+                     const campaign_predicted *pred, const campaign_phase *ph, const double *phis, size_t nphi,
+                     campaign_lab_strip *ls, campaign_predicted *labpred, char *note, size_t note_len)
+{
+    campaign_strip_fit *fits = NULL;
+    size_t n = 0;
+    int failed = 0;
+    char why[1024];
+    memset(labpred, 0, sizeof *labpred);
+    if (o->no_strip || o->no_calibration) {
+        campaign_strip_pool(NULL, 0, ls);
+        snprintf(note, note_len, "%s", o->no_calibration ? "--no-calibration" : "--no-strip");
+        return 0;
+    }
+    if (campaign_strip_collect(st, &fits, &n, &failed, why, sizeof why)) {
+        fprintf(stderr, "ribbonctl plan: the calibrations: %s\n", why);
+        return -1;
+    }
+    campaign_strip_pool(fits, n, ls);
+    free(fits);
+    snprintf(note, note_len, "from %zu calibrated trials", n);
+    if (failed) {
+        size_t len = strlen(note);
+        snprintf(note + len, note_len - len, " (%d more whose fit failed or determined nothing)", failed);
+    }
+    if (!campaign_strip_needs_trace(ls)) return 0;
+    char key[96];
+    campaign_strip_key(ls, key, sizeof key);
+    if (!o->config) {
+        size_t len = strlen(note);
+        snprintf(note + len, note_len - len, "; its %s not used: no scene to trace it from (give --config RIG)", key);
+        ls->hinge = ls->youngs = NAN;
+        ls->n_hinge = ls->n_youngs = 0;
+        return 0;
+    }
+    rod_scene lab;
+    campaign_strip_apply(&cfg->scene, ls, &lab);
+    char *base = campaign_predicted_key_text(cfg->path, cfg->scene_path);
+    size_t tl = (base ? strlen(base) : 0) + sizeof key + 32;
+    char *text = malloc(tl), cache[1100];
+    if (!text) {
+        free(base);
+        fprintf(stderr, "ribbonctl plan: out of memory\n");
+        return -1;
+    }
+    snprintf(text, tl, "%s\nlab strip %s", base ? base : "", key);
+    free(base);
+    unsigned long long hash = (unsigned long long)campaign_predicted_key(text);
+    free(text);
+    snprintf(cache, sizeof cache, "%s.labstrip.boundary.csv", db);
+    size_t len = strlen(note);
+    /* The cache: this strip's curve when it covers the planned phi. */
+    FILE *f = fopen(cache, "r");
+    if (f) {
+        unsigned long long k = 0;
+        int ok = fscanf(f, "# campaign-boundary key=%llx", &k) == 1 && k == hash;
+        fclose(f);
+        double gg;
+        size_t j = 0;
+        if (ok && campaign_predicted_load_csv(cache, labpred, why, sizeof why) == 0) {
+            while (j < nphi && campaign_strip_at(labpred, ls, phis[j], &gg, why, sizeof why) == 0) j++;
+            if (j == nphi) {
+                snprintf(labpred->source, sizeof labpred->source, "cache %.580s", cache);
+                snprintf(note + len, note_len - len, "; its boundary from the %s", labpred->source);
+                return 0;
+            }
+            campaign_predicted_free(labpred);
+        }
+    }
+    /* Traced from the strip's codim-2 point near the planned phi nearest the scene's angle, at
+     * the predicted boundary there plus the offset the trials give it (where the strip's boundary
+     * should be), then around it (campaign_strip_trace). */
+    size_t near = 0;
+    double phi_s = fabs(cfg->scene.fold_angle_deg);
+    for (size_t j = 1; j < nphi; j++)
+        if (fabs(phis[j] - phi_s) < fabs(phis[near] - phi_s)) near = j;
+    double g0 = NAN;
+    if (campaign_predicted_at(pred, phis[near], &g0, why, sizeof why) == 0 && ph && ph->n_obs) {
+        campaign_plan_opts po = campaign_plan_opts_default();
+        campaign_belief b;
+        campaign_plan_result res = {.beliefs = &b, .proposals = NULL};
+        if (campaign_plan_run(&phis[near], &g0, 1, ph->obs, ph->n_obs, &po, 0, &res, why, sizeof why) == 0)
+            g0 = b.median; /* phi's own belief: the scene's boundary moved by its trials */
+    }
+    if (!isfinite(g0)) g0 = cfg->scene.fold_position;
+    double starts[] = {g0, g0 + 0.005, g0 - 0.005, g0 + 0.01, g0 - 0.01};
+    fprintf(stderr, "lab strip boundary: %s, traced over phi %g .. %g deg\n", key, CAMPAIGN_PHI_TRACE_LO,
+            CAMPAIGN_PHI_TRACE_HI);
+    if (campaign_strip_trace(&lab, ls, phis[near] - (ls->n_relax ? ls->relax_deg : 0), starts, 5, CAMPAIGN_PHI_TRACE_LO,
+                             CAMPAIGN_PHI_TRACE_HI, phis, nphi, labpred, why, sizeof why)) {
+        snprintf(note + len, note_len - len, "; its boundary could not be traced over the planned phi (%.700s): "
+                 "planning from the predicted boundary with the relaxation alone", why);
+        ls->hinge = ls->youngs = NAN;
+        ls->n_hinge = ls->n_youngs = 0;
+        memset(labpred, 0, sizeof *labpred);
+        return 0;
+    }
+    char line[128], w[300];
+    snprintf(line, sizeof line, "# campaign-boundary key=%016llx phi=%.17g:%.17g", hash, CAMPAIGN_PHI_TRACE_LO,
+             CAMPAIGN_PHI_TRACE_HI);
+    int saved = campaign_predicted_save_csv(labpred, cache, line, w, sizeof w) == 0;
+    snprintf(note + len, note_len - len, "; its boundary %.400s%s%.300s%s%.200s", labpred->source,
+             saved ? ", cached in " : " (not cached: ", saved ? cache : w, saved ? "" : ")", "");
+    if (labpred->stop[0]) {
+        len = strlen(note);
+        snprintf(note + len, note_len - len, "; stopped %.300s", labpred->stop);
+    }
+    return 0;
+}
+
 int ctl_plan_main(int argc, char **argv)
 {
     plan_opts o;
@@ -256,10 +396,23 @@ int ctl_plan_main(int argc, char **argv)
         store_close(st);
         return 1;
     }
-    double predicted[MAX_PHI];
+    campaign_lab_strip ls;
+    campaign_predicted labpred = {0};
+    char strip_note[1400] = "";
+    if (lab_strip(&o, &cfg, db, st, &pred, rc == 0 ? &ph : NULL, phis, nphi, &ls, &labpred, strip_note,
+                  sizeof strip_note)) {
+        campaign_predicted_free(&pred);
+        campaign_phase_free(&ph);
+        store_close(st);
+        return 1;
+    }
+    const campaign_predicted *model = labpred.n ? &labpred : &pred;
+    double predicted[MAX_PHI], scene_gamma[MAX_PHI];
     for (size_t j = 0; j < nphi; j++)
-        if (campaign_predicted_at(&pred, phis[j], &predicted[j], why, sizeof why)) {
+        if (campaign_strip_at(model, &ls, phis[j], &predicted[j], why, sizeof why) ||
+            campaign_predicted_at(&pred, phis[j], &scene_gamma[j], why, sizeof why)) {
             fprintf(stderr, "ribbonctl plan: %s\n", why);
+            campaign_predicted_free(&labpred);
             campaign_predicted_free(&pred);
             campaign_phase_free(&ph);
             store_close(st);
@@ -277,9 +430,9 @@ int ctl_plan_main(int argc, char **argv)
     store_plan_proposal sp_rows[50];
     if (rc == 0) {
         for (size_t k = 0; k < res.k; k++) {
-            double pg = 0;
-            char w[8];
-            campaign_predicted_at(&pred, props[k].phi_deg, &pg, w, sizeof w);
+            double pg = 0; /* the model's boundary there: the lab strip's */
+            for (size_t j = 0; j < nphi; j++)
+                if (phis[j] == props[k].phi_deg) pg = predicted[j];
             sp_rows[k] = (store_plan_proposal){.phi_deg = props[k].phi_deg, .gamma = props[k].gamma,
                                                .sd_before = props[k].sd_before, .predicted_gamma = pg,
                                                .offset_mean = res.offset_mean, .offset_sd = res.offset_sd,
@@ -292,26 +445,31 @@ int ctl_plan_main(int argc, char **argv)
     } else if (o.json) {
         json_t *b = json_array(), *a = json_array();
         for (size_t j = 0; j < nphi; j++)
-            json_array_append_new(b, json_pack("{s:f,s:f,s:f,s:f,s:f,s:f,s:f}", "phi_deg", beliefs[j].phi_deg,
-                                               "predicted_gamma", beliefs[j].predicted, "mean", beliefs[j].mean, "sd",
-                                               beliefs[j].sd, "median", beliefs[j].median, "lo", beliefs[j].lo, "hi",
-                                               beliefs[j].hi));
+            json_array_append_new(b, json_pack("{s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f}", "phi_deg", beliefs[j].phi_deg,
+                                               "predicted_gamma", beliefs[j].predicted, "scene_gamma", scene_gamma[j],
+                                               "mean", beliefs[j].mean, "sd", beliefs[j].sd, "median",
+                                               beliefs[j].median, "lo", beliefs[j].lo, "hi", beliefs[j].hi));
         for (size_t k = 0; k < res.k; k++) json_array_append_new(a, campaign_proposal_json(&sp_rows[k]));
-        json_t *j = json_pack("{s:f,s:f,s:b,s:s,s:o,s:o}", "offset_mean", res.offset_mean, "offset_sd", res.offset_sd,
-                              "calibrated", po.calibrate, "predicted_source", pred.source, "beliefs", b, "proposals", a);
+        json_t *j = json_pack("{s:f,s:f,s:b,s:s,s:o,s:o,s:o}", "offset_mean", res.offset_mean, "offset_sd", res.offset_sd,
+                              "calibrated", po.calibrate, "predicted_source", model->source, "strip",
+                              strip_json(&ls, strip_note), "beliefs", b, "proposals", a);
         print_json(j);
         json_decref(j);
     } else {
+        char d[400];
+        campaign_strip_describe(&ls, d, sizeof d);
+        printf("strip: %s%s%s\n", d, strip_note[0] ? "; " : "", strip_note);
         printf("offset %+.4f +- %.4f (%s), from %d measured trials\n", res.offset_mean, res.offset_sd,
                po.calibrate ? "fitted" : "fixed: no calibration", ph.n_trials);
-        printf("phi_deg  predicted  belief mean +- sd    95%% interval\n");
+        printf("phi_deg  predicted  lab strip  belief mean +- sd    95%% interval\n");
         for (size_t j = 0; j < nphi; j++)
-            printf("%-8g %-10.4f %.4f +- %.4f    [%.4f, %.4f]\n", beliefs[j].phi_deg, beliefs[j].predicted,
-                   beliefs[j].mean, beliefs[j].sd, beliefs[j].lo, beliefs[j].hi);
+            printf("%-8g %-10.4f %-10.4f %.4f +- %.4f    [%.4f, %.4f]\n", beliefs[j].phi_deg, scene_gamma[j],
+                   beliefs[j].predicted, beliefs[j].mean, beliefs[j].sd, beliefs[j].lo, beliefs[j].hi);
         for (size_t k = 0; k < res.k; k++)
             printf("proposal %lld: phi %g deg, Gamma %.4f   (ribbonctl plan --approve %lld)\n", (long long)sp_rows[k].id,
                    sp_rows[k].phi_deg, sp_rows[k].gamma, (long long)sp_rows[k].id);
     }
+    campaign_predicted_free(&labpred);
     campaign_predicted_free(&pred);
     campaign_phase_free(&ph);
     store_close(st);

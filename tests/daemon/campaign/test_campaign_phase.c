@@ -303,6 +303,71 @@ static void ribbonctl_phase_and_plan(void **state)
     free(v);
 }
 
+/* Trial id's calibration as the trial stores it (trial_calibrated_json's form). */
+static void calibrated(store *st, int64_t id, double angle, double se, double hinge)
+{
+    char fit[1024];
+    int n = snprintf(fit, sizeof fit,
+                     "{\"ok\":true,\"parameters\":["
+                     "{\"key\":\"folds.angle_left_deg\",\"scene\":-90,\"fitted\":%g,\"se\":%g,\"se_kind\":\"absolute\",\"determined\":true,\"at_bound\":0},"
+                     "{\"key\":\"folds.angle_right_deg\",\"scene\":-90,\"fitted\":%g,\"se\":%g,\"se_kind\":\"absolute\",\"determined\":true,\"at_bound\":0}",
+                     angle, se, angle, se);
+    if (hinge > 0)
+        n += snprintf(fit + n, sizeof fit - (size_t)n,
+                      ",{\"key\":\"folds.hinge_stiffness\",\"scene\":0.003,\"fitted\":%g,\"se\":0.2,\"se_kind\":\"relative\",\"determined\":true,\"at_bound\":0}",
+                      hinge);
+    snprintf(fit + n, sizeof fit - (size_t)n, "]}");
+    store_calibrated c = {.snap_dw = 0.4, .snap_sd = 0.01, .p_other = 0.01, .regime = "asymmetric", .fit_json = fit};
+    OK(store_trial_set_calibrated(st, id, &c, why, sizeof why));
+}
+
+/* ribbonctl plan from the lab strip: trials 1 (specimen A, designed at 90) and 8 (E, at 60) have
+ * fits whose creases are 80 and 50 deg (relaxed 10, se 1 and 2: pooled 10 +- 1 / sqrt(1.25)), and
+ * 8 a hinge too, which with --boundary-csv alone cannot be traced (said; the relaxation is used).
+ * The lab strip's boundary at phi 90 is the curve's at 80: 0.165 (the scene's 0.17); with
+ * --no-strip the scene's. A failed fit is counted, not pooled. */
+static void ribbonctl_plan_uses_the_lab_strip(void **state)
+{
+    fx *f = *state;
+    fill(f->st);
+    calibrated(f->st, 1, -80, 1, 0);
+    calibrated(f->st, 8, -50, 2, 4e-3);
+    store_calibrated failed = {.failure = "at_bound: at bound: folds.angle_left_deg"};
+    OK(store_trial_set_calibrated(f->st, 2, &failed, why, sizeof why));
+    char cmd[1024], out[8192];
+    snprintf(cmd, sizeof cmd, "%s/ribbonctl plan --db %s --boundary-csv %s --phi 60,90,120 --count 1 --json",
+             RIBBON_BIN_DIR, f->db, f->bcsv);
+    assert_int_equal(run(cmd, out, sizeof out), 0);
+    json_t *j = json_loads(out, 0, NULL);
+    assert_non_null(j);
+    json_t *strip = json_object_get(j, "strip");
+    assert_int_equal(json_integer_value(json_object_get(strip, "fits")), 2);
+    assert_true(fabs(json_real_value(json_object_get(strip, "relax_deg")) - 10) < 1e-9);
+    assert_true(fabs(json_real_value(json_object_get(strip, "relax_se")) - 1 / sqrt(1.25)) < 1e-9);
+    assert_true(json_is_null(json_object_get(strip, "hinge")));
+    const char *note = json_string_value(json_object_get(strip, "note"));
+    assert_non_null(strstr(note, "from 2 calibrated trials (1 more whose fit failed"));
+    assert_non_null(strstr(note, "hinge=4.00e-03 youngs=scene not used: no scene to trace it from"));
+    json_t *b90 = json_array_get(json_object_get(j, "beliefs"), 1);
+    assert_true(fabs(json_real_value(json_object_get(b90, "predicted_gamma")) - 0.165) < 1e-9);
+    assert_true(fabs(json_real_value(json_object_get(b90, "scene_gamma")) - 0.17) < 1e-9);
+    json_decref(j);
+    snprintf(cmd, sizeof cmd, "%s/ribbonctl plan --db %s --boundary-csv %s --phi 60,90,120 --count 1 --no-strip --json",
+             RIBBON_BIN_DIR, f->db, f->bcsv);
+    assert_int_equal(run(cmd, out, sizeof out), 0);
+    j = json_loads(out, 0, NULL);
+    assert_non_null(j);
+    b90 = json_array_get(json_object_get(j, "beliefs"), 1);
+    assert_true(fabs(json_real_value(json_object_get(b90, "predicted_gamma")) - 0.17) < 1e-9);
+    assert_int_equal(json_integer_value(json_object_get(json_object_get(j, "strip"), "fits")), 0);
+    json_decref(j);
+    snprintf(cmd, sizeof cmd, "%s/ribbonctl plan --db %s --boundary-csv %s --phi 60,90,120 --count 1 2>&1",
+             RIBBON_BIN_DIR, f->db, f->bcsv);
+    assert_int_equal(run(cmd, out, sizeof out), 0);
+    assert_non_null(strstr(out, "strip: creases relaxed 10.00 +- 0.89 deg (2 fits), hinge the scene's"));
+    assert_non_null(strstr(out, "90       0.1700     0.1650"));
+}
+
 static int no_trial(void *user, const store_specimen *sp, const char *const *set, int n_set, const char *note,
                     int64_t *trial_id, char *w, size_t wl)
 {
@@ -573,6 +638,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(edges_land_in_their_brackets, setup, teardown),
         cmocka_unit_test_setup_teardown(proposals_store, setup, teardown),
         cmocka_unit_test_setup_teardown(ribbonctl_phase_and_plan, setup, teardown),
+        cmocka_unit_test_setup_teardown(ribbonctl_plan_uses_the_lab_strip, setup, teardown),
         cmocka_unit_test_setup_teardown(api_routes, setup, teardown),
         cmocka_unit_test_setup_teardown(cache_two_writers, setup, teardown),
         cmocka_unit_test_setup_teardown(cache_keyed_on_daemon_sets, setup, teardown),
