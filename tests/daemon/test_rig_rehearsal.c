@@ -216,8 +216,11 @@ static void test_gcode_trial_gamma021(void **state)
                                        "camera.video_dir=%s/videos", "trial.compress_speed_mm_s=20",
                                        "folds.position=0.21",
                                        /* rigid creases as before: the rig file's compliant twin
-                                          left this trial's onset bound (rig-rehearsal.ini) */
-                                       "twin.folds.hinge_stiffness=rigid", NULL};
+                                          left this trial's onset bound (rig-rehearsal.ini); and
+                                          the fit's creases rigid too, as the twin's (the hinge
+                                          guess is for compliant strips, calibration.md) */
+                                       "twin.folds.hinge_stiffness=rigid", "sim.fit_hinge=0",
+                                       "sim.fit_keys=folds.angle_left_deg,folds.angle_right_deg", NULL};
     static const char *const sim_extra[] = {"--start-dl", "0.25", NULL};
     rig_run r;
     rig_prepare(&r, sets);
