@@ -995,10 +995,12 @@ static void prediction_fails_trial_runs(void **state)
     char db[128], set_db[200], why[512] = "";
     snprintf(db, sizeof db, "%s/specimen.db", dir);
     snprintf(set_db, sizeof set_db, "store.path=%s", db);
+    /* sim.fit_hinge=0: the fit beside the trial is not this test's; with the scene's rigid creases
+     * it ends at once (at_bound) instead of a three-parameter fit the trial's end waits for. */
     const char *ov[] = {set_db, set_video, "api.port=0", "specimen.crease_angle_left_deg=88",
-                        "specimen.folded_at=2020-01-01T00:00Z"};
+                        "specimen.folded_at=2020-01-01T00:00Z", "sim.fit_hinge=0"};
     rig_daemon d;
-    int rc = rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, 5, NULL, why, sizeof why);
+    int rc = rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, 6, NULL, why, sizeof why);
     if (rc) fprintf(stderr, "open: %s\n", why);
     assert_int_equal(rc, 0);
     unsigned port = 0;
@@ -1130,9 +1132,9 @@ static void specimen_unequal_predicts(void **state)
     char db[128], set_db[200], why[512] = "";
     snprintf(db, sizeof db, "%s/unequal.db", dir);
     snprintf(set_db, sizeof set_db, "store.path=%s", db);
-    const char *ov[] = {set_db, set_video, "api.port=0", "sim.nodes=61"};
+    const char *ov[] = {set_db, set_video, "api.port=0", "sim.nodes=61", "sim.fit_hinge=0"}; /* as above */
     rig_daemon d;
-    int rc = rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, 4, NULL, why, sizeof why);
+    int rc = rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, 5, NULL, why, sizeof why);
     if (rc) fprintf(stderr, "open: %s\n", why);
     assert_int_equal(rc, 0);
     unsigned port = 0;
