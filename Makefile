@@ -59,8 +59,9 @@ build-asan: deps
 	cmake --build $(ASAN_BUILD) -j $(JOBS)
 
 # The main job: ribbond on config/mock.ini (mock rails, the simulator as the ribbon, synthetic frames
-# measured by the real tracker), one complete trial through the API, measured and predicted snap side
-# by side with the twin's own snap (its truth: the strip of mock.ini's [twin]) and the differences,
+# measured by the real tracker), one complete trial through the API, the measured snap beside the
+# scene's prediction and the calibrated one (with its band; docs/calibration.md), each one's
+# difference from the measurement, and the twin's own snap (its truth: the strip of mock.ini's [twin]),
 # the report PNG, the store's path; then ribbond is stopped with SIGTERM. The store and the
 # videos go to the working directory (ribbon-mock.db, ribbon-mock-videos/).
 DEMO_REPORT ?= ribbon-mock-report.png

@@ -242,6 +242,8 @@ static const rig_key rig_keys[] = {
      "comma-separated fit parameters; a name that is not one is the trial's named fit failure"},
     {"sim", "fit_refresh_s", RIG_KEY_DOUBLE, OFF(sim.fit_refresh_s), 0, 0.0, 3600.0, 0, 0, NULL, "s", "0.5",
      "trial time between refreshes of the fit during the shear (0: none)"},
+    {"sim", "fit_hinge", RIG_KEY_DOUBLE, OFF(sim.fit_hinge), 0, 0.0, 1e6, 0, 0, NULL, "N m/rad", "0",
+     "the fit's crease hinges when the scene's creases are rigid: compliant of this stiffness, the fit's start and its prior's centre (0: the scene's rigid creases; docs/calibration.md)"},
 
     {"store", "path", RIG_KEY_PATH, OFF(store_path), SZ(store_path), 0, 0, OUT, ALL, NULL, "-",
      "required", "SQLite database, relative to rig.outputs"},

@@ -352,8 +352,10 @@ static void print_comparison(const json_t *t)
         printf("  (N = %lld, dt = %g s, %.2f s wall)", (long long)json_integer_value(json_object_get(pr, "nodes")),
                json_number_value(json_object_get(pr, "dt")), json_number_value(json_object_get(pr, "wall_s")));
     printf("\n");
-    if (json_is_number(m) && json_is_number(p) && json_number_value(p) != 0.0)
-        printf("  difference %.2f%%\n", 100.0 * (json_number_value(m) - json_number_value(p)) / json_number_value(p));
+    if (json_is_number(m) && json_is_number(p) && json_number_value(m) != 0.0) {
+        double d = json_number_value(p) - json_number_value(m);
+        printf("  predicted - measured  %+.5f (%+.2f%%)\n", d, 100.0 * d / json_number_value(m));
+    }
     print_calibrated(t, m);
     print_twin_truth(t, m, p, json_object_get(t, "snap_dw_calibrated"));
     json_t *lc = json_object_get(t, "stop_cmd_latency_s"), *ls = json_object_get(t, "stop_stand_latency_s");

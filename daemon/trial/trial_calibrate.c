@@ -161,6 +161,9 @@ void trial_calibrate_compute(const rod_scene *sc, const char *keys, const rod_fi
     }
     /* The scene's values are the start and the centre of a weak prior on the crease angles. */
     o.prior_sigma[ROD_FIT_ANGLE_LEFT] = o.prior_sigma[ROD_FIT_ANGLE_RIGHT] = TRIAL_CALIBRATE_PRIOR_ANGLE_DEG;
+    o.prior_sigma[ROD_FIT_HINGE] = o.prior_sigma[ROD_FIT_HINGE_LEFT] = o.prior_sigma[ROD_FIT_HINGE_RIGHT] =
+        TRIAL_CALIBRATE_PRIOR_HINGE_LN;
+    o.prior_sigma[ROD_FIT_DZ_OFFSET] = TRIAL_CALIBRATE_PRIOR_DZ_OFFSET;
     o.cancel = cancel; /* the fit stops at its next evaluation when the trial ends early */
     char why[320] = "";
     rod_status st = rod_fit_run(sc, obs, nobs, &o, &r->fit, why, sizeof why);
@@ -375,7 +378,10 @@ static void launch(trial_calibrate *c, double t, int refresh)
     c->t_last_start = t;
     if (refresh == 0) {
         char keys[300];
-        snprintf(keys, sizeof keys, "%s", c->def.keys[0] ? c->def.keys : "both crease angles (the default)");
+        snprintf(keys, sizeof keys, "%s",
+                 c->def.keys[0]                         ? c->def.keys
+                 : rod_scene_hinge_rigid(&c->def.scene) ? "both crease angles (the default)"
+                                                        : "both crease angles and the hinge stiffness (the default)");
         say(c, t, "info",
             "calibration: fitting %s to %d of the %d frames measured in the compression and hold, on a worker "
             "thread (the shear does not wait)",

@@ -43,6 +43,12 @@
                                               (a band's predictions under load; a fit stops at once) */
 #define TRIAL_CALIBRATE_NICE 10            /* the worker's niceness in rig mode (the trial's threads first) */
 #define TRIAL_CALIBRATE_PRIOR_ANGLE_DEG 10.0 /* prior width of each crease angle around the scene's */
+#define TRIAL_CALIBRATE_PRIOR_DZ_OFFSET 0.005 /* prior width of view.dz_offset (over l) around 0: 2.5 px at
+                                              the rigs' 2.5 px/mm, where a lab calibration's clamp points
+                                              are within 1.5 px (vision.md) */
+#define TRIAL_CALIBRATE_PRIOR_HINGE_LN 0.88  /* prior width of ln k of a fitted hinge around the scene's:
+                                              the spread of a hand-made crease's bending length E I1 / k
+                                              over 1-20% of l, log-uniform (the family's, calibration.md) */
 
 typedef struct trial_calibrated {
     int ok;                 /* 1: fitted and its snap predicted; 0: failed (reason_key, reason) */

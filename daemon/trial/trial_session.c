@@ -657,6 +657,19 @@ static void session_open_calibrate(trial_session *s, session_parts *p)
     if (!s->cfg.sim.fit) return;
     trial_calibrate_def d = trial_calibrate_def_default();
     d.scene = p->pred;
+    /* A rigid crease is not a model of a real one (a PET crease is a compliant hinge, DESIGN.md
+     * section 9): sim.fit_hinge makes the fit's creases hinges of that stiffness, its start and
+     * its prior's centre, while the scene's prediction keeps the scene's creases. */
+    if (s->cfg.sim.fit_hinge > 0.0 && rod_scene_has_creases(&d.scene) && rod_scene_hinge_rigid(&d.scene)) {
+        d.scene.fold_hinge_stiffness = s->cfg.sim.fit_hinge;
+        d.scene.fold_hinge_stiffness_left = d.scene.fold_hinge_stiffness_right = NAN;
+        char m[200];
+        snprintf(m, sizeof m,
+                 "calibration: the scene's creases are rigid; the fit makes them hinges of %g N m/rad (sim.fit_hinge: "
+                 "its start and its prior's centre)",
+                 s->cfg.sim.fit_hinge);
+        session_event(s, NAN, STORE_EVENT_INFO, m);
+    }
     snprintf(d.keys, sizeof d.keys, "%s", s->cfg.sim.fit_keys);
     d.refresh_s = s->cfg.sim.fit_refresh_s;
     d.nice = s->cfg.mode == RIG_MODE_RIG ? TRIAL_CALIBRATE_NICE : 0;

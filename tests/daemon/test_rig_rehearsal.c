@@ -8,7 +8,8 @@
  *     (the rig file's [twin], another strip than the prediction's; ribbon-rigsim's "twin truth"),
  *     the prediction off it by more than that, regimes asymmetric, no frame lost or dropped, every video frame in the frame-times file, each
  *     frame's stamp against the simulator's true send time (every one within 1 ms), the snap-to-stop latency
- *     stored, PRAGMA integrity_check ok;
+ *     stored, PRAGMA integrity_check ok; the calibrated prediction closer to the measurement than
+ *     the scene's prediction and inside its own 2-sigma band;
  * Faults come on command (SIGUSR1 / SIGUSR2 to ribbon-rigsim) once the trial is shearing.
  *   (the rails' faults, link lost among them, are test_rig_rails's);
  *   - the camera stops sending mid-shear: failed naming the camera, within 0.5 s;
@@ -135,16 +136,17 @@ static void score_against_twin(rig_run *r, double meas, double pred, const char 
     assert_true(rig_file_has(side, "twin truth: snap Delta W = ", line, sizeof line));
 }
 
-/* The calibrated prediction (issue 32 B, docs/calibration.md "In every trial"), made in real time
- * beside the trial: its outcome is stored (a band, or the fit's named failure) and printed beside
- * the measurement and the scene's prediction. Closeness is not asserted here: the rehearsal's twin
- * has rigid creases like the scene but at N = 91 against the prediction's N = 61, and a rigid
- * crease's stiffness is one node's (mesh-dependent), so the N = 61 fit absorbs the mesh's
- * difference into the angles (-84.9, -83.5 deg for a -87.1, -84.9 deg twin, measured on the mock
- * rig with the rehearsal's twin) and its snap keeps the N = 61 error: 0.4214 +- 0.0029 against
- * the measured 0.4054 (+3.9%, 5.5 sigma; the scene's +4.0%). The band holds the fit's uncertainty
- * only. test_trial_calibrate_session asserts closeness and the band where twin and fit share N. */
-static void score_calibrated(rig_run *r, sqlite3 *db, double meas, double pred, const char *want_regime)
+/* The calibrated prediction (issue 32 B and D, docs/calibration.md "In every trial"), made in real
+ * time beside the trial: the rig file's twin (creases -87.1 and -84.9 deg, compliant hinges of
+ * 5e-3 N m/rad, N = 91) is another strip than the scene's (-90 deg, equal, rigid; N = 61), and the
+ * fit (the rig file's sim.fit_hinge: both angles and the creases as hinges from the guess
+ * 3.5e-3 N m/rad, each with a prior) learns it from the hold and the shear before the snap (rig
+ * mode tracks no compression frames). It must be stored with a band, closer to the measurement
+ * than the scene's prediction and inside its own 2-sigma band; the margins are printed. Before
+ * (the twin's creases rigid at N = 91, the fit's rigid at N = 61, angles only): 0.41978 +- 0.0027
+ * against the measured 0.40575 (+3.46%, 5.2 sigma; the scene +4.09%): a rigid crease's stiffness
+ * is one node's, and the fit soaked the meshes' difference into the angles. */
+static void score_calibrated(rig_run *r, sqlite3 *db, double meas, double pred)
 {
     double cal = rig_q_num(db, "select snap_dw_calibrated from trials where id = 1");
     double sd = rig_q_num(db, "select snap_sd_calibrated from trials where id = 1");
@@ -155,16 +157,16 @@ static void score_calibrated(rig_run *r, sqlite3 *db, double meas, double pred, 
                kept, sizeof kept);
     char treg[16];
     double truth = rig_twin_truth(r, treg, sizeof treg);
-    double bound = rig_onset_bound(0.01 / 0.2, 60.0, 1.5e-3, 0.0);
-    printf("# calibrated %.5f +- %.5f %s%s%s; calibrated - measured %+.5f (%+.2f%%), predicted - measured %+.5f "
-           "(%+.2f%%), calibrated - truth %+.5f\n# %s\n",
-           cal, sd, reg, fail[0] ? "; failed: " : "", fail, cal - meas, 100.0 * (cal - meas) / meas, pred - meas,
-           100.0 * (pred - meas) / meas, cal - truth, kept);
-    (void)want_regime;
-    (void)bound;
-    if (fail[0]) assert_non_null(strchr(fail, ':')); /* "KEY: sentence" */
-    else assert_true(isfinite(cal) && isfinite(sd) && sd > 0.0 && reg[0]);
-    assert_non_null(strstr(kept[0] ? kept : fail, fail[0] ? ":" : "calibrated prediction stored"));
+    printf("# calibrated %.5f +- %.5f %s%s%s; calibrated - measured %+.5f (%+.2f%%, %.2f of the 2-sigma band), "
+           "predicted - measured %+.5f (%+.2f%%), |calibrated error| / |scene's| %.2f, calibrated - truth %+.5f\n# %s\n",
+           cal, sd, reg, fail[0] ? "; failed: " : "", fail, cal - meas, 100.0 * (cal - meas) / meas,
+           fabs(cal - meas) / (2.0 * sd), pred - meas, 100.0 * (pred - meas) / meas, fabs(cal - meas) / fabs(pred - meas),
+           cal - truth, kept);
+    assert_string_equal(fail, "");
+    assert_true(isfinite(cal) && isfinite(sd) && sd > 0.0 && reg[0]);
+    assert_non_null(strstr(kept, "calibrated prediction stored"));
+    assert_true(fabs(cal - meas) < fabs(pred - meas));
+    assert_true(fabs(cal - meas) <= 2.0 * sd);
 }
 
 static void test_gcode_trial(void **state)
@@ -188,7 +190,7 @@ static void test_gcode_trial(void **state)
     rig_q_text(db, "select message from events where trial_id = 1 and message like 'snap-to-stop latency%'", lat, sizeof lat);
     printf("# measured %.5f predicted %.5f (%s / %s)\n# %s\n", meas, pred, rm, rp, lat);
     score_against_twin(&r, meas, pred, rm, rp, "asymmetric"); /* Gamma 0.13: the pitchfork first */
-    score_calibrated(&r, db, meas, pred, "asymmetric");
+    score_calibrated(&r, db, meas, pred);
     rig_pipeline pl = rig_pipeline_counts(db);
     assert_true(pl.captured > 0);
     assert_int_equal(pl.lost + pl.incomplete + pl.dropped, 0);
@@ -212,7 +214,13 @@ static void test_gcode_trial_gamma021(void **state)
     static const char *const sets[] = {"rail.compress.port=%s/grbl", "rail.shear.port=%s/grbl",
                                        "camera.calibration=%s/camera.calib", "store.path=%s/rig.db",
                                        "camera.video_dir=%s/videos", "trial.compress_speed_mm_s=20",
-                                       "folds.position=0.21", NULL};
+                                       "folds.position=0.21",
+                                       /* rigid creases as before: the rig file's compliant twin
+                                          left this trial's onset bound (rig-rehearsal.ini); and
+                                          the fit's creases rigid too, as the twin's (the hinge
+                                          guess is for compliant strips, calibration.md) */
+                                       "twin.folds.hinge_stiffness=rigid", "sim.fit_hinge=0",
+                                       "sim.fit_keys=folds.angle_left_deg,folds.angle_right_deg", NULL};
     static const char *const sim_extra[] = {"--start-dl", "0.25", NULL};
     rig_run r;
     rig_prepare(&r, sets);

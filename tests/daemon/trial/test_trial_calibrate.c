@@ -211,8 +211,10 @@ static void open_rig(rig_daemon *d, const char *db, const char *const *extra, in
     snprintf(set_video, sizeof set_video, "camera.video_dir=%s/videos", dir);
     const char *ov[24] = {set_store, set_video, "api.port=0", "sim.nodes=61", "sim.dt=2e-3",
                           "twin.mesh.nodes=61", "twin.solver.dt=2e-3",
-                          "twin.folds.hinge_stiffness=rigid", "sim.fit_refresh_s=0.5"};
-    int n = 9;
+                          "twin.folds.hinge_stiffness=rigid", "sim.fit_refresh_s=0.5",
+                          "sim.fit_hinge=0"}; /* the fit's creases rigid too: mock.ini's hinge guess
+                                                 is for its compliant twin (calibration.md) */
+    int n = 10;
     for (int k = 0; k < n_extra && n < 24; k++) ov[n++] = extra[k];
     char why[512] = "";
     int rc = rig_daemon_open(d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, n, NULL, why, sizeof why);
