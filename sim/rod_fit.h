@@ -7,11 +7,16 @@
  * at the first state and then by static solves in steps of at most 0.02 in Delta L and Delta W,
  * each warm-started; when the parameters change, each state is first re-solved from its own last
  * equilibrium, and followed again from its predecessor when that fails or leaves the upper
- * branch (Delta Z must keep its sign). The Jacobian comes from rod_sensitivity.h.
+ * branch (Delta Z must keep its sign); once one state fails to re-solve, the following ones
+ * are followed from their predecessor directly. Observations at the same (Delta L, Delta W) as
+ * the one before (a hold's frames) share its equilibrium: solved once. The Jacobian comes from
+ * rod_sensitivity.h.
  *
  * The fit is Levenberg-Marquardt (GSL gsl_multifit_nlinear, trust region with the LM step) on
  * residuals (model - observed) / noise for each observable, plus (u - prior) / prior_sigma for
- * parameters with a prior. Bounds: the model is evaluated at the parameters clamped into them,
+ * parameters with a prior. It stops at GSL's tolerances or, sooner, once the Gauss-Newton step
+ * still to go is below opts.stop_sd standard deviations (0.05: the values are then within a
+ * twentieth of their standard errors of the optimum). Bounds: the model is evaluated at the parameters clamped into them,
  * and a parameter that ends at a bound is reported. A trial step where the model fails (no upper
  * state) gets a residual far above the last one, so the trust region shrinks (capped).
  *
@@ -44,6 +49,11 @@ typedef struct rod_fit_opts {
     int paper;                       /* 0: dz_cam, a_cam (the camera's); 1: dz, a */
     int scale_covariance;            /* 1: covariance times chi2 / (n - p) */
     int max_iterations;              /* LM iteration cap */
+    double stop_sd;                  /* the fit stops once the Gauss-Newton step still to go is
+                                        below this many standard deviations (0.05: every value
+                                        within a twentieth of its standard error of the optimum;
+                                        the in-trial fit's speed). 0: GSL's tolerances alone
+                                        (converged to round-off: noise-free data) */
     int min_obs;                     /* fewest observations accepted (>= fitted parameters + 1) */
     double misfit;                   /* RMS residual (in units of the noise) above which no
                                         parameter set fits these data */
@@ -74,6 +84,9 @@ typedef struct rod_fit_result {
     double sv_min, sv_max;           /* singular values of the range-scaled data Jacobian */
     double wall_s;
     int cov_scaled;                  /* 1: cov already times chi2 / (n - p) (scale_covariance) */
+    double gn_sd;                    /* the Gauss-Newton step still to go when the fit stopped, in
+                                        standard deviations (below 0.05: converged to well within
+                                        the noise); -1 when not known */
 } rod_fit_result;
 
 /* Fits. Returns ROD_OK with res filled (misfit and at_bound are verdicts the caller reports),

@@ -6,7 +6,13 @@
  * (rod_fit_band.h): every fitted strip parameter with a finite covariance (determined by the data,
  * or held by its prior) is in it, the covariance is scaled by the reduced chi-square when that
  * exceeds 1, and the snap is predicted again one standard deviation either side along each
- * principal direction (2 p extra predictions). A fitted parameter the data do not determine and
+ * principal direction (2 p extra predictions, and 2 p more at two standard deviations for the
+ * regime's probability). The probes start warm (rod_predict_warm, rod_protocol.h): from the
+ * fitted strip's upper state and its static state at 0.7 of its own switch to the dynamics,
+ * each re-solved for the probe, instead of the route and the quasi-static steps before it; the
+ * answer is the cold start's (a probe that would not give it starts cold by itself), for 30% less
+ * CPU (the route and two thirds of the quasi-static start were 40% of a probe at N = 61). A
+ * fitted parameter the data do not determine and
  * without a prior makes the band unbounded (band_ok 0, unbounded 1: no number). The probability of
  * the other regime is that of a normal peak |A| (mean: the fitted strip's, sd from the larger
  * one-sided change along each direction) on the other side of the scene's regime threshold

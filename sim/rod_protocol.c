@@ -100,18 +100,59 @@ static rod_status predict_upper_state(rod_dyn *dyn, const rod_scene *sc, double 
     return ROD_OK;
 }
 
+/* A warm start's state s (rod_predict_warm) re-solved for this strip at (dl, dw): one static,
+ * minimising Newton solve from it; the state must be finite and on the upper branch. */
+static rod_status predict_warm_solve(rod_dyn *dyn, const rod_scene *sc, const rod_snapshot *s, double dl, double dw,
+                                     double *k1, rod_obs *ob)
+{
+    rod *r = dyn->r;
+    if (!s || s->ndof != r->ndof || s->n != r->n) return ROD_ERR_SCENE;
+    rod_snapshot_load(r, s);
+    rod_set_folds(r, 1.0, 1.0);
+    rod_set_clamps(r, dl, dw);
+    rod_frames_update(r);
+    rod_newton_opts no = rod_newton_opts_static(sc);
+    no.positive_definite = 1;
+    rod_newton_report nr;
+    rod_status st = rod_newton_solve(r, dyn->s, &no, &nr);
+    if (st != ROD_OK) return st;
+    rod_observe(r, k1, ob);
+    return ob->dz > 0.0 && isfinite(ob->dz) && isfinite(ob->a) ? ROD_OK : ROD_ERR_BRANCH_LOST;
+}
+
+/* The warm start's upper state, recorded as predict_upper_state records the route's. */
+static rod_status predict_warm_upper(rod_dyn *dyn, const rod_scene *sc, const rod_predict_warm *w, double *k1,
+                                     rod_obs *ob, rod_prediction *out)
+{
+    rod_status st = predict_warm_solve(dyn, sc, w->upper, sc->compression, 0.0, k1, ob);
+    if (st != ROD_OK) return st;
+    out->dz_upper = ob->dz;
+    out->elastic_upper = rod_energy(dyn->r);
+    return ROD_OK;
+}
+
 /* Fast mode's quasi-static start: follows the equilibrium in Delta W until the dynamics must take
  * over, and starts the shear phase there. */
 static rod_status predict_quasi_start(rod_dyn *dyn, const rod_scene *sc, double dl, double rate,
-                                      double *k1, rod_obs *ob, shear_state *ss, rod_prediction *out,
-                                      char *why, size_t why_len)
+                                      const rod_predict_warm *warm, double *k1, rod_obs *ob, shear_state *ss,
+                                      rod_prediction *out, char *why, size_t why_len)
 {
     rod_quasi_report qr;
-    rod_status st = rod_quasi_follow(dyn, sc, dl, rate, sc->shear_max, &qr);
+    double dw0 = 0.0;
+    if (warm) {
+        /* From the nearby strip's static state at warm->dw, when it re-solves (else cold). */
+        if (predict_warm_solve(dyn, sc, warm->at, dl, warm->dw, k1, ob) != ROD_OK) return ROD_ERR_BRANCH_LOST;
+        dw0 = warm->dw;
+        rod_dyn_start(dyn, dl, dw0);
+    }
+    rod_status st = rod_quasi_follow_from(dyn, sc, dl, dw0, rate, sc->shear_max, &qr);
     if (st != ROD_OK) {
         if (why) snprintf(why, why_len, "out of memory in the quasi-static start");
         return st;
     }
+    /* The switch must lie more than the margin after the warm start, where the cold start's
+       extrapolation and going back would have put it (rod_quasi.h). */
+    if (warm && qr.steps <= qr.back + 2) return ROD_ERR_BRANCH_LOST;
     ss->dw = qr.dw_switch;
     ss->t = ss->dw / rate;
     out->quasi_solves = qr.solves;
@@ -200,12 +241,12 @@ static void predict_next_dt(const rod_predict_opts *o, double change, double gro
     }
 }
 
-rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_prediction *out,
-                       char *why, size_t why_len)
+/* One run; with warm set, a warm start that does not hold sets *cold and returns (the caller
+   runs again cold). */
+static rod_status predict_run(const rod_scene *sc, const rod_predict_opts *o, const rod_predict_warm *warm,
+                              rod_prediction *out, int *cold, char *why, size_t why_len)
 {
     double t_start = wall_now();
-    rod_predict_opts def = rod_predict_opts_default();
-    if (!o) o = &def;
     memset(out, 0, sizeof *out);
     rod_dyn dyn;
     rod_status st = rod_dyn_open(&dyn, sc, why, why_len);
@@ -219,9 +260,18 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
     }
 
     rod_obs ob;
-    st = predict_upper_state(&dyn, sc, k1, &ob, out, why, why_len);
-    if (st != ROD_OK) goto done;
     double l = r->length, dl = sc->compression, rate = sc->shear_rate / l;
+    if (warm && !(o->adaptive && o->quasi_static && o->ramp_time <= 0.0 && rate > 0.0)) warm = NULL;
+    if (warm) {
+        if (predict_warm_upper(&dyn, sc, warm, k1, &ob, out) != ROD_OK) {
+            *cold = 1;
+            goto done;
+        }
+        out->warm = 1;
+    } else {
+        st = predict_upper_state(&dyn, sc, k1, &ob, out, why, why_len);
+        if (st != ROD_OK) goto done;
+    }
     rod_dyn_start(&dyn, dl, 0.0);
 
     shear_state ss;
@@ -230,7 +280,12 @@ rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_predi
     ss.dt = ss.dt_base;
     ss.dt_max = 100.0 * ss.dt_base;
     if (o->adaptive && o->quasi_static && o->ramp_time <= 0.0 && rate > 0.0) {
-        st = predict_quasi_start(&dyn, sc, dl, rate, k1, &ob, &ss, out, why, why_len);
+        st = predict_quasi_start(&dyn, sc, dl, rate, warm, k1, &ob, &ss, out, why, why_len);
+        if (st == ROD_ERR_BRANCH_LOST && warm) {
+            *cold = 1;
+            st = ROD_OK;
+            goto done;
+        }
         if (st != ROD_OK) goto done;
     }
     ss.dz_prev = ob.dz;
@@ -310,5 +365,16 @@ done:
     out->wall_s = wall_now() - t_start;
     free(k1);
     rod_dyn_close(&dyn);
+    return st;
+}
+
+rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_prediction *out,
+                       char *why, size_t why_len)
+{
+    rod_predict_opts def = rod_predict_opts_default();
+    if (!o) o = &def;
+    int cold = 0;
+    rod_status st = predict_run(sc, o, o->warm, out, &cold, why, why_len);
+    if (cold) st = predict_run(sc, o, NULL, out, &cold, why, why_len);
     return st;
 }

@@ -25,6 +25,7 @@
 #define RIBBON_SIM_ROD_PROTOCOL_H
 
 #include "rod.h"
+#include "rod_snapshot.h"
 
 typedef struct rod_sample {
     double t;        /* s since the shear started */
@@ -53,9 +54,26 @@ typedef struct rod_predict_opts {
                               a rung's onset is resolved like its dt (daemon/trial/predict_ladder.h) */
     double ramp_time;      /* s over which the shear velocity rises smoothly from 0 to the rate,
                               v = rate (1 - cos(pi t / T)) / 2 (0: starts at full rate) */
+    const struct rod_predict_warm *warm; /* NULL: the route and the quasi-static start from
+                              Delta W = 0. Else (fast mode) a nearby strip's states to start
+                              from (below) */
     rod_sample_fn on_sample;
     void *user;
 } rod_predict_opts;
+
+/* A warm start (the band's probes, rod_fit_snap.c): the upper state and a static state on the
+ * quasi-static branch of a nearby strip (the same mesh size), each re-solved for this strip by
+ * one static Newton solve instead of the route and the quasi-static steps before dw. The answer
+ * is the cold start's (the same static states, to the Newton tolerance, and the same grid of
+ * quasi-static steps when dw is a multiple of rod_quasi_step) as long as the switch to the
+ * dynamics is more than the quasi-static margin after dw; when it is not, or a re-solve fails
+ * or leaves the upper branch, the prediction starts again cold (rod_prediction.warm says
+ * which). */
+typedef struct rod_predict_warm {
+    const rod_snapshot *upper; /* at (compression, 0) */
+    const rod_snapshot *at;    /* at (compression, dw) */
+    double dw;
+} rod_predict_warm;
 
 rod_predict_opts rod_predict_opts_default(void);
 /* The fast prediction (ribbon-sim predict --fast, bench fast_predict): adaptive, quasi-static
@@ -79,6 +97,7 @@ typedef struct rod_prediction {
     double wall_s;         /* s of wall time for the whole prediction */
     rod_counters count;    /* what was evaluated */
     int stage_route, stage_shear, stage_damping; /* stages that ran */
+    int warm;              /* 1: started from opts.warm; 0: cold (none given, or it fell back) */
 } rod_prediction;
 
 rod_status rod_predict(const rod_scene *sc, const rod_predict_opts *o, rod_prediction *out,

@@ -79,12 +79,23 @@ static int strict_minimum(rod *r, double *H, double *Hs)
     return 1;
 }
 
+double rod_quasi_step(const rod_scene *sc)
+{
+    return fmin(QS_STEP, sc->shear_max / 20.0);
+}
+
 rod_status rod_quasi_follow(rod_dyn *d, const rod_scene *sc, double dl, double rate_dw, double dw_max,
                             rod_quasi_report *rep)
 {
+    return rod_quasi_follow_from(d, sc, dl, 0.0, rate_dw, dw_max, rep);
+}
+
+rod_status rod_quasi_follow_from(rod_dyn *d, const rod_scene *sc, double dl, double dw0, double rate_dw,
+                                 double dw_max, rod_quasi_report *rep)
+{
     rod *r = d->r;
     memset(rep, 0, sizeof *rep);
-    double step = fmin(QS_STEP, sc->shear_max / 20.0);
+    double step = rod_quasi_step(sc);
     int back = (int)ceil(QS_BACK_TIME * rate_dw / step - 1e-9);
     if (back < 1) back = 1;
     if (back > QS_RING - 2) back = QS_RING - 2;
@@ -112,9 +123,10 @@ rod_status rod_quasi_follow(rod_dyn *d, const rod_scene *sc, double dl, double r
     double e0 = rod_energy(r);
     /* count: states in the ring, the newest at index (count - 1) % ring. */
     long count = 0;
-    state_put(&st[0], r, 0.0, ob.dz, ob.a);
+    state_put(&st[0], r, dw0, ob.dz, ob.a);
     count = 1;
-    double dw = 0.0, lam_prev = NAN, margin = QS_BACK_TIME * rate_dw;
+    double dw = dw0, lam_prev = NAN, margin = QS_BACK_TIME * rate_dw;
+    rep->back = back;
     for (int guard = 0; guard < 100000; guard++) {
         double dn = dw + step;
         if (dn > dw_max - step) break;

@@ -34,6 +34,7 @@ typedef struct rod_quasi_report {
     double dw_warning;  /* Delta W of the first warning */
     int solves;         /* static solves run */
     int steps;          /* static states accepted (before going back) */
+    int back;           /* states a hard warning goes back by (the margin in steps) */
 } rod_quasi_report;
 
 /* Starts from the static equilibrium in d (after the route, at Delta W = 0, Delta L = dl) and a
@@ -42,5 +43,16 @@ typedef struct rod_quasi_report {
  * ready for rod_dyn_try (rod_dyn_start has been called). Returns ROD_OK, or ROD_ERR_ALLOC. */
 rod_status rod_quasi_follow(rod_dyn *d, const rod_scene *sc, double dl, double rate_dw, double dw_max,
                             rod_quasi_report *rep);
+
+/* The Delta W step of the static states: QS_STEP, or shear_max / 20 when smaller. */
+double rod_quasi_step(const rod_scene *sc);
+
+/* The same from the static equilibrium in d at Delta W = dw0 (a warm start: the grid of steps
+ * runs from dw0, so from a grid point k QS_STEP it is the cold start's grid). The switch can only
+ * be as far back as dw0, and the eigenvalue's extrapolation needs two states after it: a caller
+ * that wants the cold start's answer starts more than back + 2 steps before the switch
+ * (rod_protocol.c checks rep->steps). */
+rod_status rod_quasi_follow_from(rod_dyn *d, const rod_scene *sc, double dl, double dw0, double rate_dw,
+                                 double dw_max, rod_quasi_report *rep);
 
 #endif

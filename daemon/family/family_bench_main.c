@@ -9,14 +9,17 @@
  *   bench-fit-family twins= ran= seed= nodes= fit=KEYS scene_err_median= scene_err_max=
  *     before_err_median= before_err_max= before_in_2sd= before_z_median= before_regime=R/S
  *     at80_err_median= ... at80_regime=R/S tracker_dz_rms= tracker_a_rms=
- *     fit_before_cpu_s_median= fit_before_cpu_s_max= refresh_cpu_s_median= snap_band_cpu_s_median=
- *     in_trial_cpu_s_median= in_trial_cpu_s_max= refresh_total_cpu_s_median= refresh_total_cpu_s_max=
+ *     fit_before_cpu_s_median= fit_before_cpu_s_max= refresh_cpu_s_median= refresh_cpu_s_max=
+ *     snap_band_cpu_s_median= snap_band_cpu_s_max= in_trial_cpu_s_median= in_trial_cpu_s_max=
+ *     refresh_total_cpu_s_median= refresh_total_cpu_s_max=
  *     threads= wall_s=
  * CPU times are per thread (CLOCK_THREAD_CPUTIME_ID: one core's work, whatever the load):
  * fit_before_* the fit from compression and hold (issue 32 E: at most 2 s at N = 61), in_trial_*
  * that fit plus the calibrated prediction and its band (what must land before the shear starts),
  * refresh_* the fit with the shear to 80% started from the first fit, refresh_total_* with its
- * prediction and band (one refresh of the live prediction during the shear). */
+ * prediction and band (one refresh of the live prediction during the shear), snap_band_* the
+ * calibrated prediction and its band alone (before the shear). --verbose's line per twin ends
+ * with the four CPU times: fit + band before the shear, refresh + its band. */
 #define _POSIX_C_SOURCE 200809L
 #include "family.h"
 
@@ -92,8 +95,9 @@ static void print_case(job *j, const family_case *c)
             else
                 fprintf(stderr, "failed (%s)%s", f[k]->why, k == 0 ? " | at80 " : "");
         }
-        fprintf(stderr, " | track dz %.2g a %.2g sigma %.2g %.2g | %.0f s\n", c->film_stats.dz_rms, c->film_stats.a_rms,
-                c->sigma_dz, c->sigma_a, c->wall_s);
+        fprintf(stderr, " | track dz %.2g a %.2g sigma %.2g %.2g | cpu fit %.3f + band %.3f, refresh %.3f + %.3f s | %.0f s\n",
+                c->film_stats.dz_rms, c->film_stats.a_rms, c->sigma_dz, c->sigma_a, c->before.fit_cpu_s,
+                c->before.snap_cpu_s, c->at.fit_cpu_s, c->at.snap_cpu_s, c->wall_s);
         if (j->verbose > 1)
             for (int k = 0; k < 2; k++) {
                 const rod_fit_result *r = &f[k]->fit;
@@ -299,7 +303,8 @@ int main(int argc, char **argv)
     /* A figure with nothing to take it over (no twin ran, no fit landed) prints as -1, never NaN. */
     double *figs[] = {&s.scene_median, &s.scene_max, &s.before_median, &s.before_max, &s.before_in2sd,
                       &s.before_z_median, &s.at_median, &s.at_max, &s.at_in2sd, &s.at_z_median, &s.tracker_dz_rms,
-                      &s.tracker_a_rms, &fb_med, &fb_max, &rf_med, &sn_med, &it_med, &it_max, &ir_med, &ir_max};
+                      &s.tracker_a_rms, &fb_med, &fb_max, &rf_med, &rf_max, &sn_med, &sn_max, &it_med, &it_max,
+                      &ir_med, &ir_max};
     for (size_t k = 0; k < sizeof figs / sizeof figs[0]; k++)
         if (!isfinite(*figs[k])) *figs[k] = -1.0;
     char keys[256] = "";
@@ -314,20 +319,23 @@ int main(int argc, char **argv)
           "\"at_fits\":%d,\"at_err_median\":%.6g,\"at_err_max\":%.6g,\"at_in_2sd\":%.6g,\"at_z_median\":%.6g,"
           "\"at_regime_right\":%d,\"at_regime_scored\":%d,\"shear_frac\":%.6g,\"tracker_dz_rms\":%.6g,"
           "\"tracker_a_rms\":%.6g,\"fit_before_cpu_s_median\":%.6g,\"fit_before_cpu_s_max\":%.6g,"
-          "\"refresh_cpu_s_median\":%.6g,\"snap_band_cpu_s_median\":%.6g,\"in_trial_cpu_s_median\":%.6g,"
+          "\"refresh_cpu_s_median\":%.6g,\"refresh_cpu_s_max\":%.6g,\"snap_band_cpu_s_median\":%.6g,"
+          "\"snap_band_cpu_s_max\":%.6g,\"in_trial_cpu_s_median\":%.6g,"
           "\"in_trial_cpu_s_max\":%.6g,\"refresh_total_cpu_s_median\":%.6g,\"refresh_total_cpu_s_max\":%.6g,"
           "\"threads\":%d,\"wall_s\":%.6g}\n"
         : "bench-fit-family twins=%d ran=%d seed=%llu nodes=%d fit=%s scene_err_median=%.5f scene_err_max=%.5f "
           "before_fits=%d before_err_median=%.5f before_err_max=%.5f before_in_2sd=%.3f before_z_median=%.2f "
           "before_regime=%d/%d at_fits=%d at_err_median=%.5f at_err_max=%.5f at_in_2sd=%.3f at_z_median=%.2f "
           "at_regime=%d/%d shear_frac=%.2f tracker_dz_rms=%.5f tracker_a_rms=%.4f fit_before_cpu_s_median=%.3f "
-          "fit_before_cpu_s_max=%.3f refresh_cpu_s_median=%.3f snap_band_cpu_s_median=%.3f "
+          "fit_before_cpu_s_max=%.3f refresh_cpu_s_median=%.3f refresh_cpu_s_max=%.3f snap_band_cpu_s_median=%.3f "
+          "snap_band_cpu_s_max=%.3f "
           "in_trial_cpu_s_median=%.3f in_trial_cpu_s_max=%.3f refresh_total_cpu_s_median=%.3f "
           "refresh_total_cpu_s_max=%.3f threads=%d wall_s=%.1f\n";
     printf(fmt, s.twins, s.ran, seed, sc.nodes, keys, s.scene_median, s.scene_max, s.fits_before, s.before_median,
            s.before_max, s.before_in2sd, s.before_z_median, s.regime_right_before, s.regime_scored_before, s.fits_at,
            s.at_median, s.at_max, s.at_in2sd, s.at_z_median, s.regime_right_at, s.regime_scored_at, frac,
-           s.tracker_dz_rms, s.tracker_a_rms, fb_med, fb_max, rf_med, sn_med, it_med, it_max, ir_med, ir_max, threads,
+           s.tracker_dz_rms, s.tracker_a_rms, fb_med, fb_max, rf_med, rf_max, sn_med, sn_max, it_med, it_max, ir_med,
+           ir_max, threads,
            wall);
     for (int k = 0; k < twins; k++)
         if (!j.cases[k].ok) fprintf(stderr, "ribbon-fit-family: %s\n", j.cases[k].why);

@@ -16,7 +16,10 @@
  *     recovered noise-free beside both angles, written back into a scene as per-crease keys;
  *     fitting them with the pair's key is refused;
  *   - bad input: too few observations, a parameter the scene does not have, bounds that hold the
- *     truth out (the parameter is reported at its bound), data no parameter set fits (misfit). */
+ *     truth out (the parameter is reported at its bound), data no parameter set fits (misfit);
+ *   - where the fit stops: the Gauss-Newton step still to go, recomputed from the model's
+ *     Jacobian, below 0.05 standard deviations and the one reported; fewer evaluations than the
+ *     fit run to GSL's tolerances, every value within 0.05 of its standard error of that one. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -105,6 +108,7 @@ static void recovers_a_different_strip_noise_free(void **state)
     rod_fit_obs obs[NMAX];
     int n = observe(&truth, obs, 0.0, 0.0);
     rod_fit_opts o = four_keys();
+    o.stop_sd = 0.0; /* noise-free: converged to round-off, not to the noise */
     rod_fit_result r;
     char why[256];
     rod_status st = rod_fit_run(&sc, obs, n, &o, &r, why, sizeof why);
@@ -167,6 +171,7 @@ static void a_crease_position_is_recovered(void **state)
     rod_fit_obs obs[NMAX];
     int n = observe(&truth, obs, 0.0, 0.0);
     rod_fit_opts o = rod_fit_opts_default();
+    o.stop_sd = 0.0; /* noise-free: converged to round-off, not to the noise */
     o.fit[ROD_FIT_POSITION_LEFT] = o.fit[ROD_FIT_ANGLE_LEFT] = 1;
     rod_fit_result r;
     char why[256];
@@ -191,6 +196,7 @@ static void bending_stiffness_without_gravity_is_named(void **state)
     rod_fit_obs obs[NMAX];
     int n = observe(&truth, obs, 0.0, 0.0);
     rod_fit_opts o = rod_fit_opts_default();
+    o.stop_sd = 0.0; /* noise-free: converged to round-off, not to the noise */
     o.fit[ROD_FIT_ANGLE_LEFT] = o.fit[ROD_FIT_ANGLE_RIGHT] = o.fit[ROD_FIT_YOUNGS] = 1;
     rod_fit_result r;
     char why[256];
@@ -262,6 +268,7 @@ static void the_cameras_offset_is_recovered(void **state)
     int n = observe(&truth, obs, 0.0, 0.0);
     for (int k = 0; k < n; k++) obs[k].dz += 0.01; /* the camera's zero 2 mm below the clamps' line */
     rod_fit_opts o = rod_fit_opts_default();
+    o.stop_sd = 0.0; /* noise-free: converged to round-off, not to the noise */
     o.fit[ROD_FIT_ANGLE_LEFT] = o.fit[ROD_FIT_ANGLE_RIGHT] = o.fit[ROD_FIT_HINGE] = o.fit[ROD_FIT_DZ_OFFSET] = 1;
     rod_fit_result r;
     char why[256];
@@ -299,6 +306,7 @@ static void each_creases_hinge_is_recovered(void **state)
     rod_fit_obs obs[NMAX];
     int n = observe_n(&truth, obs, 12, 0.15, 0.0, 0.0);
     rod_fit_opts o = rod_fit_opts_default();
+    o.stop_sd = 0.0; /* noise-free: converged to round-off, not to the noise */
     o.fit[ROD_FIT_ANGLE_LEFT] = o.fit[ROD_FIT_ANGLE_RIGHT] = o.fit[ROD_FIT_HINGE_LEFT] = o.fit[ROD_FIT_HINGE_RIGHT] = 1;
     rod_fit_result r;
     char why[256];
@@ -369,6 +377,80 @@ static void bad_input_is_named(void **state)
     assert_non_null(strstr(why, "observation 3"));
 }
 
+/* The fit stops once the Gauss-Newton step still to go is below 0.05 standard deviations
+   (rod_fit.c, drive): that step, recomputed here from the model's own Jacobian at the fitted
+   values by the normal equations (the fit uses a QR factorisation), is the one reported and is
+   below 0.05, so every fitted value is within 0.05 of its standard error of the least-squares
+   optimum (to the linearisation). With a prior, so its rows count too. */
+static void the_fit_stops_within_the_noise(void **state)
+{
+    (void)state;
+    rod_scene truth = truth_strip(), sc = fit_kit_pet(31);
+    truth.youngs_modulus = sc.youngs_modulus;
+    truth.shear_modulus = sc.shear_modulus;
+    rod_fit_opts o = rod_fit_opts_default();
+    o.fit[ROD_FIT_ANGLE_LEFT] = o.fit[ROD_FIT_ANGLE_RIGHT] = o.fit[ROD_FIT_HINGE] = 1;
+    o.prior_sigma[ROD_FIT_HINGE] = 0.5;
+    rod_fit_obs obs[NMAX];
+    int n = observe_n(&truth, obs, 12, 0.12, o.sigma_dz, o.sigma_a);
+    rod_fit_result r;
+    char why[256];
+    assert_int_equal(rod_fit_run(&sc, obs, n, &o, &r, why, sizeof why), ROD_OK);
+    print_fit("stop within the noise", &r, &o);
+    printf("  Gauss-Newton step to go: %.4g standard deviations\n", r.gn_sd);
+    assert_true(r.gn_sd >= 0.0 && r.gn_sd < 0.05);
+    /* J^T J dx = -J^T f over the three fitted keys, data rows and the hinge's prior row */
+    const int key[3] = {ROD_FIT_ANGLE_LEFT, ROD_FIT_ANGLE_RIGHT, ROD_FIT_HINGE};
+    rod_fit_model *m = NULL;
+    assert_int_equal(rod_fit_model_alloc(&sc, obs, n, 0, &m, why, sizeof why), ROD_OK);
+    static double y[2 * NMAX], jac[2 * NMAX * ROD_FIT_NKEYS];
+    int use[ROD_FIT_NKEYS] = {0};
+    for (int i = 0; i < 3; i++) use[key[i]] = 1;
+    assert_int_equal(rod_fit_model_eval(m, r.u, use, y, jac, why, sizeof why), ROD_OK);
+    rod_fit_model_free(m);
+    double A[3][4] = {{0}};
+    for (int row = 0; row < 2 * n; row++) {
+        double w = row % 2 ? 1.0 / o.sigma_a : 1.0 / o.sigma_dz;
+        double f = (y[row] - (row % 2 ? obs[row / 2].a : obs[row / 2].dz)) * w;
+        for (int i = 0; i < 3; i++) {
+            double ji = jac[row * ROD_FIT_NKEYS + key[i]] * w;
+            for (int j = 0; j < 3; j++) A[i][j] += ji * jac[row * ROD_FIT_NKEYS + key[j]] * w;
+            A[i][3] -= ji * f;
+        }
+    }
+    double ps = o.prior_sigma[ROD_FIT_HINGE];
+    A[2][2] += 1.0 / (ps * ps);
+    A[2][3] -= (r.u[ROD_FIT_HINGE] - r.u0[ROD_FIT_HINGE]) / (ps * ps);
+    double rhs[3] = {A[0][3], A[1][3], A[2][3]}, dx[3];
+    for (int c = 0; c < 3; c++) /* Gauss-Jordan: A is positive definite */
+        for (int rr = 0; rr < 3; rr++) {
+            if (rr == c) continue;
+            double q = A[rr][c] / A[c][c];
+            for (int k = c; k < 4; k++) A[rr][k] -= q * A[c][k];
+        }
+    double d2 = 0.0;
+    for (int i = 0; i < 3; i++) {
+        dx[i] = A[i][3] / A[i][i];
+        d2 += dx[i] * rhs[i]; /* dx^T (J^T J) dx = -dx^T J^T f */
+    }
+    printf("  recomputed: %.4g\n", sqrt(d2));
+    assert_true(fabs(sqrt(d2) - r.gn_sd) <= 1e-3 * r.gn_sd + 1e-6);
+    /* Against the fit converged to GSL's tolerances: fewer evaluations, every value within 0.05
+       of its standard error of it. */
+    rod_fit_opts o0 = o;
+    o0.stop_sd = 0.0;
+    rod_fit_result r0;
+    assert_int_equal(rod_fit_run(&sc, obs, n, &o0, &r0, why, sizeof why), ROD_OK);
+    printf("  to GSL's tolerances: %d iterations, %d evaluations (stopped: %d, %d)\n", r0.iterations,
+           r0.evaluations, r.iterations, r.evaluations);
+    assert_true(r.evaluations < r0.evaluations);
+    for (int i = 0; i < 3; i++) {
+        printf("  %-24s %.3g standard errors from it\n", rod_fit_key_name(key[i]),
+               (r.u[key[i]] - r0.u[key[i]]) / r0.se[key[i]]);
+        assert_true(fabs(r.u[key[i]] - r0.u[key[i]]) <= 0.05 * r0.se[key[i]]);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -380,6 +462,7 @@ int main(void)
         cmocka_unit_test(the_cameras_offset_is_recovered),
         cmocka_unit_test(each_creases_hinge_is_recovered),
         cmocka_unit_test(bad_input_is_named),
+        cmocka_unit_test(the_fit_stops_within_the_noise),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
