@@ -1,4 +1,5 @@
 /* rigsim_camera.c: the twin filmed by a fake GigE Vision camera on 127.0.0.1 (see rigsim_camera.h). */
+#define _GNU_SOURCE /* pthread_setaffinity_np */
 #include "rigsim_camera.h"
 
 #include <arv.h>
@@ -31,6 +32,8 @@ typedef struct image_slot {
     vis_frame *f;
     int state;
     double mono;                 /* the host instant its state stands for */
+    double stamp_real;           /* its stamp on the real-time clock once sent (0: not yet): a
+                                    repeat carries the very same stamp */
     double twin_t, dz, dl, dw;   /* the twin's time, Delta Z, Delta L, Delta W in it */
     int exact;                   /* 0: the solver was behind, the state is older than its exposure */
 } image_slot;
@@ -70,8 +73,7 @@ struct rigsim_camera {
     int stopped;
     pthread_t twin_thread;      /* the render thread */
     int twin_started, twin_stop;
-    int twin_realtime;          /* the solver's and the render thread run SCHED_FIFO */
-    int send_rt_tried, send_realtime; /* the camera's send thread: tried, runs SCHED_FIFO */
+    int twin_realtime;          /* the render thread and the solver run SCHED_FIFO */
     double fps;                 /* the rig file's frame rate (the period until the sends show theirs) */
     double render_cpu_s;        /* the render thread's CPU time, s */
     long renders;               /* images rendered */
@@ -209,8 +211,10 @@ static void *render_main(void *arg)
          * little late, the send waiting for it, RIGSIM_FILL_WAIT, rather than repeat the last.) */
         while (target < t || target <= done_target + 0.5 * period) target += period;
         /* The solver lands on every exposure instant and may run a render's lead and a period
-         * ahead of real time (the axes extrapolated that far at their velocity). */
-        rigsim_twin_set_grid(c->twin, target - c->f.delay_s, period, lead + RIGSIM_SOLVER_SLACK * period);
+         * ahead of real time, less the camera's delay (an exposure precedes its send by it): the
+         * axes are extrapolated that far at their velocity. */
+        rigsim_twin_set_grid(c->twin, target - c->f.delay_s, period,
+                             fmax(0.0, lead + RIGSIM_SOLVER_SLACK * period - c->f.delay_s));
         pthread_mutex_lock(&c->lock);
         const int frozen = c->f.freeze_after_s >= 0.0 && t - c->t_start >= c->f.freeze_after_s;
         pthread_mutex_unlock(&c->lock);
@@ -250,6 +254,7 @@ static void *render_main(void *arg)
         if (drawn) {
             last_t = st.t;
             im->mono = st.mono;
+            im->stamp_real = 0.0;
             im->twin_t = st.t;
             im->exact = st.exact;
             im->dz = st.dz;
@@ -294,14 +299,6 @@ static void fill(ArvBuffer *b, void *user, guint32 exposure_us, guint32 gain, Ar
     rigsim_camera *c = user;
     size_t n = 0;
     uint8_t *dst = (uint8_t *)arv_buffer_get_data(b, &n);
-    /* The camera's own thread (Aravis's, which calls this fill and then sends) stands for the
-     * camera's hardware, which never waits for a CPU: a real-time priority above the twin's,
-     * below the rails' (else, at load 20 on 2 cores, one send came 158 ms late, at the snap). */
-    if (!c->send_rt_tried) {
-        c->send_rt_tried = 1;
-        struct sched_param sp = {.sched_priority = 6};
-        c->send_realtime = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp) == 0;
-    }
     const int w = arv_buffer_get_image_width(b), h = arv_buffer_get_image_height(b);
     pthread_mutex_lock(&c->lock);
     /* The image of this send: the newest rendered one whose exposure has come (a camera sends
@@ -314,6 +311,9 @@ static void fill(ArvBuffer *b, void *user, guint32 exposure_us, guint32 gain, Ar
     const int frozen_at_fill = c->f.freeze_after_s >= 0.0 && fill_mono - c->t_start >= c->f.freeze_after_s;
     const int resumed = c->frames == 0 || fill_mono - c->last_fill_mono > RIGSIM_IDLE_GAP_S;
     int pick = -1;
+    if (resumed)
+        for (int k = 0; k < RIGSIM_IMAGES; k++)
+            if (c->img[k].state == IMG_READY) c->img[k].state = IMG_FREE; /* rendered before the pause */
     if (!frozen_at_fill) {
         const double deadline = fill_mono + RIGSIM_FILL_WAIT / c->fps;
         for (;;) {
@@ -376,7 +376,13 @@ static void fill(ArvBuffer *b, void *user, guint32 exposure_us, guint32 gain, Ar
      * (the fault) is stamped as it leaves: the camera's clock goes on, its image does not. */
     if (resumed && !frozen && pick < 0) im->mono = send_mono - c->f.delay_s;
     const double stamp_mono = frozen ? send_mono : fmin(send_mono, im->mono + c->f.delay_s);
-    const double stamp_real = send_real - (send_mono - stamp_mono);
+    double stamp_real = send_real - (send_mono - stamp_mono);
+    if (!frozen) {
+        if (im->stamp_real > 0.0 && !resumed)
+            stamp_real = im->stamp_real;
+        else
+            im->stamp_real = stamp_real;
+    }
     arv_buffer_set_timestamp(b, (guint64)llround(stamp_real * 1e9));
     const int repeat = !frozen && !resumed && pick < 0;
     if (repeat) c->repeats++;
@@ -485,14 +491,18 @@ int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_st
             snprintf(why, why_len, "twin camera: the mounted state: %s", ve.message);
             goto fail;
         }
-        c->img[0] = (image_slot){c->img[0].f, IMG_LAST, 0.0, 0.0, st.dz, st.dl, st.dw, 1};
+        c->img[0] = (image_slot){c->img[0].f, IMG_LAST, 0.0, 0.0, 0.0, st.dz, st.dl, st.dw, 1};
         c->last = 0;
     }
     c->t_start = c->last_fill_mono = c->img[0].mono = clock_s(CLOCK_MONOTONIC);
-    /* The twin stands for the ribbon, which never waits for a CPU: like the rails' controller
-     * (rigsim_rails.c, priority 10) its solver and the render thread run at a real-time priority
-     * when the process may, below the controller's; refused, at the process's priority
-     * (rigsim_camera_twin_realtime says which). The render sleeps between images. */
+    /* The twin stands for the ribbon and the camera, which never wait for a CPU: like the rails'
+     * controller (rigsim_rails.c, priority 10) the solver and the render thread run at a
+     * real-time priority (5) when the process may, below the controller's; refused, at the
+     * process's priority (rigsim_camera_twin_realtime says which). Measured at load 26-29 on 2
+     * cores: at the process's priority (nice -10) the solver fell 17 s behind real time; held to
+     * one core beside the render, 0.3 of a core and up to 108 ms behind at the snap, 73-97
+     * images of an older state; free, 0.15 of a core, up to 56 ms behind, 8. */
+    const int cpu = -1;
     c->gv = arv_gv_fake_camera_new("127.0.0.1", serial);
     if (!c->gv || !arv_gv_fake_camera_is_running(c->gv)) {
         snprintf(why, why_len, "the GigE Vision camera could not be served on 127.0.0.1 (GVCP port 3956 taken?)");
@@ -503,7 +513,7 @@ int rigsim_camera_start(const rig_config *cfg, const rod_scene *sc, double dl_st
     c->fc = g_object_ref(arv_gv_fake_camera_get_fake_camera(c->gv));
     arv_fake_camera_set_fill_pattern(c->fc, fill, c);
     int solver_rt = 0;
-    if (rigsim_twin_run(c->twin, c->t_start, 5, &solver_rt, why, why_len)) goto fail;
+    if (rigsim_twin_run(c->twin, c->t_start, 5, cpu, &solver_rt, why, why_len)) goto fail;
     if (pthread_create(&c->twin_thread, NULL, render_main, c) != 0) {
         snprintf(why, why_len, "the twin camera's render thread could not start");
         goto fail;
@@ -610,18 +620,22 @@ void rigsim_camera_report(rigsim_camera *c, char *out, size_t n)
 {
     rigsim_twin_stats ts;
     rigsim_twin_stats_get(c->twin, &ts);
+    char err[256] = "", failed[320] = "";
+    if (ts.failures > 0) {
+        rigsim_twin_last_error(c->twin, err, sizeof err);
+        snprintf(failed, sizeof failed, "; TWIN SOLVER FAILED %ld times (the last: %s)", ts.failures, err);
+    }
     pthread_mutex_lock(&c->lock);
     const double up = clock_s(CLOCK_MONOTONIC) - c->t_start;
     snprintf(out, n,
-             "images sent: %ld%s, rendered: %ld (render thread %.2f of a core, slowest render %.1f ms); twin solver "
+             "images sent: %ld, rendered: %ld (render thread %.2f of a core, slowest render %.1f ms); twin solver "
              "%.2f of a core, %ld steps (the slowest %.1f ms), at most %.1f ms behind real time; images whose state "
              "was older than their exposure (solver behind, stamped with the state's instant): %ld; images repeating "
-             "the previous state: %ld; images older than half a frame period when sent: %ld (the oldest %.1f ms)%s",
-             c->frames, c->send_realtime ? " (send thread at a real-time priority)" : "", c->renders,
-             up > 0.0 ? c->render_cpu_s / up : 0.0, 1e3 * c->max_fill_s,
+             "the previous state: %ld; images older than half a frame period when sent: %ld (the oldest %.1f ms)%s%s",
+             c->frames, c->renders, up > 0.0 ? c->render_cpu_s / up : 0.0, 1e3 * c->max_fill_s,
              up > 0.0 ? ts.cpu_s / up : 0.0, ts.chunks, 1e3 * ts.worst_chunk_s, 1e3 * fmax(0.0, ts.behind_max_s),
              c->inexact, c->repeats, c->behind, 1e3 * c->age_max_s,
-             c->truth_lost ? "; TRUTH LOG INCOMPLETE: lines overwritten before written" : "");
+             failed, c->truth_lost ? "; TRUTH LOG INCOMPLETE: lines overwritten before written" : "");
     pthread_mutex_unlock(&c->lock);
 }
 

@@ -65,8 +65,8 @@ long rigsim_camera_frames(rigsim_camera *c);
 void rigsim_camera_stop_sending(rigsim_camera *c);
 /* Fault on command: the image freezes now (the same image is sent from now on). */
 void rigsim_camera_freeze(rigsim_camera *c);
-/* 1 when the twin's solver and render threads got a real-time priority (SCHED_FIFO, below the
- * rails' thread). */
+/* 1 when the render thread and the twin's solver got a real-time priority (SCHED_FIFO, below the
+ * rails' thread, both on one core). */
 int rigsim_camera_twin_realtime(const rigsim_camera *c);
 /* One line: images sent and rendered, the render thread's and the solver's shares of a core, the
  * slowest render and solver step, how far the solver fell behind real time, the images that showed

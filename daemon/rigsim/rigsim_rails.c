@@ -18,7 +18,7 @@
 #define RIGSIM_AXES_LOG_S 0.005   /* s between lines of the axes log */
 #define RIGSIM_DRIVE_ALARM 0x30   /* the Modbus drive alarm raised on command (mb_sim's own default) */
 #define RIGSIM_RING 8192          /* axes-log lines buffered for the writer (41 s at 5 ms) */
-#define RIGSIM_HIST 2048          /* the axes' positions after each step: the last 2 s at 1 ms */
+#define RIGSIM_HIST 32768         /* the axes' positions after each step: the last 32 s at 1 ms */
 
 /* The rails' thread runs at a real-time priority and never writes a file itself (a write may
  * block for tenths of a second when the kernel throttles dirty pages, as the recorder's video
@@ -49,7 +49,8 @@ struct rigsim_rails {
     double note_t[4];           /* and when (unix time) */
     int n_notes;
     /* Both axes after every step (host monotonic time of the step): what the axes did at an
-     * instant of the last 2 s, for a twin stepped behind real time (rigsim_rails_positions_at). */
+     * instant of the last 32 s, for a twin stepped behind real time (rigsim_rails_positions_at;
+     * at load 29 with the solver at a normal priority it fell 17 s behind). */
     double hist_t[RIGSIM_HIST], hist_c[RIGSIM_HIST], hist_s[RIGSIM_HIST];
     long hist_n;
 };
@@ -341,8 +342,16 @@ void rigsim_rails_positions_at(rigsim_rails *r, double t_mono, double *compress_
         return;
     }
 #define H(k) ((r->hist_n - 1 - (k)) % RIGSIM_HIST) /* k steps back from the latest */
-    long k = 0;
-    while (k + 1 < n && r->hist_t[H(k)] > t_mono) k++;
+    /* k: the newest step at or before t_mono (n - 1, the oldest, if none); times fall with k */
+    long lo = 0, hi = n - 1;
+    while (lo < hi) {
+        const long mid = (lo + hi) / 2;
+        if (r->hist_t[H(mid)] <= t_mono)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    const long k = lo;
     long a, b; /* a the earlier, b the later of the pair t_mono is placed on */
     if (k == 0) {
         /* After the latest step: at the velocity over the last 5 ms (or what the ring holds). */

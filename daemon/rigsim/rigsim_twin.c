@@ -1,5 +1,6 @@
 /* rigsim_twin.c: the twin stepped on its own thread, its trajectory logged for the camera (see
  * rigsim_twin.h). */
+#define _GNU_SOURCE /* pthread_setaffinity_np */
 #include "rigsim_twin.h"
 
 #include <errno.h>
@@ -211,7 +212,8 @@ fail:
     return -1;
 }
 
-int rigsim_twin_run(rigsim_twin *tw, double t0_mono, int priority, int *realtime, char *why, size_t why_len)
+int rigsim_twin_run(rigsim_twin *tw, double t0_mono, int priority, int cpu, int *realtime, char *why,
+                    size_t why_len)
 {
     pthread_mutex_lock(&tw->lock);
     tw->t0 = t0_mono;
@@ -223,6 +225,12 @@ int rigsim_twin_run(rigsim_twin *tw, double t0_mono, int priority, int *realtime
     }
     tw->started = 1;
     if (realtime) *realtime = 0;
+    if (cpu >= 0) {
+        cpu_set_t set;
+        CPU_ZERO(&set);
+        CPU_SET(cpu, &set);
+        pthread_setaffinity_np(tw->thread, sizeof set, &set); /* refused: any core */
+    }
     if (priority > 0) {
         struct sched_param sp = {.sched_priority = priority};
         const int got = pthread_setschedparam(tw->thread, SCHED_FIFO, &sp) == 0;

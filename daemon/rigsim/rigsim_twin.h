@@ -39,9 +39,10 @@ typedef struct rigsim_twin_state {
  * thread (rigsim_twin_run). */
 int rigsim_twin_open(const rod_scene *sc, double dl_start, const rig_calibration *calib, rigsim_rails *rails,
                      rigsim_twin **out, char *why, size_t why_len);
-/* Starts the solver's thread, the twin's time 0 at t0_mono; tries SCHED_FIFO at `priority`
- * (0: none); 1 in *realtime when granted. */
-int rigsim_twin_run(rigsim_twin *tw, double t0_mono, int priority, int *realtime, char *why, size_t why_len);
+/* Starts the solver's thread, the twin's time 0 at t0_mono, on core `cpu` (-1: any); tries
+ * SCHED_FIFO at `priority` (0: none); 1 in *realtime when granted. */
+int rigsim_twin_run(rigsim_twin *tw, double t0_mono, int priority, int cpu, int *realtime, char *why,
+                    size_t why_len);
 void rigsim_twin_close(rigsim_twin *tw);
 
 /* The camera's exposure instants (host monotonic): grid + k period; the solver lands on each and
