@@ -21,7 +21,8 @@
 #define RIGSIM_NOTE_EVERY_S 1.0     /* s at least between two "twin: behind" notes */
 #define RIGSIM_FILL_WAIT 1.5        /* periods a send waits at most for an image newer than the last
                                        one sent (the render thread starved of a CPU) */
-#define RIGSIM_SOLVER_SLACK 1.0     /* periods the solver may run ahead of a render's start */
+#define RIGSIM_SOLVER_SLACK 0.25    /* periods the solver may run ahead of a render's start */
+#define RIGSIM_LAG_CATCHUP 0.25     /* periods a lagging exposure schedule gains back per frame */
 
 /* The rendered images between the render thread and the sends: each slot free, being rendered,
  * ready (rendered for an exposure not sent yet) or the image sent last (a frozen camera sends it
@@ -177,6 +178,11 @@ static void *render_main(void *arg)
     rigsim_camera *c = arg;
     ArvFakeCamera *fc = c->fc;
     double done_target = -1.0, last_t = 0.0;
+    /* s the exposures lag their schedule: the solver was behind real time. The images keep the
+     * camera's rate (one exposure a period, RIGSIM_LAG_CATCHUP shorter while the lag shrinks)
+     * instead of jumping through the states the solver catches up with: a snap filmed behind
+     * real time is filmed late, never in fewer images. */
+    double lag = 0.0;
     long n_renders = 0;
     double recent[RIGSIM_LEAD_RENDERS] = {0}; /* the last renders' times, s */
     for (;;) {
@@ -190,6 +196,7 @@ static void *render_main(void *arg)
         /* Nobody streams: the twin's clock pauses (RIGSIM_IDLE_GAP_S). */
         if (t - last > RIGSIM_IDLE_GAP_S) {
             rigsim_twin_hold(c->twin, t);
+            lag = 0.0; /* the held twin's latest state stands for now */
             struct timespec ts = {0, 5000000};
             nanosleep(&ts, NULL);
             continue;
@@ -219,8 +226,16 @@ static void *render_main(void *arg)
         const int frozen = c->f.freeze_after_s >= 0.0 && t - c->t_start >= c->f.freeze_after_s;
         pthread_mutex_unlock(&c->lock);
         rigsim_twin_state st;
-        const int got = !frozen && rigsim_twin_state_at(c->twin, target - c->f.delay_s, target - lead, last_t,
-                                                        &c->rshape, &st);
+        const double want = target - c->f.delay_s - lag;
+        const int got = !frozen && rigsim_twin_state_at(c->twin, want, target - lead, last_t, &c->rshape, &st);
+        if (got) {
+            /* behind the instant asked for: the lag is what the solver lacks; there: it shrinks */
+            if (!st.exact)
+                lag = fmax(0.0, target - c->f.delay_s - st.mono);
+            else
+                lag = fmax(0.0, lag - RIGSIM_LAG_CATCHUP * period);
+            st.exact = st.exact && fabs(st.mono - (target - c->f.delay_s)) < 1e-6;
+        }
         pthread_mutex_lock(&c->lock);
         stop = c->twin_stop;
         pthread_mutex_unlock(&c->lock);

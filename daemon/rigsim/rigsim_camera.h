@@ -13,7 +13,9 @@
  * has come, adds the sensor's noise (camera.noise_sigma) and stamps it with that exposure's
  * instant plus the camera's delay (host real-time clock, ns). When the solver is behind real time
  * (the stiff snap on a loaded machine), the image shows the latest state there is and its stamp
- * says that state's instant: late, never passed off as new; a send waits up to 1.5 frame periods
+ * says that state's instant: late, never passed off as new; the exposures that follow keep the
+ * camera's rate, lagging their schedule and gaining a quarter period a frame back, so a snap
+ * filmed late is filmed in as many images; a send waits up to 1.5 frame periods
  * for an image newer than the last, and only a machine that starved the threads longer makes it
  * send the last one again (counted, with the same stamp). Images sent more than half a frame
  * period after the instant they show are counted and noted (rigsim_camera_tick). While nobody
