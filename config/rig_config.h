@@ -162,6 +162,8 @@ typedef struct rig_sim {
     bool fit;                        /* the calibrated prediction beside each trial (issue 32 B) */
     char fit_keys[256];              /* comma-separated fit keys; "" = the default set */
     double fit_refresh_s;            /* s of trial time between refreshes in the shear; 0 = none */
+    bool specimen_fit;               /* the named specimen refitted from its trials after each one
+                                        (its calibration, used by its next prediction; issue 35 A) */
 } rig_sim;
 
 typedef struct rig_api {
