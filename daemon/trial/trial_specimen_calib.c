@@ -49,6 +49,23 @@ static double natural(int k, double u)
     return rod_fit_key_log(k) ? exp(u) : u;
 }
 
+/* Parameter k's value in sc in its natural units, read from the scene's own fields (not through
+ * the fit's logarithms, so a value reads back bit for bit). */
+static double scene_value(const rod_scene *sc, int k)
+{
+    switch (k) {
+    case ROD_FIT_ANGLE_LEFT: return rod_scene_crease_angle_deg(sc, 0);
+    case ROD_FIT_ANGLE_RIGHT: return rod_scene_crease_angle_deg(sc, 1);
+    case ROD_FIT_POSITION_LEFT: return rod_scene_crease_position(sc, 0);
+    case ROD_FIT_POSITION_RIGHT: return rod_scene_crease_position(sc, 1);
+    case ROD_FIT_HINGE: return sc->fold_hinge_stiffness;
+    case ROD_FIT_HINGE_LEFT: return rod_scene_hinge_k(sc, 0);
+    case ROD_FIT_HINGE_RIGHT: return rod_scene_hinge_k(sc, 1);
+    case ROD_FIT_YOUNGS: return sc->youngs_modulus;
+    default: return 0.0; /* view.dz_offset: 0 at the scene's values */
+    }
+}
+
 /* ---- the refit ---------------------------------------------------------------------------------- */
 
 /* The keys into o->fit, as the in-trial fit reads sim.fit_keys. 0, or -1 with r failed. */
@@ -164,6 +181,7 @@ static void ids_text(const int64_t *ids, int n, char *out, size_t len)
 static json_t *calibration_json(const pooled *p, const rod_fit_result *fr, int64_t after_trial, const char *at,
                                 double wall_s)
 {
+    /* start: the strip's own value (fr->u0 is it through the fit's logarithms). */
     json_t *j = json_object(), *sk = json_array(), *keys = json_array(), *ps = json_array(), *nd = json_array();
     for (int k = 0; k < p->nskipped; k++)
         json_array_append_new(sk, json_pack("{s:I, s:s}", "trial", (json_int_t)p->skipped[k], "why", p->skipped_why[k]));
@@ -172,7 +190,7 @@ static json_t *calibration_json(const pooled *p, const rod_fit_result *fr, int64
         json_array_append_new(keys, json_string(rod_fit_key_name(k)));
         if (!fr->determined[k]) json_array_append_new(nd, json_string(rod_fit_key_name(k)));
         json_array_append_new(ps, json_pack("{s:s, s:o, s:o, s:o, s:s, s:b, s:i}", "key", rod_fit_key_name(k), "start",
-                                            num_or_null(natural(k, fr->u0[k])), "value",
+                                            num_or_null(scene_value(&p->pool.scene, k)), "value",
                                             num_or_null(natural(k, fr->u[k])), "se",
                                             fr->determined[k] ? num_or_null(fr->se[k]) : json_null(), "se_kind",
                                             rod_fit_key_log(k) ? "relative" : "absolute", "determined",
@@ -405,9 +423,8 @@ int trial_specimen_calib_apply(const char *calibration_json, const rod_scene *me
         iu += (size_t)snprintf(ids + iu, sizeof ids - iu, "%s%lld", k ? ", " : "",
                               (long long)json_integer_value(json_array_get(tr, k)));
     const char *at = json_string_value(json_object_get(j, "at"));
-    double u0[ROD_FIT_NKEYS], u[ROD_FIT_NKEYS], val[ROD_FIT_NKEYS];
+    double u[ROD_FIT_NKEYS], val[ROD_FIT_NKEYS];
     int apply[ROD_FIT_NKEYS] = {0};
-    rod_fit_scene_values(measured, u0);
     rod_fit_scene_values(sc, u);
     json_t *applied = json_array(), *held = json_array(), *ps = json_object_get(j, "parameters");
     char what[700] = "", helds[300] = "";
@@ -427,7 +444,7 @@ int trial_specimen_calib_apply(const char *calibration_json, const rod_scene *me
             continue;
         }
         double v = json_number_value(json_object_get(p, "value"));
-        double start = json_number_value(json_object_get(p, "start")), now = natural(k, u0[k]);
+        double start = json_number_value(json_object_get(p, "start")), now = scene_value(measured, k);
         if (!(fabs(start - now) <= 1e-9 * fmax(1.0, fabs(now)))) {
             snprintf(use->message, sizeof use->message,
                      "the specimen's calibration (trials %s, %s) is not applied: it was fitted from %s = %.6g and the "
