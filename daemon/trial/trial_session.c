@@ -476,9 +476,7 @@ static void specimen_calibration_in(trial_session *s, trial_prediction_def *def)
     trial_specimen_calib_use cu;
     rod_scene sc = def->scene;
     trial_specimen_calib_apply(s->specimen_calibration, &s->pred_scene, &s->use.creases, &sc, &cu);
-    if (cu.message[0]) session_event(s, NAN, cu.applied || strstr(cu.message, "determines none") ? STORE_EVENT_INFO
-                                                                                               : STORE_EVENT_WARNING,
-                                     cu.message);
+    if (cu.message[0]) session_event(s, NAN, cu.warning ? STORE_EVENT_WARNING : STORE_EVENT_INFO, cu.message);
     if (!cu.applied) return;
     def->scene = sc;
     snprintf(def->calibration_json, sizeof def->calibration_json, "%s", cu.record);

@@ -411,6 +411,7 @@ int trial_specimen_calib_apply(const char *calibration_json, const rod_scene *me
     json_error_t err;
     json_t *j = json_loads(calibration_json, 0, &err);
     if (!json_is_object(j)) {
+        use->warning = 1;
         snprintf(use->message, sizeof use->message,
                  "the specimen's calibration is not applied: its record cannot be read (%s); the measured strip predicts",
                  j ? "not an object" : err.text);
@@ -446,6 +447,7 @@ int trial_specimen_calib_apply(const char *calibration_json, const rod_scene *me
         double v = json_number_value(json_object_get(p, "value"));
         double start = json_number_value(json_object_get(p, "start")), now = scene_value(measured, k);
         if (!(fabs(start - now) <= 1e-9 * fmax(1.0, fabs(now)))) {
+            use->warning = 1;
             snprintf(use->message, sizeof use->message,
                      "the specimen's calibration (trials %s, %s) is not applied: it was fitted from %s = %.6g and the "
                      "trial's strip has %.6g (the specimen was re-measured since; its next refit starts from the new "

@@ -56,6 +56,8 @@ typedef struct trial_specimen_calib_use {
     int applied;            /* values put into the scene (0: the scene untouched) */
     char record[2048];      /* the prediction's calibration_json when applied; "" otherwise */
     char message[1000];     /* the trial's event ("" when the specimen has no calibration) */
+    int warning;            /* 1: the calibration could not be used (unreadable, or fitted from a
+                               strip other than this trial's): the event is a warning */
 } trial_specimen_calib_use;
 
 /* calibration_json: the specimen's (store_specimen.calibration_json; "" = none). measured: the

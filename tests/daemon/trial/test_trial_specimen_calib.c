@@ -109,14 +109,17 @@ static void stale_unreadable_or_empty_apply_nothing(void **state)
     assert_non_null(strstr(use.message, "not applied"));
     assert_non_null(strstr(use.message, "folds.angle_left_deg = -88"));
     assert_non_null(strstr(use.message, "re-measured"));
+    assert_int_equal(use.warning, 1);
     const char *none = CAL("{\"key\":\"folds.angle_left_deg\",\"start\":-90,\"value\":-86.25,\"se\":null,\"determined\":false}");
     assert_int_equal(trial_specimen_calib_apply(none, &m, &c, &sc, &use), 0);
     printf("%s\n", use.message);
     assert_memory_equal(&sc, &before, sizeof sc);
     assert_non_null(strstr(use.message, "determines none"));
+    assert_int_equal(use.warning, 0);
     assert_int_equal(trial_specimen_calib_apply("{not json", &m, &c, &sc, &use), 0);
     printf("%s\n", use.message);
     assert_non_null(strstr(use.message, "cannot be read"));
+    assert_int_equal(use.warning, 1);
     assert_memory_equal(&sc, &before, sizeof sc);
     assert_int_equal(trial_specimen_calib_apply("", &m, &c, &sc, &use), 0);
     assert_string_equal(use.message, "");
