@@ -201,7 +201,9 @@ static json_t *calibration_json(const pooled *p, const rod_fit_result *fr, int64
     json_object_set_new(j, "trials", ids_json(p->used, p->nused));
     json_object_set_new(j, "skipped", sk);
     json_object_set_new(j, "frames", json_integer(p->pool.nobs));
-    json_object_set_new(j, "frames_per_trial_max", json_integer(TRIAL_SPECIMEN_CALIB_MAX_FRAMES));
+    int per = TRIAL_SPECIMEN_CALIB_MAX_FRAMES_TOTAL / (p->nused ? p->nused : 1);
+    json_object_set_new(j, "frames_per_trial_max",
+                        json_integer(per < TRIAL_SPECIMEN_CALIB_MAX_FRAMES ? per : TRIAL_SPECIMEN_CALIB_MAX_FRAMES));
     json_object_set_new(j, "nodes", json_integer(p->pool.scene.nodes));
     json_object_set_new(j, "keys", keys);
     json_object_set_new(j, "parameters", ps);
@@ -236,7 +238,7 @@ static void say_fitted(trial_specimen_refit *r, const char *name, const pooled *
     size_t n = sizeof r->message, u = 0;
     ids_text(p->used, p->nused, ids, sizeof ids);
 #define PUT(...) (u += u < n ? (size_t)snprintf(m + u, n - u, __VA_ARGS__) : 0)
-    PUT("specimen %s calibrated from trial%s %s (%d frames, N = %d, %.2f s): ", name, p->nused == 1 ? "" : "s", ids,
+    PUT("calibration of specimen %s from trial%s %s (%d frames, N = %d, %.2f s): ", name, p->nused == 1 ? "" : "s", ids,
         p->pool.nobs, p->pool.scene.nodes, r->wall_s);
     int first = 1;
     for (int k = 0; k < ROD_FIT_NKEYS; k++) {
@@ -282,7 +284,7 @@ static void store_failure(store *st, int64_t specimen_id, const char *name, int6
     const char *stored = "";
     if (!t || store_specimen_set_calibration(st, specimen_id, NULL, t, w, sizeof w) != STORE_OK) stored = " (not stored)";
     free(t);
-    snprintf(r->message, sizeof r->message, "specimen %s not recalibrated: %s: %s%s; %s", name, r->reason_key,
+    snprintf(r->message, sizeof r->message, "calibration of specimen %s not refitted: %s: %s%s; %s", name, r->reason_key,
              r->reason, stored, kept);
 }
 
@@ -296,7 +298,7 @@ void trial_specimen_calib_refit(store *st, int64_t specimen_id, const char *name
     pooled *p = calloc(1, sizeof *p);
     if (!p) {
         failed(out, "fit_failed", "out of memory");
-        snprintf(out->message, sizeof out->message, "specimen %s not recalibrated: out of memory", name);
+        snprintf(out->message, sizeof out->message, "calibration of specimen %s not refitted: out of memory", name);
         return;
     }
     int64_t cand[TRIAL_SPECIMEN_CALIB_MAX_EXAMINED];
@@ -312,6 +314,18 @@ void trial_specimen_calib_refit(store *st, int64_t specimen_id, const char *name
         goto fail;
     }
     pool_trials(st, cand, ncand, p);
+    if (p->nused * TRIAL_SPECIMEN_CALIB_MAX_FRAMES > TRIAL_SPECIMEN_CALIB_MAX_FRAMES_TOTAL) {
+        /* The same trials, fewer frames each (thinned evenly, as before). */
+        trial_pool_select sel = trial_pool_select_default();
+        sel.max_samples = TRIAL_SPECIMEN_CALIB_MAX_FRAMES_TOTAL / p->nused;
+        trial_pool fewer;
+        if (trial_pool_load(st, p->used, p->nused, &sel, &fewer, why, sizeof why)) {
+            failed(out, "no_trials", "its trials could not be read again: %s", why);
+            goto fail;
+        }
+        trial_pool_free(&p->pool);
+        p->pool = fewer;
+    }
     out->ntrials = p->nused;
     out->nobs = p->pool.nobs;
     if (!p->nused) {
@@ -413,7 +427,7 @@ int trial_specimen_calib_apply(const char *calibration_json, const rod_scene *me
     if (!json_is_object(j)) {
         use->warning = 1;
         snprintf(use->message, sizeof use->message,
-                 "the specimen's calibration is not applied: its record cannot be read (%s); the measured strip predicts",
+                 "calibration of the specimen not applied: its record cannot be read (%s); the measured strip predicts",
                  j ? "not an object" : err.text);
         json_decref(j);
         return 0;
@@ -449,7 +463,7 @@ int trial_specimen_calib_apply(const char *calibration_json, const rod_scene *me
         if (!(fabs(start - now) <= 1e-9 * fmax(1.0, fabs(now)))) {
             use->warning = 1;
             snprintf(use->message, sizeof use->message,
-                     "the specimen's calibration (trials %s, %s) is not applied: it was fitted from %s = %.6g and the "
+                     "calibration of the specimen (trials %s, %s) not applied: it was fitted from %s = %.6g and the "
                      "trial's strip has %.6g (the specimen was re-measured since; its next refit starts from the new "
                      "value): the measured strip predicts",
                      ids, at ? at : "?", name, start, now);
@@ -469,7 +483,7 @@ int trial_specimen_calib_apply(const char *calibration_json, const rod_scene *me
     }
     if (!use->applied) {
         snprintf(use->message, sizeof use->message,
-                 "the specimen's calibration (trials %s, %s) determines none of the strip's values%s%s: the measured "
+                 "calibration of the specimen (trials %s, %s) determines none of the strip's values%s%s: the measured "
                  "strip predicts", ids, at ? at : "?", hu ? ": " : "", helds);
         json_decref(applied);
         json_decref(held);

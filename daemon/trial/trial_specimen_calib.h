@@ -5,7 +5,9 @@
  * The refit (trial_specimen_calib_refit) pools the specimen's finished trials (status done, rig
  * or mock, newest first, at most TRIAL_SPECIMEN_CALIB_MAX_TRIALS of them) through the trial
  * room's pool (trial_pool.h, as `ribbonctl calibrate` reads them: each trial's strip and its
- * camera frames of the upper state, at most TRIAL_SPECIMEN_CALIB_MAX_FRAMES each), skips a trial
+ * camera frames of the upper state, at most TRIAL_SPECIMEN_CALIB_MAX_FRAMES each and
+ * TRIAL_SPECIMEN_CALIB_MAX_FRAMES_TOTAL in all: the fit's cost is a static solve per frame per
+ * evaluation, so it stays bounded however often the specimen is trialled), skips a trial
  * the pool refuses (too few frames, the lower state, a strip different from the newest one's: a
  * re-measured specimen) with its reason, and fits one strip (sim/rod_fit.h, the keys of the
  * trial's sim.fit_keys). A new calibration replaces the specimen's; a refit that fails
@@ -30,8 +32,10 @@
 
 #define TRIAL_SPECIMEN_CALIB_MAX_TRIALS 8   /* newest trials pooled (each costs its frames' solves) */
 #define TRIAL_SPECIMEN_CALIB_MAX_FRAMES 40  /* frames per trial, thinned evenly (as the in-trial fit's
-                                               TRIAL_CALIBRATE_MAX_HOLD_OBS; `ribbonctl calibrate
-                                               --max-samples 40` reproduces the refit) */
+                                               TRIAL_CALIBRATE_MAX_HOLD_OBS) ... */
+#define TRIAL_SPECIMEN_CALIB_MAX_FRAMES_TOTAL 120 /* ... and in all: with more than 3 trials each
+                                               gives 120 / n (`ribbonctl calibrate --max-samples M`
+                                               with M = min(40, 120 / n) reproduces the refit) */
 #define TRIAL_SPECIMEN_CALIB_MAX_EXAMINED 16 /* newest trials looked at, used or skipped */
 
 typedef struct trial_specimen_refit {

@@ -148,7 +148,7 @@ static void specimen_calibration_across_trials(void **state)
     json_t *j1 = trial_json(t1);
     assert_string_equal(json_string_value(json_object_get(j1, "status")), "done");
     assert_true(json_is_null(json_object_get(json_object_get(j1, "prediction"), "calibration")));
-    assert_non_null(event_with(j1, "specimen S-cal calibrated from trial"));
+    assert_non_null(event_with(j1, "calibration of specimen S-cal from trial 1 ("));
     sp = campaign("GET", "/specimens/S-cal", NULL, 200);
     json_t *cal1 = json_incref(json_object_get(sp, "calibration"));
     json_decref(sp);
