@@ -490,21 +490,32 @@ int trial_specimen_calib_apply(const char *calibration_json, const rod_scene *me
         json_decref(j);
         return 0;
     }
+    /* The record first: a prediction never runs a calibration its record cannot say. */
+    json_t *rec = json_pack("{s:s?, s:O?, s:O?, s:o, s:o}", "calibrated_at", at, "after_trial",
+                            json_object_get(j, "after_trial"), "trials", tr, "applied", applied, "held", held);
+    char *t = rec ? json_dumps(rec, JSON_COMPACT | JSON_REAL_PRECISION(17)) : NULL;
+    json_decref(rec);
+    if (!t || strlen(t) >= sizeof use->record) {
+        use->applied = 0;
+        use->warning = 1;
+        snprintf(use->message, sizeof use->message,
+                 "calibration of the specimen (trials %.160s) not applied: its record for the prediction %s; the "
+                 "measured strip predicts", ids, t ? "is too long" : "could not be made (out of memory)");
+        free(t);
+        json_decref(j);
+        return 0;
+    }
+    snprintf(use->record, sizeof use->record, "%s", t);
+    free(t);
     rod_scene fitted = *sc;
     for (int k = 0; k < ROD_FIT_NKEYS; k++)
         if (apply[k]) u[k] = rod_fit_key_log(k) ? log(val[k]) : val[k];
     rod_fit_scene_apply(&fitted, u);
     for (int k = 0; k < ROD_FIT_NKEYS; k++)
         if (apply[k]) copy_key(sc, &fitted, k);
-    json_t *rec = json_pack("{s:s?, s:O?, s:O?, s:o, s:o}", "calibrated_at", at, "after_trial",
-                            json_object_get(j, "after_trial"), "trials", tr, "applied", applied, "held", held);
-    char *t = rec ? json_dumps(rec, JSON_COMPACT | JSON_REAL_PRECISION(17)) : NULL;
-    if (t && strlen(t) < sizeof use->record) snprintf(use->record, sizeof use->record, "%s", t);
-    else snprintf(use->record, sizeof use->record, "{\"trials\":[],\"truncated\":true}");
-    free(t);
-    json_decref(rec);
-    snprintf(use->message, sizeof use->message, "prediction's strip: the specimen's calibration (trials %s, %s): %s%s%s",
-             ids, at ? at : "?", what, hu ? "; kept as measured: " : "", helds);
+    snprintf(use->message, sizeof use->message,
+             "prediction's strip: the specimen's calibration (trials %.160s, %.40s): %.480s%s%.200s", ids,
+             at ? at : "?", what, hu ? "; kept as measured: " : "", helds);
     json_decref(j); /* owns at */
     return use->applied;
 }
