@@ -245,7 +245,7 @@ static const rig_key rig_keys[] = {
     {"sim", "fit_refresh_s", RIG_KEY_DOUBLE, OFF(sim.fit_refresh_s), 0, 0.0, 3600.0, 0, 0, NULL, "s", "0.5",
      "trial time between refreshes of the fit during the shear (0: none)"},
     {"sim", "specimen_fit", RIG_KEY_ENUM, OFF(sim.specimen_fit), 0, 0, 0, SWITCH, 0, off_on, "-", "on",
-     "after each done trial of a named specimen, its strip refitted from all its finished trials; its next trial predicts with it (docs/campaign.md)"},
+     "after each done trial of a named specimen, its strip refitted from all its finished trials; its next trial predicts with it (off: neither; docs/campaign.md)"},
 
     {"store", "path", RIG_KEY_PATH, OFF(store_path), SZ(store_path), 0, 0, OUT, ALL, NULL, "-",
      "required", "SQLite database, relative to rig.outputs"},

@@ -163,7 +163,8 @@ typedef struct rig_sim {
     char fit_keys[256];              /* comma-separated fit keys; "" = the default set */
     double fit_refresh_s;            /* s of trial time between refreshes in the shear; 0 = none */
     bool specimen_fit;               /* the named specimen refitted from its trials after each one
-                                        (its calibration, used by its next prediction; issue 35 A) */
+                                        (its calibration, used by its next prediction; issue 35 A);
+                                        off: neither refitted nor used */
 } rig_sim;
 
 typedef struct rig_api {

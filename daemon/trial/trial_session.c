@@ -915,7 +915,7 @@ trial_err trial_session_start_tx(const rig_config *cfg, const char *const *sets,
     s->specimen_id = spid;
     store_specimen now;
     char w0[256];
-    if (cfg->specimen.name[0] && store_specimen_get(s->st, spid, &now, w0, sizeof w0) == STORE_OK)
+    if (cfg->sim.specimen_fit && cfg->specimen.name[0] && store_specimen_get(s->st, spid, &now, w0, sizeof w0) == STORE_OK)
         memcpy(s->specimen_calibration, now.calibration_json, sizeof s->specimen_calibration);
     if (trial_camera_setup(cfg, &s->cal, &s->width, &s->height, &s->roi, why, why_len)) goto fail;
     char *config_text = trial_config_text(cfg, sets, n_sets, s->note);
