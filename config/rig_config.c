@@ -244,6 +244,8 @@ static const rig_key rig_keys[] = {
      "trial time between refreshes of the fit during the shear (0: none)"},
     {"sim", "fit_hinge", RIG_KEY_DOUBLE, OFF(sim.fit_hinge), 0, 0.0, 1e6, 0, 0, NULL, "N m/rad", "0",
      "the fit's crease hinges when the scene's creases are rigid: compliant of this stiffness, the fit's start and its prior's centre (0: the scene's rigid creases; docs/calibration.md)"},
+    {"sim", "specimen_fit", RIG_KEY_ENUM, OFF(sim.specimen_fit), 0, 0, 0, SWITCH, 0, off_on, "-", "on",
+     "after each done trial of a named specimen, its strip refitted from all its finished trials; its next trial predicts with it (off: neither; docs/campaign.md)"},
 
     {"store", "path", RIG_KEY_PATH, OFF(store_path), SZ(store_path), 0, 0, OUT, ALL, NULL, "-",
      "required", "SQLite database, relative to rig.outputs"},
@@ -1511,6 +1513,7 @@ static void config_defaults(rig_config *cfg)
     cfg->sim.fast = true;
     cfg->sim.fit = true;
     cfg->sim.fit_refresh_s = 0.5;
+    cfg->sim.specimen_fit = true;
     static const int ladder[] = {39, 75, 147, 291};
     for (int i = 0; i < 4; i++) cfg->sim.ladder_nodes[i] = ladder[i];
     cfg->sim.n_ladder = 4;

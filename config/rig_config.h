@@ -163,6 +163,9 @@ typedef struct rig_sim {
     double fit_refresh_s;            /* s of trial time between refreshes in the shear; 0 = none */
     double fit_hinge;                /* N m/rad: the fit's crease hinges when the scene's creases are
                                         rigid (its start and its prior's centre); 0 = the scene's */
+    bool specimen_fit;               /* the named specimen refitted from its trials after each one
+                                        (its calibration, used by its next prediction; issue 35 A);
+                                        off: neither refitted nor used */
 } rig_sim;
 
 typedef struct rig_api {

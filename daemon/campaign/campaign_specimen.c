@@ -37,7 +37,12 @@ json_t *campaign_specimen_json(const store_specimen *sp)
     json_object_set_new(o, "folded_at", text(sp->folded_at));
     json_object_set_new(o, "crease_orientation", text(sp->crease_orientation));
     json_object_set_new(o, "trials_count", json_integer(sp->trials_count));
-    json_object_set_new(o, "calibration", json_null()); /* the calibration issue fills it */
+    /* Its calibration and the last refit's failure (store v12, trial_specimen_calib.h): stored as
+     * JSON objects; an unreadable one is null (never a half-shown record). */
+    json_t *cal = sp->calibration_json[0] ? json_loads(sp->calibration_json, 0, NULL) : NULL;
+    json_t *fail = sp->calibration_failure_json[0] ? json_loads(sp->calibration_failure_json, 0, NULL) : NULL;
+    json_object_set_new(o, "calibration", cal ? cal : json_null());
+    json_object_set_new(o, "calibration_failure", fail ? fail : json_null());
     return o;
 }
 

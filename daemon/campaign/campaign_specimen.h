@@ -17,7 +17,8 @@ typedef struct campaign_overrides {
     int n;
 } campaign_overrides;
 
-/* The record as JSON: every field, null for what is unknown, state as text. */
+/* The record as JSON: every field, null for what is unknown, state as text; its calibration and
+ * the last refit's failure as the objects stored (null when none). */
 json_t *campaign_specimen_json(const store_specimen *sp);
 /* A new specimen from POST /specimens's body: name (letters, digits, '.', '_', '-'; at most 63),
  * phi_deg in (0, 180), gamma in (0, 0.5) required; the size, material, modulus and density

@@ -1,7 +1,8 @@
 /* ctl_calibrate.c: `ribbonctl calibrate ID [ID ...]`: one strip fitted to what the camera saw
  * in one or several stored trials (issue 32 C), offline, from the store.
  *
- * The trials' strip and observations come from ctl_calibrate_trials.c; the fit and the snap
+ * The trials' strip and observations come from the trial room's pool (daemon/trial/trial_pool.h,
+ * shared with ribbond's refit of a specimen); the fit and the snap
  * predicted with the fitted strip are the simulator's (sim/rod_fit.h, sim/rod_fit_snap.h, as
  * `ribbon-sim fit` uses them, with the same keys and the same words for what the data do not
  * determine). Printed beside each trial's measured snap and its stored prediction, so the
@@ -19,11 +20,11 @@
 #include "api.h"
 #include "ctl.h"
 #include "ctl_calibrate_joint.h"
-#include "ctl_calibrate_trials.h"
 #include "rod_fit.h"
 #include "rod_fit_snap.h"
 #include "scene_write.h"
 #include "store.h"
+#include "trial.h"
 
 #define MAX_IDS 64
 #define MAX_SETS 64
@@ -210,7 +211,7 @@ static json_t *num_or_null(double v)
 
 typedef struct calib_out {
     const calib_args *a;
-    const ctl_calib_data *d;
+    const trial_pool *d;
     const rod_fit_result *r;
     const rod_fit_snap *snap; /* NULL: none */
     int keys[ROD_FIT_NKEYS], m;
@@ -221,7 +222,7 @@ static json_t *to_json(const calib_out *c)
     const rod_fit_result *r = c->r;
     json_t *j = json_object(), *tr = json_array(), *ps = json_array(), *cm = json_array();
     for (int k = 0; k < c->d->ntrials; k++) {
-        const ctl_calib_trial *t = &c->d->trials[k];
+        const trial_pool_trial *t = &c->d->trials[k];
         json_array_append_new(tr, json_pack("{s:I, s:s, s:s, s:s, s:I, s:I, s:o, s:o, s:o, s:o, s:o, s:s}", "id",
             (json_int_t)t->id, "mode", t->mode, "status", t->status, "specimen", t->specimen, "frames",
             (json_int_t)t->frames, "samples", (json_int_t)t->used, "dl_min", num_or_null(t->dl_min), "dw_max",
@@ -277,12 +278,12 @@ static json_t *to_json(const calib_out *c)
 static void print_text(const calib_out *c)
 {
     const rod_fit_result *r = c->r;
-    const ctl_calib_data *d = c->d;
+    const trial_pool *d = c->d;
     printf("calibrate    %d trial%s of specimen %s: %d samples, %d parameter%s, N = %d, %d iterations, %.2f s\n",
            d->ntrials, d->ntrials == 1 ? "" : "s", d->trials[0].specimen, r->nobs, c->m, c->m == 1 ? "" : "s",
            d->scene.nodes, r->iterations, r->wall_s);
     for (int k = 0; k < d->ntrials; k++) {
-        const ctl_calib_trial *t = &d->trials[k];
+        const trial_pool_trial *t = &d->trials[k];
         printf("  trial %-5lld %s, %s: %d of %ld frames, Delta L %.4g .. %.4g, Delta W up to %.4g\n", (long long)t->id,
                t->mode, t->status, t->used, t->frames, t->dl_min, t->dl_hold, t->dw_max);
     }
@@ -323,7 +324,7 @@ static void print_text(const calib_out *c)
     else
         printf("calibrated   snap Delta W %.5f, %s (no band: %s)\n", s->snap_dw, reg, s->note);
     for (int k = 0; k < d->ntrials; k++) {
-        const ctl_calib_trial *t = &d->trials[k];
+        const trial_pool_trial *t = &d->trials[k];
         if (!isfinite(t->snap_measured)) {
             printf("  trial %-5lld measured: no snap\n", (long long)t->id);
             continue;
@@ -343,7 +344,7 @@ int ctl_calibrate_main(int argc, char **argv)
     calib_args a;
     memset(&a, 0, sizeof a);
     rod_fit_opts o = rod_fit_opts_default();
-    ctl_calib_select sel = ctl_calib_select_default();
+    trial_pool_select sel = trial_pool_select_default();
     a.sigma_dz = o.sigma_dz;
     a.sigma_a = o.sigma_a;
     a.dw_max = sel.dw_max;
@@ -377,9 +378,9 @@ int ctl_calibrate_main(int argc, char **argv)
         store_close(st);
         return rc;
     }
-    ctl_calib_data d;
+    trial_pool d;
     char why[1024];
-    if (ctl_calib_load(st, a.ids, a.nids, &sel, &d, why, sizeof why)) {
+    if (trial_pool_load(st, a.ids, a.nids, &sel, &d, why, sizeof why)) {
         store_close(st);
         fprintf(stderr, "ribbonctl calibrate: %s\n", why);
         return 1;
@@ -393,7 +394,7 @@ int ctl_calibrate_main(int argc, char **argv)
     rod_status fs = rod_fit_run(&d.scene, d.obs, d.nobs, &o, &r, why, sizeof why);
     if (fs != ROD_OK) {
         fprintf(stderr, "ribbonctl calibrate: the fit failed: %s\n", why);
-        ctl_calib_data_free(&d);
+        trial_pool_free(&d);
         return 1;
     }
     rod_fit_snap snap;
@@ -447,6 +448,6 @@ int ctl_calibrate_main(int argc, char **argv)
             fprintf(stderr, "ribbonctl calibrate: %s ran to its %s bound %g: the data ask for a value outside the bounds\n",
                     rod_fit_key_name(c.keys[i]), r.at_bound[c.keys[i]] > 0 ? "upper" : "lower",
                     natural(c.keys[i], r.at_bound[c.keys[i]] > 0 ? r.hi[c.keys[i]] : r.lo[c.keys[i]]));
-    ctl_calib_data_free(&d);
+    trial_pool_free(&d);
     return rc;
 }

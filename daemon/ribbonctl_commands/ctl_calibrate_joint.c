@@ -2,7 +2,7 @@
  * specimens can share the hinge stiffness per unit width".
  *
  * The trials are grouped by specimen (in the order the IDs first name each); each group is read
- * as `ribbonctl calibrate` reads one strip (ctl_calibrate_trials.h: the same cuts, overrides and
+ * as `ribbonctl calibrate` reads one strip (trial_pool.h: the same cuts, overrides and
  * refusals, so a group must be one strip), and the groups are fitted together by
  * sim/rod_fit_joint.h: each specimen its own crease angles (and whatever --fit names), one
  * k / b for all, each specimen's hinge k_s = (k / b) b_s. Printed: the shared k / b with its
@@ -30,7 +30,7 @@ typedef struct jgroup {
     char name[80];
     int64_t ids[64];
     int n;
-    ctl_calib_data d;
+    trial_pool d;
     rod_fit_snap snap;
     int have_snap;
     char scene_path[1024];
@@ -118,7 +118,7 @@ static int write_scenes(jrun *j)
     return 0;
 }
 
-static json_t *trial_json(const ctl_calib_trial *t)
+static json_t *trial_json(const trial_pool_trial *t)
 {
     return json_pack("{s:I, s:s, s:s, s:s, s:I, s:I, s:o, s:o, s:o, s:o, s:o, s:s}", "id", (json_int_t)t->id, "mode",
                      t->mode, "status", t->status, "specimen", t->specimen, "frames", (json_int_t)t->frames, "samples",
@@ -234,7 +234,7 @@ static void print_snap(const jgroup *g)
     else
         printf("  calibrated   snap Delta W %.5f, %s (no band: %s)\n", s->snap_dw, reg, s->note);
     for (int k = 0; k < g->d.ntrials; k++) {
-        const ctl_calib_trial *t = &g->d.trials[k];
+        const trial_pool_trial *t = &g->d.trials[k];
         if (!isfinite(t->snap_measured)) {
             printf("    trial %-5lld measured: no snap\n", (long long)t->id);
             continue;
@@ -270,7 +270,7 @@ static void print_text(const jrun *j)
                "start: %.3g)\n", g->name, 1e3 * g->d.scene.width, g->d.scene.nodes, g->d.ntrials,
                g->d.ntrials == 1 ? "" : "s", q->nobs, q->rms, q->rms_start);
         for (int k = 0; k < g->d.ntrials; k++) {
-            const ctl_calib_trial *t = &g->d.trials[k];
+            const trial_pool_trial *t = &g->d.trials[k];
             printf("  trial %-5lld %s, %s: %d of %ld frames, Delta L %.4g .. %.4g, Delta W up to %.4g\n",
                    (long long)t->id, t->mode, t->status, t->used, t->frames, t->dl_min, t->dl_hold, t->dw_max);
         }
@@ -320,7 +320,7 @@ int ctl_calibrate_joint(store *st, const ctl_calib_joint_args *a)
     if (group_trials(st, a, j.g, &j.ng)) goto done;
     for (int s = 0; s < j.ng; s++) {
         jgroup *g = &j.g[s];
-        if (ctl_calib_load(st, g->ids, g->n, a->sel, &g->d, why, sizeof why)) {
+        if (trial_pool_load(st, g->ids, g->n, a->sel, &g->d, why, sizeof why)) {
             fprintf(stderr, "ribbonctl calibrate: specimen %s: %s\n", g->name, why);
             j.ng = s; /* the groups read so far are freed below (this one freed itself) */
             goto done;
@@ -380,7 +380,7 @@ int ctl_calibrate_joint(store *st, const ctl_calib_joint_args *a)
 done:
     rod_fit_joint_result_free(&j.r);
     if (j.g)
-        for (int s = 0; s < j.ng; s++) ctl_calib_data_free(&j.g[s].d);
+        for (int s = 0; s < j.ng; s++) trial_pool_free(&j.g[s].d);
     free(j.g);
     free(specs);
     return rc;

@@ -6,14 +6,14 @@
 
 #include <stdint.h>
 
-#include "ctl_calibrate_trials.h"
+#include "trial.h"
 #include "rod_fit.h"
 #include "store.h"
 
 typedef struct ctl_calib_joint_args {
     const int64_t *ids;
     int nids;
-    const ctl_calib_select *sel;  /* the cuts and --set, for every trial */
+    const trial_pool_select *sel;  /* the cuts and --set, for every trial */
     rod_fit_opts fit;             /* fit[] from --fit (folds.hinge_stiffness there: the shared one),
                                      noise, scale_covariance */
     int json, no_snap;

@@ -43,7 +43,10 @@ static void help_specimen(void)
            "as fractions of the free length, --folded-at with a zone) and its state: new, in use (after its\n"
            "first trial), retired or broken (retire --broken). `ribbonctl start --specimen NAME` runs a\n"
            "trial of it: its record sets the trial's specimen and scene keys, so the prediction uses it.\n"
-           "A retired or broken specimen, or an unknown name, is refused and nothing starts.\n");
+           "A retired or broken specimen, or an unknown name, is refused and nothing starts.\n"
+           "After each trial of it ribbond refits its strip from all its finished trials: `show` prints\n"
+           "that calibration (the fitted values with their standard errors, what the data do not determine,\n"
+           "the residual, the trials used, when) and the last refit's failure; its next trial predicts with it.\n");
 }
 
 static void help_queue(void)
@@ -175,6 +178,44 @@ static void print_specimen(const json_t *s)
            json_is_string(json_object_get(s, "state_reason")) ? js(s, "state_reason") : "");
 }
 
+/* The specimen's calibration (its strip fitted to its trials) and its last refit's failure. */
+static void print_calibration(const json_t *s)
+{
+    const json_t *c = json_object_get(s, "calibration"), *f = json_object_get(s, "calibration_failure");
+    if (!json_is_object(c)) {
+        printf("  calibration  none yet\n");
+    } else {
+        printf("  calibration  trials");
+        const json_t *tr = json_object_get(c, "trials");
+        for (size_t k = 0; k < json_array_size(tr); k++)
+            printf("%s %lld", k ? "," : "", (long long)json_integer_value(json_array_get(tr, k)));
+        printf(" (%lld frames, N = %lld), %s: residual %.3g noise units RMS (%.3g at the measured strip)\n",
+               (long long)json_integer_value(json_object_get(c, "frames")),
+               (long long)json_integer_value(json_object_get(c, "nodes")), js(c, "at"),
+               json_number_value(json_object_get(c, "rms")), json_number_value(json_object_get(c, "rms_start")));
+        const json_t *ps = json_object_get(c, "parameters");
+        for (size_t k = 0; k < json_array_size(ps); k++) {
+            const json_t *p = json_array_get(ps, k), *se = json_object_get(p, "se");
+            printf("    %-27s %12.6g  (measured %.6g)  ", js(p, "key"), json_number_value(json_object_get(p, "value")),
+                   json_number_value(json_object_get(p, "start")));
+            if (!json_is_true(json_object_get(p, "determined")) || !json_is_number(se))
+                printf("not determined by these data: its trials predict with the measured value\n");
+            else if (!strcmp(js(p, "se_kind"), "relative"))
+                printf("+- %.3g%%\n", 100.0 * json_number_value(se));
+            else
+                printf("+- %.3g\n", json_number_value(se));
+        }
+        const json_t *sk = json_object_get(c, "skipped");
+        for (size_t k = 0; k < json_array_size(sk); k++)
+            printf("    skipped trial %lld: %s\n", (long long)json_integer_value(json_object_get(json_array_get(sk, k), "trial")),
+                   js(json_array_get(sk, k), "why"));
+    }
+    if (json_is_object(f))
+        printf("  last refit   after trial %lld failed: %s: %s%s\n",
+               (long long)json_integer_value(json_object_get(f, "after_trial")), js(f, "reason_key"), js(f, "reason"),
+               json_is_object(c) ? " (the calibration above stands)" : "");
+}
+
 /* "A,B" into two numbers in the body. */
 static int pair(const char *cmd, json_t *body, const char *text, const char *k1, const char *k2)
 {
@@ -218,6 +259,7 @@ static int specimen_main(const campaign_opts *o)
         if (o->json) print_json(out);
         else {
             print_specimen(out);
+            print_calibration(out);
             json_t *t = json_object_get(out, "trials");
             for (size_t k = 0; k < json_array_size(t); k++) {
                 json_t *e = json_array_get(t, k);

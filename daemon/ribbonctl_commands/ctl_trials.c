@@ -217,8 +217,8 @@ static void print_trial_row(const json_t *t)
 }
 
 /* What the prediction used of the specimen: each crease's angle and position and where each came
- * from (scene or specimen), the crease model (rigid or the hinge's stiffness), and the creases'
- * age at the trial. */
+ * from (scene or specimen), the crease model (rigid or the hinge's stiffness), the values the
+ * specimen's calibration put in their place, and the creases' age at the trial. */
 static void print_creases(const json_t *t)
 {
     const json_t *c = json_object_get(json_object_get(t, "prediction"), "creases");
@@ -233,6 +233,20 @@ static void print_creases(const json_t *t)
         printf("  prediction's crease hinges: %g N m/rad\n", json_number_value(k));
     else if (json_is_string(k))
         printf("  prediction's crease hinges: %s\n", json_string_value(k));
+    const json_t *cal = json_object_get(json_object_get(t, "prediction"), "calibration");
+    if (json_is_object(cal)) {
+        printf("  prediction's strip calibrated (the specimen's trials");
+        const json_t *tr = json_object_get(cal, "trials"), *ap = json_object_get(cal, "applied");
+        for (size_t i = 0; i < json_array_size(tr); i++)
+            printf("%s %lld", i ? "," : "", (long long)json_integer_value(json_array_get(tr, i)));
+        printf("):");
+        for (size_t i = 0; i < json_array_size(ap); i++) {
+            const json_t *a = json_array_get(ap, i);
+            printf("%s %s %.6g (was %.6g, %s)", i ? "," : "", jstr(a, "key"), json_number_value(json_object_get(a, "value")),
+                   json_number_value(json_object_get(a, "replaced")), jstr(a, "replaced_from"));
+        }
+        printf("\n");
+    }
     const json_t *age = json_object_get(t, "crease_age_s");
     if (json_is_number(age))
         printf("  creases folded %.2f days before the trial\n", json_number_value(age) / 86400.0);

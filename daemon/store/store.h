@@ -33,7 +33,7 @@
 #include <jansson.h>
 
 /* The schema version this program creates and understands (see the migration list in store.c). */
-#define STORE_SCHEMA_VERSION 11
+#define STORE_SCHEMA_VERSION 12
 
 /* Errors of the store layer; store_err_message() gives the generic text, why the specific one. */
 typedef enum store_err {
@@ -127,6 +127,9 @@ bool store_event_kind_parse(const char *s, store_event_kind *out);
 
 /* ---- specimens (store_specimens.c) --------------------------------------------------------- */
 
+#define STORE_SPECIMEN_CALIBRATION_MAX 4096        /* bytes of calibration_json, with its NUL */
+#define STORE_SPECIMEN_CALIBRATION_FAILURE_MAX 1024 /* bytes of calibration_failure_json, with its NUL */
+
 typedef struct store_specimen {
     int64_t id;                    /* set by the store */
     char name[64];                 /* unique, non-empty: the label on the specimen */
@@ -148,6 +151,11 @@ typedef struct store_specimen {
     int state;                     /* store_specimen_state; new on insert, then set by the calls below */
     char state_reason[128];        /* why retired or broken; "" = none */
     char state_at[32];             /* when the state last changed, ISO-8601 UTC; "" = never */
+    /* Read only (v12), written by store_specimen_set_calibration, never by an upsert: */
+    char calibration_json[STORE_SPECIMEN_CALIBRATION_MAX]; /* its strip fitted to its trials (a JSON
+                                      object, trial_specimen_calib.h); "" = none yet */
+    char calibration_failure_json[STORE_SPECIMEN_CALIBRATION_FAILURE_MAX]; /* the last refit's
+                                      failure (a JSON object); "" = none since the last success */
 } store_specimen;
 
 /* A specimen's life: new (never trialled), in use (trialled), retired or broken (no more
@@ -177,6 +185,13 @@ store_err store_specimen_get_by_name(store *st, const char *name, store_specimen
 store_err store_specimen_count_trial(store *st, int64_t id, char *why, size_t why_len);
 /* Every specimen, by name. *out malloc'ed (free()); NULL when *n == 0. */
 store_err store_specimen_list(store *st, store_specimen **out, size_t *n, char *why, size_t why_len);
+/* The specimen's calibration (v12). calibration_json non-NULL: the new calibration (a JSON object
+ * shorter than STORE_SPECIMEN_CALIBRATION_MAX), the last failure cleared. NULL: failure_json (a
+ * JSON object shorter than STORE_SPECIMEN_CALIBRATION_FAILURE_MAX) is the refit's failure and the
+ * calibration before it is kept. Allowed in every state (a retired specimen's last trial ends
+ * after the retirement). STORE_E_INVALID naming the field; STORE_E_NOTFOUND. */
+store_err store_specimen_set_calibration(store *st, int64_t id, const char *calibration_json,
+                                         const char *failure_json, char *why, size_t why_len);
 /* Retire (or mark broken) with a reason (required). Retired and broken are final: a second
  * retirement is STORE_E_STATE naming the first. */
 store_err store_specimen_retire(store *st, int64_t id, store_specimen_state state, const char *reason,
@@ -538,7 +553,10 @@ typedef struct store_prediction {
     char *solver_json;          /* solver settings, JSON text; NULL = none; must parse */
     store_curve curve;          /* t_s and dw required, dz and a may be NaN */
     char created_at[32];        /* read back: ISO-8601 UTC */
-    store_creases creases;      /* the creases it used and where each came from */
+    store_creases creases;      /* the creases as measured (specimen) or designed (scene), and where
+                                   each came from; calibration_json says which values replaced them */
+    char *calibration_json;     /* the specimen's calibration it ran with (a JSON object, v12): the
+                                   values it took, each with the one it replaced; NULL = none */
 } store_prediction;
 
 store_prediction store_prediction_default(void);
@@ -547,7 +565,7 @@ store_prediction store_prediction_default(void);
  * NaN, regime unknown, no curve and a non-empty failure; nodes, dt and wall_s are those it was
  * attempted at (wall_s: what it cost before it failed). */
 store_err store_prediction_insert(store *st, const store_prediction *p, int64_t *id, char *why, size_t why_len);
-/* Read back (curve and solver_json allocated: release with store_prediction_free). */
+/* Read back (curve, solver_json and calibration_json allocated: release with store_prediction_free). */
 store_err store_prediction_get(store *st, int64_t id, store_prediction *out, char *why, size_t why_len);
 /* The trial's latest prediction. STORE_E_NOTFOUND when it has none. */
 store_err store_prediction_get_by_trial(store *st, int64_t trial_id, store_prediction *out, char *why,
@@ -587,7 +605,8 @@ store_err store_ladder_get(store *st, const char *scene_hash, store_ladder_rung 
  *                        wall_s, imperfection, scene_hash,
  *                        creases: {angle_left_deg, angle_left_from, angle_right_deg,
  *                                  angle_right_from, position_left, position_left_from,
- *                                  position_right, position_right_from}}
+ *                                  position_right, position_right_from},
+ *                        calibration: the specimen's calibration it ran with (v12) or null}
  * store_trial_json adds events: [{t_s, wall_time, state, kind, message}] and calibration
  * (the parsed calibration record or null). *out is a new reference. */
 store_err store_trial_json(store *st, int64_t id, json_t **out, char *why, size_t why_len);

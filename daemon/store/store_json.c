@@ -19,7 +19,7 @@
     " p.crease_angle_right_from, p.crease_position_left, p.crease_position_left_from,"                     \
     " p.crease_position_right, p.crease_position_right_from, t.video_bytes, p.crease_hinge,"               \
     " p.crease_hinge_stiffness_nm_per_rad, t.snap_dw_calibrated, t.snap_sd_calibrated, t.regime_calibrated,"  \
-    " t.p_other_calibrated, t.fit_json, t.fit_failure"                                                     \
+    " t.p_other_calibrated, t.fit_json, t.fit_failure, p.calibration_json"                                 \
     " FROM trials t LEFT JOIN specimens s ON s.id = t.specimen_id"                                          \
     " LEFT JOIN predictions p ON p.id = (SELECT max(id) FROM predictions WHERE trial_id = t.id) "
 
@@ -28,7 +28,7 @@ enum { C_ID, C_MODE, C_STATUS, C_STATE, C_REASON, C_SNAPPED, C_SNAP_DW, C_REGIME
        C_P_ADAPTIVE, C_P_EST_ERROR, C_P_WALL_S, C_P_IMPERFECTION, C_P_HASH, C_CALIBRATION, C_STOP_CMD,
        C_STOP_STAND, C_CREASE_AGE, C_P_STATUS, C_P_FAILURE, C_P_CREASES /* 8 columns: value, source */,
        C_VIDEO_BYTES = C_P_CREASES + 8, C_P_HINGE, C_P_HINGE_K, C_CAL_SNAP_DW, C_CAL_SNAP_SD,
-       C_CAL_REGIME, C_CAL_P_OTHER, C_CAL_FIT, C_CAL_FAILURE };
+       C_CAL_REGIME, C_CAL_P_OTHER, C_CAL_FIT, C_CAL_FAILURE, C_P_CALIBRATION };
 
 static json_t *jreal(double v)
 {
@@ -104,10 +104,10 @@ static json_t *creases_object(sqlite3_stmt *s)
     return c;
 }
 
-/* The calibrated prediction's fit (fit_json, always valid JSON on the way in), or null. */
-static json_t *fit_object(sqlite3_stmt *s)
+/* A JSON column (valid JSON on the way in: fit_json, the prediction's calibration_json), or null. */
+static json_t *json_col(sqlite3_stmt *s, int col)
 {
-    const char *f = (const char *)sqlite3_column_text(s, C_CAL_FIT);
+    const char *f = (const char *)sqlite3_column_text(s, col);
     json_t *j = f ? json_loads(f, JSON_DECODE_ANY, NULL) : NULL;
     return j ? j : json_null();
 }
@@ -135,7 +135,7 @@ static json_t *trial_object(sqlite3_stmt *s)
               set(o, "snap_sd_calibrated", jcol_real(s, C_CAL_SNAP_SD)) &&
               set(o, "regime_calibrated", jcol_text(s, C_CAL_REGIME)) &&
               set(o, "p_other_regime_calibrated", jcol_real(s, C_CAL_P_OTHER)) &&
-              set(o, "fit_failure", jcol_text(s, C_CAL_FAILURE)) && set(o, "fit", fit_object(s));
+              set(o, "fit_failure", jcol_text(s, C_CAL_FAILURE)) && set(o, "fit", json_col(s, C_CAL_FIT));
     if (ok && sqlite3_column_type(s, C_P_ID) == SQLITE_NULL) {
         ok = set(o, "prediction", json_null());
     } else if (ok) {
@@ -145,7 +145,8 @@ static json_t *trial_object(sqlite3_stmt *s)
              set(p, "nodes", jcol_int(s, C_P_NODES)) &&
              set(p, "dt", jcol_real(s, C_P_DT)) && set(p, "adaptive", jcol_bool(s, C_P_ADAPTIVE)) &&
              set(p, "est_error", jcol_real(s, C_P_EST_ERROR)) && set(p, "wall_s", jcol_real(s, C_P_WALL_S)) &&
-             set(p, "imperfection", jcol_real(s, C_P_IMPERFECTION)) && set(p, "scene_hash", jcol_text(s, C_P_HASH));
+             set(p, "imperfection", jcol_real(s, C_P_IMPERFECTION)) && set(p, "scene_hash", jcol_text(s, C_P_HASH)) &&
+             set(p, "calibration", json_col(s, C_P_CALIBRATION));
         if (!ok)
             json_decref(p);
         else

@@ -95,8 +95,11 @@ static store_err check(const store_prediction *p, char *why, size_t why_len)
         (e = store_need_finite(p->wall_s, "prediction wall_s", why, why_len)) ||
         (e = store_need_not_inf(p->peak_abs_a, "prediction peak_abs_a", why, why_len)) ||
         (e = store_need_not_inf(p->est_error, "prediction est_error", why, why_len)) ||
-        (e = store_need_json(p->solver_json, "prediction solver_json", why, why_len)))
+        (e = store_need_json(p->solver_json, "prediction solver_json", why, why_len)) ||
+        (e = store_need_json(p->calibration_json, "prediction calibration_json", why, why_len)))
         return e;
+    if (p->calibration_json && p->calibration_json[0] != '{')
+        return store_fail(why, why_len, STORE_E_INVALID, "prediction calibration_json must be a JSON object");
     if (p->wall_s < 0.0 || p->peak_abs_a < 0.0 || p->est_error < 0.0) /* NaN compares false */
         return store_fail(why, why_len, STORE_E_INVALID, "prediction wall_s, peak_abs_a and est_error must be >= 0");
     const store_curve *c = &p->curve;
@@ -152,9 +155,10 @@ store_err store_prediction_insert(store *st, const store_prediction *p, int64_t 
                       " nodes, dt, adaptive, imperfection, est_error, wall_s, software_version, solver_json,"
                       " status, failure, crease_angle_left_deg, crease_angle_left_from, crease_angle_right_deg,"
                       " crease_angle_right_from, crease_position_left, crease_position_left_from,"
-                      " crease_position_right, crease_position_right_from, crease_hinge, crease_hinge_stiffness_nm_per_rad)"
+                      " crease_position_right, crease_position_right_from, crease_hinge, crease_hinge_stiffness_nm_per_rad,"
+                      " calibration_json)"
                       " VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,?15,?16,?17,?18,?19,?20,?21,?22,?23,?24,"
-                      "?25,?26)",
+                      "?25,?26,?27)",
                       &s, why, why_len);
     int64_t pid = 0;
     if (e == STORE_OK) {
@@ -184,6 +188,7 @@ store_err store_prediction_insert(store *st, const store_prediction *p, int64_t 
         double k_h = p->creases.hinge_stiffness;
         store_bind_text(s, 25, isnan(k_h) ? NULL : isinf(k_h) ? "rigid" : "compliant");
         store_bind_real(s, 26, isinf(k_h) ? NAN : k_h);
+        store_bind_text(s, 27, p->calibration_json);
         int rc = sqlite3_step(s);
         if (rc == SQLITE_CONSTRAINT_FOREIGNKEY)
             e = store_fail(why, why_len, STORE_E_NOTFOUND, "prediction for trial %lld: no such trial",
@@ -213,6 +218,8 @@ void store_prediction_free(store_prediction *p)
     store_curve_free(&p->curve);
     free(p->solver_json);
     p->solver_json = NULL;
+    free(p->calibration_json);
+    p->calibration_json = NULL;
 }
 
 #define CURVE_COUNT "SELECT count(*) FROM prediction_curve WHERE prediction_id = ?1"
@@ -228,7 +235,8 @@ store_err store_prediction_get(store *st, int64_t id, store_prediction *out, cha
                                 " created_at, status, failure, crease_angle_left_deg, crease_angle_left_from,"
                                 " crease_angle_right_deg, crease_angle_right_from, crease_position_left,"
                                 " crease_position_left_from, crease_position_right, crease_position_right_from,"
-                                " crease_hinge, crease_hinge_stiffness_nm_per_rad FROM predictions WHERE id = ?1",
+                                " crease_hinge, crease_hinge_stiffness_nm_per_rad, calibration_json"
+                                " FROM predictions WHERE id = ?1",
                                 &s, why, why_len);
     if (e != STORE_OK)
         return e;
@@ -272,6 +280,9 @@ store_err store_prediction_get(store *st, int64_t id, store_prediction *out, cha
         out->creases.hinge_stiffness = !hinge                   ? NAN
                                        : !strcmp(hinge, "rigid") ? INFINITY
                                                                  : store_col_real(s, 27);
+        out->calibration_json = store_col_strdup(s, 28);
+        if (!out->calibration_json && sqlite3_column_type(s, 28) != SQLITE_NULL)
+            e = store_fail(why, why_len, STORE_E_NOMEM, "out of memory reading prediction %lld", (long long)id);
     } else if (rc == SQLITE_DONE) {
         e = store_fail(why, why_len, STORE_E_NOTFOUND, "prediction %lld does not exist", (long long)id);
     } else {

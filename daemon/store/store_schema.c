@@ -40,7 +40,12 @@
  *   queue_items (v8) id | kind | position (queued only) | specimen_id -> specimens | set_json note |
  *                    prompt fields_json values_json | status trial_id -> trials reason |
  *                    created_at started_at ended_at
- *   queue_state (v8) one row: running reason changed_at */
+ *   queue_state (v8) one row: running reason changed_at
+ *   specimens (v12)  + calibration_json (the specimen's strip fitted to its trials, refreshed after
+ *                    each) calibration_failure_json (the last refit's failure; NULL after a success)
+ *   predictions (v12) + calibration_json (the specimen's calibration the prediction ran with: the
+ *                    values that replaced the crease columns' (and E's), which stay the strip as
+ *                    measured or designed; NULL = none) */
 #include "store_schema.h"
 
 #include <stdio.h>
@@ -253,6 +258,23 @@ static const char schema_v11[] =
     "ALTER TABLE trials ADD COLUMN fit_failure TEXT;"
     "PRAGMA user_version = 11;";
 
+/* v12: a specimen's own calibration (issue 35 A): its strip fitted to all its finished trials,
+ * refreshed by ribbond after each (daemon/trial/trial_specimen_calib.h): the fitted values with
+ * their standard errors, the names the data do not determine, the residual, the trials used and
+ * when (calibration_json); the last refit's named failure, the calibration before it kept
+ * (calibration_failure_json, NULL after a success). A prediction records the specimen calibration
+ * it ran with (calibration_json: each value it took and the measured or scene value it replaced);
+ * its crease columns keep the strip as measured or designed, so the trial's strip reads back the
+ * same whether or not it was calibrated. NULL = none. */
+static const char schema_v12[] =
+    "ALTER TABLE specimens ADD COLUMN calibration_json TEXT"
+    " CHECK (calibration_json IS NULL OR json_valid(calibration_json));"
+    "ALTER TABLE specimens ADD COLUMN calibration_failure_json TEXT"
+    " CHECK (calibration_failure_json IS NULL OR json_valid(calibration_failure_json));"
+    "ALTER TABLE predictions ADD COLUMN calibration_json TEXT"
+    " CHECK (calibration_json IS NULL OR json_valid(calibration_json));"
+    "PRAGMA user_version = 12;";
+
 typedef struct store_migration {
     int version;      /* user_version after the step */
     const char *what; /* for reasons */
@@ -271,6 +293,7 @@ static const store_migration migrations[] = {
     {9, "the planner's proposals", schema_v9},
     {10, "the camera's measured time offset per trial", schema_v10},
     {11, "the calibrated prediction per trial", schema_v11},
+    {12, "a specimen's own calibration, and the one a prediction ran with", schema_v12},
 };
 #define N_MIGRATIONS (sizeof migrations / sizeof migrations[0])
 _Static_assert(sizeof migrations / sizeof migrations[0] == STORE_SCHEMA_VERSION,

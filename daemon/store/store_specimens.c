@@ -2,7 +2,8 @@
  * by name keeps one row per physical ribbon (re-measuring its creases updates the row), and
  * trials_count only ever grows, through store_specimen_count_trial. Its state (v6) moves
  * new -> in use (its first trial) -> retired | broken (store_specimen_retire), never back; the
- * design angle phi_deg, once known, is kept by later upserts that do not know it. */
+ * design angle phi_deg, once known, is kept by later upserts that do not know it. Its calibration
+ * (v12) is written only by store_specimen_set_calibration: an upsert (every trial's start) keeps it. */
 #include "store_sql.h"
 
 #include <math.h>
@@ -135,7 +136,8 @@ store_err store_specimen_insert(store *st, const store_specimen *sp, int64_t *id
 #define SPECIMEN_COLUMNS                                                                                    \
     "SELECT id, name, length_m, width_m, thickness_m, youngs_modulus_pa, density_kg_m3, material,"          \
     " crease_angle_left_deg, crease_angle_right_deg, fold_position, crease_orientation, trials_count,"      \
-    " crease_position_left, crease_position_right, folded_at, phi_deg, state, state_reason, state_at"      \
+    " crease_position_left, crease_position_right, folded_at, phi_deg, state, state_reason, state_at,"     \
+    " calibration_json, calibration_failure_json"                                                          \
     " FROM specimens "
 
 static store_err read_one(store *st, sqlite3_stmt *s, store_specimen *out, const char *what, char *why,
@@ -167,6 +169,8 @@ static store_err read_one(store *st, sqlite3_stmt *s, store_specimen *out, const
         out->state = state;
         store_col_text(s, 18, out->state_reason, sizeof out->state_reason);
         store_col_text(s, 19, out->state_at, sizeof out->state_at);
+        store_col_text(s, 20, out->calibration_json, sizeof out->calibration_json);
+        store_col_text(s, 21, out->calibration_failure_json, sizeof out->calibration_failure_json);
     } else if (rc == SQLITE_DONE) {
         e = store_fail(why, why_len, STORE_E_NOTFOUND, "no specimen %s", what);
     } else {
@@ -314,6 +318,40 @@ store_err store_specimen_retire(store *st, int64_t id, store_specimen_state stat
         e = store_sql_fail(st->db, rc, why, why_len, "retiring a specimen");
     else if (sqlite3_changes(st->db) == 0)
         e = store_fail(why, why_len, STORE_E_STATE, "specimen %s changed state meanwhile", cur.name);
+    sqlite3_finalize(s);
+    return e;
+}
+
+store_err store_specimen_set_calibration(store *st, int64_t id, const char *calibration_json,
+                                         const char *failure_json, char *why, size_t why_len)
+{
+    store_err e = store_check_writable(st, why, why_len);
+    if (e != STORE_OK)
+        return e;
+    const char *text = calibration_json ? calibration_json : failure_json;
+    const char *field = calibration_json ? "specimen calibration_json" : "specimen calibration_failure_json";
+    size_t cap = calibration_json ? STORE_SPECIMEN_CALIBRATION_MAX : STORE_SPECIMEN_CALIBRATION_FAILURE_MAX;
+    if (!text)
+        return store_fail(why, why_len, STORE_E_INVALID, "a specimen's calibration needs a calibration or a failure");
+    if ((e = store_need_fits(text, cap, field, why, why_len)) || (e = store_need_json(text, field, why, why_len)))
+        return e;
+    if (text[0] != '{')
+        return store_fail(why, why_len, STORE_E_INVALID, "%s must be a JSON object", field);
+    sqlite3_stmt *s;
+    e = store_prepare(st,
+                      calibration_json
+                          ? "UPDATE specimens SET calibration_json = ?2, calibration_failure_json = NULL WHERE id = ?1"
+                          : "UPDATE specimens SET calibration_failure_json = ?2 WHERE id = ?1",
+                      &s, why, why_len);
+    if (e != STORE_OK)
+        return e;
+    sqlite3_bind_int64(s, 1, id);
+    store_bind_text(s, 2, text);
+    int rc = sqlite3_step(s);
+    if (rc != SQLITE_DONE)
+        e = store_sql_fail(st->db, rc, why, why_len, "saving a specimen's calibration");
+    else if (sqlite3_changes(st->db) == 0)
+        e = store_fail(why, why_len, STORE_E_NOTFOUND, "no specimen %lld", (long long)id);
     sqlite3_finalize(s);
     return e;
 }

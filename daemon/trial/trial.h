@@ -15,6 +15,7 @@
  *   trial_replay.h       a recording through the same pipeline again
  *   replay_job.h         a replay on a thread of its own inside ribbond
  *   trial_config_text.h  the configuration text stored with a trial, and its scene read back
+ *   trial_pool.h         stored trials of one strip pooled into one fit's input
  * Used inside the room only: trial_prediction.h (the prediction beside a trial),
  * trial_camera_setup.h, trial_calibrate.h (the fit beside a trial),
  * trial_specimen.h, trial_publish.h (the session's hook
@@ -35,6 +36,7 @@
 #include "trial_replay.h"
 #include "replay_job.h"
 #include "trial_config_text.h"
+#include "trial_pool.h"
 #include "trial_camera_settings.h"
 
 #endif

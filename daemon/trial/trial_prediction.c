@@ -81,6 +81,7 @@ static store_prediction row_of(const trial_prediction_def *def)
     sp.imperfection = sc->fold_angle_rel;
     sp.est_error = def->est_error;
     sp.creases = def->creases;
+    sp.calibration_json = def->calibration_json[0] ? (char *)def->calibration_json : NULL;
     return sp;
 }
 

@@ -40,7 +40,10 @@ typedef struct trial_prediction_def {
     double adapt_scale;      /* fast mode: rod_predict_opts.adapt_scale of the ladder's rung (0 = 1) */
     double est_error;        /* the ladder's estimate of the snap's relative error; NaN if unknown */
     char hash[72];           /* the scene's hash (predictions.scene_hash) */
-    store_creases creases;   /* the creases the scene holds and where each came from (trial_specimen.h) */
+    store_creases creases;   /* the creases as measured or designed and where each came from
+                                (trial_specimen.h) */
+    char calibration_json[2048]; /* the specimen's calibration the scene carries instead of some of
+                                    them (trial_specimen_calib.h); "" = none */
     char store_path[RIG_PATH_MAX];
     int64_t trial_id;
     const atomic_int *cancel; /* non-zero: stop (may be NULL) */

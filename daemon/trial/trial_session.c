@@ -24,6 +24,7 @@
 #include "trial_publish.h"
 #include "trial_record.h"
 #include "trial_specimen.h"
+#include "trial_specimen_calib.h"
 #include "trial_video.h"
 #include "twin.h"
 
@@ -60,6 +61,9 @@ struct trial_session {
     rod_scene pred_scene;   /* the prediction's scene: the rig's with the specimen's creases */
     trial_calibrate *calib; /* the fit beside the trial (trial_calibrate.h), NULL when off */
     trial_specimen_use use; /* which crease values it uses, where each came from */
+    int64_t specimen_id;    /* the trial's specimen row */
+    char specimen_calibration[STORE_SPECIMEN_CALIBRATION_MAX]; /* a named specimen's calibration at
+                               the start (trial_specimen_calib.h); "" = none */
 };
 
 /* 1 when an abort arrived before the runner took over (the trial then ends before moving). */
@@ -132,16 +136,22 @@ static void prediction_done(void *user, const trial_prediction_report *r)
 
 /* ---- resolution ----------------------------------------------------------------------------- */
 
+/* The prediction's scene hash: the scene's text hash, the program, the step control and the ladder's
+ * kind ("l2": the ladder refines dt with N; a cache of the N-only ladder is not reused). */
+static void scene_hash_text(const rod_scene *sc, int fast, char *hash, size_t hash_len)
+{
+    char h[17];
+    predict_scene_hash(sc, h);
+    snprintf(hash, hash_len, "%s-v%s-%s-l2", h, RIBBON_VERSION, fast ? "fast" : "fixed");
+}
+
 /* Picks nodes, dt and (fast mode) the step control's scale for the prediction (the mock twin takes
  * nodes and dt). Returns 0, or -1 with why. */
 static int choose_resolution(trial_session *s, rod_scene *sc, double *adapt_scale, double *est_error, char *hash,
                              size_t hash_len, char *why, size_t why_len)
 {
     const rig_sim *sim = &s->cfg.sim;
-    char h[17];
-    predict_scene_hash(sc, h);
-    /* "l2": the ladder refines dt with N (a cache of the N-only ladder is not reused). */
-    snprintf(hash, hash_len, "%s-v%s-%s-l2", h, RIBBON_VERSION, sim->fast ? "fast" : "fixed");
+    scene_hash_text(sc, sim->fast, hash, hash_len);
     *est_error = NAN;
     *adapt_scale = 0.0;
     if (sim->explicit_resolution) {
@@ -456,6 +466,26 @@ static void prediction_failed_early(trial_session *s, const trial_prediction_def
     trial_publish_prediction(s->bus, s->trial_id, 0, 0, NAN, NULL, 0, NULL, NULL, NULL, reason);
 }
 
+/* The named specimen's calibration (if it has one) in the prediction's scene, at the resolution the
+ * measured strip's ladder chose (the ladder is cached per measured strip: a calibration refreshed
+ * after every trial would otherwise compute one per trial); said in an event, recorded with the
+ * prediction (its calibration_json, its scene hash the calibrated strip's). The in-trial fit keeps
+ * the measured strip as its start and prior (p->pred), an estimate of this trial's own. */
+static void specimen_calibration_in(trial_session *s, trial_prediction_def *def)
+{
+    trial_specimen_calib_use cu;
+    rod_scene sc = def->scene;
+    trial_specimen_calib_apply(s->specimen_calibration, &s->pred_scene, &s->use.creases, &sc, &cu);
+    if (cu.message[0]) session_event(s, NAN, cu.warning ? STORE_EVENT_WARNING : STORE_EVENT_INFO, cu.message);
+    if (!cu.applied) return;
+    def->scene = sc;
+    snprintf(def->calibration_json, sizeof def->calibration_json, "%s", cu.record);
+    rod_scene at_own = sc; /* hashed as the measured strip is: at the scene's own resolution */
+    at_own.nodes = s->pred_scene.nodes;
+    at_own.dt = s->pred_scene.dt;
+    scene_hash_text(&at_own, s->cfg.sim.fast, def->hash, sizeof def->hash);
+}
+
 /* Step 2: the prediction's resolution, then the prediction on its own thread beside the trial.
  * Only an abort stops the trial here: a prediction that cannot be made (the ladder found no snap,
  * the simulator refused the scene) is stored as failed and the trial runs without it; the mock
@@ -479,6 +509,7 @@ static int session_start_prediction(trial_session *s, session_parts *p, char *wh
     def.est_error = est;
     def.adapt_scale = adapt_scale;
     snprintf(def.hash, sizeof def.hash, "%s", hash);
+    specimen_calibration_in(s, &def);
     if (failed) {
         char reason[480];
         snprintf(reason, sizeof reason, "no prediction resolution: %s", w);
@@ -758,7 +789,7 @@ static void session_store_result(trial_session *s)
 }
 
 /* Whatever the steps opened, closed; the prediction waited for (it stops at once when the trial
- * was aborted); the status final. */
+ * was aborted). */
 static void session_release(trial_session *s, session_parts *p)
 {
     char w[256];
@@ -779,6 +810,27 @@ static void session_release(trial_session *s, session_parts *p)
     vis_tracker_free(p->trk);
     mock_camera_close(p->mock);
     if (p->live.src) vis_source_close(p->live.src);
+}
+
+/* Step 7: a done trial of a named specimen (sim.specimen_fit): the specimen refitted from all its
+ * finished trials, this one included (trial_specimen_calib.h), and the outcome said in an event.
+ * After the rails stopped, the record was stored and everything was closed; before the session
+ * says it finished, so the specimen's next trial (the queue's, or a start that waits for this one)
+ * predicts with the new calibration. An abort (or ribbond's shutdown) cancels the fit at its next
+ * evaluation; a refit that fails keeps the calibration before it. */
+static void session_refit_specimen(trial_session *s)
+{
+    if (s->result.final != TRIAL_DONE || !s->cfg.sim.specimen_fit || !s->cfg.specimen.name[0] || s->specimen_id <= 0)
+        return;
+    logf_(s, "refitting specimen %s from its finished trials", s->cfg.specimen.name);
+    trial_specimen_refit r;
+    trial_specimen_calib_refit(s->st, s->specimen_id, s->cfg.specimen.name, s->trial_id, s->cfg.sim.fit_keys,
+                               &s->cancel, &r);
+    session_event(s, NAN, r.ok ? STORE_EVENT_INFO : STORE_EVENT_WARNING, r.message);
+}
+
+static void session_mark_finished(trial_session *s)
+{
     pthread_mutex_lock(&s->lock);
     s->status.finished = 1;
     if (!trial_state_final(s->status.state)) s->status.state = s->result.final;
@@ -799,6 +851,8 @@ static void *session_main(void *arg)
     else
         session_store_result(s);
     session_release(s, &p);
+    session_refit_specimen(s);
+    session_mark_finished(s);
     return NULL;
 }
 
@@ -871,6 +925,11 @@ trial_err trial_session_start_tx(const rig_config *cfg, const char *const *sets,
     trial_specimen_from_config(cfg, &sp);
     int64_t spid = 0;
     if (store_specimen_upsert(s->st, &sp, &spid, why, why_len) != STORE_OK) goto fail;
+    s->specimen_id = spid;
+    store_specimen now;
+    char w0[256];
+    if (cfg->sim.specimen_fit && cfg->specimen.name[0] && store_specimen_get(s->st, spid, &now, w0, sizeof w0) == STORE_OK)
+        memcpy(s->specimen_calibration, now.calibration_json, sizeof s->specimen_calibration);
     if (trial_camera_setup(cfg, &s->cal, &s->width, &s->height, &s->roi, why, why_len)) goto fail;
     char *config_text = trial_config_text(cfg, sets, n_sets, s->note);
     char *calib = trial_record_json(cfg, &s->cal, s->roi, why, why_len);

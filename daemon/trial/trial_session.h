@@ -23,7 +23,11 @@
  *   session_run                    the trial runner, storing every sample (batched), event and state;
  *   session_twin_truth             mock mode: the twin's own snap as an event ("twin truth: ...");
  *   session_store_result           the measured result and the final status;
- *   session_release                closes what was opened and waits for the prediction.
+ *   session_release                closes what was opened and waits for the prediction;
+ *   session_refit_specimen         a done trial of a named specimen (sim.specimen_fit): the
+ *                                  specimen refitted from all its finished trials
+ *                                  (trial_specimen_calib.h), before the session says it ended, so
+ *                                  its next trial predicts with the new calibration.
  * Every failure ends in the store as a failed trial with the reason, and in the log. An abort
  * (or SIGTERM through it) also cancels the ladder and the prediction at their next time step, so
  * it takes effect within a step whatever the trial is computing. */

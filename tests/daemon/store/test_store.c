@@ -1284,6 +1284,96 @@ static void test_trial_calibrated(void **state)
     store_close(st);
 }
 
+/* v12: a specimen's calibration: none until set; an upsert (every trial's start) keeps it; a
+ * refit's failure keeps it beside the failure; a new calibration clears the failure; kept for a
+ * retired specimen (whose last trial may end after the retirement); bad JSON, a JSON that is not
+ * an object and one too long for the record refused without touching the row. A prediction's
+ * calibration_json reads back and shows in the trial's JSON. */
+static void test_specimen_calibration(void **state)
+{
+    fixture *f = *state;
+    store *st;
+    OK(store_open(f->db, &st, why, sizeof why));
+    store_specimen sp = store_specimen_default();
+    snprintf(sp.name, sizeof sp.name, "S-1");
+    sp.length_m = 0.2;
+    sp.width_m = 0.005;
+    sp.thickness_m = 0.00025;
+    int64_t id = 0;
+    OK(store_specimen_upsert(st, &sp, &id, why, sizeof why));
+    store_specimen back;
+    OK(store_specimen_get(st, id, &back, why, sizeof why));
+    assert_string_equal(back.calibration_json, "");
+    assert_string_equal(back.calibration_failure_json, "");
+    const char *cal = "{\"trials\":[1],\"parameters\":[{\"key\":\"folds.angle_left_deg\",\"value\":-86.5}]}";
+    OK(store_specimen_set_calibration(st, id, cal, NULL, why, sizeof why));
+    OK(store_specimen_upsert(st, &sp, NULL, why, sizeof why)); /* a trial's start */
+    OK(store_specimen_get_by_name(st, "S-1", &back, why, sizeof why));
+    assert_string_equal(back.calibration_json, cal);
+    const char *fail1 = "{\"reason_key\":\"misfit\",\"after_trial\":2}";
+    OK(store_specimen_set_calibration(st, id, NULL, fail1, why, sizeof why));
+    OK(store_specimen_get(st, id, &back, why, sizeof why));
+    assert_string_equal(back.calibration_json, cal);
+    assert_string_equal(back.calibration_failure_json, fail1);
+    OK(store_specimen_retire(st, id, STORE_SPECIMEN_RETIRED, "done with it", T0, why, sizeof why));
+    const char *cal2 = "{\"trials\":[1,2,3]}";
+    OK(store_specimen_set_calibration(st, id, cal2, NULL, why, sizeof why));
+    OK(store_specimen_get(st, id, &back, why, sizeof why));
+    assert_string_equal(back.calibration_json, cal2);
+    assert_string_equal(back.calibration_failure_json, "");
+    assert_int_equal(back.state, STORE_SPECIMEN_RETIRED);
+    /* Refused, nothing written. */
+    assert_int_equal(store_specimen_set_calibration(st, id, "{not json", NULL, why, sizeof why), STORE_E_INVALID);
+    assert_non_null(strstr(why, "calibration_json"));
+    assert_int_equal(store_specimen_set_calibration(st, id, "[1,2]", NULL, why, sizeof why), STORE_E_INVALID);
+    assert_int_equal(store_specimen_set_calibration(st, id, NULL, NULL, why, sizeof why), STORE_E_INVALID);
+    char *big = malloc(STORE_SPECIMEN_CALIBRATION_MAX + 16);
+    memset(big, ' ', STORE_SPECIMEN_CALIBRATION_MAX + 15);
+    big[0] = '{';
+    big[STORE_SPECIMEN_CALIBRATION_MAX + 14] = '}';
+    big[STORE_SPECIMEN_CALIBRATION_MAX + 15] = '\0';
+    assert_int_equal(store_specimen_set_calibration(st, id, big, NULL, why, sizeof why), STORE_E_INVALID);
+    assert_non_null(strstr(why, "at most"));
+    free(big);
+    assert_int_equal(store_specimen_set_calibration(st, id + 99, cal, NULL, why, sizeof why), STORE_E_NOTFOUND);
+    OK(store_specimen_get(st, id, &back, why, sizeof why));
+    assert_string_equal(back.calibration_json, cal2);
+
+    /* The calibration a prediction ran with. */
+    int64_t tid = new_trial(st, STORE_MODE_MOCK);
+    store_prediction p = store_prediction_default();
+    p.trial_id = tid;
+    snprintf(p.scene_hash, sizeof p.scene_hash, "h");
+    p.snapped = false;
+    p.regime = STORE_REGIME_NO_SNAP;
+    p.snap_dw = NAN;
+    p.nodes = 31;
+    p.dt = 1e-3;
+    p.imperfection = 0;
+    p.wall_s = 0.5;
+    p.calibration_json = "[1]";
+    assert_int_equal(store_prediction_insert(st, &p, NULL, why, sizeof why), STORE_E_INVALID);
+    p.calibration_json = "{\"trials\":[1],\"applied\":[{\"key\":\"folds.angle_left_deg\",\"value\":-86.5}]}";
+    int64_t pid = 0;
+    OK(store_prediction_insert(st, &p, &pid, why, sizeof why));
+    store_prediction q;
+    OK(store_prediction_get(st, pid, &q, why, sizeof why));
+    assert_string_equal(q.calibration_json, p.calibration_json);
+    store_prediction_free(&q);
+    json_t *j = NULL;
+    OK(store_trial_json(st, tid, &j, why, sizeof why));
+    json_t *pc = json_object_get(json_object_get(j, "prediction"), "calibration");
+    assert_true(json_is_object(pc));
+    assert_int_equal(json_integer_value(json_array_get(json_object_get(pc, "trials"), 0)), 1);
+    json_decref(j);
+    p.calibration_json = NULL; /* none: null */
+    OK(store_prediction_insert(st, &p, &pid, why, sizeof why));
+    OK(store_trial_json(st, tid, &j, why, sizeof why));
+    assert_true(json_is_null(json_object_get(json_object_get(j, "prediction"), "calibration")));
+    json_decref(j);
+    store_close(st);
+}
+
 /* v10: the camera's time offset measured at the shear's start: NULL until set, stored with its
  * standard deviation; a NaN offset or a negative deviation refused without touching the row. */
 static void test_trial_camera_offset(void **state)
@@ -1597,6 +1687,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_trial_latency, setup, teardown),
         cmocka_unit_test_setup_teardown(test_trial_camera_offset, setup, teardown),
         cmocka_unit_test_setup_teardown(test_trial_calibrated, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_specimen_calibration, setup, teardown),
         cmocka_unit_test_setup_teardown(test_trial_video_file, setup, teardown),
         cmocka_unit_test_setup_teardown(test_json, setup, teardown),
         cmocka_unit_test_setup_teardown(test_csv, setup, teardown),

@@ -1,4 +1,5 @@
-/* ctl_calibrate_trials.c: stored trials turned into a fit's input (ctl_calibrate_trials.h).
+/* trial_pool.c: stored trials turned into a fit's input (trial_pool.h); moved here from
+ * ribbonctl's commands so that ribbond refits a specimen with the same reading.
  *
  * The strip: the scene file stored in the trial's config text with the scene overrides stored
  * there applied in order (trial_config_text_scene_load: the scene the trial ran), with the
@@ -14,7 +15,7 @@
  * the cut-off dw_max of the shear, never at or past the measured snap. A trial with more frames
  * than max_samples is thinned evenly (the fit's cost grows with its states; a hold of many
  * frames at one state adds noise averaging, not shape). */
-#include "ctl_calibrate_trials.h"
+#include "trial_pool.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -22,11 +23,11 @@
 #include <string.h>
 
 #include "scene_file.h"
-#include "trial.h"
+#include "trial_config_text.h"
 
-ctl_calib_select ctl_calib_select_default(void)
+trial_pool_select trial_pool_select_default(void)
 {
-    ctl_calib_select s;
+    trial_pool_select s;
     memset(&s, 0, sizeof s);
     s.dw_max = NAN;
     s.dl_min = NAN;
@@ -35,7 +36,7 @@ ctl_calib_select ctl_calib_select_default(void)
     return s;
 }
 
-void ctl_calib_data_free(ctl_calib_data *d)
+void trial_pool_free(trial_pool *d)
 {
     free(d->obs);
     free(d->trials);
@@ -43,7 +44,7 @@ void ctl_calib_data_free(ctl_calib_data *d)
 }
 
 /* The trial's strip. */
-static int trial_scene(store *st, const store_trial *t, const ctl_calib_select *sel, rod_scene *out,
+static int trial_scene(store *st, const store_trial *t, const trial_pool_select *sel, rod_scene *out,
                        int64_t *pred_of, double *snap_pred, char *why, size_t why_len)
 {
     char *text = NULL, w[512];
@@ -120,8 +121,8 @@ static int cmp_double(const void *a, const void *b)
 }
 
 /* The trial's observations appended to d->obs. */
-static int trial_obs(store *st, const store_trial *t, const ctl_calib_select *sel, ctl_calib_trial *ct,
-                     ctl_calib_data *d, char *why, size_t why_len)
+static int trial_obs(store *st, const store_trial *t, const trial_pool_select *sel, trial_pool_trial *ct,
+                     trial_pool *d, char *why, size_t why_len)
 {
     store_sample *s = NULL;
     size_t n = 0;
@@ -201,7 +202,7 @@ static int trial_obs(store *st, const store_trial *t, const ctl_calib_select *se
     return 0;
 }
 
-int ctl_calib_load(store *st, const int64_t *ids, int n, const ctl_calib_select *sel, ctl_calib_data *out,
+int trial_pool_load(store *st, const int64_t *ids, int n, const trial_pool_select *sel, trial_pool *out,
                    char *why, size_t why_len)
 {
     memset(out, 0, sizeof *out);
@@ -231,7 +232,7 @@ int ctl_calib_load(store *st, const int64_t *ids, int n, const ctl_calib_select 
                      (long long)t.id, store_status_name(t.status));
             goto fail;
         }
-        ctl_calib_trial *ct = &out->trials[k];
+        trial_pool_trial *ct = &out->trials[k];
         ct->id = t.id;
         snprintf(ct->mode, sizeof ct->mode, "%s", store_mode_name(t.mode));
         snprintf(ct->status, sizeof ct->status, "%s", store_status_name(t.status));
@@ -265,6 +266,6 @@ int ctl_calib_load(store *st, const int64_t *ids, int n, const ctl_calib_select 
     }
     return 0;
 fail:
-    ctl_calib_data_free(out);
+    trial_pool_free(out);
     return -1;
 }
