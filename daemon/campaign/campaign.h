@@ -9,6 +9,7 @@
  *   campaign_phase.h     the lab's phase diagram from the store: counts, edges, CSV, JSON, figure
  *   campaign_plan.h      the next specimens: beliefs with a fitted systematic offset, proposals
  *   campaign_bench.h     the simulated campaign: the planner against a bench of twins
+ *   campaign_camera_bench.h the same through the camera: approvals, the queue, mock trials
  * Everything outside this folder includes this header only. */
 #ifndef RIBBON_CAMPAIGN_H
 #define RIBBON_CAMPAIGN_H
@@ -22,5 +23,6 @@
 #include "campaign_phase.h"
 #include "campaign_plan.h"
 #include "campaign_bench.h"
+#include "campaign_camera_bench.h"
 
 #endif
