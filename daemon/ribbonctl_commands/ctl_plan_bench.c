@@ -46,8 +46,9 @@ static void help(void)
            "against the twins' mean strip's static boundary and its dynamic switch (the fast predictor at\n"
            "the rig's shear speed; --no-dynamic-truth skips it). --timeout bounds one specimen (default 1200\n"
            "s). Each trial's video is removed once read unless --keep-videos. At phi 120 the twin cannot be\n"
-           "mounted at mock.ini's Delta L 0.2: add --set rail.compress.start_mm=110 (Delta L 0.3). Minutes\n"
-           "per campaign (half a minute to a minute a trial). One line: bench-plan-camera specimens=...\n");
+           "mounted at mock.ini's Delta L 0.2 (nor at 0.3 from Gamma 0.206): add --set\n"
+           "rail.compress.start_mm=130 (Delta L 0.4). Minutes per campaign (half a minute to a minute a\n"
+           "trial). One line: bench-plan-camera specimens=...\n");
 }
 
 /* The calibrated campaign's specimens and their measured trials into a store (mock mode, done),
