@@ -1,5 +1,5 @@
 /* test_campaign_camera_bench.c: the simulated campaign through the camera (campaign_camera_bench.h)
- * on config/mock.ini, three specimens at phi 90 (heavy: three whole mock trials, about a minute on a
+ * on config/mock.ini, three specimens at phi 90 (heavy: three whole mock trials, 31 s at load 7 on a
  * quiet machine). The twin at N = 61, dt 2 ms, and the in-trial fit off, to keep it short.
  *   - the harness runs: three specimens, each approved (specimen C-k, an operator step and a trial in
  *     the queue), its operator step confirmed with the angles measured at folding (stored on the
