@@ -11,6 +11,7 @@
  *   campaign_plan.h      the next specimens: beliefs with a fitted systematic offset, proposals
  *   campaign_strip.h     the lab strip: the specimens' fitted strips pooled, the planner's model
  *   campaign_bench.h     the simulated campaign: the planner against a bench of twins
+ *   campaign_camera_bench.h the same through the camera: approvals, the queue, mock trials
  * Everything outside this folder includes this header only. */
 #ifndef RIBBON_CAMPAIGN_H
 #define RIBBON_CAMPAIGN_H
@@ -26,5 +27,6 @@
 #include "campaign_plan.h"
 #include "campaign_strip.h"
 #include "campaign_bench.h"
+#include "campaign_camera_bench.h"
 
 #endif

@@ -124,23 +124,40 @@ static int dynamic_truth(const rod_scene *twin, double phi, double g0, double *g
     return 0;
 }
 
-/* The twin folded at (phi, gamma) into *t: the scene with its creases relaxed and off at random,
- * softer; *angle its mean crease angle. */
+void campaign_bench_draw(unsigned *rng, double spread, double base_deg, campaign_twin_draw *d)
+{
+    d->ul = (2 * uniform(rng) - 1) * spread;
+    d->ur = (2 * uniform(rng) - 1) * spread;
+    d->mean_deg = base_deg * (1 + 0.5 * (d->ul + d->ur));
+    d->rel = (d->ul - d->ur) / (1 + 0.5 * (d->ul + d->ur));
+}
+
+int campaign_bench_trace(const rod_scene *sc, const double *phi, size_t n, double *gamma, char *why, size_t why_len)
+{
+    return trace_at(sc, phi, n, gamma, why, why_len);
+}
+
+int campaign_bench_dynamic_switch(const rod_scene *mean, double phi, double g0, double *g, char *why, size_t why_len)
+{
+    return dynamic_truth(mean, phi, g0, g, why, why_len);
+}
+
+/* The twin folded at (phi, gamma) into *t: the scene with its creases relaxed and off at random
+ * (campaign_bench_draw, the camera campaign's draws too), softer; *angle its mean crease angle. */
 static void fold_twin(const rod_scene *scene, const campaign_bench_opts *o, double phi, double gamma, unsigned *rng,
                       rod_scene *t, double *angle)
 {
     *t = *scene;
-    double ul = (2 * uniform(rng) - 1) * o->spread, ur = (2 * uniform(rng) - 1) * o->spread;
-    double base = phi - o->relax_deg;
-    double mean = base * (1 + 0.5 * (ul + ur));
-    *angle = mean;
-    t->fold_angle_deg = sign_of(scene->fold_angle_deg) * mean;
+    campaign_twin_draw d;
+    campaign_bench_draw(rng, o->spread, phi - o->relax_deg, &d);
+    *angle = d.mean_deg;
+    t->fold_angle_deg = sign_of(scene->fold_angle_deg) * d.mean_deg;
     t->fold_angle_left_deg = t->fold_angle_right_deg = NAN;
     t->fold_position_left = t->fold_position_right = NAN;
     t->fold_position = gamma;
     t->fold_stiffness_factor = o->twin_stiffness_factor;
     if (o->twin_hinge > 0) t->fold_hinge_stiffness = o->twin_hinge;
-    t->fold_angle_rel = (ul - ur) / (1 + 0.5 * (ul + ur));
+    t->fold_angle_rel = d.rel;
 }
 
 /* Twin t's regime: 1 asymmetric, 0 symmetric, -1 failed or neither. *dw_crit: Delta W of its first

@@ -125,4 +125,23 @@ typedef struct campaign_bench_result {
 int campaign_bench_run(const rod_scene *scene, const campaign_bench_opts *o, campaign_bench_result *r,
                        void (*progress)(void *u, const char *line), void *u, char *why, size_t why_len);
 
+/* ---- shared with the campaign through the camera (campaign_camera_bench.h) ---- */
+
+/* One twin's hand-folding error, drawn from the bench's generator: each crease off by ul, ur
+ * ~ U(-spread, spread) of base_deg (the relaxed angle); the mean crease mean_deg = base (1 + (ul +
+ * ur) / 2) and imperfection.fold_angle_rel = (ul - ur) / (1 + (ul + ur) / 2), so the creases are
+ * base (1 + ul) and base (1 + ur). Two draws a specimen, ul first. */
+typedef struct campaign_twin_draw {
+    double ul, ur;      /* relative errors of the creases at Gamma and 1 - Gamma */
+    double mean_deg;    /* their mean angle, deg (magnitude) */
+    double rel;         /* their relative difference (the scene's fold_angle_rel) */
+} campaign_twin_draw;
+void campaign_bench_draw(unsigned *rng, double spread, double base_deg, campaign_twin_draw *d);
+/* Gamma* of sc at each phi[k] (rod_boundary, the codim-2 point moved to each angle). -1 with why. */
+int campaign_bench_trace(const rod_scene *sc, const double *phi, size_t n, double *gamma, char *why, size_t why_len);
+/* The dynamic switch (rod_predict fast, the regime rule) of strip mean at crease angle phi (deg),
+ * bisected to 5e-4 from [g0 - 0.04, g0 + 0.04] into *g. -1 with why (not bracketed, a predict
+ * failed). */
+int campaign_bench_dynamic_switch(const rod_scene *mean, double phi, double g0, double *g, char *why, size_t why_len);
+
 #endif

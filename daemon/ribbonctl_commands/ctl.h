@@ -24,6 +24,7 @@ int ctl_check_main(int argc, char **argv);    /* ctl_check.c: is the rig ready (
 int ctl_phase_main(int argc, char **argv);    /* ctl_phase.c: the lab's phase diagram */
 int ctl_plan_main(int argc, char **argv);     /* ctl_plan.c: the next specimens, approval */
 int ctl_plan_bench_main(int argc, char **argv); /* ctl_plan_bench.c: the simulated campaign */
+int ctl_plan_bench_camera_main(int argc, char **argv); /* ctl_plan_bench_camera.c: plan-bench --camera */
 
 /* ctl_phase.c, shared with ctl_plan.c: the predicted boundary over [phi_lo, phi_hi], from
  * boundary_csv (ribbon-sim boundary's CSV) or, with config (cfg loaded from it), traced from its

@@ -37,7 +37,26 @@ static void help(void)
            "second per specimen, ten per phi). --truth chooses what the campaigns are scored against,\n"
            "whatever measured the twins (default: the measurement's kind).\n"
            "--db writes the calibrated campaign's specimens (B-1, B-2, ...) and measured trials to a store\n"
-           "(for ribbonctl phase).\n");
+           "(for ribbonctl phase).\n"
+           "\n"
+           "usage: ribbonctl plan-bench --camera --config RIG [--set K=V ...] [--dir D] [--name STEM] [--phi LIST]\n"
+           "                            [--max K] [--seed S] [--relax DEG] [--hinge K] [--spread S]\n"
+           "                            [--calibration both|on|off] [--no-dynamic-truth] [--timeout S] [--keep-videos]\n"
+           "                            [--verbose]\n"
+           "\n"
+           "The same campaign through the camera (docs/campaign.md): each proposal is stored, approved\n"
+           "(specimen C-k, an operator step, a trial in the queue), folded as a twin (creases relaxed by\n"
+           "--relax, compliant hinges of --hinge K N m/rad, default 5e-3; each crease off by up to --spread,\n"
+           "the same draws as above), the operator step confirmed with the angles measured at folding, and\n"
+           "trialled by the queue as a real mock trial of the rig file RIG (mode mock; --set overrides it,\n"
+           "e.g. twin.mesh.nodes=61): rendered, tracked, its regime read from the stored trial. Stores and\n"
+           "videos go to --dir (default .) as STEM-cal.db, STEM-uncal.db (default STEM campaign). Scored\n"
+           "against the twins' mean strip's static boundary and its dynamic switch (the fast predictor at\n"
+           "the rig's shear speed; --no-dynamic-truth skips it). --timeout bounds one specimen (default 1200\n"
+           "s). Each trial's video is removed once read unless --keep-videos. At phi 120 the twin cannot be\n"
+           "mounted at mock.ini's Delta L 0.2 (nor at 0.3 from Gamma 0.206): add --set\n"
+           "rail.compress.start_mm=130 (Delta L 0.4). Minutes per campaign (half a minute to a minute a\n"
+           "trial). One line: bench-plan-camera specimens=...\n");
 }
 
 /* Specimen k's calibration as a trial's fit record (trial_calibrated_json's form) with the
@@ -120,6 +139,15 @@ int ctl_plan_bench_main(int argc, char **argv)
     const char *scene = NULL, *db = NULL;
     int verbose = 0;
     campaign_bench_opts o = campaign_bench_opts_default();
+    for (int i = 1; i < argc; i++)
+        if (!strcmp(argv[i], "--camera")) {
+            for (int k = 1; k < argc; k++)
+                if (!strcmp(argv[k], "--help") || !strcmp(argv[k], "-h")) {
+                    help();
+                    return 0;
+                }
+            return ctl_plan_bench_camera_main(argc, argv);
+        }
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
