@@ -565,12 +565,7 @@ static void record_rail_settings(run_ctx *c)
     }
 }
 
-/* The camera's offset (trial_cam_watch.h): the hold's last frames and the shear's first go to the
- * fit; the frames' own times, before any offset. */
-/* A compression frame at Delta L dl measured with the clamp points where the compression rail puts
- * them (trial_comp_track.h). A tracker that fails there leaves the frame untracked ("clamp not
- * found") and says so once in the events; the trial goes on. Returns nonzero only when the trial
- * must stop (never: kept for the loop's shape). */
+/* The monotonic clock, s: what a compression frame's tracker took (the rail clock may be virtual). */
 static double mono_now_s(void)
 {
     struct timespec ts;
@@ -611,6 +606,10 @@ static void comp_track_note(run_ctx *c)
                    "measured%s", p->comp_track_from_dl, c->comp_n, over);
 }
 
+/* A compression frame at Delta L dl measured with the clamp points where the compression rail puts
+ * them (trial_comp_track.h). A tracker that fails there leaves the frame untracked ("clamp not
+ * found") and says so once in the events; the trial goes on. Returns nonzero only when the trial
+ * must stop (never: kept for the loop's shape). */
 static int comp_track_frame(run_ctx *c, double dl, vis_measure *m)
 {
     trial_runner *tr = c->tr;
@@ -637,6 +636,8 @@ static int comp_track_frame(run_ctx *c, double dl, vis_measure *m)
     return 0;
 }
 
+/* The camera's offset (trial_cam_watch.h): the hold's last frames and the shear's first go to the
+ * fit; the frames' own times, before any offset. */
 static void cam_watch_frame(run_ctx *c, double t_frame)
 {
     const trial_plan *p = &c->tr->plan;
