@@ -16,6 +16,12 @@
 #include "rig_calib.h"
 #include "vision.h"
 
+/* A live trial's share of the compression's time its compression frames may spend in their
+ * trackers (trial_plan.comp_track_budget): the frames over it are stored untracked, so the loop
+ * keeps the camera's pace whatever a fresh tracker costs (docs/trials.md: measured 640 x 480 and
+ * 1280 x 720). */
+#define TRIAL_COMP_TRACK_LIVE_BUDGET 0.5
+
 /* The first Delta L of the compression tracked by default: the family benchmark's start,
  * max(0.5 c, c - 0.05) for the trial's compression c. */
 double trial_comp_track_from_dl(double compression);

@@ -14,6 +14,7 @@
 
 #include "replay_rails_csv.h"
 #include "snap_detect.h"
+#include "trial_comp_track.h"
 #include "trial_config_text.h"
 #include "trial_publish.h"
 #include "trial_record.h"
@@ -510,8 +511,11 @@ typedef struct replay_loop {
 } replay_loop;
 
 /* Whether any of the recording's rail readings has the compress rail within tol_mm of target_mm;
- * the range recorded in *lo, *hi. */
-static int compress_in_place(const trial_replay *r, double target_mm, double tol_mm, double *lo, double *hi)
+ * the range recorded in *lo, *hi, and the time of the first such reading in *t_arrive (the
+ * compression's end: the frames before it off the compression are the compression's, those after
+ * it the return's). */
+static int compress_in_place(const trial_replay *r, double target_mm, double tol_mm, double *lo, double *hi,
+                             double *t_arrive)
 {
     int any = 0;
     const size_t n = r->smp ? r->ns : r->nr;
@@ -520,9 +524,25 @@ static int compress_in_place(const trial_replay *r, double target_mm, double tol
         if (!isfinite(c)) continue;
         *lo = fmin(*lo, c);
         *hi = fmax(*hi, c);
+        if (!any && fabs(c - target_mm) <= tol_mm) *t_arrive = r->smp ? r->smp[k].t_s : r->rails[k].t;
         any = any || fabs(c - target_mm) <= tol_mm;
     }
     return any;
+}
+
+/* The compression's last part (trial_comp_track.h, as the trial tracked it): frames of the
+ * compression (before the compress rail first reached the trial's compression) from Delta L
+ * trial_comp_track_from_dl on, each measured by a fresh tracker with the clamp point moved to
+ * where the recorded rail puts it. */
+typedef struct replay_comp {
+    double from_dl, t_arrive;
+    long n, measured, failed;
+    double dl_lo, dl_hi;
+} replay_comp;
+
+static int replay_comp_frame(const replay_comp *rc, const store_sample *x, double compression)
+{
+    return isfinite(rc->t_arrive) && x->t_s < rc->t_arrive && x->dl >= rc->from_dl && x->dl <= compression + 1e-9;
 }
 
 /* Frame x.frame measured as m (its centreline uv, n_uv pairs; the frame itself): the sample stored,
@@ -644,7 +664,8 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
     const double target_mm = rig_calib_compress_mm(&rec->calib, rec->length_m, rec->compression);
     double tol_mm = trial_clamp_tol_mm(cal.px_per_mm);
     double lo_mm = INFINITY, hi_mm = -INFINITY;
-    if (tol_mm > 0 && !compress_in_place(r, target_mm, tol_mm, &lo_mm, &hi_mm)) {
+    replay_comp comp = {trial_comp_track_from_dl(rec->compression), NAN, 0, 0, 0, INFINITY, -INFINITY};
+    if (tol_mm > 0 && !compress_in_place(r, target_mm, tol_mm, &lo_mm, &hi_mm, &comp.t_arrive)) {
         /* A recording whose rails never put the clamps where the calibration has them (another rig
          * file's compression, or a CSV without the compression's readings): tracked as recorded,
          * and said so. */
@@ -684,8 +705,30 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
             vis_measure m;
             memset(&m, 0, sizeof m);
             m.reason = VIS_REASON_CLAMP_NOT_FOUND;
+            if (replay_comp_frame(&comp, &x, rec->compression)) {
+                comp.n++;
+                if (trial_comp_track_measure(&tp, &cal, rec->calib.camera_side, rec->length_m, rec->compression, x.dl,
+                                             frame, &m, &ve) != VIS_OK) {
+                    if (!comp.failed++) {
+                        char note[400];
+                        snprintf(note, sizeof note, "compression frame %ld at Delta L %.4f not tracked: %s (later "
+                                 "failures not noted)", f, x.dl, ve.message);
+                        add_event(st, r->bus, id, x.t_s, STORE_EVENT_WARNING, note);
+                    }
+                    memset(&m, 0, sizeof m);
+                    m.reason = VIS_REASON_CLAMP_NOT_FOUND;
+                }
+                if (m.reason == VIS_REASON_NONE && m.quality >= rec->min_quality && isfinite(m.dz) && isfinite(m.a)) {
+                    comp.measured++;
+                    comp.dl_lo = fmin(comp.dl_lo, x.dl);
+                    comp.dl_hi = fmax(comp.dl_hi, x.dl);
+                } else {
+                    moving++;
+                }
+            } else {
+                moving++;
+            }
             if (replay_record(&L, x, &m, NULL, 0, frame, why, why_len)) goto fail;
-            moving++;
             continue;
         }
         int reset = 0;
@@ -727,6 +770,16 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
         char note[200];
         snprintf(note, sizeof note, "%ld frames with the compress rail away from the trial's compression stored "
                  "untracked (clamp not found)", moving);
+        add_event(st, r->bus, id, NAN, STORE_EVENT_INFO, note);
+    }
+    if (comp.n > 0) {
+        char note[300];
+        if (comp.measured)
+            snprintf(note, sizeof note, "compression frames from Delta L %.4f: %ld tracked with the clamp point moved, "
+                     "%ld measured at Delta L %.4f to %.4f", comp.from_dl, comp.n, comp.measured, comp.dl_lo, comp.dl_hi);
+        else
+            snprintf(note, sizeof note, "compression frames from Delta L %.4f: %ld tracked with the clamp point moved, "
+                     "none measured", comp.from_dl, comp.n);
         add_event(st, r->bus, id, NAN, STORE_EVENT_INFO, note);
     }
     res->snapped = snap_detect_snapped(&det);

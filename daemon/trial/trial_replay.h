@@ -14,6 +14,10 @@
  *    outside the readings are skipped and counted). Shearing is taken to run from the first reading
  *    where the shear rail has left its first position by more than 0.05 mm to the reading of
  *    largest Delta W; the tracker starts fresh at its start and snap detection sees only it.
+ * Frames with the compress rail away from the trial's compression are stored untracked ("clamp not
+ * found"), except the compression's last part (trial_comp_track.h: before the rail first reaches
+ * the compression, from trial_comp_track_from_dl on), tracked with the clamp point moved to where
+ * the recorded rail puts it, as the trial did.
  * The result is a new trial, mode replay, linked to its source trial if there is one, with its own
  * samples and events. Works without a daemon (ribbonctl replay) and inside one (on a thread of its
  * own: create on one store connection, execute on another). */

@@ -5,6 +5,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 
 #include "rail_gcode.h"
 #include "rail_pair.h"
@@ -180,6 +181,12 @@ typedef struct run_ctx {
     long loss_noted;      /* loss_total at it */
     double cam_offset;    /* s added to a frame's time to place it on the rails' clock */
     int comp_track_failed; /* a compression frame's tracker failed (said once) */
+    /* The compression frames tracked with the clamp point moved (plan.comp_track_from_dl). */
+    double comp_t0;       /* monotonic s when the first of them came (NaN: none yet) */
+    double comp_busy_s;   /* monotonic s their trackers took */
+    double comp_max_s;    /* the longest one */
+    long comp_n, comp_measured, comp_over; /* tracked, measured, over plan.comp_track_budget */
+    double comp_dl_lo, comp_dl_hi; /* Delta L of the measured ones */
 } run_ctx;
 
 static int emit_event(run_ctx *c, const char *kind, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
@@ -360,6 +367,7 @@ static int witness_add(run_ctx *c, double load, double dw, double t)
 }
 
 static void note_standing(run_ctx *c);
+static void comp_track_note(run_ctx *c);
 
 /* One step of the state machine after this iteration's frame. Returns 1 when the trial ended. */
 static int step(run_ctx *c, const trial_sample *smp)
@@ -375,6 +383,7 @@ static int step(run_ctx *c, const trial_sample *smp)
     switch (c->st) {
     case TRIAL_COMPRESSING:
         if (rail_idle_at(&c->sc, c->target_compress_mm)) {
+            comp_track_note(c);
             emit_event(c, "info", "compression reached: Delta L = %.4f (rail at %.3f mm)",
                        rig_calib_dl(&p->calib, l, c->sc.position_mm), c->sc.position_mm);
             enter(c, TRIAL_HOLDING, p->hold_s + 30.0, NULL);
@@ -556,8 +565,47 @@ static void record_rail_settings(run_ctx *c)
     }
 }
 
-/* The camera's offset (trial_cam_watch.h): the hold's last frames and the shear's first go to the
- * fit; the frames' own times, before any offset. */
+/* The monotonic clock, s: what a compression frame's tracker took (the rail clock may be virtual). */
+static double mono_now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Whether this compression frame is tracked under plan.comp_track_budget: while the trackers'
+ * time so far is within that share of the time since the first compression frame came. A live
+ * loop so never spends more than that share of the compression on them, whatever one costs on
+ * this machine at this resolution; the first is always tracked. */
+static int comp_track_due(run_ctx *c)
+{
+    const double now = mono_now_s();
+    if (!isfinite(c->comp_t0)) c->comp_t0 = now;
+    const double budget = c->tr->plan.comp_track_budget;
+    return !(budget > 0.0) || c->comp_busy_s <= budget * (now - c->comp_t0);
+}
+
+/* At the compression's end: how many of its frames were tracked with the clamp point moved, over
+ * which Delta L, what they cost and how many the budget left untracked (one info event). */
+static void comp_track_note(run_ctx *c)
+{
+    const trial_plan *p = &c->tr->plan;
+    if (!(p->comp_track_from_dl > 0.0) || !isfinite(c->comp_t0)) return;
+    char over[160] = "";
+    if (p->comp_track_budget > 0.0)
+        snprintf(over, sizeof over, "; %ld left untracked by the budget (%.0f%% of the time)", c->comp_over,
+                 100.0 * p->comp_track_budget);
+    if (c->comp_measured > 0)
+        emit_event(c, "info",
+                   "compression frames from Delta L %.4f: %ld tracked with the clamp point moved, %ld measured at "
+                   "Delta L %.4f to %.4f%s; tracker %.1f ms a frame on average, %.1f ms at most",
+                   p->comp_track_from_dl, c->comp_n, c->comp_measured, c->comp_dl_lo, c->comp_dl_hi, over,
+                   c->comp_n ? 1e3 * c->comp_busy_s / (double)c->comp_n : 0.0, 1e3 * c->comp_max_s);
+    else
+        emit_event(c, "info", "compression frames from Delta L %.4f: %ld tracked with the clamp point moved, none "
+                   "measured%s", p->comp_track_from_dl, c->comp_n, over);
+}
+
 /* A compression frame at Delta L dl measured with the clamp points where the compression rail puts
  * them (trial_comp_track.h). A tracker that fails there leaves the frame untracked ("clamp not
  * found") and says so once in the events; the trial goes on. Returns nonzero only when the trial
@@ -567,6 +615,7 @@ static int comp_track_frame(run_ctx *c, double dl, vis_measure *m)
     trial_runner *tr = c->tr;
     const trial_plan *p = &tr->plan;
     double l = p->scene.length;
+    const double t_start = mono_now_s();
     vis_track_params tp = vis_track_params_default();
     tp.length_mm = 1000.0 * l;
     vis_error ve = {0};
@@ -580,9 +629,15 @@ static int comp_track_frame(run_ctx *c, double dl, vis_measure *m)
         memset(m, 0, sizeof *m);
         m->reason = VIS_REASON_CLAMP_NOT_FOUND;
     }
+    const double took = mono_now_s() - t_start;
+    c->comp_busy_s += took;
+    c->comp_max_s = fmax(c->comp_max_s, took);
+    c->comp_n++;
     return 0;
 }
 
+/* The camera's offset (trial_cam_watch.h): the hold's last frames and the shear's first go to the
+ * fit; the frames' own times, before any offset. */
 static void cam_watch_frame(run_ctx *c, double t_frame)
 {
     const trial_plan *p = &c->tr->plan;
@@ -631,6 +686,9 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
     char why[256] = "";
 
     c.t_det_frame = c.t_stop_cmd = NAN;
+    c.comp_t0 = NAN;
+    c.comp_dl_lo = INFINITY;
+    c.comp_dl_hi = -INFINITY;
     out->stop_cmd_latency_s = out->stop_stand_latency_s = NAN;
     out->camera_offset_s = out->camera_offset_sd_s = NAN;
     c.cam_offset = p->calib.camera_time_offset_s;
@@ -794,14 +852,22 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
         }
         if (tr->cam_watch) cam_watch_frame(&c, t_frame);
         vis_measure m;
+        int comp_frame = 0; /* tracked with the clamp point moved */
         if (p->clamp_tol_mm > 0 && fabs(pos_c - c.target_compress_mm) > p->clamp_tol_mm) {
             /* The compress rail is moving (or back at zero): the clamps are not at the calibrated
              * points, and a frame measured against those would be a confident wrong answer. */
             memset(&m, 0, sizeof m);
             m.reason = VIS_REASON_CLAMP_NOT_FOUND;
-            if (p->comp_track_from_dl > 0.0 && c.st == TRIAL_COMPRESSING && smp.dl >= p->comp_track_from_dl &&
-                comp_track_frame(&c, smp.dl, &m))
-                break;
+            if (p->comp_track_from_dl > 0.0 && c.st == TRIAL_COMPRESSING && smp.dl >= p->comp_track_from_dl) {
+                if (!comp_track_due(&c)) {
+                    smp.not_tracked = 3; /* over the budget: stored untracked */
+                    c.comp_over++;
+                } else if (comp_track_frame(&c, smp.dl, &m)) {
+                    break;
+                } else {
+                    comp_frame = 1;
+                }
+            }
         } else {
             double cpu0 = trial_latency_thread_cpu_s();
             if (vis_tracker_process(tr->tracker, tr->frame, smp.dw * l * 1000.0, &m, &ve) != VIS_OK) {
@@ -818,6 +884,11 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             smp.dz = m.dz;
             smp.a = rig_calib_a_sign(&p->calib) * m.a;
             out->measured_frames++;
+            if (comp_frame) {
+                c.comp_measured++;
+                c.comp_dl_lo = fmin(c.comp_dl_lo, smp.dl);
+                c.comp_dl_hi = fmax(c.comp_dl_hi, smp.dl);
+            }
             if (c.st >= TRIAL_COMPRESSING && c.st <= TRIAL_SHEARING)
                 trial_calibrate_add(tr->calib, c.st == TRIAL_SHEARING, smp.dl, smp.dw, smp.dz, smp.a);
         }

@@ -99,6 +99,10 @@ typedef struct trial_plan {
                                     trial_comp_track_from_dl); 0: they are stored untracked */
     vis_calib comp_calib;        /* the camera calibration (clamp points at the trial's compression)
                                     that comp_track_from_dl's frames are placed from */
+    double comp_track_budget;    /* > 0 (live trials): a compression frame is tracked only while the
+                                    time the compression frames' trackers took stays within this
+                                    share of the (monotonic) time since the first of them; the others
+                                    are stored untracked (not_tracked 3). 0: every one is tracked */
     double cam_offset_window_s;  /* > 0: the camera's time offset is measured over this much of the
                                     shear's start (trial_cam_watch.h); 0: not measured */
     int cam_offset_measure;      /* 1: the measured offset replaces calib.camera_time_offset_s for
@@ -131,7 +135,8 @@ typedef struct trial_camera {
 typedef struct trial_sample {
     int kind;
     int not_tracked;             /* kind 1 in a live trial: 1 = skipped (the loop was behind), 2 =
-                                    dropped by the pipeline (not in the video); no measurement */
+                                    dropped by the pipeline (not in the video), 3 = a compression
+                                    frame over plan.comp_track_budget; no measurement */
     long frame;
     double t_s;
     double compress_mm, shear_mm, dl, dw;

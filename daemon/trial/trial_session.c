@@ -267,8 +267,9 @@ static int sink_sample(void *user, const trial_sample *smp, char *why, size_t wh
             x.a = smp->a;
         } else if (smp->not_tracked) {
             snprintf(x.reason, sizeof x.reason, "%s",
-                     smp->not_tracked == 2 ? "dropped (pipeline full, not in the video)"
-                                           : "not tracked (the trial loop was behind)");
+                     smp->not_tracked == 2   ? "dropped (pipeline full, not in the video)"
+                     : smp->not_tracked == 3 ? "not tracked (compression frame over the tracking budget)"
+                                             : "not tracked (the trial loop was behind)");
         } else {
             snprintf(x.reason, sizeof x.reason, "%s",
                      smp->reason == VIS_REASON_NONE ? "low quality" : vis_reason_str(smp->reason));
@@ -719,11 +720,12 @@ static int session_run(trial_session *s, session_parts *p, char *why, size_t why
 {
     trial_plan plan = session_plan(&s->cfg);
     plan.clamp_tol_mm = trial_clamp_tol_mm(s->cal.px_per_mm);
-    /* The compression's last part tracked with the clamp points moved (trial_comp_track.h): mock
-     * mode only for now (a fresh tracker per frame; its cost in the live loop is not measured). */
-    if (!s->live && plan.clamp_tol_mm > 0.0) {
+    /* The compression's last part tracked with the clamp points moved (trial_comp_track.h); live,
+     * within TRIAL_COMP_TRACK_LIVE_BUDGET of the loop's time (a fresh tracker per frame). */
+    if (plan.clamp_tol_mm > 0.0) {
         plan.comp_track_from_dl = trial_comp_track_from_dl(plan.scene.compression);
         plan.comp_calib = s->cal;
+        if (s->live) plan.comp_track_budget = TRIAL_COMP_TRACK_LIVE_BUDGET;
     }
     for (int k = 0; k < 2; k++) {
         plan.cam_clamp_px[0][k] = s->cal.clamp_left_px[k];

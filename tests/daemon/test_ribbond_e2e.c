@@ -403,7 +403,7 @@ static void replay_refuses_wrong_or_cut_video(store *st, int64_t id, const char 
  * tracks the compression with the clamp point moved to where the rail puts it
  * (trial_comp_track.h: from Delta L = max(0.5 c, c - 0.05)); the earlier compression's frames are
  * there, stored untracked. */
-static void none_measured_off_compression(store *st, int64_t id)
+static long none_measured_off_compression(store *st, int64_t id)
 {
     char why[256];
     store_sample *smp = NULL;
@@ -423,6 +423,44 @@ static void none_measured_off_compression(store *st, int64_t id)
     printf("trial %lld: %ld frames measured off the compression (all within its last 0.05 of Delta L), %ld stored "
            "untracked as clamp not found\n", (long long)id, away, untracked);
     assert_true(untracked > 0);
+    return away;
+}
+
+/* Issue 32 A/B: a replay of a mock trial tracks the compression window the trial tracked (its last
+ * 0.05 of Delta L, trial_comp_track.h), from the recorded video (cropped to the trial's region) and
+ * each frame's recorded compression rail position: every frame the source measured there is
+ * measured in the replay, its Delta Z within REPLAY_COMP_DZ_TOL of the source's. Before, the
+ * replay stored them untracked (clamp not found). */
+#define REPLAY_COMP_DZ_TOL 1e-5 /* measured 7.6e-7: the same pixels, cropped losslessly */
+
+static void replay_tracks_compression_window(store *st, int64_t id, int64_t rid)
+{
+    char why[256];
+    store_sample *a = NULL, *b = NULL;
+    size_t na = 0, nb = 0;
+    assert_int_equal(store_samples_get(st, id, &a, &na, why, sizeof why), STORE_OK);
+    assert_int_equal(store_samples_get(st, rid, &b, &nb, why, sizeof why), STORE_OK);
+    const double tol_dl = 0.5 / 200.0;
+    long n = 0, same = 0;
+    double worst = 0.0, lo = INFINITY, hi = -INFINITY;
+    size_t j = 0;
+    for (size_t k = 0; k < na; k++) {
+        if (a[k].kind != STORE_SAMPLE_FRAME || !isfinite(a[k].dz) || !(a[k].dl < 0.5 - tol_dl)) continue;
+        n++;
+        while (j < nb && !(b[j].kind == STORE_SAMPLE_FRAME && b[j].frame >= a[k].frame)) j++;
+        if (j >= nb || b[j].frame != a[k].frame || !isfinite(b[j].dz)) continue;
+        same++;
+        worst = fmax(worst, fabs(b[j].dz - a[k].dz));
+        lo = fmin(lo, b[j].dl);
+        hi = fmax(hi, b[j].dl);
+    }
+    free(a);
+    free(b);
+    printf("replay %lld of trial %lld: %ld of the source's %ld compression frames measured again, at Delta L %.4f to "
+           "%.4f, |Delta Z - source's| at most %.2g\n", (long long)rid, (long long)id, same, n, lo, hi, worst);
+    assert_true(n > 0);
+    assert_int_equal(same, n);
+    assert_true(worst <= REPLAY_COMP_DZ_TOL);
 }
 
 /* The measurement's own error against the twin's truth (docs/trials.md "The twin and its truth"):
@@ -688,6 +726,7 @@ static void mock_trial_then_replay(void **state)
     assert_int_equal(rt.mode, STORE_MODE_REPLAY);
     none_measured_off_compression(st, id);
     none_measured_off_compression(st, rid);
+    replay_tracks_compression_window(st, id, rid);
     replay_outside_recording(st, id, meas, frame_dw);
     replay_refuses_wrong_or_cut_video(st, id, dir);
     store_close(st);
