@@ -214,7 +214,7 @@ static void specimen_calibration_across_trials(void **state)
     store_specimen rec;
     assert_int_equal(store_specimen_get_by_name(st, "S-cal", &rec, why, sizeof why), STORE_OK);
     trial_specimen_refit r;
-    trial_specimen_calib_refit(st, rec.id, "S-cal", t2, "folds.angle_left_deg,folds.crease_colour", NULL, &r);
+    trial_specimen_calib_refit(st, rec.id, "S-cal", t2, "folds.angle_left_deg,folds.crease_colour", 0.0, NULL, &r);
     store_close(st);
     printf("refit: %s\n", r.message);
     assert_int_equal(r.ok, 0);
