@@ -82,9 +82,10 @@ static void failed(trial_calibrated *r, const char *key, const char *fmt, ...)
     va_end(ap);
 }
 
-/* The keys into o->fit: "" = both crease angles (and the hinge when compliant). 0, or -1 with r
- * failed (unknown_key, key_not_usable). */
-static int parse_keys(const rod_scene *sc, const char *keys, rod_fit_opts *o, trial_calibrated *r)
+/* The keys into o->fit: "" = both crease angles (and the hinge when compliant). 0, or -1 with
+ * reason_key and reason (unknown_key, key_not_usable). */
+static int parse_keys(const rod_scene *sc, const char *keys, rod_fit_opts *o, char *reason_key, char *reason,
+                      size_t reason_len)
 {
     for (int k = 0; k < ROD_FIT_NKEYS; k++) o->fit[k] = 0;
     if (!keys || !*keys) {
@@ -98,19 +99,40 @@ static int parse_keys(const rod_scene *sc, const char *keys, rod_fit_opts *o, tr
     for (char *t = strtok_r(buf, ", ", &save); t; t = strtok_r(NULL, ", ", &save)) {
         int k = rod_fit_key_parse(t);
         if (k < 0) {
-            failed(r, "unknown_key",
-                   "unknown fit key: %.64s is not a fit parameter (folds.angle_left_deg, folds.angle_right_deg, "
-                   "folds.position_left, folds.position_right, folds.hinge_stiffness, ribbon.youngs_modulus)", t);
+            snprintf(reason_key, 24, "unknown_key");
+            snprintf(reason, reason_len,
+                     "unknown fit key: %.64s is not a fit parameter (folds.angle_left_deg, folds.angle_right_deg, "
+                     "folds.position_left, folds.position_right, folds.hinge_stiffness, ribbon.youngs_modulus)", t);
             return -1;
         }
         char why[200];
         if (rod_fit_key_usable(sc, (rod_fit_key)k, why, sizeof why)) {
-            failed(r, "key_not_usable", "fit key %s cannot be fitted on this scene: %s", rod_fit_key_name(k), why);
+            snprintf(reason_key, 24, "key_not_usable");
+            snprintf(reason, reason_len, "fit key %s cannot be fitted on this strip: %s", rod_fit_key_name(k), why);
             return -1;
         }
         o->fit[k] = 1;
     }
     return 0;
+}
+
+int trial_calibrate_setup(rod_scene *sc, double fit_hinge, const char *keys, rod_fit_opts *o, char reason_key[24],
+                          char *reason, size_t reason_len)
+{
+    int hinged = 0;
+    if (fit_hinge > 0.0 && isfinite(fit_hinge) && rod_scene_has_creases(sc) && rod_scene_hinge_rigid(sc)) {
+        sc->fold_hinge_stiffness = fit_hinge;
+        sc->fold_hinge_stiffness_left = sc->fold_hinge_stiffness_right = NAN;
+        hinged = 1;
+    }
+    *o = rod_fit_opts_default();
+    if (parse_keys(sc, keys, o, reason_key, reason, reason_len)) return -1;
+    /* The strip's values are the start and the centre of a weak prior on each parameter. */
+    o->prior_sigma[ROD_FIT_ANGLE_LEFT] = o->prior_sigma[ROD_FIT_ANGLE_RIGHT] = TRIAL_CALIBRATE_PRIOR_ANGLE_DEG;
+    o->prior_sigma[ROD_FIT_HINGE] = o->prior_sigma[ROD_FIT_HINGE_LEFT] = o->prior_sigma[ROD_FIT_HINGE_RIGHT] =
+        TRIAL_CALIBRATE_PRIOR_HINGE_LN;
+    o->prior_sigma[ROD_FIT_DZ_OFFSET] = TRIAL_CALIBRATE_PRIOR_DZ_OFFSET;
+    return hinged;
 }
 
 static int cmp_double(const void *a, const void *b)
@@ -143,8 +165,9 @@ void trial_calibrate_compute(const rod_scene *sc, const char *keys, const rod_fi
     r->dw_cut = 0.0;
     int nobs = nobs_before + nobs_shear;
     for (int k = 0; k < nobs; k++) r->dw_cut = fmax(r->dw_cut, obs[k].dw);
-    rod_fit_opts o = rod_fit_opts_default();
-    if (parse_keys(sc, keys, &o, r)) goto done;
+    rod_fit_opts o;
+    rod_scene fit_scene = *sc; /* the def's scene already carries sim.fit_hinge (the session's setup) */
+    if (trial_calibrate_setup(&fit_scene, 0.0, keys, &o, r->reason_key, r->reason, sizeof r->reason) < 0) goto done;
     if (nobs_before < TRIAL_CALIBRATE_MIN_FRAMES) {
         failed(r, "too_few_frames",
                "too few frames: %d measured in the compression and hold (the fit needs at least %d)", nobs_before,
@@ -159,11 +182,6 @@ void trial_calibrate_compute(const rod_scene *sc, const char *keys, const rod_fi
                dz, nobs_before);
         goto done;
     }
-    /* The scene's values are the start and the centre of a weak prior on the crease angles. */
-    o.prior_sigma[ROD_FIT_ANGLE_LEFT] = o.prior_sigma[ROD_FIT_ANGLE_RIGHT] = TRIAL_CALIBRATE_PRIOR_ANGLE_DEG;
-    o.prior_sigma[ROD_FIT_HINGE] = o.prior_sigma[ROD_FIT_HINGE_LEFT] = o.prior_sigma[ROD_FIT_HINGE_RIGHT] =
-        TRIAL_CALIBRATE_PRIOR_HINGE_LN;
-    o.prior_sigma[ROD_FIT_DZ_OFFSET] = TRIAL_CALIBRATE_PRIOR_DZ_OFFSET;
     o.cancel = cancel; /* the fit stops at its next evaluation when the trial ends early */
     char why[320] = "";
     rod_status st = rod_fit_run(sc, obs, nobs, &o, &r->fit, why, sizeof why);

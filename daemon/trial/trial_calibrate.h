@@ -122,6 +122,18 @@ const trial_calibrated *trial_calibrate_last(const trial_calibrate *c);
  * is too small (then {"truncated":true}). */
 int trial_calibrated_json(const trial_calibrated *r, char *out, size_t out_len);
 
+/* The fit's setup from the rig config, the one both the fit beside a trial (trial_session.c) and
+ * the specimen's refit after it (trial_specimen_calib.c) use: sc is the strip to fit (the
+ * prediction's scene, or the pooled trials' strip); when its creases are rigid and fit_hinge > 0
+ * (sim.fit_hinge, N m/rad) they become hinges of that stiffness, the fit's start and its prior's
+ * centre (a rigid crease is not a model of a real one, DESIGN.md section 9). o gets keys
+ * (sim.fit_keys; "" = both crease angles, and the hinge stiffness when sc's creases are
+ * compliant, after the above) and the priors around sc's values (TRIAL_CALIBRATE_PRIOR_*).
+ * Returns 1 when it made the creases hinges, 0 when sc was kept, -1 with reason_key (unknown_key,
+ * key_not_usable, at most 24 bytes with its NUL) and reason when a key cannot be fitted. */
+int trial_calibrate_setup(rod_scene *sc, double fit_hinge, const char *keys, rod_fit_opts *o, char reason_key[24],
+                          char *reason, size_t reason_len);
+
 /* The fit and the snap of one set of observations, on the caller's thread (the worker's body;
  * tests call it directly). keys as in the def. Fills r (ok or a named failure). cancel (may be
  * NULL): non-zero skips the prediction. */

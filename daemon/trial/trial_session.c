@@ -691,10 +691,14 @@ static void session_open_calibrate(trial_session *s, session_parts *p)
     d.scene = p->pred;
     /* A rigid crease is not a model of a real one (a PET crease is a compliant hinge, DESIGN.md
      * section 9): sim.fit_hinge makes the fit's creases hinges of that stiffness, its start and
-     * its prior's centre, while the scene's prediction keeps the scene's creases. */
-    if (s->cfg.sim.fit_hinge > 0.0 && rod_scene_has_creases(&d.scene) && rod_scene_hinge_rigid(&d.scene)) {
-        d.scene.fold_hinge_stiffness = s->cfg.sim.fit_hinge;
-        d.scene.fold_hinge_stiffness_left = d.scene.fold_hinge_stiffness_right = NAN;
+     * its prior's centre, while the scene's prediction keeps the scene's creases.
+     * The setup is the specimen refit's too (trial_calibrate_setup); a key it refuses is the
+     * fit's named failure when it runs (trial_calibrate_compute). */
+    rod_fit_opts o;
+    char rk[24], rw[320];
+    int rigid = rod_scene_hinge_rigid(&d.scene);
+    trial_calibrate_setup(&d.scene, s->cfg.sim.fit_hinge, s->cfg.sim.fit_keys, &o, rk, rw, sizeof rw);
+    if (rigid && !rod_scene_hinge_rigid(&d.scene)) {
         char m[200];
         snprintf(m, sizeof m,
                  "calibration: the scene's creases are rigid; the fit makes them hinges of %g N m/rad (sim.fit_hinge: "
@@ -827,7 +831,7 @@ static void session_refit_specimen(trial_session *s)
     logf_(s, "refitting specimen %s from its finished trials", s->cfg.specimen.name);
     trial_specimen_refit r;
     trial_specimen_calib_refit(s->st, s->specimen_id, s->cfg.specimen.name, s->trial_id, s->cfg.sim.fit_keys,
-                               &s->cancel, &r);
+                               s->cfg.sim.fit_hinge, &s->cancel, &r);
     session_event(s, NAN, r.ok ? STORE_EVENT_INFO : STORE_EVENT_WARNING, r.message);
 }
 

@@ -8,7 +8,8 @@
  * calibration lives: the API and ribbonctl show it as stored.
  *
  * The stored calibration is a JSON object: at (ISO-8601 UTC), after_trial, trials (used, newest
- * first), skipped ([{trial, why}]), frames, nodes, keys (fitted), parameters ([{key, start, value,
+ * first), skipped ([{trial, why}]), frames, nodes, hinge_guess (sim.fit_hinge when the strip's
+ * rigid creases were fitted as hinges from it: their start; null otherwise), keys (fitted), parameters ([{key, start, value,
  * se, se_kind, determined, at_bound}]: start the measured strip's value the fit started from, se
  * null when not determined; hinge stiffness and E in N m/rad and Pa with a relative se), not_determined
  * (names), rms and rms_start (noise units), iterations, iterations_capped, wall_s. A failure is
@@ -24,6 +25,7 @@
 #include <time.h>
 
 #include "rod_fit.h"
+#include "trial_calibrate.h"
 #include "trial_pool.h"
 
 static double wall_now(void)
@@ -67,33 +69,6 @@ static double scene_value(const rod_scene *sc, int k)
 }
 
 /* ---- the refit ---------------------------------------------------------------------------------- */
-
-/* The keys into o->fit, as the in-trial fit reads sim.fit_keys. 0, or -1 with r failed. */
-static int parse_keys(const rod_scene *sc, const char *keys, rod_fit_opts *o, trial_specimen_refit *r)
-{
-    for (int k = 0; k < ROD_FIT_NKEYS; k++) o->fit[k] = 0;
-    if (!keys || !*keys) {
-        o->fit[ROD_FIT_ANGLE_LEFT] = o->fit[ROD_FIT_ANGLE_RIGHT] = 1;
-        o->fit[ROD_FIT_HINGE] = !rod_scene_hinge_rigid(sc);
-        return 0;
-    }
-    char buf[256], *save = NULL;
-    snprintf(buf, sizeof buf, "%s", keys);
-    for (char *t = strtok_r(buf, ", ", &save); t; t = strtok_r(NULL, ", ", &save)) {
-        int k = rod_fit_key_parse(t);
-        if (k < 0) {
-            failed(r, "unknown_key", "unknown fit key: %.64s (sim.fit_keys) is not a fit parameter", t);
-            return -1;
-        }
-        char why[200];
-        if (rod_fit_key_usable(sc, (rod_fit_key)k, why, sizeof why)) {
-            failed(r, "key_not_usable", "fit key %s cannot be fitted on this strip: %s", rod_fit_key_name(k), why);
-            return -1;
-        }
-        o->fit[k] = 1;
-    }
-    return 0;
-}
 
 static int cmp_id_desc(const void *a, const void *b)
 {
@@ -179,7 +154,7 @@ static void ids_text(const int64_t *ids, int n, char *out, size_t len)
 
 /* The calibration record (see the file's comment). NULL when out of memory. */
 static json_t *calibration_json(const pooled *p, const rod_fit_result *fr, int64_t after_trial, const char *at,
-                                double wall_s)
+                                double wall_s, double hinge_guess)
 {
     /* start: the strip's own value (fr->u0 is it through the fit's logarithms). */
     json_t *j = json_object(), *sk = json_array(), *keys = json_array(), *ps = json_array(), *nd = json_array();
@@ -205,6 +180,7 @@ static json_t *calibration_json(const pooled *p, const rod_fit_result *fr, int64
     json_object_set_new(j, "frames_per_trial_max",
                         json_integer(per < TRIAL_SPECIMEN_CALIB_MAX_FRAMES ? per : TRIAL_SPECIMEN_CALIB_MAX_FRAMES));
     json_object_set_new(j, "nodes", json_integer(p->pool.scene.nodes));
+    json_object_set_new(j, "hinge_guess", num_or_null(hinge_guess));
     json_object_set_new(j, "keys", keys);
     json_object_set_new(j, "parameters", ps);
     json_object_set_new(j, "not_determined", nd);
@@ -249,6 +225,8 @@ static void say_fitted(trial_specimen_refit *r, const char *name, const pooled *
         else PUT(" +- %.3g", fr->se[k]);
         first = 0;
     }
+    if (isfinite(r->hinge_guess))
+        PUT(" (the strip's rigid creases fitted as hinges from sim.fit_hinge = %g N m/rad)", r->hinge_guess);
     PUT("; residual %.3g noise units RMS (%.3g at the measured strip)", fr->rms, fr->rms_start);
     if (p->nskipped) {
         ids_text(p->skipped, p->nskipped, ids, sizeof ids);
@@ -289,10 +267,12 @@ static void store_failure(store *st, int64_t specimen_id, const char *name, int6
 }
 
 void trial_specimen_calib_refit(store *st, int64_t specimen_id, const char *name, int64_t after_trial,
-                                const char *keys, const atomic_int *cancel, trial_specimen_refit *out)
+                                const char *keys, double fit_hinge, const atomic_int *cancel,
+                                trial_specimen_refit *out)
 {
     double t0 = wall_now();
     memset(out, 0, sizeof *out);
+    out->hinge_guess = NAN;
     char at[32] = "";
     store_wall_format(store_wall_now(), at, sizeof at);
     pooled *p = calloc(1, sizeof *p);
@@ -336,8 +316,13 @@ void trial_specimen_calib_refit(store *st, int64_t specimen_id, const char *name
             failed(out, "no_trials", "it has no finished trial");
         goto fail;
     }
-    rod_fit_opts o = rod_fit_opts_default();
-    if (parse_keys(&p->pool.scene, keys, &o, out)) goto fail;
+    /* The in-trial fit's setup (sim.fit_hinge on rigid creases, sim.fit_keys, the priors): the
+     * record's hinge start is then the guess. */
+    rod_fit_opts o;
+    int rigid = rod_scene_hinge_rigid(&p->pool.scene);
+    if (trial_calibrate_setup(&p->pool.scene, fit_hinge, keys, &o, out->reason_key, out->reason, sizeof out->reason) < 0)
+        goto fail;
+    out->hinge_guess = rigid && !rod_scene_hinge_rigid(&p->pool.scene) ? fit_hinge : NAN;
     o.cancel = cancel;
     rod_status fs = rod_fit_run(&p->pool.scene, p->pool.obs, p->pool.nobs, &o, fr, why, sizeof why);
     if (fs != ROD_OK) {
@@ -358,7 +343,7 @@ void trial_specimen_calib_refit(store *st, int64_t specimen_id, const char *name
         goto fail;
     }
     out->wall_s = wall_now() - t0;
-    json_t *j = calibration_json(p, fr, after_trial, at, out->wall_s);
+    json_t *j = calibration_json(p, fr, after_trial, at, out->wall_s, out->hinge_guess);
     char *text = j ? dump_within(j, STORE_SPECIMEN_CALIBRATION_MAX) : NULL;
     json_decref(j);
     char w[300] = "out of memory, or the record too long";
@@ -438,9 +423,8 @@ int trial_specimen_calib_apply(const char *calibration_json, const rod_scene *me
         iu += (size_t)snprintf(ids + iu, sizeof ids - iu, "%s%lld", k ? ", " : "",
                               (long long)json_integer_value(json_array_get(tr, k)));
     const char *at = json_string_value(json_object_get(j, "at"));
-    double u[ROD_FIT_NKEYS], val[ROD_FIT_NKEYS];
+    double u[ROD_FIT_NKEYS], val[ROD_FIT_NKEYS], hinge_start = NAN;
     int apply[ROD_FIT_NKEYS] = {0};
-    rod_fit_scene_values(sc, u);
     json_t *applied = json_array(), *held = json_array(), *ps = json_object_get(j, "parameters");
     char what[700] = "", helds[300] = "";
     size_t wu = 0, hu = 0;
@@ -460,7 +444,16 @@ int trial_specimen_calib_apply(const char *calibration_json, const rod_scene *me
         }
         double v = json_number_value(json_object_get(p, "value"));
         double start = json_number_value(json_object_get(p, "start")), now = scene_value(measured, k);
-        if (!(fabs(start - now) <= 1e-9 * fmax(1.0, fabs(now)))) {
+        /* A hinge fitted on rigid creases started from sim.fit_hinge's guess, not from the strip: it
+         * replaces the rigid creases (a strip re-measured with compliant ones is compared below). */
+        int hinge = k == ROD_FIT_HINGE || k == ROD_FIT_HINGE_LEFT || k == ROD_FIT_HINGE_RIGHT;
+        int on_rigid = hinge && rod_scene_hinge_rigid(measured);
+        if (on_rigid && !(start > 0.0 && isfinite(start))) {
+            json_array_append_new(held, json_pack("{s:s, s:s}", "key", name, "why", "no hinge start"));
+            if (hu < sizeof helds) hu += (size_t)snprintf(helds + hu, sizeof helds - hu, "%s%s (no hinge start)", hu ? ", " : "", name);
+            continue;
+        }
+        if (!on_rigid && !(fabs(start - now) <= 1e-9 * fmax(1.0, fabs(now)))) {
             use->warning = 1;
             snprintf(use->message, sizeof use->message,
                      "calibration of the specimen (trials %s, %s) not applied: it was fitted from %s = %.6g and the "
@@ -474,11 +467,19 @@ int trial_specimen_calib_apply(const char *calibration_json, const rod_scene *me
         }
         apply[k] = 1;
         val[k] = v;
-        json_array_append_new(applied, json_pack("{s:s, s:f, s:f, s:s}", "key", name, "value", v, "replaced", now,
-                                                 "replaced_from", source_of(creases, k)));
-        if (wu < sizeof what)
-            wu += (size_t)snprintf(what + wu, sizeof what - wu, "%s%s %.6g (%s %.6g)", wu ? ", " : "", name, v,
-                                   source_of(creases, k), now);
+        if (on_rigid) {
+            hinge_start = start;
+            json_array_append_new(applied, json_pack("{s:s, s:f, s:n, s:s}", "key", name, "value", v, "replaced",
+                                                     "replaced_from", "rigid creases"));
+            if (wu < sizeof what)
+                wu += (size_t)snprintf(what + wu, sizeof what - wu, "%s%s %.6g (rigid creases)", wu ? ", " : "", name, v);
+        } else {
+            json_array_append_new(applied, json_pack("{s:s, s:f, s:f, s:s}", "key", name, "value", v, "replaced", now,
+                                                     "replaced_from", source_of(creases, k)));
+            if (wu < sizeof what)
+                wu += (size_t)snprintf(what + wu, sizeof what - wu, "%s%s %.6g (%s %.6g)", wu ? ", " : "", name, v,
+                                       source_of(creases, k), now);
+        }
         use->applied++;
     }
     if (!use->applied) {
@@ -508,6 +509,13 @@ int trial_specimen_calib_apply(const char *calibration_json, const rod_scene *me
     snprintf(use->record, sizeof use->record, "%s", t);
     free(t);
     rod_scene fitted = *sc;
+    if (isfinite(hinge_start) && rod_scene_hinge_rigid(&fitted)) {
+        /* The fit's strip: the creases hinges of the guess it started from (per-crease keys are
+           relative to it, rod_fit_param.h). */
+        fitted.fold_hinge_stiffness = hinge_start;
+        fitted.fold_hinge_stiffness_left = fitted.fold_hinge_stiffness_right = NAN;
+    }
+    rod_fit_scene_values(&fitted, u);
     for (int k = 0; k < ROD_FIT_NKEYS; k++)
         if (apply[k]) u[k] = rod_fit_key_log(k) ? log(val[k]) : val[k];
     rod_fit_scene_apply(&fitted, u);

@@ -9,15 +9,17 @@
  * TRIAL_SPECIMEN_CALIB_MAX_FRAMES_TOTAL in all: the fit's cost is a static solve per frame per
  * evaluation, so it stays bounded however often the specimen is trialled), skips a trial
  * the pool refuses (too few frames, the lower state, a strip different from the newest one's: a
- * re-measured specimen) with its reason, and fits one strip (sim/rod_fit.h, the keys of the
- * trial's sim.fit_keys). A new calibration replaces the specimen's; a refit that fails
+ * re-measured specimen) with its reason, and fits one strip (sim/rod_fit.h) set up as the fit
+ * beside a trial is (trial_calibrate_setup: sim.fit_keys, sim.fit_hinge, the priors). A new calibration replaces the specimen's; a refit that fails
  * (reason_key: no_trials, unknown_key, key_not_usable, fit_failed, at_bound, misfit, cancelled,
  * not_stored) keeps the one before and stores why beside it. Either way `message` is the
  * sentence for the trial's event.
  *
  * Its use (trial_specimen_calib_apply): the fitted strip values the data determined replace the
  * measured (or scene) ones in the prediction's scene; a value not determined, and the camera's
- * view.dz_offset (not the strip), keep the measured or scene value. A calibration made from a
+ * view.dz_offset (not the strip), keep the measured or scene value. A hinge fitted from
+ * sim.fit_hinge's guess on rigid creases makes the prediction's rigid creases hinges of the fitted
+ * stiffness (its start was the guess, not a measured value: not a sign of a re-measure). A calibration made from a
  * strip other than the one the trial measures (the specimen re-measured since) is not applied,
  * and the message says which value changed. */
 #ifndef RIBBON_TRIAL_SPECIMEN_CALIB_H
@@ -35,7 +37,8 @@
                                                TRIAL_CALIBRATE_MAX_HOLD_OBS) ... */
 #define TRIAL_SPECIMEN_CALIB_MAX_FRAMES_TOTAL 120 /* ... and in all: with more than 3 trials each
                                                gives 120 / n (`ribbonctl calibrate --max-samples M`
-                                               with M = min(40, 120 / n) reproduces the refit) */
+                                               with M = min(40, 120 / n) pools the same frames;
+                                               it fits them without the priors) */
 #define TRIAL_SPECIMEN_CALIB_MAX_EXAMINED 16 /* newest trials looked at, used or skipped */
 
 typedef struct trial_specimen_refit {
@@ -44,16 +47,20 @@ typedef struct trial_specimen_refit {
     char reason[480];
     int ntrials;            /* trials pooled */
     int nobs;               /* frames fitted */
+    double hinge_guess;     /* N m/rad: the strip's rigid creases were fitted as hinges from this
+                               guess (sim.fit_hinge); NaN: the strip's own creases */
     double wall_s;          /* wall time of the whole refit */
     char message[1000];     /* the trial's event: what was fitted, or why not and what stands */
 } trial_specimen_refit;
 
 /* Refits specimen specimen_id (named name, for the message) after its trial after_trial ended,
- * from its finished trials, keys as sim.fit_keys ("" = both crease angles, and the hinge when the
- * strip's creases are compliant), and stores the outcome in the specimen's record (st must be
+ * from its finished trials, set up as the fit beside a trial is (trial_calibrate_setup: keys as
+ * sim.fit_keys, "" = both crease angles and the hinge when the strip's creases are compliant;
+ * rigid creases made hinges of fit_hinge, sim.fit_hinge, when > 0; the same priors), and stores the outcome in the specimen's record (st must be
  * writable). cancel (may be NULL): non-zero stops the fit at its next evaluation (cancelled). */
 void trial_specimen_calib_refit(store *st, int64_t specimen_id, const char *name, int64_t after_trial,
-                                const char *keys, const atomic_int *cancel, trial_specimen_refit *out);
+                                const char *keys, double fit_hinge, const atomic_int *cancel,
+                                trial_specimen_refit *out);
 
 /* What a trial's prediction took from its specimen's calibration. */
 typedef struct trial_specimen_calib_use {
