@@ -50,6 +50,7 @@ char *trial_record_json(const rig_config *cfg, const vis_calib *cal, trial_roi r
     json_object_set_new(root, "snap", snap);
     json_object_set_new(root, "fps", json_real(cfg->camera.fps));
     json_object_set_new(root, "length_m", json_real(cfg->scene.length));
+    json_object_set_new(root, "width_m", json_real(cfg->scene.width)); /* sizes a replay's tracker */
     json_object_set_new(root, "compression", json_real(cfg->scene.compression));
     json_object_set_new(root, "min_quality", json_real(cfg->detect.min_quality));
     json_object_set_new(root, "fold_angle_deg", json_real(cfg->scene.fold_angle_deg));
@@ -136,6 +137,10 @@ int trial_record_parse(const char *text, trial_record *out, char *why, size_t wh
         num(snap, "post_snap_s", &out->snap.post_snap_s, why, why_len))
         goto done;
     (void)h;
+    /* Optional: records from before it was kept have no width (their replays keep the tracker's
+     * defaults). */
+    json_t *wv = json_object_get(root, "width_m");
+    out->width_m = json_is_number(wv) && json_number_value(wv) > 0 ? json_number_value(wv) : 0.0;
     out->camera.has_intrinsics = json_is_true(json_object_get(cam, "has_intrinsics"));
     out->calib.compress_sign = cs < 0 ? -1 : 1;
     out->calib.shear_sign = ss < 0 ? -1 : 1;
@@ -174,4 +179,11 @@ store_regime trial_regime_of(int snapped, int seen_by_camera, int asymmetric)
            : !seen_by_camera ? STORE_REGIME_UNKNOWN
            : asymmetric      ? STORE_REGIME_ASYMMETRIC
                              : STORE_REGIME_SYMMETRIC;
+}
+
+vis_track_params trial_record_track_params(const trial_record *rec, const vis_calib *video_cal)
+{
+    vis_track_params tp = vis_track_params_for_ribbon(rec->width_m * 1000.0, video_cal->px_per_mm);
+    tp.length_mm = rec->length_m * 1000.0;
+    return tp;
 }

@@ -26,6 +26,7 @@ typedef struct trial_record {
     trial_roi roi;         /* the video's region inside the full frame */
     double fps;
     double length_m;
+    double width_m;        /* the ribbon's width, m; 0 in records from before it was kept */
     double compression;    /* Delta L of the trial */
     snap_params snap;
     double min_quality;
@@ -33,6 +34,10 @@ typedef struct trial_record {
 int trial_record_parse(const char *json, trial_record *out, char *why, size_t why_len);
 /* The record's camera calibration in the saved video's pixels (moved by its region of interest). */
 void trial_record_video_calib(const trial_record *rec, vis_calib *out);
+/* The tracker's parameters for the record's video (`video_cal` from trial_record_video_calib): the
+ * known length, and sized to the ribbon's face as the trial's tracker was
+ * (vis_track_params_for_ribbon); the defaults for a record without the width. */
+vis_track_params trial_record_track_params(const trial_record *rec, const vis_calib *video_cal);
 
 /* The regime stored for a snap: no snap; unknown when only the load witness saw it (no frames to
  * read the pathway from); else asymmetric or symmetric. Predictions and replays see every snap

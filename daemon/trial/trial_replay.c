@@ -626,8 +626,7 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
     const trial_record *rec = &r->rec;
     vis_calib cal;
     trial_record_video_calib(rec, &cal);
-    vis_track_params tp = vis_track_params_default();
-    tp.length_mm = rec->length_m * 1000.0;
+    vis_track_params tp = trial_record_track_params(rec, &cal);
     trk = vis_tracker_create(&tp, &cal, &ve);
     frame = vis_frame_alloc(16, 16, 1, &ve);
     if (!trk || !frame) {

@@ -584,7 +584,8 @@ static int session_open_tracker_and_video(trial_session *s, session_parts *p, ch
 {
     const rig_config *cfg = &s->cfg;
     vis_error ve = {0};
-    vis_track_params tp = vis_track_params_default();
+    /* Sized to the ribbon's face, which a strip twisted under shear shows (docs/vision.md). */
+    vis_track_params tp = vis_track_params_for_ribbon(p->sc.width * 1000.0, s->cal.px_per_mm);
     tp.length_mm = p->sc.length * 1000.0;
     p->trk = vis_tracker_create(&tp, &s->cal, &ve);
     if (!p->trk) {

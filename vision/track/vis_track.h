@@ -51,6 +51,11 @@ typedef struct vis_track_params {
                                   (vis_track_pipe). 0 = never; 0..100000 (100) */
 } vis_track_params;
 vis_track_params vis_track_params_default(void);
+/* The defaults for a ribbon `width_mm` wide seen at `px_per_mm`: a strip that twists shows its
+ * face, so ribbon_max_px is the face's apparent width plus 2 px (rounded up) and band_px 1.5 times
+ * that, neither below the defaults nor above 100. A width or scale that is not positive and finite
+ * gives the defaults. */
+vis_track_params vis_track_params_for_ribbon(double width_mm, double px_per_mm);
 
 /* Find the two clamp points in a frame: where the ribbon leaves each clamp jaw, at the ribbon's
  * centre, sub-pixel (vision/track/clamps.cpp). The jaws are the two thick blobs that contrast with the
