@@ -1,6 +1,7 @@
 /* rod_fit.c: the strip fitted to observed equilibria: the model followed along the observed
  * states, Levenberg-Marquardt, covariance and unidentified directions (rod_fit.h). */
 #include "rod_fit.h"
+#include "rod_fit_sandwich.h"
 
 #include "rod_observe.h"
 #include "rod_route.h"
@@ -495,6 +496,7 @@ static int covariance(fit_ctx *c, const double *Jw, rod_fit_result *res)
     double factor = 1.0;
     if (c->o->scale_covariance && n > p) factor = res->chi2 / (double)(n - p);
     res->cov_scaled = factor != 1.0;
+    double hinv[ROD_FIT_NKEYS * ROD_FIT_NKEYS], cw[ROD_FIT_NKEYS * ROD_FIT_NKEYS];
     for (int a = 0; a < p; a++)
         for (int b = 0; b < p; b++) {
             double s = 0.0;
@@ -503,8 +505,27 @@ static int covariance(fit_ctx *c, const double *Jw, rod_fit_result *res)
                 if (!(sv > 1e-12 * smax)) continue;
                 s += gsl_matrix_get(V, (size_t)a, (size_t)d) * gsl_matrix_get(V, (size_t)b, (size_t)d) / (sv * sv);
             }
-            res->cov[c->key[a]][c->key[b]] = factor * s * c->scale[c->key[a]] * c->scale[c->key[b]];
+            hinv[a * p + b] = cw[a * p + b] = s;
         }
+    /* The tracker's per-phase common mode: the sandwich (rod_fit_sandwich.h). */
+    double sig[2] = {c->o->sigma_dz, c->o->sigma_a}, sb[2] = {c->o->sigma_b_dz, c->o->sigma_b_a}, rho[2];
+    int *phase = malloc((size_t)c->nobs * sizeof *phase);
+    if (!phase) {
+        gsl_matrix_free(A); gsl_matrix_free(V); gsl_vector_free(S); gsl_vector_free(work);
+        return -1;
+    }
+    rod_fit_phases(c->obs, c->nobs, phase);
+    double est[2];
+    rod_fit_common_mode_estimate(c->last_f, c->nobs, phase, est);
+    for (int a = 0; a < 2; a++) {
+        rho[a] = sb[a] > 0.0 ? (sb[a] / sig[a]) * (sb[a] / sig[a]) : sb[a] < 0.0 ? est[a] : 0.0;
+        res->sigma_b[a] = sqrt(rho[a]) * sig[a];
+    }
+    rod_fit_sandwich_add(Jw, c->nobs, p, phase, rho, hinv, cw);
+    free(phase);
+    for (int a = 0; a < p; a++)
+        for (int b = 0; b < p; b++)
+            res->cov[c->key[a]][c->key[b]] = factor * cw[a * p + b] * c->scale[c->key[a]] * c->scale[c->key[b]];
     for (int a = 0; a < p; a++) {
         int k = c->key[a];
         int has_prior = isfinite(c->o->prior_sigma[k]);
@@ -576,6 +597,10 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
     }
     if (!(o->sigma_dz > 0.0) || !(o->sigma_a > 0.0) || !isfinite(o->sigma_dz) || !isfinite(o->sigma_a)) {
         snprintf(why, why_len, "the noise of Delta Z and of A must be positive and finite");
+        return ROD_ERR_SCENE;
+    }
+    if (!isfinite(o->sigma_b_dz) || !isfinite(o->sigma_b_a)) {
+        snprintf(why, why_len, "the tracker's common-mode error (sigma_b) of Delta Z and of A must be finite");
         return ROD_ERR_SCENE;
     }
     int need = c.nfit + 1 > o->min_obs ? c.nfit + 1 : o->min_obs;

@@ -48,6 +48,12 @@ typedef struct rod_fit_opts {
     double sigma_dz, sigma_a;        /* noise of each observable (Delta Z, A in rad) */
     int paper;                       /* 0: dz_cam, a_cam (the camera's); 1: dz, a */
     int scale_covariance;            /* 1: covariance times chi2 / (n - p) */
+    double sigma_b_dz, sigma_b_a;    /* the tracker's error common to a phase (compression, hold,
+                                        shear) on each observable, besides sigma_dz / sigma_a per
+                                        frame: the covariance becomes the sandwich of
+                                        rod_fit_sandwich.h (the values are unchanged). 0: none (the
+                                        default); below 0: estimated from the phases' mean
+                                        residuals (biased low) */
     int max_iterations;              /* LM iteration cap */
     double stop_sd;                  /* the fit stops once the Gauss-Newton step still to go is
                                         below this many standard deviations (0.05: every value
@@ -83,6 +89,7 @@ typedef struct rod_fit_result {
     int misfit;                      /* rms above opts.misfit */
     double sv_min, sv_max;           /* singular values of the range-scaled data Jacobian */
     double wall_s;
+    double sigma_b[2];               /* the common mode used (Delta Z, A; 0: none) */
     int cov_scaled;                  /* 1: cov already times chi2 / (n - p) (scale_covariance) */
     double gn_sd;                    /* the Gauss-Newton step still to go when the fit stopped, in
                                         standard deviations (below 0.05: converged to well within

@@ -38,7 +38,8 @@
 static const char usage[] =
     "usage: ribbon-fit-family --scene FILE [--set section.key=value ...] [--twins N] [--seed S]\n"
     "                         [--threads T] [--fit KEY,KEY,...] [--prior KEY=SIGMA ...]\n"
-    "                         [--shear-frac F] [--sigma-dz X] [--sigma-a X] [--held-at-truth]\n"
+    "                         [--shear-frac F] [--sigma-dz X] [--sigma-a X] [--sigma-b-dz X]\n"
+    "                         [--sigma-b-a X] [--held-at-truth]\n"
     "                         [--verbose [--verbose]] [--json]\n"
     "  Draws N twins (20) of the scene's strip with seed S (1) across a hand-made strip's ranges\n"
     "  (crease angles 75-95 deg within 5% of each other, hinge bending length 1-20% of l, E -+ 20%,\n"
@@ -52,7 +53,9 @@ static const char usage[] =
     "  --prior as ribbon-sim fit's (relative for\n"
     "  the hinge and E); --fit clears the default priors.\n"
     "  The residuals are weighted by the scatter of the hold's frames unless --sigma-dz / --sigma-a\n"
-    "  give the noise. --held-at-truth (a diagnostic): the parameters not fitted are held at each\n"
+    "  give the noise. --sigma-b-dz / --sigma-b-a: the tracker's error common to each phase\n"
+    "  (compression, hold, shear) besides that noise, for the fit's covariance (a sandwich; below 0:\n"
+    "  estimated from the phases' mean residuals; default 0: none). --held-at-truth (a diagnostic): the parameters not fitted are held at each\n"
     "  twin's own values instead of the scene's. --verbose: a line per twin on stderr (twice: the\n"
     "  fitted values against the twin's, with standard errors; ND: not determined by the data).\n";
 
@@ -204,7 +207,7 @@ int main(int argc, char **argv)
     const char *scene = NULL, *sets[MAX_SETS], *fitkeys = NULL, *priors[ROD_FIT_NKEYS];
     int nsets = 0, npriors = 0, twins = 20, threads = 0, verbose = 0, json = 0;
     unsigned long long seed = 1;
-    double frac = 0.8, sigma_dz = 0, sigma_a = 0;
+    double frac = 0.8, sigma_dz = 0, sigma_a = 0, sigma_b_dz = 0, sigma_b_a = 0;
     int held_truth = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -218,6 +221,10 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--held-at-truth")) held_truth = 1;
         else if (!strcmp(a, "--sigma-dz") && more && (sigma_dz = strtod(argv[++i], &end), !*end) && sigma_dz > 0) continue;
         else if (!strcmp(a, "--sigma-a") && more && (sigma_a = strtod(argv[++i], &end), !*end) && sigma_a > 0) continue;
+        else if (!strcmp(a, "--sigma-b-dz") && more && (sigma_b_dz = strtod(argv[++i], &end), !*end) &&
+                 isfinite(sigma_b_dz)) continue;
+        else if (!strcmp(a, "--sigma-b-a") && more && (sigma_b_a = strtod(argv[++i], &end), !*end) && isfinite(sigma_b_a))
+            continue;
         else if (!strcmp(a, "--scene") && more) scene = argv[++i];
         else if (!strcmp(a, "--set") && more && nsets < MAX_SETS) sets[nsets++] = argv[++i];
         else if (!strcmp(a, "--fit") && more) fitkeys = argv[++i];
@@ -254,6 +261,8 @@ int main(int argc, char **argv)
         if (sigma_dz > 0) j.o.fit.sigma_dz = sigma_dz;
         if (sigma_a > 0) j.o.fit.sigma_a = sigma_a;
     }
+    j.o.fit.sigma_b_dz = sigma_b_dz;
+    j.o.fit.sigma_b_a = sigma_b_a;
     if (fitkeys) {
         for (int k = 0; k < ROD_FIT_NKEYS; k++) j.o.fit.prior_sigma[k] = INFINITY;
         if (parse_fit(fitkeys, &j.o.fit) != 0) return 2;

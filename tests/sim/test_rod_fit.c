@@ -32,6 +32,7 @@
 #include <string.h>
 
 #include "fit_scene_kit.h"
+#include "rod_fit_sandwich.h"
 
 #define NC 6
 #define NS 6
@@ -377,6 +378,69 @@ static void bad_input_is_named(void **state)
     assert_non_null(strstr(why, "observation 3"));
 }
 
+/* The tracker's per-phase common mode (rod_fit_sandwich.h): the values are those of the fit
+   without it, and the covariance grows by exactly sum rho (C g)(C g)^T, C the fit's covariance
+   without it and g the sum of each phase's whitened Jacobian rows (the model's, at the fit): a compression
+   and a shear. */
+static void the_common_mode_widens_the_covariance_as_a_sandwich(void **state)
+{
+    (void)state;
+    rod_scene truth = truth_strip(), sc = fit_kit_pet(31);
+    truth.youngs_modulus = sc.youngs_modulus; /* as above: angles and hinge, all determined */
+    truth.shear_modulus = sc.shear_modulus;
+    rod_fit_obs obs[NMAX];
+    rod_fit_opts o = rod_fit_opts_default();
+    o.fit[ROD_FIT_ANGLE_LEFT] = o.fit[ROD_FIT_ANGLE_RIGHT] = o.fit[ROD_FIT_HINGE] = 1;
+    int n = observe_n(&truth, obs, 30, 0.15, o.sigma_dz, o.sigma_a);
+    rod_fit_result r0, r1;
+    char why[256];
+    assert_int_equal(rod_fit_run(&sc, obs, n, &o, &r0, why, sizeof why), ROD_OK);
+    rod_fit_opts ob = o;
+    ob.sigma_b_dz = 0.5 * o.sigma_dz;
+    ob.sigma_b_a = 0.3 * o.sigma_a;
+    assert_int_equal(rod_fit_run(&sc, obs, n, &ob, &r1, why, sizeof why), ROD_OK);
+    assert_true(fabs(r1.sigma_b[0] - ob.sigma_b_dz) < 1e-15 && fabs(r1.sigma_b[1] - ob.sigma_b_a) < 1e-15);
+    for (int k = 0; k < ROD_FIT_NKEYS; k++) assert_true(r1.u[k] == r0.u[k]);
+    rod_fit_model *m = NULL;
+    assert_int_equal(rod_fit_model_alloc(&sc, obs, n, 0, &m, why, sizeof why), ROD_OK);
+    static double y[2 * NMAX], jac[2 * NMAX * ROD_FIT_NKEYS];
+    /* as the fit got there: from the scene's values, then at the fitted ones */
+    assert_int_equal(rod_fit_model_eval(m, r0.u0, o.fit, y, NULL, why, sizeof why), ROD_OK);
+    rod_status st = rod_fit_model_eval(m, r0.u, o.fit, y, jac, why, sizeof why);
+    if (st != ROD_OK) printf("model at the fit: %s\n", why);
+    assert_int_equal(st, ROD_OK);
+    rod_fit_model_free(m);
+    int phase[NMAX];
+    rod_fit_phases(obs, n, phase);
+    double sig[2] = {o.sigma_dz, o.sigma_a}, rho[2] = {0.25, 0.09};
+    double want[ROD_FIT_NKEYS][ROD_FIT_NKEYS];
+    memcpy(want, r0.cov, sizeof want);
+    for (int ph = 0; ph < ROD_FIT_NPHASES; ph++)
+        for (int a = 0; a < 2; a++) {
+            double g[ROD_FIT_NKEYS] = {0}, h[ROD_FIT_NKEYS] = {0};
+            for (int k = 0; k < n; k++)
+                if (phase[k] == ph)
+                    for (int j = 0; j < ROD_FIT_NKEYS; j++) g[j] += jac[(2 * k + a) * ROD_FIT_NKEYS + j] / sig[a];
+            for (int i = 0; i < ROD_FIT_NKEYS; i++)
+                for (int j = 0; j < ROD_FIT_NKEYS; j++) h[i] += r0.cov[i][j] * g[j];
+            for (int i = 0; i < ROD_FIT_NKEYS; i++)
+                for (int j = 0; j < ROD_FIT_NKEYS; j++) want[i][j] += rho[a] * h[i] * h[j];
+        }
+    int grew = 0;
+    for (int i = 0; i < ROD_FIT_NKEYS; i++) {
+        if (!o.fit[i]) continue;
+        printf("  %-24s se %.4g -> %.4g (sandwich %.4g)\n", rod_fit_key_name(i), r0.se[i], r1.se[i], sqrt(want[i][i]));
+        grew += r1.cov[i][i] > 1.05 * r0.cov[i][i];
+        for (int j = 0; j < ROD_FIT_NKEYS; j++)
+            if (o.fit[j]) assert_true(fabs(r1.cov[i][j] - want[i][j]) <= 1e-6 * sqrt(want[i][i] * want[j][j]));
+    }
+    assert_true(grew > 0);
+    /* not a number: refused with its reason */
+    ob.sigma_b_a = NAN;
+    assert_int_equal(rod_fit_run(&sc, obs, n, &ob, &r1, why, sizeof why), ROD_ERR_SCENE);
+    assert_non_null(strstr(why, "common-mode"));
+}
+
 /* The fit stops once the Gauss-Newton step still to go is below 0.05 standard deviations
    (rod_fit.c, drive): that step, recomputed here from the model's own Jacobian at the fitted
    values by the normal equations (the fit uses a QR factorisation), is the one reported and is
@@ -463,6 +527,7 @@ int main(void)
         cmocka_unit_test(each_creases_hinge_is_recovered),
         cmocka_unit_test(bad_input_is_named),
         cmocka_unit_test(the_fit_stops_within_the_noise),
+        cmocka_unit_test(the_common_mode_widens_the_covariance_as_a_sandwich),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
