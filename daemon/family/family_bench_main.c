@@ -55,7 +55,7 @@ static const char usage[] =
     "  The residuals are weighted by the scatter of the hold's frames unless --sigma-dz / --sigma-a\n"
     "  give the noise. --sigma-b-dz / --sigma-b-a: the tracker's error common to each phase\n"
     "  (compression, hold, shear) besides that noise, for the fit's covariance (a sandwich; below 0:\n"
-    "  estimated from the phases' mean residuals; default 0: none). --held-at-truth (a diagnostic): the parameters not fitted are held at each\n"
+    "  estimated from the phases' mean residuals; default 0 and 0.003 rad, the in-trial fit's). --held-at-truth (a diagnostic): the parameters not fitted are held at each\n"
     "  twin's own values instead of the scene's. --verbose: a line per twin on stderr (twice: the\n"
     "  fitted values against the twin's, with standard errors; ND: not determined by the data).\n";
 
@@ -207,7 +207,9 @@ int main(int argc, char **argv)
     const char *scene = NULL, *sets[MAX_SETS], *fitkeys = NULL, *priors[ROD_FIT_NKEYS];
     int nsets = 0, npriors = 0, twins = 20, threads = 0, verbose = 0, json = 0;
     unsigned long long seed = 1;
-    double frac = 0.8, sigma_dz = 0, sigma_a = 0, sigma_b_dz = 0, sigma_b_a = 0;
+    /* sigma_b_a: the in-trial fit's TRIAL_CALIBRATE_BIAS_A (daemon/trial/trial_calibrate.h, 0.003 rad:
+     * the tracker's per-phase bias on A measured on these films); --sigma-b-a 0 turns it off */
+    double frac = 0.8, sigma_dz = 0, sigma_a = 0, sigma_b_dz = 0, sigma_b_a = 0.003;
     int held_truth = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];

@@ -132,6 +132,7 @@ int trial_calibrate_setup(rod_scene *sc, double fit_hinge, const char *keys, rod
     o->prior_sigma[ROD_FIT_HINGE] = o->prior_sigma[ROD_FIT_HINGE_LEFT] = o->prior_sigma[ROD_FIT_HINGE_RIGHT] =
         TRIAL_CALIBRATE_PRIOR_HINGE_LN;
     o->prior_sigma[ROD_FIT_DZ_OFFSET] = TRIAL_CALIBRATE_PRIOR_DZ_OFFSET;
+    o->sigma_b_a = TRIAL_CALIBRATE_BIAS_A; /* the tracker's bias within a phase, in the covariance */
     return hinged;
 }
 

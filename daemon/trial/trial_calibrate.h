@@ -43,6 +43,12 @@
                                               (a band's predictions under load; a fit stops at once) */
 #define TRIAL_CALIBRATE_NICE 10            /* the worker's niceness in rig mode (the trial's threads first) */
 #define TRIAL_CALIBRATE_PRIOR_ANGLE_DEG 10.0 /* prior width of each crease angle around the scene's */
+/* The tracker's error on A common to a phase of the protocol (compression, hold, shear), rad: the
+ * fit's covariance is a sandwich with it (sim/rod_fit_sandwich.h), values unchanged. 0.003 is the RMS
+ * of the per-phase mean error the family's films measured at 640 x 480 (-0.0037, +0.0024, +0.0026
+ * on twin 18, each 3-4 se of its mean; docs/calibration.md); the residuals cannot estimate it (the
+ * parameters absorb it). ribbon-fit-family uses the same value by default. */
+#define TRIAL_CALIBRATE_BIAS_A 0.003
 #define TRIAL_CALIBRATE_PRIOR_DZ_OFFSET 0.005 /* prior width of view.dz_offset (over l) around 0: 2.5 px at
                                               the rigs' 2.5 px/mm, where a lab calibration's clamp points
                                               are within 1.5 px (vision.md) */
