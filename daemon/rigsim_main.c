@@ -248,7 +248,7 @@ int main(int argc, char **argv)
     }
     if (!truth_said) say_truth(cam, &sc, side, 1);
     if (side) fclose(side);
-    char rep[1024];
+    char rep[400];
     rigsim_camera_report(cam, rep, sizeof rep);
     printf("%s\n", rep);
     rigsim_camera_stop(cam);

@@ -1,33 +1,26 @@
 /* rigsim_camera.h: the rig simulator's camera: a GigE Vision device on 127.0.0.1 (Aravis's fake
- * GigE Vision camera) whose every image is the digital twin at that image's own exposure instant.
+ * GigE Vision camera) whose every image is the digital twin rendered at that instant.
  *
- * Three threads (docs/rig-realtime.md, "One state per frame"). The twin's solver (rigsim_twin.h)
- * steps the simulated rod with the controller's ACTUAL axis positions (rigsim_rails.h; up to a
- * render's lead and a frame period ahead of real time, extrapolated at the axes' velocity), lands
- * on every exposure instant of the camera's schedule and logs its state after every step. The
- * render thread knows that schedule exactly (Aravis's fake camera sends when the real-time clock
- * reaches a whole multiple of its frame period), takes the logged state of each exposure instant
- * (interpolated between two steps when the schedule moved) and renders it through the synthetic
- * side camera at the rig file's camera size and blur, ahead of its send. The send (Aravis's
- * thread, at the frame rate ribbond sets through GenICam) takes the newest image whose exposure
- * has come, adds the sensor's noise (camera.noise_sigma) and stamps it with that exposure's
- * instant plus the camera's delay (host real-time clock, ns). When the solver is behind real time
- * (the stiff snap on a loaded machine), the image shows the latest state there is and its stamp
- * says that state's instant: late, never passed off as new; the exposures that follow keep the
- * camera's rate, lagging their schedule and gaining a quarter period a frame back, so a snap
- * filmed late is filmed in as many images; a send waits up to 1.5 frame periods
- * for an image newer than the last, and only a machine that starved the threads longer makes it
- * send the last one again (counted, with the same stamp). Images sent more than half a frame
- * period after the instant they show are counted and noted (rigsim_camera_tick). While nobody
- * streams, the twin's clock pauses.
- * Truth log (CSV, one line per image sent): index, the camera's timestamp on the host's monotonic
- * and real-time clocks (mono_s, real_s), the axes' actual positions at that instant (mm), Delta L,
- * Delta W, the twin's Delta Z in the image, frozen, the twin time the image shows (s), image_age_s
- * (stamp - delay - the instant the image shows: 0 but for a frozen image), the camera's delay (s),
- * sent_mono_s (when the image left), state_exact (0: the solver was behind, the image shows an
- * earlier state than the schedule's) and solver_ahead_s (the solver's latest state against the
- * send: < 0 behind real time). Faults: the camera stops (the device goes away) or the image
- * freezes (the last image is sent again, stamped as it leaves) from a time on. */
+ * The twin has its own thread (a real-time priority when the process may): once per camera frame
+ * it reads the controller's ACTUAL axis positions (rigsim_rails.h), extrapolates them at the axes'
+ * velocity to that frame's send time (the camera's schedule, measured from its sends), turns them
+ * into (Delta L, Delta W) with the rig file's calibration, advances the twin (the simulated rod,
+ * daemon/twin/mock_camera.h) to the send time and renders it through the synthetic side camera at
+ * the rig file's camera size and blur, early enough to be ready before the send; images sent older
+ * than half a frame period are counted and noted (rigsim_camera_tick); the sensor's noise
+ * (camera.noise_sigma) is added to each image as it is sent, so no two images are the same. So the ribbon
+ * follows what the rails really did, not what ribbond commanded. The camera's fill (Aravis's
+ * thread, at the frame rate ribbond sets through GenICam) copies the latest image and sets the
+ * buffer's timestamp as it leaves (host real-time clock, ns): a slow twin step (the snap needs
+ * more Newton iterations) never delays an image; the image is then older than its stamp, which
+ * the truth log records. While nobody streams, the twin's clock pauses.
+ * Truth log (CSV, one line per image sent): index, host monotonic time of the send, real-time clock
+ * time (the camera's timestamp), the axes' actual positions at the send (mm), Delta L, Delta W,
+ * the twin's Delta Z in the image, frozen, the twin time the image shows (s), and the image's age
+ * at the send beyond the camera's delay (s: send time - delay - the time the twin was stepped to;
+ * negative when rendered ahead), and the camera's delay (s: the image shows the instant send time -
+ * delay - age). Faults: the camera stops (the device goes away) or the image freezes (the last
+ * image is sent again) from a time on. */
 #ifndef RIBBON_RIGSIM_CAMERA_H
 #define RIBBON_RIGSIM_CAMERA_H
 
@@ -67,13 +60,10 @@ long rigsim_camera_frames(rigsim_camera *c);
 void rigsim_camera_stop_sending(rigsim_camera *c);
 /* Fault on command: the image freezes now (the same image is sent from now on). */
 void rigsim_camera_freeze(rigsim_camera *c);
-/* 1 when the render thread and the twin's solver got a real-time priority (SCHED_FIFO, below the
- * rails' thread, both on one core). */
+/* 1 when the twin's thread got a real-time priority (SCHED_FIFO, below the rails' thread). */
 int rigsim_camera_twin_realtime(const rigsim_camera *c);
-/* One line: images sent and rendered, the render thread's and the solver's shares of a core, the
- * slowest render and solver step, how far the solver fell behind real time, the images that showed
- * an older state than their exposure's, repeated the previous one, or were sent older than half a
- * frame period (and the oldest). */
+/* One line: images sent and rendered, the twin thread's share of a core, the slowest render, how
+ * many images were sent older than half a frame period and the oldest. */
 void rigsim_camera_report(rigsim_camera *c, char *out, size_t n);
 void rigsim_camera_stop(rigsim_camera *c);
 /* The twin's own snap so far (rod_twin_snap, as of the last render) and its Delta W then: the

@@ -18,7 +18,6 @@
 #define RIGSIM_AXES_LOG_S 0.005   /* s between lines of the axes log */
 #define RIGSIM_DRIVE_ALARM 0x30   /* the Modbus drive alarm raised on command (mb_sim's own default) */
 #define RIGSIM_RING 8192          /* axes-log lines buffered for the writer (41 s at 5 ms) */
-#define RIGSIM_HIST 32768         /* the axes' positions after each step: the last 32 s at 1 ms */
 
 /* The rails' thread runs at a real-time priority and never writes a file itself (a write may
  * block for tenths of a second when the kernel throttles dirty pages, as the recorder's video
@@ -48,11 +47,6 @@ struct rigsim_rails {
     char notes[4][48];          /* fault notes to print: what */
     double note_t[4];           /* and when (unix time) */
     int n_notes;
-    /* Both axes after every step (host monotonic time of the step): what the axes did at an
-     * instant of the last 32 s, for a twin stepped behind real time (rigsim_rails_positions_at;
-     * at load 29 with the solver at a normal priority it fell 17 s behind). */
-    double hist_t[RIGSIM_HIST], hist_c[RIGSIM_HIST], hist_s[RIGSIM_HIST];
-    long hist_n;
 };
 
 static double clock_s(clockid_t id)
@@ -112,18 +106,6 @@ static void *rails_main(void *arg)
             /* A deaf drive still moves (its watchdog halts it): Modbus drives step on. */
             for (int k = 0; k < 2; k++)
                 if (r->mb[k]) mb_sim_step(r->mb[k], 0.0);
-        }
-        {
-            double pc, ps;
-            positions_locked(r, &pc, &ps, NULL);
-            const double tp = mono_s(); /* the step just made */
-            const long h = r->hist_n % RIGSIM_HIST;
-            if (r->hist_n == 0 || tp > r->hist_t[(r->hist_n - 1) % RIGSIM_HIST]) {
-                r->hist_t[h] = tp;
-                r->hist_c[h] = pc;
-                r->hist_s[h] = ps;
-                r->hist_n++;
-            }
         }
         if (r->axes && now >= r->axes_next) {
             double pc, ps;
@@ -330,47 +312,6 @@ void rigsim_rails_positions(rigsim_rails *r, double *compress_mm, double *shear_
     positions_locked(r, compress_mm, shear_mm, &t);
     pthread_mutex_unlock(&r->lock);
     if (t_s) *t_s = t;
-}
-
-void rigsim_rails_positions_at(rigsim_rails *r, double t_mono, double *compress_mm, double *shear_mm)
-{
-    pthread_mutex_lock(&r->lock);
-    const long n = r->hist_n < RIGSIM_HIST ? r->hist_n : RIGSIM_HIST;
-    if (n == 0) {
-        positions_locked(r, compress_mm, shear_mm, NULL);
-        pthread_mutex_unlock(&r->lock);
-        return;
-    }
-#define H(k) ((r->hist_n - 1 - (k)) % RIGSIM_HIST) /* k steps back from the latest */
-    /* k: the newest step at or before t_mono (n - 1, the oldest, if none); times fall with k */
-    long lo = 0, hi = n - 1;
-    while (lo < hi) {
-        const long mid = (lo + hi) / 2;
-        if (r->hist_t[H(mid)] <= t_mono)
-            hi = mid;
-        else
-            lo = mid + 1;
-    }
-    const long k = lo;
-    long a, b; /* a the earlier, b the later of the pair t_mono is placed on */
-    if (k == 0) {
-        /* After the latest step: at the velocity over the last 5 ms (or what the ring holds). */
-        long back = 1;
-        while (back + 1 < n && r->hist_t[H(0)] - r->hist_t[H(back)] < 5e-3) back++;
-        a = H(n > 1 ? back : 0);
-        b = H(0);
-    } else {
-        a = H(k);
-        b = H(k - 1);
-    }
-#undef H
-    const double span = r->hist_t[b] - r->hist_t[a];
-    const double w = span > 0.0 ? (t_mono - r->hist_t[a]) / span : 0.0;
-    /* before the ring's oldest: that step's positions (no extrapolation into the past) */
-    const double wc = r->hist_t[a] > t_mono ? 0.0 : w;
-    *compress_mm = r->hist_c[a] + wc * (r->hist_c[b] - r->hist_c[a]);
-    *shear_mm = r->hist_s[a] + wc * (r->hist_s[b] - r->hist_s[a]);
-    pthread_mutex_unlock(&r->lock);
 }
 
 const char *rigsim_rails_port(const rigsim_rails *r) { return r->label; }

@@ -40,10 +40,6 @@ int rigsim_rails_start(const rig_config *cfg, double compress_start_mm, const ri
 /* Actual positions (mm) of the compression and the shear axis, and the host monotonic time of
  * the step they are from. */
 void rigsim_rails_positions(rigsim_rails *r, double *compress_mm, double *shear_mm, double *t_s);
-/* Both axes' actual positions (mm) at the host monotonic instant t_mono: interpolated between the
- * steps of the last 32 s, extrapolated at the axes' velocity over the last 5 ms after the latest
- * step (a twin stepped ahead of real time by up to a frame period), the oldest held before them. */
-void rigsim_rails_positions_at(rigsim_rails *r, double t_mono, double *compress_mm, double *shear_mm);
 /* What ribbond connects to: the GRBL port, or "modbus 127.0.0.1:P (compress), 127.0.0.1:Q (shear)". */
 const char *rigsim_rails_port(const rigsim_rails *r);
 /* 1 when the rails' thread got a real-time priority (SCHED_FIFO; needs root or CAP_SYS_NICE), 0
