@@ -145,7 +145,7 @@ rehearsal: build
 # after the rest, one at a time, and one that fails runs once more: on 2 cores their frame-level
 # margins fail now and then through no fault of the code (a snap passage that falls between two of
 # the simulator's renders, one packet lost on loopback), and both runs' output stays in the log.
-REALTIME_TESTS = ^(test_rig_rehearsal|test_rig_rails|test_rig_camera_offset|test_trial_capture|test_rig_twin_rate)$$
+REALTIME_TESTS = ^(test_rig_rehearsal|test_rig_rails|test_rig_camera_offset|test_trial_capture)$$
 
 test-normal: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) -E '$(REALTIME_TESTS)'
