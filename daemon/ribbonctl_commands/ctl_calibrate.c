@@ -20,6 +20,7 @@
 #include "api.h"
 #include "ctl.h"
 #include "ctl_calibrate_joint.h"
+#include "ctl_calibrate_out.h"
 #include "rod_fit.h"
 #include "rod_fit_snap.h"
 #include "scene_write.h"
@@ -199,16 +200,6 @@ static int open_store(const calib_args *a, store **st)
     return 0;
 }
 
-static double natural(int k, double u)
-{
-    return rod_fit_key_log(k) ? exp(u) : u;
-}
-
-static json_t *num_or_null(double v)
-{
-    return isfinite(v) ? json_real(v) : json_null();
-}
-
 typedef struct calib_out {
     const calib_args *a;
     const trial_pool *d;
@@ -223,13 +214,7 @@ static json_t *to_json(const calib_out *c)
     json_t *j = json_object(), *tr = json_array(), *ps = json_array(), *cm = json_array();
     for (int k = 0; k < c->d->ntrials; k++) {
         const trial_pool_trial *t = &c->d->trials[k];
-        json_array_append_new(tr, json_pack("{s:I, s:s, s:s, s:s, s:I, s:I, s:o, s:o, s:o, s:o, s:o, s:s}", "id",
-            (json_int_t)t->id, "mode", t->mode, "status", t->status, "specimen", t->specimen, "frames",
-            (json_int_t)t->frames, "samples", (json_int_t)t->used, "dl_min", num_or_null(t->dl_min), "dw_max",
-            num_or_null(t->dw_max), "snap_dw_measured", num_or_null(t->snap_measured), "snap_dw_predicted",
-            num_or_null(t->snap_predicted), "prediction_of", t->prediction_of ? json_integer(t->prediction_of)
-                                                                              : json_null(),
-            "regime_measured", t->regime_measured));
+        json_array_append_new(tr, ctl_calib_trial_json(t));
     }
     json_object_set_new(j, "trials", tr);
     json_object_set_new(j, "samples", json_integer(r->nobs));
@@ -248,29 +233,13 @@ static json_t *to_json(const calib_out *c)
                                                                                        : json_null());
         json_array_append_new(cm, row);
         json_array_append_new(ps, json_pack("{s:s, s:f, s:f, s:o, s:b, s:s, s:b}", "key", rod_fit_key_name(k), "scene",
-            natural(k, r->u0[k]), "fitted", natural(k, r->u[k]), "se", num_or_null(r->se[k]), "determined",
+            ctl_calib_natural(k, r->u0[k]), "fitted", ctl_calib_natural(k, r->u[k]), "se", ctl_calib_num_or_null(r->se[k]), "determined",
             r->determined[k], "se_kind", rod_fit_key_log(k) ? "relative" : "absolute", "at_bound", r->at_bound[k] != 0));
     }
     json_object_set_new(j, "parameters", ps);
     json_object_set_new(j, "correlation", cm);
     const rod_fit_snap *s = c->snap;
-    if (s) {
-        json_t *o = json_object();
-        json_object_set_new(o, "snapped", json_boolean(s->snapped));
-        if (s->snapped) {
-            json_object_set_new(o, "snap_dw", json_real(s->snap_dw));
-            json_object_set_new(o, "regime", json_string(s->asymmetric ? "asymmetric" : "symmetric"));
-        }
-        json_object_set_new(o, "band", json_boolean(s->band_ok));
-        if (s->snapped && s->band_ok) {
-            json_object_set_new(o, "snap_sd", json_real(s->snap_sd));
-            json_object_set_new(o, "snap_lo_2sigma", json_real(s->snap_dw - 2.0 * s->snap_sd));
-            json_object_set_new(o, "snap_hi_2sigma", json_real(s->snap_dw + 2.0 * s->snap_sd));
-            json_object_set_new(o, "p_other_regime", json_real(s->p_other));
-        }
-        if (s->note[0]) json_object_set_new(o, "note", json_string(s->note));
-        json_object_set_new(j, "snap", o);
-    }
+    if (s) json_object_set_new(j, "snap", ctl_calib_snap_json(s));
     json_object_set_new(j, "scene_written", c->a->write_scene ? json_string(c->a->write_scene) : json_null());
     return j;
 }
@@ -293,10 +262,8 @@ static void print_text(const calib_out *c)
     for (int i = 0; i < c->m; i++) {
         int k = c->keys[i];
         char se[96];
-        if (!isfinite(r->se[k])) snprintf(se, sizeof se, "not determined by these data");
-        else if (rod_fit_key_log(k)) snprintf(se, sizeof se, "%.3g%% (relative)", 100.0 * r->se[k]);
-        else snprintf(se, sizeof se, "%.3g%s", r->se[k], r->determined[k] ? "" : " (prior only: not determined by these data)");
-        printf("%-27s %14.6g %14.6g   %s%s\n", rod_fit_key_name(k), natural(k, r->u0[k]), natural(k, r->u[k]), se,
+        ctl_calib_se_text(k, r, se, sizeof se);
+        printf("%-27s %14.6g %14.6g   %s%s\n", rod_fit_key_name(k), ctl_calib_natural(k, r->u0[k]), ctl_calib_natural(k, r->u[k]), se,
                r->at_bound[k] ? (r->at_bound[k] > 0 ? "  AT ITS UPPER BOUND" : "  AT ITS LOWER BOUND") : "");
     }
     if (c->m > 1) {
@@ -310,33 +277,7 @@ static void print_text(const calib_out *c)
             printf("\n");
         }
     }
-    const rod_fit_snap *s = c->snap;
-    if (!s) return;
-    if (!s->snapped) {
-        printf("snap         none before protocol.shear_max (%s)\n", s->note);
-        return;
-    }
-    const char *reg = s->asymmetric ? "asymmetric" : "symmetric", *other = s->asymmetric ? "symmetric" : "asymmetric";
-    if (s->band_ok)
-        printf("calibrated   snap Delta W %.5f +- %.5f (1 sigma; 2 sigma %.5f .. %.5f), %s; P(%s) = %.3g%s%s\n",
-               s->snap_dw, s->snap_sd, s->snap_dw - 2.0 * s->snap_sd, s->snap_dw + 2.0 * s->snap_sd, reg, other,
-               s->p_other, s->note[0] ? "; " : "", s->note);
-    else
-        printf("calibrated   snap Delta W %.5f, %s (no band: %s)\n", s->snap_dw, reg, s->note);
-    for (int k = 0; k < d->ntrials; k++) {
-        const trial_pool_trial *t = &d->trials[k];
-        if (!isfinite(t->snap_measured)) {
-            printf("  trial %-5lld measured: no snap\n", (long long)t->id);
-            continue;
-        }
-        printf("  trial %-5lld measured %.5f (%s): calibrated %+.2f%%", (long long)t->id, t->snap_measured,
-               t->regime_measured, 100.0 * (s->snap_dw - t->snap_measured) / t->snap_measured);
-        if (s->band_ok && s->snap_sd > 0.0) printf(" (%.1f sigma)", fabs(s->snap_dw - t->snap_measured) / s->snap_sd);
-        if (isfinite(t->snap_predicted))
-            printf(", scene's prediction %.5f (%+.2f%%)", t->snap_predicted,
-                   100.0 * (t->snap_predicted - t->snap_measured) / t->snap_measured);
-        printf("\n");
-    }
+    if (c->snap) ctl_calib_print_snap(c->snap, d, "");
 }
 
 int ctl_calibrate_main(int argc, char **argv)
@@ -447,7 +388,7 @@ int ctl_calibrate_main(int argc, char **argv)
         if (r.at_bound[c.keys[i]])
             fprintf(stderr, "ribbonctl calibrate: %s ran to its %s bound %g: the data ask for a value outside the bounds\n",
                     rod_fit_key_name(c.keys[i]), r.at_bound[c.keys[i]] > 0 ? "upper" : "lower",
-                    natural(c.keys[i], r.at_bound[c.keys[i]] > 0 ? r.hi[c.keys[i]] : r.lo[c.keys[i]]));
+                    ctl_calib_natural(c.keys[i], r.at_bound[c.keys[i]] > 0 ? r.hi[c.keys[i]] : r.lo[c.keys[i]]));
     trial_pool_free(&d);
     return rc;
 }

@@ -13,6 +13,7 @@
  * "-specimen<ID>" before its extension. Kept apart from ctl_calibrate.c, which only parses the
  * flag and hands over. */
 #include "ctl_calibrate_joint.h"
+#include "ctl_calibrate_out.h"
 
 #include <errno.h>
 #include <jansson.h>
@@ -42,16 +43,6 @@ typedef struct jrun {
     int ng;
     rod_fit_joint_result r;
 } jrun;
-
-static double natural(int k, double u)
-{
-    return rod_fit_key_log(k) ? exp(u) : u;
-}
-
-static json_t *num_or_null(double v)
-{
-    return isfinite(v) ? json_real(v) : json_null();
-}
 
 /* The trials grouped by specimen. 0, or -1 with the reason printed. */
 static int group_trials(store *st, const ctl_calib_joint_args *a, jgroup *g, int *ng)
@@ -118,37 +109,6 @@ static int write_scenes(jrun *j)
     return 0;
 }
 
-static json_t *trial_json(const trial_pool_trial *t)
-{
-    return json_pack("{s:I, s:s, s:s, s:s, s:I, s:I, s:o, s:o, s:o, s:o, s:o, s:s}", "id", (json_int_t)t->id, "mode",
-                     t->mode, "status", t->status, "specimen", t->specimen, "frames", (json_int_t)t->frames, "samples",
-                     (json_int_t)t->used, "dl_min", num_or_null(t->dl_min), "dw_max", num_or_null(t->dw_max),
-                     "snap_dw_measured", num_or_null(t->snap_measured), "snap_dw_predicted",
-                     num_or_null(t->snap_predicted), "prediction_of",
-                     t->prediction_of ? json_integer(t->prediction_of) : json_null(), "regime_measured",
-                     t->regime_measured);
-}
-
-static json_t *snap_json(const rod_fit_snap *s)
-{
-    json_t *o = json_object();
-    json_object_set_new(o, "snapped", json_boolean(s->snapped));
-    if (s->snapped) {
-        json_object_set_new(o, "snap_dw", json_real(s->snap_dw));
-        json_object_set_new(o, "regime", json_string(s->asymmetric ? "asymmetric" : "symmetric"));
-    }
-    json_object_set_new(o, "band", json_boolean(s->band_ok));
-    if (s->snapped && s->band_ok) {
-        json_object_set_new(o, "snap_sd", json_real(s->snap_sd));
-        json_object_set_new(o, "snap_lo_2sigma", json_real(s->snap_dw - 2.0 * s->snap_sd));
-        json_object_set_new(o, "snap_hi_2sigma", json_real(s->snap_dw + 2.0 * s->snap_sd));
-        json_object_set_new(o, "p_other_regime", json_real(s->p_other));
-    }
-    if (s->note[0]) json_object_set_new(o, "note", json_string(s->note));
-    return o;
-}
-
-/* Specimen s's parameters: the hinge first (derived from k / b), then its own keys. */
 static json_t *spec_params_json(const jrun *j, int s)
 {
     const rod_fit_result *r = &j->r.spec[s];
@@ -161,8 +121,8 @@ static json_t *spec_params_json(const jrun *j, int s)
         char key[ROD_FIT_JOINT_KEY_LEN + 8];
         snprintf(key, sizeof key, "%s:%s", j->g[s].name, rod_fit_key_name((rod_fit_key)k));
         json_array_append_new(ps, json_pack("{s:s, s:f, s:f, s:o, s:b, s:s, s:b, s:b}", "key", key, "scene",
-                                            natural(k, r->u0[k]), "fitted", natural(k, r->u[k]), "se",
-                                            num_or_null(r->se[k]), "determined", r->determined[k], "se_kind",
+                                            ctl_calib_natural(k, r->u0[k]), "fitted", ctl_calib_natural(k, r->u[k]), "se",
+                                            ctl_calib_num_or_null(r->se[k]), "determined", r->determined[k], "se_kind",
                                             rod_fit_key_log(k) ? "relative" : "absolute", "at_bound",
                                             r->at_bound[k] != 0, "shared", k == ROD_FIT_HINGE));
     }
@@ -176,18 +136,18 @@ static json_t *to_json(const jrun *j)
     json_object_set_new(o, "share_hinge", json_true());
     json_object_set_new(o, "hinge_per_width",
                         json_pack("{s:s, s:s, s:f, s:f, s:o, s:s, s:b, s:b}", "key", ROD_FIT_JOINT_SHARED_KEY, "unit",
-                                  "N/rad", "start", exp(r->kb0), "fitted", exp(r->kb), "se", num_or_null(r->kb_se),
+                                  "N/rad", "start", exp(r->kb0), "fitted", exp(r->kb), "se", ctl_calib_num_or_null(r->kb_se),
                                   "se_kind", "relative", "determined", r->kb_determined, "at_bound", r->kb_at_bound != 0));
     for (int s = 0; s < j->ng; s++) {
         const jgroup *g = &j->g[s];
         json_t *tr = json_array();
-        for (int k = 0; k < g->d.ntrials; k++) json_array_append_new(tr, trial_json(&g->d.trials[k]));
+        for (int k = 0; k < g->d.ntrials; k++) json_array_append_new(tr, ctl_calib_trial_json(&g->d.trials[k]));
         json_t *e = json_pack("{s:s, s:I, s:f, s:I, s:i, s:f, s:f, s:o, s:o}", "specimen", g->name, "specimen_id",
                               (json_int_t)g->specimen_id, "width", g->d.scene.width, "nodes",
                               (json_int_t)g->d.scene.nodes, "samples", r->spec[s].nobs, "rms", r->spec[s].rms,
                               "rms_start", r->spec[s].rms_start, "trials", tr, "parameters", spec_params_json(j, s));
         json_object_set_new(e, "scene_written", g->scene_path[0] ? json_string(g->scene_path) : json_null());
-        if (g->have_snap) json_object_set_new(e, "snap", snap_json(&g->snap));
+        if (g->have_snap) json_object_set_new(e, "snap", ctl_calib_snap_json(&g->snap));
         json_array_append_new(sp, e);
     }
     json_object_set_new(o, "specimens", sp);
@@ -211,42 +171,9 @@ static json_t *to_json(const jrun *j)
     return o;
 }
 
-static void se_text(int k, const rod_fit_result *r, char *se, size_t len)
-{
-    if (!isfinite(r->se[k])) snprintf(se, len, "not determined by these data");
-    else if (rod_fit_key_log(k)) snprintf(se, len, "%.3g%% (relative)", 100.0 * r->se[k]);
-    else snprintf(se, len, "%.3g%s", r->se[k], r->determined[k] ? "" : " (prior only: not determined by these data)");
-}
-
 static void print_snap(const jgroup *g)
 {
-    const rod_fit_snap *s = &g->snap;
-    if (!g->have_snap) return;
-    if (!s->snapped) {
-        printf("  calibrated   none before protocol.shear_max (%s)\n", s->note);
-        return;
-    }
-    const char *reg = s->asymmetric ? "asymmetric" : "symmetric", *other = s->asymmetric ? "symmetric" : "asymmetric";
-    if (s->band_ok)
-        printf("  calibrated   snap Delta W %.5f +- %.5f (1 sigma; 2 sigma %.5f .. %.5f), %s; P(%s) = %.3g%s%s\n",
-               s->snap_dw, s->snap_sd, s->snap_dw - 2.0 * s->snap_sd, s->snap_dw + 2.0 * s->snap_sd, reg, other,
-               s->p_other, s->note[0] ? "; " : "", s->note);
-    else
-        printf("  calibrated   snap Delta W %.5f, %s (no band: %s)\n", s->snap_dw, reg, s->note);
-    for (int k = 0; k < g->d.ntrials; k++) {
-        const trial_pool_trial *t = &g->d.trials[k];
-        if (!isfinite(t->snap_measured)) {
-            printf("    trial %-5lld measured: no snap\n", (long long)t->id);
-            continue;
-        }
-        printf("    trial %-5lld measured %.5f (%s): calibrated %+.2f%%", (long long)t->id, t->snap_measured,
-               t->regime_measured, 100.0 * (s->snap_dw - t->snap_measured) / t->snap_measured);
-        if (s->band_ok && s->snap_sd > 0.0) printf(" (%.1f sigma)", fabs(s->snap_dw - t->snap_measured) / s->snap_sd);
-        if (isfinite(t->snap_predicted))
-            printf(", scene's prediction %.5f (%+.2f%%)", t->snap_predicted,
-                   100.0 * (t->snap_predicted - t->snap_measured) / t->snap_measured);
-        printf("\n");
-    }
+    if (g->have_snap) ctl_calib_print_snap(&g->snap, &g->d, "  ");
 }
 
 static void print_text(const jrun *j)
@@ -282,8 +209,8 @@ static void print_text(const jrun *j)
             int k = keys[i];
             char key[ROD_FIT_JOINT_KEY_LEN + 8];
             snprintf(key, sizeof key, "%s:%s", g->name, rod_fit_key_name((rod_fit_key)k));
-            se_text(k, q, se, sizeof se);
-            printf("  %-40s %14.6g %14.6g   %s%s%s\n", key, natural(k, q->u0[k]), natural(k, q->u[k]), se,
+            ctl_calib_se_text(k, q, se, sizeof se);
+            printf("  %-40s %14.6g %14.6g   %s%s%s\n", key, ctl_calib_natural(k, q->u0[k]), ctl_calib_natural(k, q->u[k]), se,
                    k == ROD_FIT_HINGE ? " (k / b times the width)" : "",
                    q->at_bound[k] ? (q->at_bound[k] > 0 ? "  AT ITS UPPER BOUND" : "  AT ITS LOWER BOUND") : "");
         }
@@ -375,7 +302,7 @@ int ctl_calibrate_joint(store *st, const ctl_calib_joint_args *a)
             if (q->at_bound[k])
                 fprintf(stderr, "ribbonctl calibrate: %s:%s ran to its %s bound %g: the data ask for a value outside the "
                                 "bounds\n", j.g[s].name, rod_fit_key_name((rod_fit_key)k),
-                        q->at_bound[k] > 0 ? "upper" : "lower", natural(k, q->at_bound[k] > 0 ? q->hi[k] : q->lo[k]));
+                        q->at_bound[k] > 0 ? "upper" : "lower", ctl_calib_natural(k, q->at_bound[k] > 0 ? q->hi[k] : q->lo[k]));
         }
 done:
     rod_fit_joint_result_free(&j.r);
