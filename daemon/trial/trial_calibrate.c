@@ -44,7 +44,7 @@ struct trial_calibrate {
     calib_job *job;           /* the running worker, or NULL */
     int started;              /* the first fit was started */
     int refreshes;            /* refreshes started */
-    int shear_used;           /* shear frames the last started fit used */
+    int shear_used;           /* shear frames below its limit when the last fit started */
     double t_last_start;
     double t_shear;           /* NaN before the shear */
     double t_snap;            /* NaN before the snap */
@@ -286,7 +286,7 @@ static void say(trial_calibrate *c, double t, const char *kind, const char *fmt,
 static void say(trial_calibrate *c, double t, const char *kind, const char *fmt, ...)
 {
     if (!c->def.event) return;
-    char msg[512];
+    char msg[768];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
@@ -298,9 +298,41 @@ static void fit_name(const trial_calibrated *r, char *buf, size_t n)
 {
     if (r->refresh == 0)
         snprintf(buf, n, "fit 0 (compression and hold, %d frames)", r->nobs_before);
+    else if (isfinite(r->dw_limit))
+        snprintf(buf, n, "refresh %d (%d + %d frames, shear to Delta W = %.4f, below %g of the %s snap %.4f)",
+                 r->refresh, r->nobs_before, r->nobs_shear, r->dw_cut, TRIAL_CALIBRATE_SHEAR_CUT, r->limit_of,
+                 r->limit_snap);
     else
-        snprintf(buf, n, "refresh %d (%d + %d frames, shear to Delta W = %.4f)", r->refresh, r->nobs_before,
-                 r->nobs_shear, r->dw_cut);
+        snprintf(buf, n, "refresh %d (%d + %d frames, shear to Delta W = %.4f, no snap predicted yet)", r->refresh,
+                 r->nobs_before, r->nobs_shear, r->dw_cut);
+}
+
+/* The shear frames' limit for a refresh: TRIAL_CALIBRATE_SHEAR_CUT of the last calibrated snap
+ * that landed, else of the scene's; NaN when neither is known (the whole shear). */
+static double shear_limit(const trial_calibrate *c, double *snap, const char **of)
+{
+    *snap = NAN;
+    *of = "";
+    if (c->have_kept && c->kept.snapped && isfinite(c->kept.snap_dw) && c->kept.snap_dw > 0.0) {
+        *snap = c->kept.snap_dw;
+        *of = "calibrated";
+    } else if (c->def.scene_snap) {
+        double s = c->def.scene_snap(c->def.user);
+        if (isfinite(s) && s > 0.0) {
+            *snap = s;
+            *of = "scene";
+        }
+    }
+    return isfinite(*snap) ? TRIAL_CALIBRATE_SHEAR_CUT * *snap : NAN;
+}
+
+/* The shear frames at or below limit (NaN: all of them). */
+static int shear_below(const trial_calibrate *c, double limit)
+{
+    if (!isfinite(limit)) return c->shear.n;
+    int n = 0;
+    for (int k = 0; k < c->shear.n; k++) n += c->shear.v[k].dw <= limit;
+    return n;
 }
 
 /* A landed result: said in an event, then reported. */
@@ -312,7 +344,7 @@ static void land(trial_calibrate *c, trial_calibrated *r, double t)
         failed(r, "after_snap",
                "its frames reach Delta W = %.5f, past the snap's onset at %.5f (frames of the snapping strip): not kept",
                r->dw_cut, c->dw_snap);
-    char name[128], when[96];
+    char name[200], when[96];
     fit_name(r, name, sizeof name);
     if (isfinite(c->t_shear))
         snprintf(when, sizeof when, "%.2f s after the shear started", t - c->t_shear);
@@ -375,7 +407,7 @@ static void launch(trial_calibrate *c, double t, int refresh)
     memset(&fail, 0, sizeof fail);
     fail.refresh = refresh;
     fail.t_started = t;
-    fail.snap_dw = fail.snap_sd = fail.p_other = NAN;
+    fail.snap_dw = fail.snap_sd = fail.p_other = fail.dw_limit = fail.limit_snap = NAN;
     if (!j || !obs) {
         free(j);
         free(obs);
@@ -383,17 +415,38 @@ static void launch(trial_calibrate *c, double t, int refresh)
         land(c, &fail, t);
         return;
     }
+    double limit = NAN, limit_snap = NAN;
+    const char *limit_of = "";
+    if (refresh) limit = shear_limit(c, &limit_snap, &limit_of);
     j->scene = c->def.scene;
     j->nice = c->def.nice;
     snprintf(j->keys, sizeof j->keys, "%s", c->def.keys);
     j->obs = obs;
     j->nobs_before = thin_into(obs, &c->before, TRIAL_CALIBRATE_MAX_HOLD_OBS);
-    j->nobs_shear = refresh ? thin_into(obs + j->nobs_before, &c->shear, TRIAL_CALIBRATE_MAX_SHEAR_OBS) : 0;
+    j->nobs_shear = 0;
+    int below = shear_below(c, limit);
+    if (refresh && below > 0) {
+        /* The frames below the limit, in their order, thinned evenly (the first and the last kept). */
+        obs_buf sel = {malloc(sizeof *sel.v * (size_t)below), 0, below};
+        if (!sel.v) {
+            job_free(j);
+            failed(&fail, "thread", "out of memory choosing the shear frames");
+            land(c, &fail, t);
+            return;
+        }
+        for (int k = 0; k < c->shear.n; k++)
+            if (!isfinite(limit) || c->shear.v[k].dw <= limit) sel.v[sel.n++] = c->shear.v[k];
+        j->nobs_shear = thin_into(obs + j->nobs_before, &sel, TRIAL_CALIBRATE_MAX_SHEAR_OBS);
+        free(sel.v);
+    }
     j->res.refresh = refresh;
     j->res.t_started = t;
+    j->res.dw_limit = limit;
+    j->res.limit_snap = limit_snap;
+    snprintf(j->res.limit_of, sizeof j->res.limit_of, "%s", limit_of);
     atomic_init(&j->state, JOB_RUNNING);
     atomic_init(&j->cancel, 0);
-    c->shear_used = c->shear.n;
+    c->shear_used = below;
     c->t_last_start = t;
     if (refresh == 0) {
         char keys[300];
@@ -455,7 +508,12 @@ void trial_calibrate_tick(trial_calibrate *c, double t, int shearing)
     if (!c || c->ended) return;
     if (c->job && atomic_load(&c->job->state) == JOB_DONE) collect(c, t);
     if (c->job || !c->started || !shearing || isfinite(c->t_snap) || !(c->def.refresh_s > 0.0)) return;
-    if (t - c->t_last_start < c->def.refresh_s || c->shear.n <= c->shear_used) return;
+    if (t - c->t_last_start < c->def.refresh_s) return;
+    /* Frames below the limit it has not fitted yet (or fewer: the limit came down). */
+    double snap;
+    const char *of;
+    int below = shear_below(c, shear_limit(c, &snap, &of));
+    if (below == 0 || below == c->shear_used) return;
     launch(c, t, ++c->refreshes);
 }
 
@@ -491,7 +549,7 @@ void trial_calibrate_end(trial_calibrate *c, double t, int aborted)
         }
     }
     if (c->have_kept) {
-        char name[128];
+        char name[200];
         fit_name(&c->kept, name, sizeof name);
         say(c, t, "info", "calibrated prediction stored: %s, landed at t = %.2f s%s", name, c->kept.t_landed,
             c->kept.refresh == c->refreshes || !c->refreshes ? ", the last made from frames before the snap"
@@ -565,6 +623,10 @@ int trial_calibrated_json(const trial_calibrated *r, char *out, size_t out_len)
     jbuf b = {out, out_len, 0, 0};
     jb(&b, "{\"refresh\":%d,\"frames_before\":%d,\"frames_shear\":%d,", r->refresh, r->nobs_before, r->nobs_shear);
     jb_num(&b, "dw_cut", r->dw_cut);
+    if (r->refresh > 0) {
+        jb_num(&b, "dw_limit", r->dw_limit);
+        if (r->limit_of[0]) jb_str(&b, "limit_of", r->limit_of);
+    }
     jb_num(&b, "t_started_s", r->t_started);
     jb_num(&b, "t_landed_s", r->t_landed);
     jb_num(&b, "t_shear_s", r->t_shear);

@@ -10,9 +10,11 @@
  * def's `landed` callback on the runner's thread (the session stores it beside the scene's
  * prediction and publishes it) and said in an event with the trial time it landed at and whether
  * that was before or after the shear started. During the shear the fit is refreshed every
- * def.refresh_s of trial time with the shear frames up to the latest, never two at once (one still
- * running is waited for, not doubled); none starts after the snap, so the last one to land is the
- * last one made from data before the snap.
+ * def.refresh_s of trial time with the shear frames up to TRIAL_CALIBRATE_SHEAR_CUT of the latest
+ * predicted snap (the last calibrated one, else the scene's; all of them while neither is known),
+ * and only when there are frames below that limit it has not fitted yet; never two at once (one
+ * still running is waited for, not doubled); none starts after the snap, so the last one to land
+ * is the last one made from data before the snap.
  *
  * Bad input is a named failure (trial_calibrated.reason_key, and a sentence in reason), never a
  * number: too_few_frames, lower_state, unknown_key, key_not_usable, misfit, at_bound, fit_failed,
@@ -39,6 +41,12 @@
                                               (evenly thinned: each observation costs a static
                                               solve per evaluation) */
 #define TRIAL_CALIBRATE_MAX_SHEAR_OBS 40   /* the same for the shear frames of a refresh */
+/* A refresh fits the shear frames up to this fraction of the latest predicted snap (the last
+ * calibrated one that landed, else the scene's): near the snap the camera's Delta Z and A drift
+ * from the model's (the rehearsal, refitted offline with the in-trial setup: +0.4% at 0.8 of the
+ * way, +7.3% at 0.9, +9.1% at 0.95; docs/calibration.md "In every trial"). ribbonctl calibrate's
+ * default cut is the same fraction of the measured snap. */
+#define TRIAL_CALIBRATE_SHEAR_CUT 0.8
 #define TRIAL_CALIBRATE_ABORT_CAP_S 10.0   /* s of wall time an aborted trial waits for its worker
                                               (a band's predictions under load; a fit stops at once) */
 #define TRIAL_CALIBRATE_NICE 10            /* the worker's niceness in rig mode (the trial's threads first) */
@@ -63,6 +71,10 @@ typedef struct trial_calibrated {
     int refresh;            /* 0: the fit from the compression and hold; k: the k-th refresh */
     int nobs_before, nobs_shear; /* observations used (before the shear, of the shear) */
     double dw_cut;          /* the largest Delta W among them */
+    double dw_limit;        /* a refresh: the shear frames' limit, TRIAL_CALIBRATE_SHEAR_CUT of the
+                               snap in limit_of (NaN: no predicted snap known, the whole shear) */
+    double limit_snap;      /* that snap */
+    char limit_of[16];      /* "calibrated" or "scene" ("" without a limit) */
     double t_started, t_landed; /* trial time the fit started and landed (s) */
     double t_shear;         /* trial time the shear started (s) */
     int snapped;            /* ok: the fitted strip snaps before protocol.shear_max */
@@ -82,6 +94,9 @@ typedef struct trial_calibrate_def {
                                and the hinge stiffness when the scene's creases are compliant */
     double refresh_s;       /* trial time between refreshes in the shear; 0 = no refresh */
     double cap_s;           /* wall time the trial's end waits for a running worker */
+    /* The scene's predicted snap Delta W so far (NaN: not known yet), asked on the runner's thread
+     * when a refresh starts without a calibrated snap; NULL: never known. */
+    double (*scene_snap)(void *user);
     int nice;               /* the worker's niceness: TRIAL_CALIBRATE_NICE in rig mode, where the
                                trial's real-time threads share the cores; 0 in mock mode, whose
                                virtual clock runs the twin flat out and would starve it */

@@ -683,6 +683,17 @@ static int calib_event(void *user, double t_s, const char *kind, const char *mes
     return 0;
 }
 
+/* The scene's predicted snap so far, for the fit's refreshes (on the runner's thread): NaN until
+ * the prediction is stored. */
+static double calib_scene_snap(void *user)
+{
+    trial_session *s = user;
+    pthread_mutex_lock(&s->lock);
+    double dw = s->status.prediction_done ? s->status.snap_dw_predicted : NAN;
+    pthread_mutex_unlock(&s->lock);
+    return dw;
+}
+
 /* The fit beside the trial (sim.fit), on the prediction's scene at its resolution. A fit that
  * cannot be set up is said in an event; the trial runs without it. */
 static void session_open_calibrate(trial_session *s, session_parts *p)
@@ -712,6 +723,7 @@ static void session_open_calibrate(trial_session *s, session_parts *p)
     d.nice = s->cfg.mode == RIG_MODE_RIG ? TRIAL_CALIBRATE_NICE : 0;
     d.event = calib_event;
     d.landed = calibrated_landed;
+    d.scene_snap = calib_scene_snap;
     d.user = s;
     char w[256];
     s->calib = trial_calibrate_new(&d, w, sizeof w);

@@ -15,7 +15,10 @@
  *      fit's parameters; an unknown fit key is stored as the trial's named fit failure while the
  *      trial runs to done with its scene prediction.
  *   4. session_abort_joins: a trial aborted while its fit runs ends with the worker cancelled and
- *      joined (the process's threads back to their count) well within the abort cap. */
+ *      joined (the process's threads back to their count) well within the abort cap.
+ *   5. refresh_frames_below_cut: a refresh during the shear fits the shear frames only up to
+ *      TRIAL_CALIBRATE_SHEAR_CUT of the latest predicted snap (the calibrated one, else the
+ *      scene's, else all of them). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -138,6 +141,135 @@ static void expect_failure(const rod_scene *sc, const char *keys, const rod_fit_
     char js[2048];
     assert_int_equal(trial_calibrated_json(&r, js, sizeof js), 0);
     assert_null(strstr(js, "nan"));
+}
+
+
+/* ---- the refresh's frames: below TRIAL_CALIBRATE_SHEAR_CUT of the latest predicted snap ------- */
+
+#define NLANDED 8
+static trial_calibrated landed_r[NLANDED];
+static int n_landed;
+static double scene_snap_value = NAN;
+
+static void record_landed(void *user, const trial_calibrated *r)
+{
+    (void)user;
+    if (n_landed < NLANDED) landed_r[n_landed] = *r;
+    n_landed++;
+}
+
+static double scene_snap_of(void *user)
+{
+    (void)user;
+    return scene_snap_value;
+}
+
+/* Ticks at trial time t until `want` results have landed (at most 120 s of wall time). */
+static void tick_until(trial_calibrate *c, double t, int shearing, int want)
+{
+    for (int k = 0; k < 12000 && n_landed < want; k++) {
+        trial_calibrate_tick(c, t, shearing);
+        if (n_landed >= want) break;
+        struct timespec ts = {0, 10 * 1000 * 1000};
+        nanosleep(&ts, NULL);
+    }
+    assert_true(n_landed >= want);
+}
+
+/* A trial's calibration fed the hold's frames and then shear frames of the strip u up to
+ * dw_to, the refresh ticked once at t = 1 s of the shear: its result. */
+static trial_calibrated refresh_of(const rod_scene *sc, const char *keys, int with_scene_snap, const rod_fit_obs *hold,
+                                   const rod_fit_obs *shear, int nshear)
+{
+    n_landed = 0;
+    trial_calibrate_def d = trial_calibrate_def_default();
+    d.scene = *sc;
+    snprintf(d.keys, sizeof d.keys, "%s", keys);
+    d.refresh_s = 0.5;
+    d.landed = record_landed;
+    d.scene_snap = with_scene_snap ? scene_snap_of : NULL;
+    char why[256];
+    trial_calibrate *c = trial_calibrate_new(&d, why, sizeof why);
+    assert_non_null(c);
+    for (int k = 0; k < NHOLD; k++) trial_calibrate_add(c, 0, hold[k].dl, hold[k].dw, hold[k].dz, hold[k].a);
+    trial_calibrate_start(c, 0.0);
+    tick_until(c, 0.5, 0, 1); /* fit 0 */
+    trial_calibrate_shear_started(c, 1.0);
+    for (int k = 0; k < nshear; k++) trial_calibrate_add(c, 1, shear[k].dl, shear[k].dw, shear[k].dz, shear[k].a);
+    tick_until(c, 2.0, 1, 2); /* refresh 1 */
+    trial_calibrate_end(c, 3.0, 0);
+    trial_calibrate_free(c);
+    assert_int_equal(landed_r[1].refresh, 1);
+    return landed_r[1];
+}
+
+/* The shear frames of strip u at Delta W = dw_to (k + 1) / n, k < n, from the model. */
+static void shear_frames(const rod_scene *sc, const double u[ROD_FIT_NKEYS], double dw_to, rod_fit_obs *obs, int n)
+{
+    for (int k = 0; k < n; k++) obs[k] = (rod_fit_obs){sc->compression, dw_to * (k + 1) / n, 0.0, 0.0};
+    rod_fit_model *m = NULL;
+    char why[256];
+    assert_int_equal(rod_fit_model_alloc(sc, obs, n, 0, &m, why, sizeof why), ROD_OK);
+    double *y = malloc(sizeof *y * 2 * (size_t)n);
+    assert_non_null(y);
+    if (rod_fit_model_eval(m, u, NULL, y, NULL, why, sizeof why) != ROD_OK) fail_msg("shear frames: %s", why);
+    for (int k = 0; k < n; k++) {
+        obs[k].dz = y[2 * k];
+        obs[k].a = y[2 * k + 1];
+    }
+    free(y);
+    rod_fit_model_free(m);
+}
+
+/* A refresh fits the shear frames up to TRIAL_CALIBRATE_SHEAR_CUT of the latest predicted snap:
+ * the calibrated one that landed (fit 0's here), else the scene's, else (neither known) all of
+ * them. Frames of the shear close to the snap pulled the rehearsal's calibrated snap late (+9.35%
+ * from the shear to 0.94 of the way, docs/calibration.md); before this a refresh took every shear
+ * frame. The fit itself is not scored here (the frames are the model's own): which frames it got. */
+static void refresh_frames_below_cut(void **state)
+{
+    (void)state;
+    rod_scene sc = mock_scene(31);
+    double u[ROD_FIT_NKEYS];
+    rod_fit_scene_values(&sc, u);
+    u[ROD_FIT_ANGLE_LEFT] = -87.0;
+    u[ROD_FIT_ANGLE_RIGHT] = -84.5;
+    rod_fit_obs hold[NHOLD], shear[60];
+    hold_frames(&sc, u, hold, NHOLD);
+    const double truth = snap_of(&sc, u), to = 0.95 * truth;
+    shear_frames(&sc, u, to, shear, 60);
+    const double step = to / 60.0;
+
+    /* Fit 0 lands with a calibrated snap: refresh 1 takes the frames below 0.8 of it. */
+    trial_calibrated r = refresh_of(&sc, "", 0, hold, shear, 60);
+    const trial_calibrated f0 = landed_r[0];
+    if (!f0.ok) fail_msg("fit 0: %s: %s", f0.reason_key, f0.reason);
+    if (!r.ok) fail_msg("refresh 1: %s: %s", r.reason_key, r.reason);
+    printf("fit 0: snap %.5f (strip %.5f); refresh 1: %d shear frames to %.5f (limit %.5f of the %s snap %.5f), "
+           "snap %.5f\n", f0.snap_dw, truth, r.nobs_shear, r.dw_cut, r.dw_limit, r.limit_of, r.limit_snap, r.snap_dw);
+    assert_true(f0.snapped && isfinite(f0.snap_dw));
+    assert_string_equal(r.limit_of, "calibrated");
+    assert_true(r.limit_snap == f0.snap_dw);
+    assert_true(fabs(r.dw_limit - TRIAL_CALIBRATE_SHEAR_CUT * f0.snap_dw) < 1e-12);
+    assert_true(r.dw_cut <= r.dw_limit);
+    assert_true(r.dw_cut > r.dw_limit - step); /* the last frame below the limit is in */
+    assert_true(r.nobs_shear > 0 && r.nobs_shear <= TRIAL_CALIBRATE_MAX_SHEAR_OBS);
+    char js[2048];
+    assert_int_equal(trial_calibrated_json(&r, js, sizeof js), 0);
+    assert_non_null(strstr(js, "\"limit_of\":\"calibrated\""));
+
+    /* No calibrated snap (fit 0 failed: a key that is not a parameter, so both fail at once, with
+     * the frames chosen): the scene's snap sets the limit, and without it the whole shear. */
+    scene_snap_value = 0.3;
+    r = refresh_of(&sc, "no.such_key", 1, hold, shear, 60);
+    assert_string_equal(r.reason_key, "unknown_key");
+    assert_string_equal(r.limit_of, "scene");
+    assert_true(fabs(r.dw_limit - TRIAL_CALIBRATE_SHEAR_CUT * 0.3) < 1e-12);
+    assert_true(r.dw_cut <= r.dw_limit && r.dw_cut > r.dw_limit - step);
+    scene_snap_value = NAN; /* the scene's prediction not done yet */
+    r = refresh_of(&sc, "no.such_key", 1, hold, shear, 60);
+    assert_true(isnan(r.dw_limit) && !r.limit_of[0]);
+    assert_true(r.dw_cut == shear[59].dw);
 }
 
 static void compute_bad_input(void **state)
@@ -427,6 +559,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(compute_recovers_strip),
         cmocka_unit_test(compute_bad_input),
         cmocka_unit_test(setup_has_the_trackers_bias),
+        cmocka_unit_test(refresh_frames_below_cut),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
