@@ -12,7 +12,7 @@
  * that was before or after the shear started. During the shear the fit is refreshed every
  * def.refresh_s of trial time with the shear frames up to TRIAL_CALIBRATE_SHEAR_CUT of the latest
  * predicted snap (the last calibrated one, else the scene's; all of them while neither is known),
- * and only when there are frames below that limit it has not fitted yet; never two at once (one
+ * and only when the count of frames below that limit changed since the last; never two at once (one
  * still running is waited for, not doubled); none starts after the snap, so the last one to land
  * is the last one made from data before the snap.
  *
