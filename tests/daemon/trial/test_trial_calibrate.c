@@ -278,8 +278,8 @@ static void session_mock_trial(void **state)
     assert_int_equal(events_with(t, "calibration: fitting", NULL, 0), 1);
     assert_true(events_with(t, "calibrated prediction fit 0", last, sizeof last) == 1);
     assert_true(strstr(last, "after the shear started") || strstr(last, "before the shear started"));
-    /* How many refreshes land depends on the machine (the worker runs at niceness 10 beside the
-     * virtual-clock twin): counted and printed; the stored one must be the last that landed ok. */
+    /* How many refreshes land depends on the machine (the worker runs in the process's class beside
+     * the virtual-clock twin: mock mode's def.idle = 0): counted and printed; the stored one must be the last that landed ok. */
     int refreshes = events_with(t, "calibrated prediction refresh", last, sizeof last);
     int last_ok = 0;
     if (refreshes) assert_int_equal(sscanf(last, "calibrated prediction refresh %d", &last_ok), 1);
