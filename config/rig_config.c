@@ -206,7 +206,7 @@ static const rig_key rig_keys[] = {
                  "tracker's region: ribbon and clamps at the trial's compression plus margin_px, of a video "
                  "recorded with roi = full or x,y,w,h)"},
     {"camera", "transcode_threads", RIG_KEY_INT, OFF(camera.transcode_threads), 0, 1, 16, 0, 0, NULL, "threads",
-     "2", "rig mode: the FFV1 encoder's slice threads (the worker runs at niceness 10 beside the next trial)"},
+     "2", "rig mode: the FFV1 encoder's slice threads (they and the worker run in SCHED_IDLE beside the next trial)"},
     {"camera", "noise_sigma", RIG_KEY_DOUBLE, OFF(camera.noise_sigma), 0, 0.0, 255.0, 0, 0, NULL,
      "grey", "2", "mock: additive Gaussian noise of the rendered frames"},
     {"camera", "blur_sigma_px", RIG_KEY_DOUBLE, OFF(camera.blur_sigma_px), 0, 0.0, 100.0, 0, 0,

@@ -5,9 +5,11 @@
  * start, and the last landed one's key with its curve or its failure. The thread works on its own
  * copies (scene, key text, cache path) and writes only the landed result, so the caller's
  * configuration may change or go meanwhile. */
+#define _GNU_SOURCE /* SCHED_IDLE */
 #include "campaign_trace.h"
 
 #include <pthread.h>
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -89,6 +91,10 @@ void campaign_trace_free(campaign_trace *t)
 static void *run(void *arg)
 {
     campaign_trace *t = arg;
+    /* SCHED_IDLE, as every best-effort thread of ribbond (daemon/trial/trial_idle.h, which this
+     * room does not link): a trial's rails may be moving. Refused: the trace is merely slower. */
+    struct sched_param sp = {.sched_priority = 0};
+    (void)sched_setscheduler(0, SCHED_IDLE, &sp);
     campaign_predicted res;
     char why[600] = "";
     int rc = campaign_predicted_cached(&t->sc, t->key_text, t->lo, t->hi, t->cache_path, &res, why, sizeof why);

@@ -6,9 +6,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
-#include <sys/syscall.h>
-#include <unistd.h>
+
+#include "trial.h"
 
 #define PHASE_MAP_NODES 41
 #define PHASE_MAP_DT 0.01
@@ -52,8 +51,9 @@ static void on_point(void *u, size_t done, size_t total)
 static void *map_main(void *arg)
 {
     phase_map *m = arg;
-    /* This thread only (Linux: a thread is a task with its own nice value); best effort. */
-    (void)setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), 10); /* refused: the map is merely slower */
+    /* This thread only, in SCHED_IDLE (a trial's rails may be moving; trial_idle.h). Refused: nice
+     * 19, the map is merely slower. */
+    trial_idle_enter(NULL, 0);
     phase_grid g;
     char why[256] = "";
     int rc = phase_grid_compute(&m->scene, 30, 150, 5, 0.08, 0.28, 6, &g, on_point, m, &m->cancel, why, sizeof why);

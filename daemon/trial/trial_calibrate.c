@@ -14,16 +14,15 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include <sys/resource.h>
-#include <sys/syscall.h>
-#include <unistd.h>
+
+#include "trial_idle.h"
 
 enum { JOB_RUNNING = 0, JOB_DONE, JOB_ABANDONED };
 
 typedef struct calib_job {
     atomic_int state;
     atomic_int cancel;
-    int nice;
+    int idle;
     pthread_t thread;
     rod_scene scene;
     char keys[256];
@@ -247,9 +246,10 @@ static void job_free(calib_job *j)
 static void *job_main(void *arg)
 {
     calib_job *j = arg;
-    /* Below the trial's own threads (rig mode's capture, tracker, poller share the cores): Linux
-     * gives a thread its own niceness (setpriority on its thread id), as the transcoder does. */
-    if (j->nice > 0) setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), j->nice);
+    /* Below the trial's own threads (rig mode's loop, capture and poller share the cores):
+     * SCHED_IDLE, the fit and its band's predictions on CPU time no one else wants (trial_idle.h). */
+    if (j->idle) trial_idle_enter(NULL, 0); /* refused: nice 19 (trial_idle.h) */
+    j->res.idle = trial_idle_is(0) == 1;        /* the class read back, said in the landing event */
     trial_calibrate_compute(&j->scene, j->keys, j->obs, j->nobs_before, j->nobs_shear, &j->cancel, &j->res);
     int expected = JOB_RUNNING;
     if (!atomic_compare_exchange_strong(&j->state, &expected, JOB_DONE)) job_free(j); /* abandoned */
@@ -351,8 +351,8 @@ static void land(trial_calibrate *c, trial_calibrated *r, double t)
     else
         snprintf(when, sizeof when, "before the shear started");
     if (!r->ok) {
-        say(c, t, "warning", "calibration %s failed (landed at t = %.2f s, %s, %.2f s wall): %s [%s]", name, t, when,
-            r->wall_s, r->reason, r->reason_key);
+        say(c, t, "warning", "calibration %s failed (landed at t = %.2f s, %s, %.2f s wall%s): %s [%s]", name, t,
+            when, r->wall_s, r->idle ? " in SCHED_IDLE" : "", r->reason, r->reason_key);
     } else {
         char params[256] = "";
         size_t used = 0;
@@ -377,7 +377,7 @@ static void land(trial_calibrate *c, trial_calibrated *r, double t)
             snprintf(snap, sizeof snap, "snap Delta W = %.5f (no band: %.80s), %s", r->snap_dw, r->note,
                      r->asymmetric ? "asymmetric" : "symmetric");
         say(c, t, "info", "calibrated prediction %s landed at t = %.2f s, %s: %s; %s; residual %.3g noise units RMS "
-            "(%.2f s wall)", name, t, when, snap, params, r->fit.rms, r->wall_s);
+            "(%.2f s wall%s)", name, t, when, snap, params, r->fit.rms, r->wall_s, r->idle ? " in SCHED_IDLE" : "");
     }
     c->last = *r;
     c->have_last = 1;
@@ -419,7 +419,7 @@ static void launch(trial_calibrate *c, double t, int refresh)
     const char *limit_of = "";
     if (refresh) limit = shear_limit(c, &limit_snap, &limit_of);
     j->scene = c->def.scene;
-    j->nice = c->def.nice;
+    j->idle = c->def.idle;
     snprintf(j->keys, sizeof j->keys, "%s", c->def.keys);
     j->obs = obs;
     j->nobs_before = thin_into(obs, &c->before, TRIAL_CALIBRATE_MAX_HOLD_OBS);

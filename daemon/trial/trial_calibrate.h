@@ -49,7 +49,6 @@
 #define TRIAL_CALIBRATE_SHEAR_CUT 0.8
 #define TRIAL_CALIBRATE_ABORT_CAP_S 10.0   /* s of wall time an aborted trial waits for its worker
                                               (a band's predictions under load; a fit stops at once) */
-#define TRIAL_CALIBRATE_NICE 10            /* the worker's niceness in rig mode (the trial's threads first) */
 #define TRIAL_CALIBRATE_PRIOR_ANGLE_DEG 10.0 /* prior width of each crease angle around the scene's */
 /* The tracker's error on A common to a phase of the protocol (compression, hold, shear), rad: the
  * fit's covariance is a sandwich with it (sim/rod_fit_sandwich.h), values unchanged. 0.003 is the RMS
@@ -86,6 +85,8 @@ typedef struct trial_calibrated {
     rod_fit_result fit;     /* the fitted values with their standard errors (valid when the fit ran) */
     int fit_ran;
     double wall_s;          /* the worker's wall time */
+    int idle;               /* the worker ran in SCHED_IDLE (def.idle, the class read back; the
+                               landing event says "in SCHED_IDLE") */
 } trial_calibrated;
 
 typedef struct trial_calibrate_def {
@@ -97,9 +98,10 @@ typedef struct trial_calibrate_def {
     /* The scene's predicted snap Delta W so far (NaN: not known yet), asked on the runner's thread
      * when a refresh starts without a calibrated snap; NULL: never known. */
     double (*scene_snap)(void *user);
-    int nice;               /* the worker's niceness: TRIAL_CALIBRATE_NICE in rig mode, where the
-                               trial's real-time threads share the cores; 0 in mock mode, whose
-                               virtual clock runs the twin flat out and would starve it */
+    int idle;               /* 1: the worker runs in SCHED_IDLE (trial_idle.h): rig mode, where the
+                               trial's loop, capture and poller share the cores and must never wait
+                               for it; 0 in mock mode, whose virtual clock runs the twin flat out
+                               and would starve it */
     /* The trial's event sink (the runner's), and the landing report; both on the runner's thread. */
     int (*event)(void *user, double t_s, const char *kind, const char *message);
     void (*landed)(void *user, const trial_calibrated *r);

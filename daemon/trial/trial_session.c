@@ -498,7 +498,8 @@ static int session_start_prediction(trial_session *s, session_parts *p, char *wh
     char w[400];
     note_specimen_use(s);
     trial_prediction_def def = {.adaptive = s->cfg.sim.fast, .trial_id = s->trial_id, .cancel = &s->cancel,
-                                .done = prediction_done, .user = s, .creases = s->use.creases};
+                                .done = prediction_done, .user = s, .creases = s->use.creases,
+                                .idle = s->cfg.mode == RIG_MODE_RIG};
     snprintf(def.store_path, sizeof def.store_path, "%s", s->cfg.store_path);
     int failed = choose_resolution(s, &p->pred, &adapt_scale, &est, hash, sizeof hash, w, sizeof w);
     if (failed && atomic_load(&s->cancel)) {
@@ -720,7 +721,7 @@ static void session_open_calibrate(trial_session *s, session_parts *p)
     }
     snprintf(d.keys, sizeof d.keys, "%s", s->cfg.sim.fit_keys);
     d.refresh_s = s->cfg.sim.fit_refresh_s;
-    d.nice = s->cfg.mode == RIG_MODE_RIG ? TRIAL_CALIBRATE_NICE : 0;
+    d.idle = s->cfg.mode == RIG_MODE_RIG;
     d.event = calib_event;
     d.landed = calibrated_landed;
     d.scene_snap = calib_scene_snap;

@@ -7,16 +7,16 @@
 #include <errno.h>
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
-#include <sys/syscall.h>
 #include <time.h>
 #include <unistd.h>
 
 #include "store.h"
+#include "trial_idle.h"
 
 typedef struct tx_job {
     int64_t trial_id;
@@ -37,6 +37,7 @@ struct trial_transcoder {
     int busy;                /* under lock: a job in progress */
     int stopping;            /* under lock */
     volatile int cancel;     /* read by the running transcode at each frame */
+    atomic_long tid;         /* the worker's Linux thread id, 0 until it runs */
 };
 
 trial_transcoder_params trial_transcoder_params_default(void)
@@ -44,7 +45,7 @@ trial_transcoder_params trial_transcoder_params_default(void)
     trial_transcoder_params p;
     memset(&p, 0, sizeof p);
     p.codec = trial_transcode_params_default();
-    p.nice = 10;
+    p.idle = 1;
     return p;
 }
 
@@ -130,8 +131,10 @@ static void run_job(trial_transcoder *t, const tx_job *j)
 static void *tx_main(void *arg)
 {
     trial_transcoder *t = arg;
-    /* Linux: a thread's niceness is its own (setpriority on its thread id). */
-    if (t->p.nice > 0) setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), t->p.nice);
+    /* Below the trial's threads: SCHED_IDLE, inherited by the encoder's slice threads (trial_idle.h). */
+    char why[160];
+    if (t->p.idle && trial_idle_enter(why, sizeof why)) tx_log(t, "transcoder: %s", why);
+    atomic_store(&t->tid, trial_idle_tid());
     pthread_mutex_lock(&t->lock);
     for (;;) {
         while (!t->count && !t->stopping) pthread_cond_wait(&t->cond, &t->lock);
@@ -152,8 +155,8 @@ static void *tx_main(void *arg)
 
 trial_transcoder *trial_transcoder_start(const trial_transcoder_params *p, char *why, size_t why_len)
 {
-    if (!p || !p->store_path || !*p->store_path || p->nice < 0 || p->nice > 19) {
-        snprintf(why, why_len, "transcoder: needs the store's path and a niceness in [0, 19]");
+    if (!p || !p->store_path || !*p->store_path) {
+        snprintf(why, why_len, "transcoder: needs the store's path");
         return NULL;
     }
     trial_transcoder *t = calloc(1, sizeof *t);
@@ -176,6 +179,8 @@ trial_transcoder *trial_transcoder_start(const trial_transcoder_params *p, char 
     }
     return t;
 }
+
+long trial_transcoder_worker_tid(trial_transcoder *t) { return t ? atomic_load(&t->tid) : 0; }
 
 int trial_transcoder_submit(trial_transcoder *t, int64_t trial_id, const char *raw_path, const int crop[4],
                             const int rec_roi[4], char *why, size_t why_len)

@@ -3,8 +3,8 @@
  *
  * A session hands its raw video over when its trial has ended (trial_transcoder_submit only queues
  * and returns), so the next trial starts and captures while the previous video is encoded. The
- * worker is one thread at a raised niceness (the capture and tracking threads of the next trial
- * win the cores), with its own store connection: on success the trial's video becomes the .mkv
+ * worker is one thread in SCHED_IDLE (trial_idle.h; the encoder's slice threads inherit it: the
+ * next trial's loop, capture and poller always win the cores), with its own store connection: on success the trial's video becomes the .mkv
  * with its size (store_trial_set_video_file) and an event gives sizes and times; on failure the
  * raw file stays the trial's video and an event says why. Stopping (daemon shutdown) stops the
  * running transcode at its next frame and leaves every raw file not yet transcoded in place, each
@@ -23,7 +23,7 @@
 typedef struct trial_transcoder_params {
     const char *store_path;        /* the store the trials are in (the worker's own connection) */
     trial_transcode_params codec;  /* threads, slices (crop is per job) */
-    int nice;                      /* niceness added to the worker thread, [0, 19]; default 10 */
+    int idle;                      /* 1 (default): the worker runs in SCHED_IDLE; 0: in the caller's class */
     void (*log)(const char *line); /* may be NULL: one line per video */
 } trial_transcoder_params;
 
@@ -32,6 +32,8 @@ trial_transcoder_params trial_transcoder_params_default(void);
 typedef struct trial_transcoder trial_transcoder;
 
 trial_transcoder *trial_transcoder_start(const trial_transcoder_params *p, char *why, size_t why_len);
+/* The worker's Linux thread id once it runs (0 before), for trial_idle_is. */
+long trial_transcoder_worker_tid(trial_transcoder *t);
 /* Queues trial_id's raw video raw_path (...avi; the output is the same name with .mkv). crop (may
  * be NULL): x, y, w, h of the raw frame to keep, and rec_roi the kept region inside the full
  * frame, stored into the trial's calibration record with the new file (so a replay places the

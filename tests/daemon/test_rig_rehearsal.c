@@ -349,7 +349,6 @@ static void test_gcode_trial_gamma021(void **state)
      * ran on the machine (seen beside at least one run; one GigE Vision port), +0.01132 and +0.00793 (bound 0.0018) beside
      * -0.00062, as the exact file there (+0.00337, bound 0.00238, beside +0.00007): run it alone. */
     lab_calibrate(&r, "0.25");
-    rig_daemon_set(&r, "sim.fit=off"); /* its onset is scored here; the fit shares the 2 cores (above) */
     rig_start_daemon(&r, RIG);
     int rc = rig_trial(&r, 1);
     rig_stop(&r);
@@ -452,13 +451,11 @@ static void test_overloaded_loop_still_stops_at_snap(void **state)
 
 static void fault_mid_shear(rig_run *r, int sig, const char *daemon_set)
 {
-    /* (the in-trial fit off: the faults' detection is measured here, and on the quiet machine of a
-     * clean .ci/run its six refreshes during the shear shared the 2 cores with the loop and the
-     * simulator's real-time threads: a frozen image was seen 0.517 and 0.625 s after the freeze) */
+    /* The shipped config: the in-trial fit on (its refreshes run during the shear on SCHED_IDLE
+     * threads, which never take CPU from the loop, the capture and the poller; docs/rig-realtime.md). */
     rig_prepare(r, rehearsal_sets);
     rig_start_sim(r, RIG, NULL);
     if (daemon_set) rig_daemon_set(r, daemon_set);
-    rig_daemon_set(r, "sim.fit=off");
     rig_start_daemon(r, RIG);
     assert_int_equal(rig_trial(r, 0), 0);
     char got[700];

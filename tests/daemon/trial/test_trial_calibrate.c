@@ -18,7 +18,10 @@
  *      joined (the process's threads back to their count) well within the abort cap.
  *   5. refresh_frames_below_cut: a refresh during the shear fits the shear frames only up to
  *      TRIAL_CALIBRATE_SHEAR_CUT of the latest predicted snap (the calibrated one, else the
- *      scene's, else all of them). */
+ *      scene's, else all of them).
+ *   6. worker_class: the worker of a rig-mode def (idle = 1) runs its fit and band in SCHED_IDLE,
+ *      read back on its thread, and says so when it lands; a mock-mode def's (idle = 0) does not;
+ *      the runner's thread (this test's) stays in its own class either way. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -39,6 +42,7 @@
 #include "store.h"
 #include "trial.h"
 #include "trial_calibrate.h"
+#include "trial_idle.h"
 #include "trial_session.h"
 #include "twin.h"
 
@@ -406,8 +410,8 @@ static void session_mock_trial(void **state)
     assert_int_equal(events_with(t, "calibration: fitting", NULL, 0), 1);
     assert_true(events_with(t, "calibrated prediction fit 0", last, sizeof last) == 1);
     assert_true(strstr(last, "after the shear started") || strstr(last, "before the shear started"));
-    /* How many refreshes land depends on the machine (the worker runs at niceness 10 beside the
-     * virtual-clock twin): counted and printed; the stored one must be the last that landed ok. */
+    /* How many refreshes land depends on the machine (the worker runs in the process's class beside
+     * the virtual-clock twin: mock mode's def.idle = 0): counted and printed; the stored one must be the last that landed ok. */
     int refreshes = events_with(t, "calibrated prediction refresh", last, sizeof last);
     int last_ok = 0;
     if (refreshes) assert_int_equal(sscanf(last, "calibrated prediction refresh %d", &last_ok), 1);
@@ -543,6 +547,79 @@ static void setup_has_the_trackers_bias(void **state)
     assert_true(o.sigma_b_dz == 0.0);
 }
 
+/* The landing report and event of a worker (the runner's thread: this test's). */
+typedef struct class_seen {
+    int landed, idle, ok;
+    char event[600];
+} class_seen;
+
+static void class_landed(void *user, const trial_calibrated *r)
+{
+    class_seen *s = user;
+    s->landed++;
+    s->idle = r->idle;
+    s->ok = r->ok;
+}
+
+static int class_event(void *user, double t_s, const char *kind, const char *message)
+{
+    (void)t_s;
+    (void)kind;
+    class_seen *s = user;
+    if (strstr(message, " landed at") && !strstr(message, "stored:")) snprintf(s->event, sizeof s->event, "%s", message);
+    return 0;
+}
+
+/* One fit 0 of the hold's frames on a worker with def.idle = idle, ticked until it lands. */
+static class_seen run_worker(int idle)
+{
+    rod_scene sc = mock_scene(31);
+    double u[ROD_FIT_NKEYS];
+    rod_fit_scene_values(&sc, u);
+    u[ROD_FIT_ANGLE_LEFT] = -87.0;
+    rod_fit_obs obs[NHOLD];
+    hold_frames(&sc, u, obs, NHOLD);
+    class_seen seen;
+    memset(&seen, 0, sizeof seen);
+    trial_calibrate_def d = trial_calibrate_def_default();
+    d.scene = sc;
+    d.idle = idle;
+    d.landed = class_landed;
+    d.event = class_event;
+    d.user = &seen;
+    char why[256];
+    trial_calibrate *c = trial_calibrate_new(&d, why, sizeof why);
+    assert_non_null(c);
+    for (int k = 0; k < NHOLD; k++) trial_calibrate_add(c, 0, obs[k].dl, obs[k].dw, obs[k].dz, obs[k].a);
+    trial_calibrate_start(c, 0.0);
+    double t0 = mono_s();
+    while (!seen.landed && mono_s() - t0 < 60.0) { /* the fit takes about 1 s (N = 31) */
+        struct timespec ts = {0, 10 * 1000 * 1000};
+        nanosleep(&ts, NULL);
+        trial_calibrate_tick(c, mono_s() - t0, 0);
+    }
+    trial_calibrate_end(c, mono_s() - t0, 0);
+    trial_calibrate_free(c);
+    printf("idle = %d: landed %d, ok %d, worker in SCHED_IDLE %d: %.160s\n", idle, seen.landed, seen.ok, seen.idle,
+           seen.event);
+    return seen;
+}
+
+static void worker_class(void **state)
+{
+    (void)state;
+    class_seen rig = run_worker(1);
+    assert_int_equal(rig.landed, 1);
+    assert_int_equal(rig.ok, 1);
+    assert_int_equal(rig.idle, 1);
+    assert_non_null(strstr(rig.event, "in SCHED_IDLE)"));
+    assert_int_equal(trial_idle_is(0), 0); /* the runner's thread keeps its class */
+    class_seen mock = run_worker(0);
+    assert_int_equal(mock.landed, 1);
+    assert_int_equal(mock.idle, 0);
+    assert_null(strstr(mock.event, "SCHED_IDLE"));
+}
+
 /* `test_trial_calibrate session` runs the whole mock trials (3, 4) only; without an argument, the
  * fit's own tests (1, 2), seconds in either build. */
 int main(int argc, char **argv)
@@ -560,6 +637,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(compute_bad_input),
         cmocka_unit_test(setup_has_the_trackers_bias),
         cmocka_unit_test(refresh_frames_below_cut),
+        cmocka_unit_test(worker_class),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

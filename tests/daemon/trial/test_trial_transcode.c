@@ -7,12 +7,16 @@
  * a submit returns at once, the next trial's raw video is written while a transcode is held in
  * progress, the store then names each trial's .mkv with its size, and a failed verify leaves the
  * trial's .avi with an event saying why; at start-up the raw videos an earlier run left are queued
- * again, except those kept raw on purpose (a failed transcode, an interrupted trial). */
+ * again, except those kept raw on purpose (a failed transcode, an interrupted trial). While a
+ * transcode runs, the worker and every thread of the encoder it opened run in SCHED_IDLE
+ * (trial_idle.h: the next trial's loop, capture and poller always win the cores), the test's own
+ * thread in its normal class. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <cmocka.h>
 
+#include <dirent.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdint.h>
@@ -27,6 +31,7 @@
 #include "test_dir.h"
 #include "trial_transcode.h"
 #include "trial_transcoder.h"
+#include "trial_idle.h"
 #include "vision.h"
 
 #define W 160
@@ -266,6 +271,27 @@ static void test_worker_next_trial_records_while_transcode_runs(void **s)
     pthread_mutex_unlock(&g.m);
     assert_int_equal(trial_transcoder_pending(t), 1);
     assert_true(exists(raw1)); /* not removed while the transcode runs */
+    /* The worker and the encoder's slice threads (open now, held mid-video) in SCHED_IDLE; this
+     * thread, which stands for the next trial's, in its normal class. */
+    long worker = trial_transcoder_worker_tid(t);
+    assert_true(worker > 0);
+    assert_int_equal(trial_idle_is(worker), 1);
+    assert_int_equal(trial_idle_is(0), 0);
+    int others = 0, idle = 0;
+    DIR *tasks = opendir("/proc/self/task");
+    assert_non_null(tasks);
+    for (struct dirent *e; (e = readdir(tasks));) {
+        long tid = atol(e->d_name);
+        if (tid <= 0 || tid == trial_idle_tid()) continue;
+        int k = trial_idle_is(tid);
+        if (k < 0) continue; /* ended meanwhile */
+        others++;
+        idle += k;
+    }
+    closedir(tasks);
+    printf("# while a transcode runs: %d other thread(s), %d of them in SCHED_IDLE\n", others, idle);
+    assert_true(others >= 2); /* the worker and at least one encoder thread (camera.transcode_threads 2) */
+    assert_int_equal(idle, others);
     /* the next trial records its video meanwhile, and queues it */
     write_raw(raw2, NF);
     int64_t id2 = new_trial(db, raw2);
