@@ -109,6 +109,11 @@ static void print_case(job *j, const family_case *c)
         fprintf(stderr, " | track dz %.2g a %.2g sigma %.2g %.2g | cpu fit %.3f + band %.3f, refresh %.3f + %.3f s | %.0f s\n",
                 c->film_stats.dz_rms, c->film_stats.a_rms, c->sigma_dz, c->sigma_a, c->before.fit_cpu_s,
                 c->before.snap_cpu_s, c->at.fit_cpu_s, c->at.snap_cpu_s, c->wall_s);
+        if (c->nshapes > 0)
+            fprintf(stderr, "   shapes %d: tracker off the twin by %.2g l RMS (mean x %+.2g, z %+.2g); "
+                    "the fits' shape residual before / at80 %.2f / %.2f noise units\n", c->nshapes,
+                    c->film_stats.shape_rms, c->film_stats.shape_mean_x, c->film_stats.shape_mean_z,
+                    c->before.fit.shape_rms, c->at.fit.shape_rms);
         if (j->verbose > 1)
             for (int k = 0; k < 2; k++) {
                 const rod_fit_result *r = &f[k]->fit;

@@ -144,6 +144,7 @@ int family_case_run(const rod_scene *sc, const family_ranges *rg, uint64_t seed,
     out->film_stats = film;
     out->film_stats.obs = NULL;
     out->film_stats.true_dz = out->film_stats.true_a = NULL;
+    out->film_stats.true_shapes = out->film_stats.tracked_shapes = NULL;
     int nb = 0;
     while (nb < film.n && film.obs[nb].dw == 0.0) nb++;
     rod_fit_opts fo_fit = o->fit;
