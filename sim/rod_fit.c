@@ -39,6 +39,13 @@ struct rod_fit_model {
     rod_snapshot *state;     /* last equilibrium of each (path order) */
     int *have;
     double *k1;
+    /* Shapes (rod_fit_model_set_shapes): shape i is modelled at path position shape_at[i] (the
+       first of its state's observations); its rows start at shape_row[i] of shape_y / shape_jac. */
+    rod_fit_shape *shapes;
+    int nshapes, shape_rows, shape_have_jac;
+    int *shape_at, *shape_row;
+    double *shape_y, *shape_jac;
+    double *dq_buf, *save;       /* dq/du_j for every key (nfree each), scratch */
 };
 
 rod_fit_opts rod_fit_opts_default(void)
@@ -51,6 +58,7 @@ rod_fit_opts rod_fit_opts_default(void)
     }
     o.sigma_dz = 0.002;
     o.sigma_a = 0.015;
+    o.sigma_shape = 0.001;
     o.max_iterations = 50;
     o.stop_sd = 0.05;
     o.min_obs = 3;
@@ -81,6 +89,13 @@ void rod_fit_model_free(rod_fit_model *m)
     free(m->have);
     free(m->order);
     free(m->k1);
+    free(m->shapes);
+    free(m->shape_at);
+    free(m->shape_row);
+    free(m->shape_y);
+    free(m->shape_jac);
+    free(m->dq_buf);
+    free(m->save);
     rod_sens_free(m->sens);
     rod_solver_free(m->s);
     rod_free(m->r);
@@ -186,6 +201,95 @@ static void copy_rows(int from, int to, double *y, double *jac)
         memcpy(&jac[2 * to * ROD_FIT_NKEYS], &jac[2 * from * ROD_FIT_NKEYS], sizeof(double) * 2 * ROD_FIT_NKEYS);
 }
 
+rod_status rod_fit_model_set_shapes(rod_fit_model *m, const rod_fit_shape *shapes, int n, char *why,
+                                    size_t why_len)
+{
+    free(m->shapes);
+    free(m->shape_at);
+    free(m->shape_row);
+    free(m->shape_y);
+    free(m->shape_jac);
+    m->shapes = NULL;
+    m->shape_at = m->shape_row = NULL;
+    m->shape_y = m->shape_jac = NULL;
+    m->nshapes = m->shape_rows = m->shape_have_jac = 0;
+    if (n <= 0) return ROD_OK;
+    int rows = 0;
+    for (int i = 0; i < n; i++) {
+        if (shapes[i].k < 1 || shapes[i].k > ROD_SHAPE_MAX_POINTS) {
+            snprintf(why, why_len, "shape %d: %d points (1 to %d)", i + 1, shapes[i].k, ROD_SHAPE_MAX_POINTS);
+            return ROD_ERR_SCENE;
+        }
+        for (int p = 0; p < 2 * shapes[i].k; p++)
+            if (!isfinite(shapes[i].xz[p])) {
+                snprintf(why, why_len, "shape %d: a point is not finite", i + 1);
+                return ROD_ERR_SCENE;
+            }
+        rows += 2 * shapes[i].k;
+    }
+    int nf = rod_nfree(m->r);
+    m->shapes = malloc(sizeof *m->shapes * (size_t)n);
+    m->shape_at = malloc(sizeof(int) * (size_t)n);
+    m->shape_row = malloc(sizeof(int) * (size_t)n);
+    m->shape_y = calloc((size_t)rows, sizeof(double));
+    m->shape_jac = calloc((size_t)rows * ROD_FIT_NKEYS, sizeof(double));
+    if (!m->dq_buf) m->dq_buf = malloc(sizeof(double) * (size_t)nf * ROD_FIT_NKEYS);
+    if (!m->save) m->save = malloc(sizeof(double) * (size_t)nf);
+    if (!m->shapes || !m->shape_at || !m->shape_row || !m->shape_y || !m->shape_jac || !m->dq_buf || !m->save) {
+        snprintf(why, why_len, "out of memory");
+        return ROD_ERR_ALLOC;
+    }
+    memcpy(m->shapes, shapes, sizeof *m->shapes * (size_t)n);
+    m->nshapes = n;
+    m->shape_rows = rows;
+    rows = 0;
+    for (int i = 0; i < n; i++) {
+        m->shape_row[i] = rows;
+        rows += 2 * shapes[i].k;
+        m->shape_at[i] = -1;
+        for (int kk = 0; kk < m->nobs && m->shape_at[i] < 0; kk++) {
+            const rod_fit_obs *o = &m->obs[m->order[kk]];
+            if (o->dl == shapes[i].dl && o->dw == shapes[i].dw) m->shape_at[i] = kk;
+        }
+        if (m->shape_at[i] < 0) {
+            snprintf(why, why_len, "shape %d: no observation at its state (Delta L %.4g, Delta W %.4g)", i + 1,
+                     shapes[i].dl, shapes[i].dw);
+            m->nshapes = m->shape_rows = 0;
+            return ROD_ERR_SCENE;
+        }
+    }
+    return ROD_OK;
+}
+
+int rod_fit_model_shape_rows(const rod_fit_model *m, const double **y, const double **jac)
+{
+    *y = m->shape_y;
+    *jac = m->shape_have_jac ? m->shape_jac : NULL;
+    return m->shape_rows;
+}
+
+/* The shapes modelled at path position kk, whose equilibrium (and, with jac, dq/du) is current. */
+static rod_status shapes_at(rod_fit_model *m, int kk, const int *use, int with_jac)
+{
+    int nf = rod_nfree(m->r);
+    for (int i = 0; i < m->nshapes; i++) {
+        if (m->shape_at[i] != kk) continue;
+        int k = m->shapes[i].k;
+        double *y = &m->shape_y[m->shape_row[i]];
+        if (rod_shape_sample(m->r, k, y) != 0) return ROD_ERR_NAN;
+        if (!with_jac) continue;
+        double d[2 * ROD_SHAPE_MAX_POINTS];
+        for (int j = 0; j < ROD_FIT_NKEYS; j++) {
+            int strip = use[j] && rod_fit_key_strip((rod_fit_key)j);
+            if (strip && rod_shape_directional(m->r, k, &m->dq_buf[(size_t)j * (size_t)nf], m->save, d) != 0)
+                return ROD_ERR_NAN;
+            for (int p = 0; p < 2 * k; p++)
+                m->shape_jac[(size_t)(m->shape_row[i] + p) * ROD_FIT_NKEYS + (size_t)j] = strip ? d[p] : 0.0;
+        }
+    }
+    return ROD_OK;
+}
+
 rod_status rod_fit_model_eval(rod_fit_model *m, const double u[ROD_FIT_NKEYS], const int *use, double *y,
                               double *jac, char *why, size_t why_len)
 {
@@ -195,6 +299,7 @@ rod_status rod_fit_model_eval(rod_fit_model *m, const double u[ROD_FIT_NKEYS], c
     double *dq[ROD_FIT_NKEYS] = {0};
     int none[ROD_FIT_NKEYS] = {0};
     if (!use) use = none;
+    m->shape_have_jac = 0;
     rod_fit_apply(r, &m->base, u);
     for (int kk = 0; kk < m->nobs; kk++) {
         int k = m->order[kk];
@@ -259,9 +364,17 @@ rod_status rod_fit_model_eval(rod_fit_model *m, const double u[ROD_FIT_NKEYS], c
             snprintf(why, why_len, "non-finite observable at Delta L %.4g, Delta W %.4g", ob->dl, ob->dw);
             return ROD_ERR_NAN;
         }
+        int has_shape = 0;
+        for (int i = 0; i < m->nshapes; i++) has_shape |= m->shape_at[i] == kk;
+        if (has_shape && !jac && shapes_at(m, kk, use, 0) != ROD_OK) {
+            snprintf(why, why_len, "the shape at Delta L %.4g, Delta W %.4g is not finite", ob->dl, ob->dw);
+            return ROD_ERR_NAN;
+        }
         if (jac) {
             rod_obs d[ROD_FIT_NKEYS];
             int neg = 0;
+            for (int j = 0; j < ROD_FIT_NKEYS; j++)
+                dq[j] = has_shape && use[j] ? &m->dq_buf[(size_t)j * (size_t)rod_nfree(r)] : NULL;
             st = rod_sens_eval(m->sens, r, &m->base, u, use, ob->dl, ob->dw, dq, d, &neg);
             if (st != ROD_OK) {
                 snprintf(why, why_len, "the equilibrium at Delta L %.4g, Delta W %.4g is %s", ob->dl, ob->dw,
@@ -275,8 +388,13 @@ rod_status rod_fit_model_eval(rod_fit_model *m, const double u[ROD_FIT_NKEYS], c
             }
             /* The camera's offset shifts Delta Z by itself and leaves A alone: exact. */
             if (use[ROD_FIT_DZ_OFFSET]) jac[(2 * k) * ROD_FIT_NKEYS + ROD_FIT_DZ_OFFSET] = 1.0;
+            if (has_shape && shapes_at(m, kk, use, 1) != ROD_OK) {
+                snprintf(why, why_len, "the shape at Delta L %.4g, Delta W %.4g is not finite", ob->dl, ob->dw);
+                return ROD_ERR_NAN;
+            }
         }
     }
+    if (jac) m->shape_have_jac = 1;
     return ROD_OK;
 }
 
@@ -287,6 +405,7 @@ typedef struct fit_ctx {
     const rod_fit_opts *o;
     const rod_fit_obs *obs;
     int nobs, nfit, nres;
+    int nshape;                  /* the shapes' data rows, after the 2 nobs of Delta Z and A */
     int key[ROD_FIT_NKEYS];      /* fitted parameter i is key[i] */
     double u0[ROD_FIT_NKEYS], lo[ROD_FIT_NKEYS], hi[ROD_FIT_NKEYS], scale[ROD_FIT_NKEYS];
     double *y, *jac;             /* model at the last evaluation */
@@ -345,6 +464,18 @@ static int eval_fj(const gsl_vector *x, fit_ctx *c, gsl_vector *f, gsl_matrix *J
         }
     }
     int row = 2 * c->nobs;
+    if (c->nshape) {
+        const double *sy, *sj;
+        rod_fit_model_shape_rows(c->m, &sy, &sj);
+        double w = 1.0 / c->o->sigma_shape;
+        for (int i = 0, p = 0; i < c->o->nshapes; i++)
+            for (int q = 0; q < 2 * c->o->shapes[i].k; q++, p++, row++) {
+                c->last_f[row] = (sy[p] - c->o->shapes[i].xz[q]) * w;
+                for (int ii = 0; ii < c->nfit; ii++)
+                    c->cache_J[row * c->nfit + ii] =
+                        sj ? sj[(size_t)p * ROD_FIT_NKEYS + (size_t)c->key[ii]] * w * c->scale[c->key[ii]] : 0.0;
+            }
+    }
     for (int i = 0; i < c->nfit; i++) {
         int k = c->key[i];
         if (!isfinite(c->o->prior_sigma[k])) continue;
@@ -463,7 +594,7 @@ static void default_bounds(const rod_scene *sc, int k, double u0, double *lo, do
 static int covariance(fit_ctx *c, const double *Jw, rod_fit_result *res)
 {
     int n = c->nres, p = c->nfit;
-    int nd = 2 * c->nobs;
+    int nd = 2 * c->nobs + c->nshape;
     gsl_matrix *A = gsl_matrix_alloc((size_t)(n > p ? n : p), (size_t)p);
     gsl_matrix *V = gsl_matrix_alloc((size_t)p, (size_t)p);
     gsl_vector *S = gsl_vector_alloc((size_t)p), *work = gsl_vector_alloc((size_t)p);
@@ -615,14 +746,26 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
             snprintf(why, why_len, "observation %d: Delta L must be in (0, 1) and every value finite", k + 1);
             return ROD_ERR_SCENE;
         }
+    if (o->nshapes < 0 || (o->nshapes > 0 && (!o->shapes || !(o->sigma_shape > 0.0) || !isfinite(o->sigma_shape)))) {
+        snprintf(why, why_len, "shapes: the noise of a shape's points must be positive and finite");
+        return ROD_ERR_SCENE;
+    }
     int npri = 0;
     for (int i = 0; i < c.nfit; i++) npri += isfinite(o->prior_sigma[c.key[i]]);
-    c.nres = 2 * nobs + npri;
+    for (int i = 0; i < o->nshapes; i++) c.nshape += 2 * (o->shapes[i].k > 0 ? o->shapes[i].k : 0);
+    int ndata = 2 * nobs + c.nshape;
+    c.nres = ndata + npri;
     res->nobs = nobs;
-    res->nres = 2 * nobs;
+    res->nres = ndata;
+    res->nshape_rows = c.nshape;
     res->nfit = c.nfit;
     rod_status st = rod_fit_model_alloc(sc, obs, nobs, o->paper, &c.m, why, why_len);
     if (st != ROD_OK) return st;
+    st = rod_fit_model_set_shapes(c.m, o->shapes, o->nshapes, why, why_len);
+    if (st != ROD_OK) {
+        rod_fit_model_free(c.m);
+        return st;
+    }
     c.y = malloc(sizeof(double) * 2 * (size_t)nobs);
     c.jac = malloc(sizeof(double) * 2 * (size_t)nobs * ROD_FIT_NKEYS);
     c.last_f = calloc((size_t)c.nres, sizeof(double));
@@ -644,8 +787,8 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
     }
     {
         double s = 0.0;
-        for (int i = 0; i < 2 * nobs; i++) s += c.last_f[i] * c.last_f[i];
-        res->rms_start = sqrt(s / (2.0 * nobs));
+        for (int i = 0; i < ndata; i++) s += c.last_f[i] * c.last_f[i];
+        res->rms_start = sqrt(s / (double)ndata);
     }
     gsl_multifit_nlinear_parameters par = gsl_multifit_nlinear_default_parameters();
     par.trs = gsl_multifit_nlinear_trs_lm;
@@ -688,8 +831,13 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
         goto done;
     }
     x_to_u(&c, x, res->u);
-    for (int i = 0; i < 2 * nobs; i++) res->chi2 += c.last_f[i] * c.last_f[i];
-    res->rms = sqrt(res->chi2 / (2.0 * nobs));
+    for (int i = 0; i < ndata; i++) res->chi2 += c.last_f[i] * c.last_f[i];
+    res->rms = sqrt(res->chi2 / (double)ndata);
+    if (c.nshape) {
+        double s = 0.0;
+        for (int i = 2 * nobs; i < ndata; i++) s += c.last_f[i] * c.last_f[i];
+        res->shape_rms = sqrt(s / (double)c.nshape);
+    }
     res->misfit = res->rms > o->misfit;
     for (int i = 0; i < c.nfit; i++) {
         int k = c.key[i];

@@ -33,10 +33,21 @@
 #include <stddef.h>
 
 #include "rod_fit_param.h"
+#include "rod_shape.h"
 
 typedef struct rod_fit_obs {
     double dl, dw, dz, a;
 } rod_fit_obs;
+
+/* A shape seen at one observation's state (rod_shape.h): k points (x, z) over l relative to the
+ * left clamp point, evenly in the projected arc length. Its residuals (model - observed, each
+ * coordinate over opts.sigma_shape) join the data rows; its state must be one of the
+ * observations' (Delta L, Delta W) exactly. */
+typedef struct rod_fit_shape {
+    double dl, dw;
+    int k;                           /* points, 1 .. ROD_SHAPE_MAX_POINTS */
+    double xz[2 * ROD_SHAPE_MAX_POINTS];
+} rod_fit_shape;
 
 typedef struct rod_fit_opts {
     int fit[ROD_FIT_NKEYS];          /* 1: fitted, 0: held at the scene's value */
@@ -66,6 +77,11 @@ typedef struct rod_fit_opts {
     const atomic_int *cancel;        /* NULL, or non-zero stops the fit at its next evaluation
                                         (ROD_ERR_TIME_LIMIT, "cancelled"): a trial's fit
                                         beside it (daemon/trial/trial_calibrate.c) */
+    const rod_fit_shape *shapes;     /* NULL, or nshapes shapes seen (the projected centreline at a
+                                        few states): 2 k more data rows each */
+    int nshapes;
+    double sigma_shape;              /* noise of each shape coordinate, over l (the tracker's
+                                        centreline noise; 0.001 by default) */
 } rod_fit_opts;
 
 rod_fit_opts rod_fit_opts_default(void);
@@ -80,8 +96,10 @@ typedef struct rod_fit_result {
     int at_bound[ROD_FIT_NKEYS];     /* ended at (within 1e-9 of the range of) a bound */
     double cov[ROD_FIT_NKEYS][ROD_FIT_NKEYS]; /* fit units, 0 where not determined */
     double corr[ROD_FIT_NKEYS][ROD_FIT_NKEYS];
-    int nobs, nres, nfit;
+    int nobs, nres, nfit;            /* nres: data rows, 2 nobs plus 2 k per shape */
+    int nshape_rows;                 /* of which the shapes' */
     double chi2;                     /* sum of squared data residuals */
+    double shape_rms;                /* the shapes' residual alone in units of their noise (0: none) */
     double rms;                      /* sqrt(chi2 / nres): residual in units of the noise */
     double rms_start;                /* the same at the scene's values */
     int iterations, evaluations, model_failures;
@@ -116,5 +134,14 @@ void rod_fit_model_reset(rod_fit_model *m);
  * major 2 nobs x ROD_FIT_NKEYS, derivatives for the parameters with use[j] set (others 0). */
 rod_status rod_fit_model_eval(rod_fit_model *m, const double u[ROD_FIT_NKEYS], const int *use, double *y,
                               double *jac, char *why, size_t why_len);
+/* Shapes to model at the next evaluations (copied in; n 0 removes them): each at the observation
+ * with its (Delta L, Delta W). ROD_ERR_SCENE with the reason when a shape's state is no
+ * observation's or its k is out of range. */
+rod_status rod_fit_model_set_shapes(rod_fit_model *m, const rod_fit_shape *shapes, int n, char *why,
+                                    size_t why_len);
+/* After an evaluation: the shapes' model values (*y: 2 k per shape, in their order) and, when the
+ * evaluation computed a Jacobian, its rows (*jac: row major, ROD_FIT_NKEYS per row, NULL
+ * otherwise); returns the number of rows. */
+int rod_fit_model_shape_rows(const rod_fit_model *m, const double **y, const double **jac);
 
 #endif

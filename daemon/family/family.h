@@ -52,6 +52,9 @@ typedef struct family_film_opts {
     double noise_sigma;    /* grey levels (2, the rig files') */
     double blur_sigma_px;  /* (0.8, the rig files') */
     uint64_t seed;         /* the camera's noise */
+    int n_shapes;          /* compression frames whose centreline is kept (evenly over the
+                              compression, the last at the hold's Delta L; 0: none) */
+    int shape_points;      /* points K of each kept centreline (24) */
 } family_film_opts;
 
 family_film_opts family_film_opts_default(const rod_scene *sc);
@@ -66,6 +69,14 @@ typedef struct family_film {
     double *true_dz, *true_a; /* n: the twin's dz_cam, a_cam */
     double dz_rms, a_rms;  /* tracker error over the measured frames: Delta Z (over l), A (rad) */
     double dz_mean, a_mean; /* its mean (bias) */
+    int nshapes;           /* centrelines kept (n_shapes of the options, fewer when frames were
+                              lost or below the twin's upper states) */
+    rod_fit_shape *true_shapes;    /* nshapes: the twin's own x-z projection (rod_shape.h) */
+    rod_fit_shape *tracked_shapes; /* nshapes: the tracker's centreline at the same frames, mapped
+                                      from pixels to the plane y = 0 (the calibration's view model,
+                                      depth 0: no shear) and resampled alike */
+    double shape_rms;      /* RMS over every point and coordinate of tracked - true, over l */
+    double shape_mean_x, shape_mean_z; /* their mean (bias), over l */
 } family_film;
 
 /* Films `twin` (its own mesh) through the protocol of o. Arrays are allocated (family_film_free).
@@ -95,7 +106,13 @@ typedef struct family_case_opts {
                               (0: the fit options' sigmas) */
     int held_at_truth;     /* diagnostic: parameters not fitted are held at the twin's values, not
                               the scene's (what the fit could do if the specimen record knew them) */
+    int shape_source;      /* FAMILY_SHAPES_NONE (default), _TRUTH: the twin's own centreline
+                              (film.n_shapes frames) plus Gaussian noise of shape_noise, _TRACKER:
+                              the tracker's; fed to both fits as rod_fit_opts.shapes */
+    double shape_noise;    /* over l, per coordinate (FAMILY_SHAPES_TRUTH) */
 } family_case_opts;
+
+enum { FAMILY_SHAPES_NONE, FAMILY_SHAPES_TRUTH, FAMILY_SHAPES_TRACKER };
 
 family_case_opts family_case_opts_default(const rod_scene *sc);
 
@@ -115,6 +132,8 @@ typedef struct family_case {
                               snap, a refresh started from the first fit's values (from the
                               scene's when the first failed) */
     double sigma_dz, sigma_a; /* the noise the fits weighted the residuals with */
+    int nshapes;           /* centrelines the fits were given */
+    double shape_rms;      /* the tracker's centreline against the twin's, over l (film_stats') */
     double wall_s;
 } family_case;
 
@@ -135,6 +154,10 @@ typedef struct family_summary {
     int regime_scored_before, regime_right_before; /* twins whose band does not reach the boundary */
     int regime_scored_at, regime_right_at;
     double tracker_dz_rms, tracker_a_rms;  /* median over the family, shear films */
+    int before_pos_undetermined; /* before-shear fits naming a crease position not determined */
+    int at_pos_undetermined;
+    double shape_rms;          /* median over the family of the tracker's centreline error, over l
+                                  (-1: no shapes kept) */
 } family_summary;
 
 void family_summarise(const family_case *c, int n, family_summary *s);

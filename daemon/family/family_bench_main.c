@@ -12,7 +12,10 @@
  *     fit_before_cpu_s_median= fit_before_cpu_s_max= refresh_cpu_s_median= refresh_cpu_s_max=
  *     snap_band_cpu_s_median= snap_band_cpu_s_max= in_trial_cpu_s_median= in_trial_cpu_s_max=
  *     refresh_total_cpu_s_median= refresh_total_cpu_s_max=
- *     threads= wall_s=
+ *     threads= wall_s= shapes= shape_source= sigma_shape= before_pos_undetermined=
+ *     at80_pos_undetermined= shape_rms=
+ * (the last six: the centrelines given to the fits, issue 32 A; shape_rms is the tracker's
+ * centreline against the twin's over l, median over the family, -1 when none was kept)
  * CPU times are per thread (CLOCK_THREAD_CPUTIME_ID: one core's work, whatever the load):
  * fit_before_* the fit from compression and hold (issue 32 E: at most 2 s at N = 61), in_trial_*
  * that fit plus the calibrated prediction and its band (what must land before the shear starts),
@@ -40,6 +43,7 @@ static const char usage[] =
     "                         [--threads T] [--fit KEY,KEY,...] [--prior KEY=SIGMA ...]\n"
     "                         [--shear-frac F] [--sigma-dz X] [--sigma-a X] [--sigma-b-dz X]\n"
     "                         [--sigma-b-a X] [--held-at-truth]\n"
+    "                         [--shapes N [--shape-source truth|tracker] [--sigma-shape X]]\n"
     "                         [--verbose [--verbose]] [--json]\n"
     "  Draws N twins (20) of the scene's strip with seed S (1) across a hand-made strip's ranges\n"
     "  (crease angles 75-95 deg within 5% of each other, hinge bending length 1-20% of l, E -+ 20%,\n"
@@ -57,7 +61,11 @@ static const char usage[] =
     "  (compression, hold, shear) besides that noise, for the fit's covariance (a sandwich; below 0:\n"
     "  estimated from the phases' mean residuals; default 0 and 0.003 rad, the in-trial fit's). --held-at-truth (a diagnostic): the parameters not fitted are held at each\n"
     "  twin's own values instead of the scene's. --verbose: a line per twin on stderr (twice: the\n"
-    "  fitted values against the twin's, with standard errors; ND: not determined by the data).\n";
+    "  fitted values against the twin's, with standard errors; ND: not determined by the data).\n"
+    "  --shapes N: the strip's centreline at N compression frames (the last at the hold's Delta L)\n"
+    "  is fitted too, 24 points each (docs/calibration.md): the twin's own with Gaussian noise of\n"
+    "  --sigma-shape X per coordinate (over l; 0.001) with --shape-source truth (the default), or\n"
+    "  the tracker's mapped to the plane with --shape-source tracker (weighted by X all the same).\n";
 
 #define MAX_SETS 32
 #define MAX_TWINS 1000
@@ -101,6 +109,11 @@ static void print_case(job *j, const family_case *c)
         fprintf(stderr, " | track dz %.2g a %.2g sigma %.2g %.2g | cpu fit %.3f + band %.3f, refresh %.3f + %.3f s | %.0f s\n",
                 c->film_stats.dz_rms, c->film_stats.a_rms, c->sigma_dz, c->sigma_a, c->before.fit_cpu_s,
                 c->before.snap_cpu_s, c->at.fit_cpu_s, c->at.snap_cpu_s, c->wall_s);
+        if (c->nshapes > 0)
+            fprintf(stderr, "   shapes %d: tracker off the twin by %.2g l RMS (mean x %+.2g, z %+.2g); "
+                    "the fits' shape residual before / at80 %.2f / %.2f noise units\n", c->nshapes,
+                    c->film_stats.shape_rms, c->film_stats.shape_mean_x, c->film_stats.shape_mean_z,
+                    c->before.fit.shape_rms, c->at.fit.shape_rms);
         if (j->verbose > 1)
             for (int k = 0; k < 2; k++) {
                 const rod_fit_result *r = &f[k]->fit;
@@ -210,7 +223,8 @@ int main(int argc, char **argv)
     /* sigma_b_a: the in-trial fit's TRIAL_CALIBRATE_BIAS_A (daemon/trial/trial_calibrate.h, 0.003 rad:
      * the tracker's per-phase bias on A measured on these films); --sigma-b-a 0 turns it off */
     double frac = 0.8, sigma_dz = 0, sigma_a = 0, sigma_b_dz = 0, sigma_b_a = 0.003;
-    int held_truth = 0;
+    int held_truth = 0, nshapes = 0, shape_source = FAMILY_SHAPES_TRUTH;
+    double sigma_shape = 0.001;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         int more = i + 1 < argc;
@@ -227,6 +241,14 @@ int main(int argc, char **argv)
                  isfinite(sigma_b_dz)) continue;
         else if (!strcmp(a, "--sigma-b-a") && more && (sigma_b_a = strtod(argv[++i], &end), !*end) && isfinite(sigma_b_a))
             continue;
+        else if (!strcmp(a, "--shapes") && more && (nshapes = (int)strtol(argv[++i], &end, 10), !*end) && nshapes >= 0 &&
+                 nshapes <= 20) continue;
+        else if (!strcmp(a, "--sigma-shape") && more && (sigma_shape = strtod(argv[++i], &end), !*end) &&
+                 sigma_shape > 0 && isfinite(sigma_shape)) continue;
+        else if (!strcmp(a, "--shape-source") && more && (!strcmp(argv[i + 1], "truth") || !strcmp(argv[i + 1], "tracker"))) {
+            shape_source = !strcmp(argv[++i], "truth") ? FAMILY_SHAPES_TRUTH : FAMILY_SHAPES_TRACKER;
+            continue;
+        }
         else if (!strcmp(a, "--scene") && more) scene = argv[++i];
         else if (!strcmp(a, "--set") && more && nsets < MAX_SETS) sets[nsets++] = argv[++i];
         else if (!strcmp(a, "--fit") && more) fitkeys = argv[++i];
@@ -258,6 +280,10 @@ int main(int argc, char **argv)
     j.o = family_case_opts_default(&sc);
     j.o.shear_frac = frac;
     j.o.held_at_truth = held_truth;
+    j.o.film.n_shapes = nshapes;
+    j.o.shape_source = nshapes > 0 ? shape_source : FAMILY_SHAPES_NONE;
+    j.o.shape_noise = sigma_shape;
+    j.o.fit.sigma_shape = sigma_shape;
     if (sigma_dz > 0 || sigma_a > 0) {
         j.o.noise_from_hold = 0;
         if (sigma_dz > 0) j.o.fit.sigma_dz = sigma_dz;
@@ -333,7 +359,8 @@ int main(int argc, char **argv)
           "\"refresh_cpu_s_median\":%.6g,\"refresh_cpu_s_max\":%.6g,\"snap_band_cpu_s_median\":%.6g,"
           "\"snap_band_cpu_s_max\":%.6g,\"in_trial_cpu_s_median\":%.6g,"
           "\"in_trial_cpu_s_max\":%.6g,\"refresh_total_cpu_s_median\":%.6g,\"refresh_total_cpu_s_max\":%.6g,"
-          "\"threads\":%d,\"wall_s\":%.6g}\n"
+          "\"threads\":%d,\"wall_s\":%.6g,\"shapes\":%d,\"shape_source\":\"%s\",\"sigma_shape\":%.6g,"
+          "\"before_pos_undetermined\":%d,\"at_pos_undetermined\":%d,\"shape_rms\":%.6g}\n"
         : "bench-fit-family twins=%d ran=%d seed=%llu nodes=%d fit=%s scene_err_median=%.5f scene_err_max=%.5f "
           "before_fits=%d before_err_median=%.5f before_err_max=%.5f before_in_2sd=%.3f before_z_median=%.2f "
           "before_regime=%d/%d at_fits=%d at_err_median=%.5f at_err_max=%.5f at_in_2sd=%.3f at_z_median=%.2f "
@@ -341,13 +368,15 @@ int main(int argc, char **argv)
           "fit_before_cpu_s_max=%.3f refresh_cpu_s_median=%.3f refresh_cpu_s_max=%.3f snap_band_cpu_s_median=%.3f "
           "snap_band_cpu_s_max=%.3f "
           "in_trial_cpu_s_median=%.3f in_trial_cpu_s_max=%.3f refresh_total_cpu_s_median=%.3f "
-          "refresh_total_cpu_s_max=%.3f threads=%d wall_s=%.1f\n";
+          "refresh_total_cpu_s_max=%.3f threads=%d wall_s=%.1f shapes=%d shape_source=%s sigma_shape=%.5f "
+          "before_pos_undetermined=%d at80_pos_undetermined=%d shape_rms=%.6f\n";
     printf(fmt, s.twins, s.ran, seed, sc.nodes, keys, s.scene_median, s.scene_max, s.fits_before, s.before_median,
            s.before_max, s.before_in2sd, s.before_z_median, s.regime_right_before, s.regime_scored_before, s.fits_at,
            s.at_median, s.at_max, s.at_in2sd, s.at_z_median, s.regime_right_at, s.regime_scored_at, frac,
            s.tracker_dz_rms, s.tracker_a_rms, fb_med, fb_max, rf_med, rf_max, sn_med, sn_max, it_med, it_max, ir_med,
            ir_max, threads,
-           wall);
+           wall, nshapes, j.o.shape_source == FAMILY_SHAPES_TRACKER ? "tracker" : nshapes > 0 ? "truth" : "none",
+           sigma_shape, s.before_pos_undetermined, s.at_pos_undetermined, s.shape_rms);
     for (int k = 0; k < twins; k++)
         if (!j.cases[k].ok) fprintf(stderr, "ribbon-fit-family: %s\n", j.cases[k].why);
     free(j.cases);

@@ -39,6 +39,8 @@ family_case_opts family_case_opts_default(const rod_scene *sc)
        before the shear unbounded (rod_fit_band.h) */
     o.fit.prior_sigma[ROD_FIT_ANGLE_LEFT] = o.fit.prior_sigma[ROD_FIT_ANGLE_RIGHT] = 7.6;
     o.fit.prior_sigma[ROD_FIT_HINGE] = 0.88;
+    o.shape_source = FAMILY_SHAPES_NONE;
+    o.shape_noise = 0.001;
     return o;
 }
 
@@ -142,6 +144,7 @@ int family_case_run(const rod_scene *sc, const family_ranges *rg, uint64_t seed,
     out->film_stats = film;
     out->film_stats.obs = NULL;
     out->film_stats.true_dz = out->film_stats.true_a = NULL;
+    out->film_stats.true_shapes = out->film_stats.tracked_shapes = NULL;
     int nb = 0;
     while (nb < film.n && film.obs[nb].dw == 0.0) nb++;
     rod_fit_opts fo_fit = o->fit;
@@ -157,6 +160,30 @@ int family_case_run(const rod_scene *sc, const family_ranges *rg, uint64_t seed,
         sc = &fsc;
     }
     if (o->noise_from_hold) hold_noise(&out->twin, film.obs, film.n, &fo_fit);
+    out->shape_rms = film.shape_rms;
+    if (o->shape_source == FAMILY_SHAPES_TRUTH) {
+        /* The twin's own centreline with Gaussian noise of shape_noise per coordinate, from
+           (seed, index) alone (a splitmix64 stream, Box-Muller). */
+        uint64_t st = o->film.seed * 0x9E3779B97F4A7C15ull + 104729u * (uint64_t)index + 1u;
+        for (int i = 0; i < film.nshapes; i++)
+            for (int p = 0; p < 2 * film.true_shapes[i].k; p++) {
+                double u[2];
+                for (int q = 0; q < 2; q++) {
+                    uint64_t z = (st += 0x9E3779B97F4A7C15ull);
+                    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+                    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+                    z ^= z >> 31;
+                    u[q] = ((double)(z >> 11) + 0.5) / 9007199254740992.0;
+                }
+                film.true_shapes[i].xz[p] += o->shape_noise * sqrt(-2.0 * log(u[0])) * cos(2.0 * M_PI * u[1]);
+            }
+        fo_fit.shapes = film.true_shapes;
+        fo_fit.nshapes = film.nshapes;
+    } else if (o->shape_source == FAMILY_SHAPES_TRACKER) {
+        fo_fit.shapes = film.tracked_shapes;
+        fo_fit.nshapes = film.nshapes;
+    }
+    out->nshapes = fo_fit.nshapes;
     out->sigma_dz = fo_fit.sigma_dz;
     out->sigma_a = fo_fit.sigma_a;
     calibrate(sc, film.obs, nb, &fo_fit, &out->before);

@@ -39,7 +39,9 @@ family_film_opts family_film_opts_default(const rod_scene *sc)
                               .height_px = 480,
                               .noise_sigma = 2.0,
                               .blur_sigma_px = 0.8,
-                              .seed = 1};
+                              .seed = 1,
+                              .n_shapes = 0,
+                              .shape_points = 24};
 }
 
 void family_film_free(family_film *f)
@@ -48,8 +50,11 @@ void family_film_free(family_film *f)
     free(f->obs);
     free(f->true_dz);
     free(f->true_a);
+    free(f->true_shapes);
+    free(f->tracked_shapes);
     f->obs = NULL;
     f->true_dz = f->true_a = NULL;
+    f->true_shapes = f->tracked_shapes = NULL;
 }
 
 typedef struct film_ctx {
@@ -66,6 +71,7 @@ typedef struct film_ctx {
     vis_camera cam;
     vis_frame *frame;
     vis_tracker *tracker;   /* the hold and shear tracker */
+    int width_px, height_px;
 } film_ctx;
 
 static rod_status solve_at(film_ctx *c, double dl, double dw)
@@ -104,9 +110,47 @@ static rod_status step_to(film_ctx *c, double dl, double dw)
     return ROD_OK;
 }
 
-/* Renders the rod's state and measures it with t (fresh: NULL, a tracker for this Delta L is made). */
-static int film_frame(film_ctx *c, vis_tracker *t, vis_measure *m, char *why, size_t why_len)
+/* The tracker's centreline (n pixels uv) in the plane y = 0 at depth 0 (no shear), relative to
+   the left clamp point, over l: the tracker's own view model (vision/track/view_model.cpp,
+   view_to_metric) from the calibration, for a frame of w x h pixels. */
+static void curve_to_plane(const vis_calib *cal, int w, int h, double length_mm, const double *uv, int n, double *xz)
 {
+    double pu = cal->principal_px[0] >= 0 && cal->principal_px[1] >= 0 ? cal->principal_px[0] : 0.5 * (w - 1);
+    double pv = cal->principal_px[0] >= 0 && cal->principal_px[1] >= 0 ? cal->principal_px[1] : 0.5 * (h - 1);
+    double ppmm = cal->px_per_mm, D = cal->camera_distance_mm, ct = cos(cal->camera_tilt_rad),
+           st = sin(cal->camera_tilt_rad);
+    double x0 = 0.0, z0 = 0.0;
+    for (int i = -1; i < n; i++) {
+        double u = i < 0 ? cal->clamp_left_px[0] : uv[2 * i], v = i < 0 ? cal->clamp_left_px[1] : uv[2 * i + 1];
+        double du = u - pu, dv = v - pv, x, z;
+        if (!(D > 0)) {
+            x = du / ppmm;
+            z = -dv / ppmm;
+        } else {
+            double F = ppmm * D, dir_y = F * ct - dv * st, dir_z = -F * st - dv * ct;
+            double lambda = (D * ct) / dir_y;
+            x = lambda * du;
+            z = D * st + lambda * dir_z;
+        }
+        if (i < 0) {
+            x0 = x;
+            z0 = z;
+            continue;
+        }
+        xz[2 * i] = (x - x0) / length_mm;
+        xz[2 * i + 1] = (z - z0) / length_mm;
+    }
+}
+
+#define CURVE_MAX 512 /* most centreline points taken from the tracker */
+
+/* Renders the rod's state and measures it with t (fresh: NULL, a tracker for this Delta L is
+   made). With curve, the tracked centreline mapped to the plane (over l) goes there and *n_curve
+   says how many points (0: none). */
+static int film_frame(film_ctx *c, vis_tracker *t, vis_measure *m, double *curve, int *n_curve, char *why,
+                      size_t why_len)
+{
+    vis_calib own_cal = vis_calib_default();
     char err[256] = "";
     vis_error ve = {0};
     if (twin_shape_from_rod(&c->shape, c->r, err, sizeof err) != TWIN_OK) {
@@ -128,6 +172,7 @@ static int film_frame(film_ctx *c, vis_tracker *t, vis_measure *m, char *why, si
             snprintf(why, why_len, "family film: calibration: %s", err);
             return -1;
         }
+        own_cal = cal;
         own = t = vis_tracker_create(&tp, &cal, &ve);
         if (!t) {
             snprintf(why, why_len, "family film: tracker: %s", ve.message);
@@ -135,6 +180,16 @@ static int film_frame(film_ctx *c, vis_tracker *t, vis_measure *m, char *why, si
         }
     }
     vis_status vs = vis_tracker_process(t, c->frame, 1e3 * c->dw * c->sc->length, m, &ve);
+    if (curve) {
+        *n_curve = 0;
+        if (vs == VIS_OK && own && m->reason == VIS_REASON_NONE) {
+            double uv[2 * CURVE_MAX];
+            size_t nc = vis_tracker_curve(own, uv, CURVE_MAX);
+            if (nc > CURVE_MAX) nc = CURVE_MAX;
+            curve_to_plane(&own_cal, c->width_px, c->height_px, 1e3 * c->sc->length, uv, (int)nc, curve);
+            *n_curve = (int)nc;
+        }
+    }
     vis_tracker_free(own);
     if (vs != VIS_OK) {
         snprintf(why, why_len, "family film: track: %s", ve.message);
@@ -157,6 +212,8 @@ static int film_setup(film_ctx *c, const rod_scene *twin, const family_film_opts
         return -1;
     }
     c->cam = rp.camera;
+    c->width_px = o->width_px;
+    c->height_px = o->height_px;
     rp.noise_sigma = o->noise_sigma;
     rp.blur_sigma_px = o->blur_sigma_px;
     rp.seed = o->seed;
@@ -245,7 +302,16 @@ int family_film_run(const rod_scene *twin, const family_film_opts *o, family_fil
     out->true_a = calloc((size_t)total, sizeof(double));
     film_ctx c = {.sc = twin};
     int rc = -1;
-    if (!out->obs || !out->true_dz || !out->true_a) {
+    double s_shape = 0.0, m_shape_x = 0.0, m_shape_z = 0.0;
+    double *curve = malloc(sizeof(double) * 2 * CURVE_MAX);
+    int nsh_max = o->n_shapes > 0 ? o->n_shapes : 1;
+    out->true_shapes = calloc((size_t)nsh_max, sizeof *out->true_shapes);
+    out->tracked_shapes = calloc((size_t)nsh_max, sizeof *out->tracked_shapes);
+    if (o->n_shapes < 0 || (o->n_shapes > 0 && (o->shape_points < 1 || o->shape_points > ROD_SHAPE_MAX_POINTS))) {
+        snprintf(why, why_len, "family film: bad shape count or points per shape");
+        goto done;
+    }
+    if (!out->obs || !out->true_dz || !out->true_a || !curve || !out->true_shapes || !out->tracked_shapes) {
         snprintf(why, why_len, "family film: out of memory");
         goto done;
     }
@@ -270,7 +336,28 @@ int family_film_run(const rod_scene *twin, const family_film_opts *o, family_fil
             goto done;
         }
         vis_measure m;
-        if (film_frame(&c, compressing ? NULL : c.tracker, &m, why, why_len) != 0) goto done;
+        /* A kept centreline: compression frame k at j (n_compress - 1) / (n_shapes - 1). */
+        int keep = 0;
+        for (int j = 0; compressing && j < o->n_shapes && !keep; j++)
+            keep = k == (o->n_shapes > 1 ? (int)lround((double)j * (o->n_compress - 1) / (o->n_shapes - 1))
+                                         : o->n_compress - 1);
+        int n_curve = 0;
+        if (film_frame(&c, compressing ? NULL : c.tracker, &m, keep ? curve : NULL, &n_curve, why, why_len) != 0)
+            goto done;
+        if (keep && m.reason == VIS_REASON_NONE && n_curve >= 2) {
+            rod_fit_shape *ts = &out->true_shapes[out->nshapes], *ks = &out->tracked_shapes[out->nshapes];
+            *ts = (rod_fit_shape){.dl = dl, .dw = dw, .k = o->shape_points};
+            *ks = *ts;
+            if (rod_shape_sample(c.r, o->shape_points, ts->xz) == 0 &&
+                rod_shape_resample(curve, n_curve, o->shape_points, ks->xz) == 0) {
+                for (int p = 0; p < 2 * o->shape_points; p++) {
+                    double e = ks->xz[p] - ts->xz[p];
+                    s_shape += e * e;
+                    *(p % 2 ? &m_shape_z : &m_shape_x) += e;
+                }
+                out->nshapes++;
+            }
+        }
         if (m.reason != VIS_REASON_NONE) {
             out->lost++;
             continue;
@@ -292,8 +379,15 @@ int family_film_run(const rod_scene *twin, const family_film_opts *o, family_fil
         out->dz_rms = sqrt(sdz / out->n);
         out->a_rms = sqrt(sa / out->n);
     }
+    if (out->nshapes > 0) {
+        double np = 2.0 * o->shape_points * out->nshapes;
+        out->shape_rms = sqrt(s_shape / np);
+        out->shape_mean_x = 2.0 * m_shape_x / np;
+        out->shape_mean_z = 2.0 * m_shape_z / np;
+    }
     rc = 0;
 done:
+    free(curve);
     film_release(&c);
     if (rc != 0) family_film_free(out);
     return rc;

@@ -70,14 +70,26 @@ void family_summarise(const family_case *c, int n, family_summary *s)
     double *e = malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
     double *dz = malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
     double *a = malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
-    int m = 0;
-    for (int k = 0; e && dz && a && k < n; k++) {
+    double *sh = malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
+    int m = 0, msh = 0;
+    for (int k = 0; e && dz && a && sh && k < n; k++) {
         if (!c[k].ok) continue;
         e[m] = fabs(c[k].scene_dw - c[k].truth_dw) / c[k].truth_dw;
         dz[m] = c[k].film_stats.dz_rms;
         a[m] = c[k].film_stats.a_rms;
         m++;
+        if (c[k].film_stats.nshapes > 0) sh[msh++] = c[k].film_stats.shape_rms;
+        /* A fit that ran (its snap may not have) naming a fitted crease position not determined. */
+        for (int at = 0; at < 2; at++) {
+            const rod_fit_result *r = at ? &c[k].at.fit : &c[k].before.fit;
+            int undet = 0;
+            for (int p = ROD_FIT_POSITION_LEFT; p <= ROD_FIT_POSITION_RIGHT; p++)
+                undet |= r->nfit > 0 && r->fitted[p] && !r->determined[p];
+            *(at ? &s->at_pos_undetermined : &s->before_pos_undetermined) += undet;
+        }
     }
+    s->shape_rms = msh > 0 ? median(sh, msh) : -1.0;
+    free(sh);
     s->ran = m;
     s->scene_max = maxof(e, m);
     s->scene_median = median(e, m);
