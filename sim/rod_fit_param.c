@@ -33,6 +33,26 @@ int rod_fit_key_strip(rod_fit_key k)
     return k != ROD_FIT_DZ_OFFSET;
 }
 
+void rod_fit_key_bounds(rod_fit_key k, double u0, double *lo, double *hi)
+{
+    switch (k) {
+    case ROD_FIT_ANGLE_LEFT:
+    case ROD_FIT_ANGLE_RIGHT: *lo = u0 - 20.0; *hi = u0 + 20.0; break;
+    case ROD_FIT_POSITION_LEFT:
+    case ROD_FIT_POSITION_RIGHT: *lo = fmax(u0 - 0.05, 1e-3); *hi = fmin(u0 + 0.05, 1.0 - 1e-3); break;
+    case ROD_FIT_HINGE:
+    case ROD_FIT_HINGE_LEFT:
+    case ROD_FIT_HINGE_RIGHT: *lo = u0 - log(100.0); *hi = u0 + log(100.0); break;
+    case ROD_FIT_DZ_OFFSET: *lo = u0 - 0.05; *hi = u0 + 0.05; break;
+    default: *lo = u0 - log(10.0); *hi = u0 + log(10.0); break;
+    }
+}
+
+double rod_fit_key_scale(rod_fit_key k)
+{
+    return (k == ROD_FIT_POSITION_LEFT || k == ROD_FIT_POSITION_RIGHT || k == ROD_FIT_DZ_OFFSET) ? 0.01 : 1.0;
+}
+
 void rod_fit_base_init(rod_fit_base *b, const rod *r, const rod_scene *sc)
 {
     b->EA = r->EA;
