@@ -10,7 +10,6 @@
 #include "rod_snapshot.h"
 #include "rod_solver.h"
 
-#include <gsl/gsl_errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,7 +19,6 @@
 #define STEP_MAX 0.02      /* largest step in Delta L or Delta W between static solves */
 #define STEP_HALVINGS 8    /* a step halves at most this many times */
 #define PATH_SOLVES 4000   /* cap on static solves per evaluation */
-#define FAIL_CAP 30        /* cap on failed model evaluations in one fit */
 
 struct rod_fit_model {
     rod_scene sc;
@@ -304,9 +302,11 @@ static void x_to_u(const fit_ctx *c, const double *x, double u[ROD_FIT_NKEYS])
 }
 
 /* The residuals and their Jacobian at x into last_f and cache_J: 0, 1 when the model failed there
-   (last_f and cache_J kept, the reason in c->why), -1 when cancelled. */
-static int eval_point(fit_ctx *c, const double *x)
+   (last_f and cache_J kept, the reason in c->why), -1 when cancelled or past ROD_FIT_LM_FAIL_CAP failures. */
+static int eval_point(void *user, const double *x)
 {
+    fit_ctx *c = user;
+    if (c->failures > ROD_FIT_LM_FAIL_CAP) return -1;
     double u[ROD_FIT_NKEYS];
     x_to_u(c, x, u);
     int use[ROD_FIT_NKEYS] = {0};
@@ -343,25 +343,6 @@ static int eval_point(fit_ctx *c, const double *x)
             c->cache_J[row * c->nfit + ii] = ii == i ? c->scale[k] / c->o->prior_sigma[k] : 0.0;
         row++;
     }
-    return 0;
-}
-
-/* rod_fit_lm_problem's eval. */
-static int lm_eval(void *user, const double *x, double *f, double *J)
-{
-    fit_ctx *c = user;
-    if (c->failures > FAIL_CAP) return -1;
-    int rc = eval_point(c, x);
-    if (rc < 0) return -1;
-    if (rc > 0) {
-        /* A step into parameters without an upper state: a cost far above the last one, so the
-           trust region shrinks. */
-        for (int i = 0; i < c->nres; i++) f[i] = 1e3 * (fabs(c->last_f[i]) + 1.0);
-        memset(J, 0, sizeof(double) * (size_t)c->nres * (size_t)c->nfit);
-        return 1;
-    }
-    memcpy(f, c->last_f, sizeof(double) * (size_t)c->nres);
-    memcpy(J, c->cache_J, sizeof(double) * (size_t)c->nres * (size_t)c->nfit);
     return 0;
 }
 
@@ -514,26 +495,17 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
         for (int i = 0; i < 2 * nobs; i++) s += c.last_f[i] * c.last_f[i];
         res->rms_start = sqrt(s / (2.0 * nobs));
     }
-    rod_fit_lm_problem pr = {.p = c.nfit, .nres = c.nres, .eval = lm_eval, .user = &c};
-    int gs = rod_fit_lm_drive(&pr, x, o->max_iterations, o->stop_sd, &res->iterations, &res->gn_sd);
+    rod_fit_lm_problem pr = {.p = c.nfit, .nres = c.nres, .eval = eval_point, .last_f = c.last_f, .last_J = c.cache_J,
+                             .user = &c};
+    st = rod_fit_lm_drive(&pr, x, o->max_iterations, o->stop_sd, &res->iterations, &res->gn_sd, &res->capped, why,
+                          why_len);
     if (c.cancelled) goto cancelled;
-    if (c.failures > FAIL_CAP) {
+    if (c.failures > ROD_FIT_LM_FAIL_CAP) {
         snprintf(why, why_len, "the model failed at %d trial parameter sets (last: %s)", c.failures, c.why);
         st = ROD_ERR_BRANCH_LOST;
         goto done;
     }
-    if (gs == GSL_ENOMEM) {
-        snprintf(why, why_len, "out of memory");
-        st = ROD_ERR_ALLOC;
-        goto done;
-    }
-    /* GSL_ENOPROG: no step reduced the cost any more, the position is the best found. */
-    res->capped = gs == GSL_EMAXITER;
-    if (gs != GSL_SUCCESS && gs != GSL_EMAXITER && gs != GSL_ENOPROG) {
-        snprintf(why, why_len, "Levenberg-Marquardt stopped: %s", gsl_strerror(gs));
-        st = ROD_ERR_SINGULAR;
-        goto done;
-    }
+    if (st != ROD_OK) goto done;
     /* The solution, evaluated again so residual, Jacobian and values belong together. */
     if (eval_point(&c, x)) {
         if (c.cancelled) goto cancelled;

@@ -6,14 +6,12 @@
 #include "rod_fit_lm.h"
 #include "rod_fit_sandwich.h"
 
-#include <gsl/gsl_errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
-#define FAIL_CAP 30 /* cap on failed model evaluations in one fit (as rod_fit.c) */
 
 struct rod_fit_joint_model {
     int nspec, nown, np, nobs, nobs_max;
@@ -236,9 +234,11 @@ static void x_to_theta(const jctx *c, const double *x, double *th)
 }
 
 /* The residuals and their Jacobian at x into last_f and cache_J: 0, 1 when a specimen's model
-   failed there (kept, the reason in c->why), -1 when cancelled. */
-static int eval_point(jctx *c, const double *x)
+   failed there (kept, the reason in c->why), -1 when cancelled or past ROD_FIT_LM_FAIL_CAP failures. */
+static int eval_point(void *user, const double *x)
 {
+    jctx *c = user;
+    if (c->failures > ROD_FIT_LM_FAIL_CAP) return -1;
     int np = c->np;
     double *th = c->th;
     x_to_theta(c, x, th);
@@ -265,25 +265,6 @@ static int eval_point(jctx *c, const double *x)
         for (int ii = 0; ii < np; ii++) c->cache_J[(size_t)row * np + ii] = ii == i ? c->scale[i] / c->prior[i] : 0.0;
         row++;
     }
-    return 0;
-}
-
-/* rod_fit_lm_problem's eval (as rod_fit.c's). */
-static int lm_eval(void *user, const double *x, double *f, double *J)
-{
-    jctx *c = user;
-    if (c->failures > FAIL_CAP) return -1;
-    int rc = eval_point(c, x);
-    if (rc < 0) return -1;
-    size_t nJ = (size_t)c->nres * (size_t)c->np;
-    if (rc > 0) {
-        /* No upper state there: a cost far above the last one, so the trust region shrinks. */
-        for (int i = 0; i < c->nres; i++) f[i] = 1e3 * (fabs(c->last_f[i]) + 1.0);
-        memset(J, 0, sizeof(double) * nJ);
-        return 1;
-    }
-    memcpy(f, c->last_f, sizeof(double) * (size_t)c->nres);
-    memcpy(J, c->cache_J, sizeof(double) * nJ);
     return 0;
 }
 
@@ -522,21 +503,17 @@ rod_status rod_fit_joint_run(const rod_fit_joint_spec *specs, int nspec, const r
             res->spec[s].rms_start = sqrt(q / (2.0 * specs[s].nobs));
         }
     }
-    rod_fit_lm_problem pr = {.p = p, .nres = c.nres, .eval = lm_eval, .user = &c};
-    int gs = rod_fit_lm_drive(&pr, x, e->max_iterations, e->stop_sd, &res->iterations, &res->gn_sd);
+    rod_fit_lm_problem pr = {.p = p, .nres = c.nres, .eval = eval_point, .last_f = c.last_f, .last_J = c.cache_J,
+                             .user = &c};
+    st = rod_fit_lm_drive(&pr, x, e->max_iterations, e->stop_sd, &res->iterations, &res->gn_sd, &res->capped, why,
+                          why_len);
     if (c.cancelled) goto cancelled;
-    if (c.failures > FAIL_CAP) {
+    if (c.failures > ROD_FIT_LM_FAIL_CAP) {
         snprintf(why, why_len, "the model failed at %d trial parameter sets (last: %s)", c.failures, c.why);
         st = ROD_ERR_BRANCH_LOST;
         goto done;
     }
-    if (gs == GSL_ENOMEM) goto oom;
-    res->capped = gs == GSL_EMAXITER;
-    if (gs != GSL_SUCCESS && gs != GSL_EMAXITER && gs != GSL_ENOPROG) {
-        snprintf(why, why_len, "Levenberg-Marquardt stopped: %s", gsl_strerror(gs));
-        st = ROD_ERR_SINGULAR;
-        goto done;
-    }
+    if (st != ROD_OK) goto done;
     /* The solution, evaluated again so residual, Jacobian and values belong together. */
     if (eval_point(&c, x)) {
         if (c.cancelled) goto cancelled;

@@ -9,6 +9,7 @@
 #include <gsl/gsl_multifit_nlinear.h>
 #include <gsl/gsl_vector.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -30,14 +31,24 @@ static int take_x(lm_ctx *c, const gsl_vector *x)
     return same;
 }
 
-/* eval at the scratch point: GSL_SUCCESS with f and J filled, or GSL_EBADFUNC (stopped). */
+/* eval at the scratch point into f and J: GSL_SUCCESS, or GSL_EBADFUNC (stopped). */
 static int eval_at(lm_ctx *c)
 {
     const rod_fit_lm_problem *pr = c->pr;
-    int rc = pr->eval(pr->user, c->x, c->f, c->J);
+    size_t n = (size_t)pr->nres, nJ = n * (size_t)pr->p;
+    int rc = pr->eval(pr->user, c->x);
     if (rc < 0) return GSL_EBADFUNC;
     c->cached = rc == 0;
-    if (c->cached) memcpy(c->xc, c->x, sizeof(double) * (size_t)pr->p);
+    if (rc > 0) {
+        /* A step into parameters without an upper state: a cost far above the last one, so the
+           trust region shrinks. */
+        for (size_t i = 0; i < n; i++) c->f[i] = 1e3 * (fabs(pr->last_f[i]) + 1.0);
+        memset(c->J, 0, sizeof(double) * nJ);
+        return GSL_SUCCESS;
+    }
+    memcpy(c->f, pr->last_f, sizeof(double) * n);
+    memcpy(c->J, pr->last_J, sizeof(double) * nJ);
+    memcpy(c->xc, c->x, sizeof(double) * (size_t)pr->p);
     return GSL_SUCCESS;
 }
 
@@ -118,13 +129,14 @@ static int drive(gsl_multifit_nlinear_workspace *w, int maxiter, double stop_sd,
     return status;
 }
 
-int rod_fit_lm_drive(const rod_fit_lm_problem *pr, double *x, int maxiter, double stop_sd, int *iterations,
-                     double *gn_sd)
+rod_status rod_fit_lm_drive(const rod_fit_lm_problem *pr, double *x, int maxiter, double stop_sd, int *iterations,
+                            double *gn_sd, int *capped, char *why, size_t why_len)
 {
     size_t p = (size_t)pr->p, n = (size_t)pr->nres;
     lm_ctx c = {.pr = pr};
     *iterations = 0;
     *gn_sd = -1.0;
+    *capped = 0;
     c.x = malloc(sizeof(double) * p);
     c.xc = malloc(sizeof(double) * p);
     c.f = malloc(sizeof(double) * n);
@@ -155,7 +167,19 @@ int rod_fit_lm_drive(const rod_fit_lm_problem *pr, double *x, int maxiter, doubl
     free(c.xc);
     free(c.f);
     free(c.J);
-    return gs;
+    *capped = gs == GSL_EMAXITER;
+    /* GSL_ENOPROG: no step reduced the cost any more, the position is the best found. */
+    if (gs == GSL_SUCCESS || gs == GSL_EMAXITER || gs == GSL_ENOPROG) return ROD_OK;
+    if (gs == GSL_ENOMEM) {
+        snprintf(why, why_len, "out of memory");
+        return ROD_ERR_ALLOC;
+    }
+    if (gs == GSL_EBADFUNC) {
+        snprintf(why, why_len, "stopped by its evaluation");
+        return ROD_ERR_TIME_LIMIT;
+    }
+    snprintf(why, why_len, "Levenberg-Marquardt stopped: %s", gsl_strerror(gs));
+    return ROD_ERR_SINGULAR;
 }
 
 /* The pseudo-inverse of J^T J from J's SVD in A (V, S): singular values below 1e-12 of the

@@ -11,29 +11,39 @@
  * Jacobian J (nres x p, row major). The loop is GSL's trust region with the LM step (GSL 2.7's
  * gsl_multifit_nlinear_driver: its tolerances, its return codes) with one more stop: the
  * Gauss-Newton step still to go below stop_sd standard deviations (rod_fit_opts.stop_sd). A model
- * evaluation that fails is the caller's to express as a residual far above the last one (the
- * trust region shrinks); it is then not cached. The Jacobian computed with each f is kept for the
- * df call GSL makes at the same x. */
+ * evaluation that fails (no upper state there) is given a residual far above the last good one,
+ * so the trust region shrinks. The Jacobian computed with each f is kept for the df call GSL
+ * makes at the same x. */
 #ifndef RIBBON_SIM_ROD_FIT_LM_H
 #define RIBBON_SIM_ROD_FIT_LM_H
 
 #include <stddef.h>
 
+#include "rod.h"
+
+/* Failed model evaluations (trial parameter sets without an upper state) a fit accepts. */
+#define ROD_FIT_LM_FAIL_CAP 30
+
 typedef struct rod_fit_lm_problem {
     int p, nres;
-    /* f (nres) and J (nres x p, row major) at x, both always written. Returns 0, 1 when the model
-       failed there (f large, J zero: not cached), or -1 to stop the fit (cancelled, a cap). */
-    int (*eval)(void *user, const double *x, double *f, double *J);
+    /* Evaluates at x (p values) into last_f (nres) and last_J (nres x p, row major). Returns 0;
+       1 when the model failed there (last_f and last_J left at the last good point: the loop
+       answers a residual far above it, with no Jacobian, not cached); -1 to stop the fit
+       (cancelled, a cap). */
+    int (*eval)(void *user, const double *x);
+    const double *last_f, *last_J; /* the caller's */
     void *user;
 } rod_fit_lm_problem;
 
-/* Runs from x (p values; the position reached on return, whatever the status). Returns GSL's
- * status: GSL_SUCCESS (its tolerances or stop_sd), GSL_EMAXITER (maxiter iterations, or no step
- * reduced the cost at the first), GSL_ENOPROG (no progress: the position is the best found),
- * GSL_EBADFUNC (eval stopped it), GSL_ENOMEM, or another of GSL's. *iterations: GSL's count;
- * *gn_sd: the Gauss-Newton step still to go at the end in standard deviations (-1 unknown). */
-int rod_fit_lm_drive(const rod_fit_lm_problem *pr, double *x, int maxiter, double stop_sd, int *iterations,
-                     double *gn_sd);
+/* Runs from x (p values; the position reached on return, whatever the outcome). Returns ROD_OK
+ * when the position is the fit's answer: converged (GSL's tolerances or stop_sd), no step
+ * reducing the cost any more (the best found), or *capped = 1 at maxiter iterations (or when no
+ * step reduced the cost at the first, as GSL's driver says it); ROD_ERR_ALLOC; ROD_ERR_TIME_LIMIT
+ * when eval stopped it (the caller knows why: cancelled, its cap); ROD_ERR_SINGULAR with GSL's
+ * reason for anything else. *iterations: GSL's count; *gn_sd: the Gauss-Newton step still to go
+ * at the end in standard deviations (-1 unknown). */
+rod_status rod_fit_lm_drive(const rod_fit_lm_problem *pr, double *x, int maxiter, double stop_sd, int *iterations,
+                            double *gn_sd, int *capped, char *why, size_t why_len);
 
 /* What the covariance is made from, at the solution. Parameter j has bounds lo[j] < hi[j] and
  * prior width prior[j] (INFINITY: none) in natural fit units, and x_j = (u_j - u0_j) / scale[j]. */
