@@ -37,6 +37,7 @@
 #include "replay_job.h"
 #include "trial_config_text.h"
 #include "trial_pool.h"
+#include "trial_calibrate.h"
 #include "trial_camera_settings.h"
 
 #endif
