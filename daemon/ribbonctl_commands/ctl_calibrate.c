@@ -48,7 +48,7 @@ static const char usage[] =
     "  sim.fit_hinge makes rigid creases hinges of that stiffness (the start and the prior's centre),\n"
     "  its sim.fit_keys are the default keys, weak priors around the strip's values (10 deg on an\n"
     "  angle, 0.88 in ln k, 0.005 on view.dz_offset) and the tracker's common mode on A (0.003 rad)\n"
-    "  in the standard errors. --share-hinge fits without these (below).\n"
+    "  in the standard errors; with --share-hinge too (each specimen's trial's sim.fit_hinge).\n"
     "  --db         the store (default: ask ribbond where its store is, --url / $RIBBON_URL)\n"
     "  --fit        parameters fitted, the others held: folds.angle_left_deg, folds.angle_right_deg,\n"
     "               folds.position_left, folds.position_right, folds.hinge_stiffness (one k for\n"
