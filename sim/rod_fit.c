@@ -1,6 +1,7 @@
 /* rod_fit.c: the strip fitted to observed equilibria: the model followed along the observed
  * states, Levenberg-Marquardt, covariance and unidentified directions (rod_fit.h). */
 #include "rod_fit.h"
+#include "rod_fit_lm.h"
 #include "rod_fit_sandwich.h"
 
 #include "rod_observe.h"
@@ -9,12 +10,6 @@
 #include "rod_snapshot.h"
 #include "rod_solver.h"
 
-#include <gsl/gsl_blas.h>
-#include <gsl/gsl_errno.h>
-#include <gsl/gsl_linalg.h>
-#include <gsl/gsl_matrix.h>
-#include <gsl/gsl_multifit_nlinear.h>
-#include <gsl/gsl_vector.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -24,7 +19,6 @@
 #define STEP_MAX 0.02      /* largest step in Delta L or Delta W between static solves */
 #define STEP_HALVINGS 8    /* a step halves at most this many times */
 #define PATH_SOLVES 4000   /* cap on static solves per evaluation */
-#define FAIL_CAP 30        /* cap on failed model evaluations in one fit */
 
 struct rod_fit_model {
     rod_scene sc;
@@ -410,31 +404,35 @@ typedef struct fit_ctx {
     double u0[ROD_FIT_NKEYS], lo[ROD_FIT_NKEYS], hi[ROD_FIT_NKEYS], scale[ROD_FIT_NKEYS];
     double *y, *jac;             /* model at the last evaluation */
     double *last_f;              /* last good residuals */
-    double *cache_x, *cache_J;   /* x of the cached Jacobian, its weighted rows */
-    int cached, evaluations, failures;
+    double *cache_J;             /* their weighted Jacobian rows */
+    int evaluations, failures;
     int cancelled;               /* o->cancel was seen set */
     char why[256];
 } fit_ctx;
 
-static void x_to_u(const fit_ctx *c, const gsl_vector *x, double u[ROD_FIT_NKEYS])
+static void x_to_u(const fit_ctx *c, const double *x, double u[ROD_FIT_NKEYS])
 {
     memcpy(u, c->u0, sizeof(double) * ROD_FIT_NKEYS);
     for (int i = 0; i < c->nfit; i++) {
         int k = c->key[i];
-        double v = c->u0[k] + c->scale[k] * gsl_vector_get(x, (size_t)i);
+        double v = c->u0[k] + c->scale[k] * x[i];
         u[k] = fmin(c->hi[k], fmax(c->lo[k], v));
     }
 }
 
-static int eval_fj(const gsl_vector *x, fit_ctx *c, gsl_vector *f, gsl_matrix *J)
+/* The residuals and their Jacobian at x into last_f and cache_J: 0, 1 when the model failed there
+   (last_f and cache_J kept, the reason in c->why), -1 when cancelled or past ROD_FIT_LM_FAIL_CAP failures. */
+static int eval_point(void *user, const double *x)
 {
+    fit_ctx *c = user;
+    if (c->failures > ROD_FIT_LM_FAIL_CAP) return -1;
     double u[ROD_FIT_NKEYS];
     x_to_u(c, x, u);
     int use[ROD_FIT_NKEYS] = {0};
     for (int i = 0; i < c->nfit; i++) use[c->key[i]] = 1;
     if (c->o->cancel && atomic_load(c->o->cancel)) {
         c->cancelled = 1;
-        return GSL_EBADFUNC; /* stops the driver */
+        return -1;
     }
     c->evaluations++;
     char why[256];
@@ -442,15 +440,7 @@ static int eval_fj(const gsl_vector *x, fit_ctx *c, gsl_vector *f, gsl_matrix *J
     if (st != ROD_OK) {
         c->failures++;
         snprintf(c->why, sizeof c->why, "%s", why);
-        /* A step into parameters without an upper state: a cost far above the last one, so the
-           trust region shrinks. */
-        for (int i = 0; i < c->nres; i++) {
-            double v = 1e3 * (fabs(c->last_f[i]) + 1.0);
-            if (f) gsl_vector_set(f, (size_t)i, v);
-        }
-        if (J) gsl_matrix_set_zero(J);
-        c->cached = 0;
-        return GSL_SUCCESS;
+        return 1;
     }
     for (int k = 0; k < c->nobs; k++) {
         const rod_fit_obs *ob = &c->obs[k];
@@ -484,86 +474,7 @@ static int eval_fj(const gsl_vector *x, fit_ctx *c, gsl_vector *f, gsl_matrix *J
             c->cache_J[row * c->nfit + ii] = ii == i ? c->scale[k] / c->o->prior_sigma[k] : 0.0;
         row++;
     }
-    for (int i = 0; i < c->nfit; i++) c->cache_x[i] = gsl_vector_get(x, (size_t)i);
-    c->cached = 1;
-    for (int i = 0; i < c->nres; i++) {
-        if (f) gsl_vector_set(f, (size_t)i, c->last_f[i]);
-        if (J)
-            for (int j = 0; j < c->nfit; j++) gsl_matrix_set(J, (size_t)i, (size_t)j, c->cache_J[i * c->nfit + j]);
-    }
-    return GSL_SUCCESS;
-}
-
-static int cb_f(const gsl_vector *x, void *p, gsl_vector *f)
-{
-    fit_ctx *c = p;
-    if (c->failures > FAIL_CAP) return GSL_EMAXITER;
-    return eval_fj(x, c, f, NULL);
-}
-
-static int cb_df(const gsl_vector *x, void *p, gsl_matrix *J)
-{
-    fit_ctx *c = p;
-    int same = c->cached;
-    for (int i = 0; same && i < c->nfit; i++) same = c->cache_x[i] == gsl_vector_get(x, (size_t)i);
-    if (!same) return eval_fj(x, c, NULL, J);
-    for (int i = 0; i < c->nres; i++)
-        for (int j = 0; j < c->nfit; j++) gsl_matrix_set(J, (size_t)i, (size_t)j, c->cache_J[i * c->nfit + j]);
-    return GSL_SUCCESS;
-}
-
-/* The Gauss-Newton step still to go from the solver's position, in standard deviations: with J
-   and f the weighted Jacobian and residuals (priors' rows included), J^T J is the inverse of the
-   covariance, so the step -(J^T J)^-1 J^T f has the length sqrt(f^T J (J^T J)^-1 J^T f) = |Q1^T f|
-   in that metric (J = Q1 R1; with a rank-deficient J, Q1 spans more than J's range and the
-   length is an upper bound). Whatever the trust region's damping does to the steps themselves.
-   Negative when it cannot be computed. */
-static double gauss_newton_sd(gsl_multifit_nlinear_workspace *w, gsl_matrix *qr, gsl_vector *tau, gsl_vector *qtf)
-{
-    gsl_matrix_memcpy(qr, gsl_multifit_nlinear_jac(w));
-    gsl_vector_memcpy(qtf, gsl_multifit_nlinear_residual(w));
-    if (gsl_linalg_QR_decomp(qr, tau) != GSL_SUCCESS || gsl_linalg_QR_QTvec(qr, tau, qtf) != GSL_SUCCESS) return -1.0;
-    double s = 0.0;
-    for (size_t i = 0; i < qr->size2; i++) s += gsl_vector_get(qtf, i) * gsl_vector_get(qtf, i);
-    return isfinite(s) ? sqrt(s) : -1.0;
-}
-
-/* gsl_multifit_nlinear_driver's loop (GSL 2.7: its tolerances, its return codes) with one more
-   stop: the Gauss-Newton step still to go below stop_sd standard deviations (rod_fit_opts).
-   Each iteration costs a path of static solves and its sensitivities, and near the optimum the
-   trust region rejects steps of thousandths of a standard deviation (measured on the family's
-   twin 0: 14 iterations and 34 evaluations to GSL's tolerances, of which the last 4 iterations
-   and 19 evaluations moved the values by less than 0.05 sd). *gn_sd: that step at the end (-1
-   unknown). */
-static int drive(gsl_multifit_nlinear_workspace *w, int maxiter, double stop_sd, double *gn_sd)
-{
-    size_t n = gsl_multifit_nlinear_jac(w)->size1, p = gsl_multifit_nlinear_jac(w)->size2;
-    gsl_matrix *qr = gsl_matrix_alloc(n, p);
-    gsl_vector *tau = gsl_vector_alloc(p), *qtf = gsl_vector_alloc(n);
-    int status, info = 0, iter = 0;
-    *gn_sd = -1.0;
-    if (!qr || !tau || !qtf) {
-        gsl_matrix_free(qr); gsl_vector_free(tau); gsl_vector_free(qtf);
-        return GSL_ENOMEM;
-    }
-    do {
-        status = gsl_multifit_nlinear_iterate(w);
-        if (status == GSL_ENOPROG && iter == 0) {
-            status = GSL_EMAXITER; /* no step reduced the cost: as GSL's driver */
-            break;
-        }
-        ++iter;
-        *gn_sd = gauss_newton_sd(w, qr, tau, qtf);
-        if (*gn_sd >= 0.0 && *gn_sd < stop_sd) {
-            status = GSL_SUCCESS;
-            break;
-        }
-        status = gsl_multifit_nlinear_test(1e-8, 1e-10, 1e-10, &info, w);
-    } while (status == GSL_CONTINUE && iter < maxiter);
-    if (status == GSL_ETOLF || status == GSL_ETOLX || status == GSL_ETOLG) status = GSL_SUCCESS;
-    if (iter >= maxiter && status != GSL_SUCCESS) status = GSL_EMAXITER;
-    gsl_matrix_free(qr); gsl_vector_free(tau); gsl_vector_free(qtf);
-    return status;
+    return 0;
 }
 
 static double now_s(void)
@@ -573,108 +484,47 @@ static double now_s(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-static void default_bounds(const rod_scene *sc, int k, double u0, double *lo, double *hi)
-{
-    (void)sc;
-    switch (k) {
-    case ROD_FIT_ANGLE_LEFT:
-    case ROD_FIT_ANGLE_RIGHT: *lo = u0 - 20.0; *hi = u0 + 20.0; break;
-    case ROD_FIT_POSITION_LEFT:
-    case ROD_FIT_POSITION_RIGHT: *lo = fmax(u0 - 0.05, 1e-3); *hi = fmin(u0 + 0.05, 1.0 - 1e-3); break;
-    case ROD_FIT_HINGE:
-    case ROD_FIT_HINGE_LEFT:
-    case ROD_FIT_HINGE_RIGHT: *lo = u0 - log(100.0); *hi = u0 + log(100.0); break;
-    case ROD_FIT_DZ_OFFSET: *lo = u0 - 0.05; *hi = u0 + 0.05; break;
-    default: *lo = u0 - log(10.0); *hi = u0 + log(10.0); break;
-    }
-}
-
 /* Covariance, standard errors, correlations and the undetermined directions from the weighted
-   Jacobian Jw (nres x nfit, data rows first) at the solution. */
+   Jacobian Jw (nres x nfit, data rows first) at the solution (rod_fit_lm.h), by key. */
 static int covariance(fit_ctx *c, const double *Jw, rod_fit_result *res)
 {
-    int n = c->nres, p = c->nfit;
-    int nd = 2 * c->nobs + c->nshape;
-    gsl_matrix *A = gsl_matrix_alloc((size_t)(n > p ? n : p), (size_t)p);
-    gsl_matrix *V = gsl_matrix_alloc((size_t)p, (size_t)p);
-    gsl_vector *S = gsl_vector_alloc((size_t)p), *work = gsl_vector_alloc((size_t)p);
-    int bad[ROD_FIT_NKEYS] = {0};
-    if (!A || !V || !S || !work) {
-        gsl_matrix_free(A); gsl_matrix_free(V); gsl_vector_free(S); gsl_vector_free(work);
-        return -1;
+    int p = c->nfit;
+    double lo[ROD_FIT_NKEYS], hi[ROD_FIT_NKEYS], scale[ROD_FIT_NKEYS], prior[ROD_FIT_NKEYS];
+    double cov[ROD_FIT_NKEYS * ROD_FIT_NKEYS], corr[ROD_FIT_NKEYS * ROD_FIT_NKEYS], se[ROD_FIT_NKEYS];
+    int det[ROD_FIT_NKEYS];
+    for (int j = 0; j < p; j++) {
+        int k = c->key[j];
+        lo[j] = c->lo[k];
+        hi[j] = c->hi[k];
+        scale[j] = c->scale[k];
+        prior[j] = c->o->prior_sigma[k];
     }
-    /* Data rows only, in units of each parameter's range: what the data determine. */
-    gsl_matrix_set_zero(A);
-    for (int i = 0; i < nd; i++)
-        for (int j = 0; j < p; j++) {
-            int k = c->key[j];
-            gsl_matrix_set(A, (size_t)i, (size_t)j, Jw[i * p + j] * (c->hi[k] - c->lo[k]) / c->scale[k]);
-        }
-    gsl_linalg_SV_decomp(A, V, S, work);
-    res->sv_max = gsl_vector_get(S, 0);
-    res->sv_min = gsl_vector_get(S, (size_t)p - 1);
-    for (int d = 0; d < p; d++) {
-        if (gsl_vector_get(S, (size_t)d) >= 1.0) continue;
-        for (int j = 0; j < p; j++)
-            if (fabs(gsl_matrix_get(V, (size_t)j, (size_t)d)) > 0.3) bad[j] = 1;
-    }
-    /* The covariance with the priors, in fit units (x scaled by c->scale). */
-    gsl_matrix_set_zero(A);
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j < p; j++) gsl_matrix_set(A, (size_t)i, (size_t)j, Jw[i * p + j]);
-    gsl_linalg_SV_decomp(A, V, S, work);
-    double smax = gsl_vector_get(S, 0);
-    double factor = 1.0;
-    if (c->o->scale_covariance && n > p) factor = res->chi2 / (double)(n - p);
-    res->cov_scaled = factor != 1.0;
-    double hinv[ROD_FIT_NKEYS * ROD_FIT_NKEYS], cw[ROD_FIT_NKEYS * ROD_FIT_NKEYS];
-    for (int a = 0; a < p; a++)
-        for (int b = 0; b < p; b++) {
-            double s = 0.0;
-            for (int d = 0; d < p; d++) {
-                double sv = gsl_vector_get(S, (size_t)d);
-                if (!(sv > 1e-12 * smax)) continue;
-                s += gsl_matrix_get(V, (size_t)a, (size_t)d) * gsl_matrix_get(V, (size_t)b, (size_t)d) / (sv * sv);
-            }
-            hinv[a * p + b] = cw[a * p + b] = s;
-        }
-    /* The tracker's per-phase common mode: the sandwich (rod_fit_sandwich.h). */
-    double sig[2] = {c->o->sigma_dz, c->o->sigma_a}, sb[2] = {c->o->sigma_b_dz, c->o->sigma_b_a}, rho[2];
     int *phase = malloc((size_t)c->nobs * sizeof *phase);
-    if (!phase) {
-        gsl_matrix_free(A); gsl_matrix_free(V); gsl_vector_free(S); gsl_vector_free(work);
-        return -1;
-    }
+    if (!phase) return -1;
     rod_fit_phases(c->obs, c->nobs, phase);
-    double est[2];
-    rod_fit_common_mode_estimate(c->last_f, c->nobs, phase, est);
-    for (int a = 0; a < 2; a++) {
-        rho[a] = sb[a] > 0.0 ? (sb[a] / sig[a]) * (sb[a] / sig[a]) : sb[a] < 0.0 ? est[a] : 0.0;
-        res->sigma_b[a] = sqrt(rho[a]) * sig[a];
-    }
-    rod_fit_sandwich_add(Jw, c->nobs, p, phase, rho, hinv, cw);
+    double factor = 1.0;
+    if (c->o->scale_covariance && c->nres > p) factor = res->chi2 / (double)(c->nres - p);
+    res->cov_scaled = factor != 1.0;
+    rod_fit_lm_cov_in in = {.p = p, .nres = c->nres, .nobs = c->nobs, .nshape = c->nshape, .Jw = Jw, .f = c->last_f, .lo = lo, .hi = hi,
+                            .scale = scale, .prior = prior, .factor = factor, .phase = phase,
+                            .sigma = {c->o->sigma_dz, c->o->sigma_a}, .sigma_b = {c->o->sigma_b_dz, c->o->sigma_b_a}};
+    rod_fit_lm_cov_out out = {.cov = cov, .corr = corr, .se = se, .determined = det};
+    int rc = rod_fit_lm_covariance(&in, &out);
     free(phase);
-    for (int a = 0; a < p; a++)
-        for (int b = 0; b < p; b++)
-            res->cov[c->key[a]][c->key[b]] = factor * cw[a * p + b] * c->scale[c->key[a]] * c->scale[c->key[b]];
+    if (rc) return -1;
+    res->sv_min = out.sv_min;
+    res->sv_max = out.sv_max;
+    res->sigma_b[0] = out.sigma_b[0];
+    res->sigma_b[1] = out.sigma_b[1];
     for (int a = 0; a < p; a++) {
-        int k = c->key[a];
-        int has_prior = isfinite(c->o->prior_sigma[k]);
-        /* Also a standard error wider than the parameter's whole range. */
-        if (!(sqrt(res->cov[k][k]) <= c->hi[k] - c->lo[k])) bad[a] = 1;
-        res->determined[k] = !bad[a];
-        res->se[k] = (bad[a] && !has_prior) ? INFINITY : sqrt(res->cov[k][k]);
-    }
-    for (int a = 0; a < p; a++)
+        int ka = c->key[a];
+        res->se[ka] = se[a];
+        res->determined[ka] = det[a];
         for (int b = 0; b < p; b++) {
-            int ka = c->key[a], kb = c->key[b];
-            double d = sqrt(res->cov[ka][ka] * res->cov[kb][kb]);
-            res->corr[ka][kb] = (res->determined[ka] && res->determined[kb] && d > 0.0) ? res->cov[ka][kb] / d : 0.0;
+            res->cov[ka][c->key[b]] = cov[a * p + b];
+            res->corr[ka][c->key[b]] = corr[a * p + b];
         }
-    for (int a = 0; a < p; a++) /* nothing about an undetermined parameter is a number */
-        if (!res->determined[c->key[a]] && !isfinite(res->se[c->key[a]]))
-            for (int b = 0; b < p; b++) res->cov[c->key[a]][c->key[b]] = res->cov[c->key[b]][c->key[a]] = 0.0;
-    gsl_matrix_free(A); gsl_matrix_free(V); gsl_vector_free(S); gsl_vector_free(work);
+    }
     return 0;
 }
 
@@ -696,7 +546,7 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
         if (!o->fit[k]) continue;
         if (rod_fit_key_usable(sc, (rod_fit_key)k, why, why_len)) return ROD_ERR_SCENE;
         double lo, hi;
-        default_bounds(sc, k, c.u0[k], &lo, &hi);
+        rod_fit_key_bounds((rod_fit_key)k, c.u0[k], &lo, &hi);
         if (!isnan(o->lo[k])) lo = o->lo[k];
         if (!isnan(o->hi[k])) hi = o->hi[k];
         if (!(lo < hi) || !(lo <= c.u0[k] && c.u0[k] <= hi)) {
@@ -710,7 +560,7 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
         }
         c.lo[k] = lo;
         c.hi[k] = hi;
-        c.scale[k] = (k == ROD_FIT_POSITION_LEFT || k == ROD_FIT_POSITION_RIGHT || k == ROD_FIT_DZ_OFFSET) ? 0.01 : 1.0;
+        c.scale[k] = rod_fit_key_scale((rod_fit_key)k);
         res->fitted[k] = 1;
         c.key[c.nfit++] = k;
     }
@@ -769,17 +619,15 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
     c.y = malloc(sizeof(double) * 2 * (size_t)nobs);
     c.jac = malloc(sizeof(double) * 2 * (size_t)nobs * ROD_FIT_NKEYS);
     c.last_f = calloc((size_t)c.nres, sizeof(double));
-    c.cache_x = calloc((size_t)c.nfit, sizeof(double));
     c.cache_J = calloc((size_t)c.nres * (size_t)c.nfit, sizeof(double));
-    gsl_vector *x = gsl_vector_calloc((size_t)c.nfit);
-    gsl_multifit_nlinear_workspace *w = NULL;
-    if (!c.y || !c.jac || !c.last_f || !c.cache_x || !c.cache_J || !x) {
+    double x[ROD_FIT_NKEYS] = {0}; /* the scene's values */
+    if (!c.y || !c.jac || !c.last_f || !c.cache_J) {
         snprintf(why, why_len, "out of memory");
         st = ROD_ERR_ALLOC;
         goto done;
     }
     /* At the scene's values first: a model that fails there is the caller's to know. */
-    if (eval_fj(x, &c, NULL, NULL) != GSL_SUCCESS || c.failures) {
+    if (eval_point(&c, x)) {
         if (c.cancelled) goto cancelled;
         snprintf(why, why_len, "the scene's own strip: %s", c.why);
         st = ROD_ERR_BRANCH_LOST;
@@ -790,42 +638,20 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
         for (int i = 0; i < ndata; i++) s += c.last_f[i] * c.last_f[i];
         res->rms_start = sqrt(s / (double)ndata);
     }
-    gsl_multifit_nlinear_parameters par = gsl_multifit_nlinear_default_parameters();
-    par.trs = gsl_multifit_nlinear_trs_lm;
-    w = gsl_multifit_nlinear_alloc(gsl_multifit_nlinear_trust, &par, (size_t)c.nres, (size_t)c.nfit);
-    if (!w) {
-        snprintf(why, why_len, "out of memory");
-        st = ROD_ERR_ALLOC;
-        goto done;
-    }
-    gsl_multifit_nlinear_fdf fdf;
-    memset(&fdf, 0, sizeof fdf);
-    fdf.f = cb_f;
-    fdf.df = cb_df;
-    fdf.n = (size_t)c.nres;
-    fdf.p = (size_t)c.nfit;
-    fdf.params = &c;
-    int gs = gsl_multifit_nlinear_init(x, &fdf, w);
-    if (gs == GSL_SUCCESS) gs = drive(w, o->max_iterations, o->stop_sd, &res->gn_sd);
-    res->iterations = (int)gsl_multifit_nlinear_niter(w);
+    rod_fit_lm_problem pr = {.p = c.nfit, .nres = c.nres, .eval = eval_point, .last_f = c.last_f, .last_J = c.cache_J,
+                             .user = &c};
+    st = rod_fit_lm_drive(&pr, x, o->max_iterations, o->stop_sd, &res->iterations, &res->gn_sd, &res->capped, why,
+                          why_len);
     if (c.cancelled) goto cancelled;
-    if (c.failures > FAIL_CAP) {
+    if (c.failures > ROD_FIT_LM_FAIL_CAP) {
         snprintf(why, why_len, "the model failed at %d trial parameter sets (last: %s)", c.failures, c.why);
         st = ROD_ERR_BRANCH_LOST;
         goto done;
     }
-    /* GSL_ENOPROG: no step reduced the cost any more, the position is the best found. */
-    res->capped = gs == GSL_EMAXITER;
-    if (gs != GSL_SUCCESS && gs != GSL_EMAXITER && gs != GSL_ENOPROG) {
-        snprintf(why, why_len, "Levenberg-Marquardt stopped: %s", gsl_strerror(gs));
-        st = ROD_ERR_SINGULAR;
-        goto done;
-    }
+    if (st != ROD_OK) goto done;
     /* The solution, evaluated again so residual, Jacobian and values belong together. */
-    gsl_vector_memcpy(x, gsl_multifit_nlinear_position(w));
-    int fails = c.failures;
-    eval_fj(x, &c, NULL, NULL);
-    if (c.failures != fails) {
+    if (eval_point(&c, x)) {
+        if (c.cancelled) goto cancelled;
         snprintf(why, why_len, "the fitted strip: %s", c.why);
         st = ROD_ERR_BRANCH_LOST;
         goto done;
@@ -858,12 +684,9 @@ cancelled:
 done:
     res->evaluations = c.evaluations;
     res->wall_s = now_s() - t0;
-    gsl_multifit_nlinear_free(w);
-    gsl_vector_free(x);
     free(c.y);
     free(c.jac);
     free(c.last_f);
-    free(c.cache_x);
     free(c.cache_J);
     rod_fit_model_free(c.m);
     return st;

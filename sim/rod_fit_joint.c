@@ -3,19 +3,15 @@
  * joint Jacobian is assembled from their columns, and the fit, covariance and "not determined"
  * rules are rod_fit.c's over the joint parameter set. */
 #include "rod_fit_joint.h"
+#include "rod_fit_lm.h"
+#include "rod_fit_sandwich.h"
 
-#include <gsl/gsl_errno.h>
-#include <gsl/gsl_linalg.h>
-#include <gsl/gsl_matrix.h>
-#include <gsl/gsl_multifit_nlinear.h>
-#include <gsl/gsl_vector.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
-#define FAIL_CAP 30 /* cap on failed model evaluations in one fit (as rod_fit.c) */
 
 struct rod_fit_joint_model {
     int nspec, nown, np, nobs, nobs_max;
@@ -226,25 +222,29 @@ typedef struct jctx {
     double *th0, *lo, *hi, *scale, *prior; /* per joint parameter, fit units */
     double *obs, *w;                       /* observed value and weight of each data row */
     double *y, *J;                         /* model at the last evaluation */
-    double *last_f, *cache_x, *cache_J;
-    int cached, evaluations, failures, cancelled;
+    double *last_f, *cache_J;              /* last good residuals, their weighted Jacobian */
+    double *th;                            /* scratch: the joint parameters at x */
+    int evaluations, failures, cancelled;
     char why[512];
 } jctx;
 
-static void x_to_theta(const jctx *c, const gsl_vector *x, double *th)
+static void x_to_theta(const jctx *c, const double *x, double *th)
 {
-    for (int i = 0; i < c->np; i++)
-        th[i] = fmin(c->hi[i], fmax(c->lo[i], c->th0[i] + c->scale[i] * gsl_vector_get(x, (size_t)i)));
+    for (int i = 0; i < c->np; i++) th[i] = fmin(c->hi[i], fmax(c->lo[i], c->th0[i] + c->scale[i] * x[i]));
 }
 
-static int eval_fj(const gsl_vector *x, jctx *c, gsl_vector *f, gsl_matrix *Jm)
+/* The residuals and their Jacobian at x into last_f and cache_J: 0, 1 when a specimen's model
+   failed there (kept, the reason in c->why), -1 when cancelled or past ROD_FIT_LM_FAIL_CAP failures. */
+static int eval_point(void *user, const double *x)
 {
+    jctx *c = user;
+    if (c->failures > ROD_FIT_LM_FAIL_CAP) return -1;
     int np = c->np;
-    double *th = c->cache_x + np; /* scratch after the cached x */
+    double *th = c->th;
     x_to_theta(c, x, th);
     if (c->o->each.cancel && atomic_load(c->o->each.cancel)) {
         c->cancelled = 1;
-        return GSL_EBADFUNC;
+        return -1;
     }
     c->evaluations++;
     char why[512];
@@ -252,11 +252,7 @@ static int eval_fj(const gsl_vector *x, jctx *c, gsl_vector *f, gsl_matrix *Jm)
     if (st != ROD_OK) {
         c->failures++;
         snprintf(c->why, sizeof c->why, "%s", why);
-        for (int i = 0; i < c->nres; i++)
-            if (f) gsl_vector_set(f, (size_t)i, 1e3 * (fabs(c->last_f[i]) + 1.0));
-        if (Jm) gsl_matrix_set_zero(Jm);
-        c->cached = 0;
-        return GSL_SUCCESS;
+        return 1;
     }
     for (int r = 0; r < c->ndata; r++) {
         c->last_f[r] = (c->y[r] - c->obs[r]) * c->w[r];
@@ -269,32 +265,7 @@ static int eval_fj(const gsl_vector *x, jctx *c, gsl_vector *f, gsl_matrix *Jm)
         for (int ii = 0; ii < np; ii++) c->cache_J[(size_t)row * np + ii] = ii == i ? c->scale[i] / c->prior[i] : 0.0;
         row++;
     }
-    for (int i = 0; i < np; i++) c->cache_x[i] = gsl_vector_get(x, (size_t)i);
-    c->cached = 1;
-    for (int i = 0; i < c->nres; i++) {
-        if (f) gsl_vector_set(f, (size_t)i, c->last_f[i]);
-        if (Jm)
-            for (int j = 0; j < np; j++) gsl_matrix_set(Jm, (size_t)i, (size_t)j, c->cache_J[(size_t)i * np + j]);
-    }
-    return GSL_SUCCESS;
-}
-
-static int cb_f(const gsl_vector *x, void *p, gsl_vector *f)
-{
-    jctx *c = p;
-    if (c->failures > FAIL_CAP) return GSL_EMAXITER;
-    return eval_fj(x, c, f, NULL);
-}
-
-static int cb_df(const gsl_vector *x, void *p, gsl_matrix *J)
-{
-    jctx *c = p;
-    int same = c->cached;
-    for (int i = 0; same && i < c->np; i++) same = c->cache_x[i] == gsl_vector_get(x, (size_t)i);
-    if (!same) return eval_fj(x, c, NULL, J);
-    for (int i = 0; i < c->nres; i++)
-        for (int j = 0; j < c->np; j++) gsl_matrix_set(J, (size_t)i, (size_t)j, c->cache_J[(size_t)i * c->np + j]);
-    return GSL_SUCCESS;
+    return 0;
 }
 
 static double now_s(void)
@@ -304,83 +275,30 @@ static double now_s(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-/* rod_fit.c's default bounds of an own key. */
-static void default_bounds(int k, double u0, double *lo, double *hi)
-{
-    switch (k) {
-    case ROD_FIT_ANGLE_LEFT:
-    case ROD_FIT_ANGLE_RIGHT: *lo = u0 - 20.0; *hi = u0 + 20.0; break;
-    case ROD_FIT_POSITION_LEFT:
-    case ROD_FIT_POSITION_RIGHT: *lo = fmax(u0 - 0.05, 1e-3); *hi = fmin(u0 + 0.05, 1.0 - 1e-3); break;
-    case ROD_FIT_DZ_OFFSET: *lo = u0 - 0.05; *hi = u0 + 0.05; break;
-    default: *lo = u0 - log(10.0); *hi = u0 + log(10.0); break;
-    }
-}
-
-/* Covariance, standard errors, correlations and the undetermined parameters (rod_fit.c's rules)
-   from the weighted, scaled Jacobian Jw (nres x np, data rows first) at the solution. */
+/* Covariance, standard errors, correlations and the undetermined parameters from the weighted,
+   scaled Jacobian (nres x np, data rows first) at the solution (rod_fit_lm.h: rod_fit.c's rules,
+   the tracker's common mode per phase of each specimen's observations included). */
 static int covariance(jctx *c, rod_fit_joint_result *res)
 {
-    int n = c->nres, p = c->np, nd = c->ndata;
-    const double *Jw = c->cache_J;
-    gsl_matrix *A = gsl_matrix_alloc((size_t)(n > p ? n : p), (size_t)p);
-    gsl_matrix *V = gsl_matrix_alloc((size_t)p, (size_t)p);
-    gsl_vector *S = gsl_vector_alloc((size_t)p), *work = gsl_vector_alloc((size_t)p);
-    int *bad = calloc((size_t)p, sizeof *bad);
-    int rc = -1;
-    if (!A || !V || !S || !work || !bad) goto done;
-    gsl_matrix_set_zero(A);
-    for (int i = 0; i < nd; i++)
-        for (int j = 0; j < p; j++)
-            gsl_matrix_set(A, (size_t)i, (size_t)j, Jw[(size_t)i * p + j] * (c->hi[j] - c->lo[j]) / c->scale[j]);
-    gsl_linalg_SV_decomp(A, V, S, work);
-    res->sv_max = gsl_vector_get(S, 0);
-    res->sv_min = gsl_vector_get(S, (size_t)p - 1);
-    for (int d = 0; d < p; d++) {
-        if (gsl_vector_get(S, (size_t)d) >= 1.0) continue;
-        for (int j = 0; j < p; j++)
-            if (fabs(gsl_matrix_get(V, (size_t)j, (size_t)d)) > 0.3) bad[j] = 1;
-    }
-    gsl_matrix_set_zero(A);
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j < p; j++) gsl_matrix_set(A, (size_t)i, (size_t)j, Jw[(size_t)i * p + j]);
-    gsl_linalg_SV_decomp(A, V, S, work);
-    double smax = gsl_vector_get(S, 0);
+    const rod_fit_joint_model *m = c->m;
+    const rod_fit_opts *e = &c->o->each;
+    int p = c->np, nd = c->ndata;
+    int *phase = malloc(sizeof *phase * (size_t)(m->nobs > 0 ? m->nobs : 1));
+    if (!phase) return -1;
+    for (int s = 0; s < m->nspec; s++) rod_fit_phases(m->specs[s].obs, m->specs[s].nobs, phase + m->row0[s]);
     double factor = 1.0;
-    if (c->o->each.scale_covariance && nd > p) factor = res->chi2 / (double)(nd - p);
+    if (e->scale_covariance && nd > p) factor = res->chi2 / (double)(nd - p);
     res->cov_scaled = factor != 1.0;
-    for (int a = 0; a < p; a++)
-        for (int b = 0; b < p; b++) {
-            double s = 0.0;
-            for (int d = 0; d < p; d++) {
-                double sv = gsl_vector_get(S, (size_t)d);
-                if (!(sv > 1e-12 * smax)) continue;
-                s += gsl_matrix_get(V, (size_t)a, (size_t)d) * gsl_matrix_get(V, (size_t)b, (size_t)d) / (sv * sv);
-            }
-            res->cov[(size_t)a * p + b] = factor * s * c->scale[a] * c->scale[b];
-        }
-    for (int a = 0; a < p; a++) {
-        double v = res->cov[(size_t)a * p + a];
-        if (!(sqrt(v) <= c->hi[a] - c->lo[a])) bad[a] = 1;
-        res->determined[a] = !bad[a];
-        res->se[a] = (bad[a] && !isfinite(c->prior[a])) ? INFINITY : sqrt(v);
-    }
-    for (int a = 0; a < p; a++)
-        for (int b = 0; b < p; b++) {
-            double d = sqrt(res->cov[(size_t)a * p + a] * res->cov[(size_t)b * p + b]);
-            res->corr[(size_t)a * p + b] =
-                (res->determined[a] && res->determined[b] && d > 0.0) ? res->cov[(size_t)a * p + b] / d : 0.0;
-        }
-    for (int a = 0; a < p; a++)
-        if (!res->determined[a] && !isfinite(res->se[a]))
-            for (int b = 0; b < p; b++) res->cov[(size_t)a * p + b] = res->cov[(size_t)b * p + a] = 0.0;
-    rc = 0;
-done:
-    gsl_matrix_free(A);
-    gsl_matrix_free(V);
-    gsl_vector_free(S);
-    gsl_vector_free(work);
-    free(bad);
+    rod_fit_lm_cov_in in = {.p = p, .nres = c->nres, .nobs = m->nobs, .Jw = c->cache_J, .f = c->last_f, .lo = c->lo,
+                            .hi = c->hi, .scale = c->scale, .prior = c->prior, .factor = factor, .phase = phase,
+                            .sigma = {e->sigma_dz, e->sigma_a}, .sigma_b = {e->sigma_b_dz, e->sigma_b_a}};
+    rod_fit_lm_cov_out out = {.cov = res->cov, .corr = res->corr, .se = res->se, .determined = res->determined};
+    int rc = rod_fit_lm_covariance(&in, &out);
+    free(phase);
+    res->sv_min = out.sv_min;
+    res->sv_max = out.sv_max;
+    res->sigma_b[0] = out.sigma_b[0];
+    res->sigma_b[1] = out.sigma_b[1];
     return rc;
 }
 
@@ -438,6 +356,9 @@ static void spec_results(const jctx *c, const double *th, rod_fit_joint_result *
         r->evaluations = res->evaluations;
         r->capped = res->capped;
         r->cov_scaled = res->cov_scaled;
+        r->sigma_b[0] = res->sigma_b[0];
+        r->sigma_b[1] = res->sigma_b[1];
+        r->gn_sd = res->gn_sd;
         r->sv_min = res->sv_min;
         r->sv_max = res->sv_max;
     }
@@ -463,8 +384,7 @@ rod_status rod_fit_joint_run(const rod_fit_joint_spec *specs, int nspec, const r
     memset(&c, 0, sizeof c);
     c.o = o;
     const rod_fit_opts *e = &o->each;
-    gsl_vector *x = NULL;
-    gsl_multifit_nlinear_workspace *w = NULL;
+    double *x = NULL;
     rod_status st = rod_fit_joint_model_alloc(specs, nspec, o, &c.m, why, why_len);
     if (st != ROD_OK) return st;
     rod_fit_joint_model *m = c.m;
@@ -502,7 +422,7 @@ rod_status rod_fit_joint_run(const rod_fit_joint_spec *specs, int nspec, const r
         for (int i = 0; i < m->nown; i++) {
             int j = 1 + s * m->nown + i, k = m->own[i];
             double lo, hi;
-            default_bounds(k, c.th0[j], &lo, &hi);
+            rod_fit_key_bounds((rod_fit_key)k, c.th0[j], &lo, &hi);
             if (!isnan(e->lo[k])) lo = e->lo[k];
             if (!isnan(e->hi[k])) hi = e->hi[k];
             snprintf(res->key[j], sizeof res->key[j], "%s:%s", specs[s].name, rod_fit_key_name((rod_fit_key)k));
@@ -519,7 +439,7 @@ rod_status rod_fit_joint_run(const rod_fit_joint_spec *specs, int nspec, const r
             }
             c.lo[j] = lo;
             c.hi[j] = hi;
-            c.scale[j] = (k == ROD_FIT_POSITION_LEFT || k == ROD_FIT_POSITION_RIGHT || k == ROD_FIT_DZ_OFFSET) ? 0.01 : 1.0;
+            c.scale[j] = rod_fit_key_scale((rod_fit_key)k);
             c.prior[j] = e->prior_sigma[k];
         }
     for (int s = 0; s < nspec; s++) {
@@ -555,10 +475,10 @@ rod_status rod_fit_joint_run(const rod_fit_joint_spec *specs, int nspec, const r
     c.y = malloc(sizeof(double) * (size_t)c.ndata);
     c.J = malloc(sizeof(double) * (size_t)c.ndata * (size_t)p);
     c.last_f = calloc((size_t)c.nres, sizeof(double));
-    c.cache_x = calloc(2 * (size_t)p, sizeof(double));
+    c.th = calloc((size_t)p, sizeof(double));
     c.cache_J = calloc((size_t)c.nres * (size_t)p, sizeof(double));
-    x = gsl_vector_calloc((size_t)p);
-    if (!c.obs || !c.w || !c.y || !c.J || !c.last_f || !c.cache_x || !c.cache_J || !x) goto oom;
+    x = calloc((size_t)p, sizeof(double)); /* the start */
+    if (!c.obs || !c.w || !c.y || !c.J || !c.last_f || !c.th || !c.cache_J || !x) goto oom;
     for (int s = 0; s < nspec; s++)
         for (int k = 0; k < specs[s].nobs; k++) {
             int r = 2 * (m->row0[s] + k);
@@ -567,7 +487,7 @@ rod_status rod_fit_joint_run(const rod_fit_joint_spec *specs, int nspec, const r
             c.w[r] = 1.0 / e->sigma_dz;
             c.w[r + 1] = 1.0 / e->sigma_a;
         }
-    if (eval_fj(x, &c, NULL, NULL) != GSL_SUCCESS || c.failures) {
+    if (eval_point(&c, x)) {
         if (c.cancelled) goto cancelled;
         snprintf(why, why_len, "the specimens' own strips at the start: %s", c.why);
         st = ROD_ERR_BRANCH_LOST;
@@ -583,44 +503,25 @@ rod_status rod_fit_joint_run(const rod_fit_joint_spec *specs, int nspec, const r
             res->spec[s].rms_start = sqrt(q / (2.0 * specs[s].nobs));
         }
     }
-    gsl_multifit_nlinear_parameters par = gsl_multifit_nlinear_default_parameters();
-    par.trs = gsl_multifit_nlinear_trs_lm;
-    w = gsl_multifit_nlinear_alloc(gsl_multifit_nlinear_trust, &par, (size_t)c.nres, (size_t)p);
-    if (!w) goto oom;
-    gsl_multifit_nlinear_fdf fdf;
-    memset(&fdf, 0, sizeof fdf);
-    fdf.f = cb_f;
-    fdf.df = cb_df;
-    fdf.n = (size_t)c.nres;
-    fdf.p = (size_t)p;
-    fdf.params = &c;
-    int info = 0;
-    int gs = gsl_multifit_nlinear_init(x, &fdf, w);
-    if (gs == GSL_SUCCESS)
-        gs = gsl_multifit_nlinear_driver((size_t)e->max_iterations, 1e-8, 1e-10, 1e-10, NULL, NULL, &info, w);
-    res->iterations = (int)gsl_multifit_nlinear_niter(w);
+    rod_fit_lm_problem pr = {.p = p, .nres = c.nres, .eval = eval_point, .last_f = c.last_f, .last_J = c.cache_J,
+                             .user = &c};
+    st = rod_fit_lm_drive(&pr, x, e->max_iterations, e->stop_sd, &res->iterations, &res->gn_sd, &res->capped, why,
+                          why_len);
     if (c.cancelled) goto cancelled;
-    if (c.failures > FAIL_CAP) {
+    if (c.failures > ROD_FIT_LM_FAIL_CAP) {
         snprintf(why, why_len, "the model failed at %d trial parameter sets (last: %s)", c.failures, c.why);
         st = ROD_ERR_BRANCH_LOST;
         goto done;
     }
-    res->capped = gs == GSL_EMAXITER;
-    if (gs != GSL_SUCCESS && gs != GSL_EMAXITER && gs != GSL_ENOPROG) {
-        snprintf(why, why_len, "Levenberg-Marquardt stopped: %s", gsl_strerror(gs));
-        st = ROD_ERR_SINGULAR;
-        goto done;
-    }
-    gsl_vector_memcpy(x, gsl_multifit_nlinear_position(w));
-    int fails = c.failures;
-    eval_fj(x, &c, NULL, NULL);
-    if (c.failures != fails) {
+    if (st != ROD_OK) goto done;
+    /* The solution, evaluated again so residual, Jacobian and values belong together. */
+    if (eval_point(&c, x)) {
+        if (c.cancelled) goto cancelled;
         snprintf(why, why_len, "the fitted strips: %s", c.why);
         st = ROD_ERR_BRANCH_LOST;
         goto done;
     }
-    double *th = c.cache_x + p;
-    x_to_theta(&c, x, th);
+    const double *th = c.th;
     for (int i = 0; i < c.ndata; i++) res->chi2 += c.last_f[i] * c.last_f[i];
     res->rms = sqrt(res->chi2 / c.ndata);
     res->misfit = res->rms > e->misfit;
@@ -647,8 +548,7 @@ cancelled:
 done:
     res->evaluations = c.evaluations;
     res->wall_s = now_s() - t0;
-    gsl_multifit_nlinear_free(w);
-    gsl_vector_free(x);
+    free(x);
     free(c.th0);
     free(c.lo);
     free(c.hi);
@@ -659,7 +559,7 @@ done:
     free(c.y);
     free(c.J);
     free(c.last_f);
-    free(c.cache_x);
+    free(c.th);
     free(c.cache_J);
     rod_fit_joint_model_free(c.m);
     return st;

@@ -20,9 +20,11 @@
  * GSL's solver (the zeros explicit); the test checks the zeros and every column against central
  * differences of whole followed paths.
  *
- * The fit is rod_fit.h's: Levenberg-Marquardt on (model - observed) / noise plus priors, bounds by
- * clamping, covariance (J^T J)^{-1} over the whole joint parameter set, and "not determined by
- * these data" by the same two rules (a singular direction of the range-scaled data Jacobian
+ * The fit is rod_fit.h's, run by the same code (rod_fit_lm.h): Levenberg-Marquardt on
+ * (model - observed) / noise plus priors, bounds by clamping, the stop within each.stop_sd
+ * standard deviations of the optimum, covariance (J^T J)^{-1} over the whole joint parameter set
+ * (the sandwich of rod_fit_sandwich.h with each.sigma_b_dz / _a, per phase of each specimen's
+ * observations), and "not determined by these data" by the same two rules (a singular direction of the range-scaled data Jacobian
  * with a weight above 0.3, or a standard error wider than the range), with the specimen's name
  * in the key ("S-12:folds.angle_left_deg"). Because the joint information matrix is
  * block-arrowhead, the shared parameter's information is the sum of each specimen's (its
@@ -86,6 +88,10 @@ typedef struct rod_fit_joint_result {
     int iterations, evaluations, model_failures, capped, misfit, cov_scaled;
     double sv_min, sv_max;     /* of the range-scaled data Jacobian */
     double wall_s;
+    double sigma_b[2];         /* the tracker's common mode in the covariance (Delta Z, A; 0: none):
+                                  each.sigma_b_dz, _a, per phase of each specimen's observations */
+    double gn_sd;              /* the Gauss-Newton step still to go when the fit stopped, in standard
+                                  deviations (each.stop_sd); -1 when not known */
 } rod_fit_joint_result;
 
 /* Fits. ROD_OK with res filled (free it with rod_fit_joint_result_free, also after a failure),

@@ -33,6 +33,26 @@ int rod_fit_key_strip(rod_fit_key k)
     return k != ROD_FIT_DZ_OFFSET;
 }
 
+void rod_fit_key_bounds(rod_fit_key k, double u0, double *lo, double *hi)
+{
+    switch (k) {
+    case ROD_FIT_ANGLE_LEFT:
+    case ROD_FIT_ANGLE_RIGHT: *lo = u0 - 20.0; *hi = u0 + 20.0; break;
+    case ROD_FIT_POSITION_LEFT:
+    case ROD_FIT_POSITION_RIGHT: *lo = fmax(u0 - 0.05, 1e-3); *hi = fmin(u0 + 0.05, 1.0 - 1e-3); break;
+    case ROD_FIT_HINGE:
+    case ROD_FIT_HINGE_LEFT:
+    case ROD_FIT_HINGE_RIGHT: *lo = u0 - log(100.0); *hi = u0 + log(100.0); break;
+    case ROD_FIT_DZ_OFFSET: *lo = u0 - 0.05; *hi = u0 + 0.05; break;
+    default: *lo = u0 - log(10.0); *hi = u0 + log(10.0); break;
+    }
+}
+
+double rod_fit_key_scale(rod_fit_key k)
+{
+    return (k == ROD_FIT_POSITION_LEFT || k == ROD_FIT_POSITION_RIGHT || k == ROD_FIT_DZ_OFFSET) ? 0.01 : 1.0;
+}
+
 void rod_fit_base_init(rod_fit_base *b, const rod *r, const rod_scene *sc)
 {
     b->EA = r->EA;
@@ -112,10 +132,17 @@ void rod_fit_scene_apply(rod_scene *sc, const double u[ROD_FIT_NKEYS])
     sc->fold_position_left = u[ROD_FIT_POSITION_LEFT];
     sc->fold_position_right = u[ROD_FIT_POSITION_RIGHT];
     if (rod_scene_hinge_rigid(sc)) return;
-    /* Each crease's own key is written when the scene had it or the fit made the two differ. */
-    double ln_k0 = log(sc->fold_hinge_stiffness), k = exp(u[ROD_FIT_HINGE]);
-    double side[2] = {exp(u[ROD_FIT_HINGE] - ln_k0 + u[ROD_FIT_HINGE_LEFT]),
-                      exp(u[ROD_FIT_HINGE] - ln_k0 + u[ROD_FIT_HINGE_RIGHT])};
+    /* Each crease's own key is written when the scene had it or the fit made the two differ. A
+       value at the scene's own (u as rod_fit_scene_values gives it) is the scene's, bit for bit:
+       exp(log(k)) is not always k. */
+    double ln_k0 = log(sc->fold_hinge_stiffness);
+    int same = u[ROD_FIT_HINGE] == ln_k0;
+    double k = same ? sc->fold_hinge_stiffness : exp(u[ROD_FIT_HINGE]);
+    double side[2];
+    for (int c = 0; c < 2; c++) {
+        double us = u[c ? ROD_FIT_HINGE_RIGHT : ROD_FIT_HINGE_LEFT], k_own = rod_scene_hinge_k(sc, c);
+        side[c] = same && us == log(k_own) ? k_own : exp(u[ROD_FIT_HINGE] - ln_k0 + us);
+    }
     int own = !isnan(sc->fold_hinge_stiffness_left) || !isnan(sc->fold_hinge_stiffness_right) ||
               fabs(side[0] / k - 1.0) > 1e-12 || fabs(side[1] / k - 1.0) > 1e-12;
     sc->fold_hinge_stiffness = k;

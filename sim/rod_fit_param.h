@@ -52,6 +52,14 @@ int rod_fit_key_log(rod_fit_key k);
  * view.dz_offset, which only shifts what is observed. */
 int rod_fit_key_strip(rod_fit_key k);
 
+/* Parameter k's default bounds around the start u0 (fit units): -+ 20 deg on an angle, -+ 0.05
+ * (of l) on a position kept inside (0, 1) and on view.dz_offset, -+ ln 100 on a hinge, -+ ln 10
+ * on E. */
+void rod_fit_key_bounds(rod_fit_key k, double u0, double *lo, double *hi);
+/* The step of parameter k in the fits' scaled unknowns (0.01 for the positions and the view's
+ * offset, 1 otherwise): so that the solver's unknowns are of like size. */
+double rod_fit_key_scale(rod_fit_key k);
+
 /* What the rod was built with, so parameter vectors can be applied and re-applied. */
 typedef struct rod_fit_base {
     double EA, EI1, EI2, GJ; /* the scene's stiffnesses (EI1 away from creases) */

@@ -43,10 +43,10 @@ void rod_fit_common_mode_estimate(const double *f, int nobs, const int *phase, d
     }
 }
 
-void rod_fit_sandwich_add(const double *Jw, int nobs, int p, const int *phase, const double rho[2], const double *hinv, double *cov)
+int rod_fit_sandwich_add(const double *Jw, int nobs, int p, const int *phase, const double rho[2], const double *hinv, double *cov)
 {
-    double g[64], h[64];
-    if (p > 64) return;
+    double *g = malloc(sizeof(double) * 2 * (size_t)(p > 0 ? p : 1)), *h = g + (p > 0 ? p : 1);
+    if (!g) return -1;
     for (int ph = 0; ph < ROD_FIT_NPHASES; ph++)
         for (int a = 0; a < 2; a++) {
             if (!(rho[a] > 0.0)) continue;
@@ -54,15 +54,17 @@ void rod_fit_sandwich_add(const double *Jw, int nobs, int p, const int *phase, c
             for (int j = 0; j < p; j++) g[j] = 0.0;
             for (int k = 0; k < nobs; k++)
                 if (phase[k] == ph) {
-                    for (int j = 0; j < p; j++) g[j] += Jw[(2 * k + a) * p + j];
+                    for (int j = 0; j < p; j++) g[j] += Jw[(size_t)(2 * k + a) * p + j];
                     m++;
                 }
             if (m == 0) continue;
             for (int i = 0; i < p; i++) {
                 h[i] = 0.0;
-                for (int j = 0; j < p; j++) h[i] += hinv[i * p + j] * g[j];
+                for (int j = 0; j < p; j++) h[i] += hinv[(size_t)i * p + j] * g[j];
             }
             for (int i = 0; i < p; i++)
-                for (int j = 0; j < p; j++) cov[i * p + j] += rho[a] * h[i] * h[j];
+                for (int j = 0; j < p; j++) cov[(size_t)i * p + j] += rho[a] * h[i] * h[j];
         }
+    free(g);
+    return 0;
 }

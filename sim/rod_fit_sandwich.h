@@ -24,8 +24,9 @@ void rod_fit_common_mode_estimate(const double *f, int nobs, const int *phase, d
 
 /* cov (p x p, row major, the whitened problem's units) += sum over phases and
    observables of rho[a] (hinv g)(hinv g)^T, hinv = H^-1 = (J^T J)^-1 and g the sum of the phase's rows of the whitened data
-   Jacobian Jw (2 nobs x p, row major, Delta Z and A per observation). */
-void rod_fit_sandwich_add(const double *Jw, int nobs, int p, const int *phase, const double rho[2], const double *hinv,
+   Jacobian Jw (2 nobs x p, row major, Delta Z and A per observation). 0, or -1 (out of memory:
+   cov untouched). */
+int rod_fit_sandwich_add(const double *Jw, int nobs, int p, const int *phase, const double rho[2], const double *hinv,
                           double *cov);
 
 #endif

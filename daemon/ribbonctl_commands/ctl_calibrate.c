@@ -6,7 +6,10 @@
  * predicted with the fitted strip are the simulator's (sim/rod_fit.h, sim/rod_fit_snap.h, as
  * `ribbon-sim fit` uses them, with the same keys and the same words for what the data do not
  * determine). Printed beside each trial's measured snap and its stored prediction, so the
- * calibration's gain (or loss) is read off directly. --write-scene writes the fitted strip as a
+ * calibration's gain (or loss) is read off directly. The fit is set up by the function ribbond's
+ * in-trial fit and its specimen refit use (trial_calibrate_setup, with the trial's sim.fit_hinge
+ * and sim.fit_keys read back from its stored rig file), so a trial's frames refit offline give
+ * its in-trial values (test_ctl_calibrate_trial). --write-scene writes the fitted strip as a
  * scene file (config/scene_write.h) that ribbon-sim reads. Replays are trials like any other
  * (their creases come from the recorded trial's prediction). Exit 0 with the fit; 1 when a
  * trial is refused (the reason names it), the fit fails or no parameter set fits; 2 on usage. */
@@ -41,15 +44,20 @@ static const char usage[] =
     "  determined by these data\" when the data cannot fix it), their correlations, the residual in\n"
     "  noise units, and the fitted strip's snap with a 1-sigma band and its 2-sigma interval, its\n"
     "  regime and the probability of the other one, beside each trial's measured and predicted snap.\n"
+    "  Set up as the trial's own in-trial fit was (ribbond's trial_calibrate_setup): the trial's\n"
+    "  sim.fit_hinge makes rigid creases hinges of that stiffness (the start and the prior's centre),\n"
+    "  its sim.fit_keys are the default keys, weak priors around the strip's values (10 deg on an\n"
+    "  angle, 0.88 in ln k, 0.005 on view.dz_offset) and the tracker's common mode on A (0.003 rad)\n"
+    "  in the standard errors; with --share-hinge too (each specimen's trial's sim.fit_hinge).\n"
     "  --db         the store (default: ask ribbond where its store is, --url / $RIBBON_URL)\n"
     "  --fit        parameters fitted, the others held: folds.angle_left_deg, folds.angle_right_deg,\n"
     "               folds.position_left, folds.position_right, folds.hinge_stiffness (one k for\n"
     "               both creases, compliant creases) or folds.hinge_stiffness_left and _right (one\n"
     "               each), ribbon.youngs_modulus, view.dz_offset (the\n"
     "               camera's vertical offset, over l); default: both crease angles, and the hinge\n"
-    "               stiffness when the creases are compliant\n"
+    "               stiffness when the creases are compliant (or the trial's sim.fit_keys)\n"
     "  --set        scene overrides on the trials' strip (mesh.nodes=61 for speed; a compliant\n"
-    "               folds.hinge_stiffness as the start when the scene's creases are rigid)\n"
+    "               folds.hinge_stiffness as the start, in place of the trial's sim.fit_hinge)\n"
     "  --dw-max     last Delta W used (default 0.8 of the measured snap; the whole shear without one)\n"
     "  --dl-min     first Delta L used (default 0.8 of the trial's hold)\n"
     "  --max-samples  frames per trial, thinned evenly beyond it (default 200)\n"
@@ -327,7 +335,23 @@ int ctl_calibrate_main(int argc, char **argv)
         return 1;
     }
     store_close(st);
-    parse_keys(a.fit, &d.scene, &o);
+    /* The in-trial fit's setup, by the function ribbond's fit and its specimen refit use: the
+       trial's sim.fit_hinge on rigid creases, its sim.fit_keys unless --fit names keys, the
+       priors around the strip's values and the tracker's common mode in the covariance. */
+    const trial_pool_trial *t0 = &d.trials[0];
+    if (t0->fit_unread[0])
+        fprintf(stderr, "ribbonctl calibrate: trial %lld: %s: fitted without the hinge guess, with the default keys\n",
+                (long long)t0->id, t0->fit_unread);
+    char rk[24], rw[320];
+    int rigid = rod_scene_hinge_rigid(&d.scene);
+    if (trial_calibrate_setup(&d.scene, t0->fit_hinge, a.fit ? a.fit : t0->fit_keys, &o, rk, rw, sizeof rw) < 0) {
+        fprintf(stderr, "ribbonctl calibrate: %s%s\n", rw, a.fit ? "" : " (the trial's sim.fit_keys)");
+        trial_pool_free(&d);
+        return 1;
+    }
+    if (rigid && !rod_scene_hinge_rigid(&d.scene))
+        fprintf(stderr, "ribbonctl calibrate: the trials' creases are rigid; fitted as hinges of %g N m/rad (the trial's "
+                        "sim.fit_hinge: the start and the prior's centre), as its in-trial fit was\n", t0->fit_hinge);
     o.sigma_dz = a.sigma_dz;
     o.sigma_a = a.sigma_a;
     o.scale_covariance = a.scale_cov;

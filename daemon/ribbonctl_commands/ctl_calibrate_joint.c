@@ -5,7 +5,9 @@
  * as `ribbonctl calibrate` reads one strip (trial_pool.h: the same cuts, overrides and
  * refusals, so a group must be one strip), and the groups are fitted together by
  * sim/rod_fit_joint.h: each specimen its own crease angles (and whatever --fit names), one
- * k / b for all, each specimen's hinge k_s = (k / b) b_s. Printed: the shared k / b with its
+ * k / b for all, each specimen's hinge k_s = (k / b) b_s, set up as the in-trial fit is
+ * (trial_calibrate_setup: each group's sim.fit_hinge on rigid creases, the priors, the tracker's
+ * common mode; the prior on ln k is the one on ln(k / b)). Printed: the shared k / b with its
  * standard error, each specimen's fit (keys "NAME:key", "not determined by these data" as
  * everywhere), the joint correlations, and per specimen the snap predicted with its fitted strip
  * (its block of the joint covariance makes the band) beside each of its trials' measured snap
@@ -244,6 +246,7 @@ int ctl_calibrate_joint(store *st, const ctl_calib_joint_args *a)
         fprintf(stderr, "ribbonctl calibrate: out of memory\n");
         goto done;
     }
+    rod_fit_opts set = rod_fit_opts_default();
     if (group_trials(st, a, j.g, &j.ng)) goto done;
     for (int s = 0; s < j.ng; s++) {
         jgroup *g = &j.g[s];
@@ -252,11 +255,23 @@ int ctl_calibrate_joint(store *st, const ctl_calib_joint_args *a)
             j.ng = s; /* the groups read so far are freed below (this one freed itself) */
             goto done;
         }
+        /* The in-trial fit's setup, as without --share-hinge (trial_calibrate_setup): the group's
+           first trial's sim.fit_hinge on rigid creases; its priors and common mode below.
+           The keys stay --fit's ("" cannot be refused). */
+        char rk[24], rw[320];
+        if (g->d.trials[0].fit_unread[0])
+            fprintf(stderr, "ribbonctl calibrate: trial %lld: %s: fitted without the hinge guess\n",
+                    (long long)g->d.trials[0].id, g->d.trials[0].fit_unread);
+        trial_calibrate_setup(&g->d.scene, g->d.trials[0].fit_hinge, "", &set, rk, rw, sizeof rw);
         specs[s] = (rod_fit_joint_spec){g->name, &g->d.scene, g->d.obs, g->d.nobs};
     }
     rod_fit_joint_opts o = rod_fit_joint_opts_default();
     o.each = a->fit;
     o.each.fit[ROD_FIT_HINGE] = 0; /* named in --fit: it is the shared one, fitted anyway */
+    memcpy(o.each.prior_sigma, set.prior_sigma, sizeof o.each.prior_sigma);
+    o.each.sigma_b_dz = set.sigma_b_dz;
+    o.each.sigma_b_a = set.sigma_b_a;
+    o.kb_prior_sigma = set.prior_sigma[ROD_FIT_HINGE]; /* ln k_s = ln(k / b) + ln b_s: the same width */
     rod_status fs = rod_fit_joint_run(specs, j.ng, &o, &j.r, why, sizeof why);
     if (fs != ROD_OK) {
         fprintf(stderr, "ribbonctl calibrate: the joint fit failed: %s\n", why);

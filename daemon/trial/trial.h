@@ -39,6 +39,7 @@
 #include "trial_config_text.h"
 #include "trial_pool.h"
 #include "trial_idle.h"
+#include "trial_calibrate.h"
 #include "trial_camera_settings.h"
 
 #endif

@@ -9,6 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cfg_ini.h"
+#include "cfg_number.h"
 #include "scene_file.h"
 
 #define OVERRIDES_HEAD "# overrides applied in order after the files: "
@@ -212,6 +214,92 @@ int trial_config_text_scene_load(const char *text, const char *name, rod_scene *
         snprintf(why, why_len, "its stored scene cannot be read: %s", w);
         return -1;
     }
+    return 0;
+}
+
+/* The two fit keys of the rig file's [sim] section, as read so far. */
+typedef struct fit_read {
+    double hinge;
+    char keys[256];
+    int bad;          /* a value the rig loader would have refused */
+    char what[160];
+} fit_read;
+
+/* One "sim.KEY" value: fit_hinge a number in [0, 1e6] (the rig table's range), fit_keys text. */
+static void fit_value(fit_read *f, const char *name, const char *value)
+{
+    if (!strcmp(name, "fit_keys")) {
+        snprintf(f->keys, sizeof f->keys, "%s", value);
+    } else if (!strcmp(name, "fit_hinge")) {
+        double v;
+        if (cfg_number_parse(value, &v) != CFG_NUMBER_OK || !(v >= 0.0 && v <= 1e6)) {
+            f->bad = 1;
+            snprintf(f->what, sizeof f->what, "sim.fit_hinge = %.100s is not a stiffness in [0, 1e6] N m/rad", value);
+        } else
+            f->hinge = v;
+    }
+}
+
+static int fit_key_cb(void *user, int line, const char *section, const char *name, const char *value)
+{
+    (void)line;
+    if (!strcmp(section, "sim")) fit_value(user, name, value);
+    return 0;
+}
+
+static int fit_section_cb(void *user, int line, const char *section)
+{
+    (void)user;
+    (void)line;
+    (void)section;
+    return 0;
+}
+
+int trial_config_text_fit(const char *text, double *fit_hinge, char *keys, size_t keys_len, char *why,
+                          size_t why_len)
+{
+    fit_read f;
+    memset(&f, 0, sizeof f);
+    const char *end = text + strlen(text);
+    const char *head = first_line_with(text, end, "# rig file ");
+    const char *scene = head ? first_line_with(head, end, "# scene file ") : NULL;
+    const char *body = head ? strchr(head, '\n') : NULL;
+    if (!head || !scene || !body || body + 1 > scene || !strncmp(body + 1, "# (could not be read)", 21)) {
+        snprintf(why, why_len, "its stored configuration holds no readable rig file (sim.fit_hinge, sim.fit_keys)");
+        return -1;
+    }
+    body++;
+    cfg_ini_handler h = {.section = fit_section_cb, .key = fit_key_cb};
+    cfg_error ce;
+    if (cfg_ini_parse("the stored rig file", body, (size_t)(scene - body), &h, &f, &ce) != CFG_OK) {
+        char w[300];
+        cfg_error_format(&ce, w, sizeof w);
+        snprintf(why, why_len, "its stored rig file cannot be read: %s", w);
+        return -1;
+    }
+    json_t *arr = trial_config_text_overrides(text);
+    for (size_t k = 0; k < json_array_size(arr); k++) {
+        const char *o = json_string_value(json_array_get(arr, k));
+        while (*o == ' ' || *o == '\t') o++;
+        const char *eq = strchr(o, '=');
+        if (!eq || strncmp(o, "sim.", 4)) continue;
+        char name[32];
+        size_t n = (size_t)(eq - o - 4);
+        while (n > 0 && (o[4 + n - 1] == ' ' || o[4 + n - 1] == '\t')) n--;
+        if (n >= sizeof name) continue;
+        memcpy(name, o + 4, n);
+        name[n] = '\0';
+        const char *v = eq + 1;
+        while (*v == ' ' || *v == '\t') v++;
+        fit_value(&f, name, v);
+    }
+    json_decref(arr);
+    if (f.bad) {
+        snprintf(why, why_len, "its stored %s", f.what);
+        return -1;
+    }
+    *fit_hinge = f.hinge;
+    snprintf(keys, keys_len, "%s", f.keys);
     return 0;
 }
 

@@ -29,6 +29,15 @@ json_t *trial_config_text_overrides(const char *text);
  * are skipped). name names it in errors. 0, or -1 with why. */
 int trial_config_text_scene_load(const char *text, const char *name, rod_scene *out, char *why, size_t why_len);
 
+/* The in-trial fit's setup the trial ran with (rig keys sim.fit_hinge and sim.fit_keys, docs/
+ * calibration.md): read from the stored rig file's [sim] section with the stored overrides of
+ * those two keys applied in order, as the trial's rig_config_load did; the rig defaults (0, "")
+ * where the file does not set them. For `ribbonctl calibrate`, so that a stored trial is refitted
+ * with the setup its in-trial fit had (trial_calibrate_setup). 0, or -1 with why when text holds
+ * no readable rig file, or the value stored is not one the rig loader accepts. */
+int trial_config_text_fit(const char *text, double *fit_hinge, char *keys, size_t keys_len, char *why,
+                          size_t why_len);
+
 /* Sets "overrides" in trial (trial id's JSON, store_trial_json) to its stored overrides, or to
  * null when its config text holds none (stored before they were) or cannot be read. */
 void trial_config_text_add_overrides(store *st, int64_t id, json_t *trial);

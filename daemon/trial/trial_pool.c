@@ -45,7 +45,7 @@ void trial_pool_free(trial_pool *d)
 
 /* The trial's strip. */
 static int trial_scene(store *st, const store_trial *t, const trial_pool_select *sel, rod_scene *out,
-                       int64_t *pred_of, double *snap_pred, char *why, size_t why_len)
+                       trial_pool_trial *ct, char *why, size_t why_len)
 {
     char *text = NULL, w[512];
     if (store_trial_texts(st, t->id, &text, NULL, w, sizeof w) != STORE_OK) {
@@ -57,11 +57,19 @@ static int trial_scene(store *st, const store_trial *t, const trial_pool_select 
     rod_scene sc;
     cfg_error ce;
     int rc = trial_config_text_scene_load(text, name, &sc, w, sizeof w);
+    /* The setup its in-trial fit had (the hinge guess, the keys), for a refit that reproduces it. */
+    if (!rc && trial_config_text_fit(text, &ct->fit_hinge, ct->fit_keys, sizeof ct->fit_keys, ct->fit_unread,
+                                     sizeof ct->fit_unread)) {
+        ct->fit_hinge = 0.0;
+        ct->fit_keys[0] = '\0';
+    }
     free(text);
     if (rc) {
         snprintf(why, why_len, "trial %lld: %s", (long long)t->id, w);
         return -1;
     }
+    int64_t *pred_of = &ct->prediction_of;
+    double *snap_pred = &ct->snap_predicted;
     *pred_of = 0;
     *snap_pred = NAN;
     int64_t ids[2] = {t->id, t->source_trial_id};
@@ -241,7 +249,7 @@ int trial_pool_load(store *st, const int64_t *ids, int n, const trial_pool_selec
         ct->snap_measured = t.snapped == 1 ? t.snap_dw_measured : NAN;
         ct->regime_measured = store_regime_name(t.regime_measured) ? store_regime_name(t.regime_measured) : "-";
         rod_scene sc;
-        if (trial_scene(st, &t, sel, &sc, &ct->prediction_of, &ct->snap_predicted, why, why_len)) goto fail;
+        if (trial_scene(st, &t, sel, &sc, ct, why, why_len)) goto fail;
         if (k == 0) {
             out->scene = sc;
         } else {

@@ -37,10 +37,15 @@ typedef struct trial_pool_trial {
     double snap_measured;   /* NaN: did not snap (or not measured) */
     double snap_predicted;  /* the stored prediction's; NaN: none */
     const char *regime_measured; /* "symmetric", ...; "-" */
+    double fit_hinge;       /* its in-trial fit's sim.fit_hinge (N m/rad; 0: the scene's creases) */
+    char fit_keys[256];     /* its in-trial fit's sim.fit_keys ("": the default keys) */
+    char fit_unread[256];   /* why those two could not be read from its stored rig file ("": read;
+                               then 0 and "", the rig defaults) */
 } trial_pool_trial;
 
 typedef struct trial_pool {
-    rod_scene scene;        /* the strip: the first trial's reconstructed scene */
+    rod_scene scene;        /* the strip: the first trial's reconstructed scene (its fit setup,
+                               trials[0].fit_hinge and fit_keys, is the pool's: trial_calibrate_setup) */
     rod_fit_obs *obs;       /* every trial's observations, in trial order (malloc'ed) */
     int nobs;
     trial_pool_trial *trials;/* malloc'ed, ntrials */

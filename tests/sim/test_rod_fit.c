@@ -14,7 +14,9 @@
  *     state: Delta Z and A cannot fix two crease angles and an offset);
  *   - one hinge stiffness per crease (folds.hinge_stiffness_left, _right): two different hinges
  *     recovered noise-free beside both angles, written back into a scene as per-crease keys;
- *     fitting them with the pair's key is refused;
+ *     fitting them with the pair's key is refused; on a scene whose per-crease hinges differ from
+ *     the pair's, the start, the default bounds, the prior and the scene written back all read
+ *     the key as ln k of that crease (absolute), never relative to the pair's k;
  *   - bad input: too few observations, a parameter the scene does not have, bounds that hold the
  *     truth out (the parameter is reported at its bound), data no parameter set fits (misfit);
  *   - where the fit stops: the Gauss-Newton step still to go, recomputed from the model's
@@ -338,6 +340,68 @@ static void each_creases_hinge_is_recovered(void **state)
     assert_non_null(strstr(why, "one hinge stiffness for both creases or one each"));
 }
 
+/* Per-crease hinges on a scene that already has them, apart from the pair's k (3.5e-3 against
+   2e-3 and 5e-3): u[folds.hinge_stiffness_left] is ln k_left itself (absolute), never
+   ln(k_left / k_scene), in every place that reads it: the start (the scene's values put into the
+   rod give the scene's own hinges, so the scene's own frames fit at zero residual), the default
+   bounds (ln k_left -+ ln 100), the prior (centred on ln k_left: a fit held by a tight prior ends
+   there) and the fitted scene written back. A relative reading anywhere moves k_left by the factor
+   k_scene / k_left = 1.75 (ln 0.56), far above every tolerance here. */
+static void per_crease_hinge_keys_are_absolute_everywhere(void **state)
+{
+    (void)state;
+    rod_scene sc = fit_kit_pet(31);
+    sc.fold_angle_left_deg = -87.0;
+    sc.fold_angle_right_deg = -89.0;
+    sc.fold_hinge_stiffness = 3.5e-3;
+    sc.fold_hinge_stiffness_left = 2e-3;
+    sc.fold_hinge_stiffness_right = 5e-3;
+    double u0[ROD_FIT_NKEYS];
+    rod_fit_scene_values(&sc, u0);
+    assert_true(fabs(u0[ROD_FIT_HINGE_LEFT] - log(2e-3)) < 1e-15);
+    assert_true(fabs(u0[ROD_FIT_HINGE_RIGHT] - log(5e-3)) < 1e-15);
+    /* the start: the rod built from the scene and the rod given the scene's values agree */
+    rod *r = NULL;
+    char why[256];
+    assert_int_equal(rod_alloc(&sc, &r, why, sizeof why), ROD_OK);
+    double built[2] = {r->hinge_k_side[0], r->hinge_k_side[1]};
+    rod_fit_base b;
+    rod_fit_base_init(&b, r, &sc);
+    rod_fit_apply(r, &b, u0);
+    printf("per-crease hinges: built %g %g, applied from the scene's values %g %g\n", built[0], built[1],
+           r->hinge_k_side[0], r->hinge_k_side[1]);
+    assert_true(fabs(r->hinge_k_side[0] / 2e-3 - 1.0) < 1e-14 && fabs(built[0] / 2e-3 - 1.0) < 1e-14);
+    assert_true(fabs(r->hinge_k_side[1] / 5e-3 - 1.0) < 1e-14 && fabs(built[1] / 5e-3 - 1.0) < 1e-14);
+    rod_free(r);
+    /* the scene's own frames, fitted from it with a tight prior: residual 0 at the start, the values
+       stay at the scene's, the bounds around ln k_left */
+    rod_fit_obs obs[NMAX];
+    int n = observe_n(&sc, obs, 12, 0.15, 0.0, 0.0);
+    rod_fit_opts o = rod_fit_opts_default();
+    o.fit[ROD_FIT_HINGE_LEFT] = o.fit[ROD_FIT_HINGE_RIGHT] = 1;
+    o.prior_sigma[ROD_FIT_HINGE_LEFT] = o.prior_sigma[ROD_FIT_HINGE_RIGHT] = 1e-3;
+    rod_fit_result res;
+    assert_int_equal(rod_fit_run(&sc, obs, n, &o, &res, why, sizeof why), ROD_OK);
+    printf("  rms at the start %.3g, fitted %g %g, bounds of the left [%g, %g]\n", res.rms_start,
+           exp(res.u[ROD_FIT_HINGE_LEFT]), exp(res.u[ROD_FIT_HINGE_RIGHT]), exp(res.lo[ROD_FIT_HINGE_LEFT]),
+           exp(res.hi[ROD_FIT_HINGE_LEFT]));
+    assert_true(res.rms_start < 1e-6);
+    assert_true(fabs(res.u[ROD_FIT_HINGE_LEFT] - log(2e-3)) < 1e-6);
+    assert_true(fabs(res.u[ROD_FIT_HINGE_RIGHT] - log(5e-3)) < 1e-6);
+    assert_true(fabs(res.lo[ROD_FIT_HINGE_LEFT] - (log(2e-3) - log(100.0))) < 1e-12);
+    assert_true(fabs(res.hi[ROD_FIT_HINGE_RIGHT] - (log(5e-3) + log(100.0))) < 1e-12);
+    assert_false(res.at_bound[ROD_FIT_HINGE_LEFT] || res.at_bound[ROD_FIT_HINGE_RIGHT]);
+    /* a value written back is that crease's k, the pair's unchanged */
+    double u[ROD_FIT_NKEYS];
+    memcpy(u, u0, sizeof u);
+    u[ROD_FIT_HINGE_LEFT] = log(2.4e-3);
+    rod_scene fitted = sc;
+    rod_fit_scene_apply(&fitted, u);
+    assert_true(fabs(fitted.fold_hinge_stiffness_left / 2.4e-3 - 1.0) < 1e-14);
+    assert_true(fabs(fitted.fold_hinge_stiffness_right / 5e-3 - 1.0) < 1e-14);
+    assert_true(fitted.fold_hinge_stiffness == 3.5e-3);
+}
+
 static void bad_input_is_named(void **state)
 {
     (void)state;
@@ -525,6 +589,7 @@ int main(void)
         cmocka_unit_test(the_model_jacobian_matches_finite_differences),
         cmocka_unit_test(the_cameras_offset_is_recovered),
         cmocka_unit_test(each_creases_hinge_is_recovered),
+        cmocka_unit_test(per_crease_hinge_keys_are_absolute_everywhere),
         cmocka_unit_test(bad_input_is_named),
         cmocka_unit_test(the_fit_stops_within_the_noise),
         cmocka_unit_test(the_common_mode_widens_the_covariance_as_a_sandwich),

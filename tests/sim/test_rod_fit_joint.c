@@ -13,6 +13,9 @@
  *     joint standard error is below either;
  *   - an undetermined direction named per specimen: without gravity every E and k / b scale
  *     together, so "S-10mm:ribbon.youngs_modulus" and k / b get no standard error, the angles do;
+ *   - one specimen fitted jointly is the single fit (rod_fit.h) of its angles and k: the same
+ *     values, standard errors with the tracker's common mode (the sandwich), iterations and stop
+ *     within the noise (stop_sd), on noisy data;
  *   - refusals with a reason: a width that is not known, a rigid hinge, per-crease hinges, the
  *     pair's hinge asked per specimen. */
 #include <setjmp.h>
@@ -93,6 +96,7 @@ static rod_fit_joint_opts angles(void)
 {
     rod_fit_joint_opts o = rod_fit_joint_opts_default();
     o.each.fit[ROD_FIT_ANGLE_LEFT] = o.each.fit[ROD_FIT_ANGLE_RIGHT] = 1;
+    o.each.stop_sd = 0.0; /* noise-free: converged to round-off, not to the noise (as test_rod_fit) */
     return o;
 }
 
@@ -221,6 +225,56 @@ static void joint_information_is_the_sum_of_the_specimens(void **state)
     rod_fit_joint_result_free(&r);
 }
 
+/* One specimen fitted "jointly" is the single fit of its angles and its own k (ln k = ln(k / b) +
+   ln b, the same start and bounds): the same LM loop, the same stop within the noise (stop_sd,
+   default 0.05) and the same covariance with the tracker's common mode (sigma_b_a, the sandwich),
+   on data with noise in them (a fixed pattern), so the stop matters. */
+static void one_specimen_is_the_single_fit(void **state)
+{
+    (void)state;
+    static kit k;
+    kit_init(&k);
+    rod_fit_obs obs[NOBS];
+    for (int i = 0; i < NOBS; i++) {
+        obs[i] = k.obs[0][i];
+        obs[i].dz += 0.002 * sin(7.0 * i);
+        obs[i].a += 0.015 * cos(5.0 * i);
+    }
+    rod_fit_joint_spec one = {"S-5mm", &k.start[0], obs, NOBS};
+    rod_fit_joint_opts o = rod_fit_joint_opts_default();
+    o.each.fit[ROD_FIT_ANGLE_LEFT] = o.each.fit[ROD_FIT_ANGLE_RIGHT] = 1;
+    o.each.sigma_b_a = 0.003;
+    rod_fit_opts so = o.each;
+    so.fit[ROD_FIT_HINGE] = 1;
+    rod_fit_joint_result r;
+    rod_fit_result a, plain;
+    char why[512];
+    assert_int_equal(rod_fit_joint_run(&one, 1, &o, &r, why, sizeof why), ROD_OK);
+    assert_int_equal(rod_fit_run(&k.start[0], obs, NOBS, &so, &a, why, sizeof why), ROD_OK);
+    so.sigma_b_a = 0.0;
+    assert_int_equal(rod_fit_run(&k.start[0], obs, NOBS, &so, &plain, why, sizeof why), ROD_OK);
+    const rod_fit_result *q = &r.spec[0];
+    printf("joint of one: %d iterations, Gauss-Newton step left %.3g sd, sigma_b %g %g; single: %d, %.3g sd\n",
+           r.iterations, r.gn_sd, r.sigma_b[0], r.sigma_b[1], a.iterations, a.gn_sd);
+    const int keys[3] = {ROD_FIT_ANGLE_LEFT, ROD_FIT_ANGLE_RIGHT, ROD_FIT_HINGE};
+    for (int i = 0; i < 3; i++) {
+        int key = keys[i];
+        printf("  %-24s joint %.10g +- %.6g, single %.10g +- %.6g (without the common mode +- %.6g)\n",
+               rod_fit_key_name(key), q->u[key], q->se[key], a.u[key], a.se[key], plain.se[key]);
+        assert_true(fabs(q->u[key] - a.u[key]) < 1e-9);
+        assert_true(fabs(q->se[key] / a.se[key] - 1.0) < 1e-6);
+        /* The common mode widens the angles' errors (by about 1%; the hinge's by 1e-5): without
+           the sandwich the joint's would be the plain ones. */
+        if (key != ROD_FIT_HINGE) assert_true(a.se[key] > plain.se[key] * (1.0 + 1e-3));
+    }
+    assert_true(fabs(r.kb_se / a.se[ROD_FIT_HINGE] - 1.0) < 1e-6);
+    assert_true(r.sigma_b[1] == 0.003 && r.sigma_b[0] == 0.0);
+    assert_int_equal(r.iterations, a.iterations);
+    assert_true(r.gn_sd >= 0.0 && r.gn_sd < o.each.stop_sd);
+    assert_true(fabs(r.gn_sd - a.gn_sd) < 1e-6);
+    rod_fit_joint_result_free(&r);
+}
+
 static void an_undetermined_direction_is_named_per_specimen(void **state)
 {
     (void)state;
@@ -308,6 +362,7 @@ int main(void)
         cmocka_unit_test(recovers_the_shared_hinge_per_width),
         cmocka_unit_test(the_joint_jacobian_matches_finite_differences),
         cmocka_unit_test(joint_information_is_the_sum_of_the_specimens),
+        cmocka_unit_test(one_specimen_is_the_single_fit),
         cmocka_unit_test(an_undetermined_direction_is_named_per_specimen),
         cmocka_unit_test(refusals_are_named),
     };

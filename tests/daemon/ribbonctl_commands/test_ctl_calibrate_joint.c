@@ -9,7 +9,9 @@
  * comes back to 1e-3 and every angle to 1e-3 deg, one scene per specimen is written and reads back
  * with its own k, the text names the shared k / b, each specimen's keys and its calibrated snap
  * beside each trial's; refusals with a reason: different specimens without --share-hinge (which
- * names the flag), a rigid hinge, per-crease hinges, a trial that is not there. */
+ * names the flag), a rigid hinge, per-crease hinges, a trial that is not there; and two specimens
+ * whose trials' scenes are rigid with sim.fit_hinge in their rig file fitted from that guess (the
+ * in-trial fit's setup), k / b back to 1%. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -133,13 +135,25 @@ static void truth(const spec_def *s, rod_fit_obs *obs, int n)
     }
 }
 
+/* The rigid-creased pair of the hinge guess's case: the same strips, their trials' scenes with
+   rigid creases (a stored override) and no hinge in the prediction's record. */
+static const spec_def S5R = {"S-5r", "[\"folds.hinge_stiffness=rigid\"]", {NULL}, 0, 0.005, 0.21, -86.0, -89.5, 5e-3,
+                             -88.0, -90.0, NAN};
+static const spec_def S10R = {"S-10r",
+                              "[\"ribbon.width=0.01\",\"ribbon.thickness=0.3e-3\",\"folds.position=0.2\","
+                              "\"folds.hinge_stiffness=rigid\"]",
+                              {"ribbon.width=0.01", "ribbon.thickness=0.3e-3", "folds.position=0.2"}, 3, 0.010, 0.2,
+                              -88.0, -92.5, 1e-2, -90.0, -90.0, NAN};
+#define FIT_HINGE 3.5e-3 /* the rig file's sim.fit_hinge in the rigid pair's trials */
+
 static char *config_text(const spec_def *s)
 {
     FILE *f = fopen(SCENE, "r");
     assert_non_null(f);
     static char text[16384];
-    int n = snprintf(text, sizeof text, "# rig file /lab/rig.ini\n[rig]\nmode = mock\nscene = pet.ini\n# scene file %s\n",
-                     SCENE);
+    int rigid = s == &S5R || s == &S10R;
+    int n = snprintf(text, sizeof text, "# rig file /lab/rig.ini\n[rig]\nmode = mock\nscene = pet.ini\n%s# scene file %s\n",
+                     rigid ? "[sim]\nfit_hinge = 3.5e-3\n" : "", SCENE);
     n += (int)fread(text + n, 1, sizeof text - (size_t)n - 512, f);
     fclose(f);
     snprintf(text + n, sizeof text - (size_t)n, "# overrides applied in order after the files: %s\n# note: joint test\n",
@@ -215,7 +229,7 @@ static int64_t add_trial(store *st, const spec_def *s, int parts)
     return id;
 }
 
-static int64_t a1, a2, b1, a_lower, spec_a, spec_b;
+static int64_t a1, a2, b1, a_lower, spec_a, spec_b, r5, r10;
 
 static int setup(void **state)
 {
@@ -230,6 +244,8 @@ static int setup(void **state)
     b1 = add_trial(st, &S10, WITH_SHEAR);
     a2 = add_trial(st, &S5, 0);
     a_lower = add_trial(st, &S5, LOWER);
+    r5 = add_trial(st, &S5R, WITH_SHEAR);
+    r10 = add_trial(st, &S10R, WITH_SHEAR);
     store_trial t;
     if (store_trial_get(st, a1, &t, why, sizeof why) != STORE_OK) return 1;
     spec_a = t.specimen_id;
@@ -369,12 +385,47 @@ static void refusals_are_named(void **state)
     assert_non_null(strstr(r.err, "lower state"));
 }
 
+/* Rigid creases in the trials' scenes and sim.fit_hinge in their rig file: the joint fit is set up
+   as the in-trial fit is (trial_calibrate_setup), so the creases become hinges of the guess, the
+   start of k / b is the guess over each width, and the truth comes back (before: "no hinge to
+   share"). The priors (0.88 in ln(k / b), 10 deg) pull little at this noise. */
+static void the_hinge_guess_makes_rigid_creases_hinges(void **state)
+{
+    (void)state;
+    char args[256];
+    run_out r;
+    snprintf(args, sizeof args, "%lld %lld --share-hinge " TIGHT " --json --no-snap", (long long)r5, (long long)r10);
+    run(&r, args);
+    assert_int_equal(r.status, 0);
+    json_t *j = json_loads(r.out, 0, NULL);
+    assert_non_null(j);
+    json_t *h = json_object_get(j, "hinge_per_width");
+    double start = json_real_value(json_object_get(h, "start")), kb = json_real_value(json_object_get(h, "fitted"));
+    double want_start = exp(0.5 * (log(FIT_HINGE / 0.005) + log(FIT_HINGE / 0.010)));
+    printf("k / b started from %.6g N/rad (the guess over the widths: %.6g), fitted %.6g (truth 1)\n", start,
+           want_start, kb);
+    assert_true(fabs(start / want_start - 1.0) < 1e-9);
+    assert_true(fabs(kb - 1.0) < 1e-2);
+    json_t *sa = NULL, *sb = NULL, *sp = json_object_get(j, "specimens");
+    for (size_t k = 0; k < json_array_size(sp); k++) {
+        json_t *x = json_array_get(sp, k);
+        if (!strcmp(json_string_value(json_object_get(x, "specimen")), "S-5r")) sa = x;
+        if (!strcmp(json_string_value(json_object_get(x, "specimen")), "S-10r")) sb = x;
+    }
+    assert_non_null(sa);
+    assert_non_null(sb);
+    assert_true(fabs(fitted(sa, "S-5r:folds.angle_left_deg") + 86.0) < 1e-2);
+    assert_true(fabs(fitted(sb, "S-10r:folds.angle_right_deg") + 92.5) < 1e-2);
+    json_decref(j);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(shares_the_hinge_per_width_and_writes_a_scene_each),
         cmocka_unit_test(prints_the_shared_hinge_and_each_snap),
         cmocka_unit_test(refusals_are_named),
+        cmocka_unit_test(the_hinge_guess_makes_rigid_creases_hinges),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

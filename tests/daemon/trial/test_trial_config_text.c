@@ -2,7 +2,8 @@
  * start's overrides were not in the record, so a rebuilt scene was the bare scene file's). The
  * overrides line is read back exactly (a value with a newline too), a note that imitates it is
  * not taken for it, a replay's line does not hide it, a text without it (an older row) rebuilds
- * the bare file's scene, and a garbled one is refused with the reason. No simulation: ms. */
+ * the bare file's scene, and a garbled one is refused with the reason; the in-trial fit's setup
+ * (sim.fit_hinge, sim.fit_keys) reads back with its overrides. No simulation: ms. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -90,6 +91,38 @@ static void without_the_line_the_bare_file(void **state)
     free(text);
 }
 
+/* The in-trial fit's setup read back (for `ribbonctl calibrate`): mock.ini's sim.fit_hinge, the
+ * stored overrides of sim.fit_hinge and sim.fit_keys in order (spaces around the dot's key and the
+ * value allowed, as rig_config_load takes them), the rig defaults without them, a value the rig
+ * loader would refuse named, a text without a rig file refused. */
+static void fit_setup_read_back(void **state)
+{
+    (void)state;
+    rig_config c = cfg_of_files();
+    double k = -1.0;
+    char keys[256], why[320];
+    char *text = trial_config_text(&c, (const char *const[]){"folds.angle_deg=-70"}, 1, NULL);
+    assert_int_equal(trial_config_text_fit(text, &k, keys, sizeof keys, why, sizeof why), 0);
+    assert_true(k == 3.5e-3); /* mock.ini's */
+    assert_string_equal(keys, "");
+    free(text);
+    const char *sets[] = {"sim.fit_hinge=1e-3", "sim.fit_keys=folds.angle_left_deg", " sim.fit_hinge = 0 ",
+                          "sim.fit_keys = folds.angle_left_deg,folds.hinge_stiffness"};
+    text = trial_config_text(&c, sets, 4, NULL);
+    assert_int_equal(trial_config_text_fit(text, &k, keys, sizeof keys, why, sizeof why), 0);
+    assert_true(k == 0.0);
+    assert_string_equal(keys, "folds.angle_left_deg,folds.hinge_stiffness");
+    free(text);
+    text = trial_config_text(&c, (const char *const[]){"sim.fit_hinge=-1"}, 1, NULL);
+    assert_int_equal(trial_config_text_fit(text, &k, keys, sizeof keys, why, sizeof why), -1);
+    printf("refused: %s\n", why);
+    assert_non_null(strstr(why, "sim.fit_hinge = -1"));
+    free(text);
+    assert_int_equal(trial_config_text_fit("# scene file x.ini\n[ribbon]\n", &k, keys, sizeof keys, why, sizeof why),
+                     -1);
+    assert_non_null(strstr(why, "no readable rig file"));
+}
+
 static void garbled_line_refused(void **state)
 {
     (void)state;
@@ -117,6 +150,7 @@ int main(void)
         cmocka_unit_test(overrides_round_trip_and_rebuild),
         cmocka_unit_test(without_the_line_the_bare_file),
         cmocka_unit_test(garbled_line_refused),
+        cmocka_unit_test(fit_setup_read_back),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -172,6 +172,31 @@ static void hinge_on_rigid_creases(void **state)
     assert_non_null(strstr(use.message, "folds.hinge_stiffness 0.0027 (rigid creases)"));
 }
 
+/* A calibration of one crease's hinge (folds.hinge_stiffness_left, fitted from the strip's own
+   2e-3 N m/rad while the pair's key says 3.5e-3) applied to that strip: the crease gets the value
+   itself (absolute, as rod_fit_param.h's keys are), the other crease and the pair's key unchanged;
+   read relative to the pair's k it would become 2.4e-3 * 3.5e-3 / 2e-3 or 2.4e-3 * 2e-3 / 3.5e-3. */
+static void per_crease_hinge_applied_as_its_value(void **state)
+{
+    (void)state;
+    rod_scene m = scene();
+    m.fold_hinge_stiffness = 3.5e-3;
+    m.fold_hinge_stiffness_left = 2e-3;
+    m.fold_hinge_stiffness_right = 5e-3;
+    rod_scene sc = m;
+    store_creases c = creases();
+    trial_specimen_calib_use use;
+    const char *cal = CAL("{\"key\":\"folds.hinge_stiffness_left\",\"start\":0.002,\"value\":0.0024,\"se\":0.1,"
+                          "\"determined\":true}");
+    assert_int_equal(trial_specimen_calib_apply(cal, &m, &c, &sc, &use), 1);
+    printf("%s\n", use.message);
+    assert_int_equal(use.warning, 0);
+    assert_true(fabs(sc.fold_hinge_stiffness_left / 2.4e-3 - 1.0) < 1e-14);
+    assert_true(fabs(rod_scene_hinge_k(&sc, 0) / 2.4e-3 - 1.0) < 1e-14);
+    assert_true(sc.fold_hinge_stiffness_right == 5e-3);
+    assert_true(sc.fold_hinge_stiffness == 3.5e-3);
+}
+
 /* ---- the refit on pooled frames (test_ctl_calibrate's fixture) ---------------------------------- */
 
 #define PET RIBBON_SOURCE_DIR "/config/scenes/pet-200x5.ini"
@@ -379,6 +404,7 @@ int main(void)
         cmocka_unit_test(applies_determined_values_only),
         cmocka_unit_test(stale_unreadable_or_empty_apply_nothing),
         cmocka_unit_test(hinge_on_rigid_creases),
+        cmocka_unit_test(per_crease_hinge_applied_as_its_value),
         cmocka_unit_test(refit_rigid_scene_fits_the_hinge_guess),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
