@@ -797,6 +797,10 @@ static void session_store_result(trial_session *s)
         session_event(s, NAN, STORE_EVENT_FAULT, w);
     session_store_final(s, s->result.final, s->result.reason[0] ? s->result.reason : NULL);
     trial_publish_stored(s->bus, s->trial_id, s->result.final);
+    /* A failed or aborted trial's fit beside it: cancelled and waited for (at most its abort cap)
+     * after the final status, which does not wait for it (trial_runner.h). A done trial's ended
+     * in the runner. */
+    if (s->result.final != TRIAL_DONE) trial_calibrate_end(s->calib, s->result.duration_s, 1);
     logf_(s, "%s%s%s; measured %s at Delta W = %.5f", trial_state_name(s->result.final),
           s->result.reason[0] ? ": " : "", s->result.reason, s->result.regime, s->result.snap_dw);
     /* Rig mode: the camera and the pipeline after the final status (issue 33, item 13): closing a
