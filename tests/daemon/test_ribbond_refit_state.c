@@ -10,7 +10,11 @@
  *   - a start by hand then is 409 with the reason (the refit, and what to do), not "abort it first";
  *   - the live bus carries the state "done, refitting specimen S-r", then "done" again;
  *   - the queue's next item did not start before the refit had stored: trial 2's prediction ran
- *     with the calibration from trial 1 (its record's calibration after_trial = trial 1). */
+ *     with the calibration from trial 1 (its record's calibration after_trial = trial 1).
+ * Then trial 2 replayed (trial_replay.h, as `ribbonctl replay 2 --db` does, a few seconds): a
+ * replay does not predict (no prediction row of its own) and its record says which prediction it
+ * is compared with: trial 2's as stored, made with the specimen's calibration as it was then (from
+ * trial 1: its values), not the specimen's calibration now (from trials 2 and 1). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -28,10 +32,12 @@
 #include "live.h"
 #include "rig_daemon.h"
 #include "store.h"
+#include "trial_replay.h"
 
 #include "test_dir.h"
 
 static char dir[64];
+static json_int_t t1, t2; /* the two trials of S-r (refit_is_said) */
 
 static double now_s(void)
 {
@@ -141,7 +147,6 @@ static void refit_is_said(void **state)
 
     /* Trial 1 to its end: every GET /status of it once it is done, and a start while it says so. */
     int saw_refitting = 0, plain_done_uncalibrated = 0, tried_start = 0;
-    json_int_t t1 = 0;
     char last[160] = "";
     const double t0 = now_s();
     while (now_s() - t0 < 240.0) {
@@ -198,7 +203,6 @@ static void refit_is_said(void **state)
     assert_true(refit_at > 0 && done_after > refit_at);
 
     /* The queue's second trial predicted with trial 1's calibration: it started after the refit stored. */
-    json_int_t t2 = 0;
     for (double t = 0; t < 240.0 && !t2; t += 0.1) {
         t2 = item_trial(port, i2);
         if (!t2) sleep_s(0.1);
@@ -223,11 +227,76 @@ static void refit_is_said(void **state)
 
     rig_daemon_close(&d, "test done");
     api_client_global_cleanup();
+}
+
+/* The value (%.6g) of key in a calibration's list (applied: "value"; the specimen's parameters: "value"). */
+static void value_of(const json_t *list, const char *key, char *out, size_t n)
+{
+    out[0] = 0;
+    for (size_t k = 0; k < json_array_size(list); k++)
+        if (!strcmp(jstr(json_array_get(list, k), "key"), key))
+            snprintf(out, n, "%s %.6g", key, json_number_value(json_object_get(json_array_get(list, k), "value")));
+}
+
+static void replay_says_its_prediction(void **state)
+{
+    (void)state;
+    if (!t2) fail_msg("needs refit_is_said's trials");
+    char path[128], why[512] = "";
+    snprintf(path, sizeof path, "%s/trials.db", dir);
+    store *st = NULL;
+    assert_int_equal(store_open(path, &st, why, sizeof why), STORE_OK);
+    trial_replay *r = NULL;
+    if (trial_replay_from_trial(st, t2, NULL, &r, why, sizeof why)) fail_msg("replay: %s", why);
+    int64_t nid = 0;
+    trial_result res;
+    if (trial_replay_run(r, st, NULL, NULL, NULL, &nid, &res, why, sizeof why)) fail_msg("replay: %s", why);
+    trial_replay_free(r);
+    json_t *rj = NULL, *j2 = NULL;
+    assert_int_equal(store_trial_json(st, nid, &rj, why, sizeof why), STORE_OK);
+    assert_int_equal(store_trial_json(st, t2, &j2, why, sizeof why), STORE_OK);
+    store_specimen sp;
+    assert_int_equal(store_specimen_get_by_name(st, "S-r", &sp, why, sizeof why), STORE_OK);
+    json_t *now = json_loads(sp.calibration_json, 0, NULL);
+    assert_non_null(now);
+    const char *said = NULL;
+    const json_t *evs = json_object_get(rj, "events");
+    for (size_t k = 0; k < json_array_size(evs); k++)
+        if (!strncmp(jstr(json_array_get(evs, k), "message"), "prediction: ", 12))
+            said = jstr(json_array_get(evs, k), "message");
+    printf("# replay %lld of trial %lld: %s\n", (long long)nid, (long long)t2, said ? said : "(no prediction event)");
+    /* No prediction of its own. */
+    store_prediction p = store_prediction_default();
+    assert_int_equal(store_prediction_get_by_trial(st, nid, &p, why, sizeof why), STORE_E_NOTFOUND);
+    store_prediction_free(&p);
+    assert_non_null(said);
+    char want[160];
+    snprintf(want, sizeof want, "prediction: trial %lld's as stored (", (long long)t2);
+    assert_non_null(strstr(said, want));
+    assert_non_null(strstr(said, "the specimen's calibration as it was then (trials "));
+    snprintf(want, sizeof want, "(trials %lld, ", (long long)t1);
+    assert_non_null(strstr(said, want));
+    /* Its values are the ones trial 2's prediction took (from trial 1), not the specimen's now. */
+    const json_t *applied = json_object_get(json_object_get(json_object_get(j2, "prediction"), "calibration"), "applied");
+    assert_true(json_array_size(applied) > 0);
+    for (size_t k = 0; k < json_array_size(applied); k++) {
+        const char *key = jstr(json_array_get(applied, k), "key");
+        char then[96], later[96];
+        value_of(applied, key, then, sizeof then);
+        value_of(json_object_get(now, "parameters"), key, later, sizeof later);
+        printf("#   %s (trial %lld's prediction); the specimen's now: %s\n", then, (long long)t2, later);
+        assert_non_null(strstr(said, then));
+        if (strcmp(then, later)) assert_null(strstr(said, later));
+    }
+    json_decref(now);
+    json_decref(rj);
+    json_decref(j2);
+    store_close(st);
     test_dir_done(dir, 1, "refit state");
 }
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(refit_is_said)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(refit_is_said), cmocka_unit_test(replay_says_its_prediction)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
