@@ -602,9 +602,8 @@ static int start_trial(rig_daemon *d, store *check, const store_specimen *sp, co
         *http_status = 409;
         if (ss.refitting[0])
             snprintf(why, why_len, "trial %lld is done and specimen %.63s is being refitted from its finished trials "
-                     "(its next trial predicts with the new calibration): start again when GET /status is idle, "
-                     "or abort to cancel the refit (the calibration before it stays)", (long long)ss.trial_id,
-                     ss.refitting);
+                     "(its next trial predicts with the new calibration): start again when GET /status is idle",
+                     (long long)ss.trial_id, ss.refitting);
         else
             snprintf(why, why_len, "trial %lld is running (%s); abort it first", (long long)ss.trial_id,
                      trial_state_name(ss.state));
@@ -845,8 +844,13 @@ static int op_abort(void *user, json_t **out, int *http_status, char *why, size_
         /* Ended (its rails stopped); the session is still closing its camera, video or prediction. */
         pthread_mutex_unlock(&d->lock);
         *http_status = 409;
-        snprintf(why, why_len, "trial %lld has already ended %s (its rails are stopped; it is closing its camera, "
-                 "video and prediction): nothing to abort", (long long)ss.trial_id, trial_state_name(ss.state));
+        if (ss.refitting[0])
+            snprintf(why, why_len, "trial %lld has already ended %s (its rails are stopped; specimen %.63s is being "
+                     "refitted from its finished trials): nothing to abort", (long long)ss.trial_id,
+                     trial_state_name(ss.state), ss.refitting);
+        else
+            snprintf(why, why_len, "trial %lld has already ended %s (its rails are stopped; it is closing its camera, "
+                     "video and prediction): nothing to abort", (long long)ss.trial_id, trial_state_name(ss.state));
         return -1;
     }
     trial_session_abort(s, "abort requested through the API");

@@ -837,8 +837,9 @@ static void session_release(trial_session *s, session_parts *p)
  * finished trials, this one included (trial_specimen_calib.h), and the outcome said in an event.
  * After the rails stopped, the record was stored and everything was closed; before the session
  * says it finished, so the specimen's next trial (the queue's, or a start that waits for this one)
- * predicts with the new calibration. An abort (or ribbond's shutdown) cancels the fit at its next
- * evaluation; a refit that fails keeps the calibration before it. */
+ * predicts with the new calibration. An abort (ribbond's shutdown: the API refuses one once the
+ * trial has ended) cancels the fit at its next evaluation; a refit that fails keeps the
+ * calibration before it. */
 static void session_refit_specimen(trial_session *s)
 {
     if (!refit_due(s, s->result.final)) {

@@ -8,6 +8,7 @@
  *     specimen S-r" and trial.refitting_specimen "S-r"; a plain "done" is never shown while the
  *     specimen has no calibration yet (before the fix the state read "done" for the whole refit);
  *   - a start by hand then is 409 with the reason (the refit, and what to do), not "abort it first";
+ *     an abort then is 409 (the trial has ended) naming the refit, not "closing its camera";
  *   - the live bus carries the state "done, refitting specimen S-r", then "done" again;
  *   - the queue's next item did not start before the refit had stored: trial 2's prediction ran
  *     with the calibration from trial 1 (its record's calibration after_trial = trial 1).
@@ -174,6 +175,11 @@ static void refit_is_said(void **state)
                 assert_int_equal(code, 409);
                 assert_non_null(strstr(why, "specimen S-r is being refitted"));
                 assert_non_null(strstr(why, "GET /status is idle"));
+                code = http(port, "POST", "/trials/current/abort", NULL, &o, why, sizeof why);
+                json_decref(o);
+                printf("# an abort while refitting: %d %s\n", code, why);
+                assert_int_equal(code, 409);
+                assert_non_null(strstr(why, "specimen S-r is being refitted"));
             }
         }
         sleep_s(0.01);
