@@ -419,14 +419,19 @@ static int op_status(void *user, json_t **out, char *why, size_t why_len)
     } else if (s) {
         session_status ss;
         trial_session_status(s, &ss);
+        /* Done but its specimen still being refitted (the session has not ended): say so. */
+        char state[RIG_NAME_MAX + 48];
+        snprintf(state, sizeof state, "%s%s%s", trial_state_name(ss.state), ss.refitting[0] ? ", refitting specimen " : "",
+                 ss.refitting);
         json_t *t = json_pack("{s:I, s:s, s:i, s:i, s:o, s:o, s:o, s:o, s:o, s:b, s:o, s:s, s:i, s:o, s:s}", "id",
-                              (json_int_t)ss.trial_id, "state", trial_state_name(ss.state), "frames", (int)ss.frames,
+                              (json_int_t)ss.trial_id, "state", state, "frames", (int)ss.frames,
                               "measured_frames", (int)ss.measured, "t_s", num_or_null(ss.t_s), "dl",
                               num_or_null(ss.dl), "dw", num_or_null(ss.dw), "dz", num_or_null(ss.dz), "a",
                               num_or_null(ss.a), "prediction_done", ss.prediction_done, "snap_dw_predicted",
                               num_or_null(ss.prediction_done ? ss.snap_dw_predicted : NAN), "regime_predicted",
                               ss.regime_predicted, "nodes", ss.nodes, "dt", num_or_null(ss.dt), "message",
                               ss.message);
+        if (t) json_object_set_new(t, "refitting_specimen", ss.refitting[0] ? json_string(ss.refitting) : json_null());
         json_object_set_new(o, "state", json_string("running"));
         json_object_set_new(o, "trial", t ? t : json_null());
     } else {
@@ -595,8 +600,13 @@ static int start_trial(rig_daemon *d, store *check, const store_specimen *sp, co
         trial_session_status(s, &ss);
         pthread_mutex_unlock(&d->lock);
         *http_status = 409;
-        snprintf(why, why_len, "trial %lld is running (%s); abort it first", (long long)ss.trial_id,
-                 trial_state_name(ss.state));
+        if (ss.refitting[0])
+            snprintf(why, why_len, "trial %lld is done and specimen %.63s is being refitted from its finished trials "
+                     "(its next trial predicts with the new calibration): start again when GET /status is idle",
+                     (long long)ss.trial_id, ss.refitting);
+        else
+            snprintf(why, why_len, "trial %lld is running (%s); abort it first", (long long)ss.trial_id,
+                     trial_state_name(ss.state));
         return -1;
     }
     if (d->checks.fails || !d->compress || !d->shear) {
@@ -834,8 +844,13 @@ static int op_abort(void *user, json_t **out, int *http_status, char *why, size_
         /* Ended (its rails stopped); the session is still closing its camera, video or prediction. */
         pthread_mutex_unlock(&d->lock);
         *http_status = 409;
-        snprintf(why, why_len, "trial %lld has already ended %s (its rails are stopped; it is closing its camera, "
-                 "video and prediction): nothing to abort", (long long)ss.trial_id, trial_state_name(ss.state));
+        if (ss.refitting[0])
+            snprintf(why, why_len, "trial %lld has already ended %s (its rails are stopped; specimen %.63s is being "
+                     "refitted from its finished trials): nothing to abort", (long long)ss.trial_id,
+                     trial_state_name(ss.state), ss.refitting);
+        else
+            snprintf(why, why_len, "trial %lld has already ended %s (its rails are stopped; it is closing its camera, "
+                     "video and prediction): nothing to abort", (long long)ss.trial_id, trial_state_name(ss.state));
         return -1;
     }
     trial_session_abort(s, "abort requested through the API");

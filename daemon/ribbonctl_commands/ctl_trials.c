@@ -428,7 +428,7 @@ static int fetch_report(const ctl_opts *o, int64_t id, const char *out)
 
 static int wait_for(const ctl_opts *o, int64_t id)
 {
-    char last[64] = "";
+    char last[128] = ""; /* a state, or "done, refitting specimen NAME" */
     for (int polls = 0; polls < 24 * 3600 * 4; polls++) {
         json_t *s = NULL;
         if (request(o, "GET", "/status", NULL, &s, NULL, NULL) < 0) return 1;

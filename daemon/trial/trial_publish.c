@@ -15,7 +15,7 @@ void trial_publish_begin(live_bus *b, int64_t trial_id, const char *mode, const 
 void trial_publish_state_name(live_bus *b, int64_t trial_id, const char *state, double t_s, const char *why)
 {
     if (!b) return;
-    char m[1024], t[32], w[600], n[32];
+    char m[1024], t[32], w[600], n[160]; /* n: "done, refitting specimen NAME" too */
     snprintf(m, sizeof m, "{\"type\":\"state\",\"trial\":%lld,\"state\":\"%s\",\"t\":%s,\"why\":\"%s\"}",
              (long long)trial_id, live_str(n, sizeof n, state), live_num(t, sizeof t, t_s),
              live_str(w, sizeof w, why));

@@ -449,16 +449,72 @@ static int frame_rails(trial_replay *r, long f, store_sample *x, char *why, size
     return 0;
 }
 
-/* The source trial's stored prediction, for the page to draw beside the replay's points. */
-static void publish_source_prediction(trial_replay *r, store *st)
+static void add_event(store *st, live_bus *bus, int64_t id, double t, store_event_kind kind, const char *msg);
+
+/* What the stored prediction ran with of its specimen's calibration (its calibration_json: the
+ * record trial_specimen_calib_apply wrote), as a clause: "the specimen's calibration (trials 1,
+ * 2026-...; after trial 1): KEY VALUE (was V), ..." or "no specimen calibration". */
+static void calibration_clause(const char *cj, char *out, size_t n)
 {
-    if (!r->bus || r->source_id <= 0) return;
+    json_t *j = cj && cj[0] ? json_loads(cj, 0, NULL) : NULL;
+    if (!json_is_object(j)) {
+        snprintf(out, n, cj && cj[0] ? "a calibration record that cannot be read" : "no specimen calibration: the strip as measured");
+        json_decref(j);
+        return;
+    }
+    char ids[64] = "";
+    const json_t *tr = json_object_get(j, "trials");
+    for (size_t k = 0; k < json_array_size(tr) && strlen(ids) < sizeof ids - 24; k++)
+        snprintf(ids + strlen(ids), sizeof ids - strlen(ids), "%s%lld", k ? ", " : "",
+                 (long long)json_integer_value(json_array_get(tr, k)));
+    const char *at = json_string_value(json_object_get(j, "calibrated_at"));
+    size_t u = (size_t)snprintf(out, n, "the specimen's calibration as it was then (trials %s, %s)", ids[0] ? ids : "?",
+                                at ? at : "?");
+    const json_t *ap = json_object_get(j, "applied");
+    for (size_t k = 0; k < json_array_size(ap) && u < n; k++) {
+        const json_t *a = json_array_get(ap, k);
+        const char *key = json_string_value(json_object_get(a, "key"));
+        u += (size_t)snprintf(out + u, n - u, "%s %s %.6g", k ? "," : ":", key ? key : "?",
+                              json_number_value(json_object_get(a, "value")));
+    }
+    json_decref(j);
+}
+
+/* The source trial's stored prediction. A replay does not predict again: a prediction made now
+ * would take the scene and the specimen's calibration as they are now (a refit after the trial
+ * changes it), not what the trial ran with, and change its history. So the replay is compared
+ * with the prediction its trial made, as stored: its record says which (an event naming the
+ * trial, the snap and what the prediction ran with), and the page draws it beside the replay's
+ * points. */
+static void source_prediction(trial_replay *r, store *st)
+{
+    if (r->source_id <= 0) return; /* an outside recording: no stored trial, no prediction */
     store_prediction p = store_prediction_default();
-    char w[256];
-    if (store_prediction_get_by_trial(st, r->source_id, &p, w, sizeof w) != STORE_OK) return;
-    int ok = p.status != STORE_PREDICTION_FAILED; /* a failed one is published with its reason */
-    trial_publish_prediction(r->bus, r->new_id, ok, p.snapped, p.snap_dw, store_regime_name(p.regime), p.curve.n,
-                             p.curve.dw, p.curve.dz, p.curve.a, ok ? NULL : p.failure);
+    char w[256], msg[512], cal[360];
+    store_err e = store_prediction_get_by_trial(st, r->source_id, &p, w, sizeof w);
+    if (e == STORE_E_NOTFOUND) {
+        snprintf(msg, sizeof msg, "prediction: none (a replay does not predict; trial %lld has none stored)",
+                 (long long)r->source_id);
+    } else if (e != STORE_OK) {
+        snprintf(msg, sizeof msg, "prediction: trial %lld's cannot be read: %.300s", (long long)r->source_id, w);
+    } else if (p.status == STORE_PREDICTION_FAILED) {
+        snprintf(msg, sizeof msg, "prediction: trial %lld's failed (%.300s); a replay does not predict",
+                 (long long)r->source_id, p.failure);
+    } else {
+        calibration_clause(p.calibration_json, cal, sizeof cal);
+        char snap[64];
+        if (p.snapped) snprintf(snap, sizeof snap, "%s at Delta W = %.5f", store_regime_name(p.regime), p.snap_dw);
+        else snprintf(snap, sizeof snap, "no snap");
+        snprintf(msg, sizeof msg, "prediction: trial %lld's as stored (%s; N = %d), made with %s; a replay does not "
+                 "predict again", (long long)r->source_id, snap, p.nodes, cal);
+    }
+    add_event(st, r->bus, r->new_id, NAN, e == STORE_OK || e == STORE_E_NOTFOUND ? STORE_EVENT_INFO : STORE_EVENT_WARNING,
+              msg);
+    if (r->bus && e == STORE_OK) {
+        int ok = p.status != STORE_PREDICTION_FAILED; /* a failed one is published with its reason */
+        trial_publish_prediction(r->bus, r->new_id, ok, p.snapped, p.snap_dw, store_regime_name(p.regime), p.curve.n,
+                                 p.curve.dw, p.curve.dz, p.curve.a, ok ? NULL : p.failure);
+    }
     store_prediction_free(&p);
 }
 
@@ -645,7 +701,7 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
     int reset_done = 0;
     trial_publish_begin(r->bus, id, "replay", r->note);
     trial_publish_state_name(r->bus, id, "replaying", NAN, r->video);
-    publish_source_prediction(r, st);
+    source_prediction(r, st);
     /* Tracked on every core (vis_track_pipe: the results are the serial loop's); what follows a
      * frame's measurement happens as it comes out, in order. */
     pipe = vis_track_pipe_create(trk, 0, &ve);

@@ -207,8 +207,9 @@ typedef struct trial_runner {
 void trial_runner_set_live(trial_runner *tr, trial_capture *capture, trial_rail_poller *poller);
 
 /* The fit beside the trial (trial_calibrate.h): the runner feeds it the measured frames, starts it
- * when the hold ends, polls it once a frame and ends it after the rails stopped. Call after init,
- * before run. */
+ * when the hold ends, polls it once a frame and, when the trial is done, ends it after the rails
+ * stopped; after a failure or an abort the caller ends it (trial_calibrate_end(c, t, 1), or
+ * trial_calibrate_free), after storing the final status. Call after init, before run. */
 void trial_runner_set_calibrate(trial_runner *tr, trial_calibrate *calib);
 
 /* Prepares a runner (allocates its frame). The rails, camera and tracker stay the caller's. */

@@ -225,11 +225,21 @@ static int choose_resolution(trial_session *s, rod_scene *sc, double *adapt_scal
 
 /* ---- the runner's sink ------------------------------------------------------------------------ */
 
+/* A trial ending in final is followed by its specimen's refit (session_refit_specimen). */
+static int refit_due(const trial_session *s, trial_state final)
+{
+    return final == TRIAL_DONE && s->cfg.sim.specimen_fit && s->cfg.specimen.name[0] && s->specimen_id > 0;
+}
+
 static int sink_state(void *user, trial_state st, double t_s, const char *why)
 {
     trial_session *s = user;
     pthread_mutex_lock(&s->lock);
     s->status.state = st;
+    /* Done, with the specimen's refit to come: said from the same instant (status.refitting), so
+     * no one reads a bare "done" and starts the specimen's next trial, or reads the specimen,
+     * before its new calibration is stored. */
+    if (refit_due(s, st)) snprintf(s->status.refitting, sizeof s->status.refitting, "%s", s->cfg.specimen.name);
     pthread_mutex_unlock(&s->lock);
     trial_publish_state(s->bus, s->trial_id, st, t_s, why);
     char w[256];
@@ -800,6 +810,10 @@ static void session_store_result(trial_session *s)
         session_event(s, NAN, STORE_EVENT_FAULT, w);
     session_store_final(s, s->result.final, s->result.reason[0] ? s->result.reason : NULL);
     trial_publish_stored(s->bus, s->trial_id, s->result.final);
+    /* A failed or aborted trial's fit beside it: cancelled and waited for (at most its abort cap)
+     * after the final status, which does not wait for it (trial_runner.h). A done trial's ended
+     * in the runner. */
+    if (s->result.final != TRIAL_DONE) trial_calibrate_end(s->calib, s->result.duration_s, 1);
     logf_(s, "%s%s%s; measured %s at Delta W = %.5f", trial_state_name(s->result.final),
           s->result.reason[0] ? ": " : "", s->result.reason, s->result.regime, s->result.snap_dw);
     /* Rig mode: the camera and the pipeline after the final status (issue 33, item 13): closing a
@@ -836,17 +850,34 @@ static void session_release(trial_session *s, session_parts *p)
  * finished trials, this one included (trial_specimen_calib.h), and the outcome said in an event.
  * After the rails stopped, the record was stored and everything was closed; before the session
  * says it finished, so the specimen's next trial (the queue's, or a start that waits for this one)
- * predicts with the new calibration. An abort (or ribbond's shutdown) cancels the fit at its next
- * evaluation; a refit that fails keeps the calibration before it. */
+ * predicts with the new calibration. An abort (ribbond's shutdown: the API refuses one once the
+ * trial has ended) cancels the fit at its next evaluation; a refit that fails keeps the
+ * calibration before it. */
 static void session_refit_specimen(trial_session *s)
 {
-    if (s->result.final != TRIAL_DONE || !s->cfg.sim.specimen_fit || !s->cfg.specimen.name[0] || s->specimen_id <= 0)
+    if (!refit_due(s, s->result.final)) {
+        pthread_mutex_lock(&s->lock); /* the runner said done, but the trial did not end so */
+        s->status.refitting[0] = 0;
+        pthread_mutex_unlock(&s->lock);
         return;
+    }
+    /* The trial is done and stored, but the session has not ended: the page is told what it
+     * still does (the API says it from the runner's done on: sink_state). */
+    char busy[RIG_NAME_MAX + 32];
+    snprintf(busy, sizeof busy, "done, refitting specimen %s", s->cfg.specimen.name);
+    pthread_mutex_lock(&s->lock);
+    snprintf(s->status.refitting, sizeof s->status.refitting, "%s", s->cfg.specimen.name);
+    pthread_mutex_unlock(&s->lock);
+    trial_publish_state_name(s->bus, s->trial_id, busy, NAN, "its next trial predicts with the new calibration");
     logf_(s, "refitting specimen %s from its finished trials", s->cfg.specimen.name);
     trial_specimen_refit r;
     trial_specimen_calib_refit(s->st, s->specimen_id, s->cfg.specimen.name, s->trial_id, s->cfg.sim.fit_keys,
                                s->cfg.sim.fit_hinge, &s->cancel, &r);
     session_event(s, NAN, r.ok ? STORE_EVENT_INFO : STORE_EVENT_WARNING, r.message);
+    pthread_mutex_lock(&s->lock);
+    s->status.refitting[0] = 0;
+    pthread_mutex_unlock(&s->lock);
+    trial_publish_state(s->bus, s->trial_id, TRIAL_DONE, NAN, r.ok ? "specimen refitted" : "specimen not refitted");
 }
 
 static void session_mark_finished(trial_session *s)

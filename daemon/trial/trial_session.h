@@ -27,7 +27,9 @@
  *   session_refit_specimen         a done trial of a named specimen (sim.specimen_fit): the
  *                                  specimen refitted from all its finished trials
  *                                  (trial_specimen_calib.h), before the session says it ended, so
- *                                  its next trial predicts with the new calibration.
+ *                                  its next trial predicts with the new calibration; meanwhile
+ *                                  the status's refitting names the specimen (the API's state
+ *                                  "done, refitting specimen NAME") and the live page is told so.
  * Every failure ends in the store as a failed trial with the reason, and in the log. An abort
  * (or SIGTERM through it) also cancels the ladder and the prediction at their next time step, so
  * it takes effect within a step whatever the trial is computing. */
@@ -63,6 +65,9 @@ typedef struct session_status {
     int nodes;               /* prediction resolution */
     double dt;
     char message[256];       /* last event */
+    char refitting[RIG_NAME_MAX]; /* from the runner's done until its specimen's refit has stored
+                               (session_refit_specimen): that specimen's name (the session has not
+                               finished; the rails stand); "" otherwise */
     /* The store refused the trial's final status (a full disk): what to write once it takes
      * writes again (the daemon does, rig_daemon.c; at the latest the next start-up marks the
      * trial interrupted). */

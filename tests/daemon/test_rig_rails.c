@@ -16,7 +16,8 @@
  *     no frame lost or dropped, every frame's stamp within 1 ms of the simulator's send time, both
  *     rails standing at their start at the end;
  *   - the rig simulator killed mid-shear: the trial fails naming the rail, nothing half-written; the
- *     store reads it failed within 3 s of the kill and an abort then is refused (issue 33);
+ *     fault is seen within 0.5 s of the kill and the failure stored within 0.5 s of that (the
+ *     in-trial fit's worker is waited for after it), and an abort then is refused (issue 33);
  *   - an abort through the API mid-shear (GRBL and Modbus): both rails stand within the stop
  *     distance plus the abort's latency bound, from the axes log.
  * Heavy (real time, about 20-40 s each): normal build only. */
@@ -43,6 +44,8 @@
 #define RIG_GRBL RIBBON_SOURCE_DIR "/config/rig-rehearsal.ini"
 #define RIG_MODBUS RIBBON_SOURCE_DIR "/config/rig-rehearsal-modbus.ini"
 #define DETECT_BOUND_S 0.5 /* issue 13: a lost rail link is detected within 0.5 s */
+#define STORE_FINAL_BOUND_S 0.5 /* a fault seen to the failure stored: the samples' last batch and a
+                                   few rows, no waits (test_rigsim_dies_mid_shear) */
 
 static const char *const grbl_sets[] = {"rail.compress.port=%s/grbl", "rail.shear.port=%s/grbl",
                                         "camera.calibration=%s/camera.calib", "store.path=%s/rig.db",
@@ -351,10 +354,25 @@ static void test_rigsim_dies_mid_shear(void **state)
     rig_file_has(cmd, "", out, sizeof out);
     printf("# rig simulator killed: the store read the trial ended %.2f s after the kill; abort then: exit %d, %s\n",
            t_ended - t_kill, WIFEXITED(abort_rc) ? WEXITSTATUS(abort_rc) : -1, out);
-    assert_true(t_ended - t_kill < 3.0);
     assert_true(WIFEXITED(abort_rc) && WEXITSTATUS(abort_rc) != 0);
     rig_stop(&r);
     sqlite3 *db = rig_db_open(&r);
+    /* What the time from the kill to the stored failure is made of: the fault seen (the pty's
+     * hang-up, the camera's silence: DETECT_BOUND_S, issue 13), then the record closed (the
+     * samples' last batch, the result and the final status: rows, not waits). The in-trial fit's
+     * worker is not in it: it is cancelled and waited for after the final status (its prediction
+     * cannot be interrupted; before, the final status waited for it: 2.43 s of 2.91 s measured
+     * at load 20, and 3.39 s in all under load). */
+    double t_fault = rig_event_wall(db, "rail fault in shearing%");
+    double t_stored = rig_q_num(db, "select (julianday(ended_at) - 2440587.5) * 86400.0 from trials where id = 1");
+    double t_fit = rig_event_wall(db, "calibrated prediction fit % landed%");
+    printf("# rig simulator killed: fault seen %.3f s after the kill, failure stored %.3f s after the fault; the "
+           "fit beside the trial %s\n", t_fault - t_kill, t_stored - t_fault,
+           !isfinite(t_fit) ? "never landed" : t_fit > t_fault ? "landed after the fault" : "landed before the fault");
+    assert_true(t_fault - t_kill <= DETECT_BOUND_S);
+    assert_true(t_stored - t_fault <= STORE_FINAL_BOUND_S);
+    /* The whole, as the harness sees it: both bounds and its 0.1 s poll. */
+    assert_true(t_ended - t_kill < DETECT_BOUND_S + STORE_FINAL_BOUND_S + 0.1);
     char status[64], why[512];
     rig_q_text(db, "select status from trials where id = 1", status, sizeof status);
     rig_q_text(db, "select coalesce(reason,'') from trials where id = 1", why, sizeof why);
