@@ -350,6 +350,26 @@ static void twin_symmetric_read_symmetric(void **state)
     free(u);
 }
 
+/* A symmetric twin near the threshold (creases 2% apart: 3D peak 0.33) at 60 fps: a passage frame's
+ * projected |A| is 0.71, which the peak rule read asymmetric; its departure lies between the two
+ * thresholds, so the frames cannot tell: unknown, not a wrong regime. */
+static void twin_near_threshold_read_unknown(void **state)
+{
+    (void)state;
+    film *u = film_new();
+    film_run(u, 90, 0.19, 0.02, 60.0, 0.0, 31);
+    film_summary(u, 90, 0.19, 0.02);
+    snap_reading r;
+    snap_detect_read(&u->det, &r);
+    const rod_snap_report *t = &u->truth.r;
+    assert_true(t->snapped && !t->asymmetric);
+    assert_true(rod_regime_asymmetric(r.peak_swing, u->sc.asym_threshold)); /* the peak rule: asymmetric */
+    assert_int_equal(r.by_departure, 1);
+    assert_true(r.departure > u->det.p.depart_sym && r.departure < u->det.p.depart_asym);
+    assert_string_equal(snap_detect_regime(&u->det), "unknown");
+    free(u);
+}
+
 int main(int argc, char **argv)
 {
     if (argc >= 2 && !strcmp(argv[1], "probe")) return probe(argc, argv);
@@ -358,6 +378,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(twin_passage_between_frames_read_asymmetric),
         cmocka_unit_test(twin_symmetric_read_symmetric),
+        cmocka_unit_test(twin_near_threshold_read_unknown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
