@@ -18,12 +18,14 @@ static void passage_reset(snap_detect *d, double dz, double a)
     d->pass_n = 0;
     d->pass_dz[d->pass_n] = dz;
     d->pass_a[d->pass_n++] = a;
+    d->pass_far = 0.0;
     d->peak_swing = fabs(a);
 }
 
 static void passage_add(snap_detect *d, double dz, double a)
 {
     d->peak_swing = fmax(d->peak_swing, fabs(a));
+    d->pass_far = fmax(d->pass_far, fabs(dz - d->pass_dz[0])); /* every frame's, kept or not */
     if (d->pass_n < SNAP_PASSAGE_MAX) {
         d->pass_dz[d->pass_n] = dz;
         d->pass_a[d->pass_n++] = a;
@@ -126,8 +128,7 @@ double snap_detect_dw(const snap_detect *d) { return d->onset_dw; }
  * swing's travel and at least depart_min_dz from it. 0 without one. */
 static int departure(const snap_detect *d, double *ratio, double *travel, double *swing)
 {
-    double dz0 = d->pass_dz[0], a0 = d->pass_a[0], s = 0.0;
-    for (int k = 1; k < d->pass_n; k++) s = fmax(s, fabs(d->pass_dz[k] - dz0));
+    double dz0 = d->pass_dz[0], a0 = d->pass_a[0], s = d->pass_far;
     *swing = s;
     int best = -1;
     double far = 0.0;

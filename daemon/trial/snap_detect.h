@@ -102,6 +102,7 @@ typedef struct snap_detect {
     int swing_over;        /* 1 once Delta Z turned back (the first swing ended) */
     double peak_swing;     /* peak |A| from the onset to the first swing's end */
     int pass_n;            /* the passage's frames kept (from the onset; at most SNAP_PASSAGE_MAX) */
+    double pass_far;       /* the largest |Delta Z - Delta Z_onset| of the passage's frames, kept or not */
     double pass_dz[SNAP_PASSAGE_MAX], pass_a[SNAP_PASSAGE_MAX];
     double onset_dw_hi;    /* the onset's upper bound: the detection frame's Delta W when it was
                               caught across a gap (the onset lies in [onset_dw, onset_dw_hi]);
