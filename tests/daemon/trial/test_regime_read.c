@@ -7,9 +7,18 @@
  * the truth is the twin's own snap (rod_snap_watch on every simulator step: the paper's 3D A over
  * the first swing).
  *
- * `test_regime_read probe PHI GAMMA FPS [REL [PHASE_S [N]]]` prints every frame from Delta W 0.3
- * (time, Delta W, the truth's projected Delta Z, 3D A and A_cam at the frame's instant, the tracked
- * Delta Z and A) and a summary line; it is not a ctest. */
+ * The ctest: three twins at N = 31 (docs/trials.md "The measured regime"): an asymmetric passage
+ * between 30 fps frames read asymmetric, a symmetric twin read symmetric, a symmetric twin near the
+ * threshold at 60 fps read unknown (the peak rule read the first symmetric and the last
+ * asymmetric).
+ *
+ * Measuring modes (not ctests):
+ *   probe PHI GAMMA FPS [REL [PHASE_S [N]]]  every frame from Delta W 0.3 (time, Delta W, the
+ *       truth's projected Delta Z, 3D A and A_cam at the frame's instant, the tracked Delta Z and A)
+ *       and a summary line; REGIME_READ_PNG=DW saves the frame at that Delta W;
+ *   table PHI:GAMMA ...  each twin (N = 61, creases REGIME_READ_REL apart, 0.01) filmed at 120 fps
+ *       and read at 30 fps (4 phases) and 60 fps (2); REGIME_READ_DUMP=DIR keeps its frames;
+ *   reread FILE ...  those frames read again, before (the peak rule) and after (the departure). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
