@@ -4,7 +4,33 @@
 #include "rod_regime.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
+
+/* The departure's thresholds, measured on the bench's twins (tests/daemon/trial/test_regime_read.c,
+ * docs/trials.md "The measured regime"). */
+#define SNAP_DEPART_ASYM 6.0
+#define SNAP_DEPART_SYM 3.5
+
+/* The passage restarts at every slow frame before the snap (the onset moves with it). */
+static void passage_reset(snap_detect *d, double dz, double a)
+{
+    d->pass_n = 0;
+    d->pass_dz[d->pass_n] = dz;
+    d->pass_a[d->pass_n++] = a;
+    d->pass_far = 0.0;
+    d->peak_swing = fabs(a);
+}
+
+static void passage_add(snap_detect *d, double dz, double a)
+{
+    d->peak_swing = fmax(d->peak_swing, fabs(a));
+    d->pass_far = fmax(d->pass_far, fabs(dz - d->pass_dz[0])); /* every frame's, kept or not */
+    if (d->pass_n < SNAP_PASSAGE_MAX) {
+        d->pass_dz[d->pass_n] = dz;
+        d->pass_a[d->pass_n++] = a;
+    }
+}
 
 snap_params snap_params_default(void)
 {
@@ -14,6 +40,11 @@ snap_params snap_params_default(void)
     p.asym_threshold = ROD_REGIME_ASYM_THRESHOLD;
     p.post_snap_s = 2.0;
     p.settle_frames = 5;
+    p.depart_frac = 0.3;
+    p.depart_min_dz = 0.01;
+    p.depart_asym = SNAP_DEPART_ASYM;
+    p.depart_sym = SNAP_DEPART_SYM;
+    p.peak_margin = 2.0;
     return p;
 }
 
@@ -37,6 +68,7 @@ snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, do
             d->onset_frame = frame;
             d->t_onset = t_s;
             d->peak_abs_a = fabs(a);
+            passage_reset(d, dz, a);
         }
         d->have_prev = 1;
         d->t_prev = t_s;
@@ -45,7 +77,7 @@ snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, do
         d->dw_prev = dw;
         return d->phase;
     }
-    double dt = t_s - d->t_prev, jump = fabs(dz - d->dz_prev), speed = jump / dt;
+    double dt = t_s - d->t_prev, step = dz - d->dz_prev, jump = fabs(step), speed = jump / dt;
     double slow = 0.1 * d->p.snap_speed;
     long gap = frame - d->frame_prev - 1;
     double v_before = d->v_prev;
@@ -60,8 +92,10 @@ snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, do
             d->onset_frame = frame;
             d->t_onset = t_s;
             d->peak_abs_a = fabs(a);
+            passage_reset(d, dz, a);
         } else {
             d->peak_abs_a = fmax(d->peak_abs_a, fabs(a));
+            passage_add(d, dz, a);
         }
         int seen = speed > d->p.snap_speed && jump > d->p.dz_jump;
         /* Across a gap: the post-snap state without the snap's frames (snap_detect.h). */
@@ -74,11 +108,15 @@ snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, do
             d->slow_run = 0;
             d->gap_frames = across ? gap : 0;
             d->onset_dw_hi = across ? dw : d->onset_dw;
+            d->dir = step > 0.0 ? 1.0 : -1.0;
+            d->swing_over = 0;
         }
         return d->phase;
     }
     /* Snapping: follow the pathway until it settles. */
     d->peak_abs_a = fmax(d->peak_abs_a, fabs(a));
+    if (!d->swing_over && step * d->dir < 0.0) d->swing_over = 1;
+    if (!d->swing_over) passage_add(d, dz, a);
     d->slow_run = speed < slow ? d->slow_run + 1 : 0;
     if (d->slow_run >= d->p.settle_frames || t_s - d->t_detect >= d->p.post_snap_s) d->phase = SNAP_DONE;
     return d->phase;
@@ -86,9 +124,89 @@ snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, do
 
 int snap_detect_snapped(const snap_detect *d) { return d->phase != SNAP_WAITING; }
 double snap_detect_dw(const snap_detect *d) { return d->onset_dw; }
+/* The departure (snap_detect.h): the kept frame furthest from the onset within depart_frac of the
+ * swing's travel and at least depart_min_dz from it. 0 without one. */
+static int departure(const snap_detect *d, double *ratio, double *travel, double *swing)
+{
+    double dz0 = d->pass_dz[0], a0 = d->pass_a[0], s = d->pass_far;
+    *swing = s;
+    int best = -1;
+    double far = 0.0;
+    for (int k = 1; k < d->pass_n; k++) {
+        double tr = fabs(d->pass_dz[k] - dz0);
+        if (tr <= d->p.depart_frac * s && tr >= d->p.depart_min_dz && tr > far) {
+            far = tr;
+            best = k;
+        }
+    }
+    if (best < 0) return 0;
+    *travel = far;
+    *ratio = fabs(d->pass_a[best] - a0) / far;
+    return 1;
+}
+
+void snap_detect_read(const snap_detect *d, snap_reading *out)
+{
+    memset(out, 0, sizeof *out);
+    out->departure = out->departure_dz = NAN;
+    out->regime = SNAP_REGIME_NONE;
+    if (!snap_detect_snapped(d) || d->pass_n < 1) return;
+    out->peak_swing = d->peak_swing;
+    out->passage_frames = d->pass_n;
+    double ratio, travel, swing = 0.0;
+    int seen = departure(d, &ratio, &travel, &swing);
+    out->swing_dz = swing;
+    if (seen) {
+        out->by_departure = 1;
+        out->departure = ratio;
+        out->departure_dz = travel;
+        out->regime = ratio >= d->p.depart_asym   ? SNAP_REGIME_ASYMMETRIC
+                      : ratio <= d->p.depart_sym ? SNAP_REGIME_SYMMETRIC
+                                                 : SNAP_REGIME_UNDECIDED;
+        return;
+    }
+    double thr = d->p.asym_threshold, m = d->p.peak_margin > 1.0 ? d->p.peak_margin : 1.0;
+    out->regime = rod_regime_asymmetric(d->peak_swing, m * thr)   ? SNAP_REGIME_ASYMMETRIC
+                  : !rod_regime_asymmetric(d->peak_swing, thr / m) ? SNAP_REGIME_SYMMETRIC
+                                                                   : SNAP_REGIME_UNDECIDED;
+}
+
+static const char *regime_word(snap_regime r)
+{
+    return r == SNAP_REGIME_ASYMMETRIC ? "asymmetric"
+           : r == SNAP_REGIME_SYMMETRIC ? "symmetric"
+           : r == SNAP_REGIME_UNDECIDED ? "unknown"
+                                        : "no snap";
+}
+
+void snap_reading_format(const snap_reading *r, const snap_params *p, char *buf, size_t len)
+{
+    if (!buf || !len) return;
+    if (r->regime == SNAP_REGIME_NONE) {
+        snprintf(buf, len, "no snap");
+        return;
+    }
+    if (r->by_departure)
+        snprintf(buf, len,
+                 "regime %s by the departure: |dA/dDelta Z| = %.2f over the first %.4f of Delta Z (swing %.4f; "
+                 "asymmetric at or above %g, symmetric at or below %g); peak |A| over the first swing %.3f rad in %d "
+                 "frames",
+                 regime_word(r->regime), r->departure, r->departure_dz, r->swing_dz, p->depart_asym, p->depart_sym,
+                 r->peak_swing, r->passage_frames);
+    else
+        snprintf(buf, len,
+                 "regime %s by the peak: no frame within the first %g of the swing's Delta Z travel (%.4f) and %g "
+                 "from the onset; peak |A| over the first swing %.3f rad in %d frames (asymmetric above %g, "
+                 "symmetric at or below %g)",
+                 regime_word(r->regime), p->depart_frac, r->swing_dz, p->depart_min_dz, r->peak_swing,
+                 r->passage_frames, p->asym_threshold * p->peak_margin, p->asym_threshold / p->peak_margin);
+}
+
 int snap_detect_asymmetric(const snap_detect *d)
 {
-    return snap_detect_snapped(d) && rod_regime_asymmetric(d->peak_abs_a, d->p.asym_threshold);
+    snap_reading r;
+    snap_detect_read(d, &r);
+    return r.regime == SNAP_REGIME_ASYMMETRIC;
 }
 
 long snap_detect_gap_frames(const snap_detect *d) { return d->gap_frames; }
@@ -96,6 +214,7 @@ double snap_detect_dw_hi(const snap_detect *d) { return d->gap_frames > 0 ? d->o
 
 const char *snap_detect_regime(const snap_detect *d)
 {
-    if (!snap_detect_snapped(d)) return "no snap";
-    return snap_detect_asymmetric(d) ? "asymmetric" : "symmetric";
+    snap_reading r;
+    snap_detect_read(d, &r);
+    return regime_word(r.regime);
 }

@@ -19,9 +19,25 @@
  * (the gap's time over its frame count), and its mean speed over the gap exceeds both a tenth of
  * snap_speed (the slow bound) and twice the speed measured before the gap (so a ribbon that was
  * already moving steadily, below snap_speed, is not called snapping by a gap). Its onset is bounded by the gap: the last slow frame (at or before the gap's
- * start) up to the detection frame; gap_frames and onset_dw_hi say so (issue 34 F). */
+ * start) up to the detection frame; gap_frames and onset_dw_hi say so (issue 34 F).
+ *
+ * The regime (issue 35 D, docs/trials.md "The measured regime"). The rule is the simulator's: peak
+ * |A| (the paper's 3D A) over the first swing above asym_threshold. A side camera cannot apply it
+ * as such: the swing's fast part lasts about 25 ms (one frame at 30-60 fps, and the tracker loses
+ * the strip in its sharpest frames), and the projected A it measures is 0.3 to 3 times the 3D A
+ * there. What it does see in many frames is how the snap departs: a pitchfork's critical mode is
+ * odd (A grows while Delta Z hardly moves), a saddle-node's even (Delta Z falls, A follows only as
+ * the imperfection's response). So the regime is read from the departure: |A - A_onset| /
+ * |Delta Z - Delta Z_onset| at the measured frame that went furthest from the onset within the
+ * first depart_frac of the first swing's Delta Z travel (and at least depart_min_dz from the
+ * onset): asymmetric at or above depart_asym, symmetric at or below depart_sym, undecided between.
+ * Without such a frame, the peak |A| over the first swing decides only outside a factor
+ * peak_margin of asym_threshold; else undecided. The first swing ends at the first measured frame
+ * whose Delta Z turns back against the snap's direction (as rod_snap_watch.h ends it). */
 #ifndef RIBBON_DAEMON_SNAP_DETECT_H
 #define RIBBON_DAEMON_SNAP_DETECT_H
+
+#include <stddef.h>
 
 typedef struct snap_params {
     double snap_speed;     /* 1/s, normalised Delta Z speed that means snapping (scene snap.speed) */
@@ -29,7 +45,36 @@ typedef struct snap_params {
     double asym_threshold; /* rad, peak |A| above which the snap is asymmetric */
     double post_snap_s;    /* s after detection at most spent on the pathway */
     int settle_frames;     /* consecutive slow frames that end the snap */
+    double depart_frac;    /* the departure's frames lie within this share of the first swing's
+                              Delta Z travel (0.3) */
+    double depart_min_dz;  /* ... and at least this far from the onset's Delta Z (normalised, 0.01:
+                              the tracker's 0.015 rad on A then moves the ratio by about 2) */
+    double depart_asym;    /* |dA / dDelta Z| of the departure at or above which it is asymmetric */
+    double depart_sym;     /* ... at or below which it is symmetric (between: undecided) */
+    double peak_margin;    /* without a departure: asymmetric above asym_threshold times this,
+                              symmetric below it divided by this, undecided between (2) */
 } snap_params;
+
+/* The regime a snap's frames read. */
+typedef enum snap_regime {
+    SNAP_REGIME_NONE = 0,    /* no snap */
+    SNAP_REGIME_SYMMETRIC,
+    SNAP_REGIME_ASYMMETRIC,
+    SNAP_REGIME_UNDECIDED    /* the frames cannot tell (stored as unknown) */
+} snap_regime;
+
+/* The passage's frames kept for the departure: from the onset frame to the first swing's end. */
+#define SNAP_PASSAGE_MAX 256
+
+typedef struct snap_reading {
+    snap_regime regime;
+    int by_departure;      /* 1: decided (or left undecided) by the departure; 0: by the peak */
+    double departure;      /* |dA / dDelta Z| at the departure frame; NaN without one */
+    double departure_dz;   /* that frame's Delta Z travel from the onset; NaN without one */
+    double swing_dz;       /* the first swing's Delta Z travel seen by the frames */
+    double peak_swing;     /* rad, peak |A| from the onset to the first swing's end */
+    int passage_frames;    /* measured frames from the onset to the swing's end */
+} snap_reading;
 
 typedef enum snap_phase {
     SNAP_WAITING = 0, /* no snap yet */
@@ -53,6 +98,12 @@ typedef struct snap_detect {
     double v_prev;         /* the last measured |d(Delta Z)/dt| (0 before the second frame) */
     double dw_prev;        /* ... and its Delta W */
     long gap_frames;       /* unmeasured frames just before the detection frame (0: seen directly) */
+    double dir;            /* +1 / -1: Delta Z's direction at the detection */
+    int swing_over;        /* 1 once Delta Z turned back (the first swing ended) */
+    double peak_swing;     /* peak |A| from the onset to the first swing's end */
+    int pass_n;            /* the passage's frames kept (from the onset; at most SNAP_PASSAGE_MAX) */
+    double pass_far;       /* the largest |Delta Z - Delta Z_onset| of the passage's frames, kept or not */
+    double pass_dz[SNAP_PASSAGE_MAX], pass_a[SNAP_PASSAGE_MAX];
     double onset_dw_hi;    /* the onset's upper bound: the detection frame's Delta W when it was
                               caught across a gap (the onset lies in [onset_dw, onset_dw_hi]);
                               equal to onset_dw otherwise */
@@ -65,12 +116,19 @@ snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, do
 /* Result (meaningful once phase >= SNAP_SNAPPING; the regime is final at SNAP_DONE). */
 int snap_detect_snapped(const snap_detect *d);
 double snap_detect_dw(const snap_detect *d);
+/* 1 when the reading is asymmetric (snap_detect_read). */
 int snap_detect_asymmetric(const snap_detect *d);
+/* The regime the frames read, with its numbers (meaningful once snapped; final at SNAP_DONE). */
+void snap_detect_read(const snap_detect *d, snap_reading *out);
+/* The reading in words for the trial's events, e.g. "asymmetric by the departure: |dA/dDelta Z| =
+ * 14.3 over the first 0.018 of Delta Z (asymmetric at or above 6, symmetric at or below 3.5); peak
+ * |A| over the first swing 0.407 rad in 4 frames". */
+void snap_reading_format(const snap_reading *r, const snap_params *p, char *buf, size_t len);
 /* Unmeasured frames the detection spanned (0: the snap's fast frames were seen). */
 long snap_detect_gap_frames(const snap_detect *d);
 /* Upper bound of the onset's Delta W (= snap_detect_dw when no gap). */
 double snap_detect_dw_hi(const snap_detect *d);
-/* "asymmetric", "symmetric" or "no snap". */
+/* "asymmetric", "symmetric", "unknown" (undecided) or "no snap". */
 const char *snap_detect_regime(const snap_detect *d);
 
 #endif

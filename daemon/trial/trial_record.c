@@ -149,7 +149,14 @@ int trial_record_parse(const char *text, trial_record *out, char *why, size_t wh
     out->roi.y = (int)roi[1];
     out->roi.w = (int)roi[2];
     out->roi.h = (int)roi[3];
-    out->snap.settle_frames = snap_params_default().settle_frames;
+    /* Not in the record: the detector's own settings (the departure's since issue 35 D). */
+    snap_params dflt = snap_params_default();
+    out->snap.settle_frames = dflt.settle_frames;
+    out->snap.depart_frac = dflt.depart_frac;
+    out->snap.depart_min_dz = dflt.depart_min_dz;
+    out->snap.depart_asym = dflt.depart_asym;
+    out->snap.depart_sym = dflt.depart_sym;
+    out->snap.peak_margin = dflt.peak_margin;
     rc = 0;
 done:
     json_decref(root);

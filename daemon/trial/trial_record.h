@@ -40,7 +40,8 @@ void trial_record_video_calib(const trial_record *rec, vis_calib *out);
 vis_track_params trial_record_track_params(const trial_record *rec, const vis_calib *video_cal);
 
 /* The regime stored for a snap: no snap; unknown when only the load witness saw it (no frames to
- * read the pathway from); else asymmetric or symmetric. Predictions and replays see every snap
+ * read the pathway from) or the frames cannot tell it (pass seen_by_camera = 0 then: snap_detect.h,
+ * SNAP_REGIME_UNDECIDED); else asymmetric or symmetric. Predictions and replays see every snap
  * (seen_by_camera = snapped). */
 store_regime trial_regime_of(int snapped, int seen_by_camera, int asymmetric);
 

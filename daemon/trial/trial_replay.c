@@ -839,10 +839,18 @@ int trial_replay_execute(trial_replay *r, store *st, const atomic_int *cancel,
     }
     res->snapped = snap_detect_snapped(&det);
     res->snap_dw = res->snapped ? snap_detect_dw(&det) : 0.0;
-    res->asymmetric = snap_detect_asymmetric(&det);
+    snap_reading reading;
+    snap_detect_read(&det, &reading);
+    res->asymmetric = reading.regime == SNAP_REGIME_ASYMMETRIC;
+    res->regime_undecided = res->snapped && reading.regime == SNAP_REGIME_UNDECIDED;
     res->peak_abs_a = det.peak_abs_a;
     snprintf(res->regime, sizeof res->regime, "%s", snap_detect_regime(&det));
-    store_regime reg = trial_regime_of(res->snapped, res->snapped, res->asymmetric);
+    if (res->snapped) {
+        char how[512];
+        snap_reading_format(&reading, &det.p, how, sizeof how);
+        add_event(st, r->bus, id, NAN, res->regime_undecided ? STORE_EVENT_WARNING : STORE_EVENT_INFO, how);
+    }
+    store_regime reg = trial_regime_of(res->snapped, res->snapped && !res->regime_undecided, res->asymmetric);
     store_trial_set_result(st, id, res->snapped, res->snapped ? res->snap_dw : NAN, reg, w2, sizeof w2);
     char msg[400];
     if (r->source_id)

@@ -938,8 +938,17 @@ end:
     out->load_dw = c.w_fired ? c.w_dw : 0.0;
     out->snapped = out->vision_snapped || c.w_fired;
     out->snap_dw = out->vision_snapped ? snap_detect_dw(&tr->det) : c.w_fired ? c.w_dw : 0.0;
-    out->asymmetric = snap_detect_asymmetric(&tr->det);
+    snap_reading reading;
+    snap_detect_read(&tr->det, &reading);
+    out->asymmetric = reading.regime == SNAP_REGIME_ASYMMETRIC;
+    out->regime_undecided = out->vision_snapped && reading.regime == SNAP_REGIME_UNDECIDED;
     out->peak_abs_a = tr->det.peak_abs_a;
+    if (out->vision_snapped) {
+        /* How the frames read the regime, with its numbers (docs/trials.md "The measured regime"). */
+        char msg[512];
+        snap_reading_format(&reading, &tr->det.p, msg, sizeof msg);
+        emit_event(&c, reading.regime == SNAP_REGIME_UNDECIDED ? "warning" : "info", "%s", msg);
+    }
     /* A snap only the load witness saw has no pathway to classify. */
     snprintf(out->regime, sizeof out->regime, "%s",
              out->vision_snapped || !c.w_fired ? snap_detect_regime(&tr->det) : "unknown");

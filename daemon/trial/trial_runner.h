@@ -162,7 +162,10 @@ typedef struct trial_result {
     double snap_dw;              /* valid when snapped: the camera's onset, else the witness's */
     int asymmetric;
     char regime[16];             /* "asymmetric", "symmetric", "no snap", or "unknown" (a snap only
-                                    the load witness saw: the camera saw no pathway) */
+                                    the load witness saw: the camera saw no pathway; or one whose
+                                    frames cannot tell: regime_undecided) */
+    int regime_undecided;        /* the camera saw the snap but its frames cannot tell the regime
+                                    (snap_detect.h): regime "unknown", stored as not measured */
     int vision_snapped;          /* the camera saw the snap */
     int load_witnessed;          /* the shear load jumped (plan.torque_witness) */
     double load_dw;              /* valid when load_witnessed: Delta W of the last reading before

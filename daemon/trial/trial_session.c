@@ -796,7 +796,8 @@ static void session_store_result(trial_session *s)
         if (!s->result.reason[0]) snprintf(s->result.reason, sizeof s->result.reason, "%s", w);
     }
     s->video = NULL;
-    store_regime reg = trial_regime_of(s->result.snapped, s->result.vision_snapped, s->result.asymmetric);
+    store_regime reg = trial_regime_of(s->result.snapped, s->result.vision_snapped && !s->result.regime_undecided,
+                                       s->result.asymmetric);
     if (s->result.final == TRIAL_DONE || s->result.snapped)
         store_trial_set_result(s->st, s->trial_id, s->result.snapped, s->result.snapped ? s->result.snap_dw : NAN, reg,
                                w, sizeof w);

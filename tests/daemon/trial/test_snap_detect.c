@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "rod_regime.h"
 #include "trial.h"
 
 #define FPS 20.0
@@ -168,6 +169,109 @@ static void noise_spikes_need_the_jump_floor(void **state)
     assert_false(snap_detect_snapped(&d));
 }
 
+/* Frames given by hand, 60 a second, with mock.ini's dz_jump (issue 35 D: the regime read from the
+ * departure). Each row: Delta Z, A, measured. After the rows the strip rests where the last row is. */
+typedef struct hand_frame {
+    double dz, a;
+    int valid;
+} hand_frame;
+
+static snap_detect run_hand(const hand_frame *f, int n, snap_reading *r)
+{
+    snap_params p = snap_params_default();
+    p.dz_jump = 0.02;
+    snap_detect d;
+    snap_detect_init(&d, &p);
+    long k = 0;
+    for (int i = 0; i < 20; i++, k++) /* the sheared upper state, creeping */
+        snap_detect_add(&d, k, k / 60.0, 0.4 + k * 1e-4, f[0].dz + 1e-4 * (20 - i), f[0].a, 1);
+    for (int i = 0; i < n; i++, k++)
+        snap_detect_add(&d, k, k / 60.0, 0.4 + k * 1e-4, f[i].valid ? f[i].dz : NAN, f[i].a, f[i].valid);
+    for (int i = 0; i < 10 && d.phase != SNAP_DONE; i++, k++)
+        snap_detect_add(&d, k, k / 60.0, 0.4 + k * 1e-4, f[n - 1].dz, f[n - 1].a, 1);
+    assert_int_equal(d.phase, SNAP_DONE);
+    snap_detect_read(&d, r);
+    return d;
+}
+
+/* An asymmetric passage whose peak falls between frames (the sharpest frame lost, as at phi 120):
+ * the frames see |A| 0.40 at most, so the peak rule read symmetric; the departure, A up by 0.25
+ * while Delta Z fell 0.015 (16.7), reads asymmetric. */
+static void asymmetric_departure_between_frames(void **state)
+{
+    (void)state;
+    const hand_frame f[] = {{0.25, 0.15, 1}, {0.245, 0.22, 1}, {0.235, 0.40, 1}, {0.0, 0.0, 0},
+                            {-0.22, -0.10, 1}, {-0.21, -0.05, 1}};
+    snap_reading r;
+    snap_detect d = run_hand(f, 6, &r);
+    assert_true(fabs(d.peak_abs_a - 0.40) < 1e-12);
+    assert_false(rod_regime_asymmetric(d.peak_abs_a, 0.5)); /* the peak rule: symmetric */
+    assert_int_equal(r.by_departure, 1);
+    assert_true(fabs(r.departure_dz - 0.015) < 1e-9);
+    assert_true(fabs(r.departure - 0.25 / 0.015) < 1e-6);
+    assert_int_equal(r.regime, SNAP_REGIME_ASYMMETRIC);
+    assert_string_equal(snap_detect_regime(&d), "asymmetric");
+    assert_true(snap_detect_asymmetric(&d));
+}
+
+/* A symmetric passage whose one mid-passage frame shows a projected |A| of 0.6 (the side view
+ * amplifies A 2-3 times there) and whose rebound after the first swing shows 0.8: the peak rule
+ * read asymmetric; the departure (A 0.07 while Delta Z fell 0.05: 1.4) reads symmetric, and the
+ * first swing's peak leaves the rebound out. */
+static void symmetric_departure_with_amplified_frames(void **state)
+{
+    (void)state;
+    const hand_frame f[] = {{0.19, 0.0, 1},   {0.17, 0.03, 1},  {0.14, 0.07, 1},  {0.05, 0.6, 1},
+                            {-0.24, 0.05, 1}, {-0.16, 0.8, 1}, {-0.20, 0.02, 1}, {-0.20, 0.02, 1}};
+    snap_reading r;
+    snap_detect d = run_hand(f, 8, &r);
+    assert_true(rod_regime_asymmetric(d.peak_abs_a, 0.5)); /* the peak rule: asymmetric */
+    assert_true(fabs(r.peak_swing - 0.6) < 1e-12);          /* the rebound's 0.8 is after the swing */
+    assert_int_equal(r.by_departure, 1);
+    assert_true(fabs(r.departure - 0.07 / 0.05) < 1e-9);
+    assert_int_equal(r.regime, SNAP_REGIME_SYMMETRIC);
+    assert_string_equal(snap_detect_regime(&d), "symmetric");
+}
+
+/* No frame in the departure (the first one after the onset is already half way down): the peak
+ * over the first swing decides only outside a factor 2 of the threshold, else "unknown". */
+static void no_departure_frame_is_undecided_near_the_threshold(void **state)
+{
+    (void)state;
+    const hand_frame near[] = {{0.25, 0.1, 1}, {0.0, 0.7, 1}, {-0.22, 0.1, 1}, {-0.21, 0.1, 1}};
+    snap_reading r;
+    snap_detect d = run_hand(near, 4, &r);
+    assert_true(rod_regime_asymmetric(d.peak_abs_a, 0.5)); /* the peak rule: asymmetric */
+    assert_int_equal(r.by_departure, 0);
+    assert_true(isnan(r.departure));
+    assert_int_equal(r.regime, SNAP_REGIME_UNDECIDED);
+    assert_string_equal(snap_detect_regime(&d), "unknown");
+    assert_false(snap_detect_asymmetric(&d));
+    char msg[512];
+    snap_reading_format(&r, &d.p, msg, sizeof msg);
+    assert_non_null(strstr(msg, "regime unknown by the peak"));
+    const hand_frame clear[] = {{0.25, 0.1, 1}, {0.0, 1.2, 1}, {-0.22, 0.1, 1}, {-0.21, 0.1, 1}};
+    d = run_hand(clear, 4, &r);
+    assert_int_equal(r.regime, SNAP_REGIME_ASYMMETRIC);
+    const hand_frame low[] = {{0.25, 0.1, 1}, {0.0, 0.2, 1}, {-0.22, 0.1, 1}, {-0.21, 0.1, 1}};
+    d = run_hand(low, 4, &r);
+    assert_int_equal(r.regime, SNAP_REGIME_SYMMETRIC);
+}
+
+/* Between the two departure thresholds the frames cannot tell: "unknown", and the event says so. */
+static void departure_between_thresholds_is_undecided(void **state)
+{
+    (void)state;
+    const hand_frame f[] = {{0.20, 0.0, 1}, {0.18, 0.09, 1}, {0.0, 0.3, 1}, {-0.23, 0.0, 1}, {-0.22, 0.0, 1}};
+    snap_reading r;
+    snap_detect d = run_hand(f, 5, &r);
+    assert_true(fabs(r.departure - 4.5) < 1e-9);
+    assert_int_equal(r.regime, SNAP_REGIME_UNDECIDED);
+    char msg[512];
+    snap_reading_format(&r, &d.p, msg, sizeof msg);
+    assert_non_null(strstr(msg, "regime unknown by the departure: |dA/dDelta Z| = 4.50 over the first 0.0200"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -178,6 +282,10 @@ int main(void)
         cmocka_unit_test(steady_motion_across_a_gap_is_no_snap),
         cmocka_unit_test(slow_creep_is_no_snap),
         cmocka_unit_test(noise_spikes_need_the_jump_floor),
+        cmocka_unit_test(asymmetric_departure_between_frames),
+        cmocka_unit_test(symmetric_departure_with_amplified_frames),
+        cmocka_unit_test(no_departure_frame_is_undecided_near_the_threshold),
+        cmocka_unit_test(departure_between_thresholds_is_undecided),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
