@@ -641,6 +641,12 @@ static void test_jaws_along_clamped_edges(void **state)
         assert_true(fabs(du) <= 0.3);
         assert_true(fabs(dv) <= 0.3);
     }
+    /* A clamp direction that is none is refused with the reason. */
+    const double bad_dir[6] = {0.0, 0.0, 0.0, 1.0, 0.0, 0.0};
+    vis_shape bad = h.ts.view;
+    bad.clamp_dir = bad_dir;
+    assert_int_equal(vis_renderer_draw(r, &bad, f, NULL, &ve), VIS_ERR_ARG);
+    assert_non_null(strstr(ve.message, "left clamp's direction"));
     vis_frame_free(f);
     vis_renderer_free(r);
     twin_shape_release(&h.ts);
