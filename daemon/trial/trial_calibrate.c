@@ -204,6 +204,24 @@ void trial_calibrate_compute_shapes(const rod_scene *sc, const char *keys, const
     }
     o.cancel = cancel; /* the fit stops at its next evaluation when the trial ends early */
     r->nshapes = shapes && nshapes > 0 ? nshapes : 0;
+    /* With the centrelines the cost is less convex (the family's twin 11 stopped in a second
+     * minimum from the scene's values): the fit starts where the fit without them ends (cheap: the
+     * same frames, its own keys), or at the scene's values when that one fails. */
+    double start[ROD_FIT_NKEYS];
+    int have_start = 0;
+    if (r->nshapes) {
+        rod_fit_result r0;
+        char why0[320];
+        if (rod_fit_run(sc, obs, nobs, &o, &r0, why0, sizeof why0) == ROD_OK && !r0.misfit) {
+            memcpy(start, r0.u, sizeof start);
+            have_start = 1;
+        }
+        if (cancel && atomic_load(cancel)) {
+            failed(r, "cancelled", "cancelled: the trial ended while the fit ran");
+            goto done;
+        }
+    }
+    if (have_start) o.start = start;
     if (r->nshapes && (!keys || !*keys)) {
         /* The centreline sees where the creases are (docs/calibration.md "The centreline as an
          * observable"): the default set takes both positions too, where the strip has them. */
