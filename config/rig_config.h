@@ -161,6 +161,8 @@ typedef struct rig_sim {
     bool fit;                        /* the calibrated prediction beside each trial (issue 32 B) */
     char fit_keys[256];              /* comma-separated fit keys; "" = the default set */
     double fit_refresh_s;            /* s of trial time between refreshes in the shear; 0 = none */
+    bool fit_shape;                  /* the fit also takes the tracked centreline at ~4 compression
+                                        and hold frames (issue 32 A/B, docs/calibration.md) */
     double fit_hinge;                /* N m/rad: the fit's crease hinges when the scene's creases are
                                         rigid (its start and its prior's centre); 0 = the scene's */
     bool specimen_fit;               /* the named specimen refitted from its trials after each one

@@ -638,6 +638,12 @@ rod_status rod_fit_run(const rod_scene *sc, const rod_fit_obs *obs, int nobs, co
         for (int i = 0; i < ndata; i++) s += c.last_f[i] * c.last_f[i];
         res->rms_start = sqrt(s / (double)ndata);
     }
+    if (o->start) /* the caller's start (opts.start): a fit without the shapes, say */
+        for (int i = 0; i < c.nfit; i++) {
+            int k = c.key[i];
+            double v = o->start[k];
+            if (isfinite(v)) x[i] = (fmin(fmax(v, c.lo[k]), c.hi[k]) - c.u0[k]) / c.scale[k];
+        }
     rod_fit_lm_problem pr = {.p = c.nfit, .nres = c.nres, .eval = eval_point, .last_f = c.last_f, .last_J = c.cache_J,
                              .user = &c};
     st = rod_fit_lm_drive(&pr, x, o->max_iterations, o->stop_sd, &res->iterations, &res->gn_sd, &res->capped, why,

@@ -82,6 +82,12 @@ typedef struct rod_fit_opts {
     int nshapes;
     double sigma_shape;              /* noise of each shape coordinate, over l (the tracker's
                                         centreline noise; 0.001 by default) */
+    const double *start;             /* NULL: the fit starts at the scene's values; else
+                                        ROD_FIT_NKEYS values in fit units where the fitted ones start
+                                        (clamped into the bounds; a non-finite one: the scene's),
+                                        e.g. the fit without shapes, so the shapes' less convex cost
+                                        is entered near its minimum (the priors stay centred on the
+                                        scene's values; rms_start stays the scene's) */
 } rod_fit_opts;
 
 rod_fit_opts rod_fit_opts_default(void);

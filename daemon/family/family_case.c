@@ -76,7 +76,16 @@ static void calibrate(const rod_scene *sc, const rod_fit_obs *obs, int n, const 
     memset(f, 0, sizeof *f);
     f->nobs = n;
     double c0 = cpu_s();
-    rod_status st = rod_fit_run(sc, obs, n, fo, &f->fit, f->why, sizeof f->why);
+    /* With shapes, started where the fit without them ends (rod_fit_opts.start), as the fit beside a
+       trial does (daemon/trial/trial_calibrate.c): the shapes' cost is less convex. */
+    rod_fit_opts o1 = *fo, o0 = *fo;
+    rod_fit_result r0;
+    o0.shapes = NULL;
+    o0.nshapes = 0;
+    if (fo->nshapes > 0 && !fo->start && rod_fit_run(sc, obs, n, &o0, &r0, f->why, sizeof f->why) == ROD_OK &&
+        !r0.misfit)
+        o1.start = r0.u;
+    rod_status st = rod_fit_run(sc, obs, n, &o1, &f->fit, f->why, sizeof f->why);
     f->fit_cpu_s = cpu_s() - c0;
     if (st != ROD_OK) return;
     c0 = cpu_s();

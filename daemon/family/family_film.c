@@ -110,38 +110,6 @@ static rod_status step_to(film_ctx *c, double dl, double dw)
     return ROD_OK;
 }
 
-/* The tracker's centreline (n pixels uv) in the plane y = 0 at depth 0 (no shear), relative to
-   the left clamp point, over l: the tracker's own view model (vision/track/view_model.cpp,
-   view_to_metric) from the calibration, for a frame of w x h pixels. */
-static void curve_to_plane(const vis_calib *cal, int w, int h, double length_mm, const double *uv, int n, double *xz)
-{
-    double pu = cal->principal_px[0] >= 0 && cal->principal_px[1] >= 0 ? cal->principal_px[0] : 0.5 * (w - 1);
-    double pv = cal->principal_px[0] >= 0 && cal->principal_px[1] >= 0 ? cal->principal_px[1] : 0.5 * (h - 1);
-    double ppmm = cal->px_per_mm, D = cal->camera_distance_mm, ct = cos(cal->camera_tilt_rad),
-           st = sin(cal->camera_tilt_rad);
-    double x0 = 0.0, z0 = 0.0;
-    for (int i = -1; i < n; i++) {
-        double u = i < 0 ? cal->clamp_left_px[0] : uv[2 * i], v = i < 0 ? cal->clamp_left_px[1] : uv[2 * i + 1];
-        double du = u - pu, dv = v - pv, x, z;
-        if (!(D > 0)) {
-            x = du / ppmm;
-            z = -dv / ppmm;
-        } else {
-            double F = ppmm * D, dir_y = F * ct - dv * st, dir_z = -F * st - dv * ct;
-            double lambda = (D * ct) / dir_y;
-            x = lambda * du;
-            z = D * st + lambda * dir_z;
-        }
-        if (i < 0) {
-            x0 = x;
-            z0 = z;
-            continue;
-        }
-        xz[2 * i] = (x - x0) / length_mm;
-        xz[2 * i + 1] = (z - z0) / length_mm;
-    }
-}
-
 #define CURVE_MAX 512 /* most centreline points taken from the tracker */
 
 /* Renders the rod's state and measures it with t (fresh: NULL, a tracker for this Delta L is
@@ -186,7 +154,7 @@ static int film_frame(film_ctx *c, vis_tracker *t, vis_measure *m, double *curve
             double uv[2 * CURVE_MAX];
             size_t nc = vis_tracker_curve(own, uv, CURVE_MAX);
             if (nc > CURVE_MAX) nc = CURVE_MAX;
-            curve_to_plane(&own_cal, c->width_px, c->height_px, 1e3 * c->sc->length, uv, (int)nc, curve);
+            vis_calib_curve_to_plane(&own_cal, c->width_px, c->height_px, 1e3 * c->sc->length, uv, (int)nc, curve);
             *n_curve = (int)nc;
         }
     }

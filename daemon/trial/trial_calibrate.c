@@ -28,8 +28,16 @@ typedef struct calib_job {
     char keys[256];
     rod_fit_obs *obs;
     int nobs_before, nobs_shear;
+    rod_fit_shape shapes[TRIAL_CALIBRATE_SHAPES];
+    int nshapes;
     trial_calibrated res;
 } calib_job;
+
+/* A measured frame's centreline, resampled, with the frame's observation. */
+typedef struct shape_frame {
+    rod_fit_obs o;
+    rod_fit_shape s;
+} shape_frame;
 
 typedef struct obs_buf {
     rod_fit_obs *v;
@@ -39,6 +47,11 @@ typedef struct obs_buf {
 struct trial_calibrate {
     trial_calibrate_def def;
     obs_buf before, shear;
+    shape_frame *shapes;      /* centrelines handed in (def.fit_shape) */
+    int nshape_frames, shape_cap;
+    rod_fit_shape chosen[TRIAL_CALIBRATE_SHAPES]; /* the ones the first fit took, kept by refreshes */
+    rod_fit_obs chosen_obs[TRIAL_CALIBRATE_SHAPES];
+    int nchosen;
     long dropped;             /* frames not kept (out of memory) */
     calib_job *job;           /* the running worker, or NULL */
     int started;              /* the first fit was started */
@@ -156,6 +169,13 @@ static double median_dz(const rod_fit_obs *obs, int n)
 void trial_calibrate_compute(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
                              int nobs_shear, const atomic_int *cancel, trial_calibrated *r)
 {
+    trial_calibrate_compute_shapes(sc, keys, obs, nobs_before, nobs_shear, NULL, 0, cancel, r);
+}
+
+void trial_calibrate_compute_shapes(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
+                                    int nobs_shear, const rod_fit_shape *shapes, int nshapes,
+                                    const atomic_int *cancel, trial_calibrated *r)
+{
     double t0 = wall_now();
     r->ok = 0;
     r->fit_ran = 0;
@@ -183,6 +203,37 @@ void trial_calibrate_compute(const rod_scene *sc, const char *keys, const rod_fi
         goto done;
     }
     o.cancel = cancel; /* the fit stops at its next evaluation when the trial ends early */
+    r->nshapes = shapes && nshapes > 0 ? nshapes : 0;
+    /* With the centrelines the cost is less convex (the family's twin 11 stopped in a second
+     * minimum from the scene's values): the fit starts where the fit without them ends (cheap: the
+     * same frames, its own keys), or at the scene's values when that one fails. */
+    double start[ROD_FIT_NKEYS];
+    int have_start = 0;
+    if (r->nshapes) {
+        rod_fit_result r0;
+        char why0[320];
+        if (rod_fit_run(sc, obs, nobs, &o, &r0, why0, sizeof why0) == ROD_OK && !r0.misfit) {
+            memcpy(start, r0.u, sizeof start);
+            have_start = 1;
+        }
+        if (cancel && atomic_load(cancel)) {
+            failed(r, "cancelled", "cancelled: the trial ended while the fit ran");
+            goto done;
+        }
+    }
+    if (have_start) o.start = start;
+    if (r->nshapes && (!keys || !*keys)) {
+        /* The centreline sees where the creases are (docs/calibration.md "The centreline as an
+         * observable"): the default set takes both positions too, where the strip has them. */
+        char unused[200];
+        for (int k = ROD_FIT_POSITION_LEFT; k <= ROD_FIT_POSITION_RIGHT; k += ROD_FIT_POSITION_RIGHT - ROD_FIT_POSITION_LEFT)
+            if (!rod_fit_key_usable(sc, (rod_fit_key)k, unused, sizeof unused)) o.fit[k] = 1;
+    }
+    if (r->nshapes) {
+        o.shapes = shapes;
+        o.nshapes = nshapes;
+        o.sigma_shape = TRIAL_CALIBRATE_SIGMA_SHAPE;
+    }
     char why[320] = "";
     rod_status st = rod_fit_run(sc, obs, nobs, &o, &r->fit, why, sizeof why);
     if (st != ROD_OK) {
@@ -250,7 +301,8 @@ static void *job_main(void *arg)
      * SCHED_IDLE, the fit and its band's predictions on CPU time no one else wants (trial_idle.h). */
     if (j->idle) trial_idle_enter(NULL, 0); /* refused: nice 19 (trial_idle.h) */
     j->res.idle = trial_idle_is(0) == 1;        /* the class read back, said in the landing event */
-    trial_calibrate_compute(&j->scene, j->keys, j->obs, j->nobs_before, j->nobs_shear, &j->cancel, &j->res);
+    trial_calibrate_compute_shapes(&j->scene, j->keys, j->obs, j->nobs_before, j->nobs_shear, j->shapes, j->nshapes,
+                                   &j->cancel, &j->res);
     int expected = JOB_RUNNING;
     if (!atomic_compare_exchange_strong(&j->state, &expected, JOB_DONE)) job_free(j); /* abandoned */
     return NULL;
@@ -296,7 +348,9 @@ static void say(trial_calibrate *c, double t, const char *kind, const char *fmt,
 
 static void fit_name(const trial_calibrated *r, char *buf, size_t n)
 {
-    if (r->refresh == 0)
+    if (r->refresh == 0 && r->nshapes)
+        snprintf(buf, n, "fit 0 (compression and hold, %d frames, %d centrelines)", r->nobs_before, r->nshapes);
+    else if (r->refresh == 0)
         snprintf(buf, n, "fit 0 (compression and hold, %d frames)", r->nobs_before);
     else if (isfinite(r->dw_limit))
         snprintf(buf, n, "refresh %d (%d + %d frames, shear to Delta W = %.4f, below %g of the %s snap %.4f)",
@@ -376,8 +430,10 @@ static void land(trial_calibrate *c, trial_calibrated *r, double t)
         else
             snprintf(snap, sizeof snap, "snap Delta W = %.5f (no band: %.80s), %s", r->snap_dw, r->note,
                      r->asymmetric ? "asymmetric" : "symmetric");
-        say(c, t, "info", "calibrated prediction %s landed at t = %.2f s, %s: %s; %s; residual %.3g noise units RMS "
-            "(%.2f s wall%s)", name, t, when, snap, params, r->fit.rms, r->wall_s, r->idle ? " in SCHED_IDLE" : "");
+        char shp[64] = "";
+        if (r->nshapes) snprintf(shp, sizeof shp, " (the centrelines' %.3g)", r->fit.shape_rms);
+        say(c, t, "info", "calibrated prediction %s landed at t = %.2f s, %s: %s; %s; residual %.3g noise units RMS%s "
+            "(%.2f s wall%s)", name, t, when, snap, params, r->fit.rms, shp, r->wall_s, r->idle ? " in SCHED_IDLE" : "");
     }
     c->last = *r;
     c->have_last = 1;
@@ -398,11 +454,44 @@ static void collect(trial_calibrate *c, double t)
     job_free(j);
 }
 
+/* The first fit's centrelines: TRIAL_CALIBRATE_SHAPES of those handed in, evenly in Delta L from
+ * the first tracked to the last (the hold's), each the one nearest its Delta L, none twice. */
+static void choose_shapes(trial_calibrate *c)
+{
+    c->nchosen = 0;
+    int n = c->nshape_frames;
+    if (!c->def.fit_shape || n == 0) return;
+    double lo = c->shapes[0].o.dl, hi = c->shapes[n - 1].o.dl;
+    int used[TRIAL_CALIBRATE_SHAPES];
+    for (int j = TRIAL_CALIBRATE_SHAPES - 1; j >= 0; j--) {
+        int best = -1;
+        if (j == TRIAL_CALIBRATE_SHAPES - 1) {
+            best = n - 1; /* the hold's last */
+        } else {
+            double target = lo + (hi - lo) * j / (TRIAL_CALIBRATE_SHAPES - 1), err = INFINITY;
+            for (int k = 0; k < n; k++) {
+                int taken = 0;
+                for (int u = 0; u < c->nchosen; u++) taken |= used[u] == k;
+                if (!taken && fabs(c->shapes[k].o.dl - target) < err) {
+                    err = fabs(c->shapes[k].o.dl - target);
+                    best = k;
+                }
+            }
+        }
+        if (best < 0) continue;
+        used[c->nchosen] = best;
+        c->chosen[c->nchosen] = c->shapes[best].s;
+        c->chosen_obs[c->nchosen] = c->shapes[best].o;
+        c->nchosen++;
+    }
+}
+
 /* Starts a worker on the frames so far (refresh 0: those before the shear only). */
 static void launch(trial_calibrate *c, double t, int refresh)
 {
     calib_job *j = calloc(1, sizeof *j);
-    rod_fit_obs *obs = malloc(sizeof *obs * (TRIAL_CALIBRATE_MAX_HOLD_OBS + TRIAL_CALIBRATE_MAX_SHEAR_OBS));
+    rod_fit_obs *obs = malloc(sizeof *obs *
+                              (TRIAL_CALIBRATE_MAX_HOLD_OBS + TRIAL_CALIBRATE_SHAPES + TRIAL_CALIBRATE_MAX_SHEAR_OBS));
     trial_calibrated fail;
     memset(&fail, 0, sizeof fail);
     fail.refresh = refresh;
@@ -423,6 +512,16 @@ static void launch(trial_calibrate *c, double t, int refresh)
     snprintf(j->keys, sizeof j->keys, "%s", c->def.keys);
     j->obs = obs;
     j->nobs_before = thin_into(obs, &c->before, TRIAL_CALIBRATE_MAX_HOLD_OBS);
+    if (refresh == 0) choose_shapes(c);
+    for (int s = 0; s < c->nchosen; s++) {
+        /* Each shape's frame among the observations (the shape is modelled at its state). */
+        int have = 0;
+        for (int k = 0; k < j->nobs_before && !have; k++)
+            have = obs[k].dl == c->chosen_obs[s].dl && obs[k].dw == c->chosen_obs[s].dw;
+        if (!have) obs[j->nobs_before++] = c->chosen_obs[s];
+        j->shapes[s] = c->chosen[s];
+    }
+    j->nshapes = c->nchosen;
     j->nobs_shear = 0;
     int below = shear_below(c, limit);
     if (refresh && below > 0) {
@@ -488,6 +587,28 @@ void trial_calibrate_add(trial_calibrate *c, int shear, double dl, double dw, do
     if (!c || c->ended || !isfinite(dl) || !isfinite(dw) || !isfinite(dz) || !isfinite(a)) return;
     if (shear && isfinite(c->t_snap)) return;
     if (obs_push(shear ? &c->shear : &c->before, (rod_fit_obs){dl, dw, dz, a})) c->dropped++;
+}
+
+int trial_calibrate_wants_shape(const trial_calibrate *c)
+{
+    return c && c->def.fit_shape && !c->started && !c->ended && c->nshape_frames < TRIAL_CALIBRATE_MAX_SHAPE_FRAMES;
+}
+
+void trial_calibrate_add_shape(trial_calibrate *c, double dl, double dw, double dz, double a, const double *xz,
+                               int n)
+{
+    if (!trial_calibrate_wants_shape(c) || !xz || n < 2) return;
+    if (c->nshape_frames == c->shape_cap) {
+        int cap = c->shape_cap ? 2 * c->shape_cap : 64;
+        shape_frame *v = realloc(c->shapes, sizeof *v * (size_t)cap);
+        if (!v) return;
+        c->shapes = v;
+        c->shape_cap = cap;
+    }
+    shape_frame *f = &c->shapes[c->nshape_frames];
+    f->o = (rod_fit_obs){dl, dw, dz, a};
+    f->s = (rod_fit_shape){.dl = dl, .dw = dw, .k = TRIAL_CALIBRATE_SHAPE_POINTS};
+    if (rod_shape_resample(xz, n, TRIAL_CALIBRATE_SHAPE_POINTS, f->s.xz) == 0) c->nshape_frames++;
 }
 
 void trial_calibrate_start(trial_calibrate *c, double t)
@@ -578,6 +699,7 @@ void trial_calibrate_free(trial_calibrate *c)
     if (!c->ended) trial_calibrate_end(c, NAN, 1);
     free(c->before.v);
     free(c->shear.v);
+    free(c->shapes);
     free(c);
 }
 
@@ -621,7 +743,8 @@ static void jb_str(jbuf *b, const char *key, const char *v)
 int trial_calibrated_json(const trial_calibrated *r, char *out, size_t out_len)
 {
     jbuf b = {out, out_len, 0, 0};
-    jb(&b, "{\"refresh\":%d,\"frames_before\":%d,\"frames_shear\":%d,", r->refresh, r->nobs_before, r->nobs_shear);
+    jb(&b, "{\"refresh\":%d,\"frames_before\":%d,\"frames_shear\":%d,\"centrelines\":%d,", r->refresh,
+       r->nobs_before, r->nobs_shear, r->nshapes);
     jb_num(&b, "dw_cut", r->dw_cut);
     if (r->refresh > 0) {
         jb_num(&b, "dw_limit", r->dw_limit);

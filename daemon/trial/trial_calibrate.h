@@ -63,12 +63,25 @@
                                               the spread of a hand-made crease's bending length E I1 / k
                                               over 1-20% of l, log-uniform (the family's, calibration.md) */
 
+/* The tracked centreline as the fit's observable (sim.fit_shape; sim/rod_fit.h opts.shapes): the
+ * runner hands in the centreline of each measured compression and hold frame, mapped to the plane
+ * (vis_calib_curve_to_plane, over l, relative to the simulator's left clamp point); the fit takes
+ * TRIAL_CALIBRATE_SHAPES of them, evenly in Delta L over the tracked ones, the last at the hold,
+ * each resampled at TRIAL_CALIBRATE_SHAPE_POINTS points, with noise TRIAL_CALIBRATE_SIGMA_SHAPE
+ * (over l: the tracker's centreline error the family's films measured, docs/calibration.md); each
+ * shape's frame joins the observations. Refreshes keep the same shapes. */
+#define TRIAL_CALIBRATE_SHAPES 4
+#define TRIAL_CALIBRATE_SHAPE_POINTS 24
+#define TRIAL_CALIBRATE_SIGMA_SHAPE 0.0016
+#define TRIAL_CALIBRATE_MAX_SHAPE_FRAMES 2048 /* centrelines kept to choose from (later ones dropped) */
+
 typedef struct trial_calibrated {
     int ok;                 /* 1: fitted and its snap predicted; 0: failed (reason_key, reason) */
     char reason_key[24];    /* failed: one of the names in the header comment */
     char reason[320];       /* failed: the sentence */
     int refresh;            /* 0: the fit from the compression and hold; k: the k-th refresh */
     int nobs_before, nobs_shear; /* observations used (before the shear, of the shear) */
+    int nshapes;            /* centrelines the fit took (sim.fit_shape), 0: none */
     double dw_cut;          /* the largest Delta W among them */
     double dw_limit;        /* a refresh: the shear frames' limit, TRIAL_CALIBRATE_SHEAR_CUT of the
                                snap in limit_of (NaN: no predicted snap known, the whole shear) */
@@ -98,6 +111,7 @@ typedef struct trial_calibrate_def {
     /* The scene's predicted snap Delta W so far (NaN: not known yet), asked on the runner's thread
      * when a refresh starts without a calibrated snap; NULL: never known. */
     double (*scene_snap)(void *user);
+    int fit_shape;          /* 1: the fit takes the centrelines handed in (trial_calibrate_add_shape) */
     int idle;               /* 1: the worker runs in SCHED_IDLE (trial_idle.h): rig mode, where the
                                trial's loop, capture and poller share the cores and must never wait
                                for it; 0 in mock mode, whose virtual clock runs the twin flat out
@@ -119,6 +133,14 @@ void trial_calibrate_free(trial_calibrate *c);
 
 /* A measured frame: shear = 0 for the compression and hold, 1 for the shear. */
 void trial_calibrate_add(trial_calibrate *c, int shear, double dl, double dw, double dz, double a);
+/* 1 while centrelines are wanted (def.fit_shape and the first fit not started yet): the runner
+ * maps a frame's centreline only then. 0 on NULL. */
+int trial_calibrate_wants_shape(const trial_calibrate *c);
+/* The centreline of a measured compression or hold frame (the one just added with the same dl, dw,
+ * dz, a): n points (x, z) over l relative to the simulator's left clamp point (2 n values), kept
+ * resampled; a polyline that cannot be resampled is ignored. */
+void trial_calibrate_add_shape(trial_calibrate *c, double dl, double dw, double dz, double a, const double *xz,
+                               int n);
 /* The hold ended at trial time t: the fit from the compression and hold starts now. */
 void trial_calibrate_start(trial_calibrate *c, double t);
 /* The shear started at trial time t (landings are said before or after it). */
@@ -162,5 +184,9 @@ int trial_calibrate_setup(rod_scene *sc, double fit_hinge, const char *keys, rod
  * NULL): non-zero skips the prediction. */
 void trial_calibrate_compute(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
                              int nobs_shear, const atomic_int *cancel, trial_calibrated *r);
+/* The same with nshapes centrelines (each at one observation's state, TRIAL_CALIBRATE_SIGMA_SHAPE). */
+void trial_calibrate_compute_shapes(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
+                                    int nobs_shear, const rod_fit_shape *shapes, int nshapes,
+                                    const atomic_int *cancel, trial_calibrated *r);
 
 #endif

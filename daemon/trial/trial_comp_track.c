@@ -34,15 +34,29 @@ vis_status trial_comp_track_measure(const vis_track_params *tp, const vis_calib 
                                     double length_m, double dl_target, double dl, const vis_frame *f,
                                     vis_measure *m, vis_error *err)
 {
+    return trial_comp_track_measure_curve(tp, base, side, length_m, dl_target, dl, f, m, NULL, 0, NULL, NULL, err);
+}
+
+vis_status trial_comp_track_measure_curve(const vis_track_params *tp, const vis_calib *base, rig_camera_side side,
+                                          double length_m, double dl_target, double dl, const vis_frame *f,
+                                          vis_measure *m, double *uv, size_t max_uv, size_t *n_uv, vis_calib *cal_out,
+                                          vis_error *err)
+{
     memset(m, 0, sizeof *m);
+    if (n_uv) *n_uv = 0;
     vis_calib cal;
     if (trial_comp_track_calib(base, side, length_m, dl_target, dl, &cal)) {
         m->reason = VIS_REASON_CLAMP_NOT_FOUND;
         return VIS_OK;
     }
+    if (cal_out) *cal_out = cal;
     vis_tracker *t = vis_tracker_create(tp, &cal, err);
     if (!t) return err && err->code ? err->code : VIS_ERR_ARG;
     vis_status vs = vis_tracker_process(t, f, 0.0, m, err);
+    if (vs == VIS_OK && uv && n_uv && m->reason == VIS_REASON_NONE) {
+        size_t n = vis_tracker_curve(t, uv, max_uv);
+        *n_uv = n > max_uv ? max_uv : n;
+    }
     vis_tracker_free(t);
     return vs;
 }

@@ -140,6 +140,8 @@ void trial_runner_free(trial_runner *tr)
 }
 
 /* The loop's working state. */
+#define TRIAL_SHAPE_UV_MAX 512 /* most centreline points taken from the tracker for the fit (sim.fit_shape) */
+
 typedef struct run_ctx {
     trial_runner *tr;
     trial_result *res;
@@ -187,6 +189,10 @@ typedef struct run_ctx {
     double comp_max_s;    /* the longest one */
     long comp_n, comp_measured, comp_over; /* tracked, measured, over plan.comp_track_budget */
     double comp_dl_lo, comp_dl_hi; /* Delta L of the measured ones */
+    /* The last compression frame's centreline (sim.fit_shape), with its moved calibration. */
+    double shape_uv[2 * TRIAL_SHAPE_UV_MAX];
+    size_t shape_n;
+    vis_calib shape_cal;
 } run_ctx;
 
 static int emit_event(run_ctx *c, const char *kind, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
@@ -619,9 +625,12 @@ static int comp_track_frame(run_ctx *c, double dl, vis_measure *m)
     vis_track_params tp = vis_track_params_default();
     tp.length_mm = 1000.0 * l;
     vis_error ve = {0};
-    if (trial_comp_track_measure(&tp, &p->comp_calib, p->calib.camera_side, l,
-                                 rig_calib_dl(&p->calib, l, c->target_compress_mm), dl, tr->frame, m,
-                                 &ve) != VIS_OK) {
+    const int want = trial_calibrate_wants_shape(tr->calib);
+    c->shape_n = 0;
+    if (trial_comp_track_measure_curve(&tp, &p->comp_calib, p->calib.camera_side, l,
+                                       rig_calib_dl(&p->calib, l, c->target_compress_mm), dl, tr->frame, m,
+                                       want ? c->shape_uv : NULL, TRIAL_SHAPE_UV_MAX, &c->shape_n, &c->shape_cal,
+                                       &ve) != VIS_OK) {
         if (!c->comp_track_failed)
             emit_event(c, "warning", "compression frame at Delta L %.4f not tracked: %s (later failures not noted)",
                        dl, ve.message);
@@ -634,6 +643,35 @@ static int comp_track_frame(run_ctx *c, double dl, vis_measure *m)
     c->comp_max_s = fmax(c->comp_max_s, took);
     c->comp_n++;
     return 0;
+}
+
+/* A measured compression or hold frame's centreline to the fit (sim.fit_shape): n points uv of the
+ * tracker with calibration cal, mapped to the plane relative to the simulator's left clamp point
+ * (a back camera's image is mirrored: its right clamp point is the simulator's left, the order
+ * reversed). */
+static void shape_to_fit(run_ctx *c, const vis_calib *cal, const double *uv, size_t n, const trial_sample *smp)
+{
+    trial_runner *tr = c->tr;
+    if (n < 2 || !trial_calibrate_wants_shape(tr->calib)) return;
+    double xz[2 * TRIAL_SHAPE_UV_MAX];
+    int w = vis_frame_width(tr->frame), h = vis_frame_height(tr->frame);
+    double lmm = 1000.0 * tr->plan.scene.length;
+    vis_calib_curve_to_plane(cal, w, h, lmm, uv, (int)n, xz);
+    if (tr->plan.calib.camera_side == RIG_CAMERA_BACK) {
+        double r[2];
+        vis_calib_curve_to_plane(cal, w, h, lmm, cal->clamp_right_px, 1, r);
+        for (size_t i = 0; i < n / 2; i++)
+            for (int k = 0; k < 2; k++) {
+                double t = xz[2 * i + k];
+                xz[2 * i + k] = xz[2 * (n - 1 - i) + k];
+                xz[2 * (n - 1 - i) + k] = t;
+            }
+        for (size_t i = 0; i < n; i++) {
+            xz[2 * i] = r[0] - xz[2 * i];
+            xz[2 * i + 1] -= r[1];
+        }
+    }
+    trial_calibrate_add_shape(tr->calib, smp->dl, smp->dw, smp->dz, smp->a, xz, (int)n);
 }
 
 /* The camera's offset (trial_cam_watch.h): the hold's last frames and the shear's first go to the
@@ -891,6 +929,15 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
             }
             if (c.st >= TRIAL_COMPRESSING && c.st <= TRIAL_SHEARING)
                 trial_calibrate_add(tr->calib, c.st == TRIAL_SHEARING, smp.dl, smp.dw, smp.dz, smp.a);
+            if ((c.st == TRIAL_COMPRESSING || c.st == TRIAL_HOLDING) && trial_calibrate_wants_shape(tr->calib)) {
+                if (comp_frame) {
+                    shape_to_fit(&c, &c.shape_cal, c.shape_uv, c.shape_n, &smp);
+                } else if (p->comp_track_from_dl > 0.0) { /* comp_calib is the tracker's calibration */
+                    size_t n = vis_tracker_curve(tr->tracker, c.shape_uv, TRIAL_SHAPE_UV_MAX);
+                    shape_to_fit(&c, &p->comp_calib, c.shape_uv, n > TRIAL_SHAPE_UV_MAX ? TRIAL_SHAPE_UV_MAX : n,
+                                 &smp);
+                }
+            }
         }
         smp.quality = isfinite(m.quality) ? m.quality : 0.0;
         out->frames++;

@@ -731,6 +731,7 @@ static void session_open_calibrate(trial_session *s, session_parts *p)
     }
     snprintf(d.keys, sizeof d.keys, "%s", s->cfg.sim.fit_keys);
     d.refresh_s = s->cfg.sim.fit_refresh_s;
+    d.fit_shape = s->cfg.sim.fit_shape;
     d.idle = s->cfg.mode == RIG_MODE_RIG;
     d.event = calib_event;
     d.landed = calibrated_landed;

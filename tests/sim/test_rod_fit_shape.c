@@ -186,6 +186,19 @@ static void shapes_determine_the_crease_positions(void **state)
         assert_true(fabs(r1.u[k] - ut[k]) <= 1e-5 * (r1.hi[k] - r1.lo[k]));
     }
     assert_true(r1.rms < 1e-3);
+    /* Started at the optimum (opts.start: the truth, noise-free data) the fit stays there: at most
+     * one step, where from the scene's values it took r1.iterations. */
+    rod_fit_result r2;
+    o.start = ut;
+    st = rod_fit_run(&sc, obs, n, &o, &r2, why, sizeof why);
+    assert_int_equal(st, ROD_OK);
+    printf("  started at the truth: %d iterations (from the scene's values %d), rms_start %.3g (the scene's %.3g)\n",
+           r2.iterations, r1.iterations, r2.rms_start, r1.rms_start);
+    assert_true(r1.iterations > 1);
+    assert_true(r2.iterations <= 1);
+    assert_true(r2.rms_start == r1.rms_start);
+    for (int k = ROD_FIT_ANGLE_LEFT; k <= ROD_FIT_YOUNGS; k++)
+        assert_true(fabs(r2.u[k] - ut[k]) <= 1e-5 * (r2.hi[k] - r2.lo[k]));
 }
 
 static void bad_shapes_are_named(void **state)

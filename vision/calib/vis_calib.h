@@ -44,6 +44,12 @@ vis_status vis_calib_from_camera(vis_calib *c, const vis_camera *cam, const doub
 vis_status vis_calib_check(const vis_calib *c, vis_error *err);
 vis_status vis_calib_save(const vis_calib *c, const char *path, vis_error *err);
 vis_status vis_calib_load(vis_calib *c, const char *path, vis_error *err);
+/* The tracker's centreline (n points uv: (u, v) pixels, as vis_tracker_curve gives them) in the plane
+ * y = 0 at depth 0 (no shear), relative to the calibration's left clamp point, over the strip's
+ * length: xz (2 n values), through the tracker's own view model (calib_plane.cpp), for a frame of
+ * w x h pixels (the principal point's default). */
+void vis_calib_curve_to_plane(const vis_calib *cal, int w, int h, double length_mm, const double *uv, int n,
+                              double *xz);
 
 #ifdef __cplusplus
 }

@@ -475,6 +475,54 @@ static void session_mock_trial(void **state)
     json_decref(t);
 }
 
+/* sim.fit_shape = on: the fit takes the tracked centreline at 4 compression and hold frames (the
+ * last at the hold) besides Delta Z and A, and with it the default set takes both crease positions,
+ * which the centreline determines (the twin's creases sit 2.5% off the scene's); the numbers are
+ * printed (docs/calibration.md "In every trial": the mock trial's calibrated - measured with it on and
+ * off). Without the centrelines the positions are not fitted at all. */
+static void session_mock_trial_shapes(void **state)
+{
+    (void)state;
+    rig_daemon d;
+    const char *on[] = {"sim.fit_shape=on", "sim.fit_refresh_s=0"};
+    open_rig(&d, "shape.db", on, 2);
+    trial_result r;
+    int64_t id = run_trial(&d, &r);
+    rig_daemon_close(&d, "test done");
+    assert_int_equal(r.final, TRIAL_DONE);
+    json_t *t = trial_json("shape.db", id);
+    assert_int_equal(events_with(t, "calibrated prediction fit 0 (compression and hold", NULL, 0), 1);
+    assert_int_equal(events_with(t, "4 centrelines) landed", NULL, 0), 1);
+    json_t *fit = json_object_get(t, "fit");
+    assert_true(json_is_object(fit));
+    char *dump = json_dumps(fit, JSON_COMPACT);
+    printf("fit: %s\n", dump ? dump : "-");
+    free(dump);
+    assert_int_equal(json_integer_value(json_object_get(fit, "centrelines")), 4);
+    json_t *ps = json_object_get(fit, "parameters");
+    assert_int_equal(json_array_size(ps), 4);
+    int positions = 0;
+    for (size_t k = 0; k < json_array_size(ps); k++) {
+        json_t *q = json_array_get(ps, k);
+        const char *key = json_string_value(json_object_get(q, "key"));
+        if (key && strstr(key, "position")) {
+            positions++;
+            assert_true(json_is_true(json_object_get(q, "determined")));
+            assert_true(json_is_number(json_object_get(q, "se")));
+        }
+    }
+    assert_int_equal(positions, 2);
+    double dw = json_number_value(json_object_get(t, "snap_dw_calibrated"));
+    double sd = json_number_value(json_object_get(t, "snap_sd_calibrated"));
+    double pred = json_number_value(json_object_get(t, "snap_dw_predicted"));
+    double meas = json_number_value(json_object_get(t, "snap_dw_measured"));
+    printf("with the centrelines: calibrated %.5f +- %.5f, measured %.5f: calibrated - measured %+.5f (%+.2f%%, %.2f "
+           "sigma); scene's - measured %+.5f\n",
+           dw, sd, meas, dw - meas, 100.0 * (dw - meas) / meas, (dw - meas) / sd, pred - meas);
+    assert_true(isfinite(dw) && sd > 0.0);
+    json_decref(t);
+}
+
 /* An abort as soon as the fit started: the trial ends aborted with the worker joined (the
  * process's thread count back where it was) within the abort cap. */
 static void session_abort_joins(void **state)
@@ -628,6 +676,7 @@ int main(int argc, char **argv)
     if (argc > 1 && !strcmp(argv[1], "session")) {
         const struct CMUnitTest session[] = {
             cmocka_unit_test(session_mock_trial),
+            cmocka_unit_test(session_mock_trial_shapes),
             cmocka_unit_test(session_abort_joins),
         };
         return cmocka_run_group_tests(session, setup, teardown);
