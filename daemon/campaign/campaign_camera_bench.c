@@ -535,6 +535,17 @@ out:
     return rc;
 }
 
+void campaign_camera_per_phi(const campaign_camera_result *r, const double *phi, size_t n, int *used, int *agree)
+{
+    for (size_t j = 0; j < n; j++) used[j] = agree[j] = 0;
+    for (int k = 0; k < r->specimens && k < CAMPAIGN_CAMERA_MAX_SPECIMENS; k++)
+        for (size_t j = 0; j < n; j++)
+            if (fabs(r->sp[k].phi_deg - phi[j]) < 1e-9) {
+                used[j]++;
+                agree[j] += r->sp[k].truth[0] && !strcmp(r->sp[k].regime, r->sp[k].truth);
+            }
+}
+
 int campaign_camera_run(const campaign_camera_opts *o, const campaign_camera_truth *truth, campaign_camera_result *r,
                         void (*progress)(void *u, const char *line), void *u, char *why, size_t why_len)
 {

@@ -101,6 +101,10 @@ typedef struct campaign_camera_result {
     campaign_camera_specimen sp[CAMPAIGN_CAMERA_MAX_SPECIMENS];
 } campaign_camera_result;
 
+/* Per design phi[0..n) of r's specimens: used[j] specimens at phi[j], agree[j] of them whose
+ * measured regime is the twin's own (a specimen without the twin's truth never agrees). */
+void campaign_camera_per_phi(const campaign_camera_result *r, const double *phi, size_t n, int *used, int *agree);
+
 /* One campaign, calibrated or not (o->bench.calibrate), in a new store dir/NAME-cal.db or
  * NAME-uncal.db (an existing one is refused: a campaign starts from nothing). progress (may be
  * NULL) gets one line per step. -1 with why: the rig file (mock mode only), the store, a refused

@@ -31,6 +31,18 @@ static void print_num(const char *key, double v)
     else printf(" %s=-", key);
 }
 
+/* Per phi of the campaign: " PREFIXspecimens_phi=a,b,c PREFIXagree_phi=x/a,y/b,z/c" (the trials
+ * whose measured regime is the twin's own, of the specimens at that phi). */
+static void print_per_phi(const char *p, const campaign_camera_result *c, const double *phi, size_t n)
+{
+    int used[CAMPAIGN_BENCH_MAX_PHI], agree[CAMPAIGN_BENCH_MAX_PHI];
+    campaign_camera_per_phi(c, phi, n, used, agree);
+    printf(" %sspecimens_phi=", p);
+    for (size_t j = 0; j < n; j++) printf("%s%d", j ? "," : "", used[j]);
+    printf(" %sagree_phi=", p);
+    for (size_t j = 0; j < n; j++) printf("%s%d/%d", j ? "," : "", agree[j], used[j]);
+}
+
 int ctl_plan_bench_camera_main(int argc, char **argv)
 {
     campaign_camera_opts o = campaign_camera_opts_default();
@@ -156,6 +168,7 @@ int ctl_plan_bench_camera_main(int argc, char **argv)
         snprintf(k, sizeof k, "%smax_error_dynamic", p);
         print_num(k, c->err_dynamic);
         printf(" %sagree=%d/%d %sclear_agree=%d/%d", p, c->agree, c->specimens, p, c->clear_agree, c->clear);
+        print_per_phi(p, c, o.bench.phi_deg, n);
         if (cal) print_num("offset", c->offset_mean);
         trials += c->specimens;
         trial_s += c->trials_s;

@@ -170,13 +170,42 @@ static void refusals_are_named(void **state)
     test_dir_done(dir, 1, "refusals");
 }
 
+/* The per-phi report: four specimens at 60, 90, 90, 120 (one misread at 90, one without the
+ * twin's truth at 120), one at 75 (not a planned phi): 1/1, 1/2, 0/1. */
+static void per_phi_counts(void **s)
+{
+    (void)s;
+    static campaign_camera_result r;
+    memset(&r, 0, sizeof r);
+    const double at[] = {60, 90, 90, 120, 75};
+    const char *reg[] = {"asymmetric", "symmetric", "asymmetric", "symmetric", "symmetric"};
+    const char *tru[] = {"asymmetric", "symmetric", "symmetric", "", "symmetric"};
+    for (int k = 0; k < 5; k++) {
+        r.sp[k].phi_deg = at[k];
+        snprintf(r.sp[k].regime, sizeof r.sp[k].regime, "%s", reg[k]);
+        snprintf(r.sp[k].truth, sizeof r.sp[k].truth, "%s", tru[k]);
+    }
+    r.specimens = 5;
+    const double phi[] = {60, 90, 120};
+    int used[3] = {-1, -1, -1}, agree[3] = {-1, -1, -1};
+    campaign_camera_per_phi(&r, phi, 3, used, agree);
+    assert_int_equal(used[0], 1), assert_int_equal(agree[0], 1);
+    assert_int_equal(used[1], 2), assert_int_equal(agree[1], 1);
+    assert_int_equal(used[2], 1), assert_int_equal(agree[2], 0);
+    r.specimens = 1; /* only the specimens used count */
+    campaign_camera_per_phi(&r, phi, 3, used, agree);
+    assert_int_equal(used[1], 0), assert_int_equal(used[2], 0);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest quick[] = {
         cmocka_unit_test(refusals_are_named),
+        cmocka_unit_test(per_phi_counts),
     };
     const struct CMUnitTest full[] = {
         cmocka_unit_test(refusals_are_named),
+        cmocka_unit_test(per_phi_counts),
         cmocka_unit_test(three_specimens_through_the_camera),
     };
     if (argc > 1 && !strcmp(argv[1], "full")) return cmocka_run_group_tests(full, NULL, NULL);
