@@ -58,6 +58,10 @@ int ctl_plan_bench_camera_main(int argc, char **argv)
             o.keep_videos = 1;
             continue;
         }
+        if (!strcmp(a, "--strip")) {
+            o.strip = 1;
+            continue;
+        }
         if (!strcmp(a, "--no-dynamic-truth")) {
             dynamic = 0;
             continue;
@@ -170,6 +174,13 @@ int ctl_plan_bench_camera_main(int argc, char **argv)
         printf(" %sagree=%d/%d %sclear_agree=%d/%d", p, c->agree, c->specimens, p, c->clear_agree, c->clear);
         print_per_phi(p, c, o.bench.phi_deg, n);
         if (cal) print_num("offset", c->offset_mean);
+        if (cal && o.strip) {
+            printf(" strip_fits=%d strip_calibrations=%d", c->strip.n_fits, c->strip.n_calibrations);
+            print_num("strip_relax_deg", c->strip.n_relax ? c->strip.relax_deg : NAN);
+            printf(" strip_hinge=%.3g strip_traces=%d strip_failures=%d", c->strip.hinge, c->strip_traces,
+                   c->strip_failures);
+            print_list("lab_model", c->model, n);
+        }
         trials += c->specimens;
         trial_s += c->trials_s;
     }

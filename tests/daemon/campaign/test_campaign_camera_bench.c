@@ -10,7 +10,8 @@
  *     and the twin was the one folded for that specimen (its event names its keys);
  *   - the planner got them: each proposal after the first lies inside the bracket the regimes
  *     measured before it leave (above every asymmetric Gamma, below every symmetric one), so it
- *     read the stored results; the store's phase diagram counts the three trials.
+ *     read the stored results; the store's phase diagram counts the three trials;
+ *   - planned from the lab strip (opts.strip): its records are the specimens' own calibrations.
  * And the named refusals (no trial): a rig file not in mock mode, a store already there; these alone
  * without the argument "full" (milliseconds: the suite and the sanitizer build). */
 #include <math.h>
@@ -58,6 +59,7 @@ static void three_specimens_through_the_camera(void **state)
     char dir[] = "/tmp/ribbon-camcampaign-XXXXXX";
     assert_non_null(mkdtemp(dir));
     campaign_camera_opts o = small_opts(dir);
+    o.strip = 1; /* planned from the lab strip: the specimens' calibrations (sim.fit off: no trial fits) */
     campaign_camera_truth truth;
     char why[1024];
     int rc = campaign_camera_truth_trace(&o, 0, &truth, why, sizeof why);
@@ -78,6 +80,16 @@ static void three_specimens_through_the_camera(void **state)
     assert_int_equal(r->clear_agree, r->clear);
     printf("# model %.5f, twins' static %.5f, located %.5f; %.1f s\n", truth.predicted[0], truth.statik[0],
            r->located[0], r->wall_s);
+    /* the lab strip before the third proposal: with the in-trial fit off, every record pooled is a
+     * specimen's own calibration, refitted after its trial; the model read from it (or the scene's,
+     * said, when its trace failed) */
+    printf("# lab strip: %d records, %d calibrations, relaxed %.3f deg, hinge %.3g; model %.5f; %d traces, %d "
+           "failures %s\n", r->strip.n_fits, r->strip.n_calibrations, r->strip.relax_deg, r->strip.hinge, r->model[0],
+           r->strip_traces, r->strip_failures, r->strip_failure);
+    assert_int_equal(r->strip.n_fits, r->strip.n_calibrations);
+    assert_true(r->strip_traces >= 1);
+    assert_true(isfinite(r->model[0]) && r->model[0] > 0.05 && r->model[0] < 0.3);
+    if (r->strip.n_relax && !r->strip_failures) assert_true(r->model[0] != truth.predicted[0]);
 
     char path[600];
     snprintf(path, sizeof path, "%s/campaign-cal.db", dir);
