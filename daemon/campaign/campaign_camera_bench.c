@@ -446,6 +446,90 @@ static int base_overrides(cam_run *h, char *why, size_t why_len)
     return 0;
 }
 
+/* The lab strip's model for the calibrated campaign (opts.strip): the scene's curve, traced once,
+ * or the strip's (traced again when its hinge or E moved by more than a quarter of their standard
+ * errors), read at phi - relaxation; as campaign_bench.c's lab_model, from the store's records
+ * (campaign_strip_collect: the specimens' calibrations first). */
+typedef struct cam_strip {
+    campaign_predicted scene_curve, strip_curve;
+    int have_scene, have_strip;
+    double traced_hinge, traced_youngs;
+} cam_strip;
+
+static int strip_moved(double traced, double now, double se_rel)
+{
+    if (isnan(traced) != isnan(now)) return 1;
+    if (isnan(now)) return 0;
+    return fabs(log(now / traced)) > fmax(0.25 * se_rel, 1e-3);
+}
+
+/* 0 with model[] the strip's; 1 when it could not be made (model kept, r->strip_failure says
+ * why); -1 with why when the store cannot be read. */
+static int strip_model(const rod_scene *scene, const campaign_bench_opts *b, store *st, cam_strip *ss,
+                       double offset, double *model, campaign_camera_result *r, char *why, size_t why_len)
+{
+    campaign_strip_fit *fits = NULL;
+    size_t nf = 0;
+    int failed = 0;
+    if (campaign_strip_collect(st, &fits, &nf, &failed, why, why_len)) return -1;
+    campaign_strip_pool(fits, nf, &r->strip);
+    free(fits);
+    const campaign_lab_strip *ls = &r->strip;
+    double lo = 180, hi = 0;
+    for (size_t j = 0; j < b->nphi; j++) lo = fmin(lo, b->phi_deg[j]), hi = fmax(hi, b->phi_deg[j]);
+    lo -= 25, hi += 5; /* relaxations up to 25 deg, 5 the other way (campaign_bench.c) */
+    char w[1200];
+    const campaign_predicted *curve;
+    if (!campaign_strip_needs_trace(ls)) {
+        if (!ss->have_scene) {
+            r->strip_traces++;
+            if (campaign_predicted_trace(scene, lo, hi, &ss->scene_curve, w, sizeof w)) {
+                r->strip_failures++;
+                snprintf(r->strip_failure, sizeof r->strip_failure, "the scene's trace: %.560s", w);
+                return 1;
+            }
+            ss->have_scene = 1;
+        }
+        curve = &ss->scene_curve;
+    } else {
+        if (!ss->have_strip || strip_moved(ss->traced_hinge, ls->hinge, ls->hinge_se_rel) ||
+            strip_moved(ss->traced_youngs, ls->youngs, ls->youngs_se_rel)) {
+            rod_scene lab;
+            campaign_strip_apply(scene, ls, &lab);
+            size_t near = 0;
+            double ps = fabs(scene->fold_angle_deg);
+            for (size_t j = 1; j < b->nphi; j++)
+                if (fabs(b->phi_deg[j] - ps) < fabs(b->phi_deg[near] - ps)) near = j;
+            double g0 = model[near] + offset;
+            double starts[] = {g0, g0 + 0.005, g0 - 0.005, g0 + 0.01};
+            campaign_predicted next;
+            r->strip_traces++;
+            int rc = campaign_strip_trace(&lab, ls, b->phi_deg[near] - (ls->n_relax ? ls->relax_deg : 0), starts, 4,
+                                          lo, hi, b->phi_deg, b->nphi, &next, w, sizeof w);
+            ss->traced_hinge = ls->hinge, ss->traced_youngs = ls->youngs; /* not tried again until it moves */
+            if (rc) {
+                r->strip_failures++;
+                snprintf(r->strip_failure, sizeof r->strip_failure, "the strip's trace: %.560s", w);
+                return 1;
+            }
+            if (ss->have_strip) campaign_predicted_free(&ss->strip_curve);
+            ss->strip_curve = next;
+            ss->have_strip = 1;
+        }
+        if (!ss->have_strip) return 1;
+        curve = &ss->strip_curve;
+    }
+    double m[CAMPAIGN_BENCH_MAX_PHI];
+    for (size_t j = 0; j < b->nphi; j++)
+        if (campaign_strip_at(curve, ls, b->phi_deg[j], &m[j], w, sizeof w)) {
+            r->strip_failures++;
+            snprintf(r->strip_failure, sizeof r->strip_failure, "%.590s", w);
+            return 1;
+        }
+    memcpy(model, m, b->nphi * sizeof m[0]);
+    return 0;
+}
+
 static int run_campaign(cam_run *h, const rig_config *cfg, const campaign_camera_truth *truth,
                         campaign_camera_result *r, void (*progress)(void *, const char *), void *u, char *why,
                         size_t why_len)
@@ -483,6 +567,12 @@ static int run_campaign(cam_run *h, const rig_config *cfg, const campaign_camera
     r->asym_threshold = cfg->scene.asym_threshold;
     campaign_phase ph;
     memset(&ph, 0, sizeof ph);
+    cam_strip ss;
+    memset(&ss, 0, sizeof ss);
+    ss.traced_hinge = ss.traced_youngs = NAN;
+    int use_strip = o->strip && b->calibrate;
+    memcpy(r->model, truth->predicted, n * sizeof r->model[0]);
+    res.offset_mean = 0;
     for (;;) {
         campaign_phase_free(&ph);
         if (read_obs(st, &ph, w, sizeof w)) {
@@ -494,7 +584,19 @@ static int run_campaign(cam_run *h, const rig_config *cfg, const campaign_camera
             break;
         }
         if (r->specimens >= b->max_specimens || r->specimens >= CAMPAIGN_CAMERA_MAX_SPECIMENS) break;
-        if (campaign_plan_run(b->phi_deg, truth->predicted, n, ph.obs, ph.n_obs, &po, 1, &res, why, why_len)) goto out;
+        if (use_strip) {
+            int src = strip_model(&cfg->scene, b, st, &ss, res.offset_mean, r->model, r, w, sizeof w);
+            if (src < 0) {
+                snprintf(why, why_len, "the lab strip: %s", w);
+                goto out;
+            }
+            char d[400];
+            campaign_strip_describe(&r->strip, d, sizeof d);
+            say(progress, u, "lab strip: %s (%d specimen calibrations); model %.5f, %.5f, %.5f%s%s", d,
+                r->strip.n_calibrations, r->model[0], n > 1 ? r->model[1] : NAN, n > 2 ? r->model[2] : NAN,
+                src ? "; kept: " : "", src ? r->strip_failure : "");
+        }
+        if (campaign_plan_run(b->phi_deg, r->model, n, ph.obs, ph.n_obs, &po, 1, &res, why, why_len)) goto out;
         campaign_camera_specimen *cs = &r->sp[r->specimens];
         snprintf(cs->name, sizeof cs->name, "C-%d", r->specimens + 1);
         if (one_specimen(h, st, q, &ctx, &prop, &res, &rng, cs, why, why_len)) goto out;
@@ -515,7 +617,7 @@ static int run_campaign(cam_run *h, const rig_config *cfg, const campaign_camera
             cs->truth_dw, cs->truth_peak_a, agrees ? "" : " DIFFERS", res.offset_mean, cs->wall_s);
     }
     /* the located boundary: as plan-bench locates it */
-    if (campaign_plan_run(b->phi_deg, truth->predicted, n, ph.obs, ph.n_obs, &po, 0, &res, why, why_len)) goto out;
+    if (campaign_plan_run(b->phi_deg, r->model, n, ph.obs, ph.n_obs, &po, 0, &res, why, why_len)) goto out;
     r->offset_mean = res.offset_mean;
     r->err_static = 0;
     r->err_dynamic = isfinite(truth->dynamic[0]) ? 0 : NAN;
@@ -529,10 +631,23 @@ static int run_campaign(cam_run *h, const rig_config *cfg, const campaign_camera
     rc = 0;
 out:
     campaign_phase_free(&ph);
+    if (ss.have_scene) campaign_predicted_free(&ss.scene_curve);
+    if (ss.have_strip) campaign_predicted_free(&ss.strip_curve);
     join_session(h, rc ? "the campaign stopped" : NULL);
     campaign_queue_close(q);
     store_close(st);
     return rc;
+}
+
+void campaign_camera_per_phi(const campaign_camera_result *r, const double *phi, size_t n, int *used, int *agree)
+{
+    for (size_t j = 0; j < n; j++) used[j] = agree[j] = 0;
+    for (int k = 0; k < r->specimens && k < CAMPAIGN_CAMERA_MAX_SPECIMENS; k++)
+        for (size_t j = 0; j < n; j++)
+            if (fabs(r->sp[k].phi_deg - phi[j]) < 1e-9) {
+                used[j]++;
+                agree[j] += r->sp[k].truth[0] && !strcmp(r->sp[k].regime, r->sp[k].truth);
+            }
 }
 
 int campaign_camera_run(const campaign_camera_opts *o, const campaign_camera_truth *truth, campaign_camera_result *r,

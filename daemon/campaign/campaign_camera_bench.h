@@ -35,6 +35,7 @@
 #include <stdint.h>
 
 #include "campaign_bench.h"
+#include "campaign_strip.h"
 
 #define CAMPAIGN_CAMERA_MAX_SPECIMENS 32
 #define CAMPAIGN_CAMERA_MAX_SETS 16
@@ -55,6 +56,10 @@ typedef struct campaign_camera_opts {
     double trial_timeout_s;      /* wall s one specimen (its queue items) may take (default 1200) */
     int keep_videos;             /* 0 (default): each trial's video is removed once its result is read
                                     (about 56 MB a trial); the store keeps every sample and event */
+    int strip;                   /* 1: the calibrated campaign plans from the lab strip (campaign_strip.h:
+                                    the specimens' calibrations, else their trials' fits, read from the
+                                    campaign's store before each proposal, as ribbonctl plan does) and
+                                    the offset; 0 (default): from the scene's boundary and the offset */
 } campaign_camera_opts;
 
 campaign_camera_opts campaign_camera_opts_default(void);
@@ -98,8 +103,17 @@ typedef struct campaign_camera_result {
                                     CAMPAIGN_CAMERA_CLEAR of the threshold, and of them those that agree */
     double trials_s;             /* wall s of the specimens' queue items */
     double wall_s;               /* the campaign (the truths not included) */
+    campaign_lab_strip strip;    /* opts.strip: the last lab strip pooled (n_fits 0: none) */
+    double model[CAMPAIGN_BENCH_MAX_PHI]; /* the boundary the last plan was made from */
+    int strip_traces, strip_failures; /* the strip's traces, and the times its model could not be
+                                    made (the one before kept; strip_failure says the last why) */
+    char strip_failure[600];
     campaign_camera_specimen sp[CAMPAIGN_CAMERA_MAX_SPECIMENS];
 } campaign_camera_result;
+
+/* Per design phi[0..n) of r's specimens: used[j] specimens at phi[j], agree[j] of them whose
+ * measured regime is the twin's own (a specimen without the twin's truth never agrees). */
+void campaign_camera_per_phi(const campaign_camera_result *r, const double *phi, size_t n, int *used, int *agree);
 
 /* One campaign, calibrated or not (o->bench.calibrate), in a new store dir/NAME-cal.db or
  * NAME-uncal.db (an existing one is refused: a campaign starts from nothing). progress (may be

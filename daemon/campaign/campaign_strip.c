@@ -60,6 +60,47 @@ static int fill(campaign_strip_fit *f, const par *al, const par *ar, const par *
     return isfinite(f->angle_mean_deg) || isfinite(f->ln_hinge) || isfinite(f->ln_youngs);
 }
 
+/* The parameters array of a record whose entries name their start value scene_key and their
+ * fitted value value_key (a trial's fit: "scene", "fitted"; a specimen's calibration: "start",
+ * "value", either may be null there) into out; what as fit_parse's. */
+static int parse_parameters(const json_t *ps, const char *what, const char *scene_key, int nullable,
+                            const char *value_key, campaign_strip_fit *out, char *why, size_t why_len)
+{
+    if (!json_is_array(ps)) {
+        snprintf(why, why_len, "%s: \"parameters\" is not an array", what);
+        return -1;
+    }
+    par p[ROD_FIT_NKEYS];
+    memset(p, 0, sizeof p);
+    size_t i;
+    json_t *v;
+    json_array_foreach(ps, i, v) {
+        const char *key = json_string_value(json_object_get(v, "key"));
+        if (!key) {
+            snprintf(why, why_len, "%s: parameter %zu has no \"key\"", what, i);
+            return -1;
+        }
+        int k = rod_fit_key_parse(key);
+        if (k < 0) continue; /* a key this build does not know: not pooled */
+        json_t *sc = json_object_get(v, scene_key), *fv = json_object_get(v, value_key), *se = json_object_get(v, "se");
+        json_t *det = json_object_get(v, "determined"), *ab = json_object_get(v, "at_bound");
+        int sc_ok = json_is_number(sc) || (nullable && json_is_null(sc));
+        int fv_ok = json_is_number(fv) || (nullable && json_is_null(fv));
+        if (!sc_ok || !fv_ok) {
+            snprintf(why, why_len, "%s: parameter %s has no numeric \"%s\" and \"%s\"", what, key, scene_key,
+                     value_key);
+            return -1;
+        }
+        p[k].scene = json_is_number(sc) ? json_number_value(sc) : NAN;
+        p[k].fitted = json_is_number(fv) ? json_number_value(fv) : NAN;
+        p[k].se = json_is_number(se) ? json_number_value(se) : INFINITY; /* null: not determined */
+        p[k].usable = json_is_true(det) && (!ab || json_integer_value(ab) == 0) && isfinite(p[k].se) &&
+                      p[k].se > 0 && isfinite(p[k].fitted);
+    }
+    return fill(out, &p[ROD_FIT_ANGLE_LEFT], &p[ROD_FIT_ANGLE_RIGHT], &p[ROD_FIT_HINGE], &p[ROD_FIT_HINGE_LEFT],
+                &p[ROD_FIT_HINGE_RIGHT], &p[ROD_FIT_YOUNGS]);
+}
+
 int campaign_strip_fit_parse(const json_t *fit, double design_phi_deg, campaign_strip_fit *out, char *why,
                              size_t why_len)
 {
@@ -70,37 +111,22 @@ int campaign_strip_fit_parse(const json_t *fit, double design_phi_deg, campaign_
     }
     json_t *ok = json_object_get(fit, "ok");
     if (!json_is_true(ok)) return 0; /* a failed fit stores its reason, no numbers */
-    json_t *ps = json_object_get(fit, "parameters");
-    if (!json_is_array(ps)) {
-        snprintf(why, why_len, "fit: \"parameters\" is not an array");
+    return parse_parameters(json_object_get(fit, "parameters"), "fit", "scene", 0, "fitted", out, why, why_len);
+}
+
+int campaign_strip_calibration_parse(const json_t *cal, double design_phi_deg, campaign_strip_fit *out, char *why,
+                                     size_t why_len)
+{
+    fit_clear(out, design_phi_deg);
+    out->from_calibration = 1;
+    if (!json_is_object(cal)) {
+        snprintf(why, why_len, "calibration: not a JSON object");
         return -1;
     }
-    par p[ROD_FIT_NKEYS];
-    memset(p, 0, sizeof p);
-    size_t i;
-    json_t *v;
-    json_array_foreach(ps, i, v) {
-        const char *key = json_string_value(json_object_get(v, "key"));
-        if (!key) {
-            snprintf(why, why_len, "fit: parameter %zu has no \"key\"", i);
-            return -1;
-        }
-        int k = rod_fit_key_parse(key);
-        if (k < 0) continue; /* a key this build does not know: not pooled */
-        json_t *sc = json_object_get(v, "scene"), *fv = json_object_get(v, "fitted"), *se = json_object_get(v, "se");
-        json_t *det = json_object_get(v, "determined"), *ab = json_object_get(v, "at_bound");
-        if (!json_is_number(sc) || !json_is_number(fv)) {
-            snprintf(why, why_len, "fit: parameter %s has no numeric \"scene\" and \"fitted\"", key);
-            return -1;
-        }
-        p[k].scene = json_number_value(sc);
-        p[k].fitted = json_number_value(fv);
-        p[k].se = json_is_number(se) ? json_number_value(se) : INFINITY; /* null: not determined */
-        p[k].usable = json_is_true(det) && (!ab || json_integer_value(ab) == 0) && isfinite(p[k].se) &&
-                      p[k].se > 0 && isfinite(p[k].fitted);
-    }
-    return fill(out, &p[ROD_FIT_ANGLE_LEFT], &p[ROD_FIT_ANGLE_RIGHT], &p[ROD_FIT_HINGE], &p[ROD_FIT_HINGE_LEFT],
-                &p[ROD_FIT_HINGE_RIGHT], &p[ROD_FIT_YOUNGS]);
+    json_t *after = json_object_get(cal, "after_trial");
+    if (json_is_integer(after)) out->trial_id = json_integer_value(after);
+    return parse_parameters(json_object_get(cal, "parameters"), "calibration", "start", 1, "value", out, why,
+                            why_len);
 }
 
 int campaign_strip_fit_from_result(const rod_fit_result *r, double design_phi_deg, campaign_strip_fit *out)
@@ -193,8 +219,10 @@ void campaign_strip_pool(const campaign_strip_fit *fits, size_t n, campaign_lab_
         x[n + i] = f->ln_hinge, s[n + i] = f->ln_hinge_se;
         x[2 * n + i] = f->ln_youngs, s[2 * n + i] = f->ln_youngs_se;
         if ((isfinite(x[i]) && isfinite(s[i])) || (isfinite(x[n + i]) && isfinite(s[n + i])) ||
-            (isfinite(x[2 * n + i]) && isfinite(s[2 * n + i])))
+            (isfinite(x[2 * n + i]) && isfinite(s[2 * n + i]))) {
             out->n_fits++;
+            out->n_calibrations += f->from_calibration != 0;
+        }
     }
     double m, se;
     pool(x, s, n, &m, &se, &out->n_relax);
@@ -292,6 +320,14 @@ int campaign_strip_trace(const rod_scene *lab, const campaign_lab_strip *ls, dou
     return -1;
 }
 
+/* The specimen's design angle by name (NaN: none, or no such specimen). */
+static double design_of(const store_specimen *sp, size_t nsp, const char *name)
+{
+    for (size_t s = 0; name && s < nsp; s++)
+        if (!strcmp(sp[s].name, name)) return sp[s].phi_deg;
+    return NAN;
+}
+
 int campaign_strip_collect(store *st, campaign_strip_fit **out, size_t *n, int *n_failed, char *why, size_t why_len)
 {
     *out = NULL;
@@ -305,30 +341,51 @@ int campaign_strip_collect(store *st, campaign_strip_fit **out, size_t *n, int *
         json_decref(trials);
         return -1;
     }
-    size_t cap = json_array_size(trials);
+    size_t cap = json_array_size(trials) + nsp;
     campaign_strip_fit *f = calloc(cap ? cap : 1, sizeof *f);
-    if (!f) {
-        json_decref(trials), free(sp);
+    char *calibrated = calloc(nsp ? nsp : 1, 1); /* 1: the specimen's calibration stands for its trials */
+    if (!f || !calibrated) {
+        json_decref(trials), free(sp), free(f), free(calibrated);
         snprintf(why, why_len, "lab strip: out of memory");
         return -1;
     }
+    char w[300];
+    /* One record per specimen: its calibration (the newest: a refit replaces it, a failed refit
+     * keeps the one before), when it determined some parameter. */
+    for (size_t s = 0; s < nsp; s++) {
+        if (!sp[s].calibration_json[0]) continue;
+        json_t *cal = json_loads(sp[s].calibration_json, 0, NULL);
+        int rc = cal ? campaign_strip_calibration_parse(cal, sp[s].phi_deg, &f[*n], w, sizeof w) : -1;
+        if (!cal) snprintf(w, sizeof w, "not JSON");
+        json_decref(cal);
+        if (rc < 0) {
+            snprintf(why, why_len, "specimen %s's stored calibration: %s", sp[s].name, w);
+            json_decref(trials), free(sp), free(f), free(calibrated);
+            *n = 0;
+            return -1;
+        }
+        if (rc == 1) {
+            calibrated[s] = 1;
+            (*n)++;
+        }
+    }
+    /* The trials of specimens without one (and without a specimen), each by its own fit. */
     size_t i;
     json_t *t;
     json_array_foreach(trials, i, t) {
+        const char *name = json_string_value(json_object_get(t, "specimen"));
+        size_t s = 0;
+        while (name && s < nsp && strcmp(sp[s].name, name)) s++;
+        if (name && s < nsp && calibrated[s]) continue;
         json_t *fit = json_object_get(t, "fit");
         if (!json_is_object(fit)) {
             if (json_is_string(json_object_get(t, "fit_failure"))) (*n_failed)++;
             continue;
         }
-        const char *name = json_string_value(json_object_get(t, "specimen"));
-        double design = NAN;
-        for (size_t s = 0; name && s < nsp; s++)
-            if (!strcmp(sp[s].name, name)) design = sp[s].phi_deg;
-        char w[300];
-        int rc = campaign_strip_fit_parse(fit, design, &f[*n], w, sizeof w);
+        int rc = campaign_strip_fit_parse(fit, design_of(sp, nsp, name), &f[*n], w, sizeof w);
         if (rc < 0) {
             snprintf(why, why_len, "trial %lld's stored fit: %s", (long long)json_integer_value(json_object_get(t, "id")), w);
-            json_decref(trials), free(sp), free(f);
+            json_decref(trials), free(sp), free(f), free(calibrated);
             *n = 0;
             return -1;
         }
@@ -340,7 +397,7 @@ int campaign_strip_collect(store *st, campaign_strip_fit **out, size_t *n, int *
         (*n)++;
     }
     json_decref(trials);
-    free(sp);
+    free(sp), free(calibrated);
     *out = f;
     return 0;
 }

@@ -4,8 +4,10 @@
  * Why. The planner's model of the true boundary used to be the scene's Gamma*(phi) plus one offset
  * shared by every phi; a compliant hinge shifts the boundary by +0.019, +0.008, +0.004 at phi 60,
  * 90, 120 (docs/campaign.md): not one offset. Every trial fits its own strip (trials.fit_json:
- * each parameter's scene value, fitted value and standard error, or "not determined"). What the
- * specimens share is pooled here; what differs from specimen to specimen (one crease against the
+ * each parameter's scene value, fitted value and standard error, or "not determined"), and each
+ * specimen's strip is refitted from all its trials (specimens.calibration_json): one record per
+ * specimen, its calibration when it has one (campaign_strip_collect). What the specimens share is
+ * pooled here; what differs from specimen to specimen (one crease against the
  * other, the positions) is not systematic and is left to the planner's noise and offset.
  *
  * Pooled, each by its inverse-variance weighted mean over the fits that determined it (fitted,
@@ -46,7 +48,8 @@
 
 /* One fit's values of the pooled parameters (NaN: not fitted or not determined). */
 typedef struct campaign_strip_fit {
-    int64_t trial_id;          /* 0: not from a trial (the bench) */
+    int64_t trial_id;          /* 0: not from a trial (the bench); a calibration's: its after_trial */
+    int from_calibration;      /* 1: a specimen's calibration (specimens.calibration_json), 0: a trial's fit */
     double design_phi_deg;     /* the specimen's design angle (magnitude); NaN: the fit's scene value */
     double angle_mean_deg;     /* fitted mean crease magnitude (|left| + |right|) / 2 */
     double angle_se_deg;
@@ -62,12 +65,18 @@ typedef struct campaign_strip_fit {
  * every parameter undetermined or at a bound), -1 with why on a malformed record. */
 int campaign_strip_fit_parse(const json_t *fit, double design_phi_deg, campaign_strip_fit *out, char *why,
                              size_t why_len);
+/* A specimen's calibration record (trial_specimen_calib.h's: {"after_trial", "parameters": [{"key",
+ * "start", "value", "se", "se_kind", "determined", "at_bound"}, ...], ...}; start and value may be
+ * null) into out, from_calibration 1 and trial_id its after_trial. Returns as fit_parse. */
+int campaign_strip_calibration_parse(const json_t *cal, double design_phi_deg, campaign_strip_fit *out, char *why,
+                                     size_t why_len);
 /* The same from a fit's result in memory (the bench). Returns 1 or 0 as above. */
 int campaign_strip_fit_from_result(const rod_fit_result *r, double design_phi_deg, campaign_strip_fit *out);
 
 /* The pooled strip. */
 typedef struct campaign_lab_strip {
     int n_fits;                    /* fits with at least one usable parameter */
+    int n_calibrations;            /* of them, specimens' calibrations (the rest trials' fits) */
     int n_relax, n_hinge, n_youngs; /* fits that determined each */
     double relax_deg, relax_se;    /* 0 and NaN when none */
     double hinge, hinge_se_rel;    /* N m/rad (rounded, campaign_strip_key); NaN: the scene's creases */
@@ -101,11 +110,16 @@ int campaign_strip_trace(const rod_scene *lab, const campaign_lab_strip *ls, dou
                          double phi_lo, double phi_hi, const double *need, size_t nneed, campaign_predicted *out,
                          char *why, size_t why_len);
 
-/* Every usable fit in the store: the trials' fit_json (issue 32 B), each with its specimen's
- * design angle. *out malloc'ed (free()), *n of them; *n_failed counts trials whose stored fit
- * failed or determined nothing. The hook for a specimen-level calibration (specimens.
- * calibration_json, when the store has it): take one record per specimen from there instead of
- * its trials', here, and nothing else changes. 0, or -1 with why. */
+/* Every usable fit in the store, each with its specimen's design angle: one per specimen from its
+ * calibration (specimens.calibration_json, refitted from all its finished trials after each one,
+ * trial_specimen_calib.h: the newest; a failed refit keeps the one before) when that determined
+ * some parameter, in place of its trials' fits; the trials' fit_json (issue 32 B) of specimens
+ * without a usable calibration, and of trials without a specimen. Why: a specimen's trials are one
+ * strip, and its calibration pools their frames in one fit; counting each trial's own fit beside
+ * it would weigh a specimen by how often it was trialled, and a single trial's fit sees fewer
+ * frames. *out malloc'ed (free()), *n of them; *n_failed counts trials (of specimens without a
+ * calibration) whose stored fit failed or determined nothing. 0, or -1 with why (a malformed
+ * record, named). */
 int campaign_strip_collect(store *st, campaign_strip_fit **out, size_t *n, int *n_failed, char *why, size_t why_len);
 
 #endif

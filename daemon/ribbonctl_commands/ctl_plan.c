@@ -205,8 +205,8 @@ static json_t *strip_json(const campaign_lab_strip *ls, const char *note)
 {
     char d[400];
     campaign_strip_describe(ls, d, sizeof d);
-    return json_pack("{s:s,s:s,s:i,s:i,s:o,s:o,s:i,s:o,s:o,s:i,s:o,s:o}", "description", d, "note", note, "fits",
-                     ls->n_fits, "relax_fits", ls->n_relax, "relax_deg", num_or_null(ls->n_relax ? ls->relax_deg : NAN),
+    return json_pack("{s:s,s:s,s:i,s:i,s:i,s:o,s:o,s:i,s:o,s:o,s:i,s:o,s:o}", "description", d, "note", note, "fits",
+                     ls->n_fits, "calibrations", ls->n_calibrations, "relax_fits", ls->n_relax, "relax_deg", num_or_null(ls->n_relax ? ls->relax_deg : NAN),
                      "relax_se", num_or_null(ls->relax_se), "hinge_fits", ls->n_hinge, "hinge", num_or_null(ls->hinge),
                      "hinge_se_rel", num_or_null(ls->hinge_se_rel), "youngs_fits", ls->n_youngs, "youngs",
                      num_or_null(ls->youngs), "youngs_se_rel", num_or_null(ls->youngs_se_rel));
@@ -237,11 +237,22 @@ static int lab_strip(const plan_opts *o, const rig_config *cfg, const char *db, 
         return -1;
     }
     campaign_strip_pool(fits, n, ls);
+    size_t ncal = 0;
+    for (size_t k = 0; k < n; k++) ncal += fits[k].from_calibration != 0;
     free(fits);
-    snprintf(note, note_len, "from %zu calibrated trials", n);
+    /* Which records: the specimens' calibrations first, their trials' own fits only for
+     * specimens without one (campaign_strip_collect). */
+    if (ncal && ncal < n)
+        snprintf(note, note_len, "from %zu specimen calibration%s and %zu trial fit%s (of specimens without one)",
+                 ncal, ncal == 1 ? "" : "s", n - ncal, n - ncal == 1 ? "" : "s");
+    else if (ncal)
+        snprintf(note, note_len, "from %zu specimen calibration%s", ncal, ncal == 1 ? "" : "s");
+    else
+        snprintf(note, note_len, "from %zu trial fit%s (no specimen calibration)", n, n == 1 ? "" : "s");
     if (failed) {
         size_t len = strlen(note);
-        snprintf(note + len, note_len - len, " (%d more whose fit failed or determined nothing)", failed);
+        snprintf(note + len, note_len - len, " (%d more trial%s whose fit failed or determined nothing)", failed,
+                 failed == 1 ? "" : "s");
     }
     if (!campaign_strip_needs_trace(ls)) return 0;
     char key[96];

@@ -31,6 +31,18 @@ static void print_num(const char *key, double v)
     else printf(" %s=-", key);
 }
 
+/* Per phi of the campaign: " PREFIXspecimens_phi=a,b,c PREFIXagree_phi=x/a,y/b,z/c" (the trials
+ * whose measured regime is the twin's own, of the specimens at that phi). */
+static void print_per_phi(const char *p, const campaign_camera_result *c, const double *phi, size_t n)
+{
+    int used[CAMPAIGN_BENCH_MAX_PHI], agree[CAMPAIGN_BENCH_MAX_PHI];
+    campaign_camera_per_phi(c, phi, n, used, agree);
+    printf(" %sspecimens_phi=", p);
+    for (size_t j = 0; j < n; j++) printf("%s%d", j ? "," : "", used[j]);
+    printf(" %sagree_phi=", p);
+    for (size_t j = 0; j < n; j++) printf("%s%d/%d", j ? "," : "", agree[j], used[j]);
+}
+
 int ctl_plan_bench_camera_main(int argc, char **argv)
 {
     campaign_camera_opts o = campaign_camera_opts_default();
@@ -44,6 +56,10 @@ int ctl_plan_bench_camera_main(int argc, char **argv)
         }
         if (!strcmp(a, "--keep-videos")) {
             o.keep_videos = 1;
+            continue;
+        }
+        if (!strcmp(a, "--strip")) {
+            o.strip = 1;
             continue;
         }
         if (!strcmp(a, "--no-dynamic-truth")) {
@@ -156,7 +172,15 @@ int ctl_plan_bench_camera_main(int argc, char **argv)
         snprintf(k, sizeof k, "%smax_error_dynamic", p);
         print_num(k, c->err_dynamic);
         printf(" %sagree=%d/%d %sclear_agree=%d/%d", p, c->agree, c->specimens, p, c->clear_agree, c->clear);
+        print_per_phi(p, c, o.bench.phi_deg, n);
         if (cal) print_num("offset", c->offset_mean);
+        if (cal && o.strip) {
+            printf(" strip_fits=%d strip_calibrations=%d", c->strip.n_fits, c->strip.n_calibrations);
+            print_num("strip_relax_deg", c->strip.n_relax ? c->strip.relax_deg : NAN);
+            printf(" strip_hinge=%.3g strip_traces=%d strip_failures=%d", c->strip.hinge, c->strip_traces,
+                   c->strip_failures);
+            print_list("lab_model", c->model, n);
+        }
         trials += c->specimens;
         trial_s += c->trials_s;
     }

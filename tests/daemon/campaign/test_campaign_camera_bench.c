@@ -10,7 +10,8 @@
  *     and the twin was the one folded for that specimen (its event names its keys);
  *   - the planner got them: each proposal after the first lies inside the bracket the regimes
  *     measured before it leave (above every asymmetric Gamma, below every symmetric one), so it
- *     read the stored results; the store's phase diagram counts the three trials.
+ *     read the stored results; the store's phase diagram counts the three trials;
+ *   - planned from the lab strip (opts.strip): its records are the specimens' own calibrations.
  * And the named refusals (no trial): a rig file not in mock mode, a store already there; these alone
  * without the argument "full" (milliseconds: the suite and the sanitizer build). */
 #include <math.h>
@@ -58,6 +59,7 @@ static void three_specimens_through_the_camera(void **state)
     char dir[] = "/tmp/ribbon-camcampaign-XXXXXX";
     assert_non_null(mkdtemp(dir));
     campaign_camera_opts o = small_opts(dir);
+    o.strip = 1; /* planned from the lab strip: the specimens' calibrations (sim.fit off: no trial fits) */
     campaign_camera_truth truth;
     char why[1024];
     int rc = campaign_camera_truth_trace(&o, 0, &truth, why, sizeof why);
@@ -78,6 +80,16 @@ static void three_specimens_through_the_camera(void **state)
     assert_int_equal(r->clear_agree, r->clear);
     printf("# model %.5f, twins' static %.5f, located %.5f; %.1f s\n", truth.predicted[0], truth.statik[0],
            r->located[0], r->wall_s);
+    /* the lab strip before the third proposal: with the in-trial fit off, every record pooled is a
+     * specimen's own calibration, refitted after its trial; the model read from it (or the scene's,
+     * said, when its trace failed) */
+    printf("# lab strip: %d records, %d calibrations, relaxed %.3f deg, hinge %.3g; model %.5f; %d traces, %d "
+           "failures %s\n", r->strip.n_fits, r->strip.n_calibrations, r->strip.relax_deg, r->strip.hinge, r->model[0],
+           r->strip_traces, r->strip_failures, r->strip_failure);
+    assert_int_equal(r->strip.n_fits, r->strip.n_calibrations);
+    assert_true(r->strip_traces >= 1);
+    assert_true(isfinite(r->model[0]) && r->model[0] > 0.05 && r->model[0] < 0.3);
+    if (r->strip.n_relax && !r->strip_failures) assert_true(r->model[0] != truth.predicted[0]);
 
     char path[600];
     snprintf(path, sizeof path, "%s/campaign-cal.db", dir);
@@ -170,13 +182,42 @@ static void refusals_are_named(void **state)
     test_dir_done(dir, 1, "refusals");
 }
 
+/* The per-phi report: four specimens at 60, 90, 90, 120 (one misread at 90, one without the
+ * twin's truth at 120), one at 75 (not a planned phi): 1/1, 1/2, 0/1. */
+static void per_phi_counts(void **s)
+{
+    (void)s;
+    static campaign_camera_result r;
+    memset(&r, 0, sizeof r);
+    const double at[] = {60, 90, 90, 120, 75};
+    const char *reg[] = {"asymmetric", "symmetric", "asymmetric", "symmetric", "symmetric"};
+    const char *tru[] = {"asymmetric", "symmetric", "symmetric", "", "symmetric"};
+    for (int k = 0; k < 5; k++) {
+        r.sp[k].phi_deg = at[k];
+        snprintf(r.sp[k].regime, sizeof r.sp[k].regime, "%s", reg[k]);
+        snprintf(r.sp[k].truth, sizeof r.sp[k].truth, "%s", tru[k]);
+    }
+    r.specimens = 5;
+    const double phi[] = {60, 90, 120};
+    int used[3] = {-1, -1, -1}, agree[3] = {-1, -1, -1};
+    campaign_camera_per_phi(&r, phi, 3, used, agree);
+    assert_int_equal(used[0], 1), assert_int_equal(agree[0], 1);
+    assert_int_equal(used[1], 2), assert_int_equal(agree[1], 1);
+    assert_int_equal(used[2], 1), assert_int_equal(agree[2], 0);
+    r.specimens = 1; /* only the specimens used count */
+    campaign_camera_per_phi(&r, phi, 3, used, agree);
+    assert_int_equal(used[1], 0), assert_int_equal(used[2], 0);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest quick[] = {
         cmocka_unit_test(refusals_are_named),
+        cmocka_unit_test(per_phi_counts),
     };
     const struct CMUnitTest full[] = {
         cmocka_unit_test(refusals_are_named),
+        cmocka_unit_test(per_phi_counts),
         cmocka_unit_test(three_specimens_through_the_camera),
     };
     if (argc > 1 && !strcmp(argv[1], "full")) return cmocka_run_group_tests(full, NULL, NULL);

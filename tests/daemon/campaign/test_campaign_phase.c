@@ -346,7 +346,7 @@ static void ribbonctl_plan_uses_the_lab_strip(void **state)
     assert_true(fabs(json_real_value(json_object_get(strip, "relax_se")) - 1 / sqrt(1.25)) < 1e-9);
     assert_true(json_is_null(json_object_get(strip, "hinge")));
     const char *note = json_string_value(json_object_get(strip, "note"));
-    assert_non_null(strstr(note, "from 2 calibrated trials (1 more whose fit failed"));
+    assert_non_null(strstr(note, "from 2 trial fits (no specimen calibration) (1 more trial whose fit failed"));
     assert_non_null(strstr(note, "hinge=4.00e-03 youngs=scene not used: no scene to trace it from"));
     json_t *b90 = json_array_get(json_object_get(j, "beliefs"), 1);
     assert_true(fabs(json_real_value(json_object_get(b90, "predicted_gamma")) - 0.165) < 1e-9);
@@ -366,6 +366,34 @@ static void ribbonctl_plan_uses_the_lab_strip(void **state)
     assert_int_equal(run(cmd, out, sizeof out), 0);
     assert_non_null(strstr(out, "strip: creases relaxed 10.00 +- 0.89 deg (2 fits), hinge the scene's"));
     assert_non_null(strstr(out, "90       0.1700     0.1650"));
+
+    /* Specimen A (trial 1) calibrated: its calibration (relaxed 6, se 1) stands for trial
+     * 1's fit; E's trial 8 still counts by its own (relaxed 10, se 2). Pooled: (6 + 10 / 4) / 1.25
+     * = 6.8, chi2 0.8^2 + 3.2^2 / 4 = 3.2 over 1, se sqrt(3.2) / sqrt(1.25) = 1.6; the boundary
+     * at phi 90 read at 83.2: 0.1666. */
+    store_specimen a;
+    OK(store_specimen_get_by_name(f->st, "A", &a, why, sizeof why));
+    OK(store_specimen_set_calibration(
+        f->st, a.id,
+        "{\"after_trial\":1,\"trials\":[1],\"parameters\":["
+        "{\"key\":\"folds.angle_left_deg\",\"start\":-90,\"value\":-84,\"se\":1,\"se_kind\":\"absolute\",\"determined\":true,\"at_bound\":0},"
+        "{\"key\":\"folds.angle_right_deg\",\"start\":-90,\"value\":-84,\"se\":1,\"se_kind\":\"absolute\",\"determined\":true,\"at_bound\":0}]}",
+        NULL, why, sizeof why));
+    snprintf(cmd, sizeof cmd, "%s/ribbonctl plan --db %s --boundary-csv %s --phi 60,90,120 --count 1 --json",
+             RIBBON_BIN_DIR, f->db, f->bcsv);
+    assert_int_equal(run(cmd, out, sizeof out), 0);
+    j = json_loads(out, 0, NULL);
+    assert_non_null(j);
+    strip = json_object_get(j, "strip");
+    assert_int_equal(json_integer_value(json_object_get(strip, "fits")), 2);
+    assert_int_equal(json_integer_value(json_object_get(strip, "calibrations")), 1);
+    assert_true(fabs(json_real_value(json_object_get(strip, "relax_deg")) - 6.8) < 1e-9);
+    assert_true(fabs(json_real_value(json_object_get(strip, "relax_se")) - 1.6) < 1e-9);
+    note = json_string_value(json_object_get(strip, "note"));
+    assert_non_null(strstr(note, "from 1 specimen calibration and 1 trial fit (of specimens without one)"));
+    b90 = json_array_get(json_object_get(j, "beliefs"), 1);
+    assert_true(fabs(json_real_value(json_object_get(b90, "predicted_gamma")) - (0.165 + 0.005 * 0.32)) < 1e-9);
+    json_decref(j);
 }
 
 static int no_trial(void *user, const store_specimen *sp, const char *const *set, int n_set, const char *note,
