@@ -392,8 +392,10 @@ static int one_specimen(cam_run *h, store *st, campaign_queue *q, const campaign
         return -1;
     }
     if (!o->keep_videos && tr.video_path[0]) unlink(tr.video_path);
+    /* a snap whose passage the camera could not decide is stored without a regime (trials.md): the
+       planner skips it (it counts asymmetric and symmetric only), the bench says "undecided" */
     const char *rn = tr.snapped == 1 ? store_regime_name(tr.regime_measured) : tr.snapped == 0 ? "no snap" : NULL;
-    snprintf(cs->regime, sizeof cs->regime, "%s", rn ? rn : "unknown");
+    snprintf(cs->regime, sizeof cs->regime, "%s", rn ? rn : tr.snapped == 1 ? "undecided" : "unknown");
     cs->snap_dw = tr.snapped == 1 ? tr.snap_dw_measured : NAN;
     cs->truth[0] = '\0';
     cs->truth_dw = NAN;
@@ -602,12 +604,14 @@ static int run_campaign(cam_run *h, const rig_config *cfg, const campaign_camera
         if (one_specimen(h, st, q, &ctx, &prop, &res, &rng, cs, why, why_len)) goto out;
         r->specimens++;
         r->trials_s += cs->wall_s;
-        int agrees = !strcmp(cs->regime, cs->truth);
+        int agrees = !strcmp(cs->regime, cs->truth), undecided = !strcmp(cs->regime, "undecided");
         r->agree += agrees;
+        r->undecided += undecided;
         if (isfinite(cs->truth_peak_a) && (cs->truth_peak_a < r->asym_threshold / CAMPAIGN_CAMERA_CLEAR ||
                                            cs->truth_peak_a > r->asym_threshold * CAMPAIGN_CAMERA_CLEAR)) {
             r->clear++;
             r->clear_agree += agrees;
+            r->clear_undecided += undecided;
         }
         say(progress, u,
             "%s: phi %g Gamma %.5f (twin's creases %.3f, %.3f deg; measured %.3f, %.3f) -> trial %lld %s "

@@ -99,8 +99,11 @@ typedef struct campaign_camera_result {
     double offset_mean;          /* the planner's final fitted offset */
     int agree;                   /* trials whose measured regime is the twin's own */
     double asym_threshold;       /* rad, the regime rule's (the scene's snap.asym_threshold) */
-    int clear, clear_agree;      /* trials whose twin's peak |A| is not within a factor
-                                    CAMPAIGN_CAMERA_CLEAR of the threshold, and of them those that agree */
+    int undecided;               /* trials whose snap the camera could not read either way (stored
+                                    without a measured regime; the planner skips them) */
+    int clear, clear_agree, clear_undecided; /* trials whose twin's peak |A| is not within a factor
+                                    CAMPAIGN_CAMERA_CLEAR of the threshold, and of them those that agree
+                                    and those undecided */
     double trials_s;             /* wall s of the specimens' queue items */
     double wall_s;               /* the campaign (the truths not included) */
     campaign_lab_strip strip;    /* opts.strip: the last lab strip pooled (n_fits 0: none) */

@@ -171,7 +171,8 @@ int ctl_plan_bench_camera_main(int argc, char **argv)
         print_num(k, c->err_static);
         snprintf(k, sizeof k, "%smax_error_dynamic", p);
         print_num(k, c->err_dynamic);
-        printf(" %sagree=%d/%d %sclear_agree=%d/%d", p, c->agree, c->specimens, p, c->clear_agree, c->clear);
+        printf(" %sagree=%d/%d %sclear_agree=%d/%d %sundecided=%d", p, c->agree, c->specimens, p, c->clear_agree, c->clear,
+               p, c->undecided);
         print_per_phi(p, c, o.bench.phi_deg, n);
         if (cal) print_num("offset", c->offset_mean);
         if (cal && o.strip) {

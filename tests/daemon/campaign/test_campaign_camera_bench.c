@@ -5,7 +5,7 @@
  *     the queue), its operator step confirmed with the angles measured at folding (stored on the
  *     item and in the specimen's record), its trial run by the queue as a mock trial and done;
  *   - each trial's measured regime (from the video, read from the stored trial) is its twin's own
- *     logged truth where that is clear (the twin's peak |A| not within a factor 2 of the 0.5 rad
+ *     logged truth, or undecided (stored without a regime, outside the bracket), where that is clear (the twin's peak |A| not within a factor 2 of the 0.5 rad
  *     threshold; near it the camera's projection and frame rate may read either way, reported),
  *     and the twin was the one folded for that specimen (its event names its keys);
  *   - the planner got them: each proposal after the first lies inside the bracket the regimes
@@ -74,10 +74,13 @@ static void three_specimens_through_the_camera(void **state)
     assert_int_equal(r->specimens, 3);
     /* the camera reads every clear regime as the twin made it, and this seed has one (C-2, symmetric,
      * peak |A| far below the threshold); near the threshold it may not (C-3: the twin's 3D peak |A|
-     * 0.40 rad, symmetric, its projection 1.05 rad: the camera read asymmetric) */
+     * 0.40 rad, symmetric, its projection 1.05 rad: the 0.5 rad rule on the camera's A read asymmetric;
+     * the reading from the passage's start (trials.md) says undecided, 3D peak 0.252 since the
+     * in-trial fit's calibrations plan it) */
     assert_true(fabs(r->asym_threshold - 0.5) < 1e-12);
     assert_true(r->clear >= 1);
-    assert_int_equal(r->clear_agree, r->clear);
+    assert_int_equal(r->clear_agree + r->clear_undecided, r->clear); /* never wrong; undecided said */
+    printf("# %d of %d read undecided (%d of the %d clear)\n", r->undecided, r->specimens, r->clear_undecided, r->clear);
     printf("# model %.5f, twins' static %.5f, located %.5f; %.1f s\n", truth.predicted[0], truth.statik[0],
            r->located[0], r->wall_s);
     /* the lab strip before the third proposal: with the in-trial fit off, every record pooled is a
@@ -99,18 +102,20 @@ static void three_specimens_through_the_camera(void **state)
     for (int k = 0; k < 3; k++) {
         const campaign_camera_specimen *c = &r->sp[k];
         /* the measured regime, from the stored trial, is the twin's own */
-        assert_true(!strcmp(c->regime, "asymmetric") || !strcmp(c->regime, "symmetric"));
+        int decided = !strcmp(c->regime, "asymmetric") || !strcmp(c->regime, "symmetric");
+        assert_true(decided || !strcmp(c->regime, "undecided"));
         assert_true(!strcmp(c->truth, "asymmetric") || !strcmp(c->truth, "symmetric"));
         assert_true(isfinite(c->truth_peak_a));
         int clear = c->truth_peak_a < 0.5 / CAMPAIGN_CAMERA_CLEAR || c->truth_peak_a > 0.5 * CAMPAIGN_CAMERA_CLEAR;
         printf("# %s: measured %s, twin %s (peak |A| %.3f rad, %s)\n", c->name, c->regime, c->truth, c->truth_peak_a,
                clear ? "clear" : "near the threshold");
-        if (clear) assert_string_equal(c->regime, c->truth);
+        if (clear && decided) assert_string_equal(c->regime, c->truth);
         store_trial tr;
         assert_int_equal(store_trial_get(st, c->trial_id, &tr, why, sizeof why), STORE_OK);
         assert_int_equal(tr.status, STORE_STATUS_DONE);
         assert_string_equal(tr.specimen_name, c->name);
-        assert_string_equal(store_regime_name(tr.regime_measured), c->regime);
+        if (decided) assert_string_equal(store_regime_name(tr.regime_measured), c->regime);
+        else assert_int_equal(tr.regime_measured, STORE_REGIME_UNKNOWN);
         /* the twin folded for it: its event names this specimen's crease keys */
         store_event *ev = NULL;
         size_t nev = 0;
@@ -132,7 +137,7 @@ static void three_specimens_through_the_camera(void **state)
         printf("# %s at Gamma %.5f, bracket before it (%.5f, %.5f): %s\n", c->name, c->gamma, lo, hi, c->regime);
         assert_true(c->gamma > lo && c->gamma < hi);
         if (!strcmp(c->regime, "asymmetric")) lo = fmax(lo, c->gamma);
-        else hi = fmin(hi, c->gamma);
+        else if (decided) hi = fmin(hi, c->gamma); /* an undecided read leaves the bracket */
         store_plan_proposal p;
         assert_int_equal(store_plan_get(st, c->proposal_id, &p, why, sizeof why), STORE_OK);
         assert_int_equal(p.status, STORE_PLAN_APPROVED);
