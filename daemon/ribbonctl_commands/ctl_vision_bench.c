@@ -248,7 +248,7 @@ static int bench_roi(const vis_render_params *rp0, vis_error *err)
 {
     enum { RW = 1280, RH = 256, RN = 300 };
     static double pos[3 * BENCH_PTS], nrm[3 * BENCH_PTS];
-    vis_shape sh = {BENCH_PTS, pos, nrm, 0.005, 0.001, NULL};
+    vis_shape sh = {BENCH_PTS, pos, nrm, 0.005, 0.001};
     vis_render_params rp = *rp0;
     rp.camera.width_px = RW;
     rp.camera.height_px = RH;
@@ -344,7 +344,7 @@ int ctl_vision_bench_main(int argc, char **argv)
     snprintf(path, sizeof path, "%s/ribbon-vision-bench-%ld.mkv", dir && dir[0] ? dir : "/tmp", (long)getpid());
 
     static double pos[3 * BENCH_PTS], nrm[3 * BENCH_PTS];
-    vis_shape sh = {BENCH_PTS, pos, nrm, 0.005, 0.001, NULL}; /* 5 mm wide, 1 mm thick: about 5 px here */
+    vis_shape sh = {BENCH_PTS, pos, nrm, 0.005, 0.001}; /* 5 mm wide, 1 mm thick: about 5 px here */
     vis_render_params rp = vis_render_params_default();
     rp.camera.width_px = w;
     rp.camera.height_px = h;

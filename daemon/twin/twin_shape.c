@@ -34,7 +34,7 @@ twin_status twin_shape_init(twin_shape *ts, const rod_scene *sc, twin_y_origin y
                             size_t why_len)
 {
     if (!ts || !sc) return fail(TWIN_ERR_ARG, why, why_len, "twin_shape_init: NULL shape or scene");
-    ts->pos = ts->normal = ts->clamp_dir = NULL;
+    ts->pos = ts->normal = NULL;
     if (sc->nodes < 5 || sc->nodes > 1000000)
         return fail(TWIN_ERR_ARG, why, why_len, "twin_shape_init: mesh.nodes must be 5..1000000");
     if (!(isfinite(sc->width) && sc->width > 0 && isfinite(sc->thickness) && sc->thickness > 0))
@@ -43,11 +43,10 @@ twin_status twin_shape_init(twin_shape *ts, const rod_scene *sc, twin_y_origin y
     if (y != TWIN_Y_RIG && y != TWIN_Y_SIM)
         return fail(TWIN_ERR_ARG, why, why_len, "twin_shape_init: unknown y origin");
     size_t n = (size_t)sc->nodes - 2;
-    double *pos = calloc(3 * n, sizeof *pos), *nor = calloc(3 * n, sizeof *nor), *cd = calloc(6, sizeof *cd);
-    if (!pos || !nor || !cd) {
+    double *pos = calloc(3 * n, sizeof *pos), *nor = calloc(3 * n, sizeof *nor);
+    if (!pos || !nor) {
         free(pos);
         free(nor);
-        free(cd);
         return fail(TWIN_ERR_NOMEM, why, why_len, "twin_shape_init: out of memory");
     }
     ts->nodes = sc->nodes;
@@ -55,12 +54,9 @@ twin_status twin_shape_init(twin_shape *ts, const rod_scene *sc, twin_y_origin y
     ts->y_origin = y;
     ts->pos = pos;
     ts->normal = nor;
-    cd[0] = cd[3] = 1.0; /* along x until a rod's state says otherwise */
-    ts->clamp_dir = cd;
     ts->view.n = n;
     ts->view.pos = pos;
     ts->view.normal = nor;
-    ts->view.clamp_dir = cd;
     ts->view.width_m = sc->width;
     ts->view.thickness_m = sc->thickness;
     return TWIN_OK;
@@ -71,11 +67,10 @@ void twin_shape_release(twin_shape *ts)
     if (!ts) return;
     free(ts->pos);
     free(ts->normal);
-    free(ts->clamp_dir);
-    ts->pos = ts->normal = ts->clamp_dir = NULL;
+    ts->pos = ts->normal = NULL;
     ts->n = 0;
     ts->view.n = 0;
-    ts->view.pos = ts->view.normal = ts->view.clamp_dir = NULL;
+    ts->view.pos = ts->view.normal = NULL;
 }
 
 static void unit_tangent(const rod *r, int e, double t[3])
@@ -133,17 +128,6 @@ twin_status twin_shape_from_rod(twin_shape *ts, const rod *r, char *why, size_t 
             return TWIN_ERR_ARG;
         }
     }
-    /* The jaws hold the clamped edges (0 and N-2), outside the free length: the free length's
-     * first edge is already turned by the strip's curvature at the clamp (0.1 rad in the
-     * rehearsal's hold at N = 91), and jaws drawn along it tilt their faces. */
-    if (ts->clamp_dir) {
-        unit_tangent(r, 0, ts->clamp_dir);
-        unit_tangent(r, N - 2, ts->clamp_dir + 3);
-        const double *c = ts->clamp_dir;
-        if (!isfinite(c[0] + c[1] + c[2] + c[3] + c[4] + c[5]) || !(fabs(c[0]) + fabs(c[1]) + fabs(c[2]) > 0) ||
-            !(fabs(c[3]) + fabs(c[4]) + fabs(c[5]) > 0))
-            return fail(TWIN_ERR_ARG, why, why_len, "twin_shape_from_rod: a clamped edge has no direction");
-    }
     return TWIN_OK;
 }
 
@@ -165,14 +149,6 @@ twin_status twin_shape_lerp(twin_shape *out, const twin_shape *a, const twin_sha
             for (int j = 0; j < 3; j++) m[j] = (w < 0.5 ? a : b)->normal[3 * i + j];
         for (int j = 0; j < 3; j++) out->normal[3 * i + j] = m[j];
     }
-    if (out->clamp_dir && a->clamp_dir && b->clamp_dir)
-        for (int e = 0; e < 2; e++) {
-            double d[3];
-            for (int j = 0; j < 3; j++) d[j] = (1.0 - w) * a->clamp_dir[3 * e + j] + w * b->clamp_dir[3 * e + j];
-            if (!normalise(d))
-                for (int j = 0; j < 3; j++) d[j] = (w < 0.5 ? a : b)->clamp_dir[3 * e + j];
-            for (int j = 0; j < 3; j++) out->clamp_dir[3 * e + j] = d[j];
-        }
     return TWIN_OK;
 }
 

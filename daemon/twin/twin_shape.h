@@ -54,9 +54,7 @@ typedef struct twin_shape {
     twin_y_origin y_origin;
     double *pos;            /* 3 n values, metres */
     double *normal;         /* 3 n values, unit vectors */
-    double *clamp_dir;      /* 6 values: the clamped edges' unit directions (edge 0, edge N-2), the
-                               jaws' axes the renderer draws (vis_shape.clamp_dir) */
-    vis_shape view;         /* points into pos / normal / clamp_dir; width_m, thickness_m from the scene */
+    vis_shape view;         /* points into pos / normal; width_m, thickness_m from the scene */
 } twin_shape;
 
 /* Sizes `ts` for the scene's mesh (sc->nodes >= 5) and takes the ribbon's width and thickness.

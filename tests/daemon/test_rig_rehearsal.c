@@ -53,10 +53,9 @@ static const char *const rehearsal_sets[] = {"rail.compress.port=%s/grbl", "rail
  * simulator's live camera stream with the specimen mounted at Delta L dl, zero shear (the distance
  * 1000 mm as a lab measures it with a tape), and ribbond measures with that file, not with the
  * exact one ribbon-rigsim writes (camera.calib, kept for the comparison). Against the exact file,
- * measured on the rehearsal's level camera at dl 0.2: scale -0.19%, clamp points within 0.28 px
- * (the jaw face's perspective bias, vis_track.h, pulls both points toward the image centre; -0.57%
- * and 0.94 px while the simulator drew its jaws along the strip's first free edge,
- * docs/calibration.md). The bounds asserted: 1% and 1.5 px. */
+ * measured on the rehearsal's level camera at dl 0.2: scale -0.57%, clamp points within 0.94 px
+ * (the jaw face's perspective bias, vis_track.h, pulls both points toward the image centre). The
+ * bounds asserted: 1% and 1.5 px. */
 static double calib_num(const char *path, const char *key, int k)
 {
     char line[256];

@@ -233,14 +233,12 @@ extern "C" vis_status vis_renderer_draw(vis_renderer *r, const vis_shape *shape,
                 cv::fillConvexPoly(r->fine, iv, cv::Scalar(level));
             }
         }
-        // Clamp jaws: boxes from each clamp point outward along the clamp's direction (the shape's
-        // clamp_dir), else along the end tangent.
+        // Clamp jaws: boxes from each clamp point outward along the end tangent.
         const double hw = 0.5 * shape->width_m, hb = 0.5 * shape->thickness_m;
         if (p.clamp_length_m > 0 && p.clamp_height_m > 0) {
             for (int end = 0; end < 2; end++) {
                 const size_t i = end == 0 ? 0 : n - 1;
-                const double *cd = shape->clamp_dir ? shape->clamp_dir + 3 * end : nullptr;
-                const V3 t = cd ? unit(V3{cd[0], cd[1], cd[2]}) : tangent(i);
+                const V3 t = tangent(i);
                 const V3 out_dir = end == 0 ? -1.0 * t : t;
                 std::vector<cv::Point2f> pts;
                 bool okp = section(P(i), t, N(i), std::max(hw, 1e-4), 0.5 * p.clamp_height_m, pts) &&

@@ -35,14 +35,6 @@ bool shape_valid(const vis_shape *s, vis_error *err)
             return false;
         }
     }
-    for (int e = 0; s->clamp_dir && e < 2; e++) {
-        const double *d = s->clamp_dir + 3 * e;
-        if (!finite(d[0]) || !finite(d[1]) || !finite(d[2]) || !(std::hypot(std::hypot(d[0], d[1]), d[2]) > 0)) {
-            fail(err, VIS_ERR_ARG, "shape: the %s clamp's direction is not a finite non-zero vector",
-                 e == 0 ? "left" : "right");
-            return false;
-        }
-    }
     for (size_t i = 0; i + 1 < s->n; i++) {
         const double *a = s->pos + 3 * i, *b = a + 3;
         double d = std::hypot(std::hypot(b[0] - a[0], b[1] - a[1]), b[2] - a[2]);

@@ -21,11 +21,6 @@ typedef struct vis_shape {
     const double *normal;  /* 3n values: unit surface normal at each point (z-ish when flat) */
     double width_m;        /* ribbon width, metres (the band spans +-width/2 along normal x tangent) */
     double thickness_m;    /* ribbon thickness, metres (along the normal) */
-    const double *clamp_dir; /* NULL, or 6 values: the unit direction (x, y, z) each clamp holds the
-                              ribbon along, left then right, both pointing the way the points run
-                              (left to right); the renderer draws the jaws along them. NULL: along
-                              the end tangents, which for a discretised rod are its first free
-                              edges, already turned by the strip's curvature at the clamp */
 } vis_shape;
 
 typedef struct vis_truth {
