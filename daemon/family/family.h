@@ -72,7 +72,8 @@ typedef struct family_film {
     int nshapes;           /* centrelines kept (n_shapes of the options, fewer when frames were
                               lost or below the twin's upper states) */
     rod_fit_shape *true_shapes;    /* nshapes: the twin's own x-z projection (rod_shape.h) */
-    rod_fit_shape *tracked_shapes; /* nshapes: the tracker's centreline at the same frames, mapped
+    rod_fit_shape *tracked_shapes; /* nshapes: the tracker's traced centreline (vis_tracker_samples)
+                                      at the same frames, mapped
                                       from pixels to the plane y = 0 (the calibration's view model,
                                       depth 0: no shear) and resampled alike */
     double shape_rms;      /* RMS over every point and coordinate of tracked - true, over l */

@@ -110,7 +110,7 @@ static rod_status step_to(film_ctx *c, double dl, double dw)
     return ROD_OK;
 }
 
-#define CURVE_MAX 512 /* most centreline points taken from the tracker */
+#define CURVE_MAX 2048 /* most traced centreline points taken from the tracker */
 
 /* Renders the rod's state and measures it with t (fresh: NULL, a tracker for this Delta L is
    made). With curve, the tracked centreline mapped to the plane (over l) goes there and *n_curve
@@ -152,7 +152,7 @@ static int film_frame(film_ctx *c, vis_tracker *t, vis_measure *m, double *curve
         *n_curve = 0;
         if (vs == VIS_OK && own && m->reason == VIS_REASON_NONE) {
             double uv[2 * CURVE_MAX];
-            size_t nc = vis_tracker_curve(own, uv, CURVE_MAX);
+            size_t nc = vis_tracker_samples(own, uv, CURVE_MAX);
             if (nc > CURVE_MAX) nc = CURVE_MAX;
             vis_calib_curve_to_plane(&own_cal, c->width_px, c->height_px, 1e3 * c->sc->length, uv, (int)nc, curve);
             *n_curve = (int)nc;

@@ -54,7 +54,7 @@ vis_status trial_comp_track_measure_curve(const vis_track_params *tp, const vis_
     if (!t) return err && err->code ? err->code : VIS_ERR_ARG;
     vis_status vs = vis_tracker_process(t, f, 0.0, m, err);
     if (vs == VIS_OK && uv && n_uv && m->reason == VIS_REASON_NONE) {
-        size_t n = vis_tracker_curve(t, uv, max_uv);
+        size_t n = vis_tracker_samples(t, uv, max_uv);
         *n_uv = n > max_uv ? max_uv : n;
     }
     vis_tracker_free(t);

@@ -40,9 +40,9 @@ vis_status trial_comp_track_measure(const vis_track_params *tp, const vis_calib 
                                     double length_m, double dl_target, double dl, const vis_frame *f,
                                     vis_measure *m, vis_error *err);
 
-/* The same, and the tracker's centreline before it is freed: up to max_uv (u, v) pairs into uv,
- * their count in *n_uv (0: none), and the moved calibration into *cal (for mapping them to the
- * plane, vis_calib_curve_to_plane). uv may be NULL (then *n_uv = 0). */
+/* The same, and the tracker's traced centreline (vis_tracker_samples) before it is freed: up to
+ * max_uv (u, v) pairs into uv, their count in *n_uv (0: none), and the moved calibration into *cal
+ * (for mapping them to the plane, vis_calib_curve_to_plane). uv may be NULL (then *n_uv = 0). */
 vis_status trial_comp_track_measure_curve(const vis_track_params *tp, const vis_calib *base, rig_camera_side side,
                                           double length_m, double dl_target, double dl, const vis_frame *f,
                                           vis_measure *m, double *uv, size_t max_uv, size_t *n_uv, vis_calib *cal,

@@ -140,7 +140,7 @@ void trial_runner_free(trial_runner *tr)
 }
 
 /* The loop's working state. */
-#define TRIAL_SHAPE_UV_MAX 512 /* most centreline points taken from the tracker for the fit (sim.fit_shape) */
+#define TRIAL_SHAPE_UV_MAX 2048 /* most traced centreline points taken from the tracker for the fit (sim.fit_shape) */
 
 typedef struct run_ctx {
     trial_runner *tr;
@@ -933,7 +933,7 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
                 if (comp_frame) {
                     shape_to_fit(&c, &c.shape_cal, c.shape_uv, c.shape_n, &smp);
                 } else if (p->comp_track_from_dl > 0.0) { /* comp_calib is the tracker's calibration */
-                    size_t n = vis_tracker_curve(tr->tracker, c.shape_uv, TRIAL_SHAPE_UV_MAX);
+                    size_t n = vis_tracker_samples(tr->tracker, c.shape_uv, TRIAL_SHAPE_UV_MAX);
                     shape_to_fit(&c, &p->comp_calib, c.shape_uv, n > TRIAL_SHAPE_UV_MAX ? TRIAL_SHAPE_UV_MAX : n,
                                  &smp);
                 }

@@ -55,6 +55,7 @@ struct Attempt {
     vis_measure m{};
     std::vector<vis::Pt> curve_px;  // smooth centreline, pixels
     std::vector<vis::Pt> curve_mm;  // the same in the plane, mm from the left clamp point
+    std::vector<vis::Pt> traced_px; // the fit's input: clamp point, valid samples, clamp point, px
 };
 }  // namespace
 
@@ -65,6 +66,7 @@ struct vis_tracker {
     std::vector<vis::Pt> prev;       // previous smooth centreline, pixels (empty: none)
     double prev_length = 0;          // its measured length, mm
     std::vector<vis::Pt> curve;      // last smooth centreline, pixels (for overlays)
+    std::vector<vis::Pt> traced;     // the traced points that curve was fitted to, pixels
     cv::Mat work, sig;
     vis::Workspace ws;               // per-frame buffers, reused
     Attempt att[4];                  // following; walks from the left, from the right; geodesic
@@ -203,6 +205,7 @@ extern "C" void vis_tracker_reset(vis_tracker *t)
     t->prev.clear();
     t->prev_length = 0;
     t->curve.clear();
+    t->traced.clear();
     if (t->p.polarity == VIS_POLARITY_AUTO)
         t->polarity = 0;
     t->depth = t->base_depth;
@@ -269,6 +272,17 @@ extern "C" size_t vis_tracker_curve(const vis_tracker *t, double *uv, size_t max
         uv[2 * i + 1] = t->curve[i].y;
     }
     return t->curve.size();
+}
+
+extern "C" size_t vis_tracker_samples(const vis_tracker *t, double *uv, size_t max)
+{
+    if (!t)
+        return 0;
+    for (size_t i = 0; uv && i < max && i < t->traced.size(); i++) {
+        uv[2 * i] = t->traced[i].x;
+        uv[2 * i + 1] = t->traced[i].y;
+    }
+    return t->traced.size();
 }
 
 namespace {
@@ -520,6 +534,7 @@ void finish_attempt(vis_tracker *t, const Geometry &g, Attempt &at)
         }
     px.push_back(g.right);
     xi.push_back(1);
+    at.traced_px.assign(px.begin(), px.end());
     und.assign(px.begin(), px.end());
     if (t->c.has_intrinsics) {
         cv::Mat K(3, 3, CV_64F, t->c.camera_matrix), dist(1, 5, CV_64F, t->c.dist);
@@ -953,6 +968,7 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
         if (!best || !any_path) {
             measure_clear(out, VIS_REASON_NO_RIBBON);
             t->curve.clear();
+    t->traced.clear();
             vis::ok(err);
             return VIS_OK;
         }
@@ -962,12 +978,14 @@ extern "C" vis_status vis_tracker_process(vis_tracker *t, const vis_frame *f, do
             t->prev = best->curve_px;
             t->prev_length = best->m.length_mm;
             t->curve = best->curve_px;
+            t->traced = best->traced_px;
             if (t->polarity == 0)
                 t->polarity = dark ? 1 : 2;  // keep the polarity once the ribbon is found
         } else {
             measure_clear(out, best->reason);
             out->quality = best->quality;
             t->curve.clear();
+    t->traced.clear();
         }
         vis::ok(err);
         return VIS_OK;

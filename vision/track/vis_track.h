@@ -93,6 +93,14 @@ void vis_tracker_skip(vis_tracker *t, vis_measure *out);
 /* The last smooth centreline in pixels, from the left clamp: copies up to `max` (u, v) pairs into
  * `uv` and returns how many exist. */
 size_t vis_tracker_curve(const vis_tracker *t, double *uv, size_t max);
+/* The points the last smooth centreline was fitted to, in pixels as vis_tracker_curve's: the left
+ * clamp point, the tracer's valid samples in order along the arc (about step_px apart), the right
+ * clamp point; 0 when the last frame was not measured. The smooth fit (fit_window) rounds a sharp
+ * crease off and, with a crease inside its end window, moves the curve's ends off the clamp points
+ * (on the mock trial's -86 deg creases 0.002-0.004 l near them: docs/calibration.md); these points
+ * follow the crease, for a shape compared point by point (the fit's centreline, sim.fit_shape).
+ * Copies up to `max` (u, v) pairs into `uv` and returns how many exist. */
+size_t vis_tracker_samples(const vis_tracker *t, double *uv, size_t max);
 /* The centreline's depth along the ribbon for the frames that follow, from a prediction of their
  * shape (the trial's own simulation): n points of (frac[i], depth_rel[i]), frac the arc fraction
  * along the ribbon (material arc length / l) from 0 at the left clamp to 1 at the right one,
