@@ -33,11 +33,30 @@ typedef struct calib_job {
     trial_calibrated res;
 } calib_job;
 
-/* A measured frame's centreline, resampled, with the frame's observation. */
+/* A measured frame's centreline, resampled, with the frame's observation and its place among the
+ * centrelines handed in (seq: 0, 1, ...). */
 typedef struct shape_frame {
     rod_fit_obs o;
     rod_fit_shape s;
+    long seq;
 } shape_frame;
+
+/* The first fit's choice (choose_shapes) as the frames come: TRIAL_CALIBRATE_SHAPES - 1 targets in
+ * Delta L, from the first centreline handed in (lo) to the hold's (the scene's protocol.compression),
+ * each with the TRIAL_CALIBRATE_SHAPES frames nearest it so far (ties: the earlier), and the last frame
+ * (the hold's last). The choice takes the last, then for each target the nearest frame not taken:
+ * at most TRIAL_CALIBRATE_SHAPES - 1 are taken before a target's turn, so its nearest untaken frame
+ * is among its TRIAL_CALIBRATE_SHAPES nearest, and the choice from these slots is the choice from
+ * every frame. A frame that enters no slot is never needed: the runner maps only the ones that do. */
+#define SHAPE_TARGETS (TRIAL_CALIBRATE_SHAPES - 1)
+typedef struct shape_slots {
+    shape_frame near[SHAPE_TARGETS][TRIAL_CALIBRATE_SHAPES]; /* by distance to the target, then seq */
+    int nnear[SHAPE_TARGETS];
+    shape_frame last;
+    int have_last;
+    long handed;              /* centrelines handed in and kept (the next seq) */
+    double lo;                /* Delta L of the first one (NaN: none yet) */
+} shape_slots;
 
 typedef struct obs_buf {
     rod_fit_obs *v;
@@ -47,8 +66,7 @@ typedef struct obs_buf {
 struct trial_calibrate {
     trial_calibrate_def def;
     obs_buf before, shear;
-    shape_frame *shapes;      /* centrelines handed in (def.fit_shape) */
-    int nshape_frames, shape_cap;
+    shape_slots shapes;       /* the centrelines the first fit may take (def.fit_shape): a fixed set */
     rod_fit_shape chosen[TRIAL_CALIBRATE_SHAPES]; /* the ones the first fit took, kept by refreshes */
     rod_fit_obs chosen_obs[TRIAL_CALIBRATE_SHAPES];
     int nchosen;
@@ -454,36 +472,51 @@ static void collect(trial_calibrate *c, double t)
     job_free(j);
 }
 
-/* The first fit's centrelines: TRIAL_CALIBRATE_SHAPES of those handed in, evenly in Delta L from
- * the first tracked to the last (the hold's), each the one nearest its Delta L, none twice. */
+/* Target j's Delta L (j = 0 .. SHAPE_TARGETS - 1): evenly from the first centreline's to the hold's. */
+static double shape_target(const trial_calibrate *c, int j)
+{
+    double hi = c->def.scene.compression;
+    return c->shapes.lo + (hi - c->shapes.lo) * j / (TRIAL_CALIBRATE_SHAPES - 1);
+}
+
+/* 1 when frame f (at distance d of target j) comes before slot e in target j's order. */
+static int shape_before(const trial_calibrate *c, int j, const rod_fit_obs *o, long seq, const shape_frame *e)
+{
+    double t = shape_target(c, j), d = fabs(o->dl - t), de = fabs(e->o.dl - t);
+    return d < de || (d == de && seq < e->seq);
+}
+
+/* The first fit's centrelines: TRIAL_CALIBRATE_SHAPES of those handed in, the last one (the hold's
+ * last), then for each target from the highest down the nearest not taken yet (ties: the earlier),
+ * chosen from the slots (shape_slots). */
 static void choose_shapes(trial_calibrate *c)
 {
     c->nchosen = 0;
-    int n = c->nshape_frames;
-    if (!c->def.fit_shape || n == 0) return;
-    double lo = c->shapes[0].o.dl, hi = c->shapes[n - 1].o.dl;
-    int used[TRIAL_CALIBRATE_SHAPES];
-    for (int j = TRIAL_CALIBRATE_SHAPES - 1; j >= 0; j--) {
-        int best = -1;
-        if (j == TRIAL_CALIBRATE_SHAPES - 1) {
-            best = n - 1; /* the hold's last */
-        } else {
-            double target = lo + (hi - lo) * j / (TRIAL_CALIBRATE_SHAPES - 1), err = INFINITY;
-            for (int k = 0; k < n; k++) {
-                int taken = 0;
-                for (int u = 0; u < c->nchosen; u++) taken |= used[u] == k;
-                if (!taken && fabs(c->shapes[k].o.dl - target) < err) {
-                    err = fabs(c->shapes[k].o.dl - target);
-                    best = k;
-                }
-            }
+    const shape_slots *sl = &c->shapes;
+    if (!c->def.fit_shape || sl->handed == 0) return;
+    /* The last: the one handed in as last, else the latest in the slots. */
+    const shape_frame *last = sl->have_last ? &sl->last : NULL;
+    for (int j = 0; j < SHAPE_TARGETS; j++)
+        for (int q = 0; q < sl->nnear[j]; q++)
+            if (!last || sl->near[j][q].seq > last->seq) last = &sl->near[j][q];
+    if (!last) return;
+    long used[TRIAL_CALIBRATE_SHAPES];
+    used[0] = last->seq;
+    c->chosen[0] = last->s;
+    c->chosen_obs[0] = last->o;
+    c->nchosen = 1;
+    for (int j = SHAPE_TARGETS - 1; j >= 0; j--)
+        for (int q = 0; q < sl->nnear[j]; q++) { /* nearest first */
+            const shape_frame *f = &sl->near[j][q];
+            int taken = 0;
+            for (int u = 0; u < c->nchosen; u++) taken |= used[u] == f->seq;
+            if (taken) continue;
+            used[c->nchosen] = f->seq;
+            c->chosen[c->nchosen] = f->s;
+            c->chosen_obs[c->nchosen] = f->o;
+            c->nchosen++;
+            break;
         }
-        if (best < 0) continue;
-        used[c->nchosen] = best;
-        c->chosen[c->nchosen] = c->shapes[best].s;
-        c->chosen_obs[c->nchosen] = c->shapes[best].o;
-        c->nchosen++;
-    }
 }
 
 /* Starts a worker on the frames so far (refresh 0: those before the shear only). */
@@ -591,24 +624,61 @@ void trial_calibrate_add(trial_calibrate *c, int shear, double dl, double dw, do
 
 int trial_calibrate_wants_shape(const trial_calibrate *c)
 {
-    return c && c->def.fit_shape && !c->started && !c->ended && c->nshape_frames < TRIAL_CALIBRATE_MAX_SHAPE_FRAMES;
+    return c && c->def.fit_shape && !c->started && !c->ended;
+}
+
+int trial_calibrate_shape_wanted(const trial_calibrate *c, double dl)
+{
+    if (!trial_calibrate_wants_shape(c) || !isfinite(dl)) return 0;
+    if (c->shapes.handed == 0) return 1;
+    rod_fit_obs o = {dl, 0.0, 0.0, 0.0};
+    for (int j = 0; j < SHAPE_TARGETS; j++)
+        if (c->shapes.nnear[j] < TRIAL_CALIBRATE_SHAPES ||
+            shape_before(c, j, &o, c->shapes.handed, &c->shapes.near[j][TRIAL_CALIBRATE_SHAPES - 1]))
+            return 1;
+    return 0;
 }
 
 void trial_calibrate_add_shape(trial_calibrate *c, double dl, double dw, double dz, double a, const double *xz,
-                               int n)
+                               int n, int last)
 {
-    if (!trial_calibrate_wants_shape(c) || !xz || n < 2) return;
-    if (c->nshape_frames == c->shape_cap) {
-        int cap = c->shape_cap ? 2 * c->shape_cap : 64;
-        shape_frame *v = realloc(c->shapes, sizeof *v * (size_t)cap);
-        if (!v) return;
-        c->shapes = v;
-        c->shape_cap = cap;
+    if (!trial_calibrate_wants_shape(c) || !xz || n < 2 || !isfinite(dl)) return;
+    shape_slots *sl = &c->shapes;
+    shape_frame f;
+    f.o = (rod_fit_obs){dl, dw, dz, a};
+    f.s = (rod_fit_shape){.dl = dl, .dw = dw, .k = TRIAL_CALIBRATE_SHAPE_POINTS};
+    if (rod_shape_resample(xz, n, TRIAL_CALIBRATE_SHAPE_POINTS, f.s.xz) != 0) return;
+    f.seq = sl->handed++;
+    if (f.seq == 0) sl->lo = dl;
+    for (int j = 0; j < SHAPE_TARGETS; j++) {
+        int m = sl->nnear[j], q = m;
+        while (q > 0 && shape_before(c, j, &f.o, f.seq, &sl->near[j][q - 1])) q--;
+        if (q >= TRIAL_CALIBRATE_SHAPES) continue;
+        if (m == TRIAL_CALIBRATE_SHAPES) m--; /* the farthest leaves */
+        memmove(&sl->near[j][q + 1], &sl->near[j][q], sizeof f * (size_t)(m - q));
+        sl->near[j][q] = f;
+        sl->nnear[j] = m + 1;
     }
-    shape_frame *f = &c->shapes[c->nshape_frames];
-    f->o = (rod_fit_obs){dl, dw, dz, a};
-    f->s = (rod_fit_shape){.dl = dl, .dw = dw, .k = TRIAL_CALIBRATE_SHAPE_POINTS};
-    if (rod_shape_resample(xz, n, TRIAL_CALIBRATE_SHAPE_POINTS, f->s.xz) == 0) c->nshape_frames++;
+    if (last) {
+        sl->last = f;
+        sl->have_last = 1;
+    }
+}
+
+int trial_calibrate_shapes_kept(const trial_calibrate *c)
+{
+    if (!c) return 0;
+    int n = c->shapes.have_last;
+    for (int j = 0; j < SHAPE_TARGETS; j++) n += c->shapes.nnear[j];
+    return n;
+}
+
+int trial_calibrate_shapes_choose(trial_calibrate *c, rod_fit_obs *obs)
+{
+    if (!c) return 0;
+    choose_shapes(c);
+    for (int s = 0; s < c->nchosen && obs; s++) obs[s] = c->chosen_obs[s];
+    return c->nchosen;
 }
 
 void trial_calibrate_start(trial_calibrate *c, double t)
@@ -699,7 +769,6 @@ void trial_calibrate_free(trial_calibrate *c)
     if (!c->ended) trial_calibrate_end(c, NAN, 1);
     free(c->before.v);
     free(c->shear.v);
-    free(c->shapes);
     free(c);
 }
 

@@ -21,7 +21,9 @@
  *      scene's, else all of them).
  *   6. worker_class: the worker of a rig-mode def (idle = 1) runs its fit and band in SCHED_IDLE,
  *      read back on its thread, and says so when it lands; a mock-mode def's (idle = 0) does not;
- *      the runner's thread (this test's) stays in its own class either way. */
+ *      the runner's thread (this test's) stays in its own class either way.
+ *   7. shapes_picked_as_they_come: sim.fit_shape's centrelines picked as the frames come, in a
+ *      fixed set of slots, the same as the old rule over every frame, none of a long hold mapped. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -668,6 +670,103 @@ static void worker_class(void **state)
     assert_null(strstr(mock.event, "SCHED_IDLE"));
 }
 
+/* The old rule, on every frame (what the fit chose before the frames were picked as they came):
+ * the last, then for targets 2, 1, 0 (evenly in Delta L from the first frame's to the last's) the
+ * nearest not taken, the earlier on a tie. Into out (indices), their count. */
+static int reference_choice(const double *dl, int n, int *out)
+{
+    int m = 0;
+    double lo = dl[0], hi = dl[n - 1];
+    for (int j = TRIAL_CALIBRATE_SHAPES - 1; j >= 0; j--) {
+        int best = -1;
+        if (j == TRIAL_CALIBRATE_SHAPES - 1) {
+            best = n - 1;
+        } else {
+            double target = lo + (hi - lo) * j / (TRIAL_CALIBRATE_SHAPES - 1), err = INFINITY;
+            for (int k = 0; k < n; k++) {
+                int taken = 0;
+                for (int u = 0; u < m; u++) taken |= out[u] == k;
+                if (!taken && fabs(dl[k] - target) < err) {
+                    err = fabs(dl[k] - target);
+                    best = k;
+                }
+            }
+        }
+        if (best >= 0) out[m++] = best;
+    }
+    return m;
+}
+
+/* Offers the frames as the runner does (each one when the next comes, mapped only when wanted; the
+ * last at the end), frame k's dz = k to name it; the count mapped, and the hold's (dl = hold) among
+ * them before the last. Checks the choice against the old rule's and the kept set's bound. */
+static void shapes_offered(const double *dl, int n, double hold, int *mapped, int *mapped_hold)
+{
+    trial_calibrate_def d = trial_calibrate_def_default();
+    d.scene.compression = hold;
+    d.fit_shape = 1;
+    char why[256];
+    trial_calibrate *c = trial_calibrate_new(&d, why, sizeof why);
+    assert_non_null(c);
+    *mapped = *mapped_hold = 0;
+    for (int k = 0; k < n; k++) {
+        int last = k == n - 1;
+        trial_calibrate_add(c, 0, dl[k], 0.0, k, 0.0);
+        if (!last && !trial_calibrate_shape_wanted(c, dl[k])) continue;
+        double xz[6] = {0.0, 0.0, 0.5, 0.1 + 0.001 * k, 1.0, 0.0};
+        trial_calibrate_add_shape(c, dl[k], 0.0, k, 0.0, xz, 3, last);
+        if (!last) {
+            (*mapped)++;
+            *mapped_hold += dl[k] == hold;
+        }
+        assert_true(trial_calibrate_shapes_kept(c) <= TRIAL_CALIBRATE_SHAPES * (TRIAL_CALIBRATE_SHAPES - 1) + 1);
+    }
+    rod_fit_obs got[TRIAL_CALIBRATE_SHAPES];
+    int want[TRIAL_CALIBRATE_SHAPES];
+    int ng = trial_calibrate_shapes_choose(c, got), nw = reference_choice(dl, n, want);
+    assert_int_equal(ng, nw);
+    for (int s = 0; s < ng; s++) assert_int_equal((int)got[s].dz, want[s]);
+    trial_calibrate_free(c);
+}
+
+/* The centrelines the first fit takes (sim.fit_shape) are picked as the frames come, in a fixed set:
+ * the same four as the old rule picked from every frame, with only the frames that enter the set
+ * mapped, none of a long hold's (which the runner mapped, resampled and stored one by one before). */
+static void shapes_picked_as_they_come(void **state)
+{
+    (void)state;
+    enum { NC = 120, NH = 250 };
+    static double dl[NC + NH];
+    uint64_t r = 12345;
+    double x = 0.45;
+    for (int k = 0; k < NC; k++) { /* uneven steps, some repeated: a compression under load */
+        r = r * 6364136223846793005ull + 1442695040888963407ull;
+        int q = (int)(r >> 61);
+        x += q == 0 ? 0.0 : 0.05 / NC * (0.25 * q);
+        dl[k] = fmin(x, 0.4999);
+    }
+    for (int k = NC; k < NC + NH; k++) dl[k] = 0.5;
+    int mapped, mapped_hold;
+    shapes_offered(dl, NC + NH, 0.5, &mapped, &mapped_hold);
+    printf("compression %d + hold %d frames: %d centrelines mapped before the last (%d of the hold)\n", NC, NH, mapped,
+           mapped_hold);
+    assert_int_equal(mapped_hold, 0);
+    assert_true(mapped <= NC);
+    /* The hold alone: every target at the hold's Delta L, ties to the earliest. */
+    for (int k = 0; k < 30; k++) dl[k] = 0.5;
+    shapes_offered(dl, 30, 0.5, &mapped, &mapped_hold);
+    assert_true(mapped <= TRIAL_CALIBRATE_SHAPES * (TRIAL_CALIBRATE_SHAPES - 1));
+    /* Three compression frames and a hold: the hold's frames are the nearest to some targets. */
+    dl[0] = 0.45;
+    dl[1] = 0.452;
+    dl[2] = 0.48;
+    for (int k = 3; k < 60; k++) dl[k] = 0.5;
+    shapes_offered(dl, 60, 0.5, &mapped, &mapped_hold);
+    assert_true(mapped_hold <= TRIAL_CALIBRATE_SHAPES * (TRIAL_CALIBRATE_SHAPES - 1));
+    /* One frame: it is the last and the only choice. */
+    shapes_offered(dl, 1, 0.45, &mapped, &mapped_hold);
+}
+
 /* `test_trial_calibrate session` runs the whole mock trials (3, 4) only; without an argument, the
  * fit's own tests (1, 2), seconds in either build. */
 int main(int argc, char **argv)
@@ -687,6 +786,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(setup_has_the_trackers_bias),
         cmocka_unit_test(refresh_frames_below_cut),
         cmocka_unit_test(worker_class),
+        cmocka_unit_test(shapes_picked_as_they_come),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
