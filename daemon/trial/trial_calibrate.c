@@ -30,6 +30,8 @@ typedef struct calib_job {
     int nobs_before, nobs_shear;
     rod_fit_shape shapes[TRIAL_CALIBRATE_SHAPES];
     int nshapes;
+    int positions;            /* a refresh after fit 0 took the centrelines: the positions fitted
+                                 with TRIAL_CALIBRATE_PRIOR_POSITION around the scene's (fit 0's) */
     trial_calibrated res;
 } calib_job;
 
@@ -70,6 +72,7 @@ struct trial_calibrate {
     rod_fit_shape chosen[TRIAL_CALIBRATE_SHAPES]; /* the ones the first fit took, kept by refreshes */
     rod_fit_obs chosen_obs[TRIAL_CALIBRATE_SHAPES];
     int nchosen;
+    double fit0_pos[2];       /* fit 0's crease positions when it took the centrelines (NaN: none) */
     long dropped;             /* frames not kept (out of memory) */
     calib_job *job;           /* the running worker, or NULL */
     int started;              /* the first fit was started */
@@ -190,9 +193,28 @@ void trial_calibrate_compute(const rod_scene *sc, const char *keys, const rod_fi
     trial_calibrate_compute_shapes(sc, keys, obs, nobs_before, nobs_shear, NULL, 0, cancel, r);
 }
 
+static void compute(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before, int nobs_shear,
+                    const rod_fit_shape *shapes, int nshapes, int positions, const atomic_int *cancel,
+                    trial_calibrated *r);
+
 void trial_calibrate_compute_shapes(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
                                     int nobs_shear, const rod_fit_shape *shapes, int nshapes,
                                     const atomic_int *cancel, trial_calibrated *r)
+{
+    compute(sc, keys, obs, nobs_before, nobs_shear, shapes, nshapes, 0, cancel, r);
+}
+
+void trial_calibrate_compute_refresh(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
+                                     int nobs_shear, const atomic_int *cancel, trial_calibrated *r)
+{
+    compute(sc, keys, obs, nobs_before, nobs_shear, NULL, 0, 1, cancel, r);
+}
+
+/* The fit and its snap (the header's trial_calibrate_compute_*): positions = 1 fits both crease
+ * positions (default keys, where the strip has them) with TRIAL_CALIBRATE_PRIOR_POSITION around sc's. */
+static void compute(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before, int nobs_shear,
+                    const rod_fit_shape *shapes, int nshapes, int positions, const atomic_int *cancel,
+                    trial_calibrated *r)
 {
     double t0 = wall_now();
     r->ok = 0;
@@ -240,17 +262,23 @@ void trial_calibrate_compute_shapes(const rod_scene *sc, const char *keys, const
         }
     }
     if (have_start) o.start = start;
-    if (r->nshapes && (!keys || !*keys)) {
+    if ((r->nshapes || positions) && (!keys || !*keys)) {
         /* The centreline sees where the creases are (docs/calibration.md "The centreline as an
-         * observable"): the default set takes both positions too, where the strip has them. */
+         * observable"): the default set takes both positions too, where the strip has them. A
+         * refresh without the centrelines keeps them, with the specimen's tolerance as a prior
+         * around fit 0's values (the scene's here), which the shear's frames then refine. */
         char unused[200];
         for (int k = ROD_FIT_POSITION_LEFT; k <= ROD_FIT_POSITION_RIGHT; k += ROD_FIT_POSITION_RIGHT - ROD_FIT_POSITION_LEFT)
-            if (!rod_fit_key_usable(sc, (rod_fit_key)k, unused, sizeof unused)) o.fit[k] = 1;
+            if (!rod_fit_key_usable(sc, (rod_fit_key)k, unused, sizeof unused)) {
+                o.fit[k] = 1;
+                if (positions) o.prior_sigma[k] = TRIAL_CALIBRATE_PRIOR_POSITION;
+            }
     }
     if (r->nshapes) {
         o.shapes = shapes;
         o.nshapes = nshapes;
         o.sigma_shape = TRIAL_CALIBRATE_SIGMA_SHAPE;
+        o.shape_common_mode = 1; /* each centreline's error a deformation of its own (rod_fit.h) */
     }
     char why[320] = "";
     rod_status st = rod_fit_run(sc, obs, nobs, &o, &r->fit, why, sizeof why);
@@ -319,8 +347,8 @@ static void *job_main(void *arg)
      * SCHED_IDLE, the fit and its band's predictions on CPU time no one else wants (trial_idle.h). */
     if (j->idle) trial_idle_enter(NULL, 0); /* refused: nice 19 (trial_idle.h) */
     j->res.idle = trial_idle_is(0) == 1;        /* the class read back, said in the landing event */
-    trial_calibrate_compute_shapes(&j->scene, j->keys, j->obs, j->nobs_before, j->nobs_shear, j->shapes, j->nshapes,
-                                   &j->cancel, &j->res);
+    compute(&j->scene, j->keys, j->obs, j->nobs_before, j->nobs_shear, j->shapes, j->nshapes, j->positions, &j->cancel,
+            &j->res);
     int expected = JOB_RUNNING;
     if (!atomic_compare_exchange_strong(&j->state, &expected, JOB_DONE)) job_free(j); /* abandoned */
     return NULL;
@@ -411,6 +439,11 @@ static int shear_below(const trial_calibrate *c, double limit)
 static void land(trial_calibrate *c, trial_calibrated *r, double t)
 {
     r->t_landed = t;
+    if (r->refresh == 0 && r->ok && r->nshapes && r->fit.fitted[ROD_FIT_POSITION_LEFT] &&
+        r->fit.fitted[ROD_FIT_POSITION_RIGHT]) {
+        c->fit0_pos[0] = r->fit.u[ROD_FIT_POSITION_LEFT];
+        c->fit0_pos[1] = r->fit.u[ROD_FIT_POSITION_RIGHT];
+    }
     r->t_shear = c->t_shear;
     if (r->ok && r->nobs_shear > 0 && isfinite(c->dw_snap) && r->dw_cut >= c->dw_snap)
         failed(r, "after_snap",
@@ -546,7 +579,19 @@ static void launch(trial_calibrate *c, double t, int refresh)
     j->obs = obs;
     j->nobs_before = thin_into(obs, &c->before, TRIAL_CALIBRATE_MAX_HOLD_OBS);
     if (refresh == 0) choose_shapes(c);
-    for (int s = 0; s < c->nchosen; s++) {
+    /* The refreshes leave the centrelines out (the tracker's error on them is not independent
+     * noise: with them the band at 80% of the way held the snap in 85% of the family, without them
+     * 90%; docs/calibration.md); the positions fit 0 found with them stay fitted, their prior
+     * centred on fit 0's values. */
+    j->positions = refresh > 0 && c->nchosen > 0;
+    if (j->positions && isfinite(c->fit0_pos[0]) && isfinite(c->fit0_pos[1])) {
+        double u[ROD_FIT_NKEYS];
+        rod_fit_scene_values(&j->scene, u);
+        u[ROD_FIT_POSITION_LEFT] = c->fit0_pos[0];
+        u[ROD_FIT_POSITION_RIGHT] = c->fit0_pos[1];
+        rod_fit_scene_apply(&j->scene, u);
+    }
+    for (int s = 0; s < c->nchosen && refresh == 0; s++) {
         /* Each shape's frame among the observations (the shape is modelled at its state). */
         int have = 0;
         for (int k = 0; k < j->nobs_before && !have; k++)
@@ -554,7 +599,7 @@ static void launch(trial_calibrate *c, double t, int refresh)
         if (!have) obs[j->nobs_before++] = c->chosen_obs[s];
         j->shapes[s] = c->chosen[s];
     }
-    j->nshapes = c->nchosen;
+    j->nshapes = refresh == 0 ? c->nchosen : 0;
     j->nobs_shear = 0;
     int below = shear_below(c, limit);
     if (refresh && below > 0) {
@@ -611,6 +656,7 @@ trial_calibrate *trial_calibrate_new(const trial_calibrate_def *def, char *why, 
     }
     c->def = *def;
     c->t_shear = c->t_snap = c->dw_snap = NAN;
+    c->fit0_pos[0] = c->fit0_pos[1] = NAN;
     c->t_last_start = -INFINITY;
     return c;
 }

@@ -73,10 +73,16 @@
  * joins the observations. The choice is made as the frames come, in a fixed set of slots (the
  * TRIAL_CALIBRATE_SHAPES nearest each target and the last: at most TRIAL_CALIBRATE_SHAPES^2 - 
  * TRIAL_CALIBRATE_SHAPES + 1 kept), and the runner maps a frame's centreline only when it enters one
- * (trial_calibrate_shape_wanted), not every frame of the hold. Refreshes keep the same shapes. */
+ * (trial_calibrate_shape_wanted), not every frame of the hold. Fit 0 weights each centreline's
+ * error as a deformation of its own besides the independent noise (rod_fit_opts.shape_common_mode).
+ * The refreshes leave the centrelines out (with them the band at 80% of the way held the family's
+ * snaps in 85%, without them 90%: docs/calibration.md) and fit the positions fit 0 found with them
+ * with a prior of TRIAL_CALIBRATE_PRIOR_POSITION around fit 0's values. */
 #define TRIAL_CALIBRATE_SHAPES 4
 #define TRIAL_CALIBRATE_SHAPE_POINTS 24
 #define TRIAL_CALIBRATE_SIGMA_SHAPE 0.0016
+#define TRIAL_CALIBRATE_PRIOR_POSITION 0.006 /* over l: the specimen record's -+ 1% of l (uniform: sd
+                                                0.0058), ribbon-fit-family's prior on the positions */
 
 typedef struct trial_calibrated {
     int ok;                 /* 1: fitted and its snap predicted; 0: failed (reason_key, reason) */
@@ -196,9 +202,14 @@ int trial_calibrate_setup(rod_scene *sc, double fit_hinge, const char *keys, rod
  * NULL): non-zero skips the prediction. */
 void trial_calibrate_compute(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
                              int nobs_shear, const atomic_int *cancel, trial_calibrated *r);
-/* The same with nshapes centrelines (each at one observation's state, TRIAL_CALIBRATE_SIGMA_SHAPE). */
+/* The same with nshapes centrelines (each at one observation's state, TRIAL_CALIBRATE_SIGMA_SHAPE; with
+ * the default keys both crease positions too), as fit 0 with sim.fit_shape. */
 void trial_calibrate_compute_shapes(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
                                     int nobs_shear, const rod_fit_shape *shapes, int nshapes,
                                     const atomic_int *cancel, trial_calibrated *r);
+/* A refresh after such a fit 0: no centrelines, and with the default keys both crease positions
+ * with a prior of TRIAL_CALIBRATE_PRIOR_POSITION around sc's (fit 0's values put in sc). */
+void trial_calibrate_compute_refresh(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
+                                     int nobs_shear, const atomic_int *cancel, trial_calibrated *r);
 
 #endif
