@@ -508,9 +508,21 @@ static int covariance(fit_ctx *c, const double *Jw, rod_fit_result *res)
     rod_fit_lm_cov_in in = {.p = p, .nres = c->nres, .nobs = c->nobs, .nshape = c->nshape, .Jw = Jw, .f = c->last_f, .lo = lo, .hi = hi,
                             .scale = scale, .prior = prior, .factor = factor, .phase = phase,
                             .sigma = {c->o->sigma_dz, c->o->sigma_a}, .sigma_b = {c->o->sigma_b_dz, c->o->sigma_b_a}};
+    int *rows = NULL;
+    if (c->nshape && c->o->shape_common_mode) {
+        rows = malloc((size_t)c->o->nshapes * sizeof *rows);
+        if (!rows) {
+            free(phase);
+            return -1;
+        }
+        for (int i = 0; i < c->o->nshapes; i++) rows[i] = 2 * (c->o->shapes[i].k > 0 ? c->o->shapes[i].k : 0);
+        in.nshapes = c->o->nshapes;
+        in.shape_rows = rows;
+    }
     rod_fit_lm_cov_out out = {.cov = cov, .corr = corr, .se = se, .determined = det};
     int rc = rod_fit_lm_covariance(&in, &out);
     free(phase);
+    free(rows);
     if (rc) return -1;
     res->sv_min = out.sv_min;
     res->sv_max = out.sv_max;

@@ -82,6 +82,10 @@ typedef struct rod_fit_opts {
     int nshapes;
     double sigma_shape;              /* noise of each shape coordinate, over l (the tracker's
                                         centreline noise; 0.001 by default) */
+    int shape_common_mode;           /* 1: each shape's error also has a common mode, its own
+                                        residual's direction and size, in the covariance (the
+                                        sandwich of rod_fit_sandwich.h; values unchanged); 0: the
+                                        shape's rows are independent noise (the default) */
     const double *start;             /* NULL: the fit starts at the scene's values; else
                                         ROD_FIT_NKEYS values in fit units where the fitted ones start
                                         (clamped into the bounds; a non-finite one: the scene's),

@@ -239,6 +239,8 @@ int rod_fit_lm_covariance(const rod_fit_lm_cov_in *in, rod_fit_lm_cov_out *out)
         out->sigma_b[a] = sqrt(rho[a]) * sg;
     }
     if (rod_fit_sandwich_add(in->Jw, in->nobs, p, in->phase, rho, hinv, cw)) goto done;
+    if (in->nshapes > 0 && rod_fit_sandwich_add_shapes(in->Jw, in->f, p, 2 * in->nobs, in->shape_rows, in->nshapes, hinv, cw))
+        goto done;
     for (int a = 0; a < p; a++)
         for (int b = 0; b < p; b++)
             out->cov[(size_t)a * p + b] = in->factor * cw[(size_t)a * p + b] * in->scale[a] * in->scale[b];

@@ -59,6 +59,9 @@ typedef struct rod_fit_lm_cov_in {
     const int *phase;            /* nobs: each observation's phase (rod_fit_phases) */
     double sigma[2], sigma_b[2]; /* per-frame noise and common mode (0: none; < 0: estimated from
                                     the residuals) of Delta Z and A: rod_fit_opts */
+    int nshapes;                 /* shapes with a common mode each (rod_fit_opts.shape_common_mode;
+                                    0: none): shape s has shape_rows[s] of the nshape rows, in order */
+    const int *shape_rows;
 } rod_fit_lm_cov_in;
 
 typedef struct rod_fit_lm_cov_out {

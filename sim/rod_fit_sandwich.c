@@ -68,3 +68,23 @@ int rod_fit_sandwich_add(const double *Jw, int nobs, int p, const int *phase, co
     free(g);
     return 0;
 }
+
+int rod_fit_sandwich_add_shapes(const double *Jw, const double *f, int p, int row0, const int *rows, int nshapes,
+                                const double *hinv, double *cov)
+{
+    double *g = malloc(sizeof(double) * 2 * (size_t)(p > 0 ? p : 1)), *h = g + (p > 0 ? p : 1);
+    if (!g) return -1;
+    for (int s = 0, r0 = row0; s < nshapes; r0 += rows[s], s++) {
+        for (int j = 0; j < p; j++) g[j] = 0.0;
+        for (int r = r0; r < r0 + rows[s]; r++)
+            for (int j = 0; j < p; j++) g[j] += Jw[(size_t)r * p + j] * f[r];
+        for (int i = 0; i < p; i++) {
+            h[i] = 0.0;
+            for (int j = 0; j < p; j++) h[i] += hinv[(size_t)i * p + j] * g[j];
+        }
+        for (int i = 0; i < p; i++)
+            for (int j = 0; j < p; j++) cov[(size_t)i * p + j] += h[i] * h[j];
+    }
+    free(g);
+    return 0;
+}

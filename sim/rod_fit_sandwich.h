@@ -29,4 +29,14 @@ void rod_fit_common_mode_estimate(const double *f, int nobs, const int *phase, d
 int rod_fit_sandwich_add(const double *Jw, int nobs, int p, const int *phase, const double rho[2], const double *hinv,
                           double *cov);
 
+/* The centrelines' common mode (rod_fit_opts.shape_common_mode): the tracker's error on one
+   centreline is a smooth deformation of the whole curve, not 2 k independent rows, so each
+   shape's whitened error covariance is taken as I + r_s r_s^T, r_s its own whitened residuals at
+   the solution (the deformation the fit could not follow, as its direction and size). The
+   sandwich's extra term per shape is then (H^-1 g_s)(H^-1 g_s)^T with g_s = J_s^T r_s, J_s the
+   shape's whitened rows. Jw and f hold the data rows in order: the shapes' rows start at row0,
+   shape s has rows[s] of them. cov += sum over shapes; 0, or -1 (out of memory: cov untouched). */
+int rod_fit_sandwich_add_shapes(const double *Jw, const double *f, int p, int row0, const int *rows, int nshapes,
+                                const double *hinv, double *cov);
+
 #endif

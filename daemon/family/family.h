@@ -111,6 +111,9 @@ typedef struct family_case_opts {
                               (film.n_shapes frames) plus Gaussian noise of shape_noise, _TRACKER:
                               the tracker's; fed to both fits as rod_fit_opts.shapes */
     double shape_noise;    /* over l, per coordinate (FAMILY_SHAPES_TRUTH) */
+    int refresh_shapes;    /* 1 (default): the refresh (the fit with the shear) keeps the centrelines,
+                              0: drops them, as the trial's refreshes do (daemon/trial/trial_calibrate.h;
+                              with fit.shape_common_mode, the trial's fit 0) */
 } family_case_opts;
 
 enum { FAMILY_SHAPES_NONE, FAMILY_SHAPES_TRUTH, FAMILY_SHAPES_TRACKER };

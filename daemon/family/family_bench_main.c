@@ -43,7 +43,8 @@ static const char usage[] =
     "                         [--threads T] [--fit KEY,KEY,...] [--prior KEY=SIGMA ...]\n"
     "                         [--shear-frac F] [--sigma-dz X] [--sigma-a X] [--sigma-b-dz X]\n"
     "                         [--sigma-b-a X] [--held-at-truth]\n"
-    "                         [--shapes N [--shape-source truth|tracker] [--sigma-shape X]]\n"
+    "                         [--shapes N [--shape-source truth|tracker] [--sigma-shape X]\n"
+    "                         [--shape-common-mode] [--refresh-shapes keep|drop]]\n"
     "                         [--verbose [--verbose]] [--json]\n"
     "  Draws N twins (20) of the scene's strip with seed S (1) across a hand-made strip's ranges\n"
     "  (crease angles 75-95 deg within 5% of each other, hinge bending length 1-20% of l, E -+ 20%,\n"
@@ -65,7 +66,10 @@ static const char usage[] =
     "  --shapes N: the strip's centreline at N compression frames (the last at the hold's Delta L)\n"
     "  is fitted too, 24 points each (docs/calibration.md): the twin's own with Gaussian noise of\n"
     "  --sigma-shape X per coordinate (over l; 0.001) with --shape-source truth (the default), or\n"
-    "  the tracker's mapped to the plane with --shape-source tracker (weighted by X all the same).\n";
+    "  the tracker's mapped to the plane with --shape-source tracker (weighted by X all the same).\n"
+    "  --shape-common-mode: each centreline's error has a common mode too (its residual, in the\n"
+    "  covariance); --refresh-shapes drop: the fit with the shear leaves the centrelines out (keep:\n"
+    "  the default); both together are the trial's fit with sim.fit_shape (docs/calibration.md).\n";
 
 #define MAX_SETS 32
 #define MAX_TWINS 1000
@@ -225,6 +229,7 @@ int main(int argc, char **argv)
     double frac = 0.8, sigma_dz = 0, sigma_a = 0, sigma_b_dz = 0, sigma_b_a = 0.003;
     int held_truth = 0, nshapes = 0, shape_source = FAMILY_SHAPES_TRUTH;
     double sigma_shape = 0.001;
+    int shape_cm = 0, refresh_shapes = 1;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         int more = i + 1 < argc;
@@ -243,6 +248,11 @@ int main(int argc, char **argv)
             continue;
         else if (!strcmp(a, "--shapes") && more && (nshapes = (int)strtol(argv[++i], &end, 10), !*end) && nshapes >= 0 &&
                  nshapes <= 20) continue;
+        else if (!strcmp(a, "--shape-common-mode")) shape_cm = 1;
+        else if (!strcmp(a, "--refresh-shapes") && more && (!strcmp(argv[i + 1], "keep") || !strcmp(argv[i + 1], "drop"))) {
+            refresh_shapes = !strcmp(argv[++i], "keep");
+            continue;
+        }
         else if (!strcmp(a, "--sigma-shape") && more && (sigma_shape = strtod(argv[++i], &end), !*end) &&
                  sigma_shape > 0 && isfinite(sigma_shape)) continue;
         else if (!strcmp(a, "--shape-source") && more && (!strcmp(argv[i + 1], "truth") || !strcmp(argv[i + 1], "tracker"))) {
@@ -284,6 +294,8 @@ int main(int argc, char **argv)
     j.o.shape_source = nshapes > 0 ? shape_source : FAMILY_SHAPES_NONE;
     j.o.shape_noise = sigma_shape;
     j.o.fit.sigma_shape = sigma_shape;
+    j.o.fit.shape_common_mode = shape_cm;
+    j.o.refresh_shapes = refresh_shapes;
     if (sigma_dz > 0 || sigma_a > 0) {
         j.o.noise_from_hold = 0;
         if (sigma_dz > 0) j.o.fit.sigma_dz = sigma_dz;
@@ -360,7 +372,8 @@ int main(int argc, char **argv)
           "\"snap_band_cpu_s_max\":%.6g,\"in_trial_cpu_s_median\":%.6g,"
           "\"in_trial_cpu_s_max\":%.6g,\"refresh_total_cpu_s_median\":%.6g,\"refresh_total_cpu_s_max\":%.6g,"
           "\"threads\":%d,\"wall_s\":%.6g,\"shapes\":%d,\"shape_source\":\"%s\",\"sigma_shape\":%.6g,"
-          "\"before_pos_undetermined\":%d,\"at_pos_undetermined\":%d,\"shape_rms\":%.6g}\n"
+          "\"before_pos_undetermined\":%d,\"at_pos_undetermined\":%d,\"shape_rms\":%.6g,"
+          "\"shape_common_mode\":%d,\"refresh_shapes\":\"%s\"}\n"
         : "bench-fit-family twins=%d ran=%d seed=%llu nodes=%d fit=%s scene_err_median=%.5f scene_err_max=%.5f "
           "before_fits=%d before_err_median=%.5f before_err_max=%.5f before_in_2sd=%.3f before_z_median=%.2f "
           "before_regime=%d/%d at_fits=%d at_err_median=%.5f at_err_max=%.5f at_in_2sd=%.3f at_z_median=%.2f "
@@ -369,14 +382,16 @@ int main(int argc, char **argv)
           "snap_band_cpu_s_max=%.3f "
           "in_trial_cpu_s_median=%.3f in_trial_cpu_s_max=%.3f refresh_total_cpu_s_median=%.3f "
           "refresh_total_cpu_s_max=%.3f threads=%d wall_s=%.1f shapes=%d shape_source=%s sigma_shape=%.5f "
-          "before_pos_undetermined=%d at80_pos_undetermined=%d shape_rms=%.6f\n";
+          "before_pos_undetermined=%d at80_pos_undetermined=%d shape_rms=%.6f shape_common_mode=%d "
+          "refresh_shapes=%s\n";
     printf(fmt, s.twins, s.ran, seed, sc.nodes, keys, s.scene_median, s.scene_max, s.fits_before, s.before_median,
            s.before_max, s.before_in2sd, s.before_z_median, s.regime_right_before, s.regime_scored_before, s.fits_at,
            s.at_median, s.at_max, s.at_in2sd, s.at_z_median, s.regime_right_at, s.regime_scored_at, frac,
            s.tracker_dz_rms, s.tracker_a_rms, fb_med, fb_max, rf_med, rf_max, sn_med, sn_max, it_med, it_max, ir_med,
            ir_max, threads,
            wall, nshapes, j.o.shape_source == FAMILY_SHAPES_TRACKER ? "tracker" : nshapes > 0 ? "truth" : "none",
-           sigma_shape, s.before_pos_undetermined, s.at_pos_undetermined, s.shape_rms);
+           sigma_shape, s.before_pos_undetermined, s.at_pos_undetermined, s.shape_rms, shape_cm,
+           refresh_shapes ? "keep" : "drop");
     for (int k = 0; k < twins; k++)
         if (!j.cases[k].ok) fprintf(stderr, "ribbon-fit-family: %s\n", j.cases[k].why);
     free(j.cases);

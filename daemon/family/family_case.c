@@ -41,6 +41,7 @@ family_case_opts family_case_opts_default(const rod_scene *sc)
     o.fit.prior_sigma[ROD_FIT_HINGE] = 0.88;
     o.shape_source = FAMILY_SHAPES_NONE;
     o.shape_noise = 0.001;
+    o.refresh_shapes = 1;
     return o;
 }
 
@@ -202,6 +203,10 @@ int family_case_run(const rod_scene *sc, const family_ranges *rg, uint64_t seed,
     if (out->before.ok) {
         rod_scene warm = *sc;
         rod_fit_scene_apply(&warm, out->before.fit.u);
+        if (!o->refresh_shapes) {
+            fo_fit.shapes = NULL;
+            fo_fit.nshapes = 0;
+        }
         for (int k = 0; k < ROD_FIT_NKEYS; k++)
             if (fo_fit.fit[k]) {
                 fo_fit.lo[k] = out->before.fit.lo[k];

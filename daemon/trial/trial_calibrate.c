@@ -30,14 +30,35 @@ typedef struct calib_job {
     int nobs_before, nobs_shear;
     rod_fit_shape shapes[TRIAL_CALIBRATE_SHAPES];
     int nshapes;
+    int positions;            /* a refresh after fit 0 took the centrelines: the positions fitted
+                                 with TRIAL_CALIBRATE_PRIOR_POSITION around the scene's (fit 0's) */
     trial_calibrated res;
 } calib_job;
 
-/* A measured frame's centreline, resampled, with the frame's observation. */
+/* A measured frame's centreline, resampled, with the frame's observation and its place among the
+ * centrelines handed in (seq: 0, 1, ...). */
 typedef struct shape_frame {
     rod_fit_obs o;
     rod_fit_shape s;
+    long seq;
 } shape_frame;
+
+/* The first fit's choice (choose_shapes) as the frames come: TRIAL_CALIBRATE_SHAPES - 1 targets in
+ * Delta L, from the first centreline handed in (lo) to the hold's (the scene's protocol.compression),
+ * each with the TRIAL_CALIBRATE_SHAPES frames nearest it so far (ties: the earlier), and the last frame
+ * (the hold's last). The choice takes the last, then for each target the nearest frame not taken:
+ * at most TRIAL_CALIBRATE_SHAPES - 1 are taken before a target's turn, so its nearest untaken frame
+ * is among its TRIAL_CALIBRATE_SHAPES nearest, and the choice from these slots is the choice from
+ * every frame. A frame that enters no slot is never needed: the runner maps only the ones that do. */
+#define SHAPE_TARGETS (TRIAL_CALIBRATE_SHAPES - 1)
+typedef struct shape_slots {
+    shape_frame near[SHAPE_TARGETS][TRIAL_CALIBRATE_SHAPES]; /* by distance to the target, then seq */
+    int nnear[SHAPE_TARGETS];
+    shape_frame last;
+    int have_last;
+    long handed;              /* centrelines handed in and kept (the next seq) */
+    double lo;                /* Delta L of the first one (NaN: none yet) */
+} shape_slots;
 
 typedef struct obs_buf {
     rod_fit_obs *v;
@@ -47,11 +68,11 @@ typedef struct obs_buf {
 struct trial_calibrate {
     trial_calibrate_def def;
     obs_buf before, shear;
-    shape_frame *shapes;      /* centrelines handed in (def.fit_shape) */
-    int nshape_frames, shape_cap;
+    shape_slots shapes;       /* the centrelines the first fit may take (def.fit_shape): a fixed set */
     rod_fit_shape chosen[TRIAL_CALIBRATE_SHAPES]; /* the ones the first fit took, kept by refreshes */
     rod_fit_obs chosen_obs[TRIAL_CALIBRATE_SHAPES];
     int nchosen;
+    double fit0_pos[2];       /* fit 0's crease positions when it took the centrelines (NaN: none) */
     long dropped;             /* frames not kept (out of memory) */
     calib_job *job;           /* the running worker, or NULL */
     int started;              /* the first fit was started */
@@ -172,9 +193,28 @@ void trial_calibrate_compute(const rod_scene *sc, const char *keys, const rod_fi
     trial_calibrate_compute_shapes(sc, keys, obs, nobs_before, nobs_shear, NULL, 0, cancel, r);
 }
 
+static void compute(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before, int nobs_shear,
+                    const rod_fit_shape *shapes, int nshapes, int positions, const atomic_int *cancel,
+                    trial_calibrated *r);
+
 void trial_calibrate_compute_shapes(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
                                     int nobs_shear, const rod_fit_shape *shapes, int nshapes,
                                     const atomic_int *cancel, trial_calibrated *r)
+{
+    compute(sc, keys, obs, nobs_before, nobs_shear, shapes, nshapes, 0, cancel, r);
+}
+
+void trial_calibrate_compute_refresh(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
+                                     int nobs_shear, const atomic_int *cancel, trial_calibrated *r)
+{
+    compute(sc, keys, obs, nobs_before, nobs_shear, NULL, 0, 1, cancel, r);
+}
+
+/* The fit and its snap (the header's trial_calibrate_compute_*): positions = 1 fits both crease
+ * positions (default keys, where the strip has them) with TRIAL_CALIBRATE_PRIOR_POSITION around sc's. */
+static void compute(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before, int nobs_shear,
+                    const rod_fit_shape *shapes, int nshapes, int positions, const atomic_int *cancel,
+                    trial_calibrated *r)
 {
     double t0 = wall_now();
     r->ok = 0;
@@ -222,17 +262,23 @@ void trial_calibrate_compute_shapes(const rod_scene *sc, const char *keys, const
         }
     }
     if (have_start) o.start = start;
-    if (r->nshapes && (!keys || !*keys)) {
+    if ((r->nshapes || positions) && (!keys || !*keys)) {
         /* The centreline sees where the creases are (docs/calibration.md "The centreline as an
-         * observable"): the default set takes both positions too, where the strip has them. */
+         * observable"): the default set takes both positions too, where the strip has them. A
+         * refresh without the centrelines keeps them, with the specimen's tolerance as a prior
+         * around fit 0's values (the scene's here), which the shear's frames then refine. */
         char unused[200];
         for (int k = ROD_FIT_POSITION_LEFT; k <= ROD_FIT_POSITION_RIGHT; k += ROD_FIT_POSITION_RIGHT - ROD_FIT_POSITION_LEFT)
-            if (!rod_fit_key_usable(sc, (rod_fit_key)k, unused, sizeof unused)) o.fit[k] = 1;
+            if (!rod_fit_key_usable(sc, (rod_fit_key)k, unused, sizeof unused)) {
+                o.fit[k] = 1;
+                if (positions) o.prior_sigma[k] = TRIAL_CALIBRATE_PRIOR_POSITION;
+            }
     }
     if (r->nshapes) {
         o.shapes = shapes;
         o.nshapes = nshapes;
         o.sigma_shape = TRIAL_CALIBRATE_SIGMA_SHAPE;
+        o.shape_common_mode = 1; /* each centreline's error a deformation of its own (rod_fit.h) */
     }
     char why[320] = "";
     rod_status st = rod_fit_run(sc, obs, nobs, &o, &r->fit, why, sizeof why);
@@ -301,8 +347,8 @@ static void *job_main(void *arg)
      * SCHED_IDLE, the fit and its band's predictions on CPU time no one else wants (trial_idle.h). */
     if (j->idle) trial_idle_enter(NULL, 0); /* refused: nice 19 (trial_idle.h) */
     j->res.idle = trial_idle_is(0) == 1;        /* the class read back, said in the landing event */
-    trial_calibrate_compute_shapes(&j->scene, j->keys, j->obs, j->nobs_before, j->nobs_shear, j->shapes, j->nshapes,
-                                   &j->cancel, &j->res);
+    compute(&j->scene, j->keys, j->obs, j->nobs_before, j->nobs_shear, j->shapes, j->nshapes, j->positions, &j->cancel,
+            &j->res);
     int expected = JOB_RUNNING;
     if (!atomic_compare_exchange_strong(&j->state, &expected, JOB_DONE)) job_free(j); /* abandoned */
     return NULL;
@@ -393,6 +439,11 @@ static int shear_below(const trial_calibrate *c, double limit)
 static void land(trial_calibrate *c, trial_calibrated *r, double t)
 {
     r->t_landed = t;
+    if (r->refresh == 0 && r->ok && r->nshapes && r->fit.fitted[ROD_FIT_POSITION_LEFT] &&
+        r->fit.fitted[ROD_FIT_POSITION_RIGHT]) {
+        c->fit0_pos[0] = r->fit.u[ROD_FIT_POSITION_LEFT];
+        c->fit0_pos[1] = r->fit.u[ROD_FIT_POSITION_RIGHT];
+    }
     r->t_shear = c->t_shear;
     if (r->ok && r->nobs_shear > 0 && isfinite(c->dw_snap) && r->dw_cut >= c->dw_snap)
         failed(r, "after_snap",
@@ -454,36 +505,51 @@ static void collect(trial_calibrate *c, double t)
     job_free(j);
 }
 
-/* The first fit's centrelines: TRIAL_CALIBRATE_SHAPES of those handed in, evenly in Delta L from
- * the first tracked to the last (the hold's), each the one nearest its Delta L, none twice. */
+/* Target j's Delta L (j = 0 .. SHAPE_TARGETS - 1): evenly from the first centreline's to the hold's. */
+static double shape_target(const trial_calibrate *c, int j)
+{
+    double hi = c->def.scene.compression;
+    return c->shapes.lo + (hi - c->shapes.lo) * j / (TRIAL_CALIBRATE_SHAPES - 1);
+}
+
+/* 1 when frame f (at distance d of target j) comes before slot e in target j's order. */
+static int shape_before(const trial_calibrate *c, int j, const rod_fit_obs *o, long seq, const shape_frame *e)
+{
+    double t = shape_target(c, j), d = fabs(o->dl - t), de = fabs(e->o.dl - t);
+    return d < de || (d == de && seq < e->seq);
+}
+
+/* The first fit's centrelines: TRIAL_CALIBRATE_SHAPES of those handed in, the last one (the hold's
+ * last), then for each target from the highest down the nearest not taken yet (ties: the earlier),
+ * chosen from the slots (shape_slots). */
 static void choose_shapes(trial_calibrate *c)
 {
     c->nchosen = 0;
-    int n = c->nshape_frames;
-    if (!c->def.fit_shape || n == 0) return;
-    double lo = c->shapes[0].o.dl, hi = c->shapes[n - 1].o.dl;
-    int used[TRIAL_CALIBRATE_SHAPES];
-    for (int j = TRIAL_CALIBRATE_SHAPES - 1; j >= 0; j--) {
-        int best = -1;
-        if (j == TRIAL_CALIBRATE_SHAPES - 1) {
-            best = n - 1; /* the hold's last */
-        } else {
-            double target = lo + (hi - lo) * j / (TRIAL_CALIBRATE_SHAPES - 1), err = INFINITY;
-            for (int k = 0; k < n; k++) {
-                int taken = 0;
-                for (int u = 0; u < c->nchosen; u++) taken |= used[u] == k;
-                if (!taken && fabs(c->shapes[k].o.dl - target) < err) {
-                    err = fabs(c->shapes[k].o.dl - target);
-                    best = k;
-                }
-            }
+    const shape_slots *sl = &c->shapes;
+    if (!c->def.fit_shape || sl->handed == 0) return;
+    /* The last: the one handed in as last, else the latest in the slots. */
+    const shape_frame *last = sl->have_last ? &sl->last : NULL;
+    for (int j = 0; j < SHAPE_TARGETS; j++)
+        for (int q = 0; q < sl->nnear[j]; q++)
+            if (!last || sl->near[j][q].seq > last->seq) last = &sl->near[j][q];
+    if (!last) return;
+    long used[TRIAL_CALIBRATE_SHAPES];
+    used[0] = last->seq;
+    c->chosen[0] = last->s;
+    c->chosen_obs[0] = last->o;
+    c->nchosen = 1;
+    for (int j = SHAPE_TARGETS - 1; j >= 0; j--)
+        for (int q = 0; q < sl->nnear[j]; q++) { /* nearest first */
+            const shape_frame *f = &sl->near[j][q];
+            int taken = 0;
+            for (int u = 0; u < c->nchosen; u++) taken |= used[u] == f->seq;
+            if (taken) continue;
+            used[c->nchosen] = f->seq;
+            c->chosen[c->nchosen] = f->s;
+            c->chosen_obs[c->nchosen] = f->o;
+            c->nchosen++;
+            break;
         }
-        if (best < 0) continue;
-        used[c->nchosen] = best;
-        c->chosen[c->nchosen] = c->shapes[best].s;
-        c->chosen_obs[c->nchosen] = c->shapes[best].o;
-        c->nchosen++;
-    }
 }
 
 /* Starts a worker on the frames so far (refresh 0: those before the shear only). */
@@ -513,7 +579,19 @@ static void launch(trial_calibrate *c, double t, int refresh)
     j->obs = obs;
     j->nobs_before = thin_into(obs, &c->before, TRIAL_CALIBRATE_MAX_HOLD_OBS);
     if (refresh == 0) choose_shapes(c);
-    for (int s = 0; s < c->nchosen; s++) {
+    /* The refreshes leave the centrelines out (the tracker's error on them is not independent
+     * noise: with them the band at 80% of the way held the snap in 85% of the family, without them
+     * 90%; docs/calibration.md); the positions fit 0 found with them stay fitted, their prior
+     * centred on fit 0's values. */
+    j->positions = refresh > 0 && c->nchosen > 0;
+    if (j->positions && isfinite(c->fit0_pos[0]) && isfinite(c->fit0_pos[1])) {
+        double u[ROD_FIT_NKEYS];
+        rod_fit_scene_values(&j->scene, u);
+        u[ROD_FIT_POSITION_LEFT] = c->fit0_pos[0];
+        u[ROD_FIT_POSITION_RIGHT] = c->fit0_pos[1];
+        rod_fit_scene_apply(&j->scene, u);
+    }
+    for (int s = 0; s < c->nchosen && refresh == 0; s++) {
         /* Each shape's frame among the observations (the shape is modelled at its state). */
         int have = 0;
         for (int k = 0; k < j->nobs_before && !have; k++)
@@ -521,7 +599,7 @@ static void launch(trial_calibrate *c, double t, int refresh)
         if (!have) obs[j->nobs_before++] = c->chosen_obs[s];
         j->shapes[s] = c->chosen[s];
     }
-    j->nshapes = c->nchosen;
+    j->nshapes = refresh == 0 ? c->nchosen : 0;
     j->nobs_shear = 0;
     int below = shear_below(c, limit);
     if (refresh && below > 0) {
@@ -578,6 +656,7 @@ trial_calibrate *trial_calibrate_new(const trial_calibrate_def *def, char *why, 
     }
     c->def = *def;
     c->t_shear = c->t_snap = c->dw_snap = NAN;
+    c->fit0_pos[0] = c->fit0_pos[1] = NAN;
     c->t_last_start = -INFINITY;
     return c;
 }
@@ -591,24 +670,61 @@ void trial_calibrate_add(trial_calibrate *c, int shear, double dl, double dw, do
 
 int trial_calibrate_wants_shape(const trial_calibrate *c)
 {
-    return c && c->def.fit_shape && !c->started && !c->ended && c->nshape_frames < TRIAL_CALIBRATE_MAX_SHAPE_FRAMES;
+    return c && c->def.fit_shape && !c->started && !c->ended;
+}
+
+int trial_calibrate_shape_wanted(const trial_calibrate *c, double dl)
+{
+    if (!trial_calibrate_wants_shape(c) || !isfinite(dl)) return 0;
+    if (c->shapes.handed == 0) return 1;
+    rod_fit_obs o = {dl, 0.0, 0.0, 0.0};
+    for (int j = 0; j < SHAPE_TARGETS; j++)
+        if (c->shapes.nnear[j] < TRIAL_CALIBRATE_SHAPES ||
+            shape_before(c, j, &o, c->shapes.handed, &c->shapes.near[j][TRIAL_CALIBRATE_SHAPES - 1]))
+            return 1;
+    return 0;
 }
 
 void trial_calibrate_add_shape(trial_calibrate *c, double dl, double dw, double dz, double a, const double *xz,
-                               int n)
+                               int n, int last)
 {
-    if (!trial_calibrate_wants_shape(c) || !xz || n < 2) return;
-    if (c->nshape_frames == c->shape_cap) {
-        int cap = c->shape_cap ? 2 * c->shape_cap : 64;
-        shape_frame *v = realloc(c->shapes, sizeof *v * (size_t)cap);
-        if (!v) return;
-        c->shapes = v;
-        c->shape_cap = cap;
+    if (!trial_calibrate_wants_shape(c) || !xz || n < 2 || !isfinite(dl)) return;
+    shape_slots *sl = &c->shapes;
+    shape_frame f;
+    f.o = (rod_fit_obs){dl, dw, dz, a};
+    f.s = (rod_fit_shape){.dl = dl, .dw = dw, .k = TRIAL_CALIBRATE_SHAPE_POINTS};
+    if (rod_shape_resample(xz, n, TRIAL_CALIBRATE_SHAPE_POINTS, f.s.xz) != 0) return;
+    f.seq = sl->handed++;
+    if (f.seq == 0) sl->lo = dl;
+    for (int j = 0; j < SHAPE_TARGETS; j++) {
+        int m = sl->nnear[j], q = m;
+        while (q > 0 && shape_before(c, j, &f.o, f.seq, &sl->near[j][q - 1])) q--;
+        if (q >= TRIAL_CALIBRATE_SHAPES) continue;
+        if (m == TRIAL_CALIBRATE_SHAPES) m--; /* the farthest leaves */
+        memmove(&sl->near[j][q + 1], &sl->near[j][q], sizeof f * (size_t)(m - q));
+        sl->near[j][q] = f;
+        sl->nnear[j] = m + 1;
     }
-    shape_frame *f = &c->shapes[c->nshape_frames];
-    f->o = (rod_fit_obs){dl, dw, dz, a};
-    f->s = (rod_fit_shape){.dl = dl, .dw = dw, .k = TRIAL_CALIBRATE_SHAPE_POINTS};
-    if (rod_shape_resample(xz, n, TRIAL_CALIBRATE_SHAPE_POINTS, f->s.xz) == 0) c->nshape_frames++;
+    if (last) {
+        sl->last = f;
+        sl->have_last = 1;
+    }
+}
+
+int trial_calibrate_shapes_kept(const trial_calibrate *c)
+{
+    if (!c) return 0;
+    int n = c->shapes.have_last;
+    for (int j = 0; j < SHAPE_TARGETS; j++) n += c->shapes.nnear[j];
+    return n;
+}
+
+int trial_calibrate_shapes_choose(trial_calibrate *c, rod_fit_obs *obs)
+{
+    if (!c) return 0;
+    choose_shapes(c);
+    for (int s = 0; s < c->nchosen && obs; s++) obs[s] = c->chosen_obs[s];
+    return c->nchosen;
 }
 
 void trial_calibrate_start(trial_calibrate *c, double t)
@@ -699,7 +815,6 @@ void trial_calibrate_free(trial_calibrate *c)
     if (!c->ended) trial_calibrate_end(c, NAN, 1);
     free(c->before.v);
     free(c->shear.v);
-    free(c->shapes);
     free(c);
 }
 

@@ -64,16 +64,25 @@
                                               over 1-20% of l, log-uniform (the family's, calibration.md) */
 
 /* The tracked centreline as the fit's observable (sim.fit_shape; sim/rod_fit.h opts.shapes): the
- * runner hands in the centreline of each measured compression and hold frame, mapped to the plane
- * (vis_calib_curve_to_plane, over l, relative to the simulator's left clamp point); the fit takes
- * TRIAL_CALIBRATE_SHAPES of them, evenly in Delta L over the tracked ones, the last at the hold,
- * each resampled at TRIAL_CALIBRATE_SHAPE_POINTS points, with noise TRIAL_CALIBRATE_SIGMA_SHAPE
- * (over l: the tracker's centreline error the family's films measured, docs/calibration.md); each
- * shape's frame joins the observations. Refreshes keep the same shapes. */
+ * fit takes TRIAL_CALIBRATE_SHAPES measured compression and hold frames' centrelines, mapped to the
+ * plane (vis_calib_curve_to_plane, over l, relative to the simulator's left clamp point): the hold's
+ * last, and the frames nearest TRIAL_CALIBRATE_SHAPES - 1 targets evenly in Delta L from the first
+ * one handed in to the hold's (the scene's protocol.compression), each resampled at
+ * TRIAL_CALIBRATE_SHAPE_POINTS points, with noise TRIAL_CALIBRATE_SIGMA_SHAPE (over l: the
+ * tracker's centreline error the family's films measured, docs/calibration.md); each shape's frame
+ * joins the observations. The choice is made as the frames come, in a fixed set of slots (the
+ * TRIAL_CALIBRATE_SHAPES nearest each target and the last: at most TRIAL_CALIBRATE_SHAPES^2 - 
+ * TRIAL_CALIBRATE_SHAPES + 1 kept), and the runner maps a frame's centreline only when it enters one
+ * (trial_calibrate_shape_wanted), not every frame of the hold. Fit 0 weights each centreline's
+ * error as a deformation of its own besides the independent noise (rod_fit_opts.shape_common_mode).
+ * The refreshes leave the centrelines out (with them the band at 80% of the way held the family's
+ * snaps in 85%, without them 90%: docs/calibration.md) and fit the positions fit 0 found with them
+ * with a prior of TRIAL_CALIBRATE_PRIOR_POSITION around fit 0's values. */
 #define TRIAL_CALIBRATE_SHAPES 4
 #define TRIAL_CALIBRATE_SHAPE_POINTS 24
 #define TRIAL_CALIBRATE_SIGMA_SHAPE 0.0016
-#define TRIAL_CALIBRATE_MAX_SHAPE_FRAMES 2048 /* centrelines kept to choose from (later ones dropped) */
+#define TRIAL_CALIBRATE_PRIOR_POSITION 0.006 /* over l: the specimen record's -+ 1% of l (uniform: sd
+                                                0.0058), ribbon-fit-family's prior on the positions */
 
 typedef struct trial_calibrated {
     int ok;                 /* 1: fitted and its snap predicted; 0: failed (reason_key, reason) */
@@ -133,14 +142,23 @@ void trial_calibrate_free(trial_calibrate *c);
 
 /* A measured frame: shear = 0 for the compression and hold, 1 for the shear. */
 void trial_calibrate_add(trial_calibrate *c, int shear, double dl, double dw, double dz, double a);
-/* 1 while centrelines are wanted (def.fit_shape and the first fit not started yet): the runner
- * maps a frame's centreline only then. 0 on NULL. */
+/* 1 while centrelines are wanted (def.fit_shape and the first fit not started yet). 0 on NULL. */
 int trial_calibrate_wants_shape(const trial_calibrate *c);
-/* The centreline of a measured compression or hold frame (the one just added with the same dl, dw,
- * dz, a): n points (x, z) over l relative to the simulator's left clamp point (2 n values), kept
- * resampled; a polyline that cannot be resampled is ignored. */
+/* 1 when a measured compression or hold frame at Delta L dl, handed in next, would enter the set the
+ * first fit chooses from (the header comment above): the runner maps its centreline only then, and
+ * always the last one's (the hold's last, once the hold ends). Frames are offered in their order. */
+int trial_calibrate_shape_wanted(const trial_calibrate *c, double dl);
+/* The centreline of a measured compression or hold frame (dl, dw, dz, a: the frame's observation,
+ * handed to trial_calibrate_add too): n points (x, z) over l relative to the simulator's left clamp
+ * point (2 n values), kept resampled where it enters the set; last = 1 for the last frame before the
+ * fit starts (the hold's last: always kept). A polyline that cannot be resampled is ignored. */
 void trial_calibrate_add_shape(trial_calibrate *c, double dl, double dw, double dz, double a, const double *xz,
-                               int n);
+                               int n, int last);
+/* Tests: the centrelines kept (at most TRIAL_CALIBRATE_SHAPES (TRIAL_CALIBRATE_SHAPES - 1) + 1), and
+ * the ones the first fit would take now (their frames into obs, TRIAL_CALIBRATE_SHAPES at most; the
+ * count returned). */
+int trial_calibrate_shapes_kept(const trial_calibrate *c);
+int trial_calibrate_shapes_choose(trial_calibrate *c, rod_fit_obs *obs);
 /* The hold ended at trial time t: the fit from the compression and hold starts now. */
 void trial_calibrate_start(trial_calibrate *c, double t);
 /* The shear started at trial time t (landings are said before or after it). */
@@ -184,9 +202,14 @@ int trial_calibrate_setup(rod_scene *sc, double fit_hinge, const char *keys, rod
  * NULL): non-zero skips the prediction. */
 void trial_calibrate_compute(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
                              int nobs_shear, const atomic_int *cancel, trial_calibrated *r);
-/* The same with nshapes centrelines (each at one observation's state, TRIAL_CALIBRATE_SIGMA_SHAPE). */
+/* The same with nshapes centrelines (each at one observation's state, TRIAL_CALIBRATE_SIGMA_SHAPE; with
+ * the default keys both crease positions too), as fit 0 with sim.fit_shape. */
 void trial_calibrate_compute_shapes(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
                                     int nobs_shear, const rod_fit_shape *shapes, int nshapes,
                                     const atomic_int *cancel, trial_calibrated *r);
+/* A refresh after such a fit 0: no centrelines, and with the default keys both crease positions
+ * with a prior of TRIAL_CALIBRATE_PRIOR_POSITION around sc's (fit 0's values put in sc). */
+void trial_calibrate_compute_refresh(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
+                                     int nobs_shear, const atomic_int *cancel, trial_calibrated *r);
 
 #endif

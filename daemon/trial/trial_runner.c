@@ -193,6 +193,14 @@ typedef struct run_ctx {
     double shape_uv[2 * TRIAL_SHAPE_UV_MAX];
     size_t shape_n;
     vis_calib shape_cal;
+    /* The latest measured compression or hold frame's centreline, not yet offered to the fit
+     * (pixels, with its calibration): offered when the next one comes, mapped only when the fit
+     * wants it (trial_calibrate_shape_wanted), and at the hold's end handed in as the last. */
+    double pend_uv[2 * TRIAL_SHAPE_UV_MAX];
+    size_t pend_n;
+    vis_calib pend_cal;
+    trial_sample pend_smp;
+    int have_pend;
 } run_ctx;
 
 static int emit_event(run_ctx *c, const char *kind, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
@@ -376,6 +384,8 @@ static void note_standing(run_ctx *c);
 static void comp_track_note(run_ctx *c);
 
 /* One step of the state machine after this iteration's frame. Returns 1 when the trial ended. */
+static void shape_offer_pending(run_ctx *c, int last);
+
 static int step(run_ctx *c, const trial_sample *smp)
 {
     trial_runner *tr = c->tr;
@@ -400,6 +410,7 @@ static int step(run_ctx *c, const trial_sample *smp)
             c->check_sum = 0.0;
             c->check_n = 0;
             vis_tracker_reset(tr->tracker); /* frames during the moves are not trusted */
+            shape_offer_pending(c, 1);            /* the hold's last centreline (sim.fit_shape) */
             trial_calibrate_start(tr->calib, c->t); /* on its worker: the shear does not wait */
             enter(c, TRIAL_CHECKING, 10.0 + 10.0 / p->fps, NULL);
         }
@@ -648,8 +659,9 @@ static int comp_track_frame(run_ctx *c, double dl, vis_measure *m)
 /* A measured compression or hold frame's centreline to the fit (sim.fit_shape): n points uv of the
  * tracker with calibration cal, mapped to the plane relative to the simulator's left clamp point
  * (a back camera's image is mirrored: its right clamp point is the simulator's left, the order
- * reversed). */
-static void shape_to_fit(run_ctx *c, const vis_calib *cal, const double *uv, size_t n, const trial_sample *smp)
+ * reversed); last: the hold's last. */
+static void shape_to_fit(run_ctx *c, const vis_calib *cal, const double *uv, size_t n, const trial_sample *smp,
+                         int last)
 {
     trial_runner *tr = c->tr;
     if (n < 2 || !trial_calibrate_wants_shape(tr->calib)) return;
@@ -671,7 +683,28 @@ static void shape_to_fit(run_ctx *c, const vis_calib *cal, const double *uv, siz
             xz[2 * i + 1] -= r[1];
         }
     }
-    trial_calibrate_add_shape(tr->calib, smp->dl, smp->dw, smp->dz, smp->a, xz, (int)n);
+    trial_calibrate_add_shape(tr->calib, smp->dl, smp->dw, smp->dz, smp->a, xz, (int)n, last);
+}
+
+/* The pending centreline to the fit: mapped and handed in when it is the last (the hold ended) or
+ * the fit wants its Delta L; dropped otherwise (never needed: trial_calibrate.h). */
+static void shape_offer_pending(run_ctx *c, int last)
+{
+    if (!c->have_pend) return;
+    c->have_pend = 0;
+    if (last || trial_calibrate_shape_wanted(c->tr->calib, c->pend_smp.dl))
+        shape_to_fit(c, &c->pend_cal, c->pend_uv, c->pend_n, &c->pend_smp, last);
+}
+
+/* A measured compression or hold frame's centreline (n points in c->pend_uv, with calibration cal)
+ * becomes the pending one, after the one before it was offered. */
+static void shape_keep_pending(run_ctx *c, const vis_calib *cal, size_t n, const trial_sample *smp)
+{
+    if (n < 2) return;
+    c->pend_n = n;
+    c->pend_cal = *cal;
+    c->pend_smp = *smp;
+    c->have_pend = 1;
 }
 
 /* The camera's offset (trial_cam_watch.h): the hold's last frames and the shear's first go to the
@@ -931,11 +964,13 @@ void trial_runner_run(trial_runner *tr, trial_result *out)
                 trial_calibrate_add(tr->calib, c.st == TRIAL_SHEARING, smp.dl, smp.dw, smp.dz, smp.a);
             if ((c.st == TRIAL_COMPRESSING || c.st == TRIAL_HOLDING) && trial_calibrate_wants_shape(tr->calib)) {
                 if (comp_frame) {
-                    shape_to_fit(&c, &c.shape_cal, c.shape_uv, c.shape_n, &smp);
+                    shape_offer_pending(&c, 0);
+                    memcpy(c.pend_uv, c.shape_uv, sizeof(double) * 2 * c.shape_n);
+                    shape_keep_pending(&c, &c.shape_cal, c.shape_n, &smp);
                 } else if (p->comp_track_from_dl > 0.0) { /* comp_calib is the tracker's calibration */
-                    size_t n = vis_tracker_samples(tr->tracker, c.shape_uv, TRIAL_SHAPE_UV_MAX);
-                    shape_to_fit(&c, &p->comp_calib, c.shape_uv, n > TRIAL_SHAPE_UV_MAX ? TRIAL_SHAPE_UV_MAX : n,
-                                 &smp);
+                    shape_offer_pending(&c, 0);
+                    size_t n = vis_tracker_samples(tr->tracker, c.pend_uv, TRIAL_SHAPE_UV_MAX);
+                    shape_keep_pending(&c, &p->comp_calib, n > TRIAL_SHAPE_UV_MAX ? TRIAL_SHAPE_UV_MAX : n, &smp);
                 }
             }
         }

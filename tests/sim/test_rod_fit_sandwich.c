@@ -171,6 +171,90 @@ static void test_estimate(void **state)
     }
 }
 
+/* The centrelines' common mode (rod_fit_sandwich_add_shapes): after the 2 NOBS rows, 3 shapes of
+   8 whitened rows each; each shape's error covariance is I + r_s r_s^T with r_s its residuals.
+   Against the exact H^-1 J^T Sigma J H^-1 with that dense Sigma (I elsewhere), and a Monte Carlo
+   of the estimate with each shape's error a smooth deformation c_s r_s, c_s ~ N(0, 1). */
+enum { NSH = 3, KSH = 8, NRS = NR + NSH * KSH };
+
+static void shape_model(double *Jw, double *f, double *hinv)
+{
+    double X[NR * P];
+    int phase[NOBS];
+    model(X, phase);
+    for (int r = 0; r < NR; r++)
+        for (int j = 0; j < P; j++) Jw[r * P + j] = X[r * P + j] / SIG[r % 2];
+    for (int s = 0; s < NSH; s++)
+        for (int q = 0; q < KSH; q++) {
+            int r = NR + s * KSH + q;
+            double t = (q + 0.5) / KSH;
+            Jw[r * P + 0] = 900.0 * sin(M_PI * t) * (s + 1);
+            Jw[r * P + 1] = 1500.0 * t * (1.0 - 0.3 * s);
+            Jw[r * P + 2] = 600.0 * (cos(2.0 * M_PI * t) + 0.5 * s);
+            f[r] = (2.0 + 0.5 * s) * sin(M_PI * t + 0.3 * s); /* a smooth residual */
+        }
+    for (int r = 0; r < NR; r++) f[r] = 0.0;
+    double H[P * P] = {0};
+    for (int r = 0; r < NRS; r++)
+        for (int i = 0; i < P; i++)
+            for (int j = 0; j < P; j++) H[i * P + j] += Jw[r * P + i] * Jw[r * P + j];
+    inv3(H, hinv);
+}
+
+static void test_shape_common_mode_exact(void **state)
+{
+    (void)state;
+    static double Jw[NRS * P], f[NRS];
+    double hinv[P * P], cov[P * P];
+    int rows[NSH] = {KSH, KSH, KSH};
+    shape_model(Jw, f, hinv);
+    memcpy(cov, hinv, sizeof cov);
+    assert_int_equal(rod_fit_sandwich_add_shapes(Jw, f, P, NR, rows, NSH, hinv, cov), 0);
+    static double Sigma[NRS][NRS], B[P][NRS];
+    for (int r = 0; r < NRS; r++)
+        for (int q = 0; q < NRS; q++) {
+            int sr = r < NR ? -1 : (r - NR) / KSH, sq = q < NR ? -1 : (q - NR) / KSH;
+            Sigma[r][q] = (r == q ? 1.0 : 0.0) + (sr >= 0 && sr == sq ? f[r] * f[q] : 0.0);
+        }
+    for (int i = 0; i < P; i++)
+        for (int r = 0; r < NRS; r++) {
+            double s = 0.0;
+            for (int j = 0; j < P; j++) s += hinv[i * P + j] * Jw[r * P + j];
+            B[i][r] = s;
+        }
+    for (int i = 0; i < P; i++)
+        for (int j = 0; j < P; j++) {
+            double s = 0.0;
+            for (int r = 0; r < NRS; r++)
+                for (int q = 0; q < NRS; q++) s += B[i][r] * Sigma[r][q] * B[j][q];
+            assert_true(fabs(cov[i * P + j] - s) <= 1e-10 * sqrt(cov[i * P + i] * cov[j * P + j]));
+        }
+    assert_true(cov[0] > 1.5 * hinv[0]); /* the shapes' common mode matters in this model */
+    /* Monte Carlo: e = N(0, I) + c_s f_s on shape s's rows */
+    enum { DRAWS = 20000 };
+    double s2[P * P] = {0};
+    for (int d = 0; d < DRAWS; d++) {
+        double g[P] = {0}, x[P], c[NSH];
+        for (int s = 0; s < NSH; s++) c[s] = gauss();
+        for (int r = 0; r < NRS; r++) {
+            double e = gauss() + (r >= NR ? c[(r - NR) / KSH] * f[r] : 0.0);
+            for (int j = 0; j < P; j++) g[j] += Jw[r * P + j] * e;
+        }
+        for (int i = 0; i < P; i++) {
+            x[i] = 0.0;
+            for (int j = 0; j < P; j++) x[i] += hinv[i * P + j] * g[j];
+        }
+        for (int i = 0; i < P; i++)
+            for (int j = 0; j < P; j++) s2[i * P + j] += x[i] * x[j] / DRAWS;
+    }
+    for (int i = 0; i < P; i++) assert_true(fabs(s2[i * P + i] / cov[i * P + i] - 1.0) < 0.05);
+    /* Zero residuals add nothing. */
+    for (int r = NR; r < NRS; r++) f[r] = 0.0;
+    memcpy(cov, hinv, sizeof cov);
+    assert_int_equal(rod_fit_sandwich_add_shapes(Jw, f, P, NR, rows, NSH, hinv, cov), 0);
+    for (int i = 0; i < P * P; i++) assert_true(cov[i] == hinv[i]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -178,6 +262,7 @@ int main(void)
         cmocka_unit_test(test_sandwich_monte_carlo),
         cmocka_unit_test(test_phases),
         cmocka_unit_test(test_estimate),
+        cmocka_unit_test(test_shape_common_mode_exact),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -21,7 +21,11 @@
  *      scene's, else all of them).
  *   6. worker_class: the worker of a rig-mode def (idle = 1) runs its fit and band in SCHED_IDLE,
  *      read back on its thread, and says so when it lands; a mock-mode def's (idle = 0) does not;
- *      the runner's thread (this test's) stays in its own class either way. */
+ *      the runner's thread (this test's) stays in its own class either way.
+ *   7. shapes_picked_as_they_come: sim.fit_shape's centrelines picked as the frames come, in a
+ *      fixed set of slots, the same as the old rule over every frame, none of a long hold mapped.
+ *   8. refresh_without_centrelines: a refresh after a fit 0 with centrelines leaves them out and
+ *      fits the crease positions with the specimen's tolerance around fit 0's values. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -410,6 +414,7 @@ static void session_mock_trial(void **state)
     assert_int_equal(events_with(t, "calibration: fitting", NULL, 0), 1);
     assert_true(events_with(t, "calibrated prediction fit 0", last, sizeof last) == 1);
     assert_true(strstr(last, "after the shear started") || strstr(last, "before the shear started"));
+    printf("%s\n", last);
     /* How many refreshes land depends on the machine (the worker runs in the process's class beside
      * the virtual-clock twin: mock mode's def.idle = 0): counted and printed; the stored one must be the last that landed ok. */
     int refreshes = events_with(t, "calibrated prediction refresh", last, sizeof last);
@@ -475,30 +480,36 @@ static void session_mock_trial(void **state)
     json_decref(t);
 }
 
-/* sim.fit_shape = on: the fit takes the tracked centreline at 4 compression and hold frames (the
+/* sim.fit_shape = on: fit 0 takes the tracked centreline at 4 compression and hold frames (the
  * last at the hold) besides Delta Z and A, and with it the default set takes both crease positions,
- * which the centreline determines (the twin's creases sit 2.5% off the scene's); the numbers are
- * printed (docs/calibration.md "In every trial": the mock trial's calibrated - measured with it on and
- * off). Without the centrelines the positions are not fitted at all. */
+ * which the centreline determines; the refreshes leave the centrelines out and keep the positions
+ * (with a prior around fit 0's). The numbers are printed (docs/calibration.md "In every trial": the
+ * mock trial's calibrated - measured with it on and off). */
 static void session_mock_trial_shapes(void **state)
 {
     (void)state;
     rig_daemon d;
-    const char *on[] = {"sim.fit_shape=on", "sim.fit_refresh_s=0"};
-    open_rig(&d, "shape.db", on, 2);
+    const char *on[] = {"sim.fit_shape=on"};
+    open_rig(&d, "shape.db", on, 1);
     trial_result r;
     int64_t id = run_trial(&d, &r);
     rig_daemon_close(&d, "test done");
     assert_int_equal(r.final, TRIAL_DONE);
     json_t *t = trial_json("shape.db", id);
-    assert_int_equal(events_with(t, "calibrated prediction fit 0 (compression and hold", NULL, 0), 1);
+    char fit0[600] = "", last[600] = "";
+    assert_int_equal(events_with(t, "calibrated prediction fit 0 (compression and hold", fit0, sizeof fit0), 1);
     assert_int_equal(events_with(t, "4 centrelines) landed", NULL, 0), 1);
+    printf("%s\n", fit0);
+    int refreshes = events_with(t, "calibrated prediction refresh", last, sizeof last);
+    printf("%d refreshes landed ok%s%s\n", refreshes, refreshes ? ", the last: " : "", refreshes ? last : "");
     json_t *fit = json_object_get(t, "fit");
     assert_true(json_is_object(fit));
     char *dump = json_dumps(fit, JSON_COMPACT);
     printf("fit: %s\n", dump ? dump : "-");
     free(dump);
-    assert_int_equal(json_integer_value(json_object_get(fit, "centrelines")), 4);
+    /* fit 0 took the 4 centrelines; a refresh leaves them out and keeps the positions */
+    int stored_refresh = (int)json_integer_value(json_object_get(fit, "refresh"));
+    assert_int_equal(json_integer_value(json_object_get(fit, "centrelines")), stored_refresh ? 0 : 4);
     json_t *ps = json_object_get(fit, "parameters");
     assert_int_equal(json_array_size(ps), 4);
     int positions = 0;
@@ -507,7 +518,6 @@ static void session_mock_trial_shapes(void **state)
         const char *key = json_string_value(json_object_get(q, "key"));
         if (key && strstr(key, "position")) {
             positions++;
-            assert_true(json_is_true(json_object_get(q, "determined")));
             assert_true(json_is_number(json_object_get(q, "se")));
         }
     }
@@ -516,9 +526,9 @@ static void session_mock_trial_shapes(void **state)
     double sd = json_number_value(json_object_get(t, "snap_sd_calibrated"));
     double pred = json_number_value(json_object_get(t, "snap_dw_predicted"));
     double meas = json_number_value(json_object_get(t, "snap_dw_measured"));
-    printf("with the centrelines: calibrated %.5f +- %.5f, measured %.5f: calibrated - measured %+.5f (%+.2f%%, %.2f "
-           "sigma); scene's - measured %+.5f\n",
-           dw, sd, meas, dw - meas, 100.0 * (dw - meas) / meas, (dw - meas) / sd, pred - meas);
+    printf("with the centrelines: stored (refresh %d) calibrated %.5f +- %.5f, measured %.5f: calibrated - measured "
+           "%+.5f (%+.2f%%, %.2f sigma); scene's - measured %+.5f\n",
+           stored_refresh, dw, sd, meas, dw - meas, 100.0 * (dw - meas) / meas, (dw - meas) / sd, pred - meas);
     assert_true(isfinite(dw) && sd > 0.0);
     json_decref(t);
 }
@@ -668,6 +678,143 @@ static void worker_class(void **state)
     assert_null(strstr(mock.event, "SCHED_IDLE"));
 }
 
+/* A refresh after a fit 0 that took the centrelines (trial_calibrate_compute_refresh): no
+ * centrelines, both crease positions fitted with TRIAL_CALIBRATE_PRIOR_POSITION around the
+ * scene's (the runner puts fit 0's values in), a finite standard error no wider than that prior. */
+static void refresh_without_centrelines(void **state)
+{
+    (void)state;
+    rod_scene sc = mock_scene(31);
+    double u[ROD_FIT_NKEYS], us[ROD_FIT_NKEYS];
+    rod_fit_scene_values(&sc, u);
+    u[ROD_FIT_ANGLE_LEFT] = -87.0;
+    u[ROD_FIT_ANGLE_RIGHT] = -84.5;
+    enum { NSH = 10 };
+    rod_fit_obs obs[NHOLD + NSH];
+    hold_frames(&sc, u, obs, NHOLD);
+    shear_frames(&sc, u, 0.15, obs + NHOLD, NSH);
+    /* fit 0's positions, 0.002 l off the strip's */
+    memcpy(us, u, sizeof us);
+    us[ROD_FIT_ANGLE_LEFT] = us[ROD_FIT_ANGLE_RIGHT] = -90.0;
+    us[ROD_FIT_POSITION_LEFT] += 0.002;
+    us[ROD_FIT_POSITION_RIGHT] -= 0.002;
+    rod_scene fit0 = sc;
+    rod_fit_scene_apply(&fit0, us);
+    trial_calibrated r;
+    memset(&r, 0, sizeof r);
+    trial_calibrate_compute_refresh(&fit0, "", obs, NHOLD, NSH, NULL, &r);
+    if (!r.ok) fail_msg("%s: %s", r.reason_key, r.reason);
+    printf("refresh: positions %.5f +- %.5f, %.5f +- %.5f (prior around %.5f, %.5f; strip %.5f, %.5f); snap %.5f +- %.5f\n",
+           r.fit.u[ROD_FIT_POSITION_LEFT], r.fit.se[ROD_FIT_POSITION_LEFT], r.fit.u[ROD_FIT_POSITION_RIGHT],
+           r.fit.se[ROD_FIT_POSITION_RIGHT], us[ROD_FIT_POSITION_LEFT], us[ROD_FIT_POSITION_RIGHT],
+           u[ROD_FIT_POSITION_LEFT], u[ROD_FIT_POSITION_RIGHT], r.snap_dw, r.snap_sd);
+    assert_int_equal(r.nshapes, 0);
+    assert_int_equal(r.fit.nshape_rows, 0);
+    for (int k = ROD_FIT_POSITION_LEFT; k <= ROD_FIT_POSITION_RIGHT; k += ROD_FIT_POSITION_RIGHT - ROD_FIT_POSITION_LEFT) {
+        assert_true(r.fit.fitted[k]);
+        assert_true(r.fit.u0[k] == us[k]); /* the prior's centre: fit 0's */
+        assert_true(isfinite(r.fit.se[k]) && r.fit.se[k] > 0.0 && r.fit.se[k] <= TRIAL_CALIBRATE_PRIOR_POSITION);
+    }
+    assert_true(r.snapped && isfinite(r.snap_sd) && r.snap_sd > 0.0);
+}
+
+/* The old rule, on every frame (what the fit chose before the frames were picked as they came):
+ * the last, then for targets 2, 1, 0 (evenly in Delta L from the first frame's to the last's) the
+ * nearest not taken, the earlier on a tie. Into out (indices), their count. */
+static int reference_choice(const double *dl, int n, int *out)
+{
+    int m = 0;
+    double lo = dl[0], hi = dl[n - 1];
+    for (int j = TRIAL_CALIBRATE_SHAPES - 1; j >= 0; j--) {
+        int best = -1;
+        if (j == TRIAL_CALIBRATE_SHAPES - 1) {
+            best = n - 1;
+        } else {
+            double target = lo + (hi - lo) * j / (TRIAL_CALIBRATE_SHAPES - 1), err = INFINITY;
+            for (int k = 0; k < n; k++) {
+                int taken = 0;
+                for (int u = 0; u < m; u++) taken |= out[u] == k;
+                if (!taken && fabs(dl[k] - target) < err) {
+                    err = fabs(dl[k] - target);
+                    best = k;
+                }
+            }
+        }
+        if (best >= 0) out[m++] = best;
+    }
+    return m;
+}
+
+/* Offers the frames as the runner does (each one when the next comes, mapped only when wanted; the
+ * last at the end), frame k's dz = k to name it; the count mapped, and the hold's (dl = hold) among
+ * them before the last. Checks the choice against the old rule's and the kept set's bound. */
+static void shapes_offered(const double *dl, int n, double hold, int *mapped, int *mapped_hold)
+{
+    trial_calibrate_def d = trial_calibrate_def_default();
+    d.scene.compression = hold;
+    d.fit_shape = 1;
+    char why[256];
+    trial_calibrate *c = trial_calibrate_new(&d, why, sizeof why);
+    assert_non_null(c);
+    *mapped = *mapped_hold = 0;
+    for (int k = 0; k < n; k++) {
+        int last = k == n - 1;
+        trial_calibrate_add(c, 0, dl[k], 0.0, k, 0.0);
+        if (!last && !trial_calibrate_shape_wanted(c, dl[k])) continue;
+        double xz[6] = {0.0, 0.0, 0.5, 0.1 + 0.001 * k, 1.0, 0.0};
+        trial_calibrate_add_shape(c, dl[k], 0.0, k, 0.0, xz, 3, last);
+        if (!last) {
+            (*mapped)++;
+            *mapped_hold += dl[k] == hold;
+        }
+        assert_true(trial_calibrate_shapes_kept(c) <= TRIAL_CALIBRATE_SHAPES * (TRIAL_CALIBRATE_SHAPES - 1) + 1);
+    }
+    rod_fit_obs got[TRIAL_CALIBRATE_SHAPES];
+    int want[TRIAL_CALIBRATE_SHAPES];
+    int ng = trial_calibrate_shapes_choose(c, got), nw = reference_choice(dl, n, want);
+    assert_int_equal(ng, nw);
+    for (int s = 0; s < ng; s++) assert_int_equal((int)got[s].dz, want[s]);
+    trial_calibrate_free(c);
+}
+
+/* The centrelines the first fit takes (sim.fit_shape) are picked as the frames come, in a fixed set:
+ * the same four as the old rule picked from every frame, with only the frames that enter the set
+ * mapped, none of a long hold's (which the runner mapped, resampled and stored one by one before). */
+static void shapes_picked_as_they_come(void **state)
+{
+    (void)state;
+    enum { NC = 120, NH = 250 };
+    static double dl[NC + NH];
+    uint64_t r = 12345;
+    double x = 0.45;
+    for (int k = 0; k < NC; k++) { /* uneven steps, some repeated: a compression under load */
+        r = r * 6364136223846793005ull + 1442695040888963407ull;
+        int q = (int)(r >> 61);
+        x += q == 0 ? 0.0 : 0.05 / NC * (0.25 * q);
+        dl[k] = fmin(x, 0.4999);
+    }
+    for (int k = NC; k < NC + NH; k++) dl[k] = 0.5;
+    int mapped, mapped_hold;
+    shapes_offered(dl, NC + NH, 0.5, &mapped, &mapped_hold);
+    printf("compression %d + hold %d frames: %d centrelines mapped before the last (%d of the hold)\n", NC, NH, mapped,
+           mapped_hold);
+    assert_int_equal(mapped_hold, 0);
+    assert_true(mapped <= NC);
+    /* The hold alone: every target at the hold's Delta L, ties to the earliest. */
+    for (int k = 0; k < 30; k++) dl[k] = 0.5;
+    shapes_offered(dl, 30, 0.5, &mapped, &mapped_hold);
+    assert_true(mapped <= TRIAL_CALIBRATE_SHAPES * (TRIAL_CALIBRATE_SHAPES - 1));
+    /* Three compression frames and a hold: the hold's frames are the nearest to some targets. */
+    dl[0] = 0.45;
+    dl[1] = 0.452;
+    dl[2] = 0.48;
+    for (int k = 3; k < 60; k++) dl[k] = 0.5;
+    shapes_offered(dl, 60, 0.5, &mapped, &mapped_hold);
+    assert_true(mapped_hold <= TRIAL_CALIBRATE_SHAPES * (TRIAL_CALIBRATE_SHAPES - 1));
+    /* One frame: it is the last and the only choice. */
+    shapes_offered(dl, 1, 0.45, &mapped, &mapped_hold);
+}
+
 /* `test_trial_calibrate session` runs the whole mock trials (3, 4) only; without an argument, the
  * fit's own tests (1, 2), seconds in either build. */
 int main(int argc, char **argv)
@@ -687,6 +834,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(setup_has_the_trackers_bias),
         cmocka_unit_test(refresh_frames_below_cut),
         cmocka_unit_test(worker_class),
+        cmocka_unit_test(shapes_picked_as_they_come),
+        cmocka_unit_test(refresh_without_centrelines),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
