@@ -5,15 +5,15 @@
  * start, and the last landed one's key with its curve or its failure. The thread works on its own
  * copies (scene, key text, cache path) and writes only the landed result, so the caller's
  * configuration may change or go meanwhile. */
-#define _GNU_SOURCE /* SCHED_IDLE */
 #include "campaign_trace.h"
 
 #include <pthread.h>
-#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+
+#include "thread_class.h"
 
 struct campaign_trace {
     pthread_mutex_t lock;
@@ -91,10 +91,9 @@ void campaign_trace_free(campaign_trace *t)
 static void *run(void *arg)
 {
     campaign_trace *t = arg;
-    /* SCHED_IDLE, as every best-effort thread of ribbond (daemon/trial/trial_idle.h, which this
-     * room does not link): a trial's rails may be moving. Refused: the trace is merely slower. */
-    struct sched_param sp = {.sched_priority = 0};
-    (void)sched_setscheduler(0, SCHED_IDLE, &sp);
+    /* SCHED_IDLE, as every best-effort thread of ribbond (thread_class.h): a trial's rails may be
+     * moving. Refused: nice 19, the trace merely slower. */
+    thread_class_idle_enter(NULL, 0);
     campaign_predicted res;
     char why[600] = "";
     int rc = campaign_predicted_cached(&t->sc, t->key_text, t->lo, t->hi, t->cache_path, &res, why, sizeof why);

@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "trial.h"
+#include "thread_class.h"
 
 #define PHASE_MAP_NODES 41
 #define PHASE_MAP_DT 0.01
@@ -51,9 +51,9 @@ static void on_point(void *u, size_t done, size_t total)
 static void *map_main(void *arg)
 {
     phase_map *m = arg;
-    /* This thread only, in SCHED_IDLE (a trial's rails may be moving; trial_idle.h). Refused: nice
+    /* This thread only, in SCHED_IDLE (a trial's rails may be moving; thread_class.h). Refused: nice
      * 19, the map is merely slower. */
-    trial_idle_enter(NULL, 0);
+    thread_class_idle_enter(NULL, 0);
     phase_grid g;
     char why[256] = "";
     int rc = phase_grid_compute(&m->scene, 30, 150, 5, 0.08, 0.28, 6, &g, on_point, m, &m->cancel, why, sizeof why);

@@ -3,7 +3,7 @@
  * The phase report (every trial's measured regime on the predicted (phi, Gamma) map) needs a grid
  * of predictions: 30 at the default resolution, some 15 s of one core. The API must answer at
  * once and a trial must not wait for it, so the grid is computed on its own thread, started by
- * the first request that wants it, in SCHED_IDLE (trial_idle.h: a trial's loop, capture and
+ * the first request that wants it, in SCHED_IDLE (thread_class.h: a trial's loop, capture and
  * poller always come first; its rails may be moving), once per daemon (the map depends on the scene only; the trials drawn over
  * it are read from the store on every request). Until it is ready the report is drawn with the
  * trials only, and the state says how far the grid is. phase_map_free cancels a computation in

@@ -65,8 +65,9 @@ static const char usage[] =
     "  --scale-covariance  standard errors scaled by the residual; --no-snap  no snap prediction\n"
     "  --write-scene  the fitted strip as a scene file for ribbon-sim\n"
     "  --share-hinge  trials of several specimens: grouped per specimen, each group one strip with its\n"
-    "               own parameters (--fit, default both crease angles), one hinge stiffness per unit\n"
-    "               width k / b (folds.hinge_stiffness_per_width, N/rad) shared by all, k = (k / b) width;\n"
+    "               own parameters (--fit or, as without it, the trials' sim.fit_keys: the same for\n"
+    "               every specimen), one hinge stiffness per unit width k / b\n"
+    "               (folds.hinge_stiffness_per_width, N/rad) shared by all, k = (k / b) width;\n"
     "               prints k / b with its standard error and each specimen's fit and snap;\n"
     "               --write-scene FILE writes one scene per specimen, FILE-specimen<ID>.ini\n"
     "  Exit 1 when a trial is refused (no such trial, unfinished, too few samples, lower state,\n"
@@ -315,11 +316,8 @@ int ctl_calibrate_main(int argc, char **argv)
     store *st;
     if (open_store(&a, &st)) return 1;
     if (a.share_hinge) {
-        ctl_calib_joint_args ja = {.ids = a.ids, .nids = a.nids, .sel = &sel, .fit = o, .json = a.json,
-                                   .no_snap = a.no_snap, .write_scene = a.write_scene};
-        rod_scene any = rod_scene_default(); /* a --fit list does not depend on the scene */
-        if (a.fit) parse_keys(a.fit, &any, &ja.fit);
-        else ja.fit.fit[ROD_FIT_ANGLE_LEFT] = ja.fit.fit[ROD_FIT_ANGLE_RIGHT] = 1;
+        ctl_calib_joint_args ja = {.ids = a.ids, .nids = a.nids, .sel = &sel, .fit_keys = a.fit, .fit = o,
+                                   .json = a.json, .no_snap = a.no_snap, .write_scene = a.write_scene};
         ja.fit.sigma_dz = a.sigma_dz;
         ja.fit.sigma_a = a.sigma_a;
         ja.fit.scale_covariance = a.scale_cov;

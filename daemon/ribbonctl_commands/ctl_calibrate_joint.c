@@ -4,10 +4,11 @@
  * The trials are grouped by specimen (in the order the IDs first name each); each group is read
  * as `ribbonctl calibrate` reads one strip (trial_pool.h: the same cuts, overrides and
  * refusals, so a group must be one strip), and the groups are fitted together by
- * sim/rod_fit_joint.h: each specimen its own crease angles (and whatever --fit names), one
- * k / b for all, each specimen's hinge k_s = (k / b) b_s, set up as the in-trial fit is
- * (trial_calibrate_setup: each group's sim.fit_hinge on rigid creases, the priors, the tracker's
- * common mode; the prior on ln k is the one on ln(k / b)). Printed: the shared k / b with its
+ * sim/rod_fit_joint.h: each specimen its own parameters (--fit's, or its trials' sim.fit_keys as
+ * without --share-hinge: by default both crease angles), one k / b for all, each specimen's hinge
+ * k_s = (k / b) b_s, set up as the in-trial fit is (trial_calibrate_setup: each group's
+ * sim.fit_hinge on rigid creases, its keys, the priors, the tracker's common mode; the prior on ln k
+ * is the one on ln(k / b)). The specimens must come to the same keys (one joint set). Printed: the shared k / b with its
  * standard error, each specimen's fit (keys "NAME:key", "not determined by these data" as
  * everywhere), the joint correlations, and per specimen the snap predicted with its fitted strip
  * (its block of the joint covariance makes the band) beside each of its trials' measured snap
@@ -247,6 +248,7 @@ int ctl_calibrate_joint(store *st, const ctl_calib_joint_args *a)
         goto done;
     }
     rod_fit_opts set = rod_fit_opts_default();
+    const char *set_keys = "";
     if (group_trials(st, a, j.g, &j.ng)) goto done;
     for (int s = 0; s < j.ng; s++) {
         jgroup *g = &j.g[s];
@@ -256,18 +258,38 @@ int ctl_calibrate_joint(store *st, const ctl_calib_joint_args *a)
             goto done;
         }
         /* The in-trial fit's setup, as without --share-hinge (trial_calibrate_setup): the group's
-           first trial's sim.fit_hinge on rigid creases; its priors and common mode below.
-           The keys stay --fit's ("" cannot be refused). */
+           first trial's sim.fit_hinge on rigid creases, its sim.fit_keys unless --fit names keys;
+           its priors and common mode below. The hinge stiffness is the shared one (fitted anyway),
+           so not each specimen's own. */
+        const trial_pool_trial *t0 = &g->d.trials[0];
+        const char *keys = a->fit_keys ? a->fit_keys : t0->fit_keys;
         char rk[24], rw[320];
-        if (g->d.trials[0].fit_unread[0])
-            fprintf(stderr, "ribbonctl calibrate: trial %lld: %s: fitted without the hinge guess\n",
-                    (long long)g->d.trials[0].id, g->d.trials[0].fit_unread);
-        trial_calibrate_setup(&g->d.scene, g->d.trials[0].fit_hinge, "", &set, rk, rw, sizeof rw);
+        if (t0->fit_unread[0])
+            fprintf(stderr, "ribbonctl calibrate: trial %lld: %s: fitted without the hinge guess, with the default keys\n",
+                    (long long)t0->id, t0->fit_unread);
+        rod_fit_opts gs;
+        if (trial_calibrate_setup(&g->d.scene, t0->fit_hinge, keys, &gs, rk, rw, sizeof rw) < 0) {
+            fprintf(stderr, "ribbonctl calibrate: specimen %s: %s%s\n", g->name, rw,
+                    a->fit_keys ? "" : " (its trials' sim.fit_keys)");
+            j.ng = s + 1;
+            goto done;
+        }
+        gs.fit[ROD_FIT_HINGE] = 0;
+        if (s == 0) {
+            set = gs;
+            set_keys = keys;
+        } else if (memcmp(gs.fit, set.fit, sizeof set.fit)) {
+            fprintf(stderr, "ribbonctl calibrate: specimen %s's trials fit other keys (sim.fit_keys \"%s\") than specimen "
+                            "%s's (\"%s\"): a joint fit has one set; name it with --fit\n",
+                    g->name, keys, j.g[0].name, set_keys);
+            j.ng = s + 1;
+            goto done;
+        }
         specs[s] = (rod_fit_joint_spec){g->name, &g->d.scene, g->d.obs, g->d.nobs};
     }
     rod_fit_joint_opts o = rod_fit_joint_opts_default();
     o.each = a->fit;
-    o.each.fit[ROD_FIT_HINGE] = 0; /* named in --fit: it is the shared one, fitted anyway */
+    memcpy(o.each.fit, set.fit, sizeof o.each.fit); /* the keys every specimen came to, the hinge shared */
     memcpy(o.each.prior_sigma, set.prior_sigma, sizeof o.each.prior_sigma);
     o.each.sigma_b_dz = set.sigma_b_dz;
     o.each.sigma_b_a = set.sigma_b_a;

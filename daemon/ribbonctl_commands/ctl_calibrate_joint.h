@@ -14,8 +14,10 @@ typedef struct ctl_calib_joint_args {
     const int64_t *ids;
     int nids;
     const trial_pool_select *sel;  /* the cuts and --set, for every trial */
-    rod_fit_opts fit;             /* fit[] from --fit (folds.hinge_stiffness there: the shared one),
-                                     noise, scale_covariance */
+    const char *fit_keys;         /* --fit's list, or NULL: each specimen's first trial's sim.fit_keys
+                                     (as without --share-hinge; folds.hinge_stiffness there: the
+                                     shared one). Every specimen must come to the same keys. */
+    rod_fit_opts fit;             /* noise, scale_covariance (fit[] is set from fit_keys) */
     int json, no_snap;
     const char *write_scene;      /* NULL, or FILE: one scene per specimen, FILE's name with
                                      "-specimen<ID>" before its extension */

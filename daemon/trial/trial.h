@@ -16,7 +16,6 @@
  *   replay_job.h         a replay on a thread of its own inside ribbond
  *   trial_config_text.h  the configuration text stored with a trial, and its scene read back
  *   trial_pool.h         stored trials of one strip pooled into one fit's input
- *   trial_idle.h         the best-effort threads' scheduling class (SCHED_IDLE)
  * Used inside the room only: trial_prediction.h (the prediction beside a trial),
  * trial_camera_setup.h, trial_calibrate.h (the fit beside a trial),
  * trial_specimen.h, trial_publish.h (the session's hook
@@ -38,7 +37,6 @@
 #include "replay_job.h"
 #include "trial_config_text.h"
 #include "trial_pool.h"
-#include "trial_idle.h"
 #include "trial_calibrate.h"
 #include "trial_camera_settings.h"
 

@@ -15,7 +15,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "trial_idle.h"
+#include "thread_class.h"
 
 enum { JOB_RUNNING = 0, JOB_DONE, JOB_ABANDONED };
 
@@ -344,9 +344,9 @@ static void *job_main(void *arg)
 {
     calib_job *j = arg;
     /* Below the trial's own threads (rig mode's loop, capture and poller share the cores):
-     * SCHED_IDLE, the fit and its band's predictions on CPU time no one else wants (trial_idle.h). */
-    if (j->idle) trial_idle_enter(NULL, 0); /* refused: nice 19 (trial_idle.h) */
-    j->res.idle = trial_idle_is(0) == 1;        /* the class read back, said in the landing event */
+     * SCHED_IDLE, the fit and its band's predictions on CPU time no one else wants (thread_class.h). */
+    if (j->idle) thread_class_idle_enter(NULL, 0); /* refused: nice 19 (thread_class.h) */
+    j->res.idle = thread_class_is_idle(0) == 1;        /* the class read back, said in the landing event */
     compute(&j->scene, j->keys, j->obs, j->nobs_before, j->nobs_shear, j->shapes, j->nshapes, j->positions, &j->cancel,
             &j->res);
     int expected = JOB_RUNNING;

@@ -121,7 +121,7 @@ typedef struct trial_calibrate_def {
      * when a refresh starts without a calibrated snap; NULL: never known. */
     double (*scene_snap)(void *user);
     int fit_shape;          /* 1: the fit takes the centrelines handed in (trial_calibrate_add_shape) */
-    int idle;               /* 1: the worker runs in SCHED_IDLE (trial_idle.h): rig mode, where the
+    int idle;               /* 1: the worker runs in SCHED_IDLE (thread_class.h): rig mode, where the
                                trial's loop, capture and poller share the cores and must never wait
                                for it; 0 in mock mode, whose virtual clock runs the twin flat out
                                and would starve it */

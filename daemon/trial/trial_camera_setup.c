@@ -33,6 +33,14 @@ int trial_camera_setup(const rig_config *cfg, vis_calib *cal, int *width, int *h
         snprintf(why, why_len, "replay mode records no camera of its own");
         return -1;
     }
+    /* A calibration without a principal point (negative: the image's centre; the clamps' calibration
+     * leaves it so) gets the full frame's, which the live tracker takes for it: the trial's record
+     * then stores the real point, and a replay moves it into the saved video's pixels
+     * (trial_record_video_calib). Left negative, a replay's tracker took the cropped video's centre. */
+    if (cal->principal_px[0] < 0 || cal->principal_px[1] < 0) {
+        cal->principal_px[0] = 0.5 * (*width - 1);
+        cal->principal_px[1] = 0.5 * (*height - 1);
+    }
     trial_roi full = {0, 0, *width & ~1, *height & ~1};
     *roi = full;
     if (cfg->camera.roi == RIG_ROI_AUTO)

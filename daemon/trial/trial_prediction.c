@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "rod_protocol.h"
-#include "trial_idle.h"
+#include "thread_class.h"
 #include "trial_record.h"
 
 struct trial_prediction {
@@ -134,7 +134,7 @@ static store_err store_result(trial_prediction *j, store *st, const rod_predicti
 static void *prediction_main(void *arg)
 {
     trial_prediction *j = arg;
-    if (j->def.idle) trial_idle_enter(NULL, 0); /* refused: nice 19, the prediction merely slower */
+    if (j->def.idle) thread_class_idle_enter(NULL, 0); /* refused: nice 19, the prediction merely slower */
     const rod_scene *sc = &j->def.scene;
     trial_prediction_report rep = {.outcome = TRIAL_PREDICTION_NOT_STORED, .snap_dw = NAN,
                                    .regime = STORE_REGIME_UNKNOWN};

@@ -47,7 +47,7 @@ typedef struct trial_prediction_def {
     char store_path[RIG_PATH_MAX];
     int64_t trial_id;
     const atomic_int *cancel; /* non-zero: stop (may be NULL) */
-    int idle;                 /* 1: the thread runs in SCHED_IDLE (trial_idle.h): rig mode, where the
+    int idle;                 /* 1: the thread runs in SCHED_IDLE (thread_class.h): rig mode, where the
                                  compression it overlaps moves the rails; 0 in mock mode */
     trial_prediction_done_fn done;
     void *user;

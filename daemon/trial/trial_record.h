@@ -32,7 +32,9 @@ typedef struct trial_record {
     double min_quality;
 } trial_record;
 int trial_record_parse(const char *json, trial_record *out, char *why, size_t why_len);
-/* The record's camera calibration in the saved video's pixels (moved by its region of interest). */
+/* The record's camera calibration in the saved video's pixels (moved by its region of interest). The
+ * principal point is moved too; records from before trial_camera_setup gave it (negative: the image's
+ * centre) keep it negative, so their replays take the cropped video's centre. */
 void trial_record_video_calib(const trial_record *rec, vis_calib *out);
 /* The tracker's parameters for the record's video (`video_cal` from trial_record_video_calib): the
  * known length, and sized to the ribbon's face as the trial's tracker was

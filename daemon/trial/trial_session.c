@@ -19,6 +19,7 @@
 #include "trial_camera_setup.h"
 #include "trial_config_text.h"
 #include "trial_disk_words.h"
+#include "trial_fit_out.h"
 #include "trial_live.h"
 #include "trial_prediction.h"
 #include "trial_publish.h"
@@ -60,6 +61,7 @@ struct trial_session {
     live_bus *bus;          /* the live page's (may be NULL): published into, never waited on */
     rod_scene pred_scene;   /* the prediction's scene: the rig's with the specimen's creases */
     trial_calibrate *calib; /* the fit beside the trial (trial_calibrate.h), NULL when off */
+    trial_fit_out *fit_out; /* its events and landings written off the loop (trial_fit_out.h) */
     trial_specimen_use use; /* which crease values it uses, where each came from */
     int64_t specimen_id;    /* the trial's specimen row */
     char specimen_calibration[STORE_SPECIMEN_CALIBRATION_MAX]; /* a named specimen's calibration at
@@ -658,40 +660,42 @@ static trial_plan session_plan(const rig_config *cfg)
     return plan;
 }
 
-/* The calibrated prediction that landed (on the trial thread): stored in the trial's row beside
- * the scene's prediction (a later fit replaces an earlier one; a failure replaces nothing that
- * landed ok), published on the live bus as an event (the event itself says what it is). */
+/* The calibrated prediction that landed (on the trial thread): posted to the fit's writer
+ * (trial_fit_out.h), which stores it in the trial's row beside the scene's prediction (a later fit
+ * replaces an earlier one; a failure replaces nothing that landed ok) and publishes it on the live
+ * bus; the loop does not wait on the store for it. */
 static void calibrated_landed(void *user, const trial_calibrated *r)
 {
     trial_session *s = user;
     const trial_calibrated *kept = trial_calibrate_kept(s->calib);
     if (!r->ok && kept) return; /* an earlier fit stands */
-    char fit[2048];
-    trial_calibrated_json(r, fit, sizeof fit);
-    store_calibrated c = {.snap_dw = r->ok && r->snapped ? r->snap_dw : NAN,
-                          .snap_sd = r->ok && r->snapped ? r->snap_sd : NAN,
-                          .p_other = r->ok && r->snapped ? r->p_other : NAN,
-                          .regime = !r->snapped ? "no snap" : r->asymmetric ? "asymmetric" : "symmetric",
-                          .fit_json = fit,
-                          .failure = NULL};
-    char failure[400];
-    if (!r->ok) {
-        snprintf(failure, sizeof failure, "%s: %s", r->reason_key, r->reason);
-        c.failure = failure;
-    }
-    char w[256];
-    if (store_trial_set_calibrated(s->st, s->trial_id, &c, w, sizeof w) != STORE_OK)
-        session_event(s, r->t_landed, STORE_EVENT_WARNING, w);
-    trial_publish_calibrated(s->bus, s->trial_id, r);
+    if (trial_fit_out_calibrated(s->fit_out, r))
+        session_event(s, r->t_landed, STORE_EVENT_WARNING, "calibration: out of memory: its landed result is not stored");
 }
 
+/* The fit's events (on the trial thread): posted to its writer, which stores, publishes and logs
+ * them as session_event does. */
 static int calib_event(void *user, double t_s, const char *kind, const char *message)
 {
     trial_session *s = user;
-    store_event_kind k = STORE_EVENT_INFO;
-    store_event_kind_parse(kind, &k);
-    session_event(s, t_s, k, message);
+    store_event ev;
+    memset(&ev, 0, sizeof ev);
+    ev.trial_id = s->trial_id;
+    ev.t_s = t_s;
+    ev.wall_s = store_wall_now();
+    pthread_mutex_lock(&s->lock);
+    snprintf(ev.state, sizeof ev.state, "%s", trial_state_name(s->status.state));
+    pthread_mutex_unlock(&s->lock);
+    ev.kind = STORE_EVENT_INFO;
+    store_event_kind_parse(kind, &ev.kind);
+    snprintf(ev.message, sizeof ev.message, "%s", message);
+    if (trial_fit_out_event(s->fit_out, &ev)) session_event(s, t_s, ev.kind, message);
     return 0;
+}
+
+static void fit_out_log(void *user, const char *line)
+{
+    logf_((trial_session *)user, "%s", line);
 }
 
 /* The scene's predicted snap so far, for the fit's refreshes (on the runner's thread): NaN until
@@ -710,6 +714,14 @@ static double calib_scene_snap(void *user)
 static void session_open_calibrate(trial_session *s, session_parts *p)
 {
     if (!s->cfg.sim.fit) return;
+    char wo[300];
+    s->fit_out = trial_fit_out_open(s->cfg.store_path, s->trial_id, s->bus, fit_out_log, s, wo, sizeof wo);
+    if (!s->fit_out) {
+        char m[400];
+        snprintf(m, sizeof m, "calibration off for this trial: its writer could not start: %s", wo);
+        session_event(s, NAN, STORE_EVENT_WARNING, m);
+        return;
+    }
     trial_calibrate_def d = trial_calibrate_def_default();
     d.scene = p->pred;
     /* A rigid crease is not a model of a real one (a PET crease is a compliant hinge, DESIGN.md
@@ -789,6 +801,9 @@ static int session_run(trial_session *s, session_parts *p, char *why, size_t why
 static void session_store_result(trial_session *s)
 {
     char w[256];
+    /* The rails have stopped: what the fit posted (a done trial's last landing included) is
+     * written before the final status, as when the loop wrote it itself. */
+    trial_fit_out_drain(s->fit_out);
     if (store_samples_end(s->writer, w, sizeof w) != STORE_OK) session_event(s, NAN, STORE_EVENT_FAULT, w);
     s->writer = NULL;
     if (trial_video_close(s->video, w, sizeof w) < 0) { /* the video lost frames: a fault, not done */
@@ -842,6 +857,8 @@ static void session_release(trial_session *s, session_parts *p)
     s->prediction = NULL;
     trial_calibrate_free(s->calib); /* ended by the runner; else waited for at most its abort cap */
     s->calib = NULL;
+    trial_fit_out_close(s->fit_out); /* what the fit posted, written */
+    s->fit_out = NULL;
     trial_runner_free(&s->runner);
     vis_tracker_free(p->trk);
     mock_camera_close(p->mock);

@@ -16,7 +16,7 @@
 #include <unistd.h>
 
 #include "store.h"
-#include "trial_idle.h"
+#include "thread_class.h"
 
 typedef struct tx_job {
     int64_t trial_id;
@@ -131,10 +131,10 @@ static void run_job(trial_transcoder *t, const tx_job *j)
 static void *tx_main(void *arg)
 {
     trial_transcoder *t = arg;
-    /* Below the trial's threads: SCHED_IDLE, inherited by the encoder's slice threads (trial_idle.h). */
+    /* Below the trial's threads: SCHED_IDLE, inherited by the encoder's slice threads (thread_class.h). */
     char why[160];
-    if (t->p.idle && trial_idle_enter(why, sizeof why)) tx_log(t, "transcoder: %s", why);
-    atomic_store(&t->tid, trial_idle_tid());
+    if (t->p.idle && thread_class_idle_enter(why, sizeof why)) tx_log(t, "transcoder: %s", why);
+    atomic_store(&t->tid, thread_class_tid());
     pthread_mutex_lock(&t->lock);
     for (;;) {
         while (!t->count && !t->stopping) pthread_cond_wait(&t->cond, &t->lock);

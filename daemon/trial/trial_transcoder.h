@@ -3,7 +3,7 @@
  *
  * A session hands its raw video over when its trial has ended (trial_transcoder_submit only queues
  * and returns), so the next trial starts and captures while the previous video is encoded. The
- * worker is one thread in SCHED_IDLE (trial_idle.h; the encoder's slice threads inherit it: the
+ * worker is one thread in SCHED_IDLE (thread_class.h; the encoder's slice threads inherit it: the
  * next trial's loop, capture and poller always win the cores), with its own store connection: on success the trial's video becomes the .mkv
  * with its size (store_trial_set_video_file) and an event gives sizes and times; on failure the
  * raw file stays the trial's video and an event says why. Stopping (daemon shutdown) stops the
@@ -32,7 +32,7 @@ trial_transcoder_params trial_transcoder_params_default(void);
 typedef struct trial_transcoder trial_transcoder;
 
 trial_transcoder *trial_transcoder_start(const trial_transcoder_params *p, char *why, size_t why_len);
-/* The worker's Linux thread id once it runs (0 before), for trial_idle_is. */
+/* The worker's Linux thread id once it runs (0 before), for thread_class_is_idle. */
 long trial_transcoder_worker_tid(trial_transcoder *t);
 /* Queues trial_id's raw video raw_path (...avi; the output is the same name with .mkv). crop (may
  * be NULL): x, y, w, h of the raw frame to keep, and rec_roi the kept region inside the full

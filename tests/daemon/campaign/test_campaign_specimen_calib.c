@@ -29,14 +29,12 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "rig_daemon.h"
 #include "store.h"
 #include "trial_specimen_calib.h"
 
-#include "../test_dir.h"
+#include "../mock_daemon.h"
 
-static char dir[64];
-static rig_daemon d;
+static mock_daemon md;
 
 static double cpu_s(void)
 {
@@ -59,7 +57,7 @@ static json_t *campaign(const char *method, const char *path, const char *body_t
     json_t *body = body_text ? json_loads(body_text, 0, NULL) : NULL, *out = NULL;
     int http = 200;
     char why[512] = "";
-    int rc = ops.campaign(&d, method, path, body, &out, &http, why, sizeof why);
+    int rc = ops.campaign(&md.d, method, path, body, &out, &http, why, sizeof why);
     json_decref(body);
     if (rc || http != want) fail_msg("%s %s: %d %s", method, path, http, why);
     return out;
@@ -69,38 +67,12 @@ static json_t *campaign(const char *method, const char *path, const char *body_t
  * session finished: the refit after it included). Returns its id. */
 static int64_t trial(const char *set)
 {
-    api_ops ops = rig_daemon_ops();
     char text[256];
     snprintf(text, sizeof text, "{\"specimen\": \"S-cal\", \"set\": %s}", set);
-    json_t *body = json_loads(text, 0, NULL), *out = NULL;
-    int http = 201;
-    char why[512] = "";
     double t0 = mono_s(), c0 = cpu_s();
-    if (ops.start(&d, body, &out, &http, why, sizeof why)) fail_msg("start: %d %s", http, why);
-    int64_t id = json_integer_value(json_object_get(out, "id"));
-    json_decref(body);
-    json_decref(out);
-    for (int k = 0;; k++) {
-        json_t *st = NULL;
-        assert_int_equal(ops.status(&d, &st, why, sizeof why), 0);
-        int idle = !strcmp(json_string_value(json_object_get(st, "state")), "idle");
-        json_decref(st);
-        if (idle) break;
-        if (k > 6000) fail_msg("trial %lld did not end in 300 s", (long long)id);
-        usleep(50000);
-    }
+    int64_t id = mock_daemon_trial(&md, text);
     printf("trial %lld: %.1f s wall, %.1f s CPU (with the refit)\n", (long long)id, mono_s() - t0, cpu_s() - c0);
     return id;
-}
-
-static json_t *trial_json(int64_t id)
-{
-    api_ops ops = rig_daemon_ops();
-    json_t *out = NULL;
-    int http = 200;
-    char why[256];
-    if (ops.show(&d, id, &out, &http, why, sizeof why)) fail_msg("show %lld: %s", (long long)id, why);
-    return out;
 }
 
 /* The message of the trial's last event containing what (NULL: none). */
@@ -145,7 +117,7 @@ static void specimen_calibration_across_trials(void **state)
 
     /* 1. After trial 1: a calibration from trial 1 alone; its own prediction had none. */
     int64_t t1 = trial("[]");
-    json_t *j1 = trial_json(t1);
+    json_t *j1 = mock_daemon_show(&md, t1);
     assert_string_equal(json_string_value(json_object_get(j1, "status")), "done");
     assert_true(json_is_null(json_object_get(json_object_get(j1, "prediction"), "calibration")));
     assert_non_null(event_with(j1, "calibration of specimen S-cal from trial 1 ("));
@@ -170,7 +142,7 @@ static void specimen_calibration_across_trials(void **state)
 
     /* 2. Trial 2 predicts with trial 1's calibration; after it, trials 2 and 1. */
     int64_t t2 = trial("[]");
-    json_t *j2 = trial_json(t2);
+    json_t *j2 = mock_daemon_show(&md, t2);
     assert_string_equal(json_string_value(json_object_get(j2, "status")), "done");
     const json_t *pc = json_object_get(json_object_get(j2, "prediction"), "calibration");
     assert_true(json_is_object(pc));
@@ -208,7 +180,7 @@ static void specimen_calibration_across_trials(void **state)
      * change through the API, so the refit is called as the session calls it, on a connection of
      * its own) keeps the calibration from trials 2 and 1, beside its named reason. */
     char path[128], why[256];
-    snprintf(path, sizeof path, "%s/trials.db", dir);
+    snprintf(path, sizeof path, "%s/trials.db", md.dir);
     store *st = NULL;
     assert_int_equal(store_open(path, &st, why, sizeof why), STORE_OK);
     store_specimen rec;
@@ -246,28 +218,19 @@ static void specimen_calibration_across_trials(void **state)
 static int setup(void **state)
 {
     (void)state;
-    snprintf(dir, sizeof dir, "/tmp/specimen-calib-XXXXXX");
-    assert_non_null(mkdtemp(dir));
-    static char set_store[128], set_video[128];
-    snprintf(set_store, sizeof set_store, "store.path=%s/trials.db", dir);
-    snprintf(set_video, sizeof set_video, "camera.video_dir=%s/videos", dir);
-    const char *ov[] = {set_store, set_video, "api.port=0", "mesh.nodes=31", "sim.nodes=31", "sim.dt=2e-3",
-                        "twin.mesh.nodes=31", "twin.solver.dt=2e-3", "twin.folds.hinge_stiffness=rigid", "sim.fit=off",
-                        /* the twin's creases rigid, the fits' too: the refit shares the in-trial fit's setup,
-                           and mock.ini's hinge guess on this twin ran k to 0.24 N m/rad (+- 83%) and the
-                           angles to -104 deg */
-                        "sim.fit_hinge=0"};
-    char why[512] = "";
-    if (rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, 11, NULL, why, sizeof why))
-        fail_msg("open: %s", why);
+    const char *sets[] = {"twin.folds.hinge_stiffness=rigid", "sim.fit=off",
+                          /* the twin's creases rigid, the fits' too: the refit shares the in-trial fit's setup,
+                             and mock.ini's hinge guess on this twin ran k to 0.24 N m/rad (+- 83%) and the
+                             angles to -104 deg */
+                          "sim.fit_hinge=0"};
+    mock_daemon_open(&md, "specimen-calib", sets, 3);
     return 0;
 }
 
 static int teardown(void **state)
 {
     (void)state;
-    rig_daemon_close(&d, "test done");
-    test_dir_done(dir, 1, "specimen calibration");
+    mock_daemon_close(&md, "specimen calibration");
     return 0;
 }
 

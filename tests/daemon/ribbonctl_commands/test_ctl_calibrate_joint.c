@@ -11,7 +11,8 @@
  * beside each trial's; refusals with a reason: different specimens without --share-hinge (which
  * names the flag), a rigid hinge, per-crease hinges, a trial that is not there; and two specimens
  * whose trials' scenes are rigid with sim.fit_hinge in their rig file fitted from that guess (the
- * in-trial fit's setup), k / b back to 1%. */
+ * in-trial fit's setup), k / b back to 1%; and two specimens whose trials' rig file names
+ * sim.fit_keys fitted with those keys (as one strip is), specimens naming different keys refused. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -101,12 +102,13 @@ typedef struct spec_def {
     const char *sets[3];        /* the same, for the truth's scene */
     int nsets;
     double width, position, truth_left, truth_right, truth_k, pred_left, pred_right, pred_k;
+    const char *sim; /* the rig file's [sim] section in its trials' config text (NULL: none) */
 } spec_def;
 
-static const spec_def S5 = {"S-5", "[]", {NULL}, 0, 0.005, 0.21, -86.0, -89.5, 5e-3, -88.0, -90.0, 3.5e-3};
+static const spec_def S5 = {"S-5", "[]", {NULL}, 0, 0.005, 0.21, -86.0, -89.5, 5e-3, -88.0, -90.0, 3.5e-3, NULL};
 static const spec_def S10 = {"S-10", "[\"ribbon.width=0.01\",\"ribbon.thickness=0.3e-3\",\"folds.position=0.2\"]",
                              {"ribbon.width=0.01", "ribbon.thickness=0.3e-3", "folds.position=0.2"}, 3, 0.010, 0.2,
-                             -88.0, -92.5, 1e-2, -90.0, -90.0, 7e-3};
+                             -88.0, -92.5, 1e-2, -90.0, -90.0, 7e-3, NULL};
 
 /* The truth strip's camera observables at the given states. */
 static void truth(const spec_def *s, rod_fit_obs *obs, int n)
@@ -138,13 +140,25 @@ static void truth(const spec_def *s, rod_fit_obs *obs, int n)
 /* The rigid-creased pair of the hinge guess's case: the same strips, their trials' scenes with
    rigid creases (a stored override) and no hinge in the prediction's record. */
 static const spec_def S5R = {"S-5r", "[\"folds.hinge_stiffness=rigid\"]", {NULL}, 0, 0.005, 0.21, -86.0, -89.5, 5e-3,
-                             -88.0, -90.0, NAN};
+                             -88.0, -90.0, NAN, NULL};
 static const spec_def S10R = {"S-10r",
                               "[\"ribbon.width=0.01\",\"ribbon.thickness=0.3e-3\",\"folds.position=0.2\","
                               "\"folds.hinge_stiffness=rigid\"]",
                               {"ribbon.width=0.01", "ribbon.thickness=0.3e-3", "folds.position=0.2"}, 3, 0.010, 0.2,
-                              -88.0, -92.5, 1e-2, -90.0, -90.0, NAN};
+                              -88.0, -92.5, 1e-2, -90.0, -90.0, NAN, NULL};
 #define FIT_HINGE 3.5e-3 /* the rig file's sim.fit_hinge in the rigid pair's trials */
+
+/* The stored-keys pair: the same strips with their right creases at the predictions' -90 deg, their
+   trials' rig file naming sim.fit_keys = folds.angle_left_deg (S-5k, S-10k); S-10j names the
+   right angle instead. */
+static const spec_def S5K = {"S-5k", "[]", {NULL}, 0, 0.005, 0.21, -86.0, -90.0, 5e-3, -88.0, -90.0, 3.5e-3,
+                             "[sim]\nfit_keys = folds.angle_left_deg\n"};
+static const spec_def S10K = {"S-10k", "[\"ribbon.width=0.01\",\"ribbon.thickness=0.3e-3\",\"folds.position=0.2\"]",
+                              {"ribbon.width=0.01", "ribbon.thickness=0.3e-3", "folds.position=0.2"}, 3, 0.010, 0.2,
+                              -88.0, -90.0, 1e-2, -90.0, -90.0, 7e-3, "[sim]\nfit_keys = folds.angle_left_deg\n"};
+static const spec_def S10J = {"S-10j", "[\"ribbon.width=0.01\",\"ribbon.thickness=0.3e-3\",\"folds.position=0.2\"]",
+                              {"ribbon.width=0.01", "ribbon.thickness=0.3e-3", "folds.position=0.2"}, 3, 0.010, 0.2,
+                              -88.0, -90.0, 1e-2, -90.0, -90.0, 7e-3, "[sim]\nfit_keys = folds.angle_right_deg\n"};
 
 static char *config_text(const spec_def *s)
 {
@@ -153,7 +167,7 @@ static char *config_text(const spec_def *s)
     static char text[16384];
     int rigid = s == &S5R || s == &S10R;
     int n = snprintf(text, sizeof text, "# rig file /lab/rig.ini\n[rig]\nmode = mock\nscene = pet.ini\n%s# scene file %s\n",
-                     rigid ? "[sim]\nfit_hinge = 3.5e-3\n" : "", SCENE);
+                     rigid ? "[sim]\nfit_hinge = 3.5e-3\n" : s->sim ? s->sim : "", SCENE);
     n += (int)fread(text + n, 1, sizeof text - (size_t)n - 512, f);
     fclose(f);
     snprintf(text + n, sizeof text - (size_t)n, "# overrides applied in order after the files: %s\n# note: joint test\n",
@@ -229,7 +243,7 @@ static int64_t add_trial(store *st, const spec_def *s, int parts)
     return id;
 }
 
-static int64_t a1, a2, b1, a_lower, spec_a, spec_b, r5, r10;
+static int64_t a1, a2, b1, a_lower, spec_a, spec_b, r5, r10, k5, k10, j10;
 
 static int setup(void **state)
 {
@@ -246,6 +260,9 @@ static int setup(void **state)
     a_lower = add_trial(st, &S5, LOWER);
     r5 = add_trial(st, &S5R, WITH_SHEAR);
     r10 = add_trial(st, &S10R, WITH_SHEAR);
+    k5 = add_trial(st, &S5K, WITH_SHEAR);
+    k10 = add_trial(st, &S10K, WITH_SHEAR);
+    j10 = add_trial(st, &S10J, WITH_SHEAR);
     store_trial t;
     if (store_trial_get(st, a1, &t, why, sizeof why) != STORE_OK) return 1;
     spec_a = t.specimen_id;
@@ -419,6 +436,47 @@ static void the_hinge_guess_makes_rigid_creases_hinges(void **state)
     json_decref(j);
 }
 
+/* The trials' stored sim.fit_keys are the keys without --fit, as for one strip
+   (trial_calibrate_setup): each specimen fits its left crease alone, the right one held at the
+   prediction's -90 deg (the truth here), and both angles and k / b come back (before: both angles
+   of each specimen, 5 keys). Specimens whose trials name other keys are refused with both named;
+   --fit names the keys for all. */
+static void the_trials_fit_keys_are_the_keys(void **state)
+{
+    (void)state;
+    char args[256];
+    run_out r;
+    snprintf(args, sizeof args, "%lld %lld --share-hinge " TIGHT " --json --no-snap", (long long)k5, (long long)k10);
+    run(&r, args);
+    assert_int_equal(r.status, 0);
+    json_t *j = json_loads(r.out, 0, NULL);
+    assert_non_null(j);
+    json_t *keys = json_object_get(j, "keys");
+    assert_int_equal(json_array_size(keys), 3);
+    assert_string_equal(json_string_value(json_array_get(keys, 1)), "S-5k:folds.angle_left_deg");
+    assert_string_equal(json_string_value(json_array_get(keys, 2)), "S-10k:folds.angle_left_deg");
+    json_t *sp = json_object_get(j, "specimens");
+    assert_true(fabs(fitted(json_array_get(sp, 0), "S-5k:folds.angle_left_deg") + 86.0) < 1e-3);
+    assert_true(fabs(fitted(json_array_get(sp, 1), "S-10k:folds.angle_left_deg") + 88.0) < 1e-3);
+    assert_true(fabs(json_real_value(json_object_get(json_object_get(j, "hinge_per_width"), "fitted")) - 1.0) < 1e-3);
+    json_decref(j);
+
+    snprintf(args, sizeof args, "%lld %lld --share-hinge " TIGHT " --no-snap", (long long)k5, (long long)j10);
+    run(&r, args);
+    assert_int_equal(r.status, 1);
+    assert_non_null(strstr(r.err, "specimen S-10j's trials fit other keys (sim.fit_keys \"folds.angle_right_deg\") "
+                                  "than specimen S-5k's (\"folds.angle_left_deg\")"));
+    assert_non_null(strstr(r.err, "--fit"));
+    snprintf(args, sizeof args, "%lld %lld --share-hinge " TIGHT " --no-snap --json --fit folds.angle_left_deg",
+             (long long)k5, (long long)j10);
+    run(&r, args);
+    assert_int_equal(r.status, 0);
+    j = json_loads(r.out, 0, NULL);
+    assert_non_null(j);
+    assert_int_equal(json_array_size(json_object_get(j, "keys")), 3);
+    json_decref(j);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -426,6 +484,7 @@ int main(void)
         cmocka_unit_test(prints_the_shared_hinge_and_each_snap),
         cmocka_unit_test(refusals_are_named),
         cmocka_unit_test(the_hinge_guess_makes_rigid_creases_hinges),
+        cmocka_unit_test(the_trials_fit_keys_are_the_keys),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -23,45 +23,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "rig_daemon.h"
+#include "../mock_daemon.h"
 
-#include "../test_dir.h"
-
-static char dir[64];
-static rig_daemon d;
-
-/* The trial, run to its end. Returns its id. */
-static int64_t run_trial(void)
-{
-    api_ops ops = rig_daemon_ops();
-    json_t *body = json_loads("{}", 0, NULL), *out = NULL;
-    int http = 201;
-    char why[512] = "";
-    if (ops.start(&d, body, &out, &http, why, sizeof why)) fail_msg("start: %d %s", http, why);
-    int64_t id = json_integer_value(json_object_get(out, "id"));
-    json_decref(body);
-    json_decref(out);
-    for (int k = 0;; k++) {
-        json_t *st = NULL;
-        assert_int_equal(ops.status(&d, &st, why, sizeof why), 0);
-        int idle = !strcmp(json_string_value(json_object_get(st, "state")), "idle");
-        json_decref(st);
-        if (idle) break;
-        if (k > 6000) fail_msg("trial %lld did not end in 300 s", (long long)id);
-        usleep(50000);
-    }
-    return id;
-}
-
-static json_t *trial_json(int64_t id)
-{
-    api_ops ops = rig_daemon_ops();
-    json_t *out = NULL;
-    int http = 200;
-    char why[256];
-    if (ops.show(&d, id, &out, &http, why, sizeof why)) fail_msg("show %lld: %s", (long long)id, why);
-    return out;
-}
+static mock_daemon md;
 
 /* The parameter named key in a "parameters" array (NULL: none). */
 static const json_t *param(const json_t *ps, const char *key)
@@ -76,8 +40,8 @@ static const json_t *param(const json_t *ps, const char *key)
 static json_t *ribbonctl(const char *args, int *status)
 {
     char cmd[1024], out[160], err[160];
-    snprintf(out, sizeof out, "%s/out.json", dir);
-    snprintf(err, sizeof err, "%s/err.txt", dir);
+    snprintf(out, sizeof out, "%s/out.json", md.dir);
+    snprintf(err, sizeof err, "%s/err.txt", md.dir);
     snprintf(cmd, sizeof cmd, "%s calibrate %s > %s 2> %s", RIBBONCTL_PATH, args, out, err);
     int rc = system(cmd);
     *status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
@@ -92,8 +56,8 @@ static json_t *ribbonctl(const char *args, int *status)
 static void offline_fit_reproduces_the_in_trial_fit(void **state)
 {
     (void)state;
-    int64_t id = run_trial();
-    json_t *t = trial_json(id);
+    int64_t id = mock_daemon_trial(&md, NULL);
+    json_t *t = mock_daemon_show(&md, id);
     assert_string_equal(json_string_value(json_object_get(t, "status")), "done");
     const json_t *fit = json_object_get(t, "fit");
     assert_true(json_is_object(fit));
@@ -106,7 +70,7 @@ static void offline_fit_reproduces_the_in_trial_fit(void **state)
 
     /* The frames the in-trial fit had: those before the shear, from the first tracked one. */
     char path[128], args[512];
-    snprintf(path, sizeof path, "%s/trials.db", dir);
+    snprintf(path, sizeof path, "%s/trials.db", md.dir);
     snprintf(args, sizeof args, "%lld --db %s --json --no-snap --dw-max 0 --dl-min 1e-6 --max-samples 40",
              (long long)id, path);
     int status;
@@ -141,24 +105,15 @@ static void offline_fit_reproduces_the_in_trial_fit(void **state)
 static int setup(void **state)
 {
     (void)state;
-    snprintf(dir, sizeof dir, "/tmp/ctl-calib-trial-XXXXXX");
-    assert_non_null(mkdtemp(dir));
-    static char set_store[128], set_video[128];
-    snprintf(set_store, sizeof set_store, "store.path=%s/trials.db", dir);
-    snprintf(set_video, sizeof set_video, "camera.video_dir=%s/videos", dir);
-    const char *ov[] = {set_store, set_video, "api.port=0", "mesh.nodes=31", "sim.nodes=31", "sim.dt=2e-3",
-                        "twin.mesh.nodes=31", "twin.solver.dt=2e-3", "sim.fit_refresh_s=0"};
-    char why[512] = "";
-    if (rig_daemon_open(&d, RIBBON_SOURCE_DIR "/config/mock.ini", ov, 9, NULL, why, sizeof why))
-        fail_msg("open: %s", why);
+    const char *sets[] = {"sim.fit_refresh_s=0"};
+    mock_daemon_open(&md, "ctl-calib-trial", sets, 1);
     return 0;
 }
 
 static int teardown(void **state)
 {
     (void)state;
-    rig_daemon_close(&d, "test done");
-    test_dir_done(dir, 1, "ribbonctl calibrate of a mock trial");
+    mock_daemon_close(&md, "ribbonctl calibrate of a mock trial");
     return 0;
 }
 

@@ -69,6 +69,16 @@ typedef struct film {
     long frames, measured;
 } film;
 
+/* The trial's detection settings for the twin's scene, with config/mock.ini's [detect]. */
+static snap_params mock_detect(const rod_scene *sc)
+{
+    snap_params sp = snap_params_default();
+    sp.snap_speed = sc->snap_speed;
+    sp.asym_threshold = sc->asym_threshold;
+    sp.dz_jump = 0.02; /* config/mock.ini [detect] */
+    return sp;
+}
+
 static int on_frame(void *user, int index, double t_s, const vis_shape *shape)
 {
     film *u = user;
@@ -162,10 +172,7 @@ static void film_run(film *u, double phi, double gamma, double rel, double fps, 
     u->f = vis_frame_alloc(rp.camera.width_px, rp.camera.height_px, 1, &ve);
     assert_non_null(u->f);
     rod_snap_watch_init(&u->truth, u->sc.snap_speed, u->sc.asym_threshold, 2.0);
-    snap_params sp = snap_params_default();
-    sp.snap_speed = u->sc.snap_speed;
-    sp.asym_threshold = u->sc.asym_threshold;
-    sp.dz_jump = 0.02; /* config/mock.ini [detect] */
+    snap_params sp = mock_detect(&u->sc);
     snap_detect_init(&u->det, &sp);
     assert_int_equal(twin_frames_init(&u->clock, &u->sc, TWIN_Y_RIG, fps, on_frame, u, err, sizeof err), TWIN_OK);
     rod_predict_opts po = rod_predict_opts_default();
@@ -198,10 +205,7 @@ static void film_summary(const film *u, double phi, double gamma, double rel)
  * with another frame phase), with mock.ini's detection. */
 static snap_detect read_frames(const film *u, int stride, int offset)
 {
-    snap_params sp = snap_params_default();
-    sp.snap_speed = u->sc.snap_speed;
-    sp.asym_threshold = u->sc.asym_threshold;
-    sp.dz_jump = 0.02; /* config/mock.ini [detect] */
+    snap_params sp = mock_detect(&u->sc);
     snap_detect d;
     snap_detect_init(&d, &sp);
     for (long k = offset; k < u->n; k += stride) {
@@ -319,17 +323,27 @@ static int probe(int argc, char **argv)
     return 0;
 }
 
+/* The ctests' twin (N = 31, no frame phase) at (phi, gamma), creases rel apart, filmed at fps and
+ * read by the trial's detector: the film (the caller frees it), its reading in r, and the truth
+ * that it snapped (every ctest's twin does). */
+static film *film_read(double phi, double gamma, double rel, double fps, snap_reading *r)
+{
+    film *u = film_new();
+    film_run(u, phi, gamma, rel, fps, 0.0, 31);
+    film_summary(u, phi, gamma, rel);
+    snap_detect_read(&u->det, r);
+    assert_true(u->truth.r.snapped);
+    return u;
+}
+
 /* The phi 120 twin below its boundary at 30 fps (N = 31 to keep it short): the asymmetric
  * passage's sharpest frames fall between frames, so the frames' peak |A| stays under the threshold
  * (the peak rule read symmetric); the departure reads asymmetric. */
 static void twin_passage_between_frames_read_asymmetric(void **state)
 {
     (void)state;
-    film *u = film_new();
-    film_run(u, 120, 0.165, 0.01, 30.0, 0.0, 31);
-    film_summary(u, 120, 0.165, 0.01);
     snap_reading r;
-    snap_detect_read(&u->det, &r);
+    film *u = film_read(120, 0.165, 0.01, 30.0, &r);
     const rod_snap_report *t = &u->truth.r;
     assert_true(t->snapped && t->asymmetric);
     assert_true(t->peak_abs_a > 2.0 * u->sc.asym_threshold); /* a clear truth */
@@ -345,11 +359,8 @@ static void twin_passage_between_frames_read_asymmetric(void **state)
 static void twin_symmetric_read_symmetric(void **state)
 {
     (void)state;
-    film *u = film_new();
-    film_run(u, 90, 0.20, 0.01, 30.0, 0.0, 31);
-    film_summary(u, 90, 0.20, 0.01);
     snap_reading r;
-    snap_detect_read(&u->det, &r);
+    film *u = film_read(90, 0.20, 0.01, 30.0, &r);
     const rod_snap_report *t = &u->truth.r;
     assert_true(t->snapped && !t->asymmetric);
     assert_true(t->peak_abs_a < 0.5 * u->sc.asym_threshold);
@@ -365,11 +376,8 @@ static void twin_symmetric_read_symmetric(void **state)
 static void twin_near_threshold_read_unknown(void **state)
 {
     (void)state;
-    film *u = film_new();
-    film_run(u, 90, 0.19, 0.02, 60.0, 0.0, 31);
-    film_summary(u, 90, 0.19, 0.02);
     snap_reading r;
-    snap_detect_read(&u->det, &r);
+    film *u = film_read(90, 0.19, 0.02, 60.0, &r);
     const rod_snap_report *t = &u->truth.r;
     assert_true(t->snapped && !t->asymmetric);
     assert_true(rod_regime_asymmetric(r.peak_swing, u->sc.asym_threshold)); /* the peak rule: asymmetric */

@@ -46,7 +46,7 @@
 #include "store.h"
 #include "trial.h"
 #include "trial_calibrate.h"
-#include "trial_idle.h"
+#include "thread_class.h"
 #include "trial_session.h"
 #include "twin.h"
 
@@ -671,7 +671,7 @@ static void worker_class(void **state)
     assert_int_equal(rig.ok, 1);
     assert_int_equal(rig.idle, 1);
     assert_non_null(strstr(rig.event, "in SCHED_IDLE)"));
-    assert_int_equal(trial_idle_is(0), 0); /* the runner's thread keeps its class */
+    assert_int_equal(thread_class_is_idle(0), 0); /* the runner's thread keeps its class */
     class_seen mock = run_worker(0);
     assert_int_equal(mock.landed, 1);
     assert_int_equal(mock.idle, 0);

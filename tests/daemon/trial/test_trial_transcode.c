@@ -9,7 +9,7 @@
  * trial's .avi with an event saying why; at start-up the raw videos an earlier run left are queued
  * again, except those kept raw on purpose (a failed transcode, an interrupted trial). While a
  * transcode runs, the worker and every thread of the encoder it opened run in SCHED_IDLE
- * (trial_idle.h: the next trial's loop, capture and poller always win the cores), the test's own
+ * (thread_class.h: the next trial's loop, capture and poller always win the cores), the test's own
  * thread in its normal class. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -31,7 +31,7 @@
 #include "test_dir.h"
 #include "trial_transcode.h"
 #include "trial_transcoder.h"
-#include "trial_idle.h"
+#include "thread_class.h"
 #include "vision.h"
 
 #define W 160
@@ -275,15 +275,15 @@ static void test_worker_next_trial_records_while_transcode_runs(void **s)
      * thread, which stands for the next trial's, in its normal class. */
     long worker = trial_transcoder_worker_tid(t);
     assert_true(worker > 0);
-    assert_int_equal(trial_idle_is(worker), 1);
-    assert_int_equal(trial_idle_is(0), 0);
+    assert_int_equal(thread_class_is_idle(worker), 1);
+    assert_int_equal(thread_class_is_idle(0), 0);
     int others = 0, idle = 0;
     DIR *tasks = opendir("/proc/self/task");
     assert_non_null(tasks);
     for (struct dirent *e; (e = readdir(tasks));) {
         long tid = atol(e->d_name);
-        if (tid <= 0 || tid == trial_idle_tid()) continue;
-        int k = trial_idle_is(tid);
+        if (tid <= 0 || tid == thread_class_tid()) continue;
+        int k = thread_class_is_idle(tid);
         if (k < 0) continue; /* ended meanwhile */
         others++;
         idle += k;

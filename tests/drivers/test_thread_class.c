@@ -1,5 +1,5 @@
-/* test_trial_idle: the best-effort threads' scheduling class (daemon/trial/trial_idle.h).
- *   - a thread that calls trial_idle_enter runs in SCHED_IDLE, read back from another thread by
+/* test_thread_class: the best-effort threads' scheduling class (drivers/thread_class.h).
+ *   - a thread that calls thread_class_idle_enter runs in SCHED_IDLE, read back from another thread by
  *     its thread id (what the kernel says, not what the call returned);
  *   - the thread that created it keeps its own class (the trial's loop is such a thread);
  *   - a thread it creates afterwards (an encoder's slice thread) is in SCHED_IDLE too;
@@ -13,7 +13,7 @@
 #include <sched.h>
 #include <stdatomic.h>
 
-#include "trial_idle.h"
+#include "thread_class.h"
 
 typedef struct probe {
     atomic_long tid, child_tid;
@@ -24,7 +24,7 @@ typedef struct probe {
 static void *child_main(void *arg)
 {
     probe *p = arg;
-    atomic_store(&p->child_tid, trial_idle_tid());
+    atomic_store(&p->child_tid, thread_class_tid());
     while (!atomic_load(&p->release)) sched_yield();
     return NULL;
 }
@@ -32,11 +32,11 @@ static void *child_main(void *arg)
 static void *worker_main(void *arg)
 {
     probe *p = arg;
-    p->enter_rc = trial_idle_enter(NULL, 0);
-    p->self_idle = trial_idle_is(0);
+    p->enter_rc = thread_class_idle_enter(NULL, 0);
+    p->self_idle = thread_class_is_idle(0);
     pthread_t child;
     int made = pthread_create(&child, NULL, child_main, p) == 0;
-    atomic_store(&p->tid, trial_idle_tid());
+    atomic_store(&p->tid, thread_class_tid());
     atomic_store(&p->entered, 1);
     while (!atomic_load(&p->release)) sched_yield();
     if (made) pthread_join(child, NULL);
@@ -53,12 +53,12 @@ static void idle_thread_and_its_children(void **state)
     atomic_init(&p.release, 0);
     p.enter_rc = -2;
     p.self_idle = -2;
-    assert_int_equal(trial_idle_is(0), 0); /* the test's thread: the normal class */
+    assert_int_equal(thread_class_is_idle(0), 0); /* the test's thread: the normal class */
     pthread_t th;
     assert_int_equal(pthread_create(&th, NULL, worker_main, &p), 0);
     while (!atomic_load(&p.entered) || !atomic_load(&p.child_tid)) sched_yield();
     long w = atomic_load(&p.tid), c = atomic_load(&p.child_tid);
-    int w_idle = trial_idle_is(w), c_idle = trial_idle_is(c), me = trial_idle_is(trial_idle_tid());
+    int w_idle = thread_class_is_idle(w), c_idle = thread_class_is_idle(c), me = thread_class_is_idle(thread_class_tid());
     atomic_store(&p.release, 1);
     pthread_join(th, NULL);
     assert_int_equal(p.enter_rc, 0);
@@ -66,13 +66,13 @@ static void idle_thread_and_its_children(void **state)
     assert_int_equal(w_idle, 1);  /* read from outside, by its thread id */
     assert_int_equal(c_idle, 1);  /* inherited */
     assert_int_equal(me, 0);      /* the creator keeps its class */
-    assert_int_equal(trial_idle_is(0), 0);
+    assert_int_equal(thread_class_is_idle(0), 0);
 }
 
 static void no_such_thread(void **state)
 {
     (void)state;
-    assert_int_equal(trial_idle_is(-1), -1);
+    assert_int_equal(thread_class_is_idle(-1), -1);
 }
 
 int main(void)
