@@ -74,7 +74,11 @@ typedef struct snap_reading {
     double swing_dz;       /* the first swing's Delta Z travel seen by the frames */
     double peak_swing;     /* rad, peak |A| from the onset to the first swing's end */
     int passage_frames;    /* measured frames from the onset to the swing's end */
+    int inside;            /* a measured frame lies inside the passage (less than
+                              SNAP_INSIDE_FRAC of the swing's travel from the onset): without
+                              one the peak cannot read "symmetric", only a high |A| counts */
 } snap_reading;
+#define SNAP_INSIDE_FRAC 0.8
 
 typedef enum snap_phase {
     SNAP_WAITING = 0, /* no snap yet */

@@ -256,6 +256,28 @@ static void no_departure_frame_is_undecided_near_the_threshold(void **state)
     const hand_frame low[] = {{0.25, 0.1, 1}, {0.0, 0.2, 1}, {-0.22, 0.1, 1}, {-0.21, 0.1, 1}};
     d = run_hand(low, 4, &r);
     assert_int_equal(r.regime, SNAP_REGIME_SYMMETRIC);
+    assert_int_equal(r.inside, 1);
+}
+
+/* No frame of the passage at all (the clean .ci/run's test_modbus_trial: frames 118 ms apart, one
+ * occluded, two untracked, the next already at the lower state, ringing with |A| <= 0.2 after an
+ * asymmetric snap): a low peak over frames that saw only the state after is no reading. Before,
+ * "symmetric". */
+static void no_frame_inside_the_passage_is_undecided(void **state)
+{
+    (void)state;
+    const hand_frame f[] = {{0.309, 0.11, 1}, {0.0, 0.0, 0},      {0.0, 0.0, 0},       {0.0, 0.0, 0},
+                            {-0.2448, -0.19, 1}, {-0.2448, -0.2, 1}, {-0.244, 0.056, 1}, {-0.2441, 0.058, 1}};
+    snap_reading r;
+    snap_detect d = run_hand(f, 8, &r);
+    assert_int_equal(r.by_departure, 0);
+    assert_int_equal(r.inside, 0);
+    assert_false(rod_regime_asymmetric(r.peak_swing, 0.25)); /* the peak alone: symmetric */
+    assert_int_equal(r.regime, SNAP_REGIME_UNDECIDED);
+    assert_string_equal(snap_detect_regime(&d), "unknown");
+    char msg[512];
+    snap_reading_format(&r, &d.p, msg, sizeof msg);
+    assert_non_null(strstr(msg, "inside the passage: none"));
 }
 
 /* Between the two departure thresholds the frames cannot tell: "unknown", and the event says so. */
@@ -286,6 +308,7 @@ int main(void)
         cmocka_unit_test(symmetric_departure_with_amplified_frames),
         cmocka_unit_test(no_departure_frame_is_undecided_near_the_threshold),
         cmocka_unit_test(departure_between_thresholds_is_undecided),
+        cmocka_unit_test(no_frame_inside_the_passage_is_undecided),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
