@@ -12,6 +12,25 @@
  *     from creases up to 5% apart with the tracker's noise; the camera must resolve the snap's
  *     passage, docs/trials.md "Snap detection").
  * Frames the tracker could not measure are skipped (they neither start nor end anything).
+ * The onset at a slow passage (a saddle-node's departure: the speed rises through a tenth of
+ * snap_speed over several frames, e.g. 0.09 to 0.12 /s over 6 frames at the rehearsal's Gamma
+ * 0.21): a single frame-to-frame speed there is noisy (the frames' stamps against the instant
+ * they show, the tracker: 0.007-0.010 /s measured in the rehearsal), and "the last slow frame"
+ * takes the LAST of the frames that happened to read slow, late by up to the whole dwell near the
+ * threshold (+0.0021 of Delta W, 2.5 frames, measured). So once the snap is seen the onset is
+ * re-read back from the detection over the kept frames (SNAP_HIST) with a centred chord: the
+ * speed at a frame is read over its frame-to-frame interval widened by SNAP_CHORD_HALF measured
+ * frames on each side (centred where the frame-to-frame speed is, so no bias on a ramp), narrowed
+ * back symmetrically so that it never reaches past the last frame before the detection whose
+ * frame-to-frame speed was at most twice the slow bound (a fast passage's own frames never enter
+ * it and its onset stays the last slow frame), and the onset is the last frame whose chord speed
+ * is below the slow bound (the frame-to-frame rule when no chord is; always across a gap); the
+ * passage and the peak |A| restart there. And a frame that
+ * repeats the one before (Delta Z moved less than SNAP_REPEAT_FRAC of what the slow bound gives
+ * in the interval, right after a frame at or above it: a rig simulator's twin one step behind real
+ * time sends the same state twice; a strip approaching its snap does not stop within a frame) is
+ * skipped like an unmeasured one, at most SNAP_REPEAT_MAX in a row: before, it read a speed of 0
+ * and restarted the onset (+0.0037, 4 frames late, measured in the rehearsal).
  * Across a gap (unmeasured frames between two measured ones, e.g. frames stored untracked while the
  * trial loop was behind) the snap's own fast frames may be unseen and the speed over the gap
  * diluted below snap_speed: the first measured frame after the gap is then also a snap when its
@@ -74,7 +93,23 @@ typedef struct snap_reading {
     double swing_dz;       /* the first swing's Delta Z travel seen by the frames */
     double peak_swing;     /* rad, peak |A| from the onset to the first swing's end */
     int passage_frames;    /* measured frames from the onset to the swing's end */
+    int inside;            /* a measured frame lies inside the passage (less than
+                              SNAP_INSIDE_FRAC of the swing's travel from the onset): without
+                              one the peak cannot read "symmetric", only a high |A| counts */
 } snap_reading;
+#define SNAP_INSIDE_FRAC 0.8
+
+/* The frames kept for re-reading the onset (snap_detect.h, top): the last SNAP_HIST measured ones
+ * while waiting for the snap. */
+#define SNAP_HIST 64
+#define SNAP_CHORD_HALF 2
+#define SNAP_REPEAT_FRAC 0.25
+#define SNAP_REPEAT_MAX 2
+
+typedef struct snap_frame {
+    long frame;
+    double t, dw, dz, a;
+} snap_frame;
 
 typedef enum snap_phase {
     SNAP_WAITING = 0, /* no snap yet */
@@ -104,6 +139,9 @@ typedef struct snap_detect {
     int pass_n;            /* the passage's frames kept (from the onset; at most SNAP_PASSAGE_MAX) */
     double pass_far;       /* the largest |Delta Z - Delta Z_onset| of the passage's frames, kept or not */
     double pass_dz[SNAP_PASSAGE_MAX], pass_a[SNAP_PASSAGE_MAX];
+    snap_frame hist[SNAP_HIST]; /* the last measured frames while waiting (a ring) */
+    int hist_n, hist_next;      /* frames in the ring; the slot the next one goes to */
+    int repeats;                /* repeated frames skipped in a row just now */
     double onset_dw_hi;    /* the onset's upper bound: the detection frame's Delta W when it was
                               caught across a gap (the onset lies in [onset_dw, onset_dw_hi]);
                               equal to onset_dw otherwise */

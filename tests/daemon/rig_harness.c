@@ -469,7 +469,26 @@ double rig_truth_image_age(rig_run *r, double dw, double span)
     return age_max;
 }
 
-double rig_onset_bound(double rate, double fps, double twin_dt, double image_age_s)
+double rig_truth_frame_gap(rig_run *r, double dw, double span)
 {
-    return rate * (1.0 / fps + twin_dt + 1e-3 + fmax(0.0, image_age_s)) + 1e-9;
+    char path[160], line[512];
+    snprintf(path, sizeof path, "%s/truth.csv", r->dir);
+    FILE *t = fopen(path, "r");
+    assert_non_null(t);
+    double gap = 0.0, mono_prev = NAN;
+    while (fgets(line, sizeof line, t)) {
+        double v[7];
+        if (sscanf(line, "%lf,%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6]) != 7)
+            continue;
+        if (v[6] > dw + span) break; /* past it: the snap, the stop and the return come after */
+        if (fabs(v[6] - dw) < span && isfinite(mono_prev)) gap = fmax(gap, v[1] - mono_prev);
+        mono_prev = v[1];
+    }
+    fclose(t);
+    return gap;
+}
+
+double rig_onset_bound(double rate, double fps, double frame_gap_s, double twin_dt, double image_age_s)
+{
+    return rate * (fmax(1.0 / fps, frame_gap_s) + twin_dt + 1e-3 + fmax(0.0, image_age_s)) + 1e-9;
 }

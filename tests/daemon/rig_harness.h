@@ -88,9 +88,14 @@ double rig_twin_truth(rig_run *r, char *regime, size_t n);
 /* From the truth log: the oldest image (s, column image_age_s) the simulator sent while Delta W
  * was within span of dw; 0 if none. */
 double rig_truth_image_age(rig_run *r, double dw, double span);
+/* From the truth log: the longest interval (s) between two images the simulator sent while Delta W
+ * was within span of dw, on the way there (the shear's first pass); 0 if none. Where the simulator
+ * stalled (a busy machine) the frames are that far apart and the onset, a frame, no closer. */
+double rig_truth_frame_gap(rig_run *r, double dw, double span);
 /* How far the measured snap may lie from the twin's own (docs/trials.md "The twin and its truth"):
- * one frame period of shear, one twin step, the frame stamps' 1 ms and the oldest image sent near
+ * one frame period of shear (at fps, or the longer frame_gap_s the frames had near the snap:
+ * rig_truth_frame_gap), one twin step, the frame stamps' 1 ms and the oldest image sent near
  * the snap, all times the shear rate (Delta W per second). */
-double rig_onset_bound(double rate, double fps, double twin_dt, double image_age_s);
+double rig_onset_bound(double rate, double fps, double frame_gap_s, double twin_dt, double image_age_s);
 
 #endif
