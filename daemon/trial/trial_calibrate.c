@@ -300,6 +300,7 @@ static void compute(const rod_scene *sc_in, const char *keys, const rod_fit_obs 
     }
     char why[320] = "";
     rod_status st = rod_fit_run(sc, obs, nobs, &o, &r->fit, why, sizeof why);
+    if (o.prior_centre) rod_fit_scene_values(sc_in, r->fit.u0); /* stored as the scene: the trial's, not fit 0's */
     if (st != ROD_OK) {
         if (cancel && atomic_load(cancel))
             failed(r, "cancelled", "cancelled: the trial ended while the fit ran");

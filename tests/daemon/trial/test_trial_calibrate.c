@@ -719,7 +719,7 @@ static void refresh_without_centrelines(void **state)
     assert_int_equal(r.fit.nshape_rows, 0);
     for (int k = ROD_FIT_POSITION_LEFT; k <= ROD_FIT_POSITION_RIGHT; k += ROD_FIT_POSITION_RIGHT - ROD_FIT_POSITION_LEFT) {
         assert_true(r.fit.fitted[k]);
-        assert_true(fabs(r.fit.u0[k] - us[k]) < 1e-12); /* fit 0's strip, the prior's centre */
+        assert_true(fabs(r.fit.u0[k] - u[k]) < 1e-12); /* stored as the scene: the trial's, not fit 0's */
         assert_true(isfinite(r.fit.se[k]) && r.fit.se[k] > 0.0 && r.fit.se[k] <= ROD_FIT_CARRY_FLOOR);
     }
     assert_true(r.snapped && isfinite(r.snap_sd) && r.snap_sd > 0.0);
