@@ -469,7 +469,8 @@ static int eval_point(void *user, const double *x)
     for (int i = 0; i < c->nfit; i++) {
         int k = c->key[i];
         if (!isfinite(c->o->prior_sigma[k])) continue;
-        c->last_f[row] = (u[k] - c->u0[k]) / c->o->prior_sigma[k];
+        double centre = c->o->prior_centre && isfinite(c->o->prior_centre[k]) ? c->o->prior_centre[k] : c->u0[k];
+        c->last_f[row] = (u[k] - centre) / c->o->prior_sigma[k];
         for (int ii = 0; ii < c->nfit; ii++)
             c->cache_J[row * c->nfit + ii] = ii == i ? c->scale[k] / c->o->prior_sigma[k] : 0.0;
         row++;

@@ -92,6 +92,10 @@ typedef struct rod_fit_opts {
                                         e.g. the fit without shapes, so the shapes' less convex cost
                                         is entered near its minimum (the priors stay centred on the
                                         scene's values; rms_start stays the scene's) */
+    const double *prior_centre;      /* NULL: each prior is centred on the scene's value; else
+                                        ROD_FIT_NKEYS centres in fit units (a non-finite one: the
+                                        scene's), e.g. a refresh evaluated at fit 0's strip with its
+                                        priors on the specimen's values (rod_fit_carry.h) */
 } rod_fit_opts;
 
 rod_fit_opts rod_fit_opts_default(void);

@@ -113,7 +113,8 @@ typedef struct family_case_opts {
     double shape_noise;    /* over l, per coordinate (FAMILY_SHAPES_TRUTH) */
     int refresh_shapes;    /* 1 (default): the refresh (the fit with the shear) keeps the centrelines,
                               0: drops them, as the trial's refreshes do (daemon/trial/trial_calibrate.h;
-                              with fit.shape_common_mode, the trial's fit 0) */
+                              with fit.shape_common_mode, the trial's fit 0), and carries the
+                              positions by the trial's rule (sim/rod_fit_carry.h) */
 } family_case_opts;
 
 enum { FAMILY_SHAPES_NONE, FAMILY_SHAPES_TRUTH, FAMILY_SHAPES_TRACKER };

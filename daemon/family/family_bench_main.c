@@ -68,8 +68,10 @@ static const char usage[] =
     "  --sigma-shape X per coordinate (over l; 0.001) with --shape-source truth (the default), or\n"
     "  the tracker's mapped to the plane with --shape-source tracker (weighted by X all the same).\n"
     "  --shape-common-mode: each centreline's error has a common mode too (its residual, in the\n"
-    "  covariance); --refresh-shapes drop: the fit with the shear leaves the centrelines out (keep:\n"
-    "  the default); both together are the trial's fit with sim.fit_shape (docs/calibration.md).\n";
+    "  covariance); --refresh-shapes drop: the fit with the shear leaves the centrelines out, its\n"
+    "  positions' prior the first fit's values and standard errors (at least 0.001 l), its other\n"
+    "  priors on the scene's values (keep: the default, every prior on the first fit's values);\n"
+    "  both together are the trial's fit with sim.fit_shape (docs/calibration.md).\n";
 
 #define MAX_SETS 32
 #define MAX_TWINS 1000

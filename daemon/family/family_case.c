@@ -12,6 +12,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "rod_fit_carry.h"
 #include "rod_protocol.h"
 
 family_case_opts family_case_opts_default(const rod_scene *sc)
@@ -202,11 +203,19 @@ int family_case_run(const rod_scene *sc, const family_ranges *rg, uint64_t seed,
        twin's 80%: 25% early for some twins). Without a before-shear fit, from the scene. */
     if (out->before.ok) {
         rod_scene warm = *sc;
-        rod_fit_scene_apply(&warm, out->before.fit.u);
+        double centre[ROD_FIT_NKEYS];
+        int carried = 0;
         if (!o->refresh_shapes) {
+            /* The trial's refresh, by its rule (sim/rod_fit_carry.h, daemon/trial/trial_calibrate.c):
+               without the centrelines, the positions carried from the fit before the shear (its
+               values and standard errors as their prior), the other priors on the scene's values. */
             fo_fit.shapes = NULL;
             fo_fit.nshapes = 0;
+            if (fo_fit.fit[ROD_FIT_POSITION_LEFT] && fo_fit.fit[ROD_FIT_POSITION_RIGHT])
+                carried = rod_fit_carry_positions(out->before.fit.u, out->before.fit.se, ROD_FIT_CARRY_FLOOR,
+                                                  fo_fit.prior_sigma[ROD_FIT_POSITION_LEFT], &warm, &fo_fit, centre);
         }
+        if (!carried) rod_fit_scene_apply(&warm, out->before.fit.u); /* every prior on the first fit's */
         for (int k = 0; k < ROD_FIT_NKEYS; k++)
             if (fo_fit.fit[k]) {
                 fo_fit.lo[k] = out->before.fit.lo[k];

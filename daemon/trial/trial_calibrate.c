@@ -15,6 +15,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "rod_fit_carry.h"
 #include "thread_class.h"
 
 enum { JOB_RUNNING = 0, JOB_DONE, JOB_ABANDONED };
@@ -31,7 +32,9 @@ typedef struct calib_job {
     rod_fit_shape shapes[TRIAL_CALIBRATE_SHAPES];
     int nshapes;
     int positions;            /* a refresh after fit 0 took the centrelines: the positions fitted
-                                 with TRIAL_CALIBRATE_PRIOR_POSITION around the scene's (fit 0's) */
+                                 with fit 0's values and standard errors as their prior
+                                 (rod_fit_carry.h; NaN: the scene's, TRIAL_CALIBRATE_PRIOR_POSITION) */
+    double u0[ROD_FIT_NKEYS], se0[ROD_FIT_NKEYS]; /* fit 0's values and standard errors */
     trial_calibrated res;
 } calib_job;
 
@@ -72,7 +75,9 @@ struct trial_calibrate {
     rod_fit_shape chosen[TRIAL_CALIBRATE_SHAPES]; /* the ones the first fit took, kept by refreshes */
     rod_fit_obs chosen_obs[TRIAL_CALIBRATE_SHAPES];
     int nchosen;
-    double fit0_pos[2];       /* fit 0's crease positions when it took the centrelines (NaN: none) */
+    double fit0_u[ROD_FIT_NKEYS]; /* fit 0's values when it took the centrelines and fitted both
+                                     positions (NaN: none) */
+    double fit0_se[ROD_FIT_NKEYS];  /* and their standard errors */
     long dropped;             /* frames not kept (out of memory) */
     calib_job *job;           /* the running worker, or NULL */
     int started;              /* the first fit was started */
@@ -194,28 +199,34 @@ void trial_calibrate_compute(const rod_scene *sc, const char *keys, const rod_fi
 }
 
 static void compute(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before, int nobs_shear,
-                    const rod_fit_shape *shapes, int nshapes, int positions, const atomic_int *cancel,
-                    trial_calibrated *r);
+                    const rod_fit_shape *shapes, int nshapes, int positions, const double *u0,
+                    const double *se0, const atomic_int *cancel, trial_calibrated *r);
 
 void trial_calibrate_compute_shapes(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
                                     int nobs_shear, const rod_fit_shape *shapes, int nshapes,
                                     const atomic_int *cancel, trial_calibrated *r)
 {
-    compute(sc, keys, obs, nobs_before, nobs_shear, shapes, nshapes, 0, cancel, r);
+    compute(sc, keys, obs, nobs_before, nobs_shear, shapes, nshapes, 0, NULL, NULL, cancel, r);
 }
 
 void trial_calibrate_compute_refresh(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
-                                     int nobs_shear, const atomic_int *cancel, trial_calibrated *r)
+                                     int nobs_shear, const double u0[ROD_FIT_NKEYS],
+                                     const double se0[ROD_FIT_NKEYS], const atomic_int *cancel, trial_calibrated *r)
 {
-    compute(sc, keys, obs, nobs_before, nobs_shear, NULL, 0, 1, cancel, r);
+    compute(sc, keys, obs, nobs_before, nobs_shear, NULL, 0, 1, u0, se0, cancel, r);
 }
 
 /* The fit and its snap (the header's trial_calibrate_compute_*): positions = 1 fits both crease
- * positions (default keys, where the strip has them) with TRIAL_CALIBRATE_PRIOR_POSITION around sc's. */
-static void compute(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before, int nobs_shear,
-                    const rod_fit_shape *shapes, int nshapes, int positions, const atomic_int *cancel,
-                    trial_calibrated *r)
+ * positions (default keys, where the strip has them) with fit 0's values u0 and standard errors
+ * se0 as their prior, evaluated at fit 0's strip (rod_fit_carry_positions), or with
+ * TRIAL_CALIBRATE_PRIOR_POSITION around sc's when u0 is NULL or its positions not finite. */
+static void compute(const rod_scene *sc_in, const char *keys, const rod_fit_obs *obs, int nobs_before,
+                    int nobs_shear, const rod_fit_shape *shapes, int nshapes, int positions, const double *u0,
+                    const double *se0, const atomic_int *cancel, trial_calibrated *r)
 {
+    rod_scene carried = *sc_in; /* a refresh that carries fit 0's positions: fit 0's strip */
+    double centre[ROD_FIT_NKEYS];   /* its priors' centres (rod_fit_carry_positions) */
+    const rod_scene *sc = &carried;
     double t0 = wall_now();
     r->ok = 0;
     r->fit_ran = 0;
@@ -273,6 +284,13 @@ static void compute(const rod_scene *sc, const char *keys, const rod_fit_obs *ob
                 o.fit[k] = 1;
                 if (positions) o.prior_sigma[k] = TRIAL_CALIBRATE_PRIOR_POSITION;
             }
+        /* A sequential update on the positions only: fit 0's values and standard errors (at least
+         * ROD_FIT_CARRY_FLOOR, at most the tolerance) carry what the centrelines told fit 0 about
+         * them; the angles and the hinge keep their priors on the scene's values and are left to
+         * the shear's frames; the model starts at fit 0's strip (docs/calibration.md). */
+        if (positions && u0 && se0)
+            rod_fit_carry_positions(u0, se0, ROD_FIT_CARRY_FLOOR, TRIAL_CALIBRATE_PRIOR_POSITION, &carried, &o,
+                                    centre);
     }
     if (r->nshapes) {
         o.shapes = shapes;
@@ -282,6 +300,7 @@ static void compute(const rod_scene *sc, const char *keys, const rod_fit_obs *ob
     }
     char why[320] = "";
     rod_status st = rod_fit_run(sc, obs, nobs, &o, &r->fit, why, sizeof why);
+    if (o.prior_centre) rod_fit_scene_values(sc_in, r->fit.u0); /* stored as the scene: the trial's, not fit 0's */
     if (st != ROD_OK) {
         if (cancel && atomic_load(cancel))
             failed(r, "cancelled", "cancelled: the trial ended while the fit ran");
@@ -347,7 +366,8 @@ static void *job_main(void *arg)
      * SCHED_IDLE, the fit and its band's predictions on CPU time no one else wants (thread_class.h). */
     if (j->idle) thread_class_idle_enter(NULL, 0); /* refused: nice 19 (thread_class.h) */
     j->res.idle = thread_class_is_idle(0) == 1;        /* the class read back, said in the landing event */
-    compute(&j->scene, j->keys, j->obs, j->nobs_before, j->nobs_shear, j->shapes, j->nshapes, j->positions, &j->cancel,
+    compute(&j->scene, j->keys, j->obs, j->nobs_before, j->nobs_shear, j->shapes, j->nshapes, j->positions, j->u0,
+            j->se0, &j->cancel,
             &j->res);
     int expected = JOB_RUNNING;
     if (!atomic_compare_exchange_strong(&j->state, &expected, JOB_DONE)) job_free(j); /* abandoned */
@@ -441,8 +461,8 @@ static void land(trial_calibrate *c, trial_calibrated *r, double t)
     r->t_landed = t;
     if (r->refresh == 0 && r->ok && r->nshapes && r->fit.fitted[ROD_FIT_POSITION_LEFT] &&
         r->fit.fitted[ROD_FIT_POSITION_RIGHT]) {
-        c->fit0_pos[0] = r->fit.u[ROD_FIT_POSITION_LEFT];
-        c->fit0_pos[1] = r->fit.u[ROD_FIT_POSITION_RIGHT];
+        memcpy(c->fit0_u, r->fit.u, sizeof c->fit0_u);
+        memcpy(c->fit0_se, r->fit.se, sizeof c->fit0_se);
     }
     r->t_shear = c->t_shear;
     if (r->ok && r->nobs_shear > 0 && isfinite(c->dw_snap) && r->dw_cut >= c->dw_snap)
@@ -581,16 +601,11 @@ static void launch(trial_calibrate *c, double t, int refresh)
     if (refresh == 0) choose_shapes(c);
     /* The refreshes leave the centrelines out (the tracker's error on them is not independent
      * noise: with them the band at 80% of the way held the snap in 85% of the family, without them
-     * 90%; docs/calibration.md); the positions fit 0 found with them stay fitted, their prior
-     * centred on fit 0's values. */
+     * 90%; docs/calibration.md); the positions fit 0 found with them stay fitted, with fit 0's
+     * values and standard errors as their prior (compute). */
     j->positions = refresh > 0 && c->nchosen > 0;
-    if (j->positions && isfinite(c->fit0_pos[0]) && isfinite(c->fit0_pos[1])) {
-        double u[ROD_FIT_NKEYS];
-        rod_fit_scene_values(&j->scene, u);
-        u[ROD_FIT_POSITION_LEFT] = c->fit0_pos[0];
-        u[ROD_FIT_POSITION_RIGHT] = c->fit0_pos[1];
-        rod_fit_scene_apply(&j->scene, u);
-    }
+    memcpy(j->u0, c->fit0_u, sizeof j->u0);
+    memcpy(j->se0, c->fit0_se, sizeof j->se0);
     for (int s = 0; s < c->nchosen && refresh == 0; s++) {
         /* Each shape's frame among the observations (the shape is modelled at its state). */
         int have = 0;
@@ -656,7 +671,7 @@ trial_calibrate *trial_calibrate_new(const trial_calibrate_def *def, char *why, 
     }
     c->def = *def;
     c->t_shear = c->t_snap = c->dw_snap = NAN;
-    c->fit0_pos[0] = c->fit0_pos[1] = NAN;
+    for (int k = 0; k < ROD_FIT_NKEYS; k++) c->fit0_u[k] = c->fit0_se[k] = NAN;
     c->t_last_start = -INFINITY;
     return c;
 }

@@ -77,7 +77,8 @@
  * error as a deformation of its own besides the independent noise (rod_fit_opts.shape_common_mode).
  * The refreshes leave the centrelines out (with them the band at 80% of the way held the family's
  * snaps in 85%, without them 90%: docs/calibration.md) and fit the positions fit 0 found with them
- * with a prior of TRIAL_CALIBRATE_PRIOR_POSITION around fit 0's values. */
+ * with fit 0's values and standard errors as their prior (at least ROD_FIT_CARRY_FLOOR, at most
+ * TRIAL_CALIBRATE_PRIOR_POSITION: sim/rod_fit_carry.h). */
 #define TRIAL_CALIBRATE_SHAPES 4
 #define TRIAL_CALIBRATE_SHAPE_POINTS 24
 #define TRIAL_CALIBRATE_SIGMA_SHAPE 0.0016
@@ -208,8 +209,12 @@ void trial_calibrate_compute_shapes(const rod_scene *sc, const char *keys, const
                                     int nobs_shear, const rod_fit_shape *shapes, int nshapes,
                                     const atomic_int *cancel, trial_calibrated *r);
 /* A refresh after such a fit 0: no centrelines, and with the default keys both crease positions
- * with a prior of TRIAL_CALIBRATE_PRIOR_POSITION around sc's (fit 0's values put in sc). */
+ * with fit 0's values and standard errors (u0, se0: its result's, fit units) as their prior, the
+ * model at fit 0's strip, the other priors on sc's values (rod_fit_carry_positions: the width se0
+ * between ROD_FIT_CARRY_FLOOR and TRIAL_CALIBRATE_PRIOR_POSITION); u0 NULL or its positions not
+ * finite: a prior of TRIAL_CALIBRATE_PRIOR_POSITION around sc's. */
 void trial_calibrate_compute_refresh(const rod_scene *sc, const char *keys, const rod_fit_obs *obs, int nobs_before,
-                                     int nobs_shear, const atomic_int *cancel, trial_calibrated *r);
+                                     int nobs_shear, const double u0[ROD_FIT_NKEYS], const double se0[ROD_FIT_NKEYS],
+                                     const atomic_int *cancel, trial_calibrated *r);
 
 #endif

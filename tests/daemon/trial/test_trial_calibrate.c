@@ -25,7 +25,9 @@
  *   7. shapes_picked_as_they_come: sim.fit_shape's centrelines picked as the frames come, in a
  *      fixed set of slots, the same as the old rule over every frame, none of a long hold mapped.
  *   8. refresh_without_centrelines: a refresh after a fit 0 with centrelines leaves them out and
- *      fits the crease positions with the specimen's tolerance around fit 0's values. */
+ *      fits the crease positions with fit 0's values and standard errors (at least
+ *      ROD_FIT_CARRY_FLOOR) as their prior, at fit 0's strip: its positions' standard errors
+ *      within that floor, not the specimen's tolerance; without fit 0's, that tolerance. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -41,6 +43,7 @@
 #include <gsl/gsl_errno.h>
 
 #include "rig_daemon.h"
+#include "rod_fit_carry.h"
 #include "rod_protocol.h"
 #include "scene_file.h"
 #include "store.h"
@@ -679,8 +682,11 @@ static void worker_class(void **state)
 }
 
 /* A refresh after a fit 0 that took the centrelines (trial_calibrate_compute_refresh): no
- * centrelines, both crease positions fitted with TRIAL_CALIBRATE_PRIOR_POSITION around the
- * scene's (the runner puts fit 0's values in), a finite standard error no wider than that prior. */
+ * centrelines, both crease positions fitted with fit 0's values and standard errors (0.0003 l here,
+ * the mock trial's fit 0's: the floor ROD_FIT_CARRY_FLOOR applies) as their prior, the model at fit
+ * 0's strip: the positions' standard errors within the floor (the old flat prior of
+ * TRIAL_CALIBRATE_PRIOR_POSITION left them 0.0026-0.0032 l on the mock trial). Without fit 0's
+ * values, the flat prior around the scene's. */
 static void refresh_without_centrelines(void **state)
 {
     (void)state;
@@ -698,11 +704,12 @@ static void refresh_without_centrelines(void **state)
     us[ROD_FIT_ANGLE_LEFT] = us[ROD_FIT_ANGLE_RIGHT] = -90.0;
     us[ROD_FIT_POSITION_LEFT] += 0.002;
     us[ROD_FIT_POSITION_RIGHT] -= 0.002;
-    rod_scene fit0 = sc;
-    rod_fit_scene_apply(&fit0, us);
+    double se0[ROD_FIT_NKEYS];
+    for (int k = 0; k < ROD_FIT_NKEYS; k++) se0[k] = INFINITY;
+    se0[ROD_FIT_POSITION_LEFT] = se0[ROD_FIT_POSITION_RIGHT] = 0.0003;
     trial_calibrated r;
     memset(&r, 0, sizeof r);
-    trial_calibrate_compute_refresh(&fit0, "", obs, NHOLD, NSH, NULL, &r);
+    trial_calibrate_compute_refresh(&sc, "", obs, NHOLD, NSH, us, se0, NULL, &r);
     if (!r.ok) fail_msg("%s: %s", r.reason_key, r.reason);
     printf("refresh: positions %.5f +- %.5f, %.5f +- %.5f (prior around %.5f, %.5f; strip %.5f, %.5f); snap %.5f +- %.5f\n",
            r.fit.u[ROD_FIT_POSITION_LEFT], r.fit.se[ROD_FIT_POSITION_LEFT], r.fit.u[ROD_FIT_POSITION_RIGHT],
@@ -712,10 +719,21 @@ static void refresh_without_centrelines(void **state)
     assert_int_equal(r.fit.nshape_rows, 0);
     for (int k = ROD_FIT_POSITION_LEFT; k <= ROD_FIT_POSITION_RIGHT; k += ROD_FIT_POSITION_RIGHT - ROD_FIT_POSITION_LEFT) {
         assert_true(r.fit.fitted[k]);
-        assert_true(r.fit.u0[k] == us[k]); /* the prior's centre: fit 0's */
-        assert_true(isfinite(r.fit.se[k]) && r.fit.se[k] > 0.0 && r.fit.se[k] <= TRIAL_CALIBRATE_PRIOR_POSITION);
+        assert_true(fabs(r.fit.u0[k] - u[k]) < 1e-12); /* stored as the scene: the trial's, not fit 0's */
+        assert_true(isfinite(r.fit.se[k]) && r.fit.se[k] > 0.0 && r.fit.se[k] <= ROD_FIT_CARRY_FLOOR);
     }
     assert_true(r.snapped && isfinite(r.snap_sd) && r.snap_sd > 0.0);
+    /* Without fit 0's values: the specimen's tolerance around the scene's. */
+    trial_calibrated r2;
+    memset(&r2, 0, sizeof r2);
+    trial_calibrate_compute_refresh(&sc, "", obs, NHOLD, NSH, NULL, NULL, NULL, &r2);
+    if (!r2.ok) fail_msg("%s: %s", r2.reason_key, r2.reason);
+    printf("refresh without fit 0's: positions +- %.5f, %.5f\n", r2.fit.se[ROD_FIT_POSITION_LEFT],
+           r2.fit.se[ROD_FIT_POSITION_RIGHT]);
+    for (int k = ROD_FIT_POSITION_LEFT; k <= ROD_FIT_POSITION_RIGHT; k += ROD_FIT_POSITION_RIGHT - ROD_FIT_POSITION_LEFT) {
+        assert_true(r2.fit.fitted[k] && r2.fit.u0[k] == u[k]);
+        assert_true(isfinite(r2.fit.se[k]) && r2.fit.se[k] <= TRIAL_CALIBRATE_PRIOR_POSITION);
+    }
 }
 
 /* The old rule, on every frame (what the fit chose before the frames were picked as they came):
