@@ -117,7 +117,8 @@ static int parse(int argc, char **argv, plan_opts *o)
             else {
                 char *end;
                 *num = strtod(v, &end);
-                if (*end || !(*num > 0) || !isfinite(*num)) return usage("--noise, --tau, --offset-sd and --spread-max take a number > 0");
+                if (*end || !(*num > 0) || !isfinite(*num))
+                    return usage("--noise, --tau, --offset-sd and --spread-max take a number > 0");
             }
             i++;
         }
@@ -462,14 +463,15 @@ int ctl_plan_main(int argc, char **argv)
     } else if (o.json) {
         json_t *b = json_array(), *a = json_array();
         for (size_t j = 0; j < nphi; j++)
-            json_array_append_new(b, json_pack("{s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f}", "phi_deg", beliefs[j].phi_deg,
-                                               "predicted_gamma", beliefs[j].predicted, "scene_gamma", scene_gamma[j],
+            json_array_append_new(b, json_pack("{s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f}", "phi_deg",
+                                               beliefs[j].phi_deg, "predicted_gamma", beliefs[j].predicted, "scene_gamma", scene_gamma[j],
                                                "offset_mean", beliefs[j].offset_mean, "offset_sd", beliefs[j].sd,
                                                "mean", beliefs[j].mean, "sd", beliefs[j].sd, "median",
                                                beliefs[j].median, "lo", beliefs[j].lo, "hi", beliefs[j].hi));
         for (size_t k = 0; k < res.k; k++) json_array_append_new(a, campaign_proposal_json(&sp_rows[k]));
         json_t *j = json_pack("{s:f,s:f,s:f,s:f,s:b,s:s,s:o,s:o,s:o}", "offset_mean", res.offset_mean, "offset_sd",
-                              res.offset_sd, "spread_mean", res.spread_mean, "spread_max", po.spread_max, "calibrated", po.calibrate, "predicted_source", model->source, "strip",
+                              res.offset_sd, "spread_mean", res.spread_mean, "spread_max", po.spread_max, "calibrated",
+                              po.calibrate, "predicted_source", model->source, "strip",
                               strip_json(&ls, strip_note), "beliefs", b, "proposals", a);
         print_json(j);
         json_decref(j);
