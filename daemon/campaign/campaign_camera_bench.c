@@ -36,6 +36,7 @@ campaign_camera_opts campaign_camera_opts_default(void)
     o.bench.twin_hinge = 5e-3;
     o.name = "campaign";
     o.trial_timeout_s = 1200;
+    o.strip = 1;
     return o;
 }
 
@@ -623,6 +624,8 @@ static int run_campaign(cam_run *h, const rig_config *cfg, const campaign_camera
     /* the located boundary: as plan-bench locates it */
     if (campaign_plan_run(b->phi_deg, r->model, n, ph.obs, ph.n_obs, &po, 0, &res, why, why_len)) goto out;
     r->offset_mean = res.offset_mean;
+    r->spread_mean = res.spread_mean;
+    for (size_t j = 0; j < n; j++) r->offsets[j] = beliefs[j].offset_mean;
     r->err_static = 0;
     r->err_dynamic = isfinite(truth->dynamic[0]) ? 0 : NAN;
     for (size_t j = 0; j < n; j++) {

@@ -27,7 +27,8 @@
  * Truths (campaign_camera_truth): the twins' mean strip (equal creases at phi - relax, the hinge,
  * the twin's mesh) (a) traced statically with rod_boundary, as the issue states, and (b) its dynamic
  * switch: the fast predictor's regime at the rig's shear speed, bisected to 5e-4
- * (campaign_bench_dynamic_switch). The planner's model: the rig file's scene traced at each phi. */
+ * (campaign_bench_dynamic_switch). The planner's model: the lab strip's boundary (as ribbonctl
+ * plan), or with strip 0 the rig file's scene traced at each phi. */
 #ifndef RIBBON_CAMPAIGN_CAMERA_BENCH_H
 #define RIBBON_CAMPAIGN_CAMERA_BENCH_H
 
@@ -56,10 +57,11 @@ typedef struct campaign_camera_opts {
     double trial_timeout_s;      /* wall s one specimen (its queue items) may take (default 1200) */
     int keep_videos;             /* 0 (default): each trial's video is removed once its result is read
                                     (about 56 MB a trial); the store keeps every sample and event */
-    int strip;                   /* 1: the calibrated campaign plans from the lab strip (campaign_strip.h:
-                                    the specimens' calibrations, else their trials' fits, read from the
-                                    campaign's store before each proposal, as ribbonctl plan does) and
-                                    the offset; 0 (default): from the scene's boundary and the offset */
+    int strip;                   /* 1 (default): the calibrated campaign plans from the lab strip
+                                    (campaign_strip.h: the specimens' calibrations, else their trials'
+                                    fits, read from the campaign's store before each proposal) and the
+                                    offsets, as ribbonctl plan does; 0: from the scene's boundary and the
+                                    offsets (the bench's default before) */
 } campaign_camera_opts;
 
 campaign_camera_opts campaign_camera_opts_default(void);
@@ -96,7 +98,9 @@ typedef struct campaign_camera_result {
     int converged;               /* every phi's interval closed and at most stop_width */
     double located[CAMPAIGN_BENCH_MAX_PHI]; /* the experimental edge's estimate (else the belief's median) */
     double err_static, err_dynamic; /* max |located - truth| over phi (NaN without that truth) */
-    double offset_mean;          /* the planner's final fitted offset */
+    double offset_mean;          /* the planner's final fitted offset (shared) */
+    double offsets[CAMPAIGN_BENCH_MAX_PHI]; /* its final per-phi offsets, Gamma*_j - model_j */
+    double spread_mean;          /* its final spread of the per-phi offsets */
     int agree;                   /* trials whose measured regime is the twin's own */
     double asym_threshold;       /* rad, the regime rule's (the scene's snap.asym_threshold) */
     int undecided;               /* trials whose snap the camera could not read either way (stored

@@ -18,10 +18,11 @@
 
 #define SAME_PHI 1e-6
 #define PLAN_TIE 1e-3 /* relative: belief widths closer than this are a tie (see the allocation) */
+#define PLAN_Z 9.0    /* Gaussian kernels are cut at 9 sd (exp(-40.5): nothing a sum of them sees) */
 
 campaign_plan_opts campaign_plan_opts_default(void)
 {
-    campaign_plan_opts o = {.tau = 0.003, .offset_sd = 0.03, .noise = 0.002, .gamma_min = 0.02,
+    campaign_plan_opts o = {.tau = 0.003, .offset_sd = 0.03, .spread_max = 0.02, .noise = 0.002, .gamma_min = 0.02,
                             .gamma_max = 0.45, .grid_step = 2.5e-4, .calibrate = 1};
     return o;
 }
@@ -103,28 +104,113 @@ static double quantile(const double *w, size_t ng, const campaign_plan_opts *o, 
     return o->gamma_max;
 }
 
-/* Phi j's belief on the Gamma grid into w (relative density): its own trials (ll_j) times the
- * offset as the other phi's trials tell it (lc, k != j) under its prior. wd: nd scratch. */
-static void belief_density(size_t j, size_t nphi, const double *predicted, const double *ll, const double *lc,
-                           size_t ng, size_t nd, double d0, double tau, const campaign_plan_opts *o, double *wd,
-                           double *w)
+/* The planner's grids and the per-phi likelihoods, shared by the offset's posterior, the beliefs
+ * and the proposals. */
+typedef struct plan_grid {
+    size_t ng, nd, ns;
+    double d0;
+    double spread[PLAN_MAX_SPREAD]; /* s_m, Gamma: the per-phi deviations' sd */
+    double log_prior_s[PLAN_MAX_SPREAD];
+    const double *predicted;
+    size_t nphi;
+    double *ll;                     /* nphi x ng: log L_j(g) */
+    double *lc;                     /* nphi x ns x nd: log c_j(d; s) */
+} plan_grid;
+
+/* The kernel's index window: i - a in [*t0, *t1] where |z| < PLAN_Z, z = ((i - a) step + c) / s. */
+static void kernel_window(double c, double sd, double step, long *t0, long *t1)
 {
-    for (size_t a = 0; a < nd; a++) {
-        double d = d0 + (double)a * o->grid_step;
-        wd[a] = o->calibrate ? -0.5 * (d / o->offset_sd) * (d / o->offset_sd) : 0;
-        for (size_t q = 0; q < nphi; q++)
-            if (q != j) wd[a] += lc[q * nd + a];
+    *t0 = (long)ceil((-PLAN_Z * sd - c) / step);
+    *t1 = (long)floor((PLAN_Z * sd - c) / step);
+}
+
+/* log c_j(d_a; s) for every a: sum_g N(g; P_j + d_a, s) L_j(g), the Gaussian normalised, so that
+ * different s compare. Fast as a correlation of exp(ll - max) with the kernel; where that
+ * underflows, by log-sum-exp. */
+static void log_c(const plan_grid *G, size_t j, size_t m, const campaign_plan_opts *o, double *kern, double *lx,
+                  double *out)
+{
+    const double *ll = G->ll + j * G->ng;
+    double sd = G->spread[m], c = o->gamma_min - G->predicted[j] - G->d0, lmax = -INFINITY;
+    double lnorm = log(o->grid_step / (sd * sqrt(2 * M_PI)));
+    for (size_t i = 0; i < G->ng; i++)
+        if (ll[i] > lmax) lmax = ll[i];
+    for (size_t i = 0; i < G->ng; i++) lx[i] = exp(ll[i] - lmax);
+    long t0, t1;
+    kernel_window(c, sd, o->grid_step, &t0, &t1);
+    for (long t = t0; t <= t1; t++) {
+        double z = ((double)t * o->grid_step + c) / sd;
+        kern[t - t0] = exp(-0.5 * z * z);
     }
-    exp_shift(wd, nd);
-    for (size_t i = 0; i < ng; i++) {
-        double g = o->gamma_min + (double)i * o->grid_step, s = 0;
-        for (size_t a = 0; a < nd; a++) {
-            double z = (g - predicted[j] - d0 - (double)a * o->grid_step) / tau;
-            if (fabs(z) < 9) s += wd[a] * exp(-0.5 * z * z);
+    for (size_t a = 0; a < G->nd; a++) {
+        long i0 = (long)a + t0, i1 = (long)a + t1;
+        if (i0 < 0) i0 = 0;
+        if (i1 > (long)G->ng - 1) i1 = (long)G->ng - 1;
+        double sum = 0;
+        for (long i = i0; i <= i1; i++) sum += lx[i] * kern[i - (long)a - t0];
+        if (sum > 1e-250) {
+            out[a] = lmax + log(sum) + lnorm;
+            continue;
         }
-        w[i] = s > 0 ? log(s) + ll[j * ng + i] : -INFINITY;
+        double mx = -INFINITY;
+        for (long i = i0; i <= i1; i++) {
+            double z = ((double)(i - (long)a) * o->grid_step + c) / sd;
+            double v = ll[i] - 0.5 * z * z;
+            if (v > mx) mx = v;
+        }
+        sum = 0;
+        for (long i = i0; i <= i1 && isfinite(mx); i++) {
+            double z = ((double)(i - (long)a) * o->grid_step + c) / sd;
+            sum += exp(ll[i] - 0.5 * z * z - mx);
+        }
+        out[a] = isfinite(mx) && sum > 0 ? mx + log(sum) + lnorm : -INFINITY;
     }
-    exp_shift(w, ng);
+}
+
+/* The log joint of (delta_a, s_m) given every phi's trials but phi skip's (skip = nphi: all), into
+ * wd (ns x nd), exponentiated and shifted to its maximum. */
+static void joint(const plan_grid *G, size_t skip, const campaign_plan_opts *o, double *wd)
+{
+    for (size_t m = 0; m < G->ns; m++)
+        for (size_t a = 0; a < G->nd; a++) {
+            double d = G->d0 + (double)a * o->grid_step;
+            double v = (o->calibrate ? -0.5 * (d / o->offset_sd) * (d / o->offset_sd) : 0) + G->log_prior_s[m];
+            for (size_t q = 0; q < G->nphi; q++)
+                if (q != skip) v += G->lc[(q * G->ns + m) * G->nd + a];
+            wd[m * G->nd + a] = v;
+        }
+    exp_shift(wd, G->ns * G->nd);
+}
+
+/* Phi j's belief on the Gamma grid into w (relative density): its own trials (ll_j) times its
+ * Gamma*_j = P_j + delta + e_j, e_j ~ N(0, s^2), with (delta, s) as the other phi's trials tell
+ * them under their priors. wd: ns x nd scratch. */
+static void belief_density(const plan_grid *G, size_t j, const campaign_plan_opts *o, double *wd, double *w)
+{
+    joint(G, j, o, wd);
+    for (size_t i = 0; i < G->ng; i++) w[i] = 0;
+    double c = o->gamma_min - G->predicted[j] - G->d0;
+    for (size_t m = 0; m < G->ns; m++) {
+        double sd = G->spread[m], norm = 1 / sd;
+        long t0, t1;
+        kernel_window(c, sd, o->grid_step, &t0, &t1);
+        const double *wm = wd + m * G->nd;
+        for (size_t i = 0; i < G->ng; i++) {
+            /* a = i - t for t in [t0, t1] */
+            long a0 = (long)i - t1, a1 = (long)i - t0;
+            if (a0 < 0) a0 = 0;
+            if (a1 > (long)G->nd - 1) a1 = (long)G->nd - 1;
+            double s = 0;
+            for (long a = a0; a <= a1; a++) {
+                if (wm[a] == 0) continue;
+                double z = ((double)((long)i - a) * o->grid_step + c) / sd;
+                s += wm[a] * exp(-0.5 * z * z);
+            }
+            w[i] += norm * s;
+        }
+    }
+    for (size_t i = 0; i < G->ng; i++) w[i] = w[i] > 0 ? log(w[i]) + G->ll[j * G->ng + i] : -INFINITY;
+    exp_shift(w, G->ng);
 }
 
 int campaign_plan_run(const double *phi_deg, const double *predicted, size_t nphi, const campaign_obs *obs,
@@ -132,9 +218,9 @@ int campaign_plan_run(const double *phi_deg, const double *predicted, size_t nph
                       size_t why_len)
 {
     if (!(o->tau > 0) || !(o->noise > 0) || !(o->offset_sd > 0) || !(o->grid_step > 0) ||
-        !(o->gamma_min < o->gamma_max) || nphi == 0) {
+        !(o->gamma_min < o->gamma_max) || nphi == 0 || !(o->spread_max >= o->tau) || !isfinite(o->spread_max)) {
         snprintf(why, why_len, "planner: tau, noise, offset_sd and the grid step must be > 0, gamma_min < gamma_max, "
-                               "and at least one phi planned");
+                               "spread_max >= tau (finite), and at least one phi planned");
         return -1;
     }
     for (size_t j = 0; j < nphi; j++)
@@ -143,59 +229,68 @@ int campaign_plan_run(const double *phi_deg, const double *predicted, size_t nph
                      phi_deg[j], predicted[j], o->gamma_min, o->gamma_max);
             return -1;
         }
-    size_t ng = (size_t)floor((o->gamma_max - o->gamma_min) / o->grid_step + 1e-9) + 1;
-    size_t nd = o->calibrate ? 2 * (size_t)ceil(4 * o->offset_sd / o->grid_step) + 1 : 1;
-    double d0 = o->calibrate ? -(double)(nd / 2) * o->grid_step : 0;
-    double *ll = malloc(nphi * ng * sizeof *ll), *lc = malloc(nphi * nd * sizeof *lc);
-    double *pd = malloc(nd * sizeof *pd), *w = malloc(ng * sizeof *w), *wd = malloc(nd * sizeof *wd);
+    plan_grid G = {.predicted = predicted, .nphi = nphi};
+    G.ng = (size_t)floor((o->gamma_max - o->gamma_min) / o->grid_step + 1e-9) + 1;
+    G.nd = o->calibrate ? 2 * (size_t)ceil(4 * o->offset_sd / o->grid_step) + 1 : 1;
+    G.d0 = o->calibrate ? -(double)(G.nd / 2) * o->grid_step : 0;
+    /* The per-phi deviations' sd s: log-uniform on [tau, spread_max] (one value, tau, when they
+     * are equal: one offset for every phi, the planner before); without calibration delta is 0
+     * and each phi's prior carries the offset's width. */
+    if (!o->calibrate) {
+        G.ns = 1;
+        G.spread[0] = sqrt(o->tau * o->tau + o->offset_sd * o->offset_sd);
+    } else if (o->spread_max <= o->tau * (1 + 1e-9)) {
+        G.ns = 1;
+        G.spread[0] = o->tau;
+    } else {
+        G.ns = PLAN_MAX_SPREAD;
+        for (size_t m = 0; m < G.ns; m++)
+            G.spread[m] = o->tau * pow(o->spread_max / o->tau, (double)m / (double)(G.ns - 1));
+    }
+    for (size_t m = 0; m < G.ns; m++) G.log_prior_s[m] = -log((double)G.ns);
+    size_t nk = 2 * (size_t)ceil(PLAN_Z * G.spread[G.ns - 1] / o->grid_step) + 3;
+    size_t njoint = G.ns * G.nd;
+    G.ll = malloc(nphi * G.ng * sizeof *G.ll);
+    G.lc = malloc(nphi * njoint * sizeof *G.lc);
+    double *w = malloc(G.ng * sizeof *w), *wd = malloc(njoint * sizeof *wd), *kern = malloc(nk * sizeof *kern);
+    double *lx = malloc(G.ng * sizeof *lx);
     int *alloc = calloc(nphi, sizeof *alloc);
-    if (!ll || !lc || !pd || !w || !wd || !alloc) {
-        free(ll), free(lc), free(pd), free(w), free(wd), free(alloc);
+    if (!G.ll || !G.lc || !w || !wd || !kern || !lx || !alloc) {
+        free(G.ll), free(G.lc), free(w), free(wd), free(kern), free(lx), free(alloc);
         snprintf(why, why_len, "planner: out of memory");
         return -1;
     }
-    /* Without calibration delta is 0 and each phi's prior carries the offset's width. */
-    double tau = o->calibrate ? o->tau : sqrt(o->tau * o->tau + o->offset_sd * o->offset_sd);
     for (size_t j = 0; j < nphi; j++) {
-        log_lik(obs, nobs, phi_deg[j], o, ng, ll + j * ng);
-        /* log c_j(d) */
-        for (size_t a = 0; a < nd; a++) {
-            double d = d0 + (double)a * o->grid_step, m = -INFINITY;
-            for (size_t i = 0; i < ng; i++) {
-                double z = (o->gamma_min + (double)i * o->grid_step - predicted[j] - d) / tau;
-                w[i] = ll[j * ng + i] - 0.5 * z * z;
-                if (w[i] > m) m = w[i];
-            }
-            double s = 0;
-            for (size_t i = 0; i < ng; i++) s += exp(w[i] - m);
-            lc[j * nd + a] = m + log(s);
-        }
+        log_lik(obs, nobs, phi_deg[j], o, G.ng, G.ll + j * G.ng);
+        for (size_t m = 0; m < G.ns; m++) log_c(&G, j, m, o, kern, lx, G.lc + (j * G.ns + m) * G.nd);
     }
-    /* The offset's posterior. */
-    for (size_t a = 0; a < nd; a++) {
-        double d = d0 + (double)a * o->grid_step;
-        pd[a] = -0.5 * (d / o->offset_sd) * (d / o->offset_sd);
-        for (size_t j = 0; j < nphi; j++) pd[a] += lc[j * nd + a];
-    }
-    exp_shift(pd, nd);
+    /* The offset's and the spread's posteriors: the joint given every phi's trials. */
+    joint(&G, nphi, o, wd);
     {
-        double s = 0, m = 0, v = 0;
-        for (size_t a = 0; a < nd; a++) s += pd[a], m += pd[a] * (d0 + (double)a * o->grid_step);
+        double s = 0, m = 0, v = 0, sm = 0;
+        for (size_t q = 0; q < G.ns; q++)
+            for (size_t a = 0; a < G.nd; a++) {
+                double p = wd[q * G.nd + a];
+                s += p, m += p * (G.d0 + (double)a * o->grid_step), sm += p * G.spread[q];
+            }
         m /= s;
-        for (size_t a = 0; a < nd; a++) {
-            double e = d0 + (double)a * o->grid_step - m;
-            v += pd[a] * e * e;
-        }
+        for (size_t q = 0; q < G.ns; q++)
+            for (size_t a = 0; a < G.nd; a++) {
+                double e = G.d0 + (double)a * o->grid_step - m;
+                v += wd[q * G.nd + a] * e * e;
+            }
         res->offset_mean = o->calibrate ? m : 0;
         res->offset_sd = o->calibrate ? sqrt(v / s) : 0;
+        res->spread_mean = o->calibrate ? sm / s : 0;
     }
-    /* Each phi's belief: its own trials times the offset told by the others. */
+    /* Each phi's belief: its own trials times the offset and the spread told by the others. */
     for (size_t j = 0; j < nphi; j++) {
-        belief_density(j, nphi, predicted, ll, lc, ng, nd, d0, tau, o, wd, w);
+        belief_density(&G, j, o, wd, w);
         campaign_belief *b = &res->beliefs[j];
         b->phi_deg = phi_deg[j];
         b->predicted = predicted[j];
-        summarise(w, ng, o, b);
+        summarise(w, G.ng, o, b);
+        b->offset_mean = b->mean - predicted[j];
     }
     /* Allocate the k specimens: widest effective belief first. Widths within PLAN_TIE of each
      * other are a tie, given to the phi listed first: beliefs equal in exact arithmetic (the prior
@@ -215,14 +310,14 @@ int campaign_plan_run(const double *phi_deg, const double *predicted, size_t nph
     size_t n = 0;
     for (size_t j = 0; j < nphi && n < k; j++) {
         if (!alloc[j]) continue;
-        belief_density(j, nphi, predicted, ll, lc, ng, nd, d0, tau, o, wd, w);
+        belief_density(&G, j, o, wd, w);
         for (int m = 1; m <= alloc[j] && n < k; m++, n++) {
             res->proposals[n].phi_deg = phi_deg[j];
-            res->proposals[n].gamma = quantile(w, ng, o, (double)m / (alloc[j] + 1));
+            res->proposals[n].gamma = quantile(w, G.ng, o, (double)m / (alloc[j] + 1));
             res->proposals[n].sd_before = res->beliefs[j].sd;
         }
     }
     res->k = n;
-    free(ll), free(lc), free(pd), free(w), free(wd), free(alloc);
+    free(G.ll), free(G.lc), free(w), free(wd), free(kern), free(lx), free(alloc);
     return 0;
 }

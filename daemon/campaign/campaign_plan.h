@@ -20,6 +20,8 @@
 #ifndef RIBBON_CAMPAIGN_PLAN_H
 #define RIBBON_CAMPAIGN_PLAN_H
 
+#define PLAN_MAX_SPREAD 8 /* the spread s on 8 log-spaced values */
+
 #include <stddef.h>
 
 #include "campaign_edge.h"
@@ -27,6 +29,8 @@
 typedef struct campaign_plan_opts {
     double tau;        /* Gamma, the model's error at one phi after the offset (default 0.003) */
     double offset_sd;  /* Gamma, prior sd of the systematic offset (default 0.03) */
+    double spread_max; /* Gamma, the per-phi offsets' spread s: prior log-uniform on [tau, spread_max]
+                          (default 0.02; = tau: one offset for every phi, the planner before) */
     double noise;      /* Gamma, probit width of one trial's outcome (default 0.002) */
     double gamma_min, gamma_max; /* the span of Gamma* considered (0.02, 0.45: rod_boundary's) */
     double grid_step;  /* Gamma, the belief grids' step (default 2.5e-4) */
@@ -42,6 +46,7 @@ typedef struct campaign_belief {
     double mean, sd;   /* of Gamma*_j */
     double lo, hi;     /* 95% interval (2.5% and 97.5% quantiles) */
     double median;
+    double offset_mean; /* this phi's offset Gamma*_j - P_j: mean - predicted (its sd is sd) */
 } campaign_belief;
 
 typedef struct campaign_proposal {
@@ -51,6 +56,7 @@ typedef struct campaign_proposal {
 
 typedef struct campaign_plan_result {
     double offset_mean, offset_sd; /* delta's posterior (0, 0 without calibration) */
+    double spread_mean;            /* s's posterior mean (0 without calibration) */
     campaign_belief *beliefs;      /* one per planned phi (caller's array of nphi) */
     campaign_proposal *proposals;  /* k (caller's array) */
     size_t k;

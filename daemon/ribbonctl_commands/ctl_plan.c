@@ -27,22 +27,25 @@ typedef struct plan_opts {
     long count;
     long long approve;
     int json, list, no_calibration, no_strip;
-    double noise, tau, offset_sd;
+    double noise, tau, offset_sd, spread_max;
 } plan_opts;
 
 static void help(void)
 {
     printf("usage:\n"
            "  ribbonctl plan [--phi LIST] [--count K] [--db FILE] [--config RIG] [--boundary-csv FILE]\n"
-           "      [--no-strip] [--no-calibration] [--noise W] [--tau T] [--offset-sd S] [--json]\n"
+           "      [--no-strip] [--no-calibration] [--noise W] [--tau T] [--offset-sd S] [--spread-max S] [--json]\n"
            "  ribbonctl plan --list [--db FILE] [--config RIG] [--json]\n"
            "  ribbonctl plan --approve N [--name SPECIMEN] [--url URL] [--token T] [--json]\n"
            "\n"
            "Proposes the next K specimens (phi, Gamma) (default 3) that most reduce the uncertainty of the\n"
            "experimental boundary at the phi values of LIST (degrees, comma-separated; default: the phi\n"
            "values already trialled). The model: at each phi the true boundary is the lab strip's Gamma*\n"
-           "plus one systematic offset shared by every phi, fitted from the trials so far (prior sd\n"
-           "--offset-sd, default 0.03), plus a model error per phi (--tau, default 0.003); a trial near the\n"
+           "plus a systematic offset of that phi: a common offset (prior sd --offset-sd, default 0.03) plus\n"
+           "that phi's deviation from it, of sd s, itself fitted (prior log-uniform from --tau, default\n"
+           "0.003, to --spread-max, default 0.02; --spread-max equal to --tau: one offset for every phi).\n"
+           "All fitted from the trials so far, so the per-phi offsets are pooled toward the common one as\n"
+           "much as the trials say they agree; each is printed with its error. A trial near the\n"
            "boundary may go either way (probit width --noise, default 0.002). The lab strip is the scene\n"
            "with what the trials' calibrations (each trial's fitted strip) share: the creases' mean\n"
            "relaxation, the hinge stiffness and E, each pooled by its standard errors where a fit\n"
@@ -68,7 +71,7 @@ static int parse(int argc, char **argv, plan_opts *o)
 {
     memset(o, 0, sizeof *o);
     o->count = 3;
-    o->noise = o->tau = o->offset_sd = NAN;
+    o->noise = o->tau = o->offset_sd = o->spread_max = NAN;
     o->url = getenv("RIBBON_URL");
     if (!o->url || !*o->url) o->url = "http://127.0.0.1:8377";
     o->token = getenv("RIBBON_TOKEN");
@@ -93,6 +96,7 @@ static int parse(int argc, char **argv, plan_opts *o)
         else if (!strcmp(a, "--noise")) num = &o->noise;
         else if (!strcmp(a, "--tau")) num = &o->tau;
         else if (!strcmp(a, "--offset-sd")) num = &o->offset_sd;
+        else if (!strcmp(a, "--spread-max")) num = &o->spread_max;
         else if (!strcmp(a, "--count") || !strcmp(a, "--approve")) {
             char *end;
             errno = 0;
@@ -113,7 +117,8 @@ static int parse(int argc, char **argv, plan_opts *o)
             else {
                 char *end;
                 *num = strtod(v, &end);
-                if (*end || !(*num > 0) || !isfinite(*num)) return usage("--noise, --tau and --offset-sd take a number > 0");
+                if (*end || !(*num > 0) || !isfinite(*num))
+                    return usage("--noise, --tau, --offset-sd and --spread-max take a number > 0");
             }
             i++;
         }
@@ -433,6 +438,8 @@ int ctl_plan_main(int argc, char **argv)
     if (isfinite(o.noise)) po.noise = o.noise;
     if (isfinite(o.tau)) po.tau = o.tau;
     if (isfinite(o.offset_sd)) po.offset_sd = o.offset_sd;
+    if (isfinite(o.spread_max)) po.spread_max = o.spread_max;
+    else if (po.spread_max < po.tau) po.spread_max = po.tau; /* --tau above the default spread: one offset */
     po.calibrate = !o.no_calibration;
     campaign_belief beliefs[MAX_PHI];
     campaign_proposal props[50];
@@ -456,13 +463,15 @@ int ctl_plan_main(int argc, char **argv)
     } else if (o.json) {
         json_t *b = json_array(), *a = json_array();
         for (size_t j = 0; j < nphi; j++)
-            json_array_append_new(b, json_pack("{s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f}", "phi_deg", beliefs[j].phi_deg,
-                                               "predicted_gamma", beliefs[j].predicted, "scene_gamma", scene_gamma[j],
+            json_array_append_new(b, json_pack("{s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f,s:f}", "phi_deg",
+                                               beliefs[j].phi_deg, "predicted_gamma", beliefs[j].predicted, "scene_gamma", scene_gamma[j],
+                                               "offset_mean", beliefs[j].offset_mean, "offset_sd", beliefs[j].sd,
                                                "mean", beliefs[j].mean, "sd", beliefs[j].sd, "median",
                                                beliefs[j].median, "lo", beliefs[j].lo, "hi", beliefs[j].hi));
         for (size_t k = 0; k < res.k; k++) json_array_append_new(a, campaign_proposal_json(&sp_rows[k]));
-        json_t *j = json_pack("{s:f,s:f,s:b,s:s,s:o,s:o,s:o}", "offset_mean", res.offset_mean, "offset_sd", res.offset_sd,
-                              "calibrated", po.calibrate, "predicted_source", model->source, "strip",
+        json_t *j = json_pack("{s:f,s:f,s:f,s:f,s:b,s:s,s:o,s:o,s:o}", "offset_mean", res.offset_mean, "offset_sd",
+                              res.offset_sd, "spread_mean", res.spread_mean, "spread_max", po.spread_max, "calibrated",
+                              po.calibrate, "predicted_source", model->source, "strip",
                               strip_json(&ls, strip_note), "beliefs", b, "proposals", a);
         print_json(j);
         json_decref(j);
@@ -470,12 +479,18 @@ int ctl_plan_main(int argc, char **argv)
         char d[400];
         campaign_strip_describe(&ls, d, sizeof d);
         printf("strip: %s%s%s\n", d, strip_note[0] ? "; " : "", strip_note);
-        printf("offset %+.4f +- %.4f (%s), from %d measured trials\n", res.offset_mean, res.offset_sd,
-               po.calibrate ? "fitted" : "fixed: no calibration", ph.n_trials);
-        printf("phi_deg  predicted  lab strip  belief mean +- sd    95%% interval\n");
+        if (po.calibrate)
+            printf("offset %+.4f +- %.4f (fitted, common), the per-phi offsets' spread %.4f (fitted, %.4f .. %.4f), "
+                   "from %d measured trials\n", res.offset_mean, res.offset_sd, res.spread_mean, po.tau, po.spread_max,
+                   ph.n_trials);
+        else
+            printf("offset %+.4f +- %.4f (fixed: no calibration), from %d measured trials\n", res.offset_mean,
+                   res.offset_sd, ph.n_trials);
+        printf("phi_deg  predicted  lab strip  offset +- sd         belief mean +- sd    95%% interval\n");
         for (size_t j = 0; j < nphi; j++)
-            printf("%-8g %-10.4f %-10.4f %.4f +- %.4f    [%.4f, %.4f]\n", beliefs[j].phi_deg, scene_gamma[j],
-                   beliefs[j].predicted, beliefs[j].mean, beliefs[j].sd, beliefs[j].lo, beliefs[j].hi);
+            printf("%-8g %-10.4f %-10.4f %+.4f +- %.4f    %.4f +- %.4f    [%.4f, %.4f]\n", beliefs[j].phi_deg,
+                   scene_gamma[j], beliefs[j].predicted, beliefs[j].offset_mean, beliefs[j].sd, beliefs[j].mean,
+                   beliefs[j].sd, beliefs[j].lo, beliefs[j].hi);
         for (size_t k = 0; k < res.k; k++)
             printf("proposal %lld: phi %g deg, Gamma %.4f   (ribbonctl plan --approve %lld)\n", (long long)sp_rows[k].id,
                    sp_rows[k].phi_deg, sp_rows[k].gamma, (long long)sp_rows[k].id);

@@ -58,8 +58,8 @@ int ctl_plan_bench_camera_main(int argc, char **argv)
             o.keep_videos = 1;
             continue;
         }
-        if (!strcmp(a, "--strip")) {
-            o.strip = 1;
+        if (!strcmp(a, "--strip") || !strcmp(a, "--no-strip")) {
+            o.strip = a[2] == 's';
             continue;
         }
         if (!strcmp(a, "--no-dynamic-truth")) {
@@ -174,7 +174,11 @@ int ctl_plan_bench_camera_main(int argc, char **argv)
         printf(" %sagree=%d/%d %sclear_agree=%d/%d %sundecided=%d", p, c->agree, c->specimens, p, c->clear_agree, c->clear,
                p, c->undecided);
         print_per_phi(p, c, o.bench.phi_deg, n);
-        if (cal) print_num("offset", c->offset_mean);
+        if (cal) {
+            print_num("offset", c->offset_mean);
+            print_list("offsets", c->offsets, n);
+            print_num("spread", c->spread_mean);
+        }
         if (cal && o.strip) {
             printf(" strip_fits=%d strip_calibrations=%d", c->strip.n_fits, c->strip.n_calibrations);
             print_num("strip_relax_deg", c->strip.n_relax ? c->strip.relax_deg : NAN);

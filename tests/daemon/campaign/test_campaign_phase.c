@@ -295,12 +295,31 @@ static void ribbonctl_phase_and_plan(void **state)
         }
     }
     assert_true(at120);
+    /* the per-phi offsets with their errors: Gamma*_j - the model there, the belief's sd; the
+     * spread they were pooled with lies in its prior's range */
+    double spread = json_real_value(json_object_get(j, "spread_mean"));
+    assert_true(spread >= 0.003 && spread <= 0.02);
+    for (size_t k = 0; k < 3; k++) {
+        json_t *b = json_array_get(json_object_get(j, "beliefs"), k);
+        double om = json_real_value(json_object_get(b, "offset_mean")), os = json_real_value(json_object_get(b, "offset_sd"));
+        assert_true(fabs(om - (json_real_value(json_object_get(b, "mean")) -
+                               json_real_value(json_object_get(b, "predicted_gamma")))) < 1e-9);
+        assert_true(os > 0 && os == json_real_value(json_object_get(b, "sd")));
+    }
+    /* phi 90's own offset: its bracket says 0.005 below */
+    assert_true(json_real_value(json_object_get(json_array_get(json_object_get(j, "beliefs"), 1), "offset_mean")) < -0.003);
     json_decref(j);
     store_plan_proposal *v;
     size_t n;
     OK(store_plan_list(f->st, &v, &n, why, sizeof why));
     assert_int_equal(n, 3);
     free(v);
+    /* the table prints them */
+    snprintf(cmd, sizeof cmd, "%s/ribbonctl plan --db %s --boundary-csv %s --phi 60,90,120 --count 1 2>&1",
+             RIBBON_BIN_DIR, f->db, f->bcsv);
+    assert_int_equal(run(cmd, out, sizeof out), 0);
+    assert_non_null(strstr(out, "the per-phi offsets' spread"));
+    assert_non_null(strstr(out, "offset +- sd"));
 }
 
 /* Trial id's calibration as the trial stores it (trial_calibrated_json's form). */
