@@ -242,7 +242,7 @@ static const rig_key rig_keys[] = {
      "comma-separated fit parameters; a name that is not one is the trial's named fit failure"},
     {"sim", "fit_refresh_s", RIG_KEY_DOUBLE, OFF(sim.fit_refresh_s), 0, 0.0, 3600.0, 0, 0, NULL, "s", "0.5",
      "trial time between refreshes of the fit during the shear (0: none)"},
-    {"sim", "fit_shape", RIG_KEY_ENUM, OFF(sim.fit_shape), 0, 0, 0, SWITCH, 0, off_on, "-", "off",
+    {"sim", "fit_shape", RIG_KEY_ENUM, OFF(sim.fit_shape), 0, 0, 0, SWITCH, 0, off_on, "-", "on",
      "the fit beside a trial also takes the tracked centreline at 4 compression and hold frames before the shear (its refreshes leave them out; docs/calibration.md)"},
     {"sim", "fit_hinge", RIG_KEY_DOUBLE, OFF(sim.fit_hinge), 0, 0.0, 1e6, 0, 0, NULL, "N m/rad", "0",
      "the fit's crease hinges when the scene's creases are rigid: compliant of this stiffness, the fit's start and its prior's centre (0: the scene's rigid creases; docs/calibration.md)"},
@@ -1515,7 +1515,7 @@ static void config_defaults(rig_config *cfg)
     cfg->sim.fast = true;
     cfg->sim.fit = true;
     cfg->sim.fit_refresh_s = 0.5;
-    cfg->sim.fit_shape = false;
+    cfg->sim.fit_shape = true;
     cfg->sim.specimen_fit = true;
     static const int ladder[] = {39, 75, 147, 291};
     for (int i = 0; i < 4; i++) cfg->sim.ladder_nodes[i] = ladder[i];
