@@ -263,26 +263,28 @@ extern "C" void vis_tracker_skip(vis_tracker *t, vis_measure *out)
     (void)t;  // the previous curve stays the best guide for the next frame
 }
 
+namespace {
+
+// The points of a tracker's curve or traced samples into uv (at most max of them); their count.
+size_t copy_points(const std::vector<vis::Pt> &pts, double *uv, size_t max)
+{
+    for (size_t i = 0; uv && i < max && i < pts.size(); i++) {
+        uv[2 * i] = pts[i].x;
+        uv[2 * i + 1] = pts[i].y;
+    }
+    return pts.size();
+}
+
+}  // namespace
+
 extern "C" size_t vis_tracker_curve(const vis_tracker *t, double *uv, size_t max)
 {
-    if (!t)
-        return 0;
-    for (size_t i = 0; uv && i < max && i < t->curve.size(); i++) {
-        uv[2 * i] = t->curve[i].x;
-        uv[2 * i + 1] = t->curve[i].y;
-    }
-    return t->curve.size();
+    return t ? copy_points(t->curve, uv, max) : 0;
 }
 
 extern "C" size_t vis_tracker_samples(const vis_tracker *t, double *uv, size_t max)
 {
-    if (!t)
-        return 0;
-    for (size_t i = 0; uv && i < max && i < t->traced.size(); i++) {
-        uv[2 * i] = t->traced[i].x;
-        uv[2 * i + 1] = t->traced[i].y;
-    }
-    return t->traced.size();
+    return t ? copy_points(t->traced, uv, max) : 0;
 }
 
 namespace {
