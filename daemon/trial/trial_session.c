@@ -96,18 +96,24 @@ static void logf_(trial_session *s, const char *fmt, ...)
     }
 }
 
+/* A trial event as the session stores it: its trial, times, the state it happened in, kind, text. */
+static void session_event_fill(trial_session *s, double t_s, store_event_kind kind, const char *msg, store_event *ev)
+{
+    memset(ev, 0, sizeof *ev);
+    ev->trial_id = s->trial_id;
+    ev->t_s = t_s;
+    ev->wall_s = store_wall_now();
+    pthread_mutex_lock(&s->lock);
+    snprintf(ev->state, sizeof ev->state, "%s", trial_state_name(s->status.state));
+    pthread_mutex_unlock(&s->lock);
+    ev->kind = kind;
+    snprintf(ev->message, sizeof ev->message, "%s", msg);
+}
+
 static void session_event(trial_session *s, double t_s, store_event_kind kind, const char *msg)
 {
     store_event ev;
-    memset(&ev, 0, sizeof ev);
-    ev.trial_id = s->trial_id;
-    ev.t_s = t_s;
-    ev.wall_s = store_wall_now();
-    pthread_mutex_lock(&s->lock);
-    snprintf(ev.state, sizeof ev.state, "%s", trial_state_name(s->status.state));
-    pthread_mutex_unlock(&s->lock);
-    ev.kind = kind;
-    snprintf(ev.message, sizeof ev.message, "%s", msg);
+    session_event_fill(s, t_s, kind, msg, &ev);
     trial_publish_event(s->bus, s->trial_id, t_s, store_event_kind_name(kind), msg);
     char why[256];
     if (store_event_append(s->st, &ev, why, sizeof why) != STORE_OK) logf_(s, "event not stored: %s", why);
@@ -678,17 +684,10 @@ static void calibrated_landed(void *user, const trial_calibrated *r)
 static int calib_event(void *user, double t_s, const char *kind, const char *message)
 {
     trial_session *s = user;
+    store_event_kind k = STORE_EVENT_INFO;
+    store_event_kind_parse(kind, &k);
     store_event ev;
-    memset(&ev, 0, sizeof ev);
-    ev.trial_id = s->trial_id;
-    ev.t_s = t_s;
-    ev.wall_s = store_wall_now();
-    pthread_mutex_lock(&s->lock);
-    snprintf(ev.state, sizeof ev.state, "%s", trial_state_name(s->status.state));
-    pthread_mutex_unlock(&s->lock);
-    ev.kind = STORE_EVENT_INFO;
-    store_event_kind_parse(kind, &ev.kind);
-    snprintf(ev.message, sizeof ev.message, "%s", message);
+    session_event_fill(s, t_s, k, message, &ev);
     if (trial_fit_out_event(s->fit_out, &ev)) session_event(s, t_s, ev.kind, message);
     return 0;
 }
