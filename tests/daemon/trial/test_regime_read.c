@@ -18,7 +18,9 @@
  *       and a summary line; REGIME_READ_PNG=DW saves the frame at that Delta W;
  *   table PHI:GAMMA ...  each twin (N = 61, creases REGIME_READ_REL apart, 0.01) filmed at 120 fps
  *       and read at 30 fps (4 phases) and 60 fps (2); REGIME_READ_DUMP=DIR keeps its frames;
- *   reread FILE ...  those frames read again, before (the peak rule) and after (the departure). */
+ *       REGIME_READ_SETS="K=V ..." sets more scene keys (up to 4, e.g. protocol.compression=0.4);
+ *   reread FILE ...  those frames read again, before (the peak rule) and after (the departure);
+ *       REGIME_READ_STRIDE=1: the frames as they are, once (a trial's stored frames). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -148,10 +150,18 @@ static void film_run(film *u, double phi, double gamma, double rel, double fps, 
     snprintf(g, sizeof g, "folds.position=%.9g", gamma);
     snprintf(r, sizeof r, "imperfection.fold_angle_rel=%.9g", rel);
     snprintf(n, sizeof n, "mesh.nodes=%d", nodes);
-    const char *sets[] = {a, g, r, n, "folds.hinge_stiffness=5e-3", "solver.dt=2e-3"};
+    const char *sets[10] = {a, g, r, n, "folds.hinge_stiffness=5e-3", "solver.dt=2e-3"};
+    int nsets = 6;
+    /* REGIME_READ_SETS="K=V K=V": more scene keys for the measuring modes (e.g. the camera
+       campaign's mount, protocol.compression=0.4) */
+    char extra[256] = "";
+    if (getenv("REGIME_READ_SETS")) snprintf(extra, sizeof extra, "%s", getenv("REGIME_READ_SETS"));
+    for (char *save = NULL, *tok = strtok_r(extra, " ", &save); tok && nsets < 10; tok = strtok_r(NULL, " ", &save))
+        sets[nsets++] = tok;
     cfg_error ce;
     char buf[1200];
-    if (cfg_scene_load(SCENE, sets, 6, &u->sc, &ce) != CFG_OK) fail_msg("%s", cfg_error_format(&ce, buf, sizeof buf));
+    if (cfg_scene_load(SCENE, sets, (size_t)nsets, &u->sc, &ce) != CFG_OK)
+        fail_msg("%s", cfg_error_format(&ce, buf, sizeof buf));
     u->fps = fps;
     u->phase = phase;
     twin_camera_params cp = twin_camera_params_default();
@@ -291,11 +301,16 @@ static int reread(int argc, char **argv)
                 u->n++;
         }
         fclose(fp);
-        for (int s = 4; s >= 2; s /= 2)
+        int s_min = getenv("REGIME_READ_STRIDE") ? atoi(getenv("REGIME_READ_STRIDE")) : 2;
+        for (int s = s_min > 1 ? 4 : 1; s >= s_min && s >= 1; s /= 2)
             for (int o = 0; o < s; o++) {
                 snap_detect d = read_frames(u, s, o);
                 snap_reading r;
                 snap_detect_read(&d, &r);
+                if (getenv("REGIME_READ_PASSAGE")) /* the passage's kept frames: Delta Z travel, A - A_onset */
+                    for (int k = 0; k < d.pass_n; k++)
+                        fprintf(stderr, "%s %d/%d %d %.4f %+.4f %.5f\n", argv[i], s, o, 1,
+                                fabs(d.pass_dz[k] - d.pass_dz[0]), d.pass_a[k] - d.pass_a[0], d.pass_far);
                 printf("%s,%s,%.3f,%g,%d,%s,%s,%.2f,%.4f,%.4f,%.3f,%.3f\n", argv[i], treg, p3, 120.0 / s, o,
                        read_before(&d), snap_detect_regime(&d), r.departure, r.departure_dz, r.swing_dz, r.peak_swing,
                        d.peak_abs_a);
