@@ -7,9 +7,10 @@
 #include <stdio.h>
 #include <string.h>
 
-/* The departure's thresholds, measured on the bench's twins (tests/daemon/trial/test_regime_read.c,
- * docs/trials.md "The measured regime"). */
-#define SNAP_DEPART_ASYM 6.0
+/* The departure's thresholds, measured on the bench's twins (tests/daemon/trial/test_regime_read.c)
+ * and on the camera campaigns' trials (docs/trials.md "The measured regime"): symmetric twins read
+ * up to 7.6 near the threshold (3D peak |A| 0.35 at phi 90), so asymmetric needs 8. */
+#define SNAP_DEPART_ASYM 8.0
 #define SNAP_DEPART_SYM 3.5
 
 /* The passage restarts at every slow frame before the snap (the onset moves with it). */
@@ -98,6 +99,7 @@ snap_params snap_params_default(void)
     p.settle_frames = 5;
     p.depart_frac = 0.3;
     p.depart_min_dz = 0.01;
+    p.depart_at = 0.06;
     p.depart_asym = SNAP_DEPART_ASYM;
     p.depart_sym = SNAP_DEPART_SYM;
     p.peak_margin = 2.0;
@@ -197,17 +199,32 @@ snap_phase snap_detect_add(snap_detect *d, long frame, double t_s, double dw, do
 
 int snap_detect_snapped(const snap_detect *d) { return d->phase != SNAP_WAITING; }
 double snap_detect_dw(const snap_detect *d) { return d->onset_dw; }
-/* The departure (snap_detect.h): the kept frame furthest from the onset within depart_frac of the
- * swing's travel and at least depart_min_dz from it. 0 without one. */
+/* The departure (snap_detect.h): |A - A_onset| / travel at depart_at of Delta Z travel from the
+ * onset, interpolated between the two kept frames around it; when no frame reaches it, at the
+ * furthest frame. Only frames within depart_frac of the swing's travel and at least depart_min_dz
+ * from the onset are read (so a 30 fps camera whose next frame is already far down reads its last
+ * frame before the passage). 0 without one. */
 static int departure(const snap_detect *d, double *ratio, double *travel, double *swing)
 {
     double dz0 = d->pass_dz[0], a0 = d->pass_a[0], s = d->pass_far;
     *swing = s;
     int best = -1;
-    double far = 0.0;
+    double far = 0.0, prev_tr = 0.0, prev_da = 0.0;
     for (int k = 1; k < d->pass_n; k++) {
-        double tr = fabs(d->pass_dz[k] - dz0);
-        if (tr <= d->p.depart_frac * s && tr >= d->p.depart_min_dz && tr > far) {
+        double tr = fabs(d->pass_dz[k] - dz0), da = fabs(d->pass_a[k] - a0);
+        if (tr > d->p.depart_frac * s) continue;
+        if (tr >= d->p.depart_at && d->p.depart_at >= d->p.depart_min_dz && tr > prev_tr) {
+            /* the travel crossed depart_at between the last frame below it and this one */
+            double w = (d->p.depart_at - prev_tr) / (tr - prev_tr);
+            *travel = d->p.depart_at;
+            *ratio = (prev_da + w * (da - prev_da)) / d->p.depart_at;
+            return 1;
+        }
+        if (tr > prev_tr) {
+            prev_tr = tr;
+            prev_da = da;
+        }
+        if (tr >= d->p.depart_min_dz && tr > far) {
             far = tr;
             best = k;
         }

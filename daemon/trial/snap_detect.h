@@ -47,9 +47,13 @@
  * there. What it does see in many frames is how the snap departs: a pitchfork's critical mode is
  * odd (A grows while Delta Z hardly moves), a saddle-node's even (Delta Z falls, A follows only as
  * the imperfection's response). So the regime is read from the departure: |A - A_onset| /
- * |Delta Z - Delta Z_onset| at the measured frame that went furthest from the onset within the
- * first depart_frac of the first swing's Delta Z travel (and at least depart_min_dz from the
- * onset): asymmetric at or above depart_asym, symmetric at or below depart_sym, undecided between.
+ * |Delta Z - Delta Z_onset| at depart_at (0.06) of Delta Z travel from the onset, interpolated
+ * between the two measured frames around it (when no frame reaches it, at the frame that went
+ * furthest), reading only frames within the first depart_frac of the first swing's Delta Z travel
+ * and at least depart_min_dz from the onset: asymmetric at or above depart_asym, symmetric at or
+ * below depart_sym, undecided between. A fixed travel, not the furthest frame: at 60 fps the
+ * furthest frame within 30% of the swing is often already in the passage, where the side view's A
+ * is several times the 3D A (5 times at phi 60), and symmetric twins read asymmetric there.
  * Without such a frame, the peak |A| over the first swing decides only outside a factor
  * peak_margin of asym_threshold; else undecided. The first swing ends at the first measured frame
  * whose Delta Z turns back against the snap's direction (as rod_snap_watch.h ends it). */
@@ -68,6 +72,9 @@ typedef struct snap_params {
                               Delta Z travel (0.3) */
     double depart_min_dz;  /* ... and at least this far from the onset's Delta Z (normalised, 0.01:
                               the tracker's 0.015 rad on A then moves the ratio by about 2) */
+    double depart_at;      /* the departure is read at this Delta Z travel from the onset (0.06),
+                              interpolated between the kept frames around it; when none reaches
+                              it, at the furthest kept frame */
     double depart_asym;    /* |dA / dDelta Z| of the departure at or above which it is asymmetric */
     double depart_sym;     /* ... at or below which it is symmetric (between: undecided) */
     double peak_margin;    /* without a departure: asymmetric above asym_threshold times this,
@@ -159,7 +166,7 @@ int snap_detect_asymmetric(const snap_detect *d);
 /* The regime the frames read, with its numbers (meaningful once snapped; final at SNAP_DONE). */
 void snap_detect_read(const snap_detect *d, snap_reading *out);
 /* The reading in words for the trial's events, e.g. "asymmetric by the departure: |dA/dDelta Z| =
- * 14.3 over the first 0.018 of Delta Z (asymmetric at or above 6, symmetric at or below 3.5); peak
+ * 14.3 over the first 0.018 of Delta Z (asymmetric at or above 8, symmetric at or below 3.5); peak
  * |A| over the first swing 0.407 rad in 4 frames". */
 void snap_reading_format(const snap_reading *r, const snap_params *p, char *buf, size_t len);
 /* Unmeasured frames the detection spanned (0: the snap's fast frames were seen). */

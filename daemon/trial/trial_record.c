@@ -154,6 +154,7 @@ int trial_record_parse(const char *text, trial_record *out, char *why, size_t wh
     out->snap.settle_frames = dflt.settle_frames;
     out->snap.depart_frac = dflt.depart_frac;
     out->snap.depart_min_dz = dflt.depart_min_dz;
+    out->snap.depart_at = dflt.depart_at;
     out->snap.depart_asym = dflt.depart_asym;
     out->snap.depart_sym = dflt.depart_sym;
     out->snap.peak_margin = dflt.peak_margin;

@@ -53,14 +53,15 @@ static long expected_onset(double t0, double tau)
 static void asymmetric_snap(void **state)
 {
     (void)state;
-    snap_detect d = run(10.0, 0.15, 1.2, 0, 600);
+    /* a bump of 2 rad: A up about 0.6 by 0.06 of Delta Z travel, a departure of about 10 */
+    snap_detect d = run(10.0, 0.15, 2.0, 0, 600);
     assert_int_equal(d.phase, SNAP_DONE);
     assert_true(snap_detect_snapped(&d));
     long k = expected_onset(10.0, 0.15);
     assert_int_equal(d.onset_frame, k);
     assert_true(fabs(snap_detect_dw(&d) - RATE * k / FPS) < 1e-12);
     assert_string_equal(snap_detect_regime(&d), "asymmetric");
-    assert_true(fabs(d.peak_abs_a - 1.2) < 0.05);
+    assert_true(fabs(d.peak_abs_a - 2.0) < 0.08);
 }
 
 static void symmetric_snap(void **state)
@@ -372,6 +373,97 @@ static void departure_between_thresholds_is_undecided(void **state)
     assert_non_null(strstr(msg, "regime unknown by the departure: |dA/dDelta Z| = 4.50 over the first 0.0200"));
 }
 
+/* The departure read at a fixed Delta Z travel (depart_at, 0.06), on three trials' own stored frames
+ * (60 fps, the camera campaign's twins, ribbonctl plan-bench --camera):
+ *   - seed 2's C-7, phi 60 Gamma 0.17965, a symmetric twin (3D peak |A| 0.172 rad): the side view
+ *     amplifies A about five times in the passage at phi 60 (the twin camera's projected peak
+ *     0.875), and the frame furthest within 30% of the swing, 0.08 of Delta Z down and already in
+ *     the passage, read 6.06: asymmetric. At 0.06 it reads 4.75: unknown, not a wrong regime.
+ *   - an asymmetric twin at phi 90 Gamma 0.18059 (3D peak 0.685) whose A grows late: read at 0.06
+ *     it stays asymmetric (8.8; before the passage's first fast frame it was 3.0, symmetric);
+ *   - a symmetric twin near the threshold at phi 90 (below). */
+static snap_detect run_frames(const hand_frame *f, int n, double depart_at, double depart_asym, snap_reading *r)
+{
+    snap_params p = snap_params_default();
+    p.dz_jump = 0.02;
+    if (depart_at > 0) p.depart_at = depart_at;
+    if (depart_asym > 0) p.depart_asym = depart_asym;
+    snap_detect d;
+    snap_detect_init(&d, &p);
+    int k = 0;
+    for (; k < n; k++) snap_detect_add(&d, k, k / 60.0, 0.4 + k * 1e-3, f[k].dz, f[k].a, f[k].valid);
+    for (int i = 0; i < 10 && d.phase != SNAP_DONE; i++, k++) /* then it rests */
+        snap_detect_add(&d, k, k / 60.0, 0.4 + k * 1e-3, f[n - 1].dz, f[n - 1].a, 1);
+    assert_int_equal(d.phase, SNAP_DONE);
+    snap_detect_read(&d, r);
+    return d;
+}
+
+static void departure_read_at_a_fixed_travel(void **state)
+{
+    (void)state;
+    const hand_frame sym60[] = {
+        {0.1899, -0.1591, 1}, {0.1884, -0.1576, 1}, {0.1869, -0.1501, 1}, {0.1853, -0.1552, 1},
+        {0.1837, -0.1496, 1}, {0.1820, -0.1672, 1}, {0.1804, -0.1709, 1}, {0.1787, -0.1683, 1},
+        {0.1770, -0.1661, 1}, {0.1752, -0.1869, 1}, {0.1734, -0.1892, 1}, {0.1715, -0.1915, 1},
+        {0.1695, -0.1962, 1}, {0.1676, -0.2020, 1}, {0.1655, -0.1988, 1}, {0.1633, -0.2056, 1},
+        {0.1611, -0.2010, 1}, {0.1587, -0.2106, 1}, {0.1562, -0.2037, 1}, {0.1535, -0.2343, 1},
+        {0.1505, -0.2148, 1}, {0.1472, -0.2434, 1}, {0.1434, -0.2425, 1}, {0.1388, -0.2958, 1},
+        {0.1327, -0.3319, 1}, {0.1229, -0.4314, 1}, {0.0999, -0.6590, 1}, {-0.0010, -1.0821, 1},
+        {-0.2431, 0.1158, 1}, {-0.1834, 0.0367, 1}, {-0.1226, 0.0173, 1}, {-0.2128, 0.0152, 1},
+        {-0.1969, 0.0672, 1}, {-0.1588, 0.0772, 1}, {-0.1987, 0.0445, 1}, {-0.1961, 0.0223, 1}};
+    const int n60 = (int)(sizeof sym60 / sizeof *sym60);
+    snap_reading r;
+    snap_detect d = run_frames(sym60, n60, 0.0, 0.0, &r);
+    assert_int_equal(r.by_departure, 1);
+    assert_true(fabs(r.departure_dz - 0.06) < 1e-12);
+    printf("# phi 60 symmetric twin: departure %.2f at %.3f\n", r.departure, r.departure_dz);
+    assert_true(r.departure > d.p.depart_sym && r.departure < d.p.depart_asym);
+    assert_int_equal(r.regime, SNAP_REGIME_UNDECIDED);
+    /* the rule before: the furthest frame within 30% of the swing (depart_at out of reach),
+       asymmetric at 6: the misread */
+    d = run_frames(sym60, n60, 1.0, 6.0, &r);
+    printf("# ... at the furthest frame: %.2f at %.3f\n", r.departure, r.departure_dz);
+    assert_true(r.departure_dz > 0.07);
+    assert_int_equal(r.regime, SNAP_REGIME_ASYMMETRIC);
+
+    const hand_frame asym90[] = {
+        {0.1971, -0.0195, 1}, {0.1958, -0.0204, 1}, {0.1944, -0.0184, 1}, {0.1929, -0.0219, 1},
+        {0.1914, -0.0350, 1}, {0.1900, -0.0401, 1}, {0.1884, -0.0405, 1}, {0.1868, -0.0308, 1},
+        {0.1851, -0.0304, 1}, {0.1835, -0.0365, 1}, {0.1817, -0.0502, 1}, {0.1798, -0.0392, 1},
+        {0.1778, -0.0300, 1}, {0.1757, -0.0395, 1}, {0.1734, -0.0401, 1}, {0.1709, -0.0620, 1},
+        {0.1681, -0.0365, 1}, {0.1650, -0.0293, 1}, {0.1611, -0.0141, 1}, {0.1557, -0.0168, 1},
+        {0.1471, 0.0835, 1},  {0.1246, 0.5078, 1},  {0.0027, 1.6927, 1},  {-0.2490, -0.2199, 1},
+        {-0.1451, 0.1479, 1}, {-0.1192, -0.1456, 1}, {-0.2099, 0.1309, 1}, {-0.1614, -0.0462, 1},
+        {-0.1492, -0.0074, 1}, {-0.1899, 0.0587, 1}, {-0.1667, 0.0641, 1}, {-0.1610, 0.0156, 1},
+        {-0.1800, 0.0209, 1}, {-0.1689, 0.0419, 1}, {-0.1662, 0.0404, 1}};
+    d = run_frames(asym90, (int)(sizeof asym90 / sizeof *asym90), 0.0, 0.0, &r);
+    printf("# phi 90 asymmetric twin: departure %.2f at %.3f\n", r.departure, r.departure_dz);
+    assert_true(fabs(r.departure_dz - 0.06) < 1e-12);
+    assert_int_equal(r.regime, SNAP_REGIME_ASYMMETRIC);
+
+    /* seed 1's C-10, phi 90 Gamma 0.18870, a symmetric twin (3D peak 0.350, creases 1.8% apart):
+       7.6 at 0.052 (its next frame is past 30% of the swing), the highest departure a symmetric
+       twin of the campaigns read (why asymmetric needs 8, not 6) */
+    const hand_frame sym90[] = {
+        {0.2065, -0.0770, 1}, {0.2052, -0.0758, 1}, {0.2040, -0.0690, 1}, {0.2027, -0.0654, 1},
+        {0.2014, -0.0880, 1}, {0.2001, -0.0855, 1}, {0.1987, -0.0780, 1}, {0.1974, -0.1006, 1},
+        {0.1960, -0.1025, 1}, {0.1945, -0.1006, 1}, {0.1931, -0.1007, 1}, {0.1915, -0.1218, 1},
+        {0.1899, -0.1044, 1}, {0.1883, -0.0926, 1}, {0.1866, -0.1297, 1}, {0.1848, -0.1272, 1},
+        {0.1829, -0.1360, 1}, {0.1810, -0.1346, 1}, {0.1789, -0.1539, 1}, {0.1767, -0.1460, 1},
+        {0.1743, -0.1723, 1}, {0.1716, -0.1784, 1}, {0.1686, -0.1988, 1}, {0.1649, -0.2181, 1},
+        {0.1600, -0.2629, 1}, {0.1525, -0.3172, 1}, {0.1358, -0.4925, 1}, {0.0539, -1.0827, 1},
+        {-0.2139, 0.2234, 1}, {-0.1983, -0.0283, 1}, {-0.0902, -0.0220, 1}, {-0.1765, -0.0353, 1},
+        {-0.2016, 0.0657, 1}, {-0.1363, 0.0395, 1}, {-0.1624, 0.0023, 1}, {-0.1910, 0.0304, 1},
+        {0.0, 0.0, 0},        {-0.1601, 0.0510, 1}, {-0.1807, 0.0319, 1}};
+    const int n90 = (int)(sizeof sym90 / sizeof *sym90);
+    d = run_frames(sym90, n90, 0.0, 0.0, &r);
+    printf("# phi 90 symmetric twin near the threshold: departure %.2f at %.3f\n", r.departure, r.departure_dz);
+    assert_true(r.departure_dz > 0.05 && r.departure_dz < 0.06); /* its next frame is past 30% of the swing */
+    assert_true(r.departure > 6.0 && r.departure < d.p.depart_asym);
+    assert_int_equal(r.regime, SNAP_REGIME_UNDECIDED);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -386,6 +478,7 @@ int main(void)
         cmocka_unit_test(symmetric_departure_with_amplified_frames),
         cmocka_unit_test(no_departure_frame_is_undecided_near_the_threshold),
         cmocka_unit_test(departure_between_thresholds_is_undecided),
+        cmocka_unit_test(departure_read_at_a_fixed_travel),
         cmocka_unit_test(no_frame_inside_the_passage_is_undecided),
         cmocka_unit_test(repeated_frame_does_not_restart_the_onset),
         cmocka_unit_test(noisy_slow_passage_onset_is_unbiased),
