@@ -28,6 +28,8 @@ typedef struct campaign_obs {
     int n_sym;      /* trials measured symmetric */
     int n_other;    /* trials with no snap or an unknown regime (drawn, not fitted) */
     int n_specimens; /* specimens pooled into the point */
+    int n_unknown;  /* of n_other: trials that snapped but whose regime the camera could not tell
+                       (the planner's third outcome, campaign_plan.h) */
 } campaign_obs;
 
 typedef enum campaign_edge_method {

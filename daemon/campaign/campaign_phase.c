@@ -67,7 +67,10 @@ int campaign_phase_collect(store *st, campaign_phase *out, char *why, size_t why
         campaign_obs *o = &out->obs[k];
         if (tr[t].regime_measured == STORE_REGIME_ASYMMETRIC) o->n_asym++;
         else if (tr[t].regime_measured == STORE_REGIME_SYMMETRIC) o->n_sym++;
-        else o->n_other++;
+        else {
+            o->n_other++;
+            if (tr[t].snapped == 1 && tr[t].regime_measured == STORE_REGIME_UNKNOWN) o->n_unknown++;
+        }
         if (!seen[s]) {
             seen[s] = 1;
             o->n_specimens++;

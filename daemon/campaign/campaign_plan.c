@@ -22,7 +22,7 @@
 
 campaign_plan_opts campaign_plan_opts_default(void)
 {
-    campaign_plan_opts o = {.tau = 0.003, .offset_sd = 0.03, .spread_max = 0.02, .noise = 0.002, .gamma_min = 0.02,
+    campaign_plan_opts o = {.tau = 0.003, .offset_sd = 0.03, .spread_max = 0.02, .noise = 0.002, .undecided = 0.002, .gamma_min = 0.02,
                             .gamma_max = 0.45, .grid_step = 2.5e-4, .calibrate = 1};
     return o;
 }
@@ -33,6 +33,26 @@ static double log_phi_cdf(double x)
     return -0.5 * x * x - log(-x) - 0.5 * log(2 * M_PI);
 }
 
+/* log (Phi(b) - Phi(a)) for a < b, without cancelling in either tail. */
+static double log_phi_between(double a, double b)
+{
+    double v;
+    if (a > 0) v = 0.5 * (erfc(a / M_SQRT2) - erfc(b / M_SQRT2));
+    else if (b < 0) v = 0.5 * (erfc(-b / M_SQRT2) - erfc(-a / M_SQRT2));
+    else v = 1.0 - 0.5 * erfc(-a / M_SQRT2) - 0.5 * erfc(b / M_SQRT2);
+    return v > 1e-300 ? log(v) : log(1e-300);
+}
+
+/* The log probabilities of one trial's three outcomes at Gamma with the boundary at g
+ * (campaign_plan.h: the ordered probit; h = 0: two outcomes, undecided impossible). */
+static void outcome_logp(double g, double gamma, const campaign_plan_opts *o, double *la, double *ls, double *lu)
+{
+    double h = o->undecided > 0 ? o->undecided : 0, z = (g - gamma) / o->noise, hz = h / o->noise;
+    *la = log_phi_cdf(z - hz);
+    *ls = log_phi_cdf(-z - hz);
+    *lu = h > 0 ? log_phi_between(z - hz, z + hz) : -INFINITY;
+}
+
 /* log L_j on the Gamma grid. */
 static void log_lik(const campaign_obs *obs, size_t nobs, double phi, const campaign_plan_opts *o, size_t ng,
                     double *ll)
@@ -41,9 +61,11 @@ static void log_lik(const campaign_obs *obs, size_t nobs, double phi, const camp
         double g = o->gamma_min + (double)i * o->grid_step, s = 0;
         for (size_t k = 0; k < nobs; k++) {
             if (fabs(obs[k].phi_deg - phi) > SAME_PHI) continue;
-            double z = (g - obs[k].gamma) / o->noise;
-            if (obs[k].n_asym) s += obs[k].n_asym * log_phi_cdf(z);
-            if (obs[k].n_sym) s += obs[k].n_sym * log_phi_cdf(-z);
+            double la, ls, lu;
+            outcome_logp(g, obs[k].gamma, o, &la, &ls, &lu);
+            if (obs[k].n_asym) s += obs[k].n_asym * la;
+            if (obs[k].n_sym) s += obs[k].n_sym * ls;
+            if (obs[k].n_unknown && o->undecided > 0) s += obs[k].n_unknown * lu;
         }
         ll[i] = s;
     }
@@ -217,9 +239,9 @@ int campaign_plan_run(const double *phi_deg, const double *predicted, size_t nph
                       size_t nobs, const campaign_plan_opts *o, size_t k, campaign_plan_result *res, char *why,
                       size_t why_len)
 {
-    if (!(o->tau > 0) || !(o->noise > 0) || !(o->offset_sd > 0) || !(o->grid_step > 0) ||
+    if (!(o->tau > 0) || !(o->noise > 0) || !(o->offset_sd > 0) || !(o->grid_step > 0) || !(o->undecided >= 0) ||
         !(o->gamma_min < o->gamma_max) || nphi == 0 || !(o->spread_max >= o->tau) || !isfinite(o->spread_max)) {
-        snprintf(why, why_len, "planner: tau, noise, offset_sd and the grid step must be > 0, gamma_min < gamma_max, "
+        snprintf(why, why_len, "planner: tau, noise, offset_sd and the grid step must be > 0, undecided >= 0, gamma_min < gamma_max, "
                                "spread_max >= tau (finite), and at least one phi planned");
         return -1;
     }

@@ -10,6 +10,13 @@
  * probability Phi((Gamma*_j - Gamma) / noise): a specimen near the boundary may go either way
  * (its creases differ from the design by a percent or so).
  *
+ * A trial may also read undecided (the camera's departure between its two thresholds, near the
+ * boundary: docs/trials.md "The measured regime"): with undecided = h > 0 the outcome is an
+ * ordered probit, asymmetric when Gamma*_j - Gamma + eps > h, symmetric when it is < -h,
+ * undecided between (eps ~ N(0, noise^2)), so an undecided trial says the boundary is near its
+ * Gamma instead of nothing (before, the belief stayed as it was, so the next specimen went to the
+ * same phi and the same Gamma again). h = 0: two outcomes, undecided trials ignored.
+ *
  * Calibration off (calibrate = 0) fixes delta at 0: each phi then has the prior N(P_j, tau^2 +
  * offset_sd^2), the same width, and learns from its own trials only.
  *
@@ -32,6 +39,8 @@ typedef struct campaign_plan_opts {
     double spread_max; /* Gamma, the per-phi offsets' spread s: prior log-uniform on [tau, spread_max]
                           (default 0.02; = tau: one offset for every phi, the planner before) */
     double noise;      /* Gamma, probit width of one trial's outcome (default 0.002) */
+    double undecided;  /* Gamma, half-width h of the band where a trial reads undecided (default
+                          0.002; 0: two outcomes, undecided trials ignored) */
     double gamma_min, gamma_max; /* the span of Gamma* considered (0.02, 0.45: rod_boundary's) */
     double grid_step;  /* Gamma, the belief grids' step (default 2.5e-4) */
     int calibrate;     /* 1 (default): fit delta; 0: delta fixed at 0 (see above) */

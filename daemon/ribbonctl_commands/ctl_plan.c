@@ -27,14 +27,15 @@ typedef struct plan_opts {
     long count;
     long long approve;
     int json, list, no_calibration, no_strip;
-    double noise, tau, offset_sd, spread_max;
+    double noise, tau, offset_sd, spread_max, undecided;
 } plan_opts;
 
 static void help(void)
 {
     printf("usage:\n"
            "  ribbonctl plan [--phi LIST] [--count K] [--db FILE] [--config RIG] [--boundary-csv FILE]\n"
-           "      [--no-strip] [--no-calibration] [--noise W] [--tau T] [--offset-sd S] [--spread-max S] [--json]\n"
+           "      [--no-strip] [--no-calibration] [--noise W] [--undecided H] [--tau T] [--offset-sd S]\n"
+           "      [--spread-max S] [--json]\n"
            "  ribbonctl plan --list [--db FILE] [--config RIG] [--json]\n"
            "  ribbonctl plan --approve N [--name SPECIMEN] [--url URL] [--token T] [--json]\n"
            "\n"
@@ -46,7 +47,9 @@ static void help(void)
            "0.003, to --spread-max, default 0.02; --spread-max equal to --tau: one offset for every phi).\n"
            "All fitted from the trials so far, so the per-phi offsets are pooled toward the common one as\n"
            "much as the trials say they agree; each is printed with its error. A trial near the\n"
-           "boundary may go either way (probit width --noise, default 0.002). The lab strip is the scene\n"
+           "boundary may go either way (probit width --noise, default 0.002), or read undecided (the\n"
+           "camera could not tell): an undecided trial says the boundary lies within about --undecided\n"
+           "(default 0.002; 0: undecided trials are ignored) of its Gamma. The lab strip is the scene\n"
            "with what the trials' calibrations (each trial's fitted strip) share: the creases' mean\n"
            "relaxation, the hinge stiffness and E, each pooled by its standard errors where a fit\n"
            "determined it; its boundary is traced from --config's scene with them (cached beside the store)\n"
@@ -71,7 +74,7 @@ static int parse(int argc, char **argv, plan_opts *o)
 {
     memset(o, 0, sizeof *o);
     o->count = 3;
-    o->noise = o->tau = o->offset_sd = o->spread_max = NAN;
+    o->noise = o->tau = o->offset_sd = o->spread_max = o->undecided = NAN;
     o->url = getenv("RIBBON_URL");
     if (!o->url || !*o->url) o->url = "http://127.0.0.1:8377";
     o->token = getenv("RIBBON_TOKEN");
@@ -94,6 +97,7 @@ static int parse(int argc, char **argv, plan_opts *o)
         else if (!strcmp(a, "--token")) dst = &o->token;
         else if (!strcmp(a, "--name")) dst = &o->name;
         else if (!strcmp(a, "--noise")) num = &o->noise;
+        else if (!strcmp(a, "--undecided")) num = &o->undecided;
         else if (!strcmp(a, "--tau")) num = &o->tau;
         else if (!strcmp(a, "--offset-sd")) num = &o->offset_sd;
         else if (!strcmp(a, "--spread-max")) num = &o->spread_max;
@@ -117,8 +121,8 @@ static int parse(int argc, char **argv, plan_opts *o)
             else {
                 char *end;
                 *num = strtod(v, &end);
-                if (*end || !(*num > 0) || !isfinite(*num))
-                    return usage("--noise, --tau, --offset-sd and --spread-max take a number > 0");
+                if (*end || !isfinite(*num) || !(*num > 0 || (num == &o->undecided && *num == 0)))
+                    return usage("--noise, --tau, --offset-sd and --spread-max take a number > 0, --undecided >= 0");
             }
             i++;
         }
@@ -436,6 +440,7 @@ int ctl_plan_main(int argc, char **argv)
         }
     campaign_plan_opts po = campaign_plan_opts_default();
     if (isfinite(o.noise)) po.noise = o.noise;
+    if (isfinite(o.undecided)) po.undecided = o.undecided;
     if (isfinite(o.tau)) po.tau = o.tau;
     if (isfinite(o.offset_sd)) po.offset_sd = o.offset_sd;
     if (isfinite(o.spread_max)) po.spread_max = o.spread_max;

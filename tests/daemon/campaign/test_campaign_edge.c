@@ -15,8 +15,8 @@ static void bracket_lands_between(void **s)
 {
     (void)s;
     campaign_obs obs[] = {
-        {90, 0.15, 1, 0, 0, 1}, {90, 0.16, 2, 0, 0, 1}, {90, 0.17, 0, 1, 0, 1}, {90, 0.18, 0, 3, 1, 1},
-        {60, 0.10, 0, 1, 0, 1}, /* another phi: ignored */
+        {90, 0.15, 1, 0, 0, 1, 0}, {90, 0.16, 2, 0, 0, 1, 0}, {90, 0.17, 0, 1, 0, 1, 0}, {90, 0.18, 0, 3, 1, 1, 0},
+        {60, 0.10, 0, 1, 0, 1, 0}, /* another phi: ignored */
     };
     campaign_edge e;
     campaign_edge_fit(obs, 5, 90, &e);
@@ -32,8 +32,8 @@ static void bracket_lands_between(void **s)
 static void open_sides_and_none(void **s)
 {
     (void)s;
-    campaign_obs obs[] = {{90, 0.17, 0, 2, 0, 1}, {90, 0.19, 0, 1, 0, 1}, {60, 0.12, 1, 0, 0, 1},
-                          {120, 0.2, 0, 0, 2, 1}};
+    campaign_obs obs[] = {{90, 0.17, 0, 2, 0, 1, 0}, {90, 0.19, 0, 1, 0, 1, 0}, {60, 0.12, 1, 0, 0, 1, 0},
+                          {120, 0.2, 0, 0, 2, 1, 0}};
     campaign_edge e;
     campaign_edge_fit(obs, 4, 90, &e);
     assert_int_equal(e.method, CAMPAIGN_EDGE_BELOW);
@@ -60,7 +60,7 @@ static void probit_recovers_known_boundary(void **s)
         double g = 0.164 + 0.002 * i;
         double p = 0.5 * erfc(-((gs - g) / w) / M_SQRT2);
         int na = (int)lround(400 * p);
-        obs[i] = (campaign_obs){120, g, na, 400 - na, 0, 1};
+        obs[i] = (campaign_obs){120, g, na, 400 - na, 0, 1, 0};
     }
     campaign_edge e;
     campaign_edge_fit(obs, 9, 120, &e);
@@ -75,7 +75,7 @@ static void probit_recovers_known_boundary(void **s)
 static void probit_few_points(void **s)
 {
     (void)s;
-    campaign_obs obs[] = {{90, 0.16, 1, 0, 0, 1}, {90, 0.17, 1, 1, 0, 2}, {90, 0.18, 0, 1, 0, 1}};
+    campaign_obs obs[] = {{90, 0.16, 1, 0, 0, 1, 0}, {90, 0.17, 1, 1, 0, 2, 0}, {90, 0.18, 0, 1, 0, 1, 0}};
     campaign_edge e;
     campaign_edge_fit(obs, 3, 90, &e);
     assert_int_equal(e.method, CAMPAIGN_EDGE_PROBIT);

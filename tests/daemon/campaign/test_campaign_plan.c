@@ -5,12 +5,14 @@
  * spread's grid (its sd and quantiles in closed form); one specimen goes to the median, two at
  * one phi to its terciles (P -+ 0.43073 sd for the Gaussian). With a tight
  * bracket at one phi the calibrated planner moves the other phi by the bracket's offset (sd
- * back to about tau); without calibration it does not move them. */
+ * back to about tau); without calibration it does not move them. An undecided trial is a band
+ * about its Gamma (sd in closed form), so the next specimen goes to a phi the planner knows less. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <string.h>
 
 #include <cmocka.h>
@@ -109,7 +111,7 @@ static void offset_moves_other_phis(void **s)
 {
     (void)s;
     double phi[] = {60, 90, 120}, pred[] = {0.15, 0.175, 0.19};
-    campaign_obs obs[] = {{60, 0.1695, 2, 0, 0, 2}, {60, 0.1705, 0, 2, 0, 2}};
+    campaign_obs obs[] = {{60, 0.1695, 2, 0, 0, 2, 0}, {60, 0.1705, 0, 2, 0, 2, 0}};
     campaign_belief b[3];
     campaign_proposal p[1];
     char why[256];
@@ -195,7 +197,7 @@ static int synthetic_campaign(const double *off, int *used, double *err)
         assert_int_equal(campaign_plan_run(phi, pred, 3, obs, nobs, &o, 1, &r, why, sizeof why), 0);
         int j = p[0].phi_deg == 60 ? 0 : p[0].phi_deg == 90 ? 1 : 2;
         int asym = p[0].gamma < truth[j];
-        obs[nobs++] = (campaign_obs){p[0].phi_deg, p[0].gamma, asym, !asym, 0, 1};
+        obs[nobs++] = (campaign_obs){p[0].phi_deg, p[0].gamma, asym, !asym, 0, 1, 0};
     }
     assert_int_equal(campaign_plan_run(phi, pred, 3, obs, nobs, &o, 0, &r, why, sizeof why), 0);
     *used = (int)nobs;
@@ -230,6 +232,67 @@ static void offsets_that_differ_by_phi_are_located(void **s)
     assert_true(err <= 0.005);
 }
 
+/* An undecided trial (the ordered probit, campaign_plan.h): its likelihood in Gamma* is the
+ * density of U + eps, U uniform on [-h, h], eps ~ N(0, noise^2), scaled, so under a prior much
+ * wider than it the belief's sd is sqrt(h^2 / 3 + noise^2) (closed form) about the trial's Gamma.
+ * Before, an undecided trial said nothing (the belief stayed the prior's, sd 0.030). */
+static void undecided_trial_is_a_band_about_its_gamma(void **s)
+{
+    (void)s;
+    double phi[] = {60}, pred[] = {0.17};
+    campaign_belief b[1];
+    campaign_proposal p[1];
+    campaign_plan_opts o = campaign_plan_opts_default();
+    o.calibrate = 0;
+    o.offset_sd = 0.05; /* a prior ~20 times wider than the band */
+    campaign_plan_result r = {.beliefs = b, .proposals = p};
+    char why[256];
+    campaign_obs obs[] = {{60, 0.17, 0, 0, 1, 1, 1}};
+    assert_int_equal(campaign_plan_run(phi, pred, 1, obs, 1, &o, 1, &r, why, sizeof why), 0);
+    double want = sqrt(o.undecided * o.undecided / 3 + o.noise * o.noise);
+    printf("# one undecided trial: belief sd %.6f, closed form %.6f\n", b[0].sd, want);
+    assert_true(fabs(b[0].mean - 0.17) < 1e-4);
+    assert_true(fabs(b[0].sd - want) / want < 0.02);
+    o.undecided = 0; /* two outcomes: ignored */
+    assert_int_equal(campaign_plan_run(phi, pred, 1, obs, 1, &o, 1, &r, why, sizeof why), 0);
+    assert_true(b[0].sd > 0.04);
+}
+
+/* An undecided trial narrows its phi's belief, so the next specimen goes where the planner knows
+ * less. Phi 60 bracketed by (0.160, 0.180), phi 90 by (0.178, 0.190): phi 60 is the wider, and
+ * its median gets the next specimen. That specimen reads undecided: the two-outcome planner
+ * (undecided trials ignored) proposes phi 60 at the same Gamma again (the camera campaign spent 3
+ * of 14 specimens so); with the third outcome phi 60's belief is narrower than phi 90's and the
+ * next specimen goes to phi 90. */
+static void undecided_trial_sends_the_next_specimen_elsewhere(void **s)
+{
+    (void)s;
+    double phi[] = {60, 90}, pred[] = {0.17, 0.184};
+    campaign_belief b[2];
+    campaign_proposal p[1];
+    campaign_plan_opts o = campaign_plan_opts_default();
+    o.calibrate = 0;
+    campaign_plan_result r = {.beliefs = b, .proposals = p};
+    char why[256];
+    campaign_obs obs[] = {{60, 0.160, 1, 0, 0, 1, 0}, {60, 0.180, 0, 1, 0, 1, 0}, {90, 0.178, 1, 0, 0, 1, 0},
+                          {90, 0.190, 0, 1, 0, 1, 0}, {60, 0.0, 0, 0, 1, 1, 1}};
+    assert_int_equal(campaign_plan_run(phi, pred, 2, obs, 4, &o, 1, &r, why, sizeof why), 0);
+    assert_true(p[0].phi_deg == 60);
+    double median = p[0].gamma;
+    obs[4].gamma = median;
+    campaign_plan_opts two = o;
+    two.undecided = 0;
+    assert_int_equal(campaign_plan_run(phi, pred, 2, obs, 5, &two, 1, &r, why, sizeof why), 0);
+    printf("# undecided at phi 60 Gamma %.5f: two outcomes propose phi %g Gamma %.5f", median, p[0].phi_deg,
+           p[0].gamma);
+    assert_true(p[0].phi_deg == 60 && fabs(p[0].gamma - median) < 5e-4); /* the same again */
+    assert_int_equal(campaign_plan_run(phi, pred, 2, obs, 5, &o, 1, &r, why, sizeof why), 0);
+    printf("; three: phi %g Gamma %.5f (belief sd at 60 %.5f, at 90 %.5f)\n", p[0].phi_deg, p[0].gamma, b[0].sd,
+           b[1].sd);
+    assert_true(b[0].sd < b[1].sd);
+    assert_true(p[0].phi_deg == 90);
+}
+
 static void bad_options_named(void **s)
 {
     (void)s;
@@ -255,6 +318,8 @@ int main(void)
         cmocka_unit_test(offset_moves_other_phis),
         cmocka_unit_test(ties_go_to_the_first_phi),
         cmocka_unit_test(offsets_that_differ_by_phi_are_located),
+        cmocka_unit_test(undecided_trial_is_a_band_about_its_gamma),
+        cmocka_unit_test(undecided_trial_sends_the_next_specimen_elsewhere),
         cmocka_unit_test(bad_options_named),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
