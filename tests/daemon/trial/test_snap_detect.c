@@ -255,15 +255,21 @@ typedef struct hand_frame {
     int valid;
 } hand_frame;
 
-static snap_detect run_hand(const hand_frame *f, int n, snap_reading *r)
+/* The frames f after `creep` frames of the sheared upper state creeping toward f[0] (the frames'
+ * Delta W 1e-4 apart), then resting at f[n - 1] until the snap is done; depart_at and
+ * depart_asym replace the defaults when > 0. */
+static snap_detect run_frames(const hand_frame *f, int n, int creep, double depart_at, double depart_asym,
+                              snap_reading *r)
 {
     snap_params p = snap_params_default();
     p.dz_jump = 0.02;
+    if (depart_at > 0) p.depart_at = depart_at;
+    if (depart_asym > 0) p.depart_asym = depart_asym;
     snap_detect d;
     snap_detect_init(&d, &p);
     long k = 0;
-    for (int i = 0; i < 20; i++, k++) /* the sheared upper state, creeping */
-        snap_detect_add(&d, k, k / 60.0, 0.4 + k * 1e-4, f[0].dz + 1e-4 * (20 - i), f[0].a, 1);
+    for (int i = 0; i < creep; i++, k++)
+        snap_detect_add(&d, k, k / 60.0, 0.4 + k * 1e-4, f[0].dz + 1e-4 * (creep - i), f[0].a, 1);
     for (int i = 0; i < n; i++, k++)
         snap_detect_add(&d, k, k / 60.0, 0.4 + k * 1e-4, f[i].valid ? f[i].dz : NAN, f[i].a, f[i].valid);
     for (int i = 0; i < 10 && d.phase != SNAP_DONE; i++, k++)
@@ -272,6 +278,8 @@ static snap_detect run_hand(const hand_frame *f, int n, snap_reading *r)
     snap_detect_read(&d, r);
     return d;
 }
+
+static snap_detect run_hand(const hand_frame *f, int n, snap_reading *r) { return run_frames(f, n, 20, 0, 0, r); }
 
 /* An asymmetric passage whose peak falls between frames (the sharpest frame lost, as at phi 120):
  * the frames see |A| 0.40 at most, so the peak rule read symmetric; the departure, A up by 0.25
@@ -382,23 +390,6 @@ static void departure_between_thresholds_is_undecided(void **state)
  *   - an asymmetric twin at phi 90 Gamma 0.18059 (3D peak 0.685) whose A grows late: read at 0.06
  *     it stays asymmetric (8.8; before the passage's first fast frame it was 3.0, symmetric);
  *   - a symmetric twin near the threshold at phi 90 (below). */
-static snap_detect run_frames(const hand_frame *f, int n, double depart_at, double depart_asym, snap_reading *r)
-{
-    snap_params p = snap_params_default();
-    p.dz_jump = 0.02;
-    if (depart_at > 0) p.depart_at = depart_at;
-    if (depart_asym > 0) p.depart_asym = depart_asym;
-    snap_detect d;
-    snap_detect_init(&d, &p);
-    int k = 0;
-    for (; k < n; k++) snap_detect_add(&d, k, k / 60.0, 0.4 + k * 1e-3, f[k].dz, f[k].a, f[k].valid);
-    for (int i = 0; i < 10 && d.phase != SNAP_DONE; i++, k++) /* then it rests */
-        snap_detect_add(&d, k, k / 60.0, 0.4 + k * 1e-3, f[n - 1].dz, f[n - 1].a, 1);
-    assert_int_equal(d.phase, SNAP_DONE);
-    snap_detect_read(&d, r);
-    return d;
-}
-
 static void departure_read_at_a_fixed_travel(void **state)
 {
     (void)state;
@@ -414,7 +405,7 @@ static void departure_read_at_a_fixed_travel(void **state)
         {-0.1969, 0.0672, 1}, {-0.1588, 0.0772, 1}, {-0.1987, 0.0445, 1}, {-0.1961, 0.0223, 1}};
     const int n60 = (int)(sizeof sym60 / sizeof *sym60);
     snap_reading r;
-    snap_detect d = run_frames(sym60, n60, 0.0, 0.0, &r);
+    snap_detect d = run_frames(sym60, n60, 0, 0.0, 0.0, &r);
     assert_int_equal(r.by_departure, 1);
     assert_true(fabs(r.departure_dz - 0.06) < 1e-12);
     printf("# phi 60 symmetric twin: departure %.2f at %.3f\n", r.departure, r.departure_dz);
@@ -422,7 +413,7 @@ static void departure_read_at_a_fixed_travel(void **state)
     assert_int_equal(r.regime, SNAP_REGIME_UNDECIDED);
     /* the rule before: the furthest frame within 30% of the swing (depart_at out of reach),
        asymmetric at 6: the misread */
-    d = run_frames(sym60, n60, 1.0, 6.0, &r);
+    d = run_frames(sym60, n60, 0, 1.0, 6.0, &r);
     printf("# ... at the furthest frame: %.2f at %.3f\n", r.departure, r.departure_dz);
     assert_true(r.departure_dz > 0.07);
     assert_int_equal(r.regime, SNAP_REGIME_ASYMMETRIC);
@@ -437,7 +428,7 @@ static void departure_read_at_a_fixed_travel(void **state)
         {-0.1451, 0.1479, 1}, {-0.1192, -0.1456, 1}, {-0.2099, 0.1309, 1}, {-0.1614, -0.0462, 1},
         {-0.1492, -0.0074, 1}, {-0.1899, 0.0587, 1}, {-0.1667, 0.0641, 1}, {-0.1610, 0.0156, 1},
         {-0.1800, 0.0209, 1}, {-0.1689, 0.0419, 1}, {-0.1662, 0.0404, 1}};
-    d = run_frames(asym90, (int)(sizeof asym90 / sizeof *asym90), 0.0, 0.0, &r);
+    d = run_frames(asym90, (int)(sizeof asym90 / sizeof *asym90), 0, 0.0, 0.0, &r);
     printf("# phi 90 asymmetric twin: departure %.2f at %.3f\n", r.departure, r.departure_dz);
     assert_true(fabs(r.departure_dz - 0.06) < 1e-12);
     assert_int_equal(r.regime, SNAP_REGIME_ASYMMETRIC);
@@ -457,7 +448,7 @@ static void departure_read_at_a_fixed_travel(void **state)
         {-0.2016, 0.0657, 1}, {-0.1363, 0.0395, 1}, {-0.1624, 0.0023, 1}, {-0.1910, 0.0304, 1},
         {0.0, 0.0, 0},        {-0.1601, 0.0510, 1}, {-0.1807, 0.0319, 1}};
     const int n90 = (int)(sizeof sym90 / sizeof *sym90);
-    d = run_frames(sym90, n90, 0.0, 0.0, &r);
+    d = run_frames(sym90, n90, 0, 0.0, 0.0, &r);
     printf("# phi 90 symmetric twin near the threshold: departure %.2f at %.3f\n", r.departure, r.departure_dz);
     assert_true(r.departure_dz > 0.05 && r.departure_dz < 0.06); /* its next frame is past 30% of the swing */
     assert_true(r.departure > 6.0 && r.departure < d.p.depart_asym);
