@@ -22,8 +22,8 @@
 
 campaign_plan_opts campaign_plan_opts_default(void)
 {
-    campaign_plan_opts o = {.tau = 0.003, .offset_sd = 0.03, .spread_max = 0.02, .noise = 0.002, .undecided = 0.002, .gamma_min = 0.02,
-                            .gamma_max = 0.45, .grid_step = 2.5e-4, .calibrate = 1};
+    campaign_plan_opts o = {.tau = 0.003, .offset_sd = 0.03, .spread_max = 0.02, .noise = 0.002, .undecided = 0.002,
+                            .gamma_min = 0.02, .gamma_max = 0.45, .grid_step = 2.5e-4, .calibrate = 1};
     return o;
 }
 
@@ -241,8 +241,8 @@ int campaign_plan_run(const double *phi_deg, const double *predicted, size_t nph
 {
     if (!(o->tau > 0) || !(o->noise > 0) || !(o->offset_sd > 0) || !(o->grid_step > 0) || !(o->undecided >= 0) ||
         !(o->gamma_min < o->gamma_max) || nphi == 0 || !(o->spread_max >= o->tau) || !isfinite(o->spread_max)) {
-        snprintf(why, why_len, "planner: tau, noise, offset_sd and the grid step must be > 0, undecided >= 0, gamma_min < gamma_max, "
-                               "spread_max >= tau (finite), and at least one phi planned");
+        snprintf(why, why_len, "planner: tau, noise, offset_sd and the grid step must be > 0, undecided >= 0, "
+                               "gamma_min < gamma_max, spread_max >= tau (finite), and at least one phi planned");
         return -1;
     }
     for (size_t j = 0; j < nphi; j++)
