@@ -61,6 +61,17 @@ static void run(run_out *r, const char *args)
     printf("$ ribbonctl calibrate %s\nexit %d\n--- stdout\n%s--- stderr\n%s", args, r->status, r->out, r->err);
 }
 
+/* ribbonctl calibrate ARGS with --json that must succeed: its parsed output (the caller frees). */
+static json_t *run_json(const char *args)
+{
+    run_out r;
+    run(&r, args);
+    assert_int_equal(r.status, 0);
+    json_t *j = json_loads(r.out, 0, NULL);
+    assert_non_null(j);
+    return j;
+}
+
 static void frame(store_samples *w, double t, double dl, double dw, double dz, double a)
 {
     store_sample s = store_sample_default();
@@ -303,11 +314,7 @@ static void shares_the_hinge_per_width_and_writes_a_scene_each(void **state)
     /* The IDs in a mixed order: grouped by the specimen each first names. */
     snprintf(args, sizeof args, "%lld %lld %lld --share-hinge " TIGHT " --json --no-snap --write-scene %s/joint.ini",
              (long long)a1, (long long)b1, (long long)a2, dir);
-    run_out r;
-    run(&r, args);
-    assert_int_equal(r.status, 0);
-    json_t *j = json_loads(r.out, 0, NULL);
-    assert_non_null(j);
+    json_t *j = run_json(args);
     assert_true(json_is_true(json_object_get(j, "share_hinge")));
     json_t *h = json_object_get(j, "hinge_per_width");
     assert_string_equal(json_string_value(json_object_get(h, "key")), "folds.hinge_stiffness_per_width");
@@ -410,12 +417,8 @@ static void the_hinge_guess_makes_rigid_creases_hinges(void **state)
 {
     (void)state;
     char args[256];
-    run_out r;
     snprintf(args, sizeof args, "%lld %lld --share-hinge " TIGHT " --json --no-snap", (long long)r5, (long long)r10);
-    run(&r, args);
-    assert_int_equal(r.status, 0);
-    json_t *j = json_loads(r.out, 0, NULL);
-    assert_non_null(j);
+    json_t *j = run_json(args);
     json_t *h = json_object_get(j, "hinge_per_width");
     double start = json_real_value(json_object_get(h, "start")), kb = json_real_value(json_object_get(h, "fitted"));
     double want_start = exp(0.5 * (log(FIT_HINGE / 0.005) + log(FIT_HINGE / 0.010)));
@@ -447,10 +450,7 @@ static void the_trials_fit_keys_are_the_keys(void **state)
     char args[256];
     run_out r;
     snprintf(args, sizeof args, "%lld %lld --share-hinge " TIGHT " --json --no-snap", (long long)k5, (long long)k10);
-    run(&r, args);
-    assert_int_equal(r.status, 0);
-    json_t *j = json_loads(r.out, 0, NULL);
-    assert_non_null(j);
+    json_t *j = run_json(args);
     json_t *keys = json_object_get(j, "keys");
     assert_int_equal(json_array_size(keys), 3);
     assert_string_equal(json_string_value(json_array_get(keys, 1)), "S-5k:folds.angle_left_deg");
@@ -469,10 +469,7 @@ static void the_trials_fit_keys_are_the_keys(void **state)
     assert_non_null(strstr(r.err, "--fit"));
     snprintf(args, sizeof args, "%lld %lld --share-hinge " TIGHT " --no-snap --json --fit folds.angle_left_deg",
              (long long)k5, (long long)j10);
-    run(&r, args);
-    assert_int_equal(r.status, 0);
-    j = json_loads(r.out, 0, NULL);
-    assert_non_null(j);
+    j = run_json(args);
     assert_int_equal(json_array_size(json_object_get(j, "keys")), 3);
     json_decref(j);
 }
