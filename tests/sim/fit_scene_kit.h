@@ -4,6 +4,9 @@
 #ifndef RIBBON_TESTS_FIT_SCENE_KIT_H
 #define RIBBON_TESTS_FIT_SCENE_KIT_H
 
+#include <stdio.h>
+#include <stdlib.h>
+
 #include "rod_fit.h"
 #include "scene.h"
 
@@ -38,6 +41,30 @@ static inline int fit_kit_states(rod_fit_obs *obs, int n_c, int n_s, double dw_m
     for (int k = 0; k < n_c; k++) obs[n++] = (rod_fit_obs){0.25 + 0.05 * k / (n_c - 1), 0.0, 0.0, 0.0};
     for (int k = 1; k <= n_s; k++) obs[n++] = (rod_fit_obs){0.3, dw_max * k / n_s, 0.0, 0.0};
     return n;
+}
+
+/* The observables of strip `truth` at obs[0..n-1]'s (Delta L, Delta W), exactly: its own model's
+ * Delta Z and A into obs[k].dz, .a. ROD_OK, or the model's status with why. */
+static inline rod_status fit_kit_observe(const rod_scene *truth, rod_fit_obs *obs, int n, char *why, size_t why_len)
+{
+    rod_fit_model *m = NULL;
+    rod_status st = rod_fit_model_alloc(truth, obs, n, 0, &m, why, why_len);
+    if (st != ROD_OK) return st;
+    double u[ROD_FIT_NKEYS], *y = malloc(sizeof *y * 2 * (size_t)n);
+    if (!y) {
+        rod_fit_model_free(m);
+        snprintf(why, why_len, "fit_kit_observe: out of memory");
+        return ROD_ERR_ALLOC;
+    }
+    rod_fit_scene_values(truth, u);
+    st = rod_fit_model_eval(m, u, NULL, y, NULL, why, why_len);
+    for (int k = 0; k < n && st == ROD_OK; k++) {
+        obs[k].dz = y[2 * k];
+        obs[k].a = y[2 * k + 1];
+    }
+    free(y);
+    rod_fit_model_free(m);
+    return st;
 }
 
 #endif

@@ -60,19 +60,10 @@ static void observe(const rod_scene *truth, rod_fit_obs *obs)
 {
     int n = fit_kit_states(obs, NC, NS, 0.12);
     assert_int_equal(n, NOBS);
-    rod_fit_model *m = NULL;
     char why[256];
-    assert_int_equal(rod_fit_model_alloc(truth, obs, n, 0, &m, why, sizeof why), ROD_OK);
-    double u[ROD_FIT_NKEYS], y[2 * NOBS];
-    rod_fit_scene_values(truth, u);
-    rod_status st = rod_fit_model_eval(m, u, NULL, y, NULL, why, sizeof why);
+    rod_status st = fit_kit_observe(truth, obs, n, why, sizeof why);
     if (st != ROD_OK) printf("truth: %s\n", why);
     assert_int_equal(st, ROD_OK);
-    for (int k = 0; k < n; k++) {
-        obs[k].dz = y[2 * k];
-        obs[k].a = y[2 * k + 1];
-    }
-    rod_fit_model_free(m);
 }
 
 typedef struct kit {
