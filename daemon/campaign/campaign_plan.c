@@ -44,13 +44,14 @@ static double log_phi_between(double a, double b)
 }
 
 /* The log probabilities of one trial's three outcomes at Gamma with the boundary at g
- * (campaign_plan.h: the ordered probit; h = 0: two outcomes, undecided impossible). */
+ * (campaign_plan.h: the ordered probit; h = 0: two outcomes, undecided impossible); lu may be
+ * NULL when no undecided trial needs it. */
 static void outcome_logp(double g, double gamma, const campaign_plan_opts *o, double *la, double *ls, double *lu)
 {
     double h = o->undecided > 0 ? o->undecided : 0, z = (g - gamma) / o->noise, hz = h / o->noise;
     *la = log_phi_cdf(z - hz);
     *ls = log_phi_cdf(-z - hz);
-    *lu = h > 0 ? log_phi_between(z - hz, z + hz) : -INFINITY;
+    if (lu) *lu = h > 0 ? log_phi_between(z - hz, z + hz) : -INFINITY;
 }
 
 /* log L_j on the Gamma grid. */
@@ -61,11 +62,12 @@ static void log_lik(const campaign_obs *obs, size_t nobs, double phi, const camp
         double g = o->gamma_min + (double)i * o->grid_step, s = 0;
         for (size_t k = 0; k < nobs; k++) {
             if (fabs(obs[k].phi_deg - phi) > SAME_PHI) continue;
-            double la, ls, lu;
-            outcome_logp(g, obs[k].gamma, o, &la, &ls, &lu);
+            int und = obs[k].n_unknown && o->undecided > 0;
+            double la, ls, lu = 0;
+            outcome_logp(g, obs[k].gamma, o, &la, &ls, und ? &lu : NULL);
             if (obs[k].n_asym) s += obs[k].n_asym * la;
             if (obs[k].n_sym) s += obs[k].n_sym * ls;
-            if (obs[k].n_unknown && o->undecided > 0) s += obs[k].n_unknown * lu;
+            if (und) s += obs[k].n_unknown * lu;
         }
         ll[i] = s;
     }
